@@ -1,0 +1,80 @@
+-- premake5.lua — the build. Runs under premake5 and under Debian's premake4:
+--     premake4 --file=premake5.lua --to=build gmake && make -C build config=release
+-- (tools/build does this for you and is what play, test and bench call).
+--
+-- Configurations
+--   debug    -O0 -g, AddressSanitizer + UndefinedBehaviorSanitizer
+--   release  -O2 -g, portable x86-64 (never -march=native)
+--   tsan     -O1 -g, ThreadSanitizer (job-system and scheduler tests)
+--
+-- Adding code: a .c file under engine/ joins the engine library, a test file under
+-- tests/engine/ joins the test runner; nothing here needs to change. A new program is a
+-- `program { ... }` call at the bottom.
+
+local premake5 = _PREMAKE_VERSION ~= nil and string.sub(_PREMAKE_VERSION, 1, 1) ~= "4"
+
+-- premake4 scopes settings with configuration(), premake5 with filter().
+local function only(cfg)
+  if premake5 then filter("configurations:" .. cfg) else configuration(cfg) end
+end
+local function all_configs()
+  if premake5 then filter({}) else configuration({}) end
+end
+
+if premake5 then workspace "engine" else solution "engine" end
+  configurations { "debug", "release", "tsan" }
+  location(_OPTIONS["to"] or "build")
+  objdir "build/obj"
+  language "C"
+  includedirs { "engine" }
+  defines { "_GNU_SOURCE" }
+  buildoptions { "-std=c11", "-Wall", "-Wextra", "-Wshadow", "-Wno-missing-field-initializers",
+                 "-pthread", "-g" }
+  linkoptions { "-pthread" }
+
+  only "debug"
+    targetdir "bin/debug"
+    defines { "ENGINE_DEBUG" }
+    buildoptions { "-O0", "-fsanitize=address,undefined", "-fno-omit-frame-pointer",
+                   "-fno-sanitize-recover=undefined" }
+    linkoptions { "-fsanitize=address,undefined" }
+  only "release"
+    targetdir "bin/release"
+    defines { "NDEBUG" }
+    buildoptions { "-O2" }
+  only "tsan"
+    targetdir "bin/tsan"
+    defines { "ENGINE_TSAN" }
+    buildoptions { "-O1", "-fsanitize=thread", "-fno-omit-frame-pointer" }
+    linkoptions { "-fsanitize=thread" }
+  all_configs()
+
+project "engine"
+  kind "StaticLib"
+  files { "engine/**.c", "engine/**.h" }
+
+-- A program linked against the engine. `extra` may set files, links and build options.
+local function program(name, extra)
+  project(name)
+    kind "ConsoleApp"
+    files(extra.files)
+    if extra.excludes then excludes(extra.excludes) end
+    if extra.defines then defines(extra.defines) end
+    links { "engine" }
+    if extra.links then links(extra.links) end
+    links { "m" }
+    if extra.buildoptions then buildoptions(extra.buildoptions) end
+    if extra.linkoptions then linkoptions(extra.linkoptions) end
+end
+
+program("test_engine", { files = { "tests/engine/**.c", "tests/engine/**.h" },
+                         excludes = { "tests/engine/test_shim.c" },
+                         links = { "criterion" } })
+-- The tests that exercise threads, without Criterion, so they can run under ThreadSanitizer
+-- (tests/engine/test.h says why). tools/test builds and runs this in the tsan configuration.
+program("test_threads", { files = { "tests/engine/test_shim.c", "tests/engine/test_jobs.c" },
+                          defines = { "TEST_WITHOUT_CRITERION" } })
+program("bench", { files = { "tools/src/bench/**.c", "tools/src/bench/**.h" },
+                   buildoptions = { "-fopenmp" }, linkoptions = { "-fopenmp" } })
+program("trace_report", { files = { "tools/src/trace_report.c" } })
+program("hello_systems", { files = { "tools/examples/hello_systems.c" } })

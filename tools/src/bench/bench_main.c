@@ -1,0 +1,131 @@
+/* bench_main.c — the benchmark program behind tools/bench (see bench.h).
+ *   bench [--json FILE] [--filter TEXT] [--threads N] [--runs N]
+ * Rows whose name contains TEXT run; the rest are skipped. */
+#include "bench.h"
+
+#include "core/core.h"
+#include "trace/trace.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct bench_row {
+    char name[96];
+    char unit[16];
+    double median, min, max;
+    int runs;
+} bench_row;
+
+struct bench_context {
+    const char *filter;
+    int threads;
+    int runs_override;
+    bench_row *rows;
+    int row_count, row_capacity;
+};
+
+static volatile double bench_sink;
+void bench_consume(double value) { bench_sink += value; }
+
+bool bench_wants(const bench_context *ctx, const char *name) {
+    return !ctx->filter || strstr(name, ctx->filter) != NULL;
+}
+
+int bench_threads(const bench_context *ctx) { return ctx->threads > 0 ? ctx->threads : core_cpu_count(); }
+
+static int compare_doubles(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+void bench_record(bench_context *ctx, const char *name, const char *unit, const double *samples, int count) {
+    if (!bench_wants(ctx, name) || count <= 0) return;
+    double *sorted = malloc((size_t)count * sizeof *sorted);
+    memcpy(sorted, samples, (size_t)count * sizeof *sorted);
+    qsort(sorted, (size_t)count, sizeof *sorted, compare_doubles);
+    bench_row row = { .min = sorted[0], .max = sorted[count - 1], .runs = count };
+    /* The median of an even count is the mean of the middle two. */
+    row.median = count % 2 ? sorted[count / 2] : 0.5 * (sorted[count / 2 - 1] + sorted[count / 2]);
+    snprintf(row.name, sizeof row.name, "%s", name);
+    snprintf(row.unit, sizeof row.unit, "%s", unit);
+    free(sorted);
+
+    if (ctx->row_count == ctx->row_capacity) {
+        ctx->row_capacity = ctx->row_capacity ? ctx->row_capacity * 2 : 32;
+        ctx->rows = realloc(ctx->rows, (size_t)ctx->row_capacity * sizeof *ctx->rows);
+    }
+    ctx->rows[ctx->row_count++] = row;
+    printf("%-36s %12.4g %12.4g %12.4g  %-6s %5d\n", row.name, row.median, row.min, row.max, row.unit, row.runs);
+    fflush(stdout);
+}
+
+void bench_run(bench_context *ctx, const char *name, const char *unit, int runs, bench_sample_fn fn, void *user) {
+    if (!bench_wants(ctx, name)) return;
+    if (ctx->runs_override > 0) runs = ctx->runs_override;
+    bench_consume(fn(user)); /* warm-up: caches, page faults, lazily started threads */
+    double *samples = malloc((size_t)runs * sizeof *samples);
+    for (int i = 0; i < runs; i++) samples[i] = fn(user);
+    bench_record(ctx, name, unit, samples, runs);
+    free(samples);
+}
+
+static bool write_json(const bench_context *ctx, const char *path) {
+    /* Write beside the target and rename, so a reader never sees half a file. */
+    char temporary[4096];
+    snprintf(temporary, sizeof temporary, "%s.tmp", path);
+    FILE *file = fopen(temporary, "w");
+    if (!file) return false;
+    fprintf(file, "{\"results\":[");
+    for (int i = 0; i < ctx->row_count; i++) {
+        const bench_row *row = &ctx->rows[i];
+        fprintf(file, "%s\n  {\"name\":\"%s\",\"unit\":\"%s\",\"median\":%.9g,\"min\":%.9g,\"max\":%.9g,\"runs\":%d}",
+                i ? "," : "", row->name, row->unit, row->median, row->min, row->max, row->runs);
+    }
+    fprintf(file, "\n]}\n");
+    bool ok = fclose(file) == 0;
+    return ok && rename(temporary, path) == 0;
+}
+
+typedef void (*bench_group)(bench_context *ctx);
+
+int main(int argc, char **argv) {
+    core_common_args common = { 0 };
+    const char *json_path = NULL, *filter = NULL;
+    int runs = 0;
+    core_option options[] = {
+        CORE_COMMON_OPTIONS(common),
+        { .name = "json", .kind = CORE_OPTION_STRING, .value = &json_path, .metavar = "FILE",
+          .help = "also write the rows as JSON" },
+        { .name = "filter", .kind = CORE_OPTION_STRING, .value = &filter, .metavar = "TEXT",
+          .help = "run only rows whose name contains TEXT" },
+        { .name = "runs", .kind = CORE_OPTION_INT, .value = &runs, .metavar = "N", .min = 1, .max = 1000,
+          .help = "runs per row (default: each row's own)" },
+    };
+    core_cli cli = { .program = "bench", .summary = "Runs the engine's benchmarks: median, min and max over runs.",
+                     .options = options, .option_count = (int)CORE_COUNTOF(options) };
+    int rc = core_cli_parse(&cli, argc, argv);
+    if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
+
+    if (json_path) { /* find an unwritable path now, not after minutes of measuring */
+        FILE *probe = fopen(json_path, "a");
+        if (!probe) { core_error("bench", "cannot write --json %s", json_path); return 2; }
+        fclose(probe);
+    }
+    if (common.trace_path && !trace_start(common.trace_path)) return 2;
+
+    bench_context ctx = { .filter = filter, .threads = common.threads, .runs_override = runs };
+    printf("%-36s %12s %12s %12s  %-6s %5s\n", "name", "median", "min", "max", "unit", "runs");
+    const bench_group groups[] = { bench_group_ecs, bench_group_jobs, bench_group_trace };
+    for (size_t i = 0; i < CORE_COUNTOF(groups); i++) groups[i](&ctx);
+
+    if (common.trace_path) trace_stop();
+    if (ctx.row_count == 0) core_warn("bench", "no row matches --filter %s", filter ? filter : "");
+    if (json_path && !write_json(&ctx, json_path)) {
+        core_error("bench", "could not write %s", json_path);
+        return 1;
+    }
+    free(ctx.rows);
+    return 0;
+}
