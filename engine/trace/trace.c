@@ -1,0 +1,653 @@
+/* trace.c — capture: per-thread event buffers written out as Chrome Trace Event JSON (trace.h).
+ *
+ * Each thread appends fixed-size events to a chunk of its own, reached through a thread-local
+ * pointer, so recording takes no lock. A full chunk is handed to a global list (the only time a
+ * recording thread locks) and trace_flush writes that list to the file, which keeps memory
+ * bounded in long runs. The registry, not the thread, owns the chunks: a thread that exits
+ * hands its last chunk over, and trace_stop writes whatever every thread still holds.
+ *
+ * Locks: `trace_lock` guards the registry (threads, chunk lists, names, lanes); `trace_write_lock`
+ * guards the file. When both are needed trace_lock is taken first. Recording threads only ever
+ * take trace_lock, so a slow disk write in trace_flush never blocks them.
+ */
+#include "trace/trace.h"
+
+#include "core/core.h"
+
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if defined(__x86_64__)
+#include <cpuid.h>
+#include <x86intrin.h>
+#define TRACE_HAS_TSC 1
+#else
+#define TRACE_HAS_TSC 0
+#endif
+
+enum {
+    TRACE_CHUNK_EVENTS = 2048, /* 64 KiB chunks of 32-byte events */
+    TRACE_PID = 1,
+};
+
+typedef enum trace_event_kind {
+    TRACE_EVENT_BEGIN,
+    TRACE_EVENT_END,
+    TRACE_EVENT_COUNTER,
+    TRACE_EVENT_COMPLETE,
+} trace_event_kind;
+
+typedef struct trace_event {
+    uint64_t time;    /* clock ticks; for COMPLETE, trace_now() nanoseconds */
+    const char *name; /* NULL for END */
+    uint64_t payload; /* COUNTER: the double's bits; COMPLETE: duration in nanoseconds */
+    uint32_t kind;
+    uint32_t lane;    /* COMPLETE: the lane's tid */
+} trace_event;
+
+typedef struct trace_chunk {
+    struct trace_chunk *next; /* in the full list or the pool */
+    uint32_t tid;             /* the thread whose events these are */
+    /* Stored with release by the owner after each event, so trace_stop can read a live
+     * thread's events [0, count) without a lock on the recording side. */
+    _Atomic uint32_t count;
+    trace_event events[TRACE_CHUNK_EVENTS];
+} trace_chunk;
+
+/* One per thread that ever recorded or named itself; lives until that thread exits. */
+typedef struct trace_thread {
+    struct trace_thread *next;
+    trace_chunk *chunk;  /* being filled; swapped only under trace_lock */
+    uint32_t session;    /* the capture that `tid` and `chunk` belong to */
+    uint32_t tid;
+    const char *name;    /* interned; kept across captures */
+} trace_thread;
+
+/* A tid's name, written as an "M" event by the next flush after it is set. */
+typedef struct trace_tid_name {
+    const char *name; /* interned */
+    bool is_lane;     /* a trace_complete lane rather than a thread */
+    bool pending;
+} trace_tid_name;
+
+typedef struct trace_clock_map {
+    uint64_t start_ticks;
+    double ns_per_tick;
+} trace_clock_map;
+
+int trace__active;
+static _Atomic uint32_t trace_session; /* bumped by every trace_start */
+static _Thread_local trace_thread *trace_local;
+static pthread_mutex_t trace_lock = PTHREAD_MUTEX_INITIALIZER;
+static pthread_mutex_t trace_write_lock = PTHREAD_MUTEX_INITIALIZER;
+static pthread_once_t trace_once = PTHREAD_ONCE_INIT;
+static pthread_key_t trace_exit_key;
+static bool trace_use_tsc; /* set once in trace_init, before any capture */
+
+/* Guarded by trace_lock. */
+static struct {
+    trace_thread *threads;
+    trace_chunk *full_first, **full_last; /* handed over, oldest first */
+    trace_chunk *pool;
+    trace_tid_name *names; /* indexed by tid; tid 0 is unused */
+    uint32_t tid_count;    /* next tid to give out */
+    uint32_t name_capacity;
+} trace_registry;
+
+/* Guarded by trace_write_lock. */
+static struct {
+    FILE *file;
+    char *path;
+    uint64_t start_ns;    /* core_time_ns() at trace_start */
+    uint64_t start_ticks; /* the clock's ticks at the same moment */
+    uint64_t *last_ns;    /* per tid: the last timestamp written */
+    size_t last_capacity;
+    size_t events_written;
+} trace_writer;
+
+/* ---- clock ------------------------------------------------------------------------------ */
+
+#if TRACE_HAS_TSC
+/* The TSC is a usable clock only when it ticks at a constant rate through frequency changes
+ * and sleep states ("invariant TSC", CPUID 0x80000007 EDX bit 8); otherwise use the OS clock. */
+static bool trace_tsc_is_invariant(void) {
+    unsigned eax, ebx, ecx, edx;
+    if (!__get_cpuid(0x80000000u, &eax, &ebx, &ecx, &edx) || eax < 0x80000007u) return false;
+    __get_cpuid(0x80000007u, &eax, &ebx, &ecx, &edx);
+    return (edx & (1u << 8)) != 0;
+}
+#endif
+
+/* ~7 ns for rdtsc against ~20 ns for clock_gettime: most of a zone's cost is reading the time. */
+static inline uint64_t trace_ticks(void) {
+#if TRACE_HAS_TSC
+    if (trace_use_tsc) return __rdtsc();
+#endif
+    return core_time_ns();
+}
+
+/* Maps ticks to nanoseconds through two points read on both clocks: the start of the capture and
+ * now. The longer the capture runs, the more exact the rate. */
+static trace_clock_map trace_clock_map_now(void) {
+    trace_clock_map map = { .start_ticks = trace_writer.start_ticks, .ns_per_tick = 1.0 };
+    if (!trace_use_tsc) return map;
+    uint64_t ns = core_time_ns(), ticks = trace_ticks();
+    if (ticks > map.start_ticks && ns > trace_writer.start_ns)
+        map.ns_per_tick = (double)(ns - trace_writer.start_ns) / (double)(ticks - map.start_ticks);
+    return map;
+}
+
+static uint64_t trace_ticks_to_ns(const trace_clock_map *map, uint64_t ticks) {
+    if (ticks <= map->start_ticks) return 0;
+    return (uint64_t)((double)(ticks - map->start_ticks) * map->ns_per_tick + 0.5);
+}
+
+/* ---- interned strings ------------------------------------------------------------------- */
+
+/* An open-addressing set of copies that live until the process ends, so a name handed out once
+ * stays valid in every later capture. */
+static struct {
+    pthread_mutex_t lock;
+    char **slots;
+    size_t capacity, count;
+} trace_interned = { .lock = PTHREAD_MUTEX_INITIALIZER };
+
+static char **trace_intern_slot(char **slots, size_t capacity, const char *s) {
+    size_t mask = capacity - 1;
+    for (size_t i = core_hash_bytes(s, strlen(s), 0) & mask;; i = (i + 1) & mask)
+        if (!slots[i] || strcmp(slots[i], s) == 0) return &slots[i];
+}
+
+static void trace_intern_grow(void) {
+    size_t capacity = trace_interned.capacity ? trace_interned.capacity * 2 : 256;
+    char **slots = core_calloc(capacity, sizeof *slots);
+    for (size_t i = 0; i < trace_interned.capacity; i++) {
+        char *s = trace_interned.slots[i];
+        if (s) *trace_intern_slot(slots, capacity, s) = s;
+    }
+    core_free(trace_interned.slots, trace_interned.capacity * sizeof *slots);
+    trace_interned.slots = slots;
+    trace_interned.capacity = capacity;
+}
+
+const char *trace_intern(const char *s) {
+    if (!s) return NULL;
+    pthread_mutex_lock(&trace_interned.lock);
+    if (2 * (trace_interned.count + 1) > trace_interned.capacity) trace_intern_grow();
+    char **slot = trace_intern_slot(trace_interned.slots, trace_interned.capacity, s);
+    if (!*slot) {
+        *slot = core_strdup(s);
+        trace_interned.count++;
+    }
+    const char *copy = *slot;
+    pthread_mutex_unlock(&trace_interned.lock);
+    return copy;
+}
+
+/* ---- registry (trace_lock held) --------------------------------------------------------- */
+
+static trace_chunk *trace_chunk_take(uint32_t tid) {
+    trace_chunk *chunk = trace_registry.pool;
+    if (chunk) trace_registry.pool = chunk->next;
+    else chunk = core_alloc(sizeof *chunk);
+    chunk->next = NULL;
+    chunk->tid = tid;
+    atomic_store_explicit(&chunk->count, 0, memory_order_relaxed);
+    return chunk;
+}
+
+static void trace_chunks_to_pool(trace_chunk *first) {
+    while (first) {
+        trace_chunk *next = first->next;
+        first->next = trace_registry.pool;
+        trace_registry.pool = first;
+        first = next;
+    }
+}
+
+static void trace_chunk_append_full(trace_chunk *chunk) {
+    chunk->next = NULL;
+    *trace_registry.full_last = chunk;
+    trace_registry.full_last = &chunk->next;
+}
+
+static trace_chunk *trace_take_full_list(void) {
+    trace_chunk *first = trace_registry.full_first;
+    trace_registry.full_first = NULL;
+    trace_registry.full_last = &trace_registry.full_first;
+    return first;
+}
+
+/* trace__active is a plain int shared with the inline fast path in trace.h, hence __atomic. */
+static bool trace_capturing(void) { return __atomic_load_n(&trace__active, __ATOMIC_RELAXED) != 0; }
+static void trace_set_capturing(bool on) { __atomic_store_n(&trace__active, on, __ATOMIC_RELEASE); }
+
+static uint32_t trace_tid_new(const char *name, bool is_lane) {
+    uint32_t tid = trace_registry.tid_count++;
+    if (tid >= trace_registry.name_capacity) {
+        uint32_t grown = trace_registry.name_capacity ? trace_registry.name_capacity * 2 : 64;
+        trace_registry.names = core_realloc(trace_registry.names,
+                                            trace_registry.name_capacity * sizeof(trace_tid_name),
+                                            grown * sizeof(trace_tid_name));
+        trace_registry.name_capacity = grown;
+    }
+    trace_registry.names[tid] = (trace_tid_name){ .name = name, .is_lane = is_lane, .pending = name != NULL };
+    return tid;
+}
+
+/* Runs on a thread that exits (a pthread key destructor): its events outlive it. */
+static void trace_thread_exit(void *arg) {
+    trace_thread *thread = arg;
+    pthread_mutex_lock(&trace_lock);
+    for (trace_thread **link = &trace_registry.threads; *link; link = &(*link)->next) {
+        if (*link == thread) {
+            *link = thread->next;
+            break;
+        }
+    }
+    trace_chunk *chunk = thread->chunk;
+    if (chunk) {
+        bool current = trace_capturing() && thread->session == atomic_load(&trace_session);
+        if (current && atomic_load_explicit(&chunk->count, memory_order_relaxed) > 0)
+            trace_chunk_append_full(chunk);
+        else
+            trace_chunks_to_pool(chunk);
+    }
+    pthread_mutex_unlock(&trace_lock);
+    core_free(thread, sizeof *thread);
+    trace_local = NULL;
+}
+
+static void trace_init(void) {
+    pthread_key_create(&trace_exit_key, trace_thread_exit);
+    trace_registry.full_last = &trace_registry.full_first;
+#if TRACE_HAS_TSC
+    trace_use_tsc = trace_tsc_is_invariant();
+#endif
+}
+
+static trace_thread *trace_thread_self(void) {
+    if (trace_local) return trace_local;
+    trace_thread *thread = core_calloc(1, sizeof *thread);
+    thread->next = trace_registry.threads;
+    trace_registry.threads = thread;
+    pthread_setspecific(trace_exit_key, thread);
+    trace_local = thread;
+    return thread;
+}
+
+/* The slow path of recording: the first event of this thread in the running capture. */
+static trace_thread *trace_thread_join(void) {
+    pthread_once(&trace_once, trace_init);
+    pthread_mutex_lock(&trace_lock);
+    trace_thread *thread = NULL;
+    uint32_t session = atomic_load(&trace_session);
+    if (trace_capturing()) {
+        thread = trace_thread_self();
+        if (thread->session != session) {
+            thread->session = session;
+            thread->tid = trace_tid_new(thread->name, false);
+            if (!thread->chunk) thread->chunk = trace_chunk_take(thread->tid);
+            /* Whatever the chunk held belongs to an earlier capture, already written. */
+            thread->chunk->tid = thread->tid;
+            atomic_store_explicit(&thread->chunk->count, 0, memory_order_relaxed);
+        }
+    }
+    pthread_mutex_unlock(&trace_lock);
+    return thread;
+}
+
+/* A full chunk goes to the list trace_flush writes; the thread carries on in a fresh one. */
+static trace_chunk *trace_chunk_hand_over(trace_thread *thread) {
+    pthread_mutex_lock(&trace_lock);
+    if (trace_capturing() && thread->session == atomic_load(&trace_session)) {
+        trace_chunk_append_full(thread->chunk);
+        thread->chunk = trace_chunk_take(thread->tid);
+    } else {
+        /* The capture these events belong to has ended: drop them. */
+        atomic_store_explicit(&thread->chunk->count, 0, memory_order_relaxed);
+    }
+    trace_chunk *chunk = thread->chunk;
+    pthread_mutex_unlock(&trace_lock);
+    return chunk;
+}
+
+/* ---- recording (the hot path) ----------------------------------------------------------- */
+
+static inline trace_chunk *trace_local_chunk(void) {
+    trace_thread *thread = trace_local;
+    uint32_t session = atomic_load_explicit(&trace_session, memory_order_relaxed);
+    if (__builtin_expect(!thread || thread->session != session, 0)) {
+        thread = trace_thread_join();
+        if (!thread) return NULL;
+    }
+    trace_chunk *chunk = thread->chunk;
+    if (__builtin_expect(atomic_load_explicit(&chunk->count, memory_order_relaxed) == TRACE_CHUNK_EVENTS, 0))
+        chunk = trace_chunk_hand_over(thread);
+    return chunk;
+}
+
+/* Fields are stored one by one: building a trace_event on the stack and copying it made the
+ * compiler reload it with 16-byte loads right after 8-byte stores, a store-forwarding stall. */
+static inline void trace_chunk_push(trace_chunk *chunk, uint32_t kind, const char *name, uint64_t time,
+                                    uint64_t payload, uint32_t lane) {
+    uint32_t n = atomic_load_explicit(&chunk->count, memory_order_relaxed);
+    trace_event *event = &chunk->events[n];
+    event->time = time;
+    event->name = name;
+    event->payload = payload;
+    event->kind = kind;
+    event->lane = lane;
+    atomic_store_explicit(&chunk->count, n + 1, memory_order_release);
+}
+
+void trace__zone_begin(const char *name) {
+    trace_chunk *chunk = trace_local_chunk();
+    if (chunk) trace_chunk_push(chunk, TRACE_EVENT_BEGIN, name, trace_ticks(), 0, 0);
+}
+
+void trace__zone_end(void) {
+    trace_chunk *chunk = trace_local_chunk();
+    if (chunk) trace_chunk_push(chunk, TRACE_EVENT_END, NULL, trace_ticks(), 0, 0);
+}
+
+void trace_counter(const char *name, double value) {
+    /* NaN and infinities have no JSON spelling. */
+    if (!trace_active() || !isfinite(value)) return;
+    trace_chunk *chunk = trace_local_chunk();
+    if (!chunk) return;
+    uint64_t bits;
+    memcpy(&bits, &value, sizeof bits);
+    trace_chunk_push(chunk, TRACE_EVENT_COUNTER, name, trace_ticks(), bits, 0);
+}
+
+/* The tid of a trace_complete lane, made on first use; 0 when no capture runs. */
+static uint32_t trace_lane_tid(const char *lane) {
+    pthread_mutex_lock(&trace_lock);
+    uint32_t tid = 0;
+    if (trace_capturing()) {
+        for (uint32_t i = 1; i < trace_registry.tid_count && !tid; i++) {
+            const trace_tid_name *entry = &trace_registry.names[i];
+            if (entry->is_lane && strcmp(entry->name, lane) == 0) tid = i;
+        }
+        if (!tid) tid = trace_tid_new(trace_intern(lane), true);
+    }
+    pthread_mutex_unlock(&trace_lock);
+    return tid;
+}
+
+void trace_complete(const char *lane, const char *name, uint64_t begin_ns, uint64_t end_ns) {
+    if (!trace_active()) return;
+    uint32_t lane_tid = trace_lane_tid(lane ? lane : "lane");
+    trace_chunk *chunk = lane_tid ? trace_local_chunk() : NULL;
+    if (!chunk) return;
+    trace_chunk_push(chunk, TRACE_EVENT_COMPLETE, name, begin_ns, end_ns > begin_ns ? end_ns - begin_ns : 0, lane_tid);
+}
+
+void trace_thread_name(const char *name) {
+    pthread_once(&trace_once, trace_init);
+    const char *interned = trace_intern(name ? name : "");
+    pthread_mutex_lock(&trace_lock);
+    /* Kept on the thread even with no capture running, so a worker named at start-up shows its
+     * name in a capture started later. */
+    trace_thread *thread = trace_thread_self();
+    thread->name = interned;
+    if (trace_capturing() && thread->session == atomic_load(&trace_session)) {
+        trace_registry.names[thread->tid].name = interned;
+        trace_registry.names[thread->tid].pending = true;
+    }
+    pthread_mutex_unlock(&trace_lock);
+}
+
+void trace_frame_begin(void) { trace_zone_begin("frame"); }
+
+void trace_frame_end(void) {
+    if (!trace_active()) return;
+    trace__zone_end();
+    /* DESIGN.md: resident memory is a counter in every trace. */
+    trace_counter("memory.bytes", (double)core_memory_in_use());
+    trace_flush();
+}
+
+uint64_t trace_now(void) { return core_time_ns(); }
+
+/* ---- writing (trace_write_lock held) ---------------------------------------------------- */
+
+static void trace_write_separator(void) {
+    fputs(trace_writer.events_written++ ? ",\n" : "\n", trace_writer.file);
+}
+
+/* Microseconds with 3 decimals, formatted from integer nanoseconds so no rounding creeps in. */
+static void trace_write_micros(uint64_t ns) {
+    char buffer[32];
+    char *end = buffer + sizeof buffer, *p = end;
+    unsigned fraction = (unsigned)(ns % 1000);
+    for (int i = 0; i < 3; i++, fraction /= 10) *--p = (char)('0' + fraction % 10);
+    *--p = '.';
+    uint64_t micros = ns / 1000;
+    do *--p = (char)('0' + micros % 10); while ((micros /= 10) != 0);
+    fwrite(p, 1, (size_t)(end - p), trace_writer.file);
+}
+
+/* The shortest of %.15g and %.17g that reads back as the same double. */
+static void trace_write_double(double value) {
+    char buffer[32];
+    snprintf(buffer, sizeof buffer, "%.15g", value);
+    if (strtod(buffer, NULL) != value) snprintf(buffer, sizeof buffer, "%.17g", value);
+    fputs(buffer, trace_writer.file);
+}
+
+static void trace_write_head(const char *ph, const char *name) {
+    FILE *out = trace_writer.file;
+    trace_write_separator();
+    fprintf(out, "{\"ph\":\"%s\",", ph);
+    if (name) {
+        fputs("\"name\":", out);
+        core_json_write_string(out, name);
+        fputc(',', out);
+    }
+}
+
+static void trace_write_tail(uint32_t tid) { fprintf(trace_writer.file, "\"pid\":%d,\"tid\":%u}", TRACE_PID, tid); }
+
+static void trace_write_thread_name(uint32_t tid, const char *name) {
+    trace_write_head("M", "thread_name");
+    fprintf(trace_writer.file, "\"pid\":%d,\"tid\":%u,\"args\":{\"name\":", TRACE_PID, tid);
+    core_json_write_string(trace_writer.file, name);
+    fputs("}}", trace_writer.file);
+}
+
+/* Timestamps of one tid never go backwards in the file. Viewers and trace_report nest B/E by
+ * file order, and ticks can step back a little: a thread that migrates reads another core's
+ * TSC, the tick rate is re-estimated at each flush, and trace_complete times come from the
+ * caller. Clamping to the previous timestamp keeps nesting intact at the cost of a few ns. */
+static uint64_t trace_clamp_to_tid(uint32_t tid, uint64_t ns) {
+    if (tid >= trace_writer.last_capacity) {
+        size_t grown = CORE_MAX((size_t)tid + 1, trace_writer.last_capacity * 2);
+        trace_writer.last_ns = core_realloc(trace_writer.last_ns, trace_writer.last_capacity * sizeof(uint64_t),
+                                            grown * sizeof(uint64_t));
+        memset(trace_writer.last_ns + trace_writer.last_capacity, 0,
+               (grown - trace_writer.last_capacity) * sizeof(uint64_t));
+        trace_writer.last_capacity = grown;
+    }
+    if (ns < trace_writer.last_ns[tid]) ns = trace_writer.last_ns[tid];
+    trace_writer.last_ns[tid] = ns;
+    return ns;
+}
+
+static void trace_write_complete(const trace_event *event) {
+    uint64_t begin = event->time > trace_writer.start_ns ? event->time - trace_writer.start_ns : 0;
+    uint64_t end = begin + event->payload;
+    uint64_t ts = trace_clamp_to_tid(event->lane, begin);
+    trace_write_head("X", event->name);
+    fputs("\"ts\":", trace_writer.file);
+    trace_write_micros(ts);
+    fputs(",\"dur\":", trace_writer.file);
+    trace_write_micros(end > ts ? end - ts : 0);
+    fputc(',', trace_writer.file);
+    trace_write_tail(event->lane);
+}
+
+static void trace_write_event(const trace_event *event, uint32_t tid, const trace_clock_map *map) {
+    if (event->kind == TRACE_EVENT_COMPLETE) {
+        trace_write_complete(event);
+        return;
+    }
+    static const char *const phases[] = { [TRACE_EVENT_BEGIN] = "B", [TRACE_EVENT_END] = "E",
+                                          [TRACE_EVENT_COUNTER] = "C" };
+    uint64_t ts = trace_clamp_to_tid(tid, trace_ticks_to_ns(map, event->time));
+    trace_write_head(phases[event->kind], event->name);
+    fputs("\"ts\":", trace_writer.file);
+    trace_write_micros(ts);
+    fputc(',', trace_writer.file);
+    if (event->kind == TRACE_EVENT_COUNTER) {
+        double value;
+        memcpy(&value, &event->payload, sizeof value);
+        fputs("\"args\":{\"value\":", trace_writer.file);
+        trace_write_double(value);
+        fputs("},", trace_writer.file);
+    }
+    trace_write_tail(tid);
+}
+
+static void trace_write_events(const trace_chunk *chunk, uint32_t count, const trace_clock_map *map) {
+    for (uint32_t i = 0; i < count; i++) trace_write_event(&chunk->events[i], chunk->tid, map);
+}
+
+static void trace_write_chunks(const trace_chunk *first, const trace_clock_map *map) {
+    for (const trace_chunk *chunk = first; chunk; chunk = chunk->next)
+        trace_write_events(chunk, atomic_load_explicit(&chunk->count, memory_order_acquire), map);
+}
+
+/* Needs trace_lock too: the names live in the registry. */
+static void trace_write_pending_names(void) {
+    for (uint32_t tid = 1; tid < trace_registry.tid_count; tid++) {
+        trace_tid_name *entry = &trace_registry.names[tid];
+        if (!entry->pending) continue;
+        trace_write_thread_name(tid, entry->name);
+        entry->pending = false;
+    }
+}
+
+/* ---- capture control -------------------------------------------------------------------- */
+
+static void trace_write_header(void) {
+    fputs("{\"traceEvents\":[", trace_writer.file);
+    trace_write_head("M", "process_name");
+    fprintf(trace_writer.file, "\"pid\":%d,\"tid\":0,\"args\":{\"name\":", TRACE_PID);
+    core_json_write_string(trace_writer.file, program_invocation_short_name); /* glibc */
+    fputs("}}", trace_writer.file);
+}
+
+bool trace_start(const char *path) {
+    pthread_once(&trace_once, trace_init);
+    pthread_mutex_lock(&trace_lock);
+    if (trace_capturing()) {
+        core_error("trace", "cannot start a trace to '%s': one is already being written to '%s'",
+                   path, trace_writer.path);
+        pthread_mutex_unlock(&trace_lock);
+        return false;
+    }
+    FILE *file = fopen(path, "w");
+    if (!file) {
+        core_error("trace", "cannot write trace file '%s': %s", path, strerror(errno));
+        pthread_mutex_unlock(&trace_lock);
+        return false;
+    }
+    /* Chunks handed over after the last stop belong to no capture. */
+    trace_chunks_to_pool(trace_take_full_list());
+    trace_registry.tid_count = 1;
+
+    pthread_mutex_lock(&trace_write_lock);
+    setvbuf(file, NULL, _IOFBF, 1 << 20);
+    trace_writer.file = file;
+    trace_writer.path = core_strdup(path);
+    trace_writer.events_written = 0;
+    if (trace_writer.last_ns) memset(trace_writer.last_ns, 0, trace_writer.last_capacity * sizeof(uint64_t));
+    trace_writer.start_ns = core_time_ns();
+    trace_writer.start_ticks = trace_ticks();
+    trace_write_header();
+    pthread_mutex_unlock(&trace_write_lock);
+
+    atomic_fetch_add(&trace_session, 1);
+    trace_set_capturing(true);
+    pthread_mutex_unlock(&trace_lock);
+    return true;
+}
+
+void trace_flush(void) {
+    if (!trace_active()) return;
+    pthread_mutex_lock(&trace_lock);
+    trace_chunk *full = trace_take_full_list();
+    pthread_mutex_lock(&trace_write_lock);
+    bool writing = trace_writer.file != NULL;
+    if (writing) trace_write_pending_names();
+    pthread_mutex_unlock(&trace_lock);
+    if (writing && full) {
+        trace_clock_map map = trace_clock_map_now(); /* after the events were taken */
+        trace_write_chunks(full, &map);
+        /* A run that crashes later still leaves every flushed event on disk. */
+        fflush(trace_writer.file);
+    }
+    pthread_mutex_unlock(&trace_write_lock);
+    pthread_mutex_lock(&trace_lock);
+    trace_chunks_to_pool(full);
+    pthread_mutex_unlock(&trace_lock);
+}
+
+/* Live threads keep their chunk (they may still be inside a push), so only their events are
+ * read, up to the count each one has published. */
+static void trace_write_live_threads(const trace_clock_map *map) {
+    uint32_t session = atomic_load(&trace_session);
+    for (trace_thread *thread = trace_registry.threads; thread; thread = thread->next) {
+        if (thread->session != session || !thread->chunk) continue;
+        trace_write_events(thread->chunk, atomic_load_explicit(&thread->chunk->count, memory_order_acquire), map);
+    }
+}
+
+static void trace_close_file(void) {
+    FILE *file = trace_writer.file;
+    fputs("\n],\"displayTimeUnit\":\"ms\"}\n", file);
+    bool failed = ferror(file) != 0;
+    int error = errno;
+    if (fclose(file) != 0 && !failed) {
+        failed = true;
+        error = errno;
+    }
+    if (failed) core_error("trace", "writing trace file '%s' failed: %s", trace_writer.path, strerror(error));
+    core_free(trace_writer.path, strlen(trace_writer.path) + 1);
+    trace_writer.file = NULL;
+    trace_writer.path = NULL;
+}
+
+static void trace_free_pool(void) {
+    while (trace_registry.pool) {
+        trace_chunk *next = trace_registry.pool->next;
+        core_free(trace_registry.pool, sizeof *trace_registry.pool);
+        trace_registry.pool = next;
+    }
+}
+
+void trace_stop(void) {
+    pthread_mutex_lock(&trace_lock);
+    if (!trace_capturing()) {
+        pthread_mutex_unlock(&trace_lock);
+        return;
+    }
+    trace_set_capturing(false);
+    trace_chunk *full = trace_take_full_list();
+    pthread_mutex_lock(&trace_write_lock);
+    trace_clock_map map = trace_clock_map_now();
+    trace_write_pending_names();
+    trace_write_chunks(full, &map);
+    trace_write_live_threads(&map);
+    trace_close_file();
+    pthread_mutex_unlock(&trace_write_lock);
+    trace_chunks_to_pool(full);
+    trace_free_pool();
+    pthread_mutex_unlock(&trace_lock);
+}

@@ -1,0 +1,106 @@
+/* trace.h — captured traces: zones, counters, frame markers and thread names, written as Chrome
+ * Trace Event JSON that Perfetto (ui.perfetto.dev) and chrome://tracing open.
+ *
+ * CAPTURE
+ *     if (!trace_start("run.json")) return 2;   // opens the file now: a bad path fails here
+ *     trace_thread_name("main");
+ *     for (;;) {
+ *         trace_frame_begin();
+ *         { TRACE_ZONE("stream"); ... }          // zone closes at the end of the block
+ *         trace_zone_begin("mesh"); ...; trace_zone_end();
+ *         trace_counter("chunks.resident", n);
+ *         trace_frame_end();                     // also writes full buffers to the file
+ *     }
+ *     trace_stop();                              // writes the rest and closes the JSON
+ *
+ *   Zone and counter names must outlive the capture: string literals, or trace_intern(s) for a
+ *   name built at run time. Each thread records into its own buffer (no lock on the hot path);
+ *   full buffers are handed over and written by trace_flush, which trace_frame_end calls.
+ *   With no capture running every call returns after one load of a flag.
+ *   trace_frame_end also records the counter "memory.bytes" (core_memory_in_use). A thread may
+ *   name itself before any capture starts; the name is kept. Stop the capture once the other
+ *   threads are idle: events recorded while trace_stop runs may be dropped. See README.md.
+ *
+ * FILE
+ *   {"traceEvents":[ ... ],"displayTimeUnit":"ms"} with events
+ *     {"ph":"B"/"E", "name", "ts", "pid", "tid"}         zones (frames are zones named "frame")
+ *     {"ph":"X", ..., "dur"}                             zones recorded whole (trace_complete)
+ *     {"ph":"C", "name", "ts", "args":{"value":v}}       counters
+ *     {"ph":"M", "name":"thread_name", "args":{"name"}}  thread names
+ *   ts and dur in microseconds since trace_start. Timestamps are non-decreasing per thread.
+ *
+ * REPORT
+ *   trace_report_load reads such a file back (any Chrome trace with B/E or X events) and
+ *   computes frame-time percentiles and per-zone statistics; tools/trace_report prints them
+ *   and writes an SVG plot of frame times beside the trace.
+ */
+#ifndef TRACE_H
+#define TRACE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+/* ---- capture ---------------------------------------------------------------------------- */
+
+bool trace_start(const char *path);
+void trace_stop(void);
+void trace_flush(void);
+
+extern int trace__active; /* internal: read by the inline fast paths below */
+static inline bool trace_active(void) { return __atomic_load_n(&trace__active, __ATOMIC_RELAXED) != 0; }
+
+void trace__zone_begin(const char *name);
+void trace__zone_end(void);
+static inline void trace_zone_begin(const char *name) { if (trace_active()) trace__zone_begin(name); }
+static inline void trace_zone_end(void) { if (trace_active()) trace__zone_end(); }
+
+static inline void trace__scope_end(int *unused) { (void)unused; trace_zone_end(); }
+#define TRACE__CAT2(a, b) a##b
+#define TRACE__CAT(a, b) TRACE__CAT2(a, b)
+/* Opens a zone that closes when the enclosing block ends. */
+#define TRACE_ZONE(name)                                                                       \
+    int TRACE__CAT(trace__scope_, __LINE__) __attribute__((cleanup(trace__scope_end), unused)) = \
+        (trace_zone_begin(name), 0)
+
+void trace_counter(const char *name, double value);
+void trace_thread_name(const char *name);
+void trace_frame_begin(void);
+void trace_frame_end(void);
+
+/* A zone measured elsewhere (e.g. a GPU timer query), on a named lane of its own. Times are
+ * trace_now() values. */
+void trace_complete(const char *lane, const char *name, uint64_t begin_ns, uint64_t end_ns);
+uint64_t trace_now(void);          /* nanoseconds on the trace's clock (CLOCK_MONOTONIC) */
+/* A copy of s that lives until the process ends; equal strings share one copy. */
+const char *trace_intern(const char *s);
+
+/* ---- report ----------------------------------------------------------------------------- */
+
+typedef struct trace_zone_stats {
+    const char *name;
+    size_t count;
+    double total_ms, p99_ms, max_ms;
+} trace_zone_stats;
+
+typedef struct trace_report {
+    size_t frame_count;
+    double *frame_ms;              /* frame durations in file order */
+    double frame_p50_ms, frame_p95_ms, frame_p99_ms, frame_max_ms;
+    size_t frames_over_16ms, frames_over_33ms;  /* > 16.7 ms and > 33.3 ms */
+    trace_zone_stats *zones;       /* sorted by total time, largest first */
+    size_t zone_count;
+    size_t counter_count;          /* "C" events seen */
+    char error[256];               /* why loading failed, when it did */
+} trace_report;
+
+bool trace_report_load(const char *path, trace_report *report);
+bool trace_report_parse(const char *json, size_t size, trace_report *report);
+void trace_report_print(const trace_report *report, FILE *out);
+bool trace_report_write_svg(const trace_report *report, const char *svg_path);
+void trace_report_free(trace_report *report);
+/* Nearest-rank percentile of sorted values: sorted[ceil(p/100 · n) − 1]; 0 for n = 0. */
+double trace_percentile(const double *sorted, size_t n, double p);
+
+#endif /* TRACE_H */

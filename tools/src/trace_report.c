@@ -1,0 +1,75 @@
+/* trace_report — prints a summary of a Chrome trace (frame-time percentiles, slow frames, the
+ * zones that took the most time) and writes an SVG plot of frame times beside it.
+ *
+ *     trace_report run.json                  # summary; plot in run.frames.svg
+ *     trace_report run.json --svg plot.svg   # plot elsewhere
+ *
+ * Exit status: 0 done, 1 the trace could not be read or the plot written, 2 bad arguments or
+ * an unwritable --trace (the report can trace itself, like every program).
+ */
+#include "core/core.h"
+#include "trace/trace.h"
+
+#include <stdio.h>
+#include <string.h>
+
+/* "dir/run.json" → "dir/run.frames.svg"; a name without an extension just gets the suffix. */
+static char *trace_report_svg_path_for(const char *trace_path) {
+    const char *base = strrchr(trace_path, '/');
+    base = base ? base + 1 : trace_path;
+    const char *dot = strrchr(base, '.');
+    size_t stem = dot && dot != base ? (size_t)(dot - trace_path) : strlen(trace_path);
+    static const char suffix[] = ".frames.svg";
+    char *path = core_alloc(stem + sizeof suffix);
+    memcpy(path, trace_path, stem);
+    memcpy(path + stem, suffix, sizeof suffix);
+    return path;
+}
+
+int main(int argc, char **argv) {
+    const char *svg_path = NULL;
+    const char *trace_path = NULL;
+    int positional_count = 0;
+    core_common_args common = { 0 };
+    core_option options[] = {
+        CORE_COMMON_OPTIONS(common), /* every program takes them; --threads changes nothing here */
+        { .name = "svg", .kind = CORE_OPTION_STRING, .value = &svg_path, .metavar = "OUT",
+          .help = "where to write the frame-time plot (default: FILE with .frames.svg)" },
+    };
+    core_cli cli = {
+        .program = "trace_report",
+        .summary = "Summarise a Chrome trace: frame times, slow frames, zones; plot frame times.",
+        .options = options,
+        .option_count = (int)CORE_COUNTOF(options),
+        .positional_name = "FILE",
+        .positional = &trace_path,
+        .positional_min = 1,
+        .positional_max = 1,
+        .positional_count = &positional_count,
+    };
+    int rc = core_cli_parse(&cli, argc, argv);
+    if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
+
+    if (common.trace_path && !trace_start(common.trace_path)) return 2;
+
+    trace_report report;
+    trace_zone_begin("load");
+    bool loaded = trace_report_load(trace_path, &report);
+    trace_zone_end();
+    bool plotted = false;
+    if (loaded) {
+        trace_report_print(&report, stdout);
+        char *default_svg = svg_path ? NULL : trace_report_svg_path_for(trace_path);
+        const char *plot_path = svg_path ? svg_path : default_svg;
+        trace_zone_begin("plot");
+        plotted = trace_report_write_svg(&report, plot_path);
+        trace_zone_end();
+        if (plotted) printf("\nframe-time plot: %s\n", plot_path);
+        if (default_svg) core_free(default_svg, strlen(default_svg) + 1);
+        trace_report_free(&report);
+    } else {
+        fprintf(stderr, "trace_report: %s\n", report.error);
+    }
+    trace_stop();
+    return loaded && plotted ? 0 : 1;
+}
