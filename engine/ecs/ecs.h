@@ -1,0 +1,252 @@
+/* ecs.h — entities, components, queries, command buffers, systems and phases.
+ *
+ * WORLD
+ *     ecs_world *world = ecs_world_create(&(ecs_world_desc){ .jobs = jobs }); // NULL jobs: run
+ *     ...                                                                     // on this thread
+ *     ecs_world_destroy(world);
+ *
+ * COMPONENTS are plain structs registered at run time; a tag is a component of size 0.
+ *     typedef struct Position { float x, y; } Position;
+ *     ecs_component position = ECS_COMPONENT(world, Position);
+ *     ecs_component frozen = ECS_TAG(world, Frozen);
+ *
+ * ENTITIES are 64-bit ids: a 32-bit index and a 32-bit generation (0 is the null entity). A
+ * destroyed entity's index is reused with a new generation, so an old id never reaches the
+ * new entity: ecs_is_alive says false and ecs_get returns NULL.
+ *     ecs_entity e = ecs_entity_create(world);
+ *     ecs_set(world, e, position, &(Position){ 1, 2 });   // adds the component if missing
+ *     Position *p = ecs_get(world, e, position);          // NULL if e lacks it or is dead
+ *     ecs_remove(world, e, position);
+ *     ecs_entity_destroy(world, e);
+ *
+ * QUERIES match every entity that has all `with` components and none of the `without` ones.
+ * Fields are numbered: the `with` terms first, then the `optional` ones. An optional field is
+ * NULL in tables that lack it (and a tag's field is always NULL: use ecs_field_is_set).
+ *     ecs_query *moving = ecs_query_create(world, &(ecs_query_desc){
+ *         .with = { position, velocity }, .without = { frozen }, .optional = { color } });
+ *     ecs_iter it = ecs_query_iter(world, moving);
+ *     while (ecs_query_next(&it)) {
+ *         Position *p = ecs_field(&it, 0);
+ *         Velocity *v = ecs_field(&it, 1);
+ *         Color *c = ecs_field(&it, 2);                     // may be NULL
+ *         for (int i = 0; i < it.count; i++) { p[i].x += v[i].x; p[i].y += v[i].y; }
+ *     }
+ *   Each step of the loop is one table: `it.count` entities whose fields are plain arrays.
+ *   Do not add, remove, create or destroy while iterating; record commands instead.
+ *
+ * COMMANDS defer structural changes (create, destroy, add, set, remove). A system gets its own
+ * buffer in it->commands; the scheduler applies all buffers at the end of the phase, in system
+ * registration order and then batch order, so the result never depends on thread timing.
+ *     ecs_entity chunk = ecs_defer_create(it->commands);  // a placeholder id, see below
+ *     ecs_defer_set(it->commands, chunk, position, &(Position){ 0, 0 });
+ *     ecs_defer_destroy(it->commands, it->entities[i]);
+ *   Outside systems, a buffer of your own: ecs_commands_create, ecs_commands_apply, _destroy.
+ *
+ * SYSTEMS AND PHASES. A frame runs the phases in order; the default pipeline is
+ *     input, game, stream, generate, stabilize, mesh, lod, cull, draw
+ *     static void move(ecs_iter *it) {
+ *         while (ecs_query_next(it)) { ... }               // it->dt, it->user, it->commands
+ *     }
+ *     ecs_phase_add(world, "physics", "game");             // a new phase right after "game"
+ *     ecs_system_add(world, &(ecs_system_desc){ .name = "move", .phase = "physics",
+ *         .query = { .with = { position, velocity } }, .writes = { position }, .fn = move });
+ *     ecs_progress(world, dt);                             // one frame, every phase in order
+ *   A system reads its query's components unless it lists them in `writes`; components it
+ *   touches through ecs_get go in `reads` or `writes` too. Within a phase, two systems
+ *   conflict when one writes what the other reads or writes: conflicting systems run one after
+ *   the other in registration order, the others run at the same time on the job system.
+ *   `.main_thread` pins a system to the main thread (OpenGL); `.parallel` splits its query
+ *   into batches of about `.batch_size` entities that run as parallel jobs, each batch with
+ *   its own command buffer. Every phase and every system is a trace zone named after it.
+ *
+ * PLACEHOLDER IDS. ecs_defer_create returns a placeholder that only the buffer it came from
+ * understands: use it in later commands of that buffer; the real entity exists once the buffer
+ * is applied. Real ids are handed out at apply time, in apply order, which is what keeps them
+ * identical for any thread count. Do not store a placeholder in component data.
+ *
+ * THREADS. All calls that change the world's structure (and registering components, queries,
+ * phases and systems) belong to the thread that runs ecs_progress, outside a running phase:
+ * while a phase runs, such a call is a programmer error and asserts. Systems may read anything
+ * and write the components they declare, through fields or ecs_get.
+ */
+#ifndef ECS_H
+#define ECS_H
+
+#include <assert.h>
+#include <stdalign.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "jobs/jobs.h"
+
+enum {
+    ECS_MAX_TERMS = 8,                       /* per list in a query: with, without, optional */
+    ECS_MAX_FIELDS = 2 * ECS_MAX_TERMS,      /* with + optional */
+    ECS_MAX_ACCESS = 16,                     /* per list in a system: reads, writes */
+    ECS_DEFAULT_BATCH_SIZE = 4096,           /* entities per batch of a parallel system */
+};
+
+typedef uint64_t ecs_entity;                 /* 0 = none */
+typedef uint32_t ecs_component;              /* 0 = none; also ends the term lists below */
+typedef uint32_t ecs_system;                 /* 0 = none */
+
+typedef struct ecs_world ecs_world;
+typedef struct ecs_query ecs_query;
+typedef struct ecs_commands ecs_commands;
+
+/* ---- world ------------------------------------------------------------------------------ */
+
+typedef struct ecs_world_desc {
+    job_system *jobs;                        /* NULL = run every system on the calling thread */
+} ecs_world_desc;
+
+ecs_world *ecs_world_create(const ecs_world_desc *desc);   /* desc may be NULL */
+void ecs_world_destroy(ecs_world *world);
+job_system *ecs_world_jobs(const ecs_world *world);        /* for systems that spawn jobs */
+
+/* ---- components ------------------------------------------------------------------------- */
+
+typedef struct ecs_component_desc {
+    const char *name;                        /* required, unique; copied */
+    size_t size;                             /* 0 = a tag */
+    size_t align;                            /* 0 = alignof(max_align_t) */
+} ecs_component_desc;
+
+/* Registering a name again returns the same component (the size must match). */
+ecs_component ecs_component_register(ecs_world *world, const ecs_component_desc *desc);
+ecs_component ecs_component_lookup(const ecs_world *world, const char *name); /* 0 = unknown */
+size_t ecs_component_size(const ecs_world *world, ecs_component component);
+
+#define ECS_COMPONENT(world, Type)                                                             \
+    ecs_component_register((world), &(ecs_component_desc){                                    \
+        .name = #Type, .size = sizeof(Type), .align = alignof(Type) })
+#define ECS_TAG(world, Name) ecs_component_register((world), &(ecs_component_desc){ .name = #Name })
+
+/* ---- entities --------------------------------------------------------------------------- */
+
+ecs_entity ecs_entity_create(ecs_world *world);
+void ecs_entity_destroy(ecs_world *world, ecs_entity entity);      /* dead ids are ignored */
+bool ecs_is_alive(const ecs_world *world, ecs_entity entity);
+int ecs_entity_count(const ecs_world *world);                      /* alive entities */
+
+/* Returns the component's data, zeroed if it was just added (tags: NULL). */
+void *ecs_add(ecs_world *world, ecs_entity entity, ecs_component component);
+/* Copies `value` into the component, adding it first if missing. Inside a phase only the copy
+ * is allowed (a component the entity has, declared in the system's writes). */
+void ecs_set(ecs_world *world, ecs_entity entity, ecs_component component, const void *value);
+void ecs_remove(ecs_world *world, ecs_entity entity, ecs_component component);
+bool ecs_has(const ecs_world *world, ecs_entity entity, ecs_component component);
+/* NULL when the entity is dead, lacks the component, or the component is a tag. */
+void *ecs_get(const ecs_world *world, ecs_entity entity, ecs_component component);
+
+/* Creates `count` entities straight into the table of `components`, without moving them
+ * through the tables in between: the fast path for spawning many alike entities. */
+typedef struct ecs_bulk_desc {
+    int count;
+    ecs_component components[ECS_MAX_TERMS]; /* ends at the first 0 */
+    const void *values[ECS_MAX_TERMS];       /* per component `count` values; NULL = zeroed */
+    ecs_entity *ids;                         /* optional: receives the `count` new ids */
+} ecs_bulk_desc;
+void ecs_entity_create_many(ecs_world *world, const ecs_bulk_desc *desc);
+
+/* ---- queries ---------------------------------------------------------------------------- */
+
+typedef struct ecs_query_desc {
+    ecs_component with[ECS_MAX_TERMS];       /* each list ends at the first 0 */
+    ecs_component without[ECS_MAX_TERMS];
+    ecs_component optional[ECS_MAX_TERMS];
+} ecs_query_desc;
+
+/* The world owns queries (freed with it). A query remembers its matching tables and picks up
+ * tables created later. An empty desc matches every entity. */
+ecs_query *ecs_query_create(ecs_world *world, const ecs_query_desc *desc);
+void ecs_query_destroy(ecs_world *world, ecs_query *query);
+int ecs_query_count(const ecs_world *world, const ecs_query *query); /* matching entities */
+
+typedef struct ecs_iter {
+    ecs_world *world;
+    const ecs_entity *entities;              /* `count` entities of the current table */
+    int count;
+    float dt;                                /* in systems: the frame's delta time, seconds */
+    ecs_commands *commands;                  /* in systems: this invocation's own buffer */
+    void *user;                              /* in systems: ecs_system_desc.user */
+    void *fields[ECS_MAX_FIELDS];            /* read through ecs_field */
+    struct {                                 /* private: where the iteration stands */
+        const ecs_query *query;
+        uint32_t match;                      /* next matched table */
+        uint32_t row;                        /* first row to visit in it */
+        uint32_t remaining;                  /* entities left in this iteration's range */
+        uint32_t present;                    /* bit f: the current table has field f */
+    } internal;
+} ecs_iter;
+
+ecs_iter ecs_query_iter(ecs_world *world, const ecs_query *query);
+bool ecs_query_next(ecs_iter *it);
+
+static inline void *ecs_field(const ecs_iter *it, int index) {
+    assert(index >= 0 && index < ECS_MAX_FIELDS);
+    return it->fields[index];
+}
+/* True when the current table has the field's component (for optional tags). */
+static inline bool ecs_field_is_set(const ecs_iter *it, int index) {
+    assert(index >= 0 && index < ECS_MAX_FIELDS);
+    return (it->internal.present >> index) & 1u;
+}
+
+/* A range of a query's matches: `count` entities starting at `row` of matched table `match`,
+ * running on into the following tables. Valid until the world's structure next changes. */
+typedef struct ecs_batch {
+    uint32_t match, row, count;
+} ecs_batch;
+
+/* Splits the matches into consecutive batches of `batch_size` entities (the last may be
+ * smaller), writes up to `capacity` of them and returns how many there are in all. */
+int ecs_query_batches(const ecs_world *world, const ecs_query *query, int batch_size,
+                      ecs_batch *batches, int capacity);
+ecs_iter ecs_batch_iter(ecs_world *world, const ecs_query *query, ecs_batch batch);
+
+/* ---- commands --------------------------------------------------------------------------- */
+
+ecs_commands *ecs_commands_create(ecs_world *world);
+void ecs_commands_destroy(ecs_commands *commands);
+/* Applies the commands in the order they were recorded, then empties the buffer. Commands on
+ * entities that died meanwhile are skipped (two systems may both destroy the same entity). */
+void ecs_commands_apply(ecs_commands *commands);
+int ecs_commands_count(const ecs_commands *commands);
+
+ecs_entity ecs_defer_create(ecs_commands *commands);                 /* returns a placeholder */
+void ecs_defer_destroy(ecs_commands *commands, ecs_entity entity);
+void ecs_defer_add(ecs_commands *commands, ecs_entity entity, ecs_component component);
+void ecs_defer_set(ecs_commands *commands, ecs_entity entity, ecs_component component,
+                   const void *value);
+void ecs_defer_remove(ecs_commands *commands, ecs_entity entity, ecs_component component);
+
+/* ---- phases and systems ----------------------------------------------------------------- */
+
+typedef void (*ecs_system_fn)(ecs_iter *it);
+
+typedef struct ecs_system_desc {
+    const char *name;                        /* trace zone name; copied */
+    const char *phase;                       /* required: an existing phase */
+    ecs_query_desc query;                    /* empty: no query, fn is called once */
+    ecs_component reads[ECS_MAX_ACCESS];     /* besides the query's terms */
+    ecs_component writes[ECS_MAX_ACCESS];
+    ecs_system_fn fn;                        /* required */
+    void *user;
+    bool main_thread;                        /* always run on the main thread */
+    bool parallel;                           /* split the query into batches run as jobs */
+    int batch_size;                          /* 0 = ECS_DEFAULT_BATCH_SIZE */
+} ecs_system_desc;
+
+/* Inserts phase `name` right after phase `after`. False (and an error logged) when `after`
+ * does not exist or `name` already does. */
+bool ecs_phase_add(ecs_world *world, const char *name, const char *after);
+/* Returns 0 (and logs an error) when the phase does not exist. */
+ecs_system ecs_system_add(ecs_world *world, const ecs_system_desc *desc);
+
+/* Runs one frame: every phase in order, applying the phase's command buffers at its end.
+ * Call from the thread that created the job system. */
+void ecs_progress(ecs_world *world, float dt);
+
+#endif /* ECS_H */

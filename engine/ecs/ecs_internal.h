@@ -1,0 +1,181 @@
+/* ecs_internal.h — the ECS's private structures, shared by the files of engine/ecs/.
+ *
+ * Storage is by archetype: one table per distinct set of components. A table holds its
+ * entities in one array and each component in one contiguous column, row i of every column
+ * belonging to entities[i]. An entity's record says which table and row hold it. Adding or
+ * removing a component moves the entity to the table of the new set; each table caches, per
+ * component, the table that adding or removing it leads to (its edges).
+ */
+#ifndef ECS_INTERNAL_H
+#define ECS_INTERNAL_H
+
+#include "ecs.h"
+
+#include "core/core.h"
+
+/* ---- ids -------------------------------------------------------------------------------- */
+
+/* The generation's top bit marks a placeholder from ecs_defer_create; real generations use
+ * the low 31 bits and wrap, so a real id never looks like a placeholder. */
+#define ECS_PLACEHOLDER_BIT (1ull << 63)
+#define ECS_GENERATION_MASK 0x7fffffffu
+
+static inline uint32_t ecs_id_index(ecs_entity e) { return (uint32_t)e; }
+static inline uint32_t ecs_id_generation(ecs_entity e) { return (uint32_t)(e >> 32); }
+static inline ecs_entity ecs_id_make(uint32_t index, uint32_t generation) {
+    return (ecs_entity)generation << 32 | index;
+}
+static inline bool ecs_id_is_placeholder(ecs_entity e) { return (e & ECS_PLACEHOLDER_BIT) != 0; }
+
+/* ---- components ------------------------------------------------------------------------- */
+
+typedef struct ecs_component_info {
+    char *name;
+    uint32_t size, align;
+} ecs_component_info;
+
+/* ---- tables ----------------------------------------------------------------------------- */
+
+/* Columns start on a cache line: a fresh line for every column keeps vector loads aligned and
+ * keeps two columns from sharing a line that two threads write. */
+enum { ECS_COLUMN_ALIGN = 64 };
+
+typedef struct ecs_column {
+    uint8_t *data;          /* table->capacity elements, ECS_COLUMN_ALIGN-ed; NULL for tags */
+    uint32_t size;          /* bytes per element; 0 for tags */
+} ecs_column;
+
+typedef struct ecs_table ecs_table;
+
+typedef struct ecs_edge {
+    ecs_table *add, *remove; /* NULL = not looked up yet */
+} ecs_edge;
+
+struct ecs_table {
+    uint32_t index;                  /* position in world->tables */
+    uint64_t hash;                   /* of the component set, for lookup */
+    ecs_component *components;       /* sorted ascending */
+    uint32_t component_count;
+    ecs_column *columns;             /* columns[i] holds components[i] */
+    ecs_entity *entities;
+    uint32_t count, capacity;
+    ecs_edge *edges;                 /* indexed by component id */
+    uint32_t edge_capacity;
+};
+
+/* Index of `component` among the table's columns, or -1. */
+int ecs_table_column_of(const ecs_table *table, ecs_component component);
+
+/* ---- entities --------------------------------------------------------------------------- */
+
+typedef struct ecs_record {
+    ecs_table *table;       /* NULL = free slot */
+    uint32_t row;           /* in a free slot: the next free index (0 = end of the list) */
+    uint32_t generation;
+} ecs_record;
+
+/* ---- queries ---------------------------------------------------------------------------- */
+
+typedef struct ecs_query_match {
+    ecs_table *table;
+    int16_t columns[ECS_MAX_FIELDS]; /* column of each field in the table, -1 = absent */
+} ecs_query_match;
+
+struct ecs_query {
+    ecs_component with[ECS_MAX_TERMS], without[ECS_MAX_TERMS], optional[ECS_MAX_TERMS];
+    int with_count, without_count, optional_count;
+    ecs_query_match *matches;        /* in table creation order */
+    uint32_t match_count, match_capacity;
+};
+
+/* Adds `table` to the query's matches if it matches. */
+void ecs_query_consider_table(ecs_query *query, ecs_table *table);
+void ecs_query_free(ecs_query *query);
+
+/* ---- commands --------------------------------------------------------------------------- */
+
+typedef enum ecs_command_kind {
+    ECS_COMMAND_CREATE,
+    ECS_COMMAND_DESTROY,
+    ECS_COMMAND_ADD,
+    ECS_COMMAND_SET,
+    ECS_COMMAND_REMOVE,
+} ecs_command_kind;
+
+typedef struct ecs_command {
+    ecs_command_kind kind;
+    ecs_component component;
+    ecs_entity entity;               /* real id or placeholder of this buffer */
+    size_t value_offset;             /* SET: where the value starts in commands->values */
+} ecs_command;
+
+struct ecs_commands {
+    ecs_world *world;
+    uint32_t serial;                 /* stamped into placeholders; changes on every reset */
+    ecs_command *list;
+    uint32_t count, capacity;
+    uint8_t *values;                 /* SET values, back to back */
+    size_t values_size, values_capacity;
+    uint32_t placeholder_count;
+    ecs_entity *resolved;            /* apply-time scratch: placeholder → real id */
+    uint32_t resolved_capacity;
+};
+
+/* Empties the buffer and gives it a new serial (main thread, outside phases). */
+void ecs_commands_reset(ecs_commands *commands);
+
+/* ---- systems and phases ----------------------------------------------------------------- */
+
+typedef struct ecs_system_info ecs_system_info;
+
+typedef struct ecs_phase {
+    char *name;
+    const char *trace_name;          /* trace_intern'ed: outlives the world */
+    ecs_system_info **systems;       /* in registration order */
+    uint32_t system_count, system_capacity;
+} ecs_phase;
+
+void ecs_scheduler_free(ecs_world *world);
+void ecs_pipeline_init(ecs_world *world);
+
+/* ---- the world -------------------------------------------------------------------------- */
+
+struct ecs_world {
+    job_system *jobs;
+
+    ecs_component_info *components;  /* indexed by id; [0] unused */
+    uint32_t component_count, component_capacity;
+
+    ecs_record *records;             /* indexed by entity index; [0] unused */
+    uint32_t record_count, record_capacity;
+    uint32_t free_head;              /* first free index, 0 = none */
+    int alive_count;
+
+    ecs_table **tables;              /* [0] is the empty table */
+    uint32_t table_count, table_capacity;
+
+    ecs_query **queries;
+    uint32_t query_count, query_capacity;
+
+    ecs_phase *phases;               /* in frame order */
+    uint32_t phase_count, phase_capacity;
+    ecs_system_info **systems;       /* in registration order; ecs_system is index + 1 */
+    uint32_t system_count, system_capacity;
+
+    core_arena frame;                /* scheduler scratch, reset every phase */
+    bool in_phase;                   /* a phase is running: structural calls assert */
+    uint32_t command_serial;
+};
+
+/* Asserts that the world's structure may change now. */
+#define ECS_ASSERT_STRUCTURAL(world)                                                          \
+    assert(!(world)->in_phase && "structural change while a phase runs: use it->commands")
+
+#define ECS_ASSERT_COMPONENT(world, component)                                                \
+    assert((component) > 0 && (component) < (world)->component_count && "unknown component")
+
+ecs_table *ecs_table_for(ecs_world *world, const ecs_component *sorted, uint32_t count);
+/* Returns `items` (an array of `*capacity` elements) grown to hold at least `needed`. */
+void *ecs_grow(void *items, uint32_t *capacity, uint32_t needed, size_t item_size);
+
+#endif /* ECS_INTERNAL_H */
