@@ -72,7 +72,9 @@ program("test_engine", { files = { "tests/engine/**.c", "tests/engine/**.h" },
                          links = { "criterion" } })
 -- The tests that exercise threads, without Criterion, so they can run under ThreadSanitizer
 -- (tests/engine/test.h says why). tools/test builds and runs this in the tsan configuration.
-program("test_threads", { files = { "tests/engine/test_shim.c", "tests/engine/test_jobs.c" },
+program("test_threads", { files = { "tests/engine/test_shim.c", "tests/engine/test_jobs.c",
+                                    "tests/engine/test_ecs_scheduler.c", "tests/engine/test_ecs_commands.c",
+                                    "tests/engine/test_trace.c" },
                           defines = { "TEST_WITHOUT_CRITERION" } })
 program("bench", { files = { "tools/src/bench/**.c", "tools/src/bench/**.h" },
                    buildoptions = { "-fopenmp" }, linkoptions = { "-fopenmp" } })

@@ -93,6 +93,16 @@ static void slot_lock(job_slot *slot) {
 }
 static void slot_unlock(job_slot *slot) { atomic_flag_clear_explicit(&slot->lock, memory_order_release); }
 
+/* Makes room for `more` entries in the shared free list. Called with slot_lock held. */
+static void reserve_shared_free(job_system *jobs, size_t more) {
+    size_t needed = jobs->shared_free_count + more;
+    if (needed <= jobs->shared_free_capacity) return;
+    size_t capacity = needed * 2;
+    jobs->shared_free = core_realloc(jobs->shared_free, jobs->shared_free_capacity * sizeof(uint32_t),
+                                     capacity * sizeof(uint32_t));
+    jobs->shared_free_capacity = capacity;
+}
+
 /* Adds a block of fresh slots to the shared free list. Called with slot_lock held. */
 static void grow_slots(job_system *jobs) {
     uint32_t block_index = atomic_load(&jobs->block_count);
@@ -107,13 +117,7 @@ static void grow_slots(job_system *jobs) {
     atomic_store_explicit(&jobs->blocks[block_index], block, memory_order_release);
     atomic_store(&jobs->block_count, block_index + 1);
 
-    size_t needed = jobs->shared_free_count + JOB_BLOCK_SIZE;
-    if (needed > jobs->shared_free_capacity) {
-        size_t capacity = needed * 2;
-        jobs->shared_free = core_realloc(jobs->shared_free, jobs->shared_free_capacity * sizeof(uint32_t),
-                                         capacity * sizeof(uint32_t));
-        jobs->shared_free_capacity = capacity;
-    }
+    reserve_shared_free(jobs, JOB_BLOCK_SIZE);
     /* Push in reverse so the lowest index is handed out first. */
     for (int i = JOB_BLOCK_SIZE - 1; i >= 0; i--)
         jobs->shared_free[jobs->shared_free_count++] = block_index * JOB_BLOCK_SIZE + (uint32_t)i;
@@ -130,13 +134,7 @@ static uint32_t take_shared_slots(job_system *jobs, uint32_t *out, int want) {
 
 static void give_shared_slots(job_system *jobs, const uint32_t *slots, int count) {
     pthread_mutex_lock(&jobs->slot_lock);
-    size_t needed = jobs->shared_free_count + (size_t)count;
-    if (needed > jobs->shared_free_capacity) {
-        size_t capacity = needed * 2;
-        jobs->shared_free = core_realloc(jobs->shared_free, jobs->shared_free_capacity * sizeof(uint32_t),
-                                         capacity * sizeof(uint32_t));
-        jobs->shared_free_capacity = capacity;
-    }
+    reserve_shared_free(jobs, (size_t)count);
     memcpy(jobs->shared_free + jobs->shared_free_count, slots, (size_t)count * sizeof *slots);
     jobs->shared_free_count += (size_t)count;
     pthread_mutex_unlock(&jobs->slot_lock);
