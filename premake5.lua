@@ -4,7 +4,7 @@
 --
 -- Configurations
 --   debug    -O0 -g, AddressSanitizer + UndefinedBehaviorSanitizer
---   release  -O2 -g, portable x86-64 (never -march=native)
+--   release  -O2 -g, portable x86-64 (no CPU-specific flags: runs on any x86-64)
 --   tsan     -O1 -g, ThreadSanitizer (job-system and scheduler tests)
 --
 -- Adding code: a .c file under engine/ joins the engine library, a test file under
