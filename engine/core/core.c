@@ -103,6 +103,14 @@ void core_free(void *ptr, size_t size) {
     atomic_fetch_sub_explicit(&memory_in_use, size, memory_order_relaxed);
 }
 
+void *core__grow_slow(void *items, size_t *capacity, size_t needed, size_t item_size) {
+    size_t grown = CORE_MAX(CORE_MAX(needed, *capacity * 2), (size_t)8);
+    if (item_size && grown > SIZE_MAX / item_size) core_fatal("core", "array of %zu × %zu bytes overflows", grown, item_size);
+    items = core_realloc(items, *capacity * item_size, grown * item_size);
+    *capacity = grown;
+    return items;
+}
+
 size_t core_memory_in_use(void) { return atomic_load_explicit(&memory_in_use, memory_order_relaxed); }
 
 char *core_strdup(const char *s) {

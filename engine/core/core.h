@@ -107,6 +107,14 @@ void *core_alloc(size_t size);
 void *core_calloc(size_t count, size_t size);
 void *core_realloc(void *ptr, size_t old_size, size_t new_size);
 void core_free(void *ptr, size_t size);
+/* Returns `items` with room for at least `needed` items of `item_size` bytes, growing the
+ * capacity by doubling (to at least 8) so that appending one at a time costs O(1) amortised;
+ * updates *capacity. The new items are not initialised. The one growth policy of the engine. */
+void *core__grow_slow(void *items, size_t *capacity, size_t needed, size_t item_size);
+static inline void *core_grow(void *items, size_t *capacity, size_t needed, size_t item_size) {
+    /* Inline: on hot append paths the array is almost always big enough already. */
+    return needed <= *capacity ? items : core__grow_slow(items, capacity, needed, item_size);
+}
 /* Aligned to `align` (a power of two, at least sizeof(void *)); free with core_free. */
 void *core_alloc_aligned(size_t size, size_t align);
 size_t core_memory_in_use(void);                  /* live bytes through core_alloc & co. */

@@ -77,21 +77,12 @@ static const char *json_describe_byte(const json_parser *p, size_t at, char buff
 /* ---- scratch stacks --------------------------------------------------------------------- */
 
 static void json_push_value(json_parser *p, const core_json_value *value) {
-    if (p->value_count == p->value_capacity) {
-        size_t grown = p->value_capacity ? p->value_capacity * 2 : 64;
-        p->values = core_realloc(p->values, p->value_capacity * sizeof *p->values,
-                                 grown * sizeof *p->values);
-        p->value_capacity = grown;
-    }
+    p->values = core_grow(p->values, &p->value_capacity, p->value_count + 1, sizeof *p->values);
     p->values[p->value_count++] = *value;
 }
 
 static void json_push_key(json_parser *p, core_json_string key) {
-    if (p->key_count == p->key_capacity) {
-        size_t grown = p->key_capacity ? p->key_capacity * 2 : 64;
-        p->keys = core_realloc(p->keys, p->key_capacity * sizeof *p->keys, grown * sizeof *p->keys);
-        p->key_capacity = grown;
-    }
+    p->keys = core_grow(p->keys, &p->key_capacity, p->key_count + 1, sizeof *p->keys);
     p->keys[p->key_count++] = key;
 }
 

@@ -48,11 +48,7 @@ static void record(ecs_commands *commands, ecs_command command) {
 
 static size_t store_value(ecs_commands *commands, const void *value, size_t size) {
     size_t offset = commands->values_size, needed = offset + size;
-    if (needed > commands->values_capacity) {
-        size_t grown = CORE_MAX(CORE_MAX(needed, commands->values_capacity * 2), (size_t)256);
-        commands->values = core_realloc(commands->values, commands->values_capacity, grown);
-        commands->values_capacity = grown;
-    }
+    commands->values = core_grow(commands->values, &commands->values_capacity, needed, 1);
     if (size) memcpy(commands->values + offset, value, size);
     commands->values_size = needed;
     return offset;

@@ -5,11 +5,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* core_grow for the ECS's 32-bit counts (they keep tables and records small). */
 void *ecs_grow(void *items, uint32_t *capacity, uint32_t needed, size_t item_size) {
     if (needed <= *capacity) return items;
-    uint32_t grown = CORE_MAX(CORE_MAX(needed, *capacity * 2), 8u);
-    items = core_realloc(items, *capacity * item_size, grown * item_size);
-    *capacity = grown;
+    size_t grown = *capacity;
+    items = core_grow(items, &grown, needed, item_size);
+    *capacity = (uint32_t)grown;
     return items;
 }
 

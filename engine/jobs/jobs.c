@@ -95,12 +95,8 @@ static void slot_unlock(job_slot *slot) { atomic_flag_clear_explicit(&slot->lock
 
 /* Makes room for `more` entries in the shared free list. Called with slot_lock held. */
 static void reserve_shared_free(job_system *jobs, size_t more) {
-    size_t needed = jobs->shared_free_count + more;
-    if (needed <= jobs->shared_free_capacity) return;
-    size_t capacity = needed * 2;
-    jobs->shared_free = core_realloc(jobs->shared_free, jobs->shared_free_capacity * sizeof(uint32_t),
-                                     capacity * sizeof(uint32_t));
-    jobs->shared_free_capacity = capacity;
+    jobs->shared_free = core_grow(jobs->shared_free, &jobs->shared_free_capacity, jobs->shared_free_count + more,
+                                  sizeof *jobs->shared_free);
 }
 
 /* Adds a block of fresh slots to the shared free list. Called with slot_lock held. */
@@ -217,12 +213,10 @@ static void add_dependent(job_slot *slot, uint32_t dependent) {
         return;
     }
     int extra = slot->dependent_count - JOB_INLINE_DEPENDENTS;
-    if (extra == slot->dependent_capacity) {
-        int capacity = slot->dependent_capacity ? slot->dependent_capacity * 2 : 8;
-        slot->more_dependents = core_realloc(slot->more_dependents, (size_t)slot->dependent_capacity * sizeof(uint32_t),
-                                             (size_t)capacity * sizeof(uint32_t));
-        slot->dependent_capacity = capacity;
-    }
+    /* The slot keeps an int capacity to stay within its cache line. */
+    size_t capacity = (size_t)slot->dependent_capacity;
+    slot->more_dependents = core_grow(slot->more_dependents, &capacity, (size_t)extra + 1, sizeof(uint32_t));
+    slot->dependent_capacity = (int)capacity;
     slot->more_dependents[extra] = dependent;
     slot->dependent_count++;
 }

@@ -95,7 +95,7 @@ static struct {
     trace_chunk *pool;
     trace_tid_name *names; /* indexed by tid; tid 0 is unused */
     uint32_t tid_count;    /* next tid to give out */
-    uint32_t name_capacity;
+    size_t name_capacity;
 } trace_registry;
 
 /* Guarded by trace_write_lock. */
@@ -228,13 +228,8 @@ static void trace_set_capturing(bool on) { __atomic_store_n(&trace__active, on, 
 
 static uint32_t trace_tid_new(const char *name, bool is_lane) {
     uint32_t tid = trace_registry.tid_count++;
-    if (tid >= trace_registry.name_capacity) {
-        uint32_t grown = trace_registry.name_capacity ? trace_registry.name_capacity * 2 : 64;
-        trace_registry.names = core_realloc(trace_registry.names,
-                                            trace_registry.name_capacity * sizeof(trace_tid_name),
-                                            grown * sizeof(trace_tid_name));
-        trace_registry.name_capacity = grown;
-    }
+    trace_registry.names = core_grow(trace_registry.names, &trace_registry.name_capacity, (size_t)tid + 1,
+                                     sizeof *trace_registry.names);
     trace_registry.names[tid] = (trace_tid_name){ .name = name, .is_lane = is_lane, .pending = name != NULL };
     return tid;
 }
@@ -467,12 +462,10 @@ static void trace_write_thread_name(uint32_t tid, const char *name) {
  * caller. Clamping to the previous timestamp keeps nesting intact at the cost of a few ns. */
 static uint64_t trace_clamp_to_tid(uint32_t tid, uint64_t ns) {
     if (tid >= trace_writer.last_capacity) {
-        size_t grown = CORE_MAX((size_t)tid + 1, trace_writer.last_capacity * 2);
-        trace_writer.last_ns = core_realloc(trace_writer.last_ns, trace_writer.last_capacity * sizeof(uint64_t),
-                                            grown * sizeof(uint64_t));
-        memset(trace_writer.last_ns + trace_writer.last_capacity, 0,
-               (grown - trace_writer.last_capacity) * sizeof(uint64_t));
-        trace_writer.last_capacity = grown;
+        size_t old = trace_writer.last_capacity;
+        trace_writer.last_ns = core_grow(trace_writer.last_ns, &trace_writer.last_capacity, (size_t)tid + 1,
+                                         sizeof *trace_writer.last_ns);
+        memset(trace_writer.last_ns + old, 0, (trace_writer.last_capacity - old) * sizeof *trace_writer.last_ns);
     }
     if (ns < trace_writer.last_ns[tid]) ns = trace_writer.last_ns[tid];
     trace_writer.last_ns[tid] = ns;

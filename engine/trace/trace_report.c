@@ -52,14 +52,6 @@ typedef struct report_builder {
 
 /* ---- small helpers ---------------------------------------------------------------------- */
 
-/* Makes room for one more item in a growable array. */
-static void report_reserve(void **items, size_t *capacity, size_t count, size_t item_size) {
-    if (count < *capacity) return;
-    size_t grown = *capacity ? *capacity * 2 : 16;
-    *items = core_realloc(*items, *capacity * item_size, grown * item_size);
-    *capacity = grown;
-}
-
 CORE_PRINTF(2, 3)
 static bool report_fail(trace_report *report, const char *fmt, ...) {
     va_list args;
@@ -104,7 +96,7 @@ static uint32_t report_zone_index(report_builder *b, const char *name) {
     size_t i = core_hash_bytes(name, strlen(name), 0) & mask;
     for (; b->zone_slots[i]; i = (i + 1) & mask)
         if (strcmp(b->zone_names[b->zone_slots[i] - 1], name) == 0) return b->zone_slots[i] - 1;
-    report_reserve((void **)&b->zone_names, &b->zone_capacity, b->zone_count, sizeof *b->zone_names);
+    b->zone_names = core_grow(b->zone_names, &b->zone_capacity, b->zone_count + 1, sizeof *b->zone_names);
     b->zone_names[b->zone_count] = name;
     b->zone_slots[i] = (uint32_t)++b->zone_count;
     return (uint32_t)(b->zone_count - 1);
@@ -113,10 +105,10 @@ static uint32_t report_zone_index(report_builder *b, const char *name) {
 static bool report_add_zone(report_builder *b, size_t index, const char *name, double ms) {
     /* Finite timestamps far apart can still overflow their difference. */
     if (!isfinite(ms)) return report_fail(b->report, "event %zu: zone duration out of range", index);
-    report_reserve((void **)&b->samples, &b->sample_capacity, b->sample_count, sizeof *b->samples);
+    b->samples = core_grow(b->samples, &b->sample_capacity, b->sample_count + 1, sizeof *b->samples);
     b->samples[b->sample_count++] = (report_sample){ .zone = report_zone_index(b, name), .ms = ms };
     if (strcmp(name, "frame") == 0) {
-        report_reserve((void **)&b->frames, &b->frame_capacity, b->frame_count, sizeof *b->frames);
+        b->frames = core_grow(b->frames, &b->frame_capacity, b->frame_count + 1, sizeof *b->frames);
         b->frames[b->frame_count++] = ms;
     }
     return true;
@@ -145,7 +137,7 @@ static report_thread *report_thread_of(report_builder *b, const core_json_value 
             return &b->threads[i];
         }
     }
-    report_reserve((void **)&b->threads, &b->thread_capacity, b->thread_count, sizeof *b->threads);
+    b->threads = core_grow(b->threads, &b->thread_capacity, b->thread_count + 1, sizeof *b->threads);
     b->threads[b->thread_count] = (report_thread){ .pid = pid, .tid = tid };
     b->last_thread = b->thread_count++;
     return &b->threads[b->last_thread];
@@ -170,7 +162,7 @@ static bool report_begin(report_builder *b, const core_json_value *event, size_t
     double ts = 0;
     if (!report_event_time(b, event, index, "ts", 'B', &ts)) return false;
     report_thread *thread = report_thread_of(b, event);
-    report_reserve((void **)&thread->open, &thread->open_capacity, thread->open_count, sizeof *thread->open);
+    thread->open = core_grow(thread->open, &thread->open_capacity, thread->open_count + 1, sizeof *thread->open);
     thread->open[thread->open_count++] = (report_open_zone){ .name = report_event_name(event), .ts_us = ts };
     return true;
 }
@@ -321,11 +313,8 @@ static char *report_read_file(const char *path, size_t *size, size_t *capacity) 
     char *data = NULL;
     *size = *capacity = 0;
     for (;;) {
-        if (*size == *capacity) {
-            size_t grown = *capacity ? *capacity * 2 : 1 << 16;
-            data = core_realloc(data, *capacity, grown);
-            *capacity = grown;
-        }
+        /* Read in pieces of at least 64 KiB. */
+        if (*size == *capacity) data = core_grow(data, capacity, CORE_MAX(*size + 1, (size_t)1 << 16), 1);
         size_t n = fread(data + *size, 1, *capacity - *size, file);
         *size += n;
         if (n == 0) break;

@@ -133,6 +133,34 @@ Test(core_memory, live_bytes_follow_allocations) {
     cr_expect_eq(core_memory_in_use(), before);
 }
 
+Test(core_memory, grow_keeps_items_and_doubles) {
+    size_t before = core_memory_in_use();
+    int *items = NULL;
+    size_t capacity = 0, reallocations = 0;
+    for (int i = 0; i < 1000; i++) {
+        size_t old = capacity;
+        items = core_grow(items, &capacity, (size_t)i + 1, sizeof *items);
+        if (capacity != old) {
+            reallocations++;
+            /* Never less than 8, and at least double the old capacity. */
+            cr_expect_geq(capacity, old * 2 > 8 ? old * 2 : 8);
+        }
+        cr_assert_geq(capacity, (size_t)i + 1);
+        items[i] = i * 3;
+    }
+    for (int i = 0; i < 1000; i++) cr_assert_eq(items[i], i * 3, "item %d lost in a move", i);
+    /* 8, 16, …, 1024: eight reallocations for a thousand appends. */
+    cr_expect_eq(reallocations, 8u);
+    cr_expect_eq(capacity, 1024u);
+    cr_expect_eq(core_memory_in_use() - before, 1024 * sizeof *items);
+    /* Asking for less than there is changes nothing. */
+    int *same = core_grow(items, &capacity, 10, sizeof *items);
+    cr_expect_eq(same, items);
+    cr_expect_eq(capacity, 1024u);
+    core_free(items, capacity * sizeof *items);
+    cr_expect_eq(core_memory_in_use(), before);
+}
+
 /* ---- hashing ---------------------------------------------------------------------------- */
 
 Test(core_hash, mixing_is_bijective_on_a_sample_and_avalanches) {

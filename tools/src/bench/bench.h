@@ -21,6 +21,7 @@
 typedef struct bench_context bench_context;
 typedef double (*bench_sample_fn)(void *user);
 
+/* Whether a group should set up rows that start with `name` (true when --filter names one). */
 bool bench_wants(const bench_context *ctx, const char *name);
 /* Calls fn `runs` times (after one warm-up call) and records what it returns. */
 void bench_run(bench_context *ctx, const char *name, const char *unit, int runs,

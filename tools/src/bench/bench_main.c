@@ -23,14 +23,21 @@ struct bench_context {
     int threads;
     int runs_override;
     bench_row *rows;
-    int row_count, row_capacity;
+    size_t row_count, row_capacity;
 };
 
 static volatile double bench_sink;
 void bench_consume(double value) { bench_sink += value; }
 
-bool bench_wants(const bench_context *ctx, const char *name) {
+/* Whether row `name` is printed and recorded: its name contains the filter. */
+static bool row_selected(const bench_context *ctx, const char *name) {
     return !ctx->filter || strstr(name, ctx->filter) != NULL;
+}
+
+/* Groups ask with their rows' common prefix ("ecs.iterate.1m"), so a filter naming one of the
+ * rows ("ecs.iterate.1m.ratio") must let the group run too; only that row is then recorded. */
+bool bench_wants(const bench_context *ctx, const char *name) {
+    return row_selected(ctx, name) || strncmp(ctx->filter, name, strlen(name)) == 0;
 }
 
 int bench_threads(const bench_context *ctx) { return ctx->threads > 0 ? ctx->threads : core_cpu_count(); }
@@ -41,7 +48,7 @@ static int compare_doubles(const void *a, const void *b) {
 }
 
 void bench_record(bench_context *ctx, const char *name, const char *unit, const double *samples, int count) {
-    if (!bench_wants(ctx, name) || count <= 0) return;
+    if (!row_selected(ctx, name) || count <= 0) return;
     double *sorted = malloc((size_t)count * sizeof *sorted);
     memcpy(sorted, samples, (size_t)count * sizeof *sorted);
     qsort(sorted, (size_t)count, sizeof *sorted, compare_doubles);
@@ -52,17 +59,14 @@ void bench_record(bench_context *ctx, const char *name, const char *unit, const 
     snprintf(row.unit, sizeof row.unit, "%s", unit);
     free(sorted);
 
-    if (ctx->row_count == ctx->row_capacity) {
-        ctx->row_capacity = ctx->row_capacity ? ctx->row_capacity * 2 : 32;
-        ctx->rows = realloc(ctx->rows, (size_t)ctx->row_capacity * sizeof *ctx->rows);
-    }
+    ctx->rows = core_grow(ctx->rows, &ctx->row_capacity, ctx->row_count + 1, sizeof *ctx->rows);
     ctx->rows[ctx->row_count++] = row;
     printf("%-36s %12.4g %12.4g %12.4g  %-6s %5d\n", row.name, row.median, row.min, row.max, row.unit, row.runs);
     fflush(stdout);
 }
 
 void bench_run(bench_context *ctx, const char *name, const char *unit, int runs, bench_sample_fn fn, void *user) {
-    if (!bench_wants(ctx, name)) return;
+    if (!row_selected(ctx, name)) return;
     if (ctx->runs_override > 0) runs = ctx->runs_override;
     bench_consume(fn(user)); /* warm-up: caches, page faults, lazily started threads */
     double *samples = malloc((size_t)runs * sizeof *samples);
@@ -78,7 +82,7 @@ static bool write_json(const bench_context *ctx, const char *path) {
     FILE *file = fopen(temporary, "w");
     if (!file) return false;
     fprintf(file, "{\"results\":[");
-    for (int i = 0; i < ctx->row_count; i++) {
+    for (size_t i = 0; i < ctx->row_count; i++) {
         const bench_row *row = &ctx->rows[i];
         fprintf(file, "%s\n  {\"name\":\"%s\",\"unit\":\"%s\",\"median\":%.9g,\"min\":%.9g,\"max\":%.9g,\"runs\":%d}",
                 i ? "," : "", row->name, row->unit, row->median, row->min, row->max, row->runs);
@@ -126,6 +130,6 @@ int main(int argc, char **argv) {
         core_error("bench", "could not write %s", json_path);
         return 1;
     }
-    free(ctx.rows);
+    core_free(ctx.rows, ctx.row_capacity * sizeof *ctx.rows);
     return 0;
 }
