@@ -21,12 +21,22 @@ local function all_configs()
   if premake5 then filter({}) else configuration({}) end
 end
 
+-- The OpenGL loader is generated, not written: Debian's glad 2 writes it into build/glad the
+-- first time the makefiles are generated (--reproducible keeps it offline and byte-stable).
+local glad_dir = "build/glad"
+if not os.isfile(glad_dir .. "/src/gl.c") then
+  os.execute("glad --reproducible --api gl:core=4.5 --out-path " .. glad_dir .. " c >/dev/null 2>&1")
+  if not os.isfile(glad_dir .. "/src/gl.c") then
+    error("could not generate the OpenGL loader with glad (install python3-glad: tools/setup)")
+  end
+end
+
 if premake5 then workspace "engine" else solution "engine" end
   configurations { "debug", "release", "tsan" }
   location(_OPTIONS["to"] or "build")
   objdir "build/obj"
   language "C"
-  includedirs { "engine" }
+  includedirs { "engine", glad_dir .. "/include" }
   defines { "_GNU_SOURCE" }
   buildoptions { "-std=c11", "-Wall", "-Wextra", "-Wshadow", "-Wno-missing-field-initializers",
                  "-pthread", "-g" }
@@ -53,6 +63,15 @@ project "engine"
   kind "StaticLib"
   files { "engine/**.c", "engine/**.h" }
 
+-- Generated code: built with its own warnings off, so ours can stay strict.
+project "glad"
+  kind "StaticLib"
+  files { glad_dir .. "/src/gl.c" }
+  buildoptions { "-w" }
+
+-- What the engine's platform layer links against (engine/gfx, engine/input).
+local platform_libs = { "glfw", "OSMesa", "hidapi-hidraw", "dl" }
+
 -- A program linked against the engine. `extra` may set files, links and build options.
 local function program(name, extra)
   project(name)
@@ -60,8 +79,9 @@ local function program(name, extra)
     files(extra.files)
     if extra.excludes then excludes(extra.excludes) end
     if extra.defines then defines(extra.defines) end
-    links { "engine" }
+    links { "engine", "glad" }
     if extra.links then links(extra.links) end
+    links(platform_libs)
     links { "m" }
     if extra.buildoptions then buildoptions(extra.buildoptions) end
     if extra.linkoptions then linkoptions(extra.linkoptions) end
@@ -80,3 +100,4 @@ program("bench", { files = { "tools/src/bench/**.c", "tools/src/bench/**.h" },
                    buildoptions = { "-fopenmp" }, linkoptions = { "-fopenmp" } })
 program("trace_report", { files = { "tools/src/trace_report.c" } })
 program("hello_systems", { files = { "tools/examples/hello_systems.c" } })
+program("hidreplay", { files = { "tools/src/hidreplay.c" } })
