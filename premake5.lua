@@ -70,7 +70,7 @@ project "glad"
   buildoptions { "-w" }
 
 -- What the engine's platform layer links against (engine/gfx, engine/input).
-local platform_libs = { "glfw", "OSMesa", "hidapi-hidraw", "dl" }
+local platform_libs = { "glfw", "OSMesa", "hidapi-hidraw", "stb", "dl" }
 
 -- A program linked against the engine. `extra` may set files, links and build options.
 local function program(name, extra)
@@ -101,3 +101,7 @@ program("bench", { files = { "tools/src/bench/**.c", "tools/src/bench/**.h" },
 program("trace_report", { files = { "tools/src/trace_report.c" } })
 program("hello_systems", { files = { "tools/examples/hello_systems.c" } })
 program("hidreplay", { files = { "tools/src/hidreplay.c" } })
+-- Render tests: OSMesa scenes checked by image properties and a golden PNG; a window test when
+-- there is a display (tools/test starts Xvfb for it).
+program("test_render", { files = { "tests/render/**.c", "tests/render/**.h" }, links = { "criterion" } })
+program("hello_scene", { files = { "tools/examples/hello_scene.c" } })

@@ -26,7 +26,7 @@ expect() {
   fi
 }
 
-for program in bench trace_report hello_systems; do
+for program in bench trace_report hello_systems hello_scene; do
   p=$bin/$program
   expect "$program: unknown flag" 2 "unknown option '--no-such-flag'.*" -- "$p" --no-such-flag
   expect "$program: usage on error" 2 "usage: $program" -- "$p" --no-such-flag
@@ -55,6 +55,24 @@ expect "hello_systems: runs with a trace" 0 "" -- "$bin/hello_systems" --frames 
 expect "trace_report: frames of the run" 0 "30 frames" -- "$bin/trace_report" "$tmp/run.json"
 expect "trace_report: phases in the run" 0 "(^| )cull( |$)" -- "$bin/trace_report" "$tmp/run.json"
 expect "trace_report: svg beside the trace" 0 "^<svg|<svg " -- cat "$tmp/run.frames.svg"
+
+# The platform example: flags, a headless run with a screenshot and a trace, shader errors.
+expect "hello_scene: bad --size" 2 "bad value for '--size': '640by360'" -- "$bin/hello_scene" --size 640by360
+expect "hello_scene: tiny --size" 2 "bad value for '--size'" -- "$bin/hello_scene" --size 8x8
+expect "hello_scene: headless run" 0 "10 frames.*offscreen 160x90" -- \
+  "$bin/hello_scene" --headless --size 160x90 --frames 10 --screenshot "$tmp/scene.png" --trace "$tmp/scene.json"
+expect "hello_scene: screenshot is a PNG" 0 "^ *137 80 78 71" -- od -An -tu1 -N4 "$tmp/scene.png"
+expect "hello_scene: screenshot is 160 x 90" 0 "^ *0 0 0 160 0 0 0 90" -- od -An -tu1 -j16 -N8 "$tmp/scene.png"
+expect "trace_report: GPU lane of the run" 0 "scene" -- "$bin/trace_report" "$tmp/scene.json"
+expect "hello_scene: unwritable --screenshot" 1 "/nonexistent-dir/s.png" -- \
+  "$bin/hello_scene" --headless --size 64x64 --frames 2 --screenshot /nonexistent-dir/s.png
+expect "hello_scene: missing --bindings" 1 "$tmp/absent-bindings.txt" -- \
+  "$bin/hello_scene" --headless --frames 1 --bindings "$tmp/absent-bindings.txt"
+mkdir -p "$tmp/shaders"
+cp "$(dirname "$0")"/../shaders/* "$tmp/shaders/"
+printf '#version 450 core\n#include "common.glsl"\nout vec4 c;\nvoid main() { c = vec4(oops); }\n' >"$tmp/shaders/scene.frag"
+expect "hello_scene: shader error at file:line, exit 1" 1 "shaders/scene.frag:4:" -- \
+  env ENGINE_SHADERS="$tmp/shaders" "$bin/hello_scene" --headless --frames 1
 
 echo "programs: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]
