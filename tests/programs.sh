@@ -5,6 +5,8 @@
 # Ends with "N passed, N failed".
 set -uo pipefail
 bin=${1:?usage: tests/programs.sh BINDIR}
+# System libraries' leftovers (OSMesa) are not ours: the same suppressions tools/test uses.
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$(cd "$(dirname "$0")" && pwd)/lsan.supp:print_suppressions=0}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 passed=0 failed=0
@@ -61,9 +63,9 @@ expect "hello_scene: bad --size" 2 "bad value for '--size': '640by360'" -- "$bin
 expect "hello_scene: tiny --size" 2 "bad value for '--size'" -- "$bin/hello_scene" --size 8x8
 expect "hello_scene: headless run" 0 "10 frames.*offscreen 160x90" -- \
   "$bin/hello_scene" --headless --size 160x90 --frames 10 --screenshot "$tmp/scene.png" --trace "$tmp/scene.json"
-expect "hello_scene: screenshot is a PNG" 0 "^ *137 80 78 71" -- od -An -tu1 -N4 "$tmp/scene.png"
-expect "hello_scene: screenshot is 160 x 90" 0 "^ *0 0 0 160 0 0 0 90" -- od -An -tu1 -j16 -N8 "$tmp/scene.png"
-expect "trace_report: GPU lane of the run" 0 "scene" -- "$bin/trace_report" "$tmp/scene.json"
+expect "hello_scene: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 -N4 "$tmp/scene.png"
+expect "hello_scene: screenshot is 160 x 90" 0 "^ *0 +0 +0 +160 +0 +0 +0 +90" -- od -An -tu1 -j16 -N8 "$tmp/scene.png"
+expect "trace_report: GPU lane of the run" 0 "gpu scene" -- "$bin/trace_report" "$tmp/scene.json"
 expect "hello_scene: unwritable --screenshot" 1 "/nonexistent-dir/s.png" -- \
   "$bin/hello_scene" --headless --size 64x64 --frames 2 --screenshot /nonexistent-dir/s.png
 expect "hello_scene: missing --bindings" 1 "$tmp/absent-bindings.txt" -- \
@@ -73,6 +75,50 @@ cp "$(dirname "$0")"/../shaders/* "$tmp/shaders/"
 printf '#version 450 core\n#include "common.glsl"\nout vec4 c;\nvoid main() { c = vec4(oops); }\n' >"$tmp/shaders/scene.frag"
 expect "hello_scene: shader error at file:line, exit 1" 1 "shaders/scene.frag:4:" -- \
   env ENGINE_SHADERS="$tmp/shaders" "$bin/hello_scene" --headless --frames 1
+
+# hidreplay: its command line, bad files, and a decode end to end.
+p=$bin/hidreplay
+expect "hidreplay: unknown flag" 2 "unknown option '--no-such-flag'" -- "$p" --no-such-flag
+expect "hidreplay: usage on error" 2 "usage: hidreplay" -- "$p" --no-such-flag
+expect "hidreplay: --help" 0 "usage: hidreplay" -- "$p" --help
+expect "hidreplay: no arguments" 2 "usage: hidreplay" -- "$p"
+expect "hidreplay: no file" 2 "missing" -- "$p" 054c:09cc
+expect "hidreplay: bad VID:PID" 2 "bad VID:PID 'sony'.*" -- "$p" sony "$tmp/absent.bin"
+expect "hidreplay: VID:PID usage" 2 "usage: hidreplay" -- "$p" 054c:09cc0 "$tmp/absent.bin"
+expect "hidreplay: bad --dead-zone" 2 "bad value for '--dead-zone'" -- "$p" 054c:09cc "$tmp/absent.bin" --dead-zone 2
+expect "hidreplay: bad --threads" 2 "bad value for '--threads'" -- "$p" 054c:09cc "$tmp/absent.bin" --threads many
+expect "hidreplay: missing file" 1 "$tmp/absent.bin" -- "$p" 054c:09cc "$tmp/absent.bin"
+# A DualShock 4: a reduced Bluetooth report (left stick left, right stick right, cross, R2 full),
+# one byte short of it, then a record whose length promises more than the file holds.
+printf '\x0a\x00\x01\x00\x80\xff\x80\x28\x00\x00\x00\xff' >"$tmp/ds4.bin"
+printf '\x09\x00\x01\x00\x80\xff\x80\x28\x00\x00\x00' >>"$tmp/ds4.bin"
+printf '\x0a\x00\x01\x00' >"$tmp/cut.bin"
+cat "$tmp/ds4.bin" "$tmp/cut.bin" >"$tmp/ds4_cut.bin"
+expect "hidreplay: unknown pad needs --descriptor" 1 "1234:5678 is not a known pad.*--descriptor" -- \
+  "$p" 1234:5678 "$tmp/ds4.bin"
+expect "hidreplay: missing --descriptor file" 1 "$tmp/absent-desc.bin" -- \
+  "$p" 1234:5678 "$tmp/ds4.bin" --descriptor "$tmp/absent-desc.bin"
+printf '\x05\x01\xa1\x01' >"$tmp/bad-desc.bin"
+expect "hidreplay: unusable descriptor" 1 "unusable report descriptor" -- \
+  "$p" 1234:5678 "$tmp/ds4.bin" --descriptor "$tmp/bad-desc.bin"
+expect "hidreplay: DualShock 4 report" 0 \
+  '^\{"lx":-1,"ly":0\.003921569,"rx":1,"ry":0\.003921569,"lt":0,"rt":1,"buttons":\["south"\]\}$' -- \
+  "$p" 054c:09cc "$tmp/ds4.bin"
+expect "hidreplay: short report is an error line" 0 '^\{"error":"report too short: 9 bytes, need 10"\}$' -- \
+  "$p" 054c:09cc "$tmp/ds4.bin"
+expect "hidreplay: truncated record, exit 1" 1 '^\{"error":"truncated record' -- "$p" 054c:09cc "$tmp/ds4_cut.bin"
+# Left stick a little off centre (0x88, 0x80: |(0.067, 0.004)| < 0.2) reads 0 inside the dead zone.
+printf '\x0a\x00\x01\x88\x80\xff\x80\x08\x00\x00\x00\x00' >"$tmp/near.bin"
+expect "hidreplay: --dead-zone" 0 '^\{"lx":0,"ly":0,"rx":0\.99999' -- "$p" 054c:09cc "$tmp/near.bin" --dead-zone 0.2
+expect "hidreplay: no dead zone by default" 0 '^\{"lx":0\.06666667,"ly":0\.003921569,"rx":1,' -- "$p" 054c:09cc "$tmp/near.bin"
+# A generic pad through its descriptor: X Y Z Rz, a hat, 12 buttons; hat 2 (right) + button 1.
+printf '\x05\x01\x09\x05\xa1\x01\x09\x30\x09\x31\x09\x32\x09\x35\x15\x00\x26\xff\x00\x75\x08\x95\x04\x81\x02' >"$tmp/desc.bin"
+printf '\x09\x39\x15\x00\x25\x07\x75\x04\x95\x01\x81\x42\x05\x09\x19\x01\x29\x0c\x25\x01\x75\x01\x95\x0c\x81\x02\xc0' >>"$tmp/desc.bin"
+printf '\x06\x00\xff\x00\x80\x80\x12\x00' >"$tmp/generic.bin"
+expect "hidreplay: generic pad" 0 '^\{"lx":1,"ly":-1,"rx":0\.003921569,"ry":0\.003921569,"lt":0,"rt":0,"buttons":\["south","dpad_right"\]\}$' -- \
+  "$p" 0079:0006 "$tmp/generic.bin" --descriptor "$tmp/desc.bin"
+expect "hidreplay: unwritable --trace" 2 "/nonexistent-dir/t.json" -- \
+  "$p" 054c:09cc "$tmp/ds4.bin" --trace /nonexistent-dir/t.json
 
 echo "programs: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]

@@ -3,7 +3,7 @@
  * Each pass writes a timestamp query at its start and end. Results are read GFX_TIMER_FRAMES − 1
  * frames later, and only once the GPU says they are available: asking earlier would make the CPU
  * wait for the GPU, which is the stall this exists to show, not cause. Finished passes go to the
- * trace as zones on the "GPU" lane, in trace time (GL timestamps are offset by a calibration taken
+ * trace as zones named "gpu PASS" on the "GPU" lane, in trace time (GL timestamps are offset by a calibration taken
  * at start-up and every 256 frames). */
 #include "gfx_internal.h"
 
@@ -39,9 +39,13 @@ static bool gfx_timer_frame_read(gfx_context *gfx, gfx_timer_frame *frame) {
         glGetQueryObjectui64v(frame->queries[p * 2 + 1], GL_QUERY_RESULT, &end);
         if (end < begin) end = begin;
         gfx->last_timings[p] = (gfx_pass_timing){ frame->names[p], (double)(end - begin) * 1e-6 };
-        if (trace_active())
-            trace_complete("GPU", frame->names[p], (uint64_t)((int64_t)begin + gfx->gpu_to_trace_ns),
+        if (trace_active()) {
+            /* "gpu scene" beside the CPU's "scene" zone, so the report tells them apart. */
+            char name[96];
+            snprintf(name, sizeof name, "gpu %s", frame->names[p]);
+            trace_complete("GPU", trace_intern(name), (uint64_t)((int64_t)begin + gfx->gpu_to_trace_ns),
                            (uint64_t)((int64_t)end + gfx->gpu_to_trace_ns));
+        }
     }
     gfx->last_timing_count = frame->pass_count;
     return true;

@@ -116,8 +116,11 @@ typedef enum input_decode_result {
  * it). On anything but INPUT_DECODE_OK, *state is left as it was. */
 input_decode_result input_decoder_decode(input_decoder *decoder, const uint8_t *report, size_t size,
                                          input_gamepad_state *state);
-/* A short English reason for a result ("report too short: 9 bytes, need 10"), for messages. */
+/* The result in a few words ("report too short"). */
 const char *input_decode_result_name(input_decode_result result);
+/* Why the decoder's last failed report failed, with its numbers ("report too short: 9 bytes,
+ * need 10"); the text lives in the decoder until its next failure. */
+const char *input_decoder_last_error(input_decoder *decoder);
 
 typedef struct input_decoder_stats {
     uint64_t decoded, short_reports, oversized, unknown_id, malformed;
@@ -192,6 +195,9 @@ void input_destroy(input_system *input);
  * actions; records or replays the frame. Returns false when a replay has run out of frames. */
 bool input_update(input_system *input, float dt);
 const input_actions *input_actions_get(const input_system *input);
+/* The dt this frame's actions were computed with: input_update's argument, or while replaying the
+ * recorded one, which a replayed run should step its simulation with (stick look scales by it). */
+float input_frame_dt(const input_system *input);
 
 /* The first connected gamepad's state after the dead zone (zeros when none). */
 input_gamepad_state input_gamepad(const input_system *input);

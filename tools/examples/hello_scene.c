@@ -64,15 +64,15 @@ static void fly(gfx_camera *camera, const input_actions *a, float dt) {
     camera->position[1] = fmaxf(0.2f, camera->position[1] + rise * speed * dt);
 }
 
-/* What the window's keys ask of the renderer rather than of the camera. */
-static bool handle_commands(gfx_context *gfx, input_system *input, const input_actions *a) {
+/* What the keys ask of the renderer rather than of the camera. (Mouse capture the input system
+ * does by itself: a click captures, Escape lets go, Escape again quits.) */
+static bool handle_commands(gfx_context *gfx, const input_actions *a) {
     if (a->pressed & INPUT_ACTION_BIT(INPUT_ACTION_SCREENSHOT)) {
         char path[64];
         snprintf(path, sizeof path, "screenshot-%06llu.png", (unsigned long long)gfx_frame_index(gfx));
         gfx_screenshot(gfx, path);
     }
     if (a->pressed & INPUT_ACTION_BIT(INPUT_ACTION_FULLSCREEN)) gfx_window_toggle_fullscreen(gfx);
-    if (a->pressed & INPUT_ACTION_BIT(INPUT_ACTION_CAPTURE_MOUSE)) input_capture_mouse(input, true);
     return !(a->pressed & INPUT_ACTION_BIT(INPUT_ACTION_QUIT));
 }
 
@@ -106,8 +106,9 @@ int main(int argc, char **argv) {
         float dt = windowed ? (float)((now - last) * 1e-9) : 1.0f / 60.0f;
         last = now;
         if (!input_update(input, dt)) break;          /* a replay ran out */
+        dt = input_frame_dt(input);                   /* a replay's recorded step */
         const input_actions *actions = input_actions_get(input);
-        if (!handle_commands(gfx, input, actions) || gfx_window_should_close(gfx)) break;
+        if (!handle_commands(gfx, actions) || gfx_window_should_close(gfx)) break;
         fly(&camera, actions, dt);
         gfx_frame_begin(gfx);
         gfx_scene_draw(scene, &camera, windowed ? (now - start) * 1e-9 : frame / 60.0);
@@ -126,10 +127,11 @@ int main(int argc, char **argv) {
         gfx_frame_end(gfx);
     }
     double seconds = (core_time_ns() - start) * 1e-9;
-    printf("hello_scene: %llu frames in %.2f s (%.2f ms a frame), %s %dx%d\n",
+    printf("hello_scene: %llu frames in %.2f s (%.2f ms a frame), %s %dx%d, camera at (%.4f, %.4f, %.4f)\n",
            (unsigned long long)gfx_frame_index(gfx), seconds,
            gfx_frame_index(gfx) ? seconds * 1e3 / (double)gfx_frame_index(gfx) : 0.0,
-           windowed ? "window" : "offscreen", width, height);
+           windowed ? "window" : "offscreen", width, height, camera.position[0], camera.position[1],
+           camera.position[2]);
     input_destroy(input);
     input_bindings_destroy(bindings);
     gfx_scene_destroy(scene);

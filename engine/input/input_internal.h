@@ -1,0 +1,250 @@
+/* input_internal.h — what the input system's files share, and the seams tests use. Only
+ * engine/input/ and the input tests include this.
+ *
+ * The input system is built around one device-independent seam: everything a device does becomes
+ * an input_event in a per-frame list (GLFW callbacks, the gamepad thread, the replay reader and the
+ * tests' input__inject_* all append to it), and input__state_* turn that list plus the held state
+ * into the frame's input_actions. Recording writes the list; replaying reads it back and runs the
+ * same code, so a replay is bit for bit the recorded run.
+ */
+#ifndef INPUT_INTERNAL_H
+#define INPUT_INTERNAL_H
+
+#include "input/input.h"
+
+#include <pthread.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+enum {
+    INPUT_KEY_COUNT = 349,          /* GLFW_KEY_LAST + 1 (checked where GLFW is included) */
+    INPUT_MOUSE_BUTTON_COUNT = 8,   /* GLFW_MOUSE_BUTTON_LAST + 1 */
+    INPUT_MAX_GAMEPADS = 8,         /* slots; a ninth pad is logged and ignored */
+    INPUT_MAX_SOURCES = 8,          /* sources per action in a binding */
+    INPUT_MAX_EVENTS = 4096,        /* events per frame; more are dropped (warned once) */
+    INPUT_BINDINGS_MAX_LINE = 1024, /* bytes per bindings line, comment included */
+};
+
+/* ---- binding targets and sources ------------------------------------------------------------ */
+
+/* The half-axes the analog actions are built from: move_x = right − left, etc. */
+typedef enum input_axis {
+    INPUT_AXIS_MOVE_UP,
+    INPUT_AXIS_MOVE_DOWN,
+    INPUT_AXIS_MOVE_LEFT,
+    INPUT_AXIS_MOVE_RIGHT,
+    INPUT_AXIS_LOOK_UP,
+    INPUT_AXIS_LOOK_DOWN,
+    INPUT_AXIS_LOOK_LEFT,
+    INPUT_AXIS_LOOK_RIGHT,
+    INPUT_AXIS_COUNT
+} input_axis;
+
+/* A binding target is a button action (0 … INPUT_ACTION_COUNT − 1) or a half-axis
+ * (INPUT_ACTION_COUNT + input_axis). */
+enum { INPUT_TARGET_COUNT = INPUT_ACTION_COUNT + INPUT_AXIS_COUNT };
+#define INPUT_TARGET_AXIS(axis) (INPUT_ACTION_COUNT + (int)(axis))
+
+typedef enum input_source_kind {
+    INPUT_SOURCE_KEY = 1,           /* code: GLFW key */
+    INPUT_SOURCE_MOUSE_BUTTON,      /* code: GLFW mouse button, 0 = button1 (left) */
+    INPUT_SOURCE_MOUSE_AXIS,        /* code: input_mouse_axis; look half-axes only */
+    INPUT_SOURCE_PAD_BUTTON,        /* code: input_button */
+    INPUT_SOURCE_PAD_AXIS,          /* code: input_pad_axis */
+} input_source_kind;
+
+typedef enum input_mouse_axis {
+    INPUT_MOUSE_LEFT,
+    INPUT_MOUSE_RIGHT,
+    INPUT_MOUSE_UP,
+    INPUT_MOUSE_DOWN,
+    INPUT_MOUSE_AXIS_COUNT
+} input_mouse_axis;
+
+typedef enum input_pad_axis {
+    INPUT_PAD_LT,
+    INPUT_PAD_RT,
+    INPUT_PAD_LEFT_STICK_UP,
+    INPUT_PAD_LEFT_STICK_DOWN,
+    INPUT_PAD_LEFT_STICK_LEFT,
+    INPUT_PAD_LEFT_STICK_RIGHT,
+    INPUT_PAD_RIGHT_STICK_UP,
+    INPUT_PAD_RIGHT_STICK_DOWN,
+    INPUT_PAD_RIGHT_STICK_LEFT,
+    INPUT_PAD_RIGHT_STICK_RIGHT,
+    INPUT_PAD_AXIS_COUNT
+} input_pad_axis;
+
+typedef struct input_source {
+    uint8_t kind;    /* input_source_kind */
+    uint16_t code;
+} input_source;
+
+struct input_bindings {
+    input_source sources[INPUT_TARGET_COUNT][INPUT_MAX_SOURCES];
+    uint8_t source_count[INPUT_TARGET_COUNT];
+    float look_speed;        /* radians per mouse count */
+    float stick_look_speed;  /* radians per second at full stick deflection (and for keys) */
+    float dead_zone;         /* radial stick dead zone */
+    bool invert_y;           /* look_y sign flipped (mouse, stick and keys alike) */
+};
+
+/* "jump" … "quit", then "move_up" … "look_right". */
+const char *input__target_name(int target);
+/* NULL when the source fits the target; otherwise why not ("mouse:left only turns the view"). */
+const char *input__source_misfit(int target, input_source source);
+/* Every source valid for its target, counts in range, settings in range. */
+bool input__bindings_valid(const input_bindings *bindings);
+/* Same sources per target (as sets) and the same settings. */
+bool input__bindings_equal(const input_bindings *a, const input_bindings *b);
+void input__bindings_set_default(input_bindings *bindings);
+
+/* Setting ranges (inclusive). */
+#define INPUT_LOOK_SPEED_MAX 1.0f
+#define INPUT_STICK_LOOK_SPEED_MAX 100.0f
+#define INPUT_DEAD_ZONE_MAX 0.95f
+#define INPUT_DEAD_ZONE_DEFAULT 0.15f
+
+/* ---- raw events ----------------------------------------------------------------------------- */
+
+typedef enum input_event_kind {
+    INPUT_EVENT_KEY = 1,            /* code: GLFW key; down */
+    INPUT_EVENT_MOUSE_BUTTON,       /* code: GLFW mouse button; down */
+    INPUT_EVENT_MOUSE_MOTION,       /* x, y: cursor counts, y down positive */
+    INPUT_EVENT_SCROLL,             /* x, y: wheel offsets */
+    INPUT_EVENT_GAMEPAD,            /* code: slot; pad: the state before the dead zone */
+    INPUT_EVENT_GAMEPAD_GONE,       /* code: slot */
+    INPUT_EVENT_CAPTURE,            /* down: captured (input_capture_mouse) */
+    INPUT_EVENT_KIND_END
+} input_event_kind;
+
+typedef struct input_event {
+    uint8_t kind;
+    uint8_t down;
+    uint16_t code;
+    float x, y;
+    input_gamepad_state pad;
+} input_event;
+
+/* Whether an event's fields are in range (a replayed file is checked with this). */
+bool input__event_valid(const input_event *event);
+
+/* ---- held state and action computation (input_actions.c) ----------------------------------- */
+
+typedef struct input_pad_view {
+    bool connected;
+    input_gamepad_state state;      /* after the dead zone */
+} input_pad_view;
+
+typedef struct input_state {
+    input_bindings bindings;
+    float dead_zone;
+    bool keys[INPUT_KEY_COUNT];
+    uint8_t mouse_down;             /* bit per mouse button held */
+    uint8_t mouse_down_captured;    /* … pressed while the mouse was captured */
+    bool captured;                  /* logical mouse capture: motion turns the view */
+    input_pad_view pads[INPUT_MAX_GAMEPADS];
+    uint32_t raw_down;              /* button actions whose sources are down */
+    uint32_t swallowed;             /* held actions hidden from the game (quit that released capture) */
+    float mouse_dx, mouse_dy;       /* this frame's captured motion */
+    float scroll_x, scroll_y;       /* this frame's wheel */
+    input_actions actions;
+} input_state;
+
+void input__state_init(input_state *state, const input_bindings *bindings, float dead_zone);
+void input__state_begin_frame(input_state *state);
+void input__state_apply(input_state *state, const input_event *event);
+void input__state_end_frame(input_state *state, float dt);
+
+/* ---- gamepads: the thread and what it publishes (input_gamepads.c) -------------------------- */
+
+typedef struct input_pad_slot {
+    bool connected;
+    uint32_t generation;            /* bumped on every connect, so a quick re-plug is seen */
+    input_gamepad_state state;      /* latest decoded, before the dead zone */
+    uint32_t latched;               /* buttons that went down since the main thread last looked */
+} input_pad_slot;
+
+/* Shared between the gamepad thread (writes) and the main thread (reads in input_update). */
+typedef struct input_pads_shared {
+    pthread_mutex_t lock;
+    pthread_cond_t wake;            /* CLOCK_MONOTONIC; signalled to stop the thread */
+    bool stop;
+    input_pad_slot slots[INPUT_MAX_GAMEPADS];
+} input_pads_shared;
+
+typedef struct input_gamepads input_gamepads;
+
+void input__pads_shared_init(input_pads_shared *shared);
+void input__pads_shared_destroy(input_pads_shared *shared);
+/* What the reading thread calls for each decoded report (state NULL: the pad is gone). Tests
+ * call it from threads of their own. */
+void input__gamepad_publish(input_pads_shared *shared, int slot, const input_gamepad_state *state);
+
+/* NULL when hid_init fails (logged); starts the thread. */
+input_gamepads *input__gamepads_start(input_pads_shared *shared);
+/* Stops and joins the thread (within a few milliseconds), closes the devices. */
+void input__gamepads_stop(input_gamepads *gamepads);
+
+/* Top-level usages of a HID report descriptor: true when one of its top-level application
+ * collections is Generic Desktop Joystick (0x04) or Gamepad (0x05). Safe on any bytes. */
+bool input__descriptor_is_gamepad(const uint8_t *descriptor, size_t size);
+
+/* ---- record and replay (input_record.c) ----------------------------------------------------- */
+
+typedef struct input_recorder input_recorder;
+typedef struct input_replayer input_replayer;
+
+/* The frame as stored: dt, raw events, resulting actions. */
+typedef struct input_frame {
+    uint32_t index;
+    float dt;
+    input_event *events;            /* owned by whoever decoded it */
+    uint32_t event_count;
+    input_actions actions;
+} input_frame;
+
+/* Opens PATH.part for writing and writes the header; NULL (logged) when it cannot. */
+input_recorder *input__recorder_open(const char *path, const input_bindings *bindings, float dead_zone);
+void input__recorder_write(input_recorder *recorder, float dt, const input_event *events, uint32_t count,
+                           const input_actions *actions);
+/* Writes the end record, closes, renames PATH.part over PATH. */
+void input__recorder_close(input_recorder *recorder);
+
+/* Reads and checks the header; NULL (logged, naming the file) when it is missing or bad. The
+ * bindings and dead zone the recording was made with come back in *bindings and *dead_zone. */
+input_replayer *input__replayer_open(const char *path, input_bindings *bindings, float *dead_zone);
+/* The next frame (events valid until the next call), or false at the end or on a bad record
+ * (logged with the file name and frame). */
+bool input__replayer_next(input_replayer *replayer, input_frame *frame);
+/* True once a bad or truncated record, not the end record, ended the replay. */
+bool input__replayer_failed(const input_replayer *replayer);
+void input__replayer_close(input_replayer *replayer);
+
+/* The decoders behind the reader, exposed for the fuzz target: they check everything but the
+ * checksum. `payload` is one record's payload. */
+bool input__record_decode_header(const uint8_t *payload, size_t size, input_bindings *bindings, float *dead_zone,
+                                 char *error, size_t error_size);
+bool input__record_decode_frame(const uint8_t *payload, size_t size, input_frame *frame, input_event *events,
+                                uint32_t event_capacity, char *error, size_t error_size);
+
+/* ---- test seams (input_system.c) ------------------------------------------------------------ */
+
+/* Queue a raw event for the next input_update, as a device would. Ignored while replaying. */
+void input__inject_key(input_system *input, int key, bool down);
+void input__inject_mouse_button(input_system *input, int button, bool down);
+void input__inject_mouse_motion(input_system *input, float dx, float dy);
+void input__inject_scroll(input_system *input, float dx, float dy);
+/* state NULL: the pad in that slot is unplugged. */
+void input__inject_gamepad(input_system *input, int slot, const input_gamepad_state *state);
+/* The shared slots the gamepad thread publishes into (exists with or without the thread). */
+input_pads_shared *input__pads(input_system *input);
+bool input__mouse_captured(const input_system *input);
+bool input__gamepad_thread_running(const input_system *input);
+/* Replayed frames whose recomputed actions differed from the recorded ones. */
+uint64_t input__replay_mismatches(const input_system *input);
+/* True when the replay ended on a bad record rather than its end record. */
+bool input__replay_failed(const input_system *input);
+
+#endif /* INPUT_INTERNAL_H */
