@@ -6,7 +6,7 @@
  * comment under each descriptor gives the bit positions its fields get. Hostile and truncated
  * descriptors must be refused with a reason, never crash or read outside (ASan watches).
  */
-#include "test.h"
+#include "input_decode_test.h"
 
 #include "input/input.h"
 #include "input/input_decode_internal.h"
@@ -14,8 +14,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define BIT(button) (1u << (button))
-#define EPS 1e-5f
 
 /* A typical cheap USB pad: no report IDs, X Y Z Rz 8-bit, a 4-bit hat, 12 buttons.
  * Body bits: X 0-7, Y 8-15, Z 16-23, Rz 24-31, hat 32-35, buttons 1-12 at 36-47 → 6 bytes. */
@@ -95,21 +93,6 @@ static input_decoder *generic_decoder(const uint8_t *descriptor, size_t size) {
     cr_assert_not_null(d, "%s", error);
     cr_assert_eq(input_decoder_kind(d), INPUT_GAMEPAD_GENERIC);
     return d;
-}
-
-static input_gamepad_state decode_ok(input_decoder *d, const uint8_t *report, size_t size) {
-    input_gamepad_state state = { 0 };
-    input_decode_result result = input_decoder_decode(d, report, size, &state);
-    cr_assert_eq(result, INPUT_DECODE_OK, "decode: %s", input_decode_result_name(result));
-    return state;
-}
-
-static void expect_rejected(input_decoder *d, const uint8_t *report, size_t size, input_decode_result want) {
-    const input_gamepad_state sentinel = { .lx = 0.25f, .ly = -0.5f, .rt = 0.75f, .buttons = 0x1234 };
-    input_gamepad_state state = sentinel;
-    input_decode_result got = input_decoder_decode(d, report, size, &state);
-    cr_expect_eq(got, want, "size %zu: got %s", size, input_decode_result_name(got));
-    cr_expect(memcmp(&state, &sentinel, sizeof state) == 0, "state changed on a rejected report");
 }
 
 /* Whether parsing fails, with a non-empty reason containing `needle` (NULL: any). */

@@ -7,15 +7,13 @@
  * Switch sticks (raw − 2048)/1433 with y negated. The Bluetooth CRC comes from a bitwise CRC-32
  * written here, checked against the standard check value first.
  */
-#include "test.h"
+#include "input_decode_test.h"
 
 #include "input/input.h"
 
 #include <math.h>
 #include <string.h>
 
-#define BIT(button) (1u << (button))
-#define EPS 1e-5f
 
 static input_decoder *decoder_for(uint16_t vendor_id, uint16_t product_id) {
     char error[160];
@@ -23,24 +21,6 @@ static input_decoder *decoder_for(uint16_t vendor_id, uint16_t product_id) {
                                             error, sizeof error);
     cr_assert_not_null(d, "%04x:%04x: %s", vendor_id, product_id, error);
     return d;
-}
-
-static input_gamepad_state decode_ok(input_decoder *d, const uint8_t *report, size_t size) {
-    input_gamepad_state state = { 0 };
-    input_decode_result result = input_decoder_decode(d, report, size, &state);
-    cr_assert_eq(result, INPUT_DECODE_OK, "decode: %s", input_decode_result_name(result));
-    return state;
-}
-
-/* A state that no decode produces, to see that failed decodes leave it alone. */
-static const input_gamepad_state sentinel = { .lx = 0.25f, .ly = -0.5f, .rx = 0.125f, .ry = -0.75f,
-                                              .lt = 0.5f, .rt = 0.0625f, .buttons = 0x15555u };
-
-static void expect_rejected(input_decoder *d, const uint8_t *report, size_t size, input_decode_result want) {
-    input_gamepad_state state = sentinel;
-    input_decode_result got = input_decoder_decode(d, report, size, &state);
-    cr_expect_eq(got, want, "size %zu: got %s", size, input_decode_result_name(got));
-    cr_expect(memcmp(&state, &sentinel, sizeof state) == 0, "size %zu: state changed on a rejected report", size);
 }
 
 /* ---- a reference CRC-32 (bit by bit) for the Sony Bluetooth reports ------------------------- */

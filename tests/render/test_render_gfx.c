@@ -305,3 +305,16 @@ Test(render_gfx, screenshot_writes_a_png_and_reports_unwritable_paths) {
     free(log);
     gfx_destroy(gfx);
 }
+
+#ifdef ENGINE_DEBUG
+Test(render_gfx, debug_builds_route_gl_errors_to_the_log) {
+    gfx_context *gfx = render_offscreen(32, 32);
+    render_capture_begin();
+    glBindBuffer(GL_ARRAY_BUFFER, 123456);   /* never made by glGenBuffers: an error in core GL */
+    char *log = render_capture_end();
+    cr_assert_eq(glGetError(), GL_INVALID_OPERATION);
+    cr_assert(strstr(log, "[error] gl:"), "log: %s", log);
+    free(log);
+    gfx_destroy(gfx);
+}
+#endif

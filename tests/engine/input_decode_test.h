@@ -1,0 +1,33 @@
+/* input_decode_test.h — what the decoder tests (test_input_decode.c, test_hid_descriptor.c) share:
+ * decode and insist on success, or on a given failure that leaves the state untouched. */
+#ifndef INPUT_DECODE_TEST_H
+#define INPUT_DECODE_TEST_H
+
+#include "test.h"
+
+#include "input/input.h"
+
+#include <string.h>
+
+#define BIT(button) (1u << (button))
+#define EPS 1e-5f
+
+static input_gamepad_state decode_ok(input_decoder *d, const uint8_t *report, size_t size) {
+    input_gamepad_state state = { 0 };
+    input_decode_result result = input_decoder_decode(d, report, size, &state);
+    cr_assert_eq(result, INPUT_DECODE_OK, "decode: %s", input_decoder_last_error(d));
+    return state;
+}
+
+/* A state no decoder would produce, to see that a rejected report changes nothing. */
+static const input_gamepad_state sentinel = { .lx = 0.25f, .ly = -0.5f, .rx = 0.125f, .ry = -0.75f,
+                                              .lt = 0.5f, .rt = 0.0625f, .buttons = 0x15555u };
+
+static void expect_rejected(input_decoder *d, const uint8_t *report, size_t size, input_decode_result want) {
+    input_gamepad_state state = sentinel;
+    input_decode_result got = input_decoder_decode(d, report, size, &state);
+    cr_expect_eq(got, want, "size %zu: got %s", size, input_decode_result_name(got));
+    cr_expect(memcmp(&state, &sentinel, sizeof state) == 0, "size %zu: state changed on a rejected report", size);
+}
+
+#endif
