@@ -21,7 +21,8 @@
  *   3. Actions (move, look, jump, sprint, crouch, tool, toggle fly) are what a game reads. They
  *      are fed by both devices through bindings loaded from a small text file the user can edit
  *      (see input_bindings_load). Every frame:
- *          input_update(input);                       // once per frame, main thread
+ *          input_update(input, dt);                   // once per frame, main thread
+ *          dt = input_frame_dt(input);                // the recorded dt when replaying
  *          const input_actions *a = input_actions_get(input);
  *          if (a->pressed & INPUT_ACTION_BIT(INPUT_ACTION_JUMP)) jump();
  *      `--record FILE` stores every frame's raw events and actions; `--replay FILE` feeds them
