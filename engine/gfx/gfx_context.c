@@ -54,8 +54,9 @@ gfx_context *gfx_create(const gfx_desc *desc_in) {
         core_info("gfx", "no display (DISPLAY and WAYLAND_DISPLAY unset): rendering offscreen with OSMesa");
         window = false;
     }
-    if (window && !gfx__window_open(gfx, &desc)) {
-        core_info("gfx", "no window (see above): rendering offscreen with OSMesa");
+    char reason[256] = "";
+    if (window && !gfx__window_open(gfx, &desc, reason, sizeof reason)) {
+        core_info("gfx", "no window (%s): rendering offscreen with OSMesa", reason);
         window = false;
     }
     if (!window && !gfx__offscreen_open(gfx, desc.width, desc.height)) {

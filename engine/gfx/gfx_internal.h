@@ -47,8 +47,9 @@ struct gfx_context {
     uint32_t program_in_use;
 };
 
-/* Backends (gfx_window.c, gfx_offscreen.c): return false after logging why. */
-bool gfx__window_open(gfx_context *gfx, const gfx_desc *desc);
+/* Backends (gfx_window.c, gfx_offscreen.c). The window says why it failed in `reason`; the
+ * offscreen backend logs its own errors. */
+bool gfx__window_open(gfx_context *gfx, const gfx_desc *desc, char *reason, size_t reason_size);
 void gfx__window_close(gfx_context *gfx);
 void gfx__window_swap(gfx_context *gfx);
 bool gfx__offscreen_open(gfx_context *gfx, int width, int height);

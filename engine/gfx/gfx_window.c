@@ -14,9 +14,20 @@ static void gfx_glfw_error(int code, const char *message) {
     core_warn("glfw", "%s (error 0x%x)", message, code);
 }
 
-bool gfx__window_open(gfx_context *gfx, const gfx_desc *desc) {
-    glfwSetErrorCallback(gfx_glfw_error);
-    if (gfx_glfw_users == 0 && !glfwInit()) return false;
+/* Why the last GLFW call failed, for the one line that says we fall back to OSMesa. */
+static void gfx_glfw_failure(char *reason, size_t size) {
+    const char *description = NULL;
+    glfwGetError(&description);
+    snprintf(reason, size, "%s", description ? description : "unknown reason");
+}
+
+bool gfx__window_open(gfx_context *gfx, const gfx_desc *desc, char *reason, size_t reason_size) {
+    /* Errors while opening are reported once, by the caller; later ones go to the log. */
+    glfwSetErrorCallback(NULL);
+    if (gfx_glfw_users == 0 && !glfwInit()) {
+        gfx_glfw_failure(reason, reason_size);
+        return false;
+    }
     gfx_glfw_users++;
     glfwDefaultWindowHints();
     glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
@@ -31,16 +42,18 @@ bool gfx__window_open(gfx_context *gfx, const gfx_desc *desc) {
     GLFWmonitor *monitor = desc->fullscreen ? glfwGetPrimaryMonitor() : NULL;
     GLFWwindow *window = glfwCreateWindow(desc->width, desc->height, desc->title, monitor, NULL);
     if (!window) {
+        gfx_glfw_failure(reason, reason_size);
         if (--gfx_glfw_users == 0) glfwTerminate();
         return false;
     }
     glfwMakeContextCurrent(window);
     if (!gladLoadGL((GLADloadfunc)glfwGetProcAddress)) {
-        core_error("gfx", "cannot load OpenGL functions through GLFW");
+        snprintf(reason, reason_size, "cannot load OpenGL functions through GLFW");
         glfwDestroyWindow(window);
         if (--gfx_glfw_users == 0) glfwTerminate();
         return false;
     }
+    glfwSetErrorCallback(gfx_glfw_error);
     gfx->backend = GFX_BACKEND_WINDOW;
     gfx->window = window;
     gfx->fullscreen = monitor != NULL;

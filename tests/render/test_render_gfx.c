@@ -318,3 +318,19 @@ Test(render_gfx, debug_builds_route_gl_errors_to_the_log) {
     gfx_destroy(gfx);
 }
 #endif
+
+Test(render_gfx, a_window_that_cannot_open_falls_back_in_one_line) {
+    setenv("DISPLAY", ":97", 1);          /* a display no X server serves */
+    unsetenv("WAYLAND_DISPLAY");
+    render_capture_begin();
+    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = 32, .height = 32 });
+    char *log = render_capture_end();
+    cr_assert(gfx);
+    cr_assert_eq(gfx_backend_get(gfx), GFX_BACKEND_OFFSCREEN);
+    int lines = 0;
+    for (const char *p = log; *p; p++) lines += *p == '\n';
+    cr_assert_eq(lines, 1, "log: %s", log);
+    cr_assert(strstr(log, "no window (") && strstr(log, ":97") && strstr(log, "OSMesa"), "log: %s", log);
+    free(log);
+    gfx_destroy(gfx);
+}
