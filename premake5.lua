@@ -36,7 +36,7 @@ if premake5 then workspace "engine" else solution "engine" end
   location(_OPTIONS["to"] or "build")
   objdir "build/obj"
   language "C"
-  includedirs { "engine", glad_dir .. "/include" }
+  includedirs { "engine", "modules", glad_dir .. "/include" }
   defines { "_GNU_SOURCE" }
   buildoptions { "-std=c11", "-Wall", "-Wextra", "-Wshadow", "-Wno-missing-field-initializers",
                  "-pthread", "-g" }
@@ -63,6 +63,11 @@ project "engine"
   kind "StaticLib"
   files { "engine/**.c", "engine/**.h" }
 
+-- Modules: one library each, built on the engine (modules/NAME/**.c).
+project "terrain"
+  kind "StaticLib"
+  files { "modules/terrain/**.c", "modules/terrain/**.h" }
+
 -- Generated code: built with its own warnings off, so ours can stay strict.
 project "glad"
   kind "StaticLib"
@@ -70,7 +75,7 @@ project "glad"
   buildoptions { "-w" }
 
 -- What the engine's platform layer links against (engine/gfx, engine/input).
-local platform_libs = { "glfw", "OSMesa", "hidapi-hidraw", "stb", "dl" }
+local platform_libs = { "glfw", "OSMesa", "hidapi-hidraw", "stb", "meshoptimizer", "dl" }
 
 -- A program linked against the engine. `extra` may set files, links and build options.
 local function program(name, extra)
@@ -79,7 +84,7 @@ local function program(name, extra)
     files(extra.files)
     if extra.excludes then excludes(extra.excludes) end
     if extra.defines then defines(extra.defines) end
-    links { "engine", "glad" }
+    links { "terrain", "engine", "glad" }
     if extra.links then links(extra.links) end
     links(platform_libs)
     links { "m" }
@@ -101,6 +106,9 @@ program("bench", { files = { "tools/src/bench/**.c", "tools/src/bench/**.h" },
 program("trace_report", { files = { "tools/src/trace_report.c" } })
 program("hello_systems", { files = { "tools/examples/hello_systems.c" } })
 program("hidreplay", { files = { "tools/src/hidreplay.c" } })
+program("test_terrain", { files = { "tests/terrain/**.c", "tests/terrain/**.h" }, links = { "criterion" } })
+program("terrain_export", { files = { "tools/src/terrain_export.c" } })
+program("terrain_mesh", { files = { "tools/src/terrain_mesh.c" } })
 -- Render tests: OSMesa scenes checked by image properties and a golden PNG; a window test when
 -- there is a display (tools/test starts Xvfb for it).
 program("test_render", { files = { "tests/render/**.c", "tests/render/**.h" }, links = { "criterion" } })

@@ -9,15 +9,16 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 cd "$root"
 seconds=${1:-15}
 mkdir -p bin/fuzz out/fuzz
-# Every engine source but the renderer (no fuzz target draws); input needs GLFW and hidapi.
-mapfile -t engine_sources < <(find engine -name '*.c' -not -path 'engine/gfx/*' | sort)
-platform_libs=(-lglfw -lhidapi-hidraw -ldl)
+# Every engine and module source but the renderer (no fuzz target draws); input needs GLFW and
+# hidapi, terrain meshoptimizer.
+mapfile -t engine_sources < <(find engine modules -name '*.c' -not -path 'engine/gfx/*' | sort)
+platform_libs=(-lglfw -lhidapi-hidraw -lmeshoptimizer -ldl)
 passed=0 failed=0
 for target in tests/fuzz/fuzz_*.c; do
   [[ -e $target ]] || continue
   name=$(basename "$target" .c)
   if ! clang -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
-        -std=c11 -D_GNU_SOURCE -Iengine -Wall -Wextra -Werror \
+        -std=c11 -D_GNU_SOURCE -Iengine -Imodules -Wall -Wextra -Werror \
         "$target" "${engine_sources[@]}" "${platform_libs[@]}" -lm -pthread -o "bin/fuzz/$name"; then
     echo "[FAIL] $name: does not build"
     failed=$((failed + 1))
