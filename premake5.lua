@@ -113,3 +113,4 @@ program("terrain_mesh", { files = { "tools/src/terrain_mesh.c" } })
 -- there is a display (tools/test starts Xvfb for it).
 program("test_render", { files = { "tests/render/**.c", "tests/render/**.h" }, links = { "criterion" } })
 program("hello_scene", { files = { "tools/examples/hello_scene.c" } })
+program("hello_terrain", { files = { "tools/examples/hello_terrain.c" } })

@@ -2,12 +2,12 @@
 
 uniform vec3 u_sun_direction;      // towards the sun, normalised
 uniform vec3 u_camera_position;
+uniform float u_fog_density;       // per metre: 1 − e^(−distance·density) of the colour is fog
 
 const vec3 SUN_COLOR = vec3(1.0, 0.95, 0.85);
 const vec3 SKY_ZENITH = vec3(0.25, 0.45, 0.85);
 const vec3 SKY_HORIZON = vec3(0.70, 0.80, 0.95);
 const vec3 GROUND_BOUNCE = vec3(0.30, 0.27, 0.22);
-const float FOG_DENSITY = 0.012;
 
 vec3 sky_color(vec3 direction) {
     float up = clamp(direction.y, 0.0, 1.0);
@@ -27,6 +27,6 @@ vec3 light_surface(vec3 albedo, vec3 normal) {
 vec3 apply_fog(vec3 color, vec3 world_position) {
     vec3 to_point = world_position - u_camera_position;
     float distance = length(to_point);
-    float fog = 1.0 - exp(-distance * FOG_DENSITY);
+    float fog = 1.0 - exp(-distance * u_fog_density);
     return mix(color, sky_color(to_point / max(distance, 1e-4)), fog);
 }

@@ -28,7 +28,7 @@ expect() {
   fi
 }
 
-for program in bench trace_report hello_systems hello_scene; do
+for program in bench trace_report hello_systems hello_scene hello_terrain; do
   p=$bin/$program
   expect "$program: unknown flag" 2 "unknown option '--no-such-flag'.*" -- "$p" --no-such-flag
   expect "$program: usage on error" 2 "usage: $program" -- "$p" --no-such-flag
@@ -119,6 +119,66 @@ expect "hidreplay: generic pad" 0 '^\{"lx":1,"ly":-1,"rx":0\.003921569,"ry":0\.0
   "$p" 0079:0006 "$tmp/generic.bin" --descriptor "$tmp/desc.bin"
 expect "hidreplay: unwritable --trace" 2 "/nonexistent-dir/t.json" -- \
   "$p" 054c:09cc "$tmp/ds4.bin" --trace /nonexistent-dir/t.json
+
+# terrain_export and terrain_mesh: flags, an export of a small region meshed again from its
+# field file, and field files that are wrong in each way (size, header, a NaN value).
+for program in terrain_export terrain_mesh; do
+  p=$bin/$program
+  expect "$program: unknown flag" 2 "unknown option '--no-such-flag'" -- "$p" --no-such-flag
+  expect "$program: usage on error" 2 "usage: $program" -- "$p" --no-such-flag
+  expect "$program: --help" 0 "usage: $program" -- "$p" --help
+  expect "$program: bad --threads" 2 "bad value for '--threads'" -- "$p" --threads many
+done
+p=$bin/terrain_export
+expect "terrain_export: no --region" 2 "missing '--region X,Y,Z:NX,NY,NZ'" -- "$p" --out "$tmp/t"
+expect "terrain_export: usage without --region" 2 "usage: terrain_export" -- "$p" --out "$tmp/t"
+expect "terrain_export: no --out" 2 "missing '--out" -- "$p" --region 0,0,0:8,8,8
+expect "terrain_export: bad --seed" 2 "bad value for '--seed': 'soil'" -- "$p" --seed soil --region 0,0,0:8,8,8 --out "$tmp/t"
+expect "terrain_export: --region without counts" 2 "bad value for '--region': '1,2,3'.*expected ':'" -- \
+  "$p" --region 1,2,3 --out "$tmp/t"
+expect "terrain_export: --region count too small" 2 "NY = 1 must be 2 … 1024" -- "$p" --region 0,0,0:8,1,8 --out "$tmp/t"
+expect "terrain_export: --region count too large" 2 "NZ = 5000 must be 2 … 1024" -- "$p" --region 0,0,0:8,8,5000 --out "$tmp/t"
+expect "terrain_export: --region not numbers" 2 "first coordinate is not a whole number" -- "$p" --region a,b,c:1,2,3 --out "$tmp/t"
+expect "terrain_export: --region trailing text" 2 "unexpected ',9' at the end" -- "$p" --region 0,0,0:8,8,8,9 --out "$tmp/t"
+expect "terrain_export: bad --sigma" 2 "bad value for '--sigma'" -- "$p" --sigma 99 --region 0,0,0:8,8,8 --out "$tmp/t"
+expect "terrain_export: unwritable --out" 2 "cannot write --out /nonexistent-dir/t" -- \
+  "$p" --region 0,0,0:8,8,8 --out /nonexistent-dir/t
+# A region across a chunk corner, from below the ground to above it.
+expect "terrain_export: a region" 0 "40 x 64 x 40 samples.*[1-9][0-9]* triangles" -- \
+  "$p" --seed 3 --region -20,-24,-20:40,64,40 --out "$tmp/region"
+expect "terrain_export: the header" 0 '^\{"dims":\[40,64,40\],"origin":\[-20,-24,-20\],"spacing":1\}$' -- cat "$tmp/region.json"
+expect "terrain_export: raw is 40·64·40 floats" 0 "^409600$" -- stat -c %s "$tmp/region.raw"
+expect "terrain_export: a binary PLY" 0 "format binary_little_endian 1.0" -- head -c 200 "$tmp/region.ply"
+p=$bin/terrain_mesh
+expect "terrain_mesh: no file" 2 "missing" -- "$p"
+expect "terrain_mesh: the exported field" 0 \
+  '^\{"vertices":[1-9][0-9]*,"triangles":[1-9][0-9]*,"area":[0-9.e+]+,"ms":[0-9.e+-]+\}$' -- "$p" "$tmp/region.json"
+# The same mesh as the export's PLY: same face count.
+faces=$(head -c 400 "$tmp/region.ply" | grep -a -m1 '^element face' | cut -d' ' -f3)
+expect "terrain_mesh: as many triangles as the export" 0 "\"triangles\":$faces," -- "$p" "$tmp/region.json"
+expect "terrain_mesh: by prefix and .raw too" 0 "\"triangles\":$faces," -- "$p" "$tmp/region.raw"
+expect "terrain_mesh: missing file" 1 "cannot open $tmp/absent.json" -- "$p" "$tmp/absent.json"
+cp "$tmp/region.json" "$tmp/short.json"
+head -c 409596 "$tmp/region.raw" >"$tmp/short.raw"
+expect "terrain_mesh: raw of the wrong size" 1 "short.raw holds 409596 bytes.*need 409600" -- "$p" "$tmp/short.json"
+printf '{"dims":[40,64],"origin":[0,0,0],"spacing":1}' >"$tmp/bad.json"
+cp "$tmp/region.raw" "$tmp/bad.raw"
+expect "terrain_mesh: bad header" 1 'bad.json: "dims" must be an array of 3 numbers' -- "$p" "$tmp/bad.json"
+printf '{"dims":[40,64,40],"origin":[0,0,0],"spacing":1' >"$tmp/cut.json"
+cp "$tmp/region.raw" "$tmp/cut.raw"
+expect "terrain_mesh: header not JSON" 1 "cut.json: not JSON: line 1" -- "$p" "$tmp/cut.json"
+cp "$tmp/region.json" "$tmp/nan.json"
+cp "$tmp/region.raw" "$tmp/nan.raw"
+printf '\x00\x00\xc0\x7f' | dd of="$tmp/nan.raw" bs=1 seek=400 conv=notrunc status=none
+expect "terrain_mesh: a NaN value" 1 "nan.raw: value 100 \(x 20, y 2, z 0\) is NaN" -- "$p" "$tmp/nan.json"
+expect "terrain_mesh: unwritable --ply" 2 "cannot write --ply /nonexistent-dir/m.ply" -- \
+  "$p" "$tmp/region.json" --ply /nonexistent-dir/m.ply
+
+# The terrain example: a headless run generates, meshes and draws, and writes its screenshot.
+expect "hello_terrain: headless run" 0 "9 chunks, [0-9]+ mesh chunks \([0-9]+ drawn\), [1-9][0-9]* triangles" -- \
+  "$bin/hello_terrain" --headless --size 96x64 --radius 1 --frames 2 --seed 3 --screenshot "$tmp/terrain.png"
+expect "hello_terrain: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 -N4 "$tmp/terrain.png"
+expect "hello_terrain: bad --radius" 2 "bad value for '--radius'" -- "$bin/hello_terrain" --radius 99
 
 echo "programs: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]

@@ -145,6 +145,7 @@ void gfx_scene_draw(gfx_scene *scene, const gfx_camera *camera, double seconds) 
     for (int p = 0; p < 2; p++) {
         gfx_uniform_vec3(gfx, programs[p], "u_sun_direction", sun);
         gfx_uniform_vec3(gfx, programs[p], "u_camera_position", camera->position);
+        gfx_uniform_float(gfx, programs[p], "u_fog_density", 0.012f);
     }
     gfx_program_use(gfx, scene->lit);
     gfx_uniform_mat4(gfx, scene->lit, "u_view_projection", (const float *)view_projection);

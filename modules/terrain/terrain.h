@@ -140,23 +140,52 @@ float terrain_fbm3(uint64_t seed, float x, float y, float z, int octaves);
 
 /* ---- the world: generated chunks, cached -------------------------------------------------- */
 
+/* generate (for tests and tools that need chunks they control, e.g. hand-made stacks for the
+ * field's exact cases): if set, called instead of terrain_generate_chunk(&generation, coord)
+ * whenever a chunk is needed; the world owns the stacks it returns (frees them with
+ * terrain_stacks_destroy) as it does generated ones. It must be a pure function of the
+ * coordinate and safe to call from any thread. */
 typedef struct terrain_world_desc {
     terrain_generation_params generation;
     size_t max_chunks;                /* cached chunks kept (least recently used go); 0 = 4096 */
+    terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);  /* NULL = generation */
+    void *generate_user;              /* passed to generate */
 } terrain_world_desc;
 
 typedef struct terrain_world terrain_world;
 terrain_world *terrain_world_create(const terrain_world_desc *desc);
 void terrain_world_destroy(terrain_world *world);
-/* The chunk's stacks, generated on first use (thread-safe; valid until the world is destroyed or
- * the chunk is evicted — callers that keep a pointer across frames hold a reference). */
+/* The chunk's stacks, generated on first use (thread-safe: any thread, any number at once).
+ * EVICTION RULE: terrain_world_stacks never evicts. A returned pointer stays valid until the next
+ * terrain_world_trim (or terrain_world_destroy) — so within a frame every pointer a job got stays
+ * good — and across trims for as long as its chunk is retained. */
 const terrain_stacks *terrain_world_stacks(terrain_world *world, terrain_chunk_coord coord);
+/* Reference counts (generating the chunk if needed): a retained chunk is never evicted. A
+ * release without a matching retain is logged and ignored. */
 void terrain_world_retain(terrain_world *world, terrain_chunk_coord coord);
 void terrain_world_release(terrain_world *world, terrain_chunk_coord coord);
+/* Evicts least recently used, unretained chunks until at most max_chunks are cached (retained
+ * ones may keep it above); returns how many went. Call it where no thread holds an unretained
+ * pointer: once a frame, between phases (the frame loop), never from a job. A world that is
+ * never trimmed keeps every chunk it generated. */
+size_t terrain_world_trim(terrain_world *world);
+size_t terrain_world_chunk_count(terrain_world *world);   /* chunks cached now */
 /* Material at a world point (generating its chunk if needed). */
 terrain_material terrain_world_material_at(terrain_world *world, double x, double y, double z);
 
 /* ---- the implicit field (000 §3.3) -------------------------------------------------------- */
+
+/* One 32³-cell chunk (cx, cy, cz) meshed, with a one-sample apron so that normals on its border
+ * agree with the neighbours':
+ *     terrain_field field;
+ *     terrain_field_sample(world, &(terrain_field_desc){
+ *         .first = { 32 * cx - 1, 32 * cy - 1, 32 * cz - 1 }, .size = { 35, 35, 35 } }, &field);
+ *     terrain_mesh mesh;
+ *     terrain_mesh_build(&field, &(terrain_mesh_desc){ .world = world, .apron = 1 }, &mesh);
+ *     terrain_field_free(&field);
+ *     ...                              // upload mesh.vertices / mesh.indices at mesh.origin
+ *     terrain_mesh_free(&mesh);
+ */
 
 /* A regular grid of samples: values[(z·ny + y)·nx + x] at origin + (x, y, z)·spacing. */
 typedef struct terrain_field {
@@ -174,8 +203,10 @@ typedef struct terrain_field_desc {
 
 /* Samples f on the grid of spacing c = TERRAIN_COLUMN_SIZE: index (i, j, k) is the world point
  * (i·c, j·c, k·c), so samples sit on column corners. Reads whatever chunks the kernel reaches
- * (generating them). O(1) amortised per sample. False (message logged) only when the request is
- * absurd (a size ≤ 0 or over 1024). */
+ * (generating them). O(1) amortised per sample. Shared samples of two requests are bit-identical
+ * (adjacent chunks' meshes meet exactly). False (message logged) only when the request is
+ * absurd: a size ≤ 0 or over 1024, sigma ≤ 0 or over 16 columns, a first index beyond ±2^52.
+ * Free with terrain_field_free. */
 bool terrain_field_sample(terrain_world *world, const terrain_field_desc *desc, terrain_field *out);
 void terrain_field_free(terrain_field *field);
 /* The field at one point, by direct summation (slow; for tests and single queries). */
@@ -204,9 +235,134 @@ typedef struct terrain_mesh_desc {
     bool no_optimize;                 /* skip meshoptimizer's vertex-cache reordering */
 } terrain_mesh_desc;
 
-/* Marching cubes over every cell of the field (nx−1 × ny−1 × nz−1 cells) with shared vertices;
- * an empty or full field gives an empty mesh at once. */
+/* Marching cubes over every cell of the field (nx−1 × ny−1 × nz−1 cells, less the apron) with
+ * shared vertices; watertight for closed surfaces (ambiguous faces always keep the inside
+ * corners apart). mesh.origin is the field's origin. An empty or full field gives an empty mesh
+ * (NULL arrays) at once. False (message logged) for a field without values or a negative apron.
+ * Free with terrain_mesh_free. */
 bool terrain_mesh_build(const terrain_field *field, const terrain_mesh_desc *desc, terrain_mesh *out);
 void terrain_mesh_free(terrain_mesh *mesh);
+
+/* ---- field and mesh files ----------------------------------------------------------------- */
+
+/* A field on disk is two files: PREFIX.raw, the values as little-endian float32 (x fastest, then
+ * y, then z; f > 0 inside), and PREFIX.json, its header:
+ *     {"dims":[NX,NY,NZ],"origin":[x,y,z],"spacing":s}
+ * Both are written to a temporary beside the target and renamed over it. Reading checks
+ * everything (keys, types, 1 ≤ dims ≤ TERRAIN_FIELD_FILE_MAX_DIM, finite origin, spacing > 0,
+ * the .raw's size, finite values) and on failure fills `error` with a message naming the file and
+ * the problem and returns false (out is then zeroed). Free a read field with terrain_field_free. */
+#define TERRAIN_FIELD_FILE_MAX_DIM 4096
+
+typedef struct terrain_field_header {
+    int dims[3];
+    double origin[3];
+    float spacing;
+} terrain_field_header;
+
+bool terrain_field_write(const terrain_field *field, const char *prefix, char *error, size_t error_size);
+/* `path` is PREFIX, PREFIX.json or PREFIX.raw. */
+bool terrain_field_read(const char *path, terrain_field *out, char *error, size_t error_size);
+/* The header parser alone (text need not be NUL-terminated). */
+bool terrain_field_header_parse(const char *text, size_t size, terrain_field_header *out,
+                                char *error, size_t error_size);
+
+/* Binary little-endian PLY: vertex x y z nx ny nz (float, positions in world units relative to
+ * mesh->origin), faces as a uchar count and uint indices. */
+bool terrain_mesh_write_ply(const terrain_mesh *mesh, const char *path, char *error, size_t error_size);
+/* Total area of the triangles (m²). */
+double terrain_mesh_area(const terrain_mesh *mesh);
+
+/* ---- rendering (main thread; needs a gfx context) ---------------------------------------- */
+
+/* Triplanar texturing with blend exponent 8 (000 §6), materials mixed by the vertices' weights,
+ * bedrock tinted by height band and slope (002 §4.1), sun, sky ambient and fog. Material
+ * textures are generated procedurally when the renderer is made. Meshes are drawn
+ * camera-relative (origins subtracted in double precision), so a view 100 km from the world's
+ * origin renders exactly as one near it. */
+typedef struct gfx_context gfx_context;
+typedef struct terrain_renderer terrain_renderer;
+
+typedef struct terrain_renderer_desc {
+    float sea_level;                  /* for the shore band; 0 = 0 m */
+    float snow_height;                /* 0 = 120 m */
+    float fog_density;                /* per metre; 0 = 0.0025 */
+} terrain_renderer_desc;
+
+/* NULL when the shaders do not build (their errors printed at file:line). */
+terrain_renderer *terrain_renderer_create(gfx_context *gfx, const terrain_renderer_desc *desc);
+void terrain_renderer_destroy(terrain_renderer *renderer);
+
+/* A mesh on the GPU. */
+typedef struct terrain_gpu_mesh {
+    uint32_t vertex_buffer, index_buffer, vertex_array;   /* GL names */
+    uint32_t index_count;
+    double origin[3];
+    float bounds_min[3], bounds_max[3];
+} terrain_gpu_mesh;
+
+terrain_gpu_mesh terrain_gpu_mesh_upload(const terrain_mesh *mesh);
+void terrain_gpu_mesh_destroy(terrain_gpu_mesh *mesh);
+
+typedef struct terrain_view {
+    double camera[3];                 /* world position of the eye */
+    float yaw, pitch;                 /* radians; yaw 0 looks along −z, positive turns right */
+    float fov_y;                      /* radians; 0 = 60° */
+    float aspect;                     /* width / height */
+    float far_distance;               /* 0 = 4000 m */
+    float sun_direction[3];           /* towards the sun; 0 = a morning sun */
+} terrain_view;
+
+/* Draws the meshes, then the sky behind them, inside one pass named "terrain". */
+void terrain_renderer_draw(terrain_renderer *renderer, const terrain_view *view,
+                           const terrain_gpu_mesh *meshes, int mesh_count);
+
+/* ---- in the ECS --------------------------------------------------------------------------- */
+
+/* Column chunks and mesh chunks are entities. Systems (registered by terrain_ecs_create):
+ *   generate  "terrain_generate"  TerrainChunk without stacks → stacks (parallel)
+ *   mesh      "terrain_mesh"      TerrainMeshChunk waiting → field + marching cubes (parallel)
+ *   draw      "terrain_upload"    meshed TerrainMeshChunk → GPU (main thread)
+ * terrain_ecs_draw then draws every uploaded mesh chunk and trims the world's cache (call it
+ * outside ecs_progress, on the main thread). */
+typedef struct ecs_world ecs_world;
+
+typedef struct TerrainChunk {
+    terrain_chunk_coord coord;
+    const terrain_stacks *stacks;        /* NULL until the generate phase has run */
+} TerrainChunk;
+
+/* TERRAIN_MESH_CELLS³ cells of the sample grid; (x, y, z) counts mesh chunks. */
+#define TERRAIN_MESH_CELLS 32
+
+typedef enum terrain_mesh_state {
+    TERRAIN_MESH_WAITING,               /* to be meshed */
+    TERRAIN_MESH_MESHED,                /* CPU mesh ready, not uploaded */
+    TERRAIN_MESH_UPLOADED,              /* on the GPU (the CPU copy is freed) */
+} terrain_mesh_state;
+
+typedef struct TerrainMeshChunk {
+    int64_t x, y, z;
+    terrain_mesh_state state;
+    terrain_mesh mesh;
+    terrain_gpu_mesh gpu;
+} TerrainMeshChunk;
+
+typedef struct terrain_ecs terrain_ecs;
+typedef struct terrain_ecs_stats {
+    int chunks, chunks_generated;
+    int mesh_chunks, mesh_chunks_waiting, mesh_chunks_uploaded;
+    uint64_t triangles;
+} terrain_ecs_stats;
+
+/* Registers the components and systems on `ecs`; `terrain` is not owned. */
+terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain);
+/* Frees the meshes the entities hold (GPU ones too: call on the main thread, with the context). */
+void terrain_ecs_destroy(terrain_ecs *te);
+/* Spawns the column chunks within `radius` chunks of (cx, cz) and their mesh chunks for mesh
+ * layers y_first … y_last (each TERRAIN_MESH_CELLS metres tall). */
+void terrain_ecs_spawn_area(terrain_ecs *te, int64_t cx, int64_t cz, int radius, int64_t y_first, int64_t y_last);
+void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view);
+terrain_ecs_stats terrain_ecs_stats_get(terrain_ecs *te);
 
 #endif

@@ -1,0 +1,160 @@
+/* terrain_ecs.c — the terrain as entities: column chunks generated in the generate phase, mesh
+ * chunks meshed in the mesh phase (both in parallel on the job system), uploaded in draw. */
+#include "terrain.h"
+
+#include "core/core.h"
+#include "ecs/ecs.h"
+#include "trace/trace.h"
+
+struct terrain_ecs {
+    ecs_world *ecs;
+    terrain_world *terrain;
+    ecs_component chunk, mesh_chunk;
+    ecs_query *chunks, *mesh_chunks;
+    terrain_gpu_mesh *draw_list;         /* gathered each draw */
+    size_t draw_capacity;
+};
+
+static void terrain_generate_system(ecs_iter *it) {
+    terrain_ecs *te = it->user;
+    while (ecs_query_next(it)) {
+        TerrainChunk *chunks = ecs_field(it, 0);
+        for (int i = 0; i < it->count; i++) {
+            if (chunks[i].stacks) continue;
+            /* Retained: the cache never evicts a chunk an entity holds. */
+            terrain_world_retain(te->terrain, chunks[i].coord);
+            chunks[i].stacks = terrain_world_stacks(te->terrain, chunks[i].coord);
+        }
+    }
+}
+
+/* One mesh chunk: its cells plus one apron sample on every side for gradients, so normals agree
+ * with the neighbours' along shared borders. */
+static void terrain_mesh_chunk_build(terrain_ecs *te, TerrainMeshChunk *chunk) {
+    TRACE_ZONE("terrain_mesh_chunk");
+    const int cells = TERRAIN_MESH_CELLS, apron = 1;
+    terrain_field field;
+    terrain_field_desc desc = {
+        .first = { chunk->x * cells - apron, chunk->y * cells - apron, chunk->z * cells - apron },
+        .size = { cells + 1 + 2 * apron, cells + 1 + 2 * apron, cells + 1 + 2 * apron } };
+    if (!terrain_field_sample(te->terrain, &desc, &field)) {
+        chunk->state = TERRAIN_MESH_MESHED;      /* nothing to show; logged by the sampler */
+        return;
+    }
+    terrain_mesh_build(&field, &(terrain_mesh_desc){ .world = te->terrain, .apron = apron }, &chunk->mesh);
+    terrain_field_free(&field);
+    chunk->state = TERRAIN_MESH_MESHED;
+}
+
+static void terrain_mesh_system(ecs_iter *it) {
+    terrain_ecs *te = it->user;
+    while (ecs_query_next(it)) {
+        TerrainMeshChunk *chunks = ecs_field(it, 0);
+        for (int i = 0; i < it->count; i++)
+            if (chunks[i].state == TERRAIN_MESH_WAITING) terrain_mesh_chunk_build(te, &chunks[i]);
+    }
+}
+
+static void terrain_upload_system(ecs_iter *it) {
+    while (ecs_query_next(it)) {
+        TerrainMeshChunk *chunks = ecs_field(it, 0);
+        for (int i = 0; i < it->count; i++) {
+            if (chunks[i].state != TERRAIN_MESH_MESHED) continue;
+            chunks[i].gpu = terrain_gpu_mesh_upload(&chunks[i].mesh);
+            terrain_mesh_free(&chunks[i].mesh);
+            chunks[i].state = TERRAIN_MESH_UPLOADED;
+        }
+    }
+}
+
+terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
+    terrain_ecs *te = core_calloc(1, sizeof *te);
+    te->ecs = ecs;
+    te->terrain = terrain;
+    te->chunk = ECS_COMPONENT(ecs, TerrainChunk);
+    te->mesh_chunk = ECS_COMPONENT(ecs, TerrainMeshChunk);
+    te->chunks = ecs_query_create(ecs, &(ecs_query_desc){ .with = { te->chunk } });
+    te->mesh_chunks = ecs_query_create(ecs, &(ecs_query_desc){ .with = { te->mesh_chunk } });
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_generate", .phase = "generate",
+        .query = { .with = { te->chunk } }, .writes = { te->chunk }, .fn = terrain_generate_system,
+        .user = te, .parallel = true, .batch_size = 1 });
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_mesh", .phase = "mesh",
+        .query = { .with = { te->mesh_chunk } }, .writes = { te->mesh_chunk }, .fn = terrain_mesh_system,
+        .user = te, .parallel = true, .batch_size = 1 });
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_upload", .phase = "draw",
+        .query = { .with = { te->mesh_chunk } }, .writes = { te->mesh_chunk }, .fn = terrain_upload_system,
+        .user = te, .main_thread = true });
+    return te;
+}
+
+void terrain_ecs_destroy(terrain_ecs *te) {
+    if (!te) return;
+    ecs_iter it = ecs_query_iter(te->ecs, te->mesh_chunks);
+    while (ecs_query_next(&it)) {
+        TerrainMeshChunk *chunks = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++) {
+            terrain_mesh_free(&chunks[i].mesh);
+            terrain_gpu_mesh_destroy(&chunks[i].gpu);
+        }
+    }
+    it = ecs_query_iter(te->ecs, te->chunks);
+    while (ecs_query_next(&it)) {
+        TerrainChunk *chunks = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++)
+            if (chunks[i].stacks) terrain_world_release(te->terrain, chunks[i].coord);
+    }
+    if (te->draw_list) core_free(te->draw_list, te->draw_capacity * sizeof *te->draw_list);
+    core_free(te, sizeof *te);
+}
+
+void terrain_ecs_spawn_area(terrain_ecs *te, int64_t cx, int64_t cz, int radius, int64_t y_first, int64_t y_last) {
+    const int64_t mesh_per_chunk = TERRAIN_CHUNK_COLUMNS / TERRAIN_MESH_CELLS;
+    for (int64_t z = cz - radius; z <= cz + radius; z++)
+        for (int64_t x = cx - radius; x <= cx + radius; x++) {
+            ecs_entity e = ecs_entity_create(te->ecs);
+            ecs_set(te->ecs, e, te->chunk, &(TerrainChunk){ .coord = { x, z } });
+            for (int64_t mz = 0; mz < mesh_per_chunk; mz++)
+                for (int64_t mx = 0; mx < mesh_per_chunk; mx++)
+                    for (int64_t y = y_first; y <= y_last; y++) {
+                        ecs_entity m = ecs_entity_create(te->ecs);
+                        ecs_set(te->ecs, m, te->mesh_chunk, &(TerrainMeshChunk){
+                            .x = x * mesh_per_chunk + mx, .y = y, .z = z * mesh_per_chunk + mz });
+                    }
+        }
+}
+
+void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view) {
+    size_t count = 0;
+    ecs_iter it = ecs_query_iter(te->ecs, te->mesh_chunks);
+    while (ecs_query_next(&it)) {
+        TerrainMeshChunk *chunks = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++) {
+            if (chunks[i].state != TERRAIN_MESH_UPLOADED || chunks[i].gpu.index_count == 0) continue;
+            te->draw_list = core_grow(te->draw_list, &te->draw_capacity, count + 1, sizeof *te->draw_list);
+            te->draw_list[count++] = chunks[i].gpu;
+        }
+    }
+    terrain_renderer_draw(renderer, view, te->draw_list, (int)count);
+    /* Outside ecs_progress no job holds stacks: the moment to drop cached chunks no entity keeps. */
+    terrain_world_trim(te->terrain);
+}
+
+terrain_ecs_stats terrain_ecs_stats_get(terrain_ecs *te) {
+    terrain_ecs_stats stats = { 0 };
+    ecs_iter it = ecs_query_iter(te->ecs, te->chunks);
+    while (ecs_query_next(&it)) {
+        TerrainChunk *chunks = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++, stats.chunks++) stats.chunks_generated += chunks[i].stacks != NULL;
+    }
+    it = ecs_query_iter(te->ecs, te->mesh_chunks);
+    while (ecs_query_next(&it)) {
+        TerrainMeshChunk *chunks = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++, stats.mesh_chunks++) {
+            stats.mesh_chunks_waiting += chunks[i].state == TERRAIN_MESH_WAITING;
+            stats.mesh_chunks_uploaded += chunks[i].state == TERRAIN_MESH_UPLOADED;
+            stats.triangles += chunks[i].state == TERRAIN_MESH_UPLOADED ? chunks[i].gpu.index_count / 3
+                                                                         : chunks[i].mesh.index_count / 3;
+        }
+    }
+    return stats;
+}

@@ -1,0 +1,603 @@
+/* terrain_generate.c — a chunk's stacks from 3D noise (002 §3.1.3, 004 §2).
+ *
+ * The density of a point is
+ *     d(x, y, z) = min(d_ground, d_cave), solid where d > 0
+ *     d_ground   = G(x + A·u(x, y, z), z + A·w(x, y, z)) − y                       (002 §3.1.3.1)
+ *     G(x, z)    = cliffs(base + relief·shape(M(x, z))) + V·fbm2(x, z)        (M: 004 §2)
+ *     d_cave     = (1 − t·a(y) − R₁(p)·R₂(p))·scale                               (002 §3.1.3.2)
+ *
+ *  - The ground/sky split is the height gradient G − y (002 Fig. 3). Its y perturbation V·fbm2
+ *    is a 2D fBm: the paper samples the perturbing fractal "along 0 in the y axis" so that it
+ *    acts like a height map and leaves no floating islands (002 Fig. 6, 7). It is added to the
+ *    macro relief M, a rescale-and-add multifractal with domain warping (004 §2.1, §2.2; octave
+ *    count from the column spacing, fractional last octave, 004 §4), shaped so that peaks rise
+ *    faster than seas sink.
+ *  - Cliffs (ours, not the papers'): where a low-frequency mask says so, and above the sea, the
+ *    macro height is pulled towards terraces of relief/10 metres with steep risers. The papers'
+ *    relief alone is rarely steep enough for the overhang shear below to tip it over.
+ *  - Overhangs: the sample point is moved sideways by A·(u, w), two 3D fBms (002 Fig. 8, the
+ *    "X perturbation", here in x and z). The solid set is then the height field's solid set
+ *    pulled back through Φ(x, y, z) = (x + A·u, y, z + A·w); while Φ's horizontal Jacobian is
+ *    invertible (A·|∇_h u| < 1: A/λ is kept small) Φ is a homeomorphism, so the terrain keeps a
+ *    height field's topology — overhangs but no floating islands — whatever the y-derivatives.
+ *    We therefore squeeze u and w by 3 along y: steeper shear, more overhangs, same topology.
+ *    An overhang needs |∇G|·A·|∂u/∂y| > 1, which is why they sit on the cliffs' risers.
+ *  - Caves: R₁, R₂ are ridged multifractals (1 on their ridges, where their noise crosses zero);
+ *    one alone cuts sheets through the ground, so, as the paper does, two with different seeds
+ *    are combined: both near 1 only along the curves where two sheets meet, i.e. tunnels. The
+ *    paper multiplies the two clamped maps; we threshold the product, R₁R₂ > 1 − t (our
+ *    reading of "only where the values of both fractals are 0 caves will be formed": 0 in the
+ *    paper's inverted, clamped map is a ridge here). The second octave has gain 1/4 so that it
+ *    roughens the tunnel walls without breaking tunnels into pockets (at gain 1/2 the ridge
+ *    value along a tunnel drops to 2/3 wherever octave 2 is far from 0). a(y) is the height
+ *    attenuation: 0 above the macro ground G (+ 0.3·fade, so a few tunnels open at the surface;
+ *    never under the sea), full from cave_fade_height below that, fading out again at the
+ *    bottom of the cave band (fade + 1.5 cave wavelengths deep). Nothing above G is ever cut,
+ *    so overhang lips stay whole and caves make no floating islands there.
+ *
+ * Evaluation, per chunk:
+ *  1. G on a grid of the chunk's columns plus a margin of ⌈A⌉ + 2, a row at a time with the
+ *     vectorised multifractal; it also gives the slopes for sand.
+ *  2. Per column, the range of y where the ground can cross: [min G, max G] over the grid
+ *     points a displaced sample can read. Below it d_ground > 0, above it d_ground < 0, surely.
+ *  3. The 3D noises (u, w and the caves' raw octaves) on a coarse lattice, 4 m apart in x and z
+ *     and 2 m in y, with the column batch (terrain__noise3_column); per column they are
+ *     interpolated bilinearly to its centre, then linearly along y. Every noise's wavelength is
+ *     at least 4 lattice spacings along each axis (u, w: 24 m across, 8 m up; caves 32 m, 21 m),
+ *     and the ridge (|n|, a kink) is applied after interpolation, at full resolution.
+ *  4. Each column samples d every SAMPLE_STEP (1 m) over its range and places each sign change
+ *     by linear interpolation of the full density at the two samples around it; runs of solid
+ *     become bedrock, air between solid runs air layers (caves, overhangs). Below the ground's
+ *     range only caves can make air, and a 2 m segment of the lattice can only hold a cave if a
+ *     bound on R₁R₂ there (the smallest |n| of each octave on the segment) passes the
+ *     threshold: most samples cost a comparison.
+ *  5. Sand replaces the top of the highest solid run where the macro ground's slope is below
+ *     sand_max_slope (thinning to nothing at that slope), and water fills the air above the
+ *     highest solid run up to sea_level.
+ *
+ * Determinism: everything is a function of (params, coord), computed in the same order on any
+ * thread; no shared state, no RNG. The G grid and the coarse lattice sit on world-aligned
+ * positions (multiples of 1 m, and of 4 m and 2 m), so neighbouring chunks see the same values
+ * at their shared border up to float rounding (a lattice node's y is y₀ + j·dy from each
+ * chunk's own y₀), which keeps columns continuous across chunk borders.
+ */
+#include "terrain_internal.h"
+
+#include "core/core.h"
+
+#include <math.h>
+#include <string.h>
+
+#define COARSE 4                                   /* metres between coarse noise nodes in x, z */
+#define COARSE_Y 2                                 /* and in y (the fields vary faster along y) */
+#define COARSE_NODES (TERRAIN_CHUNK_COLUMNS / COARSE + 1)
+#define SAMPLE_STEP 1.0f                           /* metres between density samples in a column */
+#define CAVE_OCTAVES 2
+#define CAVE_GAIN 0.25f                            /* octave 2 adds wall detail, keeps tunnels whole */
+#define MAX_PERTURBATION_OCTAVES 4
+#define MAX_FIELDS (2 * MAX_PERTURBATION_OCTAVES + 2 * CAVE_OCTAVES)
+#define DISPLACEMENT_Y_SQUEEZE 3.0f                /* u, w vary 3× faster along y (see above) */
+#define CLIFF_STEP 0.1f                            /* terrace height, a fraction of the relief */
+#define CLIFF_RISER 0.2f                           /* the part of a terrace step that rises */
+#define CLIFF_WAVELENGTH 900.0f                    /* of the mask that says where cliffs are */
+#define CAVE_Y_SQUEEZE 1.5f                        /* caves run flatter than they are tall */
+#define CAVE_OPENING 0.3f                          /* caves reach 0.3·fade above the ground */
+#define MAX_TRANSITIONS 256
+
+terrain_generation_params terrain_generation_defaults(uint64_t seed) {
+    return (terrain_generation_params){
+        .seed = seed,
+        .sea_level = 0.0f,
+        /* Relief: about −80 m (sea floors) to +160 m (peaks) around 25 m, rarely +250 m. */
+        .relief_height = 150.0f,
+        .base_height = 25.0f,
+        .relief_wavelength = 1200.0f,
+        .lacunarity = 2.0f,
+        .hurst = 0.85f,
+        .relief_octaves = 10,
+        .warp_strength = 1.0f,
+        .vertical_perturbation = 4.0f,
+        .horizontal_perturbation = 10.0f,
+        .perturbation_wavelength = 48.0f,
+        .perturbation_octaves = 2,
+        .cave_threshold = 0.22f,
+        .cave_wavelength = 64.0f,
+        .cave_fade_height = 12.0f,
+        .sand_max_slope = 0.3f,                    /* about 17° */
+        .sand_depth = 1.5f,
+    };
+}
+
+/* ---- the macro ground G ---------------------------------------------------------------- */
+
+typedef struct ground_model {
+    terrain__multifractal multifractal;
+    uint32_t perturbation_seed;
+    int perturbation_octaves;
+    float inverse_relief_wavelength, inverse_perturbation_wavelength;
+    float base, relief, vertical_perturbation, sea_level;
+    uint32_t cliff_seed;
+} ground_model;
+
+static uint32_t field_seed(const terrain_generation_params *p, uint64_t field) {
+    return terrain__seed32(core_hash_combine(p->seed, field));
+}
+
+static int clamp_int(int v, int lo, int hi) {
+    return v < lo ? lo : v > hi ? hi : v;
+}
+
+static float clampf(float v, float lo, float hi) {
+    return v < lo ? lo : v > hi ? hi : v;
+}
+
+static ground_model ground_model_make(const terrain_generation_params *p) {
+    ground_model g;
+    float lacunarity = p->lacunarity > 1.01f ? p->lacunarity : 2.0f;
+    float hurst = p->hurst > 0.01f ? p->hurst : 0.85f;
+    float relief = p->relief_height > 0.0f ? p->relief_height : 0.0f;
+    /* 004 §4: octaves until one's amplitude falls to the column spacing. */
+    float octaves = terrain__multifractal_octaves(lacunarity, hurst,
+                                                  TERRAIN_COLUMN_SIZE / (relief > 1.0f ? relief : 1.0f),
+                                                  clamp_int(p->relief_octaves, 1, 16));
+    g.multifractal = (terrain__multifractal){ field_seed(p, 1), lacunarity, hurst, octaves, p->warp_strength };
+    g.perturbation_seed = field_seed(p, 2);
+    g.perturbation_octaves = clamp_int(p->perturbation_octaves, 1, MAX_PERTURBATION_OCTAVES);
+    g.inverse_relief_wavelength = 1.0f / (p->relief_wavelength > 1.0f ? p->relief_wavelength : 1.0f);
+    g.inverse_perturbation_wavelength =
+        1.0f / (p->perturbation_wavelength > 1.0f ? p->perturbation_wavelength : 1.0f);
+    g.base = p->base_height;
+    g.relief = relief;
+    g.vertical_perturbation = p->vertical_perturbation;
+    g.cliff_seed = field_seed(p, 3);
+    g.sea_level = p->sea_level;
+    return g;
+}
+
+#define GROUND_ROW_MAX 256
+
+/* G at (xs[j], z) for j < count (count ≤ GROUND_ROW_MAX): one row of the chunk's grid. */
+static void ground_row(const ground_model *g, const double *xs, double z, int count, float *out) {
+    float relief_x[GROUND_ROW_MAX] = { 0 }, relief[GROUND_ROW_MAX];
+    float perturbation_x[GROUND_ROW_MAX] = { 0 }, perturbation[GROUND_ROW_MAX], octave[GROUND_ROW_MAX];
+    for (int j = 0; j < count; j++) {
+        relief_x[j] = (float)(xs[j] * g->inverse_relief_wavelength);
+        perturbation_x[j] = (float)(xs[j] * g->inverse_perturbation_wavelength);
+        perturbation[j] = 0.0f;
+    }
+    terrain__multifractal2_row(&g->multifractal, relief_x, (float)(z * g->inverse_relief_wavelength), count, relief);
+    /* 002 §3.1.3.1: the y perturbation, a fractal sampled at y = 0, i.e. a height map. */
+    float pz = (float)(z * g->inverse_perturbation_wavelength), amplitude = 1.0f, total = 0.0f, scale = 1.0f;
+    for (int k = 0; k < g->perturbation_octaves; k++) {
+        terrain__noise2_row(g->perturbation_seed + (uint32_t)k * 0x9e3779b9u, perturbation_x, scale, pz * scale,
+                            count, octave);
+        for (int j = 0; j < count; j++) perturbation[j] += amplitude * octave[j];
+        total += amplitude;
+        amplitude *= 0.5f;
+        scale *= 2.0f;
+    }
+    /* Where cliffs are: a low-frequency mask, 0 over about half the land. */
+    float cliff_x[GROUND_ROW_MAX], cliffs[GROUND_ROW_MAX];
+    for (int j = 0; j < count; j++) cliff_x[j] = (float)(xs[j] * (1.0 / CLIFF_WAVELENGTH));
+    terrain__noise2_row(g->cliff_seed, cliff_x, 1.0f, (float)(z * (1.0 / CLIFF_WAVELENGTH)), count, cliffs);
+    for (int j = 0; j < count; j++) {
+        /* The normalised multifractal spans about ±0.4 (1st–99th percentile); 2.5 maps that
+         * onto ±1. The shape keeps slope 0.6 at m = 0 on both sides but makes the highs convex
+         * (m·(0.6 + 0.4m): peaks rise faster than valleys sink, lowlands stay gentle) and the
+         * lows linear (seas no deeper than 0.6·relief for the usual range). */
+        float m = 2.5f * relief[j];
+        float shaped = m > 0.0f ? m * (0.6f + 0.4f * m) : 0.6f * m;
+        float macro = g->base + g->relief * shaped;
+        /* Cliffs: terraces of CLIFF_STEP·relief metres (15 m by default), each riser a quintic fade over the middle
+         * CLIFF_RISER of the step (flat benches, risers up to 1.875 / CLIFF_RISER times the
+         * slope around them), blended in by the mask.
+         * The shear of the overhang displacement turns steep risers into overhangs. Only
+         * above the sea: under water the relief stays smooth. */
+        float strength = clampf(2.0f * cliffs[j] + 0.1f, 0.0f, 1.0f) * clampf(macro - g->sea_level, 0.0f, 8.0f) * 0.125f;
+        float step = CLIFF_STEP * g->relief;
+        if (step < 0.5f) strength = 0.0f, step = 1.0f;   /* no relief, no cliffs */
+        float steps = macro / step, bench = floorf(steps);
+        float rise = clampf((steps - bench - 0.5f) * (1.0f / CLIFF_RISER) + 0.5f, 0.0f, 1.0f);
+        rise = rise * rise * rise * (rise * (rise * 6.0f - 15.0f) + 10.0f);
+        float terraced = (bench + rise) * step;
+        macro += strength * (terraced - macro);
+        float h = macro + g->vertical_perturbation * perturbation[j] / total;
+        /* Keep every height well inside what a column can hold above the floor. */
+        out[j] = clampf(h, TERRAIN_FLOOR_Y + 16.0f, TERRAIN_FLOOR_Y + 4000.0f);
+    }
+}
+
+float terrain__ground_height(const terrain_generation_params *params, double x, double z) {
+    ground_model g = ground_model_make(params);
+    float h;
+    ground_row(&g, &x, z, 1, &h);
+    return h;
+}
+
+/* ---- one chunk ------------------------------------------------------------------------- */
+
+typedef struct chunk_gen {
+    const terrain_generation_params *params;
+    ground_model model;
+    double x0, z0;                        /* world position of the chunk's corner */
+    float displacement;                   /* A, metres */
+    int margin;                           /* G grid columns beyond the chunk on each side */
+    int ground_size;                      /* G grid side: N + 2·margin */
+    float *heights;                       /* G at column centres, [(k + margin)·size + i + margin] */
+    float *reach_min, *reach_max;         /* min/max of G within reach of each chunk column */
+    /* Coarse lattice: node (a, c, level) at world (x0 + 4a, y_base + 4·level, z0 + 4c). */
+    int fields;                           /* u octaves, w octaves, cave 1 octaves, cave 2 octaves */
+    int levels;
+    float y_base;
+    float *coarse;                        /* [((field·NODES + c)·NODES + a)·levels + level] */
+    uint32_t field_seeds[MAX_FIELDS];
+    float field_frequency[MAX_FIELDS];    /* horizontal, cycles per metre */
+    float field_y_squeeze[MAX_FIELDS];
+    float field_weight[MAX_FIELDS];       /* displacement octaves' normalised amplitudes */
+} chunk_gen;
+
+static void ground_grid(chunk_gen *g) {
+    int size = g->ground_size;
+    double xs[GROUND_ROW_MAX];
+    for (int i = 0; i < size; i++) xs[i] = g->x0 + (double)(i - g->margin) + 0.5;
+    for (int k = 0; k < size; k++)
+        ground_row(&g->model, xs, g->z0 + (double)(k - g->margin) + 0.5, size, g->heights + (size_t)k * size);
+}
+
+/* Min and max of G over the square of radius `radius` around each chunk column: separable. */
+static void ground_reach(chunk_gen *g, int radius) {
+    int size = g->ground_size, n = TERRAIN_CHUNK_COLUMNS, m = g->margin;
+    float *row_min = core_alloc((size_t)size * n * sizeof(float));
+    float *row_max = core_alloc((size_t)size * n * sizeof(float));
+    for (int k = 0; k < size; k++) {
+        for (int i = 0; i < n; i++) {
+            float lo = INFINITY, hi = -INFINITY;
+            for (int d = -radius; d <= radius; d++) {
+                float v = g->heights[k * size + i + m + d];
+                lo = v < lo ? v : lo;
+                hi = v > hi ? v : hi;
+            }
+            row_min[k * n + i] = lo;
+            row_max[k * n + i] = hi;
+        }
+    }
+    for (int k = 0; k < n; k++) {
+        for (int i = 0; i < n; i++) {
+            float lo = INFINITY, hi = -INFINITY;
+            for (int d = -radius; d <= radius; d++) {
+                lo = CORE_MIN(lo, row_min[(k + m + d) * n + i]);
+                hi = CORE_MAX(hi, row_max[(k + m + d) * n + i]);
+            }
+            g->reach_min[k * n + i] = lo;
+            g->reach_max[k * n + i] = hi;
+        }
+    }
+    core_free(row_min, (size_t)size * n * sizeof(float));
+    core_free(row_max, (size_t)size * n * sizeof(float));
+}
+
+static float cave_depth(const terrain_generation_params *p) {
+    /* The band below the ground where caves live: the fade, then one and a half cave
+     * wavelengths (about 110 m by default: deeper caves cost time and nobody sees them). */
+    return p->cave_fade_height + 1.5f * p->cave_wavelength;
+}
+
+static bool caves_enabled(const terrain_generation_params *p) {
+    return p->cave_threshold > 0.0f && p->cave_wavelength > 0.0f;
+}
+
+/* The y range a column samples: from the lowest point where a cave or the ground's surface can
+ * be to the highest point where the ground can be. */
+static void column_range(const chunk_gen *g, int i, int k, float *lo, float *hi) {
+    int n = TERRAIN_CHUNK_COLUMNS;
+    float ground = g->heights[(k + g->margin) * g->ground_size + i + g->margin];
+    float bottom = g->reach_min[k * n + i] - SAMPLE_STEP;
+    if (caves_enabled(g->params)) bottom = CORE_MIN(bottom, ground - cave_depth(g->params));
+    *lo = CORE_MAX(bottom, TERRAIN_FLOOR_Y + 2.0f);
+    *hi = g->reach_max[k * n + i] + SAMPLE_STEP;
+}
+
+static void coarse_setup(chunk_gen *g) {
+    const terrain_generation_params *p = g->params;
+    int f = 0;
+    int octaves = g->model.perturbation_octaves;
+    float total = 0.0f;
+    for (int o = 0; o < octaves; o++) total += ldexpf(1.0f, -o);
+    for (int axis = 0; axis < 2; axis++) {         /* u (x displacement), w (z displacement) */
+        for (int o = 0; o < octaves; o++, f++) {
+            g->field_seeds[f] = field_seed(p, 16 + (uint64_t)axis * 8 + (uint64_t)o);
+            g->field_frequency[f] = g->model.inverse_perturbation_wavelength * ldexpf(1.0f, o);
+            g->field_y_squeeze[f] = DISPLACEMENT_Y_SQUEEZE;
+            g->field_weight[f] = ldexpf(1.0f, -o) / total;
+        }
+    }
+    if (caves_enabled(p)) {
+        for (int cave = 0; cave < 2; cave++) {
+            for (int o = 0; o < CAVE_OCTAVES; o++, f++) {
+                g->field_seeds[f] = field_seed(p, 64 + (uint64_t)cave * 8 + (uint64_t)o);
+                g->field_frequency[f] = ldexpf(1.0f, o) / p->cave_wavelength;
+                g->field_y_squeeze[f] = CAVE_Y_SQUEEZE;
+                g->field_weight[f] = 1.0f;
+            }
+        }
+    }
+    g->fields = f;
+}
+
+static void coarse_lattice(chunk_gen *g, float y_lo, float y_hi) {
+    g->y_base = floorf(y_lo / COARSE_Y) * COARSE_Y;
+    g->levels = (int)ceilf((y_hi - g->y_base) / COARSE_Y) + 2;
+    size_t count = (size_t)g->fields * COARSE_NODES * COARSE_NODES * (size_t)g->levels;
+    g->coarse = core_alloc(count * sizeof(float));
+    for (int f = 0; f < g->fields; f++) {
+        float frequency = g->field_frequency[f];
+        float dy = COARSE_Y * frequency * g->field_y_squeeze[f];
+        float y0 = g->y_base * frequency * g->field_y_squeeze[f];
+        for (int c = 0; c < COARSE_NODES; c++) {
+            float z = (float)((g->z0 + (double)(c * COARSE)) * frequency);
+            for (int a = 0; a < COARSE_NODES; a++) {
+                float x = (float)((g->x0 + (double)(a * COARSE)) * frequency);
+                float *out = g->coarse + (((size_t)f * COARSE_NODES + c) * COARSE_NODES + a) * g->levels;
+                terrain__noise3_column(g->field_seeds[f], x, y0, dy, z, g->levels, out);
+            }
+        }
+    }
+}
+
+/* ---- one column ------------------------------------------------------------------------ */
+
+/* Bilinear interpolation of every field's coarse columns to the centre of column (i, k). */
+static void column_fields(const chunk_gen *g, int i, int k, float *out) {
+    float ax = ((float)i + 0.5f) / COARSE, cz = ((float)k + 0.5f) / COARSE;
+    int a = (int)ax, c = (int)cz;
+    float tx = ax - (float)a, tz = cz - (float)c;
+    float w00 = (1 - tx) * (1 - tz), w10 = tx * (1 - tz), w01 = (1 - tx) * tz, w11 = tx * tz;
+    int levels = g->levels;
+    for (int f = 0; f < g->fields; f++) {
+        const float *base = g->coarse + (((size_t)f * COARSE_NODES + c) * COARSE_NODES + a) * levels;
+        const float *p00 = base, *p10 = base + levels;
+        const float *p01 = base + (size_t)COARSE_NODES * levels, *p11 = p01 + levels;
+        float *o = out + (size_t)f * levels;
+        for (int l = 0; l < levels; l++) o[l] = w00 * p00[l] + w10 * p10[l] + w01 * p01[l] + w11 * p11[l];
+    }
+}
+
+static float ground_lookup(const chunk_gen *g, float gx, float gz) {
+    /* Bilinear in the G grid; gx, gz in grid units (column centres at integers). */
+    int size = g->ground_size;
+    gx = clampf(gx, 0.0f, (float)(size - 1) - 1e-3f);
+    gz = clampf(gz, 0.0f, (float)(size - 1) - 1e-3f);
+    int i = (int)gx, k = (int)gz;
+    float tx = gx - (float)i, tz = gz - (float)k;
+    const float *row = g->heights + k * size + i;
+    float a = row[0] + tx * (row[1] - row[0]);
+    float b = row[size] + tx * (row[size + 1] - row[size]);
+    return a + tz * (b - a);
+}
+
+/* Heights where solid and air alternate, bottom-up, starting in solid: even indices are tops
+ * of solid runs, odd ones bottoms; the count is odd (the column ends in air). */
+typedef struct column_layers {
+    float transitions[MAX_TRANSITIONS];
+    int count;
+} column_layers;
+
+/* What a column's density needs: its interpolated fields and bounds. */
+typedef struct column_context {
+    const chunk_gen *g;
+    const float *u, *w, *cave1, *cave2;    /* [octave·levels + level] */
+    float gx, gz;                          /* the column centre in G grid units */
+    float reach_min;                       /* below this the ground part is surely solid */
+    float cave_top, cave_bottom, fade;
+    float threshold, cave_scale;
+    int octaves, levels;
+    bool caves;
+} column_context;
+
+static inline float ground_density(const column_context *c, int l, float t, float y) {
+    /* The sideways displacement of the sample point (002 Fig. 8). */
+    float du = 0.0f, dw = 0.0f;
+    for (int o = 0; o < c->octaves; o++) {
+        const float *uo = c->u + (size_t)o * c->levels, *wo = c->w + (size_t)o * c->levels;
+        du += c->g->field_weight[o] * (uo[l] + t * (uo[l + 1] - uo[l]));
+        dw += c->g->field_weight[o] * (wo[l] + t * (wo[l + 1] - wo[l]));
+    }
+    float a = c->g->displacement;
+    return ground_lookup(c->g, c->gx + a * du, c->gz + a * dw) - y;
+}
+
+static inline bool in_cave_band(const column_context *c, float y) {
+    return c->caves && y > c->cave_bottom && y < c->cave_top;
+}
+
+static inline float cave_density(const column_context *c, int l, float t, float y) {
+    float n1[CAVE_OCTAVES], n2[CAVE_OCTAVES];
+    for (int o = 0; o < CAVE_OCTAVES; o++) {
+        const float *a = c->cave1 + (size_t)o * c->levels, *b = c->cave2 + (size_t)o * c->levels;
+        n1[o] = a[l] + t * (a[l + 1] - a[l]);
+        n2[o] = b[l] + t * (b[l + 1] - b[l]);
+    }
+    float ridges = terrain__ridged_from_octaves(n1, CAVE_OCTAVES, CAVE_GAIN) *
+                   terrain__ridged_from_octaves(n2, CAVE_OCTAVES, CAVE_GAIN);
+    /* Height attenuation (002 §3.1.3.2): 0 above cave_top, full from fade below it, fading
+     * out again over the fade above cave_bottom. */
+    float attenuation = clampf((c->cave_top - y) / c->fade, 0.0f, 1.0f) *
+                        clampf((y - c->cave_bottom) / c->fade, 0.0f, 1.0f);
+    return (1.0f - c->threshold * attenuation - ridges) * c->cave_scale;
+}
+
+/* The density at y, every part evaluated (for placing a crossing). */
+static float density_exact(const column_context *c, float y) {
+    float level = (y - c->g->y_base) * (1.0f / COARSE_Y);
+    int l = (int)level;
+    float t = level - (float)l;
+    float d = ground_density(c, l, t, y);
+    if (in_cave_band(c, y)) d = CORE_MIN(d, cave_density(c, l, t, y));
+    return d;
+}
+
+/* The largest ridged value the interpolated octaves can reach between levels l and l + 1:
+ * ridged_from_octaves grows as each |n| shrinks, and on a linear segment |n| is smallest at an
+ * end, or 0 where the sign changes. */
+static float ridged_bound(const float *n, int levels, int l) {
+    float smallest[CAVE_OCTAVES];
+    for (int o = 0; o < CAVE_OCTAVES; o++) {
+        float a = n[(size_t)o * levels + l], b = n[(size_t)o * levels + l + 1];
+        smallest[o] = (a > 0.0f) != (b > 0.0f) ? 0.0f : CORE_MIN(fabsf(a), fabsf(b));
+    }
+    return terrain__ridged_from_octaves(smallest, CAVE_OCTAVES, CAVE_GAIN);
+}
+
+static void column_generate(const chunk_gen *g, int i, int k, const float *fields, bool *cave_possible,
+                            column_layers *out) {
+    const terrain_generation_params *p = g->params;
+    float y_lo, y_hi;
+    column_range(g, i, k, &y_lo, &y_hi);
+    float ground_here = g->heights[(k + g->margin) * g->ground_size + i + g->margin];
+    column_context c = {
+        .g = g, .gx = (float)(i + g->margin), .gz = (float)(k + g->margin),
+        .reach_min = g->reach_min[k * TERRAIN_CHUNK_COLUMNS + i],
+        .octaves = g->model.perturbation_octaves, .levels = g->levels, .caves = caves_enabled(p),
+        .fade = p->cave_fade_height > 0.5f ? p->cave_fade_height : 0.5f,
+        .threshold = p->cave_threshold,
+        /* In metres, roughly, so that min() with the ground's part is balanced: R₁R₂ changes by
+         * about 1 over a tenth of a cave wavelength. */
+        .cave_scale = p->cave_wavelength * 0.1f,
+    };
+    c.u = fields;
+    c.w = fields + (size_t)c.octaves * c.levels;
+    c.cave1 = fields + (size_t)2 * c.octaves * c.levels;
+    c.cave2 = c.cave1 + (size_t)CAVE_OCTAVES * c.levels;
+    c.cave_top = ground_here + (ground_here > p->sea_level + 2.0f ? CAVE_OPENING * c.fade : -0.5f * c.fade);
+    c.cave_bottom = ground_here - cave_depth(p);
+
+    /* Segments of the coarse lattice where this column can have a cave at all. */
+    int first_level = (int)((y_lo - g->y_base) * (1.0f / COARSE_Y));
+    int last_level = (int)((y_hi + 2.0f * SAMPLE_STEP - g->y_base) * (1.0f / COARSE_Y));
+    if (c.caves) {
+        for (int l = first_level; l <= last_level && l + 1 < c.levels; l++)
+            cave_possible[l] = ridged_bound(c.cave1, c.levels, l) * ridged_bound(c.cave2, c.levels, l) >
+                               1.0f - c.threshold;
+    }
+
+    out->count = 0;
+    bool solid = true;                    /* y_lo is below every surface */
+    float previous_y = y_lo;
+    int samples = (int)ceilf((y_hi - y_lo) / SAMPLE_STEP) + 1;
+    for (int j = 0; j <= samples; j++) {
+        float y = y_lo + (float)j * SAMPLE_STEP;
+        float level = (y - g->y_base) * (1.0f / COARSE_Y);
+        int l = (int)level;
+        float t = level - (float)l;
+        bool cave_here = in_cave_band(&c, y) && cave_possible[l];
+        float d;
+        if (y < c.reach_min) {
+            /* The ground part is surely positive: only a cave can make this air. */
+            d = cave_here ? cave_density(&c, l, t, y) : 1.0f;
+        } else {
+            d = ground_density(&c, l, t, y);
+            if (d > 0.0f && cave_here) d = CORE_MIN(d, cave_density(&c, l, t, y));
+        }
+        bool now_solid = d > 0.0f;
+        if (now_solid != solid) {
+            /* Place the crossing from the full density at both samples. */
+            float d0 = density_exact(&c, previous_y), d1 = density_exact(&c, y);
+            float crossing = (d0 > 0.0f) != (d1 > 0.0f) ? previous_y + d0 / (d0 - d1) * (y - previous_y)
+                                                        : 0.5f * (previous_y + y);
+            if (out->count < MAX_TRANSITIONS - 1) out->transitions[out->count++] = crossing;
+            solid = now_solid;
+        }
+        previous_y = y;
+    }
+    /* Close a solid run left open (by y_hi or by a full buffer; one slot is kept for this). */
+    if (out->count % 2 == 0) out->transitions[out->count++] = y_hi;
+}
+
+/* Pushes a column: bedrock/air runs, then sand on the top run and water above it. */
+static void column_push(const chunk_gen *g, int i, int k, const column_layers *layers,
+                        terrain_stacks_builder *builder) {
+    const terrain_generation_params *p = g->params;
+    int count = layers->count;
+    float top = layers->transitions[count - 1];
+    float top_run_bottom = count >= 3 ? layers->transitions[count - 2] : TERRAIN_FLOOR_Y;
+    /* Sand on low slopes: the macro ground's gradient at the column, central differences. */
+    int size = g->ground_size, at = (k + g->margin) * size + i + g->margin;
+    float slope_x = 0.5f * (g->heights[at + 1] - g->heights[at - 1]);
+    float slope_z = 0.5f * (g->heights[at + size] - g->heights[at - size]);
+    float slope = sqrtf(slope_x * slope_x + slope_z * slope_z);
+    float sand = 0.0f;
+    if (p->sand_max_slope > 0.0f && p->sand_depth > 0.0f)
+        sand = p->sand_depth * clampf(1.0f - slope / p->sand_max_slope, 0.0f, 1.0f);
+    sand = CORE_MIN(sand, top - top_run_bottom);
+
+    float y = TERRAIN_FLOOR_Y;
+    for (int t = 0; t < count; t++) {
+        float next = layers->transitions[t];
+        if (t % 2) {
+            terrain_stacks_builder_push(builder, TERRAIN_AIR, next - y);
+        } else if (t == count - 1) {      /* the highest solid run */
+            terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, next - sand - y);
+            terrain_stacks_builder_push(builder, TERRAIN_SAND, sand);
+        } else {
+            terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, next - y);
+        }
+        y = next;
+    }
+    if (top < p->sea_level) terrain_stacks_builder_push(builder, TERRAIN_WATER, p->sea_level - top);
+    terrain_stacks_builder_end_column(builder);
+}
+
+terrain_stacks *terrain_generate_chunk(const terrain_generation_params *params, terrain_chunk_coord coord) {
+    chunk_gen g = { .params = params };
+    g.model = ground_model_make(params);
+    g.x0 = (double)coord.x * TERRAIN_CHUNK_COLUMNS * TERRAIN_COLUMN_SIZE;
+    g.z0 = (double)coord.z * TERRAIN_CHUNK_COLUMNS * TERRAIN_COLUMN_SIZE;
+    /* |u|, |w| ≤ 1 (normalised fBm of clamped noise), so a displaced point stays within A. */
+    g.displacement = clampf(params->horizontal_perturbation, 0.0f, 64.0f);
+    int reach = (int)ceilf(g.displacement) + 1;    /* + 1: bilinear reads the next column */
+    g.margin = reach + 1;                          /* + 1: slopes by central differences */
+    g.ground_size = TERRAIN_CHUNK_COLUMNS + 2 * g.margin;
+    size_t grid_bytes = (size_t)g.ground_size * g.ground_size * sizeof(float);
+    size_t column_bytes = (size_t)TERRAIN__COLUMNS * sizeof(float);
+    g.heights = core_alloc(grid_bytes);
+    g.reach_min = core_alloc(column_bytes);
+    g.reach_max = core_alloc(column_bytes);
+    ground_grid(&g);
+    ground_reach(&g, reach);
+
+    /* The chunk's y range, then the coarse lattice over it. */
+    float y_lo = INFINITY, y_hi = -INFINITY;
+    for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++) {
+        for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
+            float lo, hi;
+            column_range(&g, i, k, &lo, &hi);
+            y_lo = CORE_MIN(y_lo, lo);
+            y_hi = CORE_MAX(y_hi, hi);
+        }
+    }
+    coarse_setup(&g);
+    coarse_lattice(&g, y_lo, y_hi + 2.0f * SAMPLE_STEP);   /* the last sample may pass y_hi */
+
+    size_t fields_bytes = (size_t)g.fields * g.levels * sizeof(float);
+    float *fields = core_alloc(fields_bytes ? fields_bytes : sizeof(float));
+    column_layers *layers = core_alloc(sizeof *layers);
+    bool *cave_possible = core_calloc((size_t)g.levels, sizeof(bool));
+    terrain_stacks_builder *builder = terrain_stacks_builder_create();
+    for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++) {
+        for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
+            column_fields(&g, i, k, fields);
+            column_generate(&g, i, k, fields, cave_possible, layers);
+            column_push(&g, i, k, layers, builder);
+        }
+    }
+    terrain_stacks *stacks = terrain_stacks_builder_finish(builder);
+    terrain_stacks_builder_destroy(builder);
+    core_free(layers, sizeof *layers);
+    core_free(cave_possible, (size_t)g.levels * sizeof(bool));
+    core_free(fields, fields_bytes ? fields_bytes : sizeof(float));
+    core_free(g.coarse, (size_t)g.fields * COARSE_NODES * COARSE_NODES * (size_t)g.levels * sizeof(float));
+    core_free(g.heights, grid_bytes);
+    core_free(g.reach_min, column_bytes);
+    core_free(g.reach_max, column_bytes);
+    return stacks;
+}

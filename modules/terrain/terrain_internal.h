@@ -1,0 +1,109 @@
+/* terrain_internal.h — the terrain module's private declarations. Only the module's .c files and
+ * the module's own tests include this; the public API is terrain.h.
+ *
+ * Sections are owned by whoever wrote them; add new declarations in a section of your own.
+ */
+#ifndef TERRAIN_INTERNAL_H
+#define TERRAIN_INTERNAL_H
+
+#include "terrain/terrain.h"
+
+#include <stdint.h>
+
+/* ==== stacks, noise, generation (terrain_stacks.c, terrain_noise.c, terrain_generate.c) ===== */
+
+/* ---- packed stacks (terrain_stacks.c) ----
+ * A layer is one 16-bit word: material in bits 0–3, thickness in quanta in bits 4–15
+ * (1…4095, i.e. up to 127.97 m). A thickness field of 0 marks a long layer: the next word holds
+ * its thickness in quanta (4096…65535, up to 2048 m); longer runs are split into several
+ * entries of the same material, which every reader merges back into one logical layer. */
+#define TERRAIN__LAYER_MATERIAL_BITS 4
+#define TERRAIN__LAYER_SHORT_MAX 4095u
+#define TERRAIN__LAYER_LONG_MAX 65535u
+#define TERRAIN__QUANTA_PER_METRE 32      /* 1 / TERRAIN_HEIGHT_QUANTUM */
+#define TERRAIN__COLUMNS (TERRAIN_CHUNK_COLUMNS * TERRAIN_CHUNK_COLUMNS)
+
+/* A logical layer in quanta: what readers walk. */
+typedef struct terrain__qlayer {
+    uint8_t material;
+    uint32_t quanta;
+} terrain__qlayer;
+
+/* Walks column (i, k): the range of words and a cursor over logical layers (split entries
+ * merged). */
+typedef struct terrain__column_cursor {
+    const uint16_t *word, *end;
+} terrain__column_cursor;
+
+terrain__column_cursor terrain__stacks_cursor(const terrain_stacks *stacks, int i, int k);
+/* Next logical layer; false at the end of the column (the implicit air above). */
+bool terrain__cursor_next(terrain__column_cursor *cursor, terrain__qlayer *out);
+
+/* ---- noise (terrain_noise.c) ----
+ * Seeds are folded to 32 bits once (terrain__seed32) so that the hot loops hash with 32-bit
+ * integer operations, which SSE2 vectorises. */
+uint32_t terrain__seed32(uint64_t seed);
+/* Improved gradient noise (Perlin 2002 gradients, quintic fade) with a 32-bit seed; in [-1, 1]. */
+float terrain__noise3(uint32_t seed, float x, float y, float z);
+/* 2D gradient noise in [-1, 1] (the macro relief is a height field: 2D is half the work). */
+float terrain__noise2(uint32_t seed, float x, float z);
+/* A row of 2D noise at (xs[j]·scale, z), vectorised; unclamped (measured within ±0.99), else
+ * equal to terrain__noise2. */
+void terrain__noise2_row(uint32_t seed, const float *xs, float scale, float z, int count, float *out);
+/* The column batch: out[j] = terrain__noise3(seed, x, y0 + j·dy, z) for j < count. */
+void terrain__noise3_column(uint32_t seed, float x, float y0, float dy, float z, int count, float *out);
+
+/* Rescale-and-add multifractal with domain warping (004 §2.1, §2.2) over a 2D domain measured
+ * in wavelengths of the lowest octave. */
+typedef struct terrain__multifractal {
+    uint32_t seed;
+    float lacunarity;        /* r */
+    float hurst;             /* H */
+    float octaves;           /* ν: floor(ν) full octaves, then one weighted by its fraction (004 §4) */
+    float warp;              /* 0 = no domain warping; 1 = 004's control vectors as published */
+} terrain__multifractal;
+
+/* Octave count for sampling spacing `spacing` (same unit as the first octave's amplitude):
+ * ν = log(spacing) / log(r^−H) (004 §4), capped to [1, max_octaves]. */
+float terrain__multifractal_octaves(float lacunarity, float hurst, float spacing, int max_octaves);
+/* Σ_k r^(−kH)·S(r^k·x_k), the sum normalised by Σ_k r^(−kH) so the result lies in [-1, 1]. */
+float terrain__multifractal2(const terrain__multifractal *mf, float x, float z);
+/* The same at (xs[j], z) for j < count, several points per instruction; equal to the scalar. */
+void terrain__multifractal2_row(const terrain__multifractal *mf, const float *xs, float z, int count, float *out);
+
+/* Ridged multifractal (Musgrave) of `octaves` octaves at lacunarity 2, octave k's amplitude
+ * gain^k, in [0, 1]; 1 on the ridges, where the underlying noise crosses zero. Scalar
+ * reference; generation uses the form from raw octave values below. */
+float terrain__ridged3(uint32_t seed, float x, float y, float z, int octaves, float gain);
+/* The same from the raw octave values n[0…octaves-1] (octave k at frequency 2^k), so a caller
+ * that interpolates the smooth raw noise can apply the ridge (a kink) at full resolution. */
+float terrain__ridged_from_octaves(const float *n, int octaves, float gain);
+
+/* ---- generation (terrain_generate.c) ---- */
+
+/* Macro ground height (metres) at world column position (x, z): base + relief·multifractal,
+ * plus the vertical fBm perturbation (002 §3.1.3.1's "fractal sampled along y = 0"). */
+float terrain__ground_height(const terrain_generation_params *params, double x, double z);
+
+/* ==== end of the stacks/noise/generation section ========================================== */
+
+
+/* ==== field and meshing (terrain_field.c, terrain_mesh.c, terrain_mesh_tables.c) ========== */
+
+/* The marching-cubes case table (terrain_mesh_tables.c says how it is derived): for the cell
+ * configuration `config` (bit v set when corner v = x | y << 1 | z << 2 is inside, f > 0), the
+ * triangles as triples of cell edges, counter-clockwise seen from the outside. Edge 4·a + m runs
+ * along axis a between terrain__mc_edge_corners[e][0] and [1]. Built once, thread-safely. */
+typedef struct terrain__mc_case {
+    uint8_t triangle_count;          /* 0xff would mean a loop without a valid triangulation */
+    uint8_t loop_count;              /* surface pieces in the cell */
+    uint16_t edge_mask;              /* crossed edges */
+    uint8_t edges[12][3];
+} terrain__mc_case;
+
+const terrain__mc_case *terrain__mc_table(void);
+extern const uint8_t terrain__mc_edge_corners[12][2];
+
+/* ==== end of the field and meshing section ================================================ */
+
+#endif

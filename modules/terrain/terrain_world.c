@@ -1,0 +1,213 @@
+/* terrain_world.c — generated chunks, cached: a hash map from chunk coordinate to stacks under
+ * one mutex, an LRU list, retain counts.
+ *
+ * Chunks are generated outside the lock, so threads generate different chunks in parallel; two
+ * threads that race on the same chunk both generate it and the second to finish frees its copy
+ * (the bytes are identical: generation is a pure function of (params, coord)).
+ *
+ * Eviction never happens inside terrain_world_stacks: a caller may hold pointers to several
+ * chunks at once (the field sampler reads up to four) while other threads fetch more. Only
+ * terrain_world_trim evicts, at a point the owner chooses (once a frame, when no job reads
+ * stacks); see terrain.h.
+ */
+#include "terrain_internal.h"
+
+#include "core/core.h"
+
+#include <math.h>
+#include <pthread.h>
+
+typedef struct world_entry world_entry;
+struct world_entry {
+    terrain_chunk_coord coord;
+    terrain_stacks *stacks;
+    world_entry *next_in_bucket;
+    world_entry *lru_prev, *lru_next;     /* most recently used at the head */
+    int retained;
+};
+
+struct terrain_world {
+    pthread_mutex_t lock;
+    terrain_generation_params generation;
+    terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);
+    void *generate_user;
+    size_t max_chunks;
+    world_entry **buckets;
+    size_t bucket_count;                  /* a power of two */
+    size_t count;
+    world_entry *lru_head, *lru_tail;
+};
+
+static uint64_t coord_hash(terrain_chunk_coord c) {
+    return core_hash_combine(core_hash_u64((uint64_t)c.x), (uint64_t)c.z);
+}
+
+static bool coord_equal(terrain_chunk_coord a, terrain_chunk_coord b) {
+    return a.x == b.x && a.z == b.z;
+}
+
+terrain_world *terrain_world_create(const terrain_world_desc *desc) {
+    terrain_world *w = core_calloc(1, sizeof *w);
+    pthread_mutex_init(&w->lock, NULL);
+    w->generation = desc->generation;
+    w->generate = desc->generate;
+    w->generate_user = desc->generate_user;
+    w->max_chunks = desc->max_chunks ? desc->max_chunks : 4096;
+    w->bucket_count = 64;
+    w->buckets = core_calloc(w->bucket_count, sizeof *w->buckets);
+    return w;
+}
+
+void terrain_world_destroy(terrain_world *world) {
+    if (!world) return;
+    for (world_entry *e = world->lru_head, *next; e; e = next) {
+        next = e->lru_next;
+        terrain_stacks_destroy(e->stacks);
+        core_free(e, sizeof *e);
+    }
+    core_free(world->buckets, world->bucket_count * sizeof *world->buckets);
+    pthread_mutex_destroy(&world->lock);
+    core_free(world, sizeof *world);
+}
+
+/* ---- the map and the LRU list (lock held) ---------------------------------------------- */
+
+static world_entry **find_slot(terrain_world *w, terrain_chunk_coord coord) {
+    world_entry **slot = &w->buckets[coord_hash(coord) & (w->bucket_count - 1)];
+    while (*slot && !coord_equal((*slot)->coord, coord)) slot = &(*slot)->next_in_bucket;
+    return slot;
+}
+
+static void lru_unlink(terrain_world *w, world_entry *e) {
+    if (e->lru_prev) e->lru_prev->lru_next = e->lru_next; else w->lru_head = e->lru_next;
+    if (e->lru_next) e->lru_next->lru_prev = e->lru_prev; else w->lru_tail = e->lru_prev;
+    e->lru_prev = e->lru_next = NULL;
+}
+
+static void lru_push_front(terrain_world *w, world_entry *e) {
+    e->lru_prev = NULL;
+    e->lru_next = w->lru_head;
+    if (w->lru_head) w->lru_head->lru_prev = e; else w->lru_tail = e;
+    w->lru_head = e;
+}
+
+static void touch(terrain_world *w, world_entry *e) {
+    if (w->lru_head == e) return;
+    lru_unlink(w, e);
+    lru_push_front(w, e);
+}
+
+static void grow_buckets(terrain_world *w) {
+    size_t old_count = w->bucket_count;
+    world_entry **old = w->buckets;
+    w->bucket_count = old_count * 2;
+    w->buckets = core_calloc(w->bucket_count, sizeof *w->buckets);
+    for (size_t b = 0; b < old_count; b++) {
+        for (world_entry *e = old[b], *next; e; e = next) {
+            next = e->next_in_bucket;
+            world_entry **slot = &w->buckets[coord_hash(e->coord) & (w->bucket_count - 1)];
+            e->next_in_bucket = *slot;
+            *slot = e;
+        }
+    }
+    core_free(old, old_count * sizeof *old);
+}
+
+/* Inserts a freshly generated chunk unless another thread got there first; returns the entry
+ * that is in the map (ours or theirs; a losing copy is freed). */
+static world_entry *insert_or_get(terrain_world *w, terrain_chunk_coord coord, terrain_stacks *stacks) {
+    world_entry **slot = find_slot(w, coord);
+    if (*slot) {
+        terrain_stacks_destroy(stacks);
+        return *slot;
+    }
+    world_entry *e = core_calloc(1, sizeof *e);
+    e->coord = coord;
+    e->stacks = stacks;
+    *slot = e;
+    lru_push_front(w, e);
+    if (++w->count > w->bucket_count) grow_buckets(w);
+    return e;
+}
+
+static terrain_stacks *generate(terrain_world *w, terrain_chunk_coord coord) {
+    if (w->generate) return w->generate(w->generate_user, coord);
+    return terrain_generate_chunk(&w->generation, coord);
+}
+
+/* The entry for `coord`, generated if needed, touched; returns with the lock held. */
+static world_entry *acquire(terrain_world *w, terrain_chunk_coord coord) {
+    pthread_mutex_lock(&w->lock);
+    world_entry *e = *find_slot(w, coord);
+    if (!e) {
+        pthread_mutex_unlock(&w->lock);
+        terrain_stacks *stacks = generate(w, coord);   /* outside the lock: slow, parallel */
+        pthread_mutex_lock(&w->lock);
+        e = insert_or_get(w, coord, stacks);
+    }
+    touch(w, e);
+    return e;
+}
+
+/* ---- the API ---------------------------------------------------------------------------- */
+
+const terrain_stacks *terrain_world_stacks(terrain_world *world, terrain_chunk_coord coord) {
+    world_entry *e = acquire(world, coord);
+    const terrain_stacks *stacks = e->stacks;
+    pthread_mutex_unlock(&world->lock);
+    return stacks;
+}
+
+void terrain_world_retain(terrain_world *world, terrain_chunk_coord coord) {
+    world_entry *e = acquire(world, coord);
+    e->retained++;
+    pthread_mutex_unlock(&world->lock);
+}
+
+void terrain_world_release(terrain_world *world, terrain_chunk_coord coord) {
+    pthread_mutex_lock(&world->lock);
+    world_entry *e = *find_slot(world, coord);
+    bool unmatched = !e || e->retained == 0;
+    if (!unmatched) e->retained--;
+    pthread_mutex_unlock(&world->lock);
+    if (unmatched)
+        core_warn("terrain", "release of chunk (%lld, %lld) that is not retained",
+                  (long long)coord.x, (long long)coord.z);
+}
+
+size_t terrain_world_trim(terrain_world *world) {
+    pthread_mutex_lock(&world->lock);
+    size_t evicted = 0;
+    world_entry *e = world->lru_tail;
+    while (world->count > world->max_chunks && e) {
+        world_entry *prev = e->lru_prev;
+        if (e->retained == 0) {
+            *find_slot(world, e->coord) = e->next_in_bucket;
+            lru_unlink(world, e);
+            terrain_stacks_destroy(e->stacks);
+            core_free(e, sizeof *e);
+            world->count--;
+            evicted++;
+        }
+        e = prev;
+    }
+    pthread_mutex_unlock(&world->lock);
+    return evicted;
+}
+
+size_t terrain_world_chunk_count(terrain_world *world) {
+    pthread_mutex_lock(&world->lock);
+    size_t count = world->count;
+    pthread_mutex_unlock(&world->lock);
+    return count;
+}
+
+terrain_material terrain_world_material_at(terrain_world *world, double x, double y, double z) {
+    double column_x = floor(x / TERRAIN_COLUMN_SIZE), column_z = floor(z / TERRAIN_COLUMN_SIZE);
+    double chunk_x = floor(column_x / TERRAIN_CHUNK_COLUMNS), chunk_z = floor(column_z / TERRAIN_CHUNK_COLUMNS);
+    int i = (int)(column_x - chunk_x * TERRAIN_CHUNK_COLUMNS);
+    int k = (int)(column_z - chunk_z * TERRAIN_CHUNK_COLUMNS);
+    const terrain_stacks *stacks =
+        terrain_world_stacks(world, (terrain_chunk_coord){ (int64_t)chunk_x, (int64_t)chunk_z });
+    return terrain_stacks_material_at(stacks, i, k, (float)y);
+}

@@ -1,0 +1,29 @@
+#version 450 core
+// terrain.vert — terrain meshes, drawn camera-relative: positions arrive relative to their mesh's
+// origin, and u_offset (mesh origin − camera, subtracted in double precision on the CPU) keeps
+// every float small however far from the world's origin the camera is.
+
+layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec4 a_weights;      // bedrock, sand, rocks, water (unorm8)
+
+uniform mat4 u_view_projection;              // camera at the origin
+uniform vec3 u_offset;                       // mesh origin − camera position
+uniform vec3 u_texture_offset;               // mesh origin modulo the texture period
+uniform float u_mesh_y;                      // mesh origin's world height (bands are absolute)
+
+out vec3 v_relative_position;                // to the camera
+out vec3 v_texture_position;                 // for the triplanar projections
+out vec3 v_normal;
+out vec4 v_weights;
+out float v_height;
+
+void main() {
+    vec3 relative = a_position + u_offset;
+    v_relative_position = relative;
+    v_texture_position = a_position + u_texture_offset;
+    v_normal = a_normal;
+    v_weights = a_weights;
+    v_height = a_position.y + u_mesh_y;
+    gl_Position = u_view_projection * vec4(relative, 1.0);
+}

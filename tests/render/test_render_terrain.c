@@ -1,0 +1,150 @@
+/* The terrain renderer through OSMesa: materials from the vertex weights, camera-relative drawing
+ * far from the origin, and a generated, meshed region that looks like ground under a sky. */
+#include "../engine/test.h"
+#include "render_util.h"
+
+#include "terrain/terrain.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define W 96
+#define H 64
+
+/* A flat square of `size` metres at height 0, facing up, every vertex with the given weights. */
+static terrain_mesh flat_square(double origin_x, double origin_z, float size, const uint8_t weights[4]) {
+    terrain_mesh mesh = { .origin = { origin_x, 0, origin_z }, .vertex_count = 4, .index_count = 6 };
+    mesh.vertices = calloc(4, sizeof *mesh.vertices);
+    mesh.indices = malloc(6 * sizeof *mesh.indices);
+    const float corners[4][2] = { { -size, -size }, { -size, size }, { size, size }, { size, -size } };
+    for (int i = 0; i < 4; i++) {
+        mesh.vertices[i] = (terrain_vertex){ .position = { corners[i][0], 0, corners[i][1] }, .normal = { 0, 1, 0 } };
+        memcpy(mesh.vertices[i].weights, weights, 4);
+    }
+    const uint32_t indices[6] = { 0, 1, 2, 0, 2, 3 };   /* counter-clockwise seen from above */
+    memcpy(mesh.indices, indices, sizeof indices);
+    mesh.bounds_min[0] = mesh.bounds_min[2] = -size;
+    mesh.bounds_max[0] = mesh.bounds_max[2] = size;
+    return mesh;
+}
+
+static void free_square(terrain_mesh *mesh) { free(mesh->vertices); free(mesh->indices); }
+
+/* Renders one mesh seen from `height` metres above its origin, looking straight down. */
+static render_image render_mesh(gfx_context *gfx, terrain_renderer *renderer, const terrain_mesh *mesh,
+                                double camera_x, double camera_z, double height) {
+    terrain_gpu_mesh gpu = terrain_gpu_mesh_upload(mesh);
+    terrain_view view = { .camera = { camera_x, height, camera_z }, .pitch = -1.5707f, .aspect = (float)W / H,
+                          .sun_direction = { 0, 1, 0 } };
+    gfx_frame_begin(gfx);
+    terrain_renderer_draw(renderer, &view, &gpu, 1);
+    render_image image = { W, H, malloc(W * H * 4) };
+    gfx_read_pixels(gfx, image.rgba);
+    gfx_frame_end(gfx);
+    terrain_gpu_mesh_destroy(&gpu);
+    return image;
+}
+
+static void mean_color(const render_image *image, double mean[3]) {
+    mean[0] = mean[1] = mean[2] = 0;
+    for (int i = 0; i < W * H; i++)
+        for (int c = 0; c < 3; c++) mean[c] += image->rgba[i * 4 + c] / (double)(W * H);
+}
+
+Test(render_terrain, vertex_weights_pick_the_material) {
+    gfx_context *gfx = render_offscreen(W, H);
+    terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = -50 });
+    cr_assert(renderer);
+    terrain_mesh sand = flat_square(0, 0, 50, (const uint8_t[4]){ 0, 255, 0, 0 });
+    terrain_mesh rock = flat_square(0, 0, 50, (const uint8_t[4]){ 0, 0, 255, 0 });
+    render_image a = render_mesh(gfx, renderer, &sand, 0, 0, 10), b = render_mesh(gfx, renderer, &rock, 0, 0, 10);
+    double sand_mean[3], rock_mean[3];
+    mean_color(&a, sand_mean);
+    mean_color(&b, rock_mean);
+    /* Sand is warm (red well above blue); the rocks texture is a neutral grey and darker. */
+    cr_assert_gt(sand_mean[0], sand_mean[2] + 40, "sand %.0f %.0f %.0f", sand_mean[0], sand_mean[1], sand_mean[2]);
+    cr_assert_lt(fabs(rock_mean[0] - rock_mean[2]), 15, "rocks %.0f %.0f %.0f", rock_mean[0], rock_mean[1], rock_mean[2]);
+    cr_assert_gt(sand_mean[1], rock_mean[1] + 30);
+    free_square(&sand);
+    free_square(&rock);
+    render_image_free(&a);
+    render_image_free(&b);
+    terrain_renderer_destroy(renderer);
+    gfx_destroy(gfx);
+}
+
+Test(render_terrain, a_view_100_km_away_renders_exactly_as_at_the_origin) {
+    gfx_context *gfx = render_offscreen(W, H);
+    terrain_renderer *renderer = terrain_renderer_create(gfx, NULL);
+    const uint8_t mixed[4] = { 128, 64, 63, 0 };
+    /* The same square and camera, shifted by 100 km (a multiple of the texture period). */
+    terrain_mesh near = flat_square(3.25, -7.5, 30, mixed), far = flat_square(100003.25, 99992.5, 30, mixed);
+    render_image a = render_mesh(gfx, renderer, &near, 1.0, -6.0, 12), b = render_mesh(gfx, renderer, &far, 100001.0, 99994.0, 12);
+    int worst = 0;
+    for (int i = 0; i < W * H * 4; i++) {
+        int d = abs((int)a.rgba[i] - (int)b.rgba[i]);
+        if (d > worst) worst = d;
+    }
+    cr_assert_leq(worst, 1, "largest channel difference %d", worst);
+    free_square(&near);
+    free_square(&far);
+    render_image_free(&a);
+    render_image_free(&b);
+    terrain_renderer_destroy(renderer);
+    gfx_destroy(gfx);
+}
+
+#include "ecs/ecs.h"
+#include "jobs/jobs.h"
+
+/* Generates, meshes and draws a 3 × 3-chunk area through the ECS on `threads` threads. */
+static terrain_ecs_stats render_generated(int threads, render_image *image) {
+    gfx_context *gfx = render_offscreen(W, H);
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = threads });
+    ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
+    terrain_generation_params params = terrain_generation_defaults(7);
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = params });
+    terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = params.sea_level });
+    terrain_ecs *te = terrain_ecs_create(ecs, world);
+    terrain_ecs_spawn_area(te, 0, 0, 1, -4, 8);
+    ecs_progress(ecs, 1.0f / 60.0f);
+    const terrain_stacks *middle = terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 });
+    float ground = terrain_stacks_surface(middle, 16, 16);
+    /* From 60 m above the middle of chunk (0, 0), looking north and down a little. */
+    terrain_view view = { .camera = { 16, ground + 60, 40 }, .pitch = -0.3f, .aspect = (float)W / H };
+    gfx_frame_begin(gfx);
+    terrain_ecs_draw(te, renderer, &view);
+    *image = (render_image){ W, H, malloc(W * H * 4) };
+    gfx_read_pixels(gfx, image->rgba);
+    gfx_frame_end(gfx);
+    terrain_ecs_stats stats = terrain_ecs_stats_get(te);
+    terrain_ecs_destroy(te);
+    terrain_renderer_destroy(renderer);
+    ecs_world_destroy(ecs);
+    terrain_world_destroy(world);
+    job_system_destroy(jobs);
+    gfx_destroy(gfx);
+    return stats;
+}
+
+Test(render_terrain, generated_area_shows_ground_under_sky_the_same_on_any_thread_count) {
+    render_image one, two;
+    terrain_ecs_stats a = render_generated(1, &one), b = render_generated(2, &two);
+    cr_assert_eq(a.chunks, 9);
+    cr_assert_eq(a.chunks_generated, 9, "the generate phase made every chunk's stacks");
+    cr_assert_eq(a.mesh_chunks_uploaded, a.mesh_chunks, "the mesh and draw phases finished in one frame");
+    cr_assert_gt(a.triangles, 1000u);
+    cr_assert_eq(a.triangles, b.triangles, "the same meshes on 1 and 2 threads");
+    cr_assert(memcmp(one.rgba, two.rgba, W * H * 4) == 0, "the same image on 1 and 2 threads");
+    int sky = 0, ground = 0;
+    for (int x = 0; x < W; x++) {
+        const uint8_t *top = render_pixel(&one, x, 0), *bottom = render_pixel(&one, x, H - 1);
+        sky += top[2] > top[0] + 30;
+        ground += !(bottom[2] > bottom[0] + 30);
+    }
+    cr_assert_gt(sky, W * 9 / 10, "sky along the top row");
+    cr_assert_gt(ground, W * 9 / 10, "ground along the bottom row");
+    render_image_free(&one);
+    render_image_free(&two);
+}

@@ -1,0 +1,126 @@
+/* hello_terrain — the terrain module on the engine: column chunks and mesh chunks as entities,
+ * generated and meshed in parallel by the generate and mesh phases, drawn with triplanar
+ * materials. Fly with the same controls as hello_scene.
+ *
+ *   hello_terrain [--seed S] [--radius R] [--size WxH] [--headless] [--frames N]
+ *                 [--screenshot FILE] [--threads N] [--trace FILE]
+ */
+#include "core/core.h"
+#include "ecs/ecs.h"
+#include "gfx/gfx.h"
+#include "input/input.h"
+#include "jobs/jobs.h"
+#include "terrain/terrain.h"
+#include "trace/trace.h"
+
+#include <math.h>
+#include <stdio.h>
+
+typedef struct options {
+    core_common_args common;
+    const char *size, *screenshot;
+    int seed, radius, frames;
+    bool headless;
+} options;
+
+static int parse(int argc, char **argv, options *o, int *width, int *height) {
+    const core_option list[] = {
+        CORE_COMMON_OPTIONS(o->common),
+        { "seed", CORE_OPTION_INT, &o->seed, "S", "world seed", 0, 2147483647 },
+        { "radius", CORE_OPTION_INT, &o->radius, "R", "chunks around the start (default 2)", 0, 16 },
+        { "size", CORE_OPTION_STRING, &o->size, "WxH", "framebuffer size (default 1280x720)" },
+        { "headless", CORE_OPTION_FLAG, &o->headless, NULL, "render offscreen with OSMesa" },
+        { "frames", CORE_OPTION_INT, &o->frames, "N", "stop after N frames (0 = when closed)", 0, 100000000 },
+        { "screenshot", CORE_OPTION_STRING, &o->screenshot, "FILE", "write the last frame as a PNG" },
+    };
+    core_cli cli = { .program = "hello_terrain", .summary = "generate, mesh and fly over terrain",
+                     .options = list, .option_count = CORE_COUNTOF(list) };
+    o->seed = 1;
+    o->radius = 2;
+    int rc = core_cli_parse(&cli, argc, argv);
+    if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
+    *width = 1280;
+    *height = 720;
+    if (o->size && !gfx_parse_size(o->size, width, height)) {
+        fprintf(stderr, "hello_terrain: bad value for '--size': '%s' is not WxH (16 to 16384 each)\n", o->size);
+        core_cli_print_usage(&cli, stderr);
+        return 2;
+    }
+    return -1;
+}
+
+/* Walk the view by the actions: heading from yaw, Space/Ctrl up and down, Shift faster. */
+static void steer(terrain_view *view, const input_actions *a, float dt) {
+    view->yaw += a->look_x;
+    view->pitch = fmaxf(-1.5f, fminf(1.5f, view->pitch + a->look_y));
+    double speed = (a->down & INPUT_ACTION_BIT(INPUT_ACTION_SPRINT)) ? 60.0 : 15.0;
+    double step = speed * dt, s = sin(view->yaw), c = cos(view->yaw);
+    view->camera[0] += (s * a->move_y + c * a->move_x) * step;
+    view->camera[2] += (-c * a->move_y + s * a->move_x) * step;
+    if (a->down & INPUT_ACTION_BIT(INPUT_ACTION_JUMP)) view->camera[1] += step;
+    if (a->down & INPUT_ACTION_BIT(INPUT_ACTION_CROUCH)) view->camera[1] -= step;
+}
+
+int main(int argc, char **argv) {
+    options o = { 0 };
+    int width, height;
+    int rc = parse(argc, argv, &o, &width, &height);
+    if (rc >= 0) return rc;
+    if (o.common.trace_path && !trace_start(o.common.trace_path)) return 2;
+    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "hello_terrain",
+                                               .headless = o.headless });
+    if (!gfx) return 1;
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = o.common.threads });
+    ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
+    terrain_generation_params params = terrain_generation_defaults((uint64_t)o.seed);
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = params });
+    terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = params.sea_level });
+    if (!renderer) return 1;
+    terrain_ecs *te = terrain_ecs_create(ecs, world);
+    /* Mesh layers that cover the relief, with a margin for overhangs. */
+    double low = params.base_height - params.relief_height - 48, high = params.base_height + params.relief_height + 48;
+    terrain_ecs_spawn_area(te, 0, 0, o.radius, (int64_t)floor(low / TERRAIN_MESH_CELLS),
+                           (int64_t)floor(high / TERRAIN_MESH_CELLS));
+    input_system *input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(gfx) });
+    if (!input) return 1;
+
+    /* Start above the middle of chunk (0, 0), looking down the −z axis and a little down. */
+    const terrain_stacks *origin = terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 });
+    float ground = terrain_stacks_surface(origin, TERRAIN_CHUNK_COLUMNS / 2, TERRAIN_CHUNK_COLUMNS / 2);
+    terrain_view view = { .camera = { 16.0, ground + 40.0, 40.0 }, .pitch = -0.35f };
+    bool windowed = gfx_backend_get(gfx) == GFX_BACKEND_WINDOW;
+    int frames = o.frames ? o.frames : (windowed ? 0 : 30);
+    uint64_t last = core_time_ns();
+    for (int frame = 0; frames == 0 || frame < frames; frame++) {
+        trace_frame_begin();
+        uint64_t now = core_time_ns();
+        float dt = windowed ? (float)((now - last) * 1e-9) : 1.0f / 60.0f;
+        last = now;
+        if (!input_update(input, dt)) break;
+        const input_actions *actions = input_actions_get(input);
+        if ((actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_QUIT)) || gfx_window_should_close(gfx)) break;
+        if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_SCREENSHOT)) gfx_screenshot(gfx, "terrain.png");
+        steer(&view, actions, input_frame_dt(input));
+        gfx_frame_begin(gfx);
+        ecs_progress(ecs, dt);                     /* generate, mesh and upload */
+        gfx_size(gfx, &width, &height);
+        view.aspect = (float)width / (float)height;
+        terrain_ecs_draw(te, renderer, &view);
+        if (o.screenshot && frames && frame + 1 == frames && !gfx_screenshot(gfx, o.screenshot)) rc = 1;
+        gfx_frame_end(gfx);
+        trace_frame_end();
+    }
+    terrain_ecs_stats stats = terrain_ecs_stats_get(te);
+    printf("hello_terrain: %d chunks, %d mesh chunks (%d drawn), %llu triangles, %llu frames\n", stats.chunks,
+           stats.mesh_chunks, stats.mesh_chunks_uploaded, (unsigned long long)stats.triangles,
+           (unsigned long long)gfx_frame_index(gfx));
+    input_destroy(input);
+    terrain_ecs_destroy(te);
+    terrain_renderer_destroy(renderer);
+    ecs_world_destroy(ecs);
+    terrain_world_destroy(world);
+    job_system_destroy(jobs);
+    gfx_destroy(gfx);
+    trace_stop();
+    return rc < 0 ? 0 : rc;
+}
