@@ -10,6 +10,9 @@ struct terrain_ecs {
     ecs_world *ecs;
     terrain_world *terrain;
     ecs_component chunk, mesh_chunk;
+    /* Tags that move finished entities out of the systems' queries, so a frame with nothing to
+     * generate or mesh schedules no jobs at all. */
+    ecs_component chunk_ready, mesh_ready, mesh_uploaded;
     ecs_query *chunks, *mesh_chunks;
     terrain_gpu_mesh *draw_list;         /* gathered each draw */
     size_t draw_capacity;
@@ -24,6 +27,7 @@ static void terrain_generate_system(ecs_iter *it) {
             /* Retained: the cache never evicts a chunk an entity holds. */
             terrain_world_retain(te->terrain, chunks[i].coord);
             chunks[i].stacks = terrain_world_stacks(te->terrain, chunks[i].coord);
+            ecs_defer_add(it->commands, it->entities[i], te->chunk_ready);
         }
     }
 }
@@ -50,12 +54,16 @@ static void terrain_mesh_system(ecs_iter *it) {
     terrain_ecs *te = it->user;
     while (ecs_query_next(it)) {
         TerrainMeshChunk *chunks = ecs_field(it, 0);
-        for (int i = 0; i < it->count; i++)
-            if (chunks[i].state == TERRAIN_MESH_WAITING) terrain_mesh_chunk_build(te, &chunks[i]);
+        for (int i = 0; i < it->count; i++) {
+            if (chunks[i].state != TERRAIN_MESH_WAITING) continue;
+            terrain_mesh_chunk_build(te, &chunks[i]);
+            ecs_defer_add(it->commands, it->entities[i], te->mesh_ready);
+        }
     }
 }
 
 static void terrain_upload_system(ecs_iter *it) {
+    terrain_ecs *te = it->user;
     while (ecs_query_next(it)) {
         TerrainMeshChunk *chunks = ecs_field(it, 0);
         for (int i = 0; i < it->count; i++) {
@@ -63,6 +71,7 @@ static void terrain_upload_system(ecs_iter *it) {
             chunks[i].gpu = terrain_gpu_mesh_upload(&chunks[i].mesh);
             terrain_mesh_free(&chunks[i].mesh);
             chunks[i].state = TERRAIN_MESH_UPLOADED;
+            ecs_defer_add(it->commands, it->entities[i], te->mesh_uploaded);
         }
     }
 }
@@ -73,16 +82,22 @@ terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
     te->terrain = terrain;
     te->chunk = ECS_COMPONENT(ecs, TerrainChunk);
     te->mesh_chunk = ECS_COMPONENT(ecs, TerrainMeshChunk);
+    te->chunk_ready = ECS_TAG(ecs, TerrainChunkReady);
+    te->mesh_ready = ECS_TAG(ecs, TerrainMeshReady);
+    te->mesh_uploaded = ECS_TAG(ecs, TerrainMeshUploaded);
     te->chunks = ecs_query_create(ecs, &(ecs_query_desc){ .with = { te->chunk } });
     te->mesh_chunks = ecs_query_create(ecs, &(ecs_query_desc){ .with = { te->mesh_chunk } });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_generate", .phase = "generate",
-        .query = { .with = { te->chunk } }, .writes = { te->chunk }, .fn = terrain_generate_system,
+        .query = { .with = { te->chunk }, .without = { te->chunk_ready } }, .writes = { te->chunk },
+        .fn = terrain_generate_system,
         .user = te, .parallel = true, .batch_size = 1 });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_mesh", .phase = "mesh",
-        .query = { .with = { te->mesh_chunk } }, .writes = { te->mesh_chunk }, .fn = terrain_mesh_system,
+        .query = { .with = { te->mesh_chunk }, .without = { te->mesh_ready } }, .writes = { te->mesh_chunk },
+        .fn = terrain_mesh_system,
         .user = te, .parallel = true, .batch_size = 1 });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_upload", .phase = "draw",
-        .query = { .with = { te->mesh_chunk } }, .writes = { te->mesh_chunk }, .fn = terrain_upload_system,
+        .query = { .with = { te->mesh_chunk, te->mesh_ready }, .without = { te->mesh_uploaded } },
+        .writes = { te->mesh_chunk }, .fn = terrain_upload_system,
         .user = te, .main_thread = true });
     return te;
 }
@@ -125,6 +140,7 @@ void terrain_ecs_spawn_area(terrain_ecs *te, int64_t cx, int64_t cz, int radius,
 
 void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view) {
     size_t count = 0;
+    uint64_t triangles = 0;
     ecs_iter it = ecs_query_iter(te->ecs, te->mesh_chunks);
     while (ecs_query_next(&it)) {
         TerrainMeshChunk *chunks = ecs_field(&it, 0);
@@ -132,9 +148,13 @@ void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain
             if (chunks[i].state != TERRAIN_MESH_UPLOADED || chunks[i].gpu.index_count == 0) continue;
             te->draw_list = core_grow(te->draw_list, &te->draw_capacity, count + 1, sizeof *te->draw_list);
             te->draw_list[count++] = chunks[i].gpu;
+            triangles += chunks[i].gpu.index_count / 3;
         }
     }
     terrain_renderer_draw(renderer, view, te->draw_list, (int)count);
+    trace_counter("terrain.mesh_chunks_drawn", (double)count);
+    trace_counter("terrain.triangles_drawn", (double)triangles);
+    trace_counter("terrain.chunks_cached", (double)terrain_world_chunk_count(te->terrain));
     /* Outside ecs_progress no job holds stacks: the moment to drop cached chunks no entity keeps. */
     terrain_world_trim(te->terrain);
 }
