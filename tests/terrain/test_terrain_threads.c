@@ -1,0 +1,52 @@
+/* The terrain world shared by jobs: many threads asking for the same chunks at once get the same
+ * bytes a lone thread generates, and fields sampled concurrently agree. Also built into
+ * test_threads, which tools/test runs under ThreadSanitizer. */
+#include "../engine/test.h"
+
+#include "jobs/jobs.h"
+#include "terrain/terrain.h"
+
+#define THREAD_CHUNKS 6
+#define THREAD_REQUESTS 48
+
+typedef struct world_job {
+    terrain_world *world;
+    uint64_t hashes[THREAD_REQUESTS];
+    float samples[THREAD_REQUESTS];
+} world_job;
+
+static terrain_chunk_coord chunk_of(int request) {
+    return (terrain_chunk_coord){ request % THREAD_CHUNKS - 3, (request / 7) % 2 };
+}
+
+static void fetch_range(void *user, size_t begin, size_t end) {
+    world_job *job = user;
+    for (int r = (int)begin; r < (int)end; r++) {
+        terrain_chunk_coord c = chunk_of(r);
+        job->hashes[r] = terrain_stacks_hash(terrain_world_stacks(job->world, c));
+        /* A field sample on the chunk's corner reads it and its neighbours. */
+        terrain_field field;
+        cr_assert(terrain_field_sample(job->world, &(terrain_field_desc){
+            .first = { c.x * TERRAIN_CHUNK_COLUMNS, 20, c.z * TERRAIN_CHUNK_COLUMNS }, .size = { 2, 2, 2 } }, &field));
+        job->samples[r] = field.values[0];
+        terrain_field_free(&field);
+    }
+}
+
+Test(terrain_threads, shared_world_gives_the_bytes_of_a_lone_thread) {
+    terrain_generation_params params = terrain_generation_defaults(11);
+    terrain_world *lone = terrain_world_create(&(terrain_world_desc){ .generation = params });
+    terrain_world *shared = terrain_world_create(&(terrain_world_desc){ .generation = params });
+    world_job expected = { .world = lone }, got = { .world = shared };
+    fetch_range(&expected, 0, THREAD_REQUESTS);
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 4 });
+    job_parallel_for(jobs, THREAD_REQUESTS, 1, fetch_range, &got, "fetch");
+    for (int r = 0; r < THREAD_REQUESTS; r++) {
+        cr_assert_eq(got.hashes[r], expected.hashes[r], "request %d", r);
+        cr_assert_eq(got.samples[r], expected.samples[r], "request %d", r);
+    }
+    cr_assert_leq(terrain_world_chunk_count(shared), (size_t)(THREAD_CHUNKS * 2 * 9), "each chunk cached once");
+    job_system_destroy(jobs);
+    terrain_world_destroy(lone);
+    terrain_world_destroy(shared);
+}
