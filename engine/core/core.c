@@ -113,6 +113,16 @@ void *core__grow_slow(void *items, size_t *capacity, size_t needed, size_t item_
 
 size_t core_memory_in_use(void) { return atomic_load_explicit(&memory_in_use, memory_order_relaxed); }
 
+bool core_error_format(char *error, size_t error_size, const char *fmt, ...) {
+    if (error && error_size) {
+        va_list args;
+        va_start(args, fmt);
+        vsnprintf(error, error_size, fmt, args);
+        va_end(args);
+    }
+    return false;
+}
+
 char *core_strdup(const char *s) {
     size_t size = strlen(s) + 1;
     return memcpy(core_alloc(size), s, size);

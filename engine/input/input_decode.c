@@ -144,19 +144,11 @@ struct input_decoder {
 static void input_decode_crc_init(void);
 static pthread_once_t input_decode_crc_once = PTHREAD_ONCE_INIT;
 
-static void input_decode_error(char *error, size_t error_size, const char *fmt, ...) CORE_PRINTF(3, 4);
-static void input_decode_error(char *error, size_t error_size, const char *fmt, ...) {
-    if (!error || error_size == 0) return;
-    va_list args;
-    va_start(args, fmt);
-    vsnprintf(error, error_size, fmt, args);
-    va_end(args);
-}
 
 input_decoder *input_decoder_create(const input_decoder_desc *desc, char *error, size_t error_size) {
     if (error && error_size) error[0] = '\0';
     if (!desc) {
-        input_decode_error(error, error_size, "no decoder description given");
+        core_error_format(error, error_size, "no decoder description given");
         return NULL;
     }
     input_gamepad_kind kind = INPUT_GAMEPAD_GENERIC;
@@ -164,14 +156,14 @@ input_decoder *input_decoder_create(const input_decoder_desc *desc, char *error,
     input_hid_layout layout;
     if (!known) {
         if (!desc->descriptor || desc->descriptor_size == 0) {
-            input_decode_error(error, error_size,
+            core_error_format(error, error_size,
                                "%04x:%04x is not a known pad and no report descriptor was given",
                                desc->vendor_id, desc->product_id);
             return NULL;
         }
         char reason[160];
         if (!input__hid_layout_parse(desc->descriptor, desc->descriptor_size, &layout, reason, sizeof reason)) {
-            input_decode_error(error, error_size, "%04x:%04x: unusable report descriptor: %s",
+            core_error_format(error, error_size, "%04x:%04x: unusable report descriptor: %s",
                                desc->vendor_id, desc->product_id, reason);
             return NULL;
         }

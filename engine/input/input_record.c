@@ -101,16 +101,6 @@ static float input_get_f32(input_cursor *c) {
     return f;
 }
 
-static bool input_fail(char *error, size_t error_size, const char *fmt, ...) CORE_PRINTF(3, 4);
-static bool input_fail(char *error, size_t error_size, const char *fmt, ...) {
-    if (error && error_size) {
-        va_list args;
-        va_start(args, fmt);
-        vsnprintf(error, error_size, fmt, args);
-        va_end(args);
-    }
-    return false;
-}
 
 /* ---- payloads ------------------------------------------------------------------------------- */
 
@@ -136,16 +126,16 @@ bool input__record_decode_header(const uint8_t *payload, size_t size, input_bind
     input_bindings b = { 0 };
     uint32_t targets = input_get(&c, 4);
     if (c.ok && targets != INPUT_TARGET_COUNT)
-        return input_fail(error, error_size, "%u actions, this build has %d", targets, INPUT_TARGET_COUNT);
+        return core_error_format(error, error_size, "%u actions, this build has %d", targets, INPUT_TARGET_COUNT);
     for (int t = 0; t < INPUT_TARGET_COUNT && c.ok; t++) {
         uint32_t count = input_get(&c, 1);
         if (count > INPUT_MAX_SOURCES)
-            return input_fail(error, error_size, "%s has %u sources (at most %d)", input__target_name(t), count,
+            return core_error_format(error, error_size, "%s has %u sources (at most %d)", input__target_name(t), count,
                               INPUT_MAX_SOURCES);
         for (uint32_t i = 0; i < count && c.ok; i++) {
             input_source source = { .kind = (uint8_t)input_get(&c, 1), .code = (uint16_t)input_get(&c, 2) };
             if (c.ok && input__source_misfit(t, source))
-                return input_fail(error, error_size, "bad source %u:%u for %s", source.kind, source.code,
+                return core_error_format(error, error_size, "bad source %u:%u for %s", source.kind, source.code,
                                   input__target_name(t));
             b.sources[t][i] = source;
         }
@@ -156,11 +146,11 @@ bool input__record_decode_header(const uint8_t *payload, size_t size, input_bind
     b.dead_zone = input_get_f32(&c);
     uint32_t invert = input_get(&c, 1);
     float zone = input_get_f32(&c);
-    if (!c.ok) return input_fail(error, error_size, "header payload too short");
-    if (c.at != c.end) return input_fail(error, error_size, "%zu stray bytes in the header", (size_t)(c.end - c.at));
+    if (!c.ok) return core_error_format(error, error_size, "header payload too short");
+    if (c.at != c.end) return core_error_format(error, error_size, "%zu stray bytes in the header", (size_t)(c.end - c.at));
     b.invert_y = invert != 0;
     if (invert > 1 || !input__bindings_valid(&b) || !(zone >= 0.0f && zone <= INPUT_DEAD_ZONE_MAX))
-        return input_fail(error, error_size, "settings out of range");
+        return core_error_format(error, error_size, "settings out of range");
     *bindings = b;
     *dead_zone = zone;
     return true;
@@ -262,13 +252,13 @@ bool input__record_decode_frame(const uint8_t *payload, size_t size, input_frame
     frame->index = input_get(&c, 4);
     frame->dt = input_get_f32(&c);
     uint32_t count = input_get(&c, 4);
-    if (!c.ok) return input_fail(error, error_size, "frame record too short");
-    if (!(frame->dt >= 0.0f) || !isfinite(frame->dt)) return input_fail(error, error_size, "bad dt");
-    if (count > event_capacity) return input_fail(error, error_size, "%u events (at most %u)", count, event_capacity);
+    if (!c.ok) return core_error_format(error, error_size, "frame record too short");
+    if (!(frame->dt >= 0.0f) || !isfinite(frame->dt)) return core_error_format(error, error_size, "bad dt");
+    if (count > event_capacity) return core_error_format(error, error_size, "%u events (at most %u)", count, event_capacity);
     for (uint32_t i = 0; i < count; i++) {
         events[i] = input_decode_event(&c);
-        if (!c.ok) return input_fail(error, error_size, "event %u cut short", i);
-        if (!input__event_valid(&events[i])) return input_fail(error, error_size, "event %u is not valid", i);
+        if (!c.ok) return core_error_format(error, error_size, "event %u cut short", i);
+        if (!input__event_valid(&events[i])) return core_error_format(error, error_size, "event %u is not valid", i);
     }
     input_actions *a = &frame->actions;
     a->move_x = input_get_f32(&c);
@@ -278,8 +268,8 @@ bool input__record_decode_frame(const uint8_t *payload, size_t size, input_frame
     a->down = input_get(&c, 4);
     a->pressed = input_get(&c, 4);
     a->released = input_get(&c, 4);
-    if (!c.ok) return input_fail(error, error_size, "frame record too short for its actions");
-    if (c.at != c.end) return input_fail(error, error_size, "%zu stray bytes after the actions", (size_t)(c.end - c.at));
+    if (!c.ok) return core_error_format(error, error_size, "frame record too short for its actions");
+    if (c.at != c.end) return core_error_format(error, error_size, "%zu stray bytes after the actions", (size_t)(c.end - c.at));
     frame->events = events;
     frame->event_count = count;
     return true;

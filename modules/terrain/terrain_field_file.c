@@ -22,16 +22,6 @@
 /* A field file may hold up to 2^30 samples (4 GiB of floats). */
 #define FIELD_FILE_MAX_SAMPLES ((uint64_t)1 << 30)
 
-static bool file_error(char *error, size_t error_size, const char *fmt, ...) CORE_PRINTF(3, 4);
-static bool file_error(char *error, size_t error_size, const char *fmt, ...) {
-    if (error && error_size) {
-        va_list args;
-        va_start(args, fmt);
-        vsnprintf(error, error_size, fmt, args);
-        va_end(args);
-    }
-    return false;
-}
 
 /* ---- little-endian floats ----------------------------------------------------------------- */
 
@@ -56,15 +46,15 @@ static void put_u32le(uint8_t *out, uint32_t value) {
 
 static bool header_vector(const core_json_value *root, const char *key, double out[3], char *error, size_t error_size) {
     const core_json_value *value = core_json_get(root, key);
-    if (!value) return file_error(error, error_size, "missing key \"%s\"", key);
+    if (!value) return core_error_format(error, error_size, "missing key \"%s\"", key);
     if (value->type != CORE_JSON_ARRAY || value->array.count != 3)
-        return file_error(error, error_size, "\"%s\" must be an array of 3 numbers", key);
+        return core_error_format(error, error_size, "\"%s\" must be an array of 3 numbers", key);
     for (int a = 0; a < 3; a++) {
         const core_json_value *item = &value->array.items[a];
         if (item->type != CORE_JSON_NUMBER)
-            return file_error(error, error_size, "\"%s\"[%d] must be a number", key, a);
+            return core_error_format(error, error_size, "\"%s\"[%d] must be a number", key, a);
         if (!isfinite(item->number))
-            return file_error(error, error_size, "\"%s\"[%d] = %g is not finite", key, a, item->number);
+            return core_error_format(error, error_size, "\"%s\"[%d] = %g is not finite", key, a, item->number);
         out[a] = item->number;
     }
     return true;
@@ -79,9 +69,9 @@ bool terrain_field_header_parse(const char *text, size_t size, terrain_field_hea
     bool ok = false;
     double dims[3], origin[3];
     if (!core_json_parse(text, size, &arena, &root, &json_error)) {
-        file_error(error, error_size, "not JSON: %s", json_error.message);
+        core_error_format(error, error_size, "not JSON: %s", json_error.message);
     } else if (root->type != CORE_JSON_OBJECT) {
-        file_error(error, error_size, "the header must be a JSON object");
+        core_error_format(error, error_size, "the header must be a JSON object");
     } else if (header_vector(root, "dims", dims, error, error_size) &&
                header_vector(root, "origin", origin, error, error_size)) {
         const core_json_value *spacing = core_json_get(root, "spacing");
@@ -89,18 +79,18 @@ bool terrain_field_header_parse(const char *text, size_t size, terrain_field_hea
         uint64_t samples = 1;
         for (int a = 0; a < 3 && ok; a++) {
             if (dims[a] != floor(dims[a]) || dims[a] < 1 || dims[a] > TERRAIN_FIELD_FILE_MAX_DIM)
-                ok = file_error(error, error_size, "\"dims\"[%d] = %g is not a whole number in 1 … %d", a,
+                ok = core_error_format(error, error_size, "\"dims\"[%d] = %g is not a whole number in 1 … %d", a,
                                 dims[a], TERRAIN_FIELD_FILE_MAX_DIM);
             else samples *= (uint64_t)dims[a];
         }
         if (ok && samples > FIELD_FILE_MAX_SAMPLES)
-            ok = file_error(error, error_size, "\"dims\" give %llu samples, over the limit of %llu",
+            ok = core_error_format(error, error_size, "\"dims\" give %llu samples, over the limit of %llu",
                             (unsigned long long)samples, (unsigned long long)FIELD_FILE_MAX_SAMPLES);
-        if (ok && !spacing) ok = file_error(error, error_size, "missing key \"spacing\"");
-        if (ok && spacing->type != CORE_JSON_NUMBER) ok = file_error(error, error_size, "\"spacing\" must be a number");
+        if (ok && !spacing) ok = core_error_format(error, error_size, "missing key \"spacing\"");
+        if (ok && spacing->type != CORE_JSON_NUMBER) ok = core_error_format(error, error_size, "\"spacing\" must be a number");
         /* A float must hold it, positive and finite. */
         if (ok && !(spacing->number > 0.0 && spacing->number <= 1e30 && (float)spacing->number > 0.0f))
-            ok = file_error(error, error_size, "\"spacing\" = %g must be a positive finite number", spacing->number);
+            ok = core_error_format(error, error_size, "\"spacing\" = %g must be a positive finite number", spacing->number);
         if (ok) {
             for (int a = 0; a < 3; a++) out->dims[a] = (int)dims[a], out->origin[a] = origin[a];
             out->spacing = (float)spacing->number;
@@ -140,10 +130,10 @@ static bool write_whole_file(const char *path, const void *data, size_t size, ch
     sprintf(temporary, "%s.tmp%ld", path, (long)getpid());
     FILE *file = fopen(temporary, "wb");
     bool ok = file != NULL;
-    if (!ok) file_error(error, error_size, "cannot write %s: %s", path, strerror(errno));
-    if (ok && size && fwrite(data, 1, size, file) != size) ok = file_error(error, error_size, "cannot write %s: %s", path, strerror(errno));
-    if (file && fclose(file) != 0 && ok) ok = file_error(error, error_size, "cannot write %s: %s", path, strerror(errno));
-    if (ok && rename(temporary, path) != 0) ok = file_error(error, error_size, "cannot write %s: %s", path, strerror(errno));
+    if (!ok) core_error_format(error, error_size, "cannot write %s: %s", path, strerror(errno));
+    if (ok && size && fwrite(data, 1, size, file) != size) ok = core_error_format(error, error_size, "cannot write %s: %s", path, strerror(errno));
+    if (file && fclose(file) != 0 && ok) ok = core_error_format(error, error_size, "cannot write %s: %s", path, strerror(errno));
+    if (ok && rename(temporary, path) != 0) ok = core_error_format(error, error_size, "cannot write %s: %s", path, strerror(errno));
     if (!ok && file) remove(temporary);
     core_free(temporary, strlen(path) + 32);
     return ok;
@@ -153,7 +143,7 @@ static bool write_whole_file(const char *path, const void *data, size_t size, ch
 
 bool terrain_field_write(const terrain_field *field, const char *prefix, char *error, size_t error_size) {
     if (!field->values || field->nx <= 0 || field->ny <= 0 || field->nz <= 0)
-        return file_error(error, error_size, "cannot write %s: the field is empty", prefix);
+        return core_error_format(error, error_size, "cannot write %s: the field is empty", prefix);
     size_t count = (size_t)field->nx * field->ny * field->nz;
     uint8_t *bytes = core_alloc(count * 4);
     for (size_t i = 0; i < count; i++) put_f32le(bytes + 4 * i, field->values[i]);
@@ -175,14 +165,14 @@ bool terrain_field_write(const terrain_field *field, const char *prefix, char *e
 /* Reads at most `limit` bytes of `path`; false when it is larger or unreadable. */
 static bool read_small_file(const char *path, size_t limit, char **out, size_t *size, char *error, size_t error_size) {
     FILE *file = fopen(path, "rb");
-    if (!file) return file_error(error, error_size, "cannot open %s: %s", path, strerror(errno));
+    if (!file) return core_error_format(error, error_size, "cannot open %s: %s", path, strerror(errno));
     char *text = core_alloc(limit + 1);
     size_t got = fread(text, 1, limit + 1, file);
     bool failed = ferror(file);
     fclose(file);
     if (failed || got > limit) {
         core_free(text, limit + 1);
-        return file_error(error, error_size, failed ? "cannot read %s" : "%s: the header is over 1 MiB", path);
+        return core_error_format(error, error_size, failed ? "cannot read %s" : "%s: the header is over 1 MiB", path);
     }
     *out = text;
     *size = got;
@@ -202,18 +192,18 @@ bool terrain_field_read(const char *path, terrain_field *out, char *error, size_
     FILE *file = NULL;
     if (!read_small_file(json, FIELD_HEADER_MAX_BYTES, &text, &text_size, error, error_size)) goto done;
     if (!terrain_field_header_parse(text, text_size, &header, message, sizeof message)) {
-        file_error(error, error_size, "%s: %s", json, message);
+        core_error_format(error, error_size, "%s: %s", json, message);
         goto done;
     }
     uint64_t count = (uint64_t)header.dims[0] * header.dims[1] * header.dims[2];
     file = fopen(raw, "rb");
     struct stat info;
     if (!file || fstat(fileno(file), &info) != 0) {
-        file_error(error, error_size, "cannot open %s: %s", raw, strerror(errno));
+        core_error_format(error, error_size, "cannot open %s: %s", raw, strerror(errno));
         goto done;
     }
     if (!S_ISREG(info.st_mode) || (uint64_t)info.st_size != count * 4) {
-        file_error(error, error_size, "%s holds %lld bytes, but dims %d × %d × %d in %s need %llu (float32 each)",
+        core_error_format(error, error_size, "%s holds %lld bytes, but dims %d × %d × %d in %s need %llu (float32 each)",
                    raw, (long long)info.st_size, header.dims[0], header.dims[1], header.dims[2], json,
                    (unsigned long long)(count * 4));
         goto done;
@@ -222,7 +212,7 @@ bool terrain_field_read(const char *path, terrain_field *out, char *error, size_
     size_t got = fread(bytes, 1, (size_t)count * 4, file);
     if (got != count * 4) {
         core_free(bytes, (size_t)count * 4);
-        file_error(error, error_size, "cannot read %s: %s", raw, ferror(file) ? strerror(errno) : "shorter than it said");
+        core_error_format(error, error_size, "cannot read %s: %s", raw, ferror(file) ? strerror(errno) : "shorter than it said");
         goto done;
     }
     float *values = core_alloc((size_t)count * sizeof *values);
@@ -231,7 +221,7 @@ bool terrain_field_read(const char *path, terrain_field *out, char *error, size_
         values[i] = get_f32le(bytes + 4 * i);
         if (!isfinite(values[i])) {
             int nx = header.dims[0], ny = header.dims[1];
-            file_error(error, error_size, "%s: value %llu (x %d, y %d, z %d) is %s", raw, (unsigned long long)i,
+            core_error_format(error, error_size, "%s: value %llu (x %d, y %d, z %d) is %s", raw, (unsigned long long)i,
                        (int)(i % (uint64_t)nx), (int)(i / (uint64_t)nx % (uint64_t)ny),
                        (int)(i / ((uint64_t)nx * ny)), isnan(values[i]) ? "NaN" : "infinite");
             ok = false;
