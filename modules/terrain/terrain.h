@@ -199,13 +199,18 @@ typedef struct terrain_field_desc {
     int64_t first[3];                 /* the first sample's grid index (x, y, z) */
     int size[3];                      /* samples along each axis */
     float sigma;                      /* kernel radius in metres; 0 = TERRAIN_COLUMN_SIZE */
+    int step;                         /* grid indices between samples (a coarser grid for level
+                                         of detail; the kernel stays sigma); 0 = 1 */
 } terrain_field_desc;
 
 /* Samples f on the grid of spacing c = TERRAIN_COLUMN_SIZE: index (i, j, k) is the world point
- * (i·c, j·c, k·c), so samples sit on column corners. Reads whatever chunks the kernel reaches
- * (generating them). O(1) amortised per sample. Shared samples of two requests are bit-identical
- * (adjacent chunks' meshes meet exactly). False (message logged) only when the request is
- * absurd: a size ≤ 0 or over 1024, sigma ≤ 0 or over 16 columns, a first index beyond ±2^52.
+ * (i·c, j·c, k·c), so samples sit on column corners. With a step, sample (x, y, z) of the result
+ * is grid index first + (x, y, z)·step (field.spacing = step·c): the same point-sampled f, the
+ * kernel unchanged. Reads whatever chunks the kernel reaches (generating them). O(1) amortised
+ * per sample (O(⌈σ/c⌉) with a step). Shared samples of two requests are bit-identical, whatever
+ * their steps (adjacent chunks' meshes meet exactly, across levels of detail too). False
+ * (message logged) only when the request is absurd: a size ≤ 0 or over 1024, sigma ≤ 0 or over
+ * 16 columns, a step < 0 or over 65536, an index beyond ±2^52.
  * Free with terrain_field_free. */
 bool terrain_field_sample(terrain_world *world, const terrain_field_desc *desc, terrain_field *out);
 void terrain_field_free(terrain_field *field);
@@ -242,6 +247,40 @@ typedef struct terrain_mesh_desc {
  * Free with terrain_mesh_free. */
 bool terrain_mesh_build(const terrain_field *field, const terrain_mesh_desc *desc, terrain_mesh *out);
 void terrain_mesh_free(terrain_mesh *mesh);
+
+/* Level of detail. A mesh chunk at level L has TERRAIN_MESH_CELLS cells per side, each 2^L
+ * columns wide: it covers TERRAIN_MESH_CELLS·2^L metres, its samples are f at every 2^L-th grid
+ * point (the kernel stays one column). Chunks of a level tile space; a chunk whose neighbours
+ * are one level finer closes the seams with them by "subdivided transition faces" (README,
+ * Level of detail): its cell edges on a boundary shared with a finer neighbour get their midpoint
+ * sample, its cell faces on a face shared with one their centre too, and those cells are
+ * contoured face by face with the same rule as the regular cells, so both sides draw the same
+ * segments on the shared faces and the union is watertight. The finer chunk needs nothing.
+ *     terrain_mesh mesh;
+ *     terrain_mesh_chunk(world, cx, cy, cz, &(terrain_lod_desc){ .level = 1,
+ *         .finer_neighbours = terrain_lod_neighbour_bit(-1, 0, 0) }, &mesh);   // finer at −x
+ *
+ * finer_neighbours: bit terrain_lod_neighbour_bit(dx, dy, dz) is set when the chunk-sized region
+ * at offset (dx, dy, dz) ∈ {−1, 0, 1}³ \ {0} is meshed one level finer (level L − 1). The bit is
+ * index (dz+1)·9 + (dy+1)·3 + (dx+1), less one above the centre (13): 26 bits. Corner bits are
+ * accepted but change nothing (a corner neighbour shares a point only). Chunks that touch (faces,
+ * edges or corners) must be at most one level apart, and every chunk's mask must say the truth
+ * about its neighbours (those of an octree do). */
+typedef struct terrain_lod_desc {
+    int level;                        /* 0 … 16; cells 2^level columns wide */
+    uint32_t finer_neighbours;        /* 26 bits (above); must be 0 at level 0 */
+} terrain_lod_desc;
+
+uint32_t terrain_lod_neighbour_bit(int dx, int dy, int dz);   /* 0 for (0, 0, 0) or out of range */
+
+/* Samples what chunk (x, y, z) of level lod->level needs (its first sample is grid index
+ * (x, y, z)·TERRAIN_MESH_CELLS·2^L, with a one-sample apron for gradients, plus the transition
+ * samples) and meshes it with weights from `world`; mesh.origin is its apron's first sample.
+ * lod NULL = level 0 with no finer neighbours, which gives exactly the terrain_field_sample +
+ * terrain_mesh_build pair of the example above. False (message logged) for a bad level or
+ * mask, or a chunk too far out. Free with terrain_mesh_free. */
+bool terrain_mesh_chunk(terrain_world *world, int64_t x, int64_t y, int64_t z, const terrain_lod_desc *lod,
+                        terrain_mesh *out);
 
 /* ---- field and mesh files ----------------------------------------------------------------- */
 

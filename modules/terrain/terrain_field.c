@@ -39,6 +39,7 @@
 #define TERRAIN_FIELD_MAX_SIZE 1024
 #define TERRAIN_FIELD_MAX_SIGMA_COLUMNS 16       /* σ up to 16 columns */
 #define TERRAIN_FIELD_FIXED 1048576.0            /* 2^20 fixed-point units per metre of L */
+#define TERRAIN_FIELD_MAX_STEP 65536
 
 static int64_t terrain_floor_div(int64_t a, int64_t b) {
     int64_t q = a / b;
@@ -138,11 +139,11 @@ static inline __attribute__((always_inline)) double field_cursor_solid_to(field_
 
 /* L at the samples y = (first + j)·c, j < count, in fixed point, written with stride `stride`.
  * L ≥ 0 (S only grows), so adding ½ and truncating rounds it. */
-static void field_column_lengths(const field_runs *column, int64_t first_y, int count, double sigma,
+static void field_column_lengths(const field_runs *column, int64_t first_y, int count, int step, double sigma,
                                  int64_t *out, size_t stride) {
     field_cursor low = { column, 0 }, high = low;
     for (int j = 0; j < count; j++) {
-        double y = (double)(first_y + j) * TERRAIN_COLUMN_SIZE;
+        double y = (double)(first_y + (int64_t)j * step) * TERRAIN_COLUMN_SIZE;
         double s_high = field_cursor_solid_to(&high, y + sigma);
         double s_low = field_cursor_solid_to(&low, y - sigma);
         double length = (s_high - s_low) * TERRAIN_FIELD_FIXED;
@@ -161,10 +162,15 @@ static bool field_desc_valid(const terrain_field_desc *desc, float sigma) {
             return false;
         }
         /* Keep every index (and the kernel's reach) far from int64 overflow. */
-        if (desc->first[a] < -((int64_t)1 << 52) || desc->first[a] > ((int64_t)1 << 52)) {
+        int64_t last = desc->first[a] + (int64_t)(desc->size[a] - 1) * (desc->step > 0 ? desc->step : 1);
+        if (desc->first[a] < -((int64_t)1 << 52) || desc->first[a] > ((int64_t)1 << 52) || last > ((int64_t)1 << 52)) {
             core_error("terrain", "field: first[%d] = %lld is too far out", a, (long long)desc->first[a]);
             return false;
         }
+    }
+    if (desc->step < 0 || desc->step > TERRAIN_FIELD_MAX_STEP) {
+        core_error("terrain", "field: step = %d is outside 0 … %d", desc->step, TERRAIN_FIELD_MAX_STEP);
+        return false;
     }
     if (!(sigma > 0.0f) || sigma > TERRAIN_FIELD_MAX_SIGMA_COLUMNS * TERRAIN_COLUMN_SIZE) {
         core_error("terrain", "field: sigma = %g is outside (0, %g]", (double)sigma,
@@ -174,10 +180,104 @@ static bool field_desc_valid(const terrain_field_desc *desc, float sigma) {
     return true;
 }
 
+/* The columns a strided axis reads: sample i (grid index first + i·step) reads columns
+ * first + i·step − R + d, d < window. Overlapping windows (step ≤ window) share one contiguous
+ * run of columns; disjoint ones get window columns each. map[i·window + d] is the column's place
+ * in the list; returns the list's length (its columns from columns_out). */
+static int field_strided_columns(int n, int step, int reach, int64_t first, int64_t *columns_out, int *map) {
+    const int window = 2 * reach;
+    int count = step <= window ? (n - 1) * step + window : n * window;
+    for (int i = 0; i < n; i++)
+        for (int d = 0; d < window; d++) {
+            int place = step <= window ? i * step + d : i * window + d;
+            map[i * window + d] = place;
+            columns_out[place] = first - reach + (int64_t)i * step + d;
+        }
+    return count;
+}
+
+/* step > 1: the samples are sparse, so the sliding windows would slide over columns no sample
+ * reads. Instead L is computed for exactly the columns some kernel reaches (at the strided
+ * heights), then the same interior/edge sums per sample, x then z. They are the same 64-bit
+ * integer sums as the step-1 path's (exact, so the order is free) followed by the same float
+ * operations, hence a sample equals the step-1 sample at the same grid point bit for bit. */
+static void field_sample_strided(terrain_world *world, const terrain_field_desc *desc, float sigma, int step,
+                                 terrain_field *out) {
+    const int nx = desc->size[0], ny = desc->size[1], nz = desc->size[2];
+    const double c = TERRAIN_COLUMN_SIZE, s = (double)sigma / c;
+    const int reach = (int)ceil(s), window = 2 * reach;
+    const double e = s - (reach - 1), e2 = e * e;
+    int64_t *cols_x = core_alloc((size_t)nx * window * sizeof *cols_x);
+    int64_t *cols_z = core_alloc((size_t)nz * window * sizeof *cols_z);
+    int *map_x = core_alloc((size_t)nx * window * sizeof *map_x), *map_z = core_alloc((size_t)nz * window * sizeof *map_z);
+    const int ncx = field_strided_columns(nx, step, reach, desc->first[0], cols_x, map_x);
+    const int ncz = field_strided_columns(nz, step, reach, desc->first[2], cols_z, map_z);
+    const size_t row_samples = (size_t)ny * nx;
+    int64_t *lengths = core_alloc((size_t)ny * ncx * sizeof *lengths);
+    /* Per column row (z), the x-filtered sums: [row][j][i]. */
+    int64_t *rows_inner = core_alloc((size_t)ncz * row_samples * sizeof *rows_inner);
+    int64_t *rows_edge = core_alloc((size_t)ncz * row_samples * sizeof *rows_edge);
+    field_column_source src = { .world = world, .layer_capacity = 64 };
+    src.layers = core_alloc(src.layer_capacity * sizeof *src.layers);
+    field_runs column = { 0 };
+    for (int row = 0; row < ncz; row++) {
+        for (int col = 0; col < ncx; col++) {
+            field_runs_build(&column, src.layers, field_column_layers(&src, cols_x[col], cols_z[row]));
+            field_column_lengths(&column, desc->first[1], ny, step, (double)sigma, lengths + col, (size_t)ncx);
+        }
+        int64_t *inner = rows_inner + (size_t)row * row_samples, *edge = rows_edge + (size_t)row * row_samples;
+        for (int j = 0; j < ny; j++) {
+            const int64_t *l = lengths + (size_t)j * ncx;
+            for (int i = 0; i < nx; i++) {
+                const int *m = map_x + i * window;
+                int64_t sum = 0;
+                for (int d = 1; d < window - 1; d++) sum += l[m[d]];
+                inner[(size_t)j * nx + i] = sum;
+                edge[(size_t)j * nx + i] = l[m[0]] + l[m[window - 1]];
+            }
+        }
+    }
+    const double scale = c * c / TERRAIN_FIELD_FIXED, to_f = 1.0 / (4.0 * (double)sigma * sigma * sigma);
+    for (int k = 0; k < nz; k++) {
+        const int *m = map_z + k * window;
+        float *values = out->values + (size_t)k * row_samples;
+        for (size_t n = 0; n < row_samples; n++) {
+            int64_t s1 = 0, se = 0, see = 0;
+            for (int d = 1; d < window - 1; d++) {
+                s1 += rows_inner[(size_t)m[d] * row_samples + n];
+                se += rows_edge[(size_t)m[d] * row_samples + n];
+            }
+            const size_t first = (size_t)m[0] * row_samples + n, last = (size_t)m[window - 1] * row_samples + n;
+            se += rows_inner[first] + rows_inner[last];
+            see = rows_edge[first] + rows_edge[last];
+            double volume = scale * ((double)s1 + e * (double)se + e2 * (double)see);
+            values[n] = (float)(volume * to_f - 1.0);
+        }
+    }
+    field_column_source_end(&src);
+    if (column.runs) core_free(column.runs, column.capacity * sizeof *column.runs);
+    core_free(lengths, (size_t)ny * ncx * sizeof *lengths);
+    core_free(rows_inner, (size_t)ncz * row_samples * sizeof *rows_inner);
+    core_free(rows_edge, (size_t)ncz * row_samples * sizeof *rows_edge);
+    core_free(cols_x, (size_t)nx * window * sizeof *cols_x);
+    core_free(cols_z, (size_t)nz * window * sizeof *cols_z);
+    core_free(map_x, (size_t)nx * window * sizeof *map_x);
+    core_free(map_z, (size_t)nz * window * sizeof *map_z);
+}
+
 bool terrain_field_sample(terrain_world *world, const terrain_field_desc *desc, terrain_field *out) {
     memset(out, 0, sizeof *out);
     float sigma = field_sigma(desc->sigma);
     if (!field_desc_valid(desc, sigma)) return false;
+    const int step = desc->step > 0 ? desc->step : 1;
+    if (step > 1) {
+        out->nx = desc->size[0], out->ny = desc->size[1], out->nz = desc->size[2];
+        for (int a = 0; a < 3; a++) out->origin[a] = (double)desc->first[a] * TERRAIN_COLUMN_SIZE;
+        out->spacing = (float)(step * TERRAIN_COLUMN_SIZE);
+        out->values = core_alloc((size_t)out->nx * out->ny * out->nz * sizeof *out->values);
+        field_sample_strided(world, desc, sigma, step, out);
+        return true;
+    }
     const int nx = desc->size[0], ny = desc->size[1], nz = desc->size[2];
     const double c = TERRAIN_COLUMN_SIZE, s = (double)sigma / c;
     const int reach = (int)ceil(s);                    /* R */
@@ -209,7 +309,7 @@ bool terrain_field_sample(terrain_world *world, const terrain_field_desc *desc, 
         /* y pass: L for every column of this row. */
         for (int col = 0; col < ncx; col++) {
             field_runs_build(&column, src.layers, field_column_layers(&src, column_x0 + col, column_z0 + row));
-            field_column_lengths(&column, desc->first[1], ny, (double)sigma, lengths + col, (size_t)ncx);
+            field_column_lengths(&column, desc->first[1], ny, 1, (double)sigma, lengths + col, (size_t)ncx);
         }
         /* x pass: for sample i the columns are i … i + window − 1 of the row. */
         int64_t *inner = ring_inner + (size_t)(row % window) * row_samples;

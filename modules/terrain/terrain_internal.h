@@ -8,6 +8,7 @@
 
 #include "terrain/terrain.h"
 
+#include <math.h>
 #include <stdint.h>
 
 /* ==== stacks, noise, generation (terrain_stacks.c, terrain_noise.c, terrain_generate.c) ===== */
@@ -103,6 +104,46 @@ typedef struct terrain__mc_case {
 
 const terrain__mc_case *terrain__mc_table(void);
 extern const uint8_t terrain__mc_edge_corners[12][2];
+
+/* ---- shared by the mesher (terrain_mesh.c) and level of detail (terrain_lod.c) ---- */
+
+/* Edge parameter of the crossing from sample value f0 (the lower-index end) to f1: f0/(f0 − f1)
+ * rounded to 1/8192 and clamped to [0, 1], so (index + t)·spacing is exact in a float. Every
+ * mesh computes a crossing with this, from the lower-index end, so shared crossings agree. */
+static inline float terrain__mesh_edge_t(float f0, float f1) {
+    float t = f0 / (f0 - f1);
+    t = nearbyintf(t * 8192.0f) / 8192.0f;
+    if (!(t >= 0.0f)) t = 0.0f;  /* NaN too */
+    if (t > 1.0f) t = 1.0f;
+    return t;
+}
+
+typedef struct terrain__mesh_builder {
+    const terrain_field *field;
+    int n[3];                    /* samples per axis */
+    int lo[3], hi[3];            /* meshed samples: lo … hi inclusive */
+    size_t slice;                /* samples per z slice */
+    terrain_vertex *vertices;
+    size_t vertex_count, vertex_capacity;
+    uint32_t *indices;
+    size_t index_count, index_capacity;
+} terrain__mesh_builder;
+
+/* −∇f at sample (x, y, z) up to the factor 1/spacing (central differences, one-sided at the
+ * field's outermost samples). */
+void terrain__mesh_gradient(const terrain__mesh_builder *b, int x, int y, int z, float g[3]);
+/* The vertex on the grid edge from sample (x, y, z) one step along `axis` (terrain_mesh.c). */
+uint32_t terrain__mesh_add_vertex(terrain__mesh_builder *b, int x, int y, int z, int axis, float f0, float f1);
+/* Weights, vertex-cache order, exact-size arrays into `out` (the builder's arrays move there);
+ * false (arrays freed, message logged) past 32-bit indices. */
+bool terrain__mesh_finish(terrain__mesh_builder *b, const terrain_mesh_desc *desc, const double origin[3], terrain_mesh *out);
+
+/* Level of detail (terrain_lod.c) with the field coming from `sample` instead of a world (tests
+ * give an analytic field): sample must fill `out` like terrain_field_sample (steps included) and
+ * give a grid point the same value whatever the request. `weights_world` may be NULL. */
+typedef bool (*terrain__field_sampler)(void *user, const terrain_field_desc *desc, terrain_field *out);
+bool terrain__mesh_chunk_with(terrain__field_sampler sample, void *user, terrain_world *weights_world, int64_t x,
+                              int64_t y, int64_t z, const terrain_lod_desc *lod, terrain_mesh *out);
 
 /* ==== end of the field and meshing section ================================================ */
 

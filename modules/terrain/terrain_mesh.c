@@ -36,18 +36,8 @@
 #include <string.h>
 
 #define MESH_NO_VERTEX UINT32_MAX
-#define MESH_T_STEPS 8192.0f     /* edge parameters are multiples of 1/8192 */
 
-typedef struct mesh_builder {
-    const terrain_field *field;
-    int n[3];                    /* samples per axis */
-    int lo[3], hi[3];            /* meshed samples: lo … hi inclusive */
-    size_t slice;                /* samples per z slice */
-    terrain_vertex *vertices;
-    size_t vertex_count, vertex_capacity;
-    uint32_t *indices;
-    size_t index_count, index_capacity;
-} mesh_builder;
+typedef terrain__mesh_builder mesh_builder;   /* terrain_internal.h (terrain_lod.c builds one too) */
 
 /* ---- vertices ------------------------------------------------------------------------------ */
 
@@ -68,10 +58,7 @@ static void mesh_gradient(const mesh_builder *b, int x, int y, int z, float g[3]
 /* The vertex on the edge from sample (x, y, z) one step along `axis`; its two samples have
  * values f0 (at the lower index) and f1 of different signs. */
 static uint32_t mesh_add_vertex(mesh_builder *b, int x, int y, int z, int axis, float f0, float f1) {
-    float t = f0 / (f0 - f1);
-    t = nearbyintf(t * MESH_T_STEPS) / MESH_T_STEPS;
-    if (!(t >= 0.0f)) t = 0.0f;  /* NaN too */
-    if (t > 1.0f) t = 1.0f;
+    float t = terrain__mesh_edge_t(f0, f1);
     b->vertices = core_grow(b->vertices, &b->vertex_capacity, b->vertex_count + 1, sizeof *b->vertices);
     terrain_vertex *v = &b->vertices[b->vertex_count];
     const float spacing = b->field->spacing;
@@ -317,6 +304,25 @@ bool terrain_mesh_build(const terrain_field *field, const terrain_mesh_desc *des
         return false;
     }
     mesh_finish(&b, &desc, field->origin, out);
+    return true;
+}
+
+/* ---- for terrain_lod.c ---------------------------------------------------------------------- */
+
+void terrain__mesh_gradient(const terrain__mesh_builder *b, int x, int y, int z, float g[3]) { mesh_gradient(b, x, y, z, g); }
+
+uint32_t terrain__mesh_add_vertex(terrain__mesh_builder *b, int x, int y, int z, int axis, float f0, float f1) {
+    return mesh_add_vertex(b, x, y, z, axis, f0, f1);
+}
+
+bool terrain__mesh_finish(terrain__mesh_builder *b, const terrain_mesh_desc *desc, const double origin[3], terrain_mesh *out) {
+    if (b->vertex_count > UINT32_MAX - 1 || b->index_count > UINT32_MAX) {
+        core_error("terrain", "mesh: %zu vertices, %zu indices: over 32-bit indices", b->vertex_count, b->index_count);
+        core_free(b->vertices, b->vertex_capacity * sizeof *b->vertices);
+        core_free(b->indices, b->index_capacity * sizeof *b->indices);
+        return false;
+    }
+    mesh_finish(b, desc, origin, out);
     return true;
 }
 

@@ -11,6 +11,11 @@
  *                                surface, sampled beforehand, read from memory), same options.
  *   terrain.mesh.*.ns_per_cell   both meshing rows per cell, and their ratio: how meshing scales
  *                                from a chunk to a large grid (cache effects, skipped cells).
+ *   terrain.mesh_lod1.chunk32, terrain.mesh_lod2.chunk32   ms for terrain_mesh_chunk of one
+ *                                32³-cell chunk at level 1 / 2 (cells 2 / 4 m) with all 26
+ *                                neighbours finer, the worst case for transition cells: coarse
+ *                                and fine face samples, meshing, weights. Mean over 8 chunks at
+ *                                the surface; every column the kernel reaches generated first.
  *
  * Peer: scikit-image's marching_cubes or VTK's vtkFlyingEdges3D would be the natural peer on the
  * same field, but neither is in Debian 12's default install here (`python3 -c "import skimage"`
@@ -119,12 +124,77 @@ static double median(double *values, int count) {
     return count % 2 ? values[count / 2] : 0.5 * (values[count / 2 - 1] + values[count / 2]);
 }
 
+/* ---- level of detail ---------------------------------------------------------------------- */
+
+typedef struct lod_bench {
+    terrain_world *world;
+    int level;
+    int64_t chunks[CHUNK_COUNT][3];
+    uint64_t triangles;
+} lod_bench;
+
+static void lod_pick_chunks(lod_bench *b) {
+    const int64_t span = (int64_t)CHUNK_CELLS << b->level;   /* columns per chunk side */
+    for (int c = 0; c < CHUNK_COUNT; c++) {
+        int64_t x = c % 4, z = c / 4;
+        int64_t centre[2] = { x * span + span / 2, z * span + span / 2 };
+        terrain_chunk_coord world_chunk = { bench_floor_div(centre[0], TERRAIN_CHUNK_COLUMNS),
+                                            bench_floor_div(centre[1], TERRAIN_CHUNK_COLUMNS) };
+        const terrain_stacks *stacks = terrain_world_stacks(b->world, world_chunk);
+        float top = terrain_stacks_top(stacks, (int)(centre[0] - world_chunk.x * TERRAIN_CHUNK_COLUMNS),
+                                       (int)(centre[1] - world_chunk.z * TERRAIN_CHUNK_COLUMNS));
+        b->chunks[c][0] = x;
+        b->chunks[c][1] = bench_floor_div((int64_t)floorf(top), span);
+        b->chunks[c][2] = z;
+        /* Every world chunk the samples' kernels and the weights reach, untimed. */
+        int64_t lo[2] = { x * span - span - 2, z * span - span - 2 }, hi[2] = { lo[0] + 3 * span + 4, lo[1] + 3 * span + 4 };
+        for (int64_t wz = bench_floor_div(lo[1], TERRAIN_CHUNK_COLUMNS); wz <= bench_floor_div(hi[1], TERRAIN_CHUNK_COLUMNS); wz++)
+            for (int64_t wx = bench_floor_div(lo[0], TERRAIN_CHUNK_COLUMNS); wx <= bench_floor_div(hi[0], TERRAIN_CHUNK_COLUMNS); wx++)
+                terrain_world_stacks(b->world, (terrain_chunk_coord){ wx, wz });
+    }
+}
+
+static double sample_mesh_lod(void *user) {
+    lod_bench *b = user;
+    terrain_lod_desc lod = { .level = b->level, .finer_neighbours = (1u << 26) - 1 };
+    double total = 0.0;
+    uint64_t triangles = 0;
+    for (int c = 0; c < CHUNK_COUNT; c++) {
+        uint64_t t0 = core_time_ns();
+        terrain_mesh mesh;
+        terrain_mesh_chunk(b->world, b->chunks[c][0], b->chunks[c][1], b->chunks[c][2], &lod, &mesh);
+        total += core_ns_to_ms(core_time_ns() - t0);
+        triangles += mesh.index_count / 3;
+        terrain_mesh_free(&mesh);
+    }
+    b->triangles = triangles / CHUNK_COUNT;
+    bench_consume((double)triangles);
+    return total / CHUNK_COUNT;
+}
+
+static void bench_terrain_mesh_lod(bench_context *ctx) {
+    static const char *const names[] = { "terrain.mesh_lod1.chunk32", "terrain.mesh_lod2.chunk32" };
+    for (int level = 1; level <= 2; level++) {
+        if (!bench_wants(ctx, names[level - 1])) continue;
+        lod_bench b = { .level = level };
+        b.world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(42) });
+        lod_pick_chunks(&b);
+        bench_run(ctx, names[level - 1], "ms", 9, sample_mesh_lod, &b);
+        printf("  (lod%d: %llu triangles per %lld m chunk on average)\n", level, (unsigned long long)b.triangles,
+               (long long)(CHUNK_CELLS << level));
+        terrain_world_destroy(b.world);
+    }
+}
+
 void bench_group_terrain_mesh(bench_context *ctx) {
     bool want_big = bench_wants(ctx, "terrain.mesh.256");
     /* The 256 row's per-cell ratio needs the chunk's meshing time. */
     bool want_chunk = want_big || bench_wants(ctx, "terrain.field_mesh.chunk32") ||
                       bench_wants(ctx, "terrain.field.chunk32") || bench_wants(ctx, "terrain.mesh.chunk32");
-    if (!want_chunk && !want_big) return;
+    if (!want_chunk && !want_big) {
+        bench_terrain_mesh_lod(ctx);
+        return;
+    }
     mesh_bench *b = core_calloc(1, sizeof *b);
     b->world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(42) });
     pick_chunks(b);
@@ -172,4 +242,5 @@ void bench_group_terrain_mesh(bench_context *ctx) {
     }
     terrain_world_destroy(b->world);
     core_free(b, sizeof *b);
+    bench_terrain_mesh_lod(ctx);
 }
