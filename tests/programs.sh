@@ -175,8 +175,9 @@ expect "terrain_mesh: unwritable --ply" 2 "cannot write --ply /nonexistent-dir/m
   "$p" "$tmp/region.json" --ply /nonexistent-dir/m.ply
 
 # The terrain example: a headless run generates, meshes and draws, and writes its screenshot.
-expect "hello_terrain: headless run" 0 "9 chunks, [0-9]+ mesh chunks \([0-9]+ drawn\), [1-9][0-9]* triangles" -- \
-  "$bin/hello_terrain" --headless --size 96x64 --radius 1 --frames 2 --seed 3 --screenshot "$tmp/terrain.png"
+# --radius 1 is 2 × 2 chunks each way of full detail (16 column chunks), and one coarser ring.
+expect "hello_terrain: headless run" 0 "16 chunks, [0-9]+ mesh chunks \([0-9]+ drawn\), [1-9][0-9]* triangles" -- \
+  "$bin/hello_terrain" --headless --size 96x64 --radius 1 --rings 1 --frames 2 --seed 3 --screenshot "$tmp/terrain.png"
 expect "hello_terrain: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 -N4 "$tmp/terrain.png"
 expect "hello_terrain: bad --radius" 2 "bad value for '--radius'" -- "$bin/hello_terrain" --radius 99
 

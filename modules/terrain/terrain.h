@@ -381,7 +381,8 @@ typedef enum terrain_mesh_state {
 } terrain_mesh_state;
 
 typedef struct TerrainMeshChunk {
-    int64_t x, y, z;
+    int64_t x, y, z;                    /* in chunks of its level */
+    terrain_lod_desc lod;               /* level and finer neighbours (terrain_mesh_chunk) */
     terrain_mesh_state state;
     terrain_mesh mesh;
     terrain_gpu_mesh gpu;
@@ -401,6 +402,12 @@ void terrain_ecs_destroy(terrain_ecs *te);
 /* Spawns the column chunks within `radius` chunks of (cx, cz) and their mesh chunks for mesh
  * layers y_first … y_last (each TERRAIN_MESH_CELLS metres tall). */
 void terrain_ecs_spawn_area(terrain_ecs *te, int64_t cx, int64_t cz, int radius, int64_t y_first, int64_t y_last);
+/* Nested rings of detail around the origin: level 0 covers mesh chunks x, z ∈ [−w, w) (w =
+ * half_width, even when levels > 1), and each coarser level L covers its own chunks in [−w, w)
+ * but not the finer area inside, so level L reaches w·32·2^L metres out. Seams between levels
+ * are closed (terrain_mesh_chunk). All levels cover [y_min, y_max] rounded out to the coarsest
+ * chunk height. Column-chunk entities are spawned for the level-0 area. */
+void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double y_min, double y_max);
 void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view);
 terrain_ecs_stats terrain_ecs_stats_get(terrain_ecs *te);
 

@@ -6,6 +6,10 @@
 #include "ecs/ecs.h"
 #include "trace/trace.h"
 
+#include <math.h>
+
+_Static_assert(TERRAIN_CHUNK_COLUMNS == TERRAIN_MESH_CELLS, "a level-0 mesh chunk is one column chunk wide");
+
 struct terrain_ecs {
     ecs_world *ecs;
     terrain_world *terrain;
@@ -32,21 +36,13 @@ static void terrain_generate_system(ecs_iter *it) {
     }
 }
 
-/* One mesh chunk: its cells plus one apron sample on every side for gradients, so normals agree
- * with the neighbours' along shared borders. */
+/* One mesh chunk at its level: terrain_mesh_chunk samples the cells plus a one-sample apron for
+ * gradients (normals agree with the neighbours' along shared borders) and, next to finer
+ * neighbours, the transition samples that close the seam. */
 static void terrain_mesh_chunk_build(terrain_ecs *te, TerrainMeshChunk *chunk) {
     TRACE_ZONE("terrain_mesh_chunk");
-    const int cells = TERRAIN_MESH_CELLS, apron = 1;
-    terrain_field field;
-    terrain_field_desc desc = {
-        .first = { chunk->x * cells - apron, chunk->y * cells - apron, chunk->z * cells - apron },
-        .size = { cells + 1 + 2 * apron, cells + 1 + 2 * apron, cells + 1 + 2 * apron } };
-    if (!terrain_field_sample(te->terrain, &desc, &field)) {
-        chunk->state = TERRAIN_MESH_MESHED;      /* nothing to show; logged by the sampler */
-        return;
-    }
-    terrain_mesh_build(&field, &(terrain_mesh_desc){ .world = te->terrain, .apron = apron }, &chunk->mesh);
-    terrain_field_free(&field);
+    if (!terrain_mesh_chunk(te->terrain, chunk->x, chunk->y, chunk->z, &chunk->lod, &chunk->mesh))
+        chunk->mesh = (terrain_mesh){ 0 };      /* nothing to show; the reason is logged */
     chunk->state = TERRAIN_MESH_MESHED;
 }
 
@@ -123,19 +119,61 @@ void terrain_ecs_destroy(terrain_ecs *te) {
 }
 
 void terrain_ecs_spawn_area(terrain_ecs *te, int64_t cx, int64_t cz, int radius, int64_t y_first, int64_t y_last) {
-    const int64_t mesh_per_chunk = TERRAIN_CHUNK_COLUMNS / TERRAIN_MESH_CELLS;
     for (int64_t z = cz - radius; z <= cz + radius; z++)
         for (int64_t x = cx - radius; x <= cx + radius; x++) {
             ecs_entity e = ecs_entity_create(te->ecs);
             ecs_set(te->ecs, e, te->chunk, &(TerrainChunk){ .coord = { x, z } });
-            for (int64_t mz = 0; mz < mesh_per_chunk; mz++)
-                for (int64_t mx = 0; mx < mesh_per_chunk; mx++)
-                    for (int64_t y = y_first; y <= y_last; y++) {
-                        ecs_entity m = ecs_entity_create(te->ecs);
-                        ecs_set(te->ecs, m, te->mesh_chunk, &(TerrainMeshChunk){
-                            .x = x * mesh_per_chunk + mx, .y = y, .z = z * mesh_per_chunk + mz });
-                    }
+            for (int64_t y = y_first; y <= y_last; y++) {
+                ecs_entity m = ecs_entity_create(te->ecs);
+                ecs_set(te->ecs, m, te->mesh_chunk, &(TerrainMeshChunk){ .x = x, .y = y, .z = z });
+            }
         }
+}
+
+/* Whether level-L chunk (x, z) lies inside the finer level's area (L > 0). */
+static bool terrain_ring_inner(int half_width, int level, int64_t x, int64_t z) {
+    int64_t inner = half_width / 2;
+    return level > 0 && x >= -inner && x < inner && z >= -inner && z < inner;
+}
+
+static uint32_t terrain_ring_mask(int half_width, int level, int64_t x, int64_t y, int64_t z,
+                                  int64_t y_first, int64_t y_last) {
+    uint32_t mask = 0;
+    for (int dz = -1; dz <= 1; dz++)
+        for (int dy = -1; dy <= 1; dy++)
+            for (int dx = -1; dx <= 1; dx++) {
+                if (y + dy < y_first || y + dy > y_last) continue;   /* nothing meshed there */
+                if (terrain_ring_inner(half_width, level, x + dx, z + dz))
+                    mask |= terrain_lod_neighbour_bit(dx, dy, dz);
+            }
+    return mask;
+}
+
+void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double y_min, double y_max) {
+    if (levels < 1) levels = 1;
+    if (levels > 1 && half_width % 2) half_width++;     /* rings must align with coarser chunks */
+    double top_height = (double)TERRAIN_MESH_CELLS * (double)(1 << (levels - 1));
+    y_min = floor(y_min / top_height) * top_height;
+    y_max = ceil(y_max / top_height) * top_height;
+    for (int level = 0; level < levels; level++) {
+        double height = (double)TERRAIN_MESH_CELLS * (double)(1 << level);
+        int64_t y_first = (int64_t)floor(y_min / height), y_last = (int64_t)ceil(y_max / height) - 1;
+        for (int64_t z = -half_width; z < half_width; z++)
+            for (int64_t x = -half_width; x < half_width; x++) {
+                if (terrain_ring_inner(half_width, level, x, z)) continue;
+                if (level == 0) {     /* a level-0 mesh chunk is one column chunk wide */
+                    ecs_entity e = ecs_entity_create(te->ecs);
+                    ecs_set(te->ecs, e, te->chunk, &(TerrainChunk){ .coord = { x, z } });
+                }
+                for (int64_t y = y_first; y <= y_last; y++) {
+                    ecs_entity m = ecs_entity_create(te->ecs);
+                    ecs_set(te->ecs, m, te->mesh_chunk, &(TerrainMeshChunk){
+                        .x = x, .y = y, .z = z,
+                        .lod = { .level = level,
+                                 .finer_neighbours = terrain_ring_mask(half_width, level, x, y, z, y_first, y_last) } });
+                }
+            }
+    }
 }
 
 void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view) {

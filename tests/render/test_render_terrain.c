@@ -148,3 +148,118 @@ Test(render_terrain, generated_area_shows_ground_under_sky_the_same_on_any_threa
     render_image_free(&one);
     render_image_free(&two);
 }
+
+/* ---- rings of detail through the ECS: the meshes on the GPU close every seam ---- */
+
+typedef struct ring_point { double p[3]; } ring_point;
+
+static int ring_point_compare(const void *a, const void *b) {
+    const double *x = ((const ring_point *)a)->p, *y = ((const ring_point *)b)->p;
+    for (int i = 0; i < 3; i++)
+        if (x[i] != y[i]) return x[i] < y[i] ? -1 : 1;
+    return 0;
+}
+
+static int u64_compare(const void *a, const void *b) {
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+typedef struct ring_meshes { ring_point *points; uint32_t *triangles; size_t point_count, index_count; } ring_meshes;
+
+/* Reads every uploaded mesh back from the GPU, in world positions (origin + vertex, in doubles). */
+static void gather_gpu_meshes(const terrain_gpu_mesh *meshes, int count, ring_meshes *out) {
+    *out = (ring_meshes){ 0 };
+    for (int m = 0; m < count; m++) {
+        GLint bytes = 0;
+        glGetNamedBufferParameteriv(meshes[m].vertex_buffer, GL_BUFFER_SIZE, &bytes);
+        size_t vertex_count = (size_t)bytes / sizeof(terrain_vertex);
+        terrain_vertex *vertices = malloc((size_t)bytes);
+        uint32_t *indices = malloc(meshes[m].index_count * sizeof *indices);
+        glGetNamedBufferSubData(meshes[m].vertex_buffer, 0, bytes, vertices);
+        glGetNamedBufferSubData(meshes[m].index_buffer, 0, meshes[m].index_count * sizeof *indices, indices);
+        out->points = realloc(out->points, (out->point_count + vertex_count) * sizeof *out->points);
+        out->triangles = realloc(out->triangles, (out->index_count + meshes[m].index_count) * sizeof *out->triangles);
+        for (size_t v = 0; v < vertex_count; v++)
+            for (int a = 0; a < 3; a++)
+                out->points[out->point_count + v].p[a] = meshes[m].origin[a] + (double)vertices[v].position[a];
+        for (uint32_t i = 0; i < meshes[m].index_count; i++)
+            out->triangles[out->index_count + i] = (uint32_t)out->point_count + indices[i];
+        out->point_count += vertex_count;
+        out->index_count += meshes[m].index_count;
+        free(vertices);
+        free(indices);
+    }
+}
+
+Test(render_terrain, rings_of_detail_leave_no_open_edge_inside_the_area) {
+    gfx_context *gfx = render_offscreen(32, 32);
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
+    ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(5) });
+    terrain_ecs *te = terrain_ecs_create(ecs, world);
+    const int half_width = 2, levels = 2;
+    const double y_min = -64, y_max = 192;       /* multiples of the coarsest chunk height (64 m) */
+    terrain_ecs_spawn_rings(te, half_width, levels, y_min, y_max);
+    ecs_progress(ecs, 1.0f / 60.0f);             /* generate, mesh and upload */
+
+    /* The GPU meshes, via the query the draw uses: gather them through a renderer-free path. */
+    terrain_gpu_mesh meshes[1024];
+    int count = 0;
+    ecs_query *q = ecs_query_create(ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(ecs, "TerrainMeshChunk") } });
+    ecs_iter it = ecs_query_iter(ecs, q);
+    while (ecs_query_next(&it)) {
+        TerrainMeshChunk *chunks = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++) {
+            cr_assert_eq(chunks[i].state, TERRAIN_MESH_UPLOADED);
+            if (chunks[i].gpu.index_count) meshes[count++] = chunks[i].gpu;
+        }
+    }
+    ring_meshes all;
+    gather_gpu_meshes(meshes, count, &all);
+    cr_assert_gt(all.index_count, 3000u);
+
+    /* Weld by exact world position, then every directed edge needs its reverse unless it lies
+     * on the outer box of the area. */
+    ring_point *unique = malloc(all.point_count * sizeof *unique);
+    memcpy(unique, all.points, all.point_count * sizeof *unique);
+    qsort(unique, all.point_count, sizeof *unique, ring_point_compare);
+    size_t unique_count = 0;
+    for (size_t i = 0; i < all.point_count; i++)
+        if (i == 0 || ring_point_compare(&unique[i], &unique[unique_count - 1]) != 0) unique[unique_count++] = unique[i];
+    uint32_t *weld = malloc(all.point_count * sizeof *weld);
+    for (size_t i = 0; i < all.point_count; i++)
+        weld[i] = (uint32_t)((ring_point *)bsearch(&all.points[i], unique, unique_count, sizeof *unique, ring_point_compare) - unique);
+    uint64_t *edges = malloc(all.index_count * sizeof *edges);
+    size_t edge_count = 0;
+    for (size_t t = 0; t + 2 < all.index_count; t += 3)
+        for (int k = 0; k < 3; k++) {
+            uint64_t a = weld[all.triangles[t + k]], b = weld[all.triangles[t + (k + 1) % 3]];
+            if (a != b) edges[edge_count++] = a << 32 | b;
+        }
+    qsort(edges, edge_count, sizeof *edges, u64_compare);
+    const double outer = half_width * TERRAIN_MESH_CELLS * (double)(1 << (levels - 1));
+    int open_inside = 0;
+    for (size_t e = 0; e < edge_count; e++) {
+        uint64_t reverse = (edges[e] << 32) | (edges[e] >> 32);
+        if (bsearch(&reverse, edges, edge_count, sizeof *edges, u64_compare)) continue;
+        const double *p = unique[edges[e] >> 32].p, *q2 = unique[edges[e] & 0xffffffffu].p;
+        bool on_box = false;
+        for (int a = 0; a < 3; a++) {
+            double lo = a == 1 ? y_min : -outer, hi = a == 1 ? y_max : outer;
+            on_box |= (p[a] == lo && q2[a] == lo) || (p[a] == hi && q2[a] == hi);
+        }
+        open_inside += !on_box;
+    }
+    cr_assert_eq(open_inside, 0, "%d open edges inside the area (seams between levels or chunks)", open_inside);
+    free(edges);
+    free(weld);
+    free(unique);
+    free(all.points);
+    free(all.triangles);
+    terrain_ecs_destroy(te);
+    ecs_world_destroy(ecs);
+    terrain_world_destroy(world);
+    job_system_destroy(jobs);
+    gfx_destroy(gfx);
+}

@@ -2,8 +2,11 @@
  * generated and meshed in parallel by the generate and mesh phases, drawn with triplanar
  * materials. Fly with the same controls as hello_scene.
  *
- *   hello_terrain [--seed S] [--radius R] [--size WxH] [--headless] [--frames N]
+ *   hello_terrain [--seed S] [--radius R] [--rings N] [--size WxH] [--headless] [--frames N]
  *                 [--screenshot FILE] [--threads N] [--trace FILE]
+ *
+ * Full detail covers 2R × 2R chunks of 32 m around the start; each of N rings beyond it is meshed
+ * at half the resolution of the one inside, out to 2R·32·2^N metres, with closed seams.
  */
 #include "core/core.h"
 #include "ecs/ecs.h"
@@ -19,7 +22,7 @@
 typedef struct options {
     core_common_args common;
     const char *size, *screenshot;
-    int seed, radius, frames;
+    int seed, radius, rings, frames;
     bool headless;
 } options;
 
@@ -27,7 +30,8 @@ static int parse(int argc, char **argv, options *o, int *width, int *height) {
     const core_option list[] = {
         CORE_COMMON_OPTIONS(o->common),
         { "seed", CORE_OPTION_INT, &o->seed, "S", "world seed", 0, 2147483647 },
-        { "radius", CORE_OPTION_INT, &o->radius, "R", "chunks around the start (default 2)", 0, 16 },
+        { "radius", CORE_OPTION_INT, &o->radius, "R", "full-detail chunks each way from the start (default 2)", 1, 16 },
+        { "rings", CORE_OPTION_INT, &o->rings, "N", "coarser rings of detail beyond (default 2)", 0, 5 },
         { "size", CORE_OPTION_STRING, &o->size, "WxH", "framebuffer size (default 1280x720)" },
         { "headless", CORE_OPTION_FLAG, &o->headless, NULL, "render offscreen with OSMesa" },
         { "frames", CORE_OPTION_INT, &o->frames, "N", "stop after N frames (0 = when closed)", 0, 100000000 },
@@ -37,6 +41,7 @@ static int parse(int argc, char **argv, options *o, int *width, int *height) {
                      .options = list, .option_count = CORE_COUNTOF(list) };
     o->seed = 1;
     o->radius = 2;
+    o->rings = 2;
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
     *width = 1280;
@@ -79,8 +84,7 @@ int main(int argc, char **argv) {
     terrain_ecs *te = terrain_ecs_create(ecs, world);
     /* Mesh layers that cover the relief, with a margin for overhangs. */
     double low = params.base_height - params.relief_height - 48, high = params.base_height + params.relief_height + 48;
-    terrain_ecs_spawn_area(te, 0, 0, o.radius, (int64_t)floor(low / TERRAIN_MESH_CELLS),
-                           (int64_t)floor(high / TERRAIN_MESH_CELLS));
+    terrain_ecs_spawn_rings(te, 2 * o.radius, o.rings + 1, low, high);
     input_system *input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(gfx) });
     if (!input) return 1;
 
