@@ -29,7 +29,7 @@
  * the same few floating-point operations on the same integers for every sample, so two adjacent
  * chunks agree exactly on the samples they share.
  */
-#include "terrain/terrain.h"
+#include "terrain_internal.h"
 
 #include "core/core.h"
 
@@ -96,20 +96,39 @@ typedef struct field_runs {
     size_t capacity;
 } field_runs;
 
-static void field_runs_build(field_runs *out, const terrain_layer *layers, int layer_count) {
+static void field_runs_push(field_runs *out, double *bottom, double *solid_below, bool solid, double thickness) {
+    double top = *bottom + thickness;
+    if (out->count > 0 && out->runs[out->count - 1].solid == solid) {
+        out->runs[out->count - 1].top = top;
+    } else {
+        out->runs = core_grow(out->runs, &out->capacity, (size_t)out->count + 1, sizeof *out->runs);
+        out->runs[out->count++] = (field_run){ *bottom, top, *solid_below, solid };
+    }
+    if (solid) *solid_below += thickness;
+    *bottom = top;
+}
+
+/* The runs of global column (gx, gz) below `limit`, straight from the packed stacks: the same
+ * thicknesses as terrain_stacks_column's layers (the same float), without copying every layer
+ * out first (coarse chunks read 3.8× a level-0 chunk's columns, so per-column costs count). */
+static void field_runs_of_column(field_runs *out, field_column_source *src, int64_t gx, int64_t gz, double limit) {
+    terrain_chunk_coord chunk = { terrain_floor_div(gx, TERRAIN_CHUNK_COLUMNS),
+                                  terrain_floor_div(gz, TERRAIN_CHUNK_COLUMNS) };
+    if (!src->stacks || chunk.x != src->chunk.x || chunk.z != src->chunk.z) {
+        src->stacks = terrain_world_stacks(src->world, chunk);
+        src->chunk = chunk;
+    }
+    terrain__column_cursor cursor = terrain__stacks_cursor(src->stacks, (int)(gx - chunk.x * TERRAIN_CHUNK_COLUMNS),
+                                                           (int)(gz - chunk.z * TERRAIN_CHUNK_COLUMNS));
     out->count = 0;
     double bottom = TERRAIN_FLOOR_Y, solid_below = 0.0;
-    for (int l = 0; l < layer_count; l++) {
-        bool solid = terrain_material_in_field(layers[l].material);
-        double top = bottom + layers[l].thickness;
-        if (out->count > 0 && out->runs[out->count - 1].solid == solid) {
-            out->runs[out->count - 1].top = top;
-        } else {
-            out->runs = core_grow(out->runs, &out->capacity, (size_t)out->count + 1, sizeof *out->runs);
-            out->runs[out->count++] = (field_run){ bottom, top, solid_below, solid };
-        }
-        if (solid) solid_below += layers[l].thickness;
-        bottom = top;
+    terrain__qlayer layer;
+    /* Runs above `limit` are never read: once a run's top is above every height asked, the
+     * cursors stop in it (it is not the last run, so S does not take the whole solid length),
+     * and S there depends only on its bottom and solid_below, which later layers leave alone. */
+    while (bottom <= limit && terrain__cursor_next(&cursor, &layer)) {
+        float thickness = (float)layer.quanta * TERRAIN_HEIGHT_QUANTUM;
+        field_runs_push(out, &bottom, &solid_below, terrain_material_in_field((terrain_material)layer.material), thickness);
     }
 }
 
@@ -138,14 +157,26 @@ static inline __attribute__((always_inline)) double field_cursor_solid_to(field_
 }
 
 /* L at the samples y = (first + j)·c, j < count, in fixed point, written with stride `stride`.
- * L ≥ 0 (S only grows), so adding ½ and truncating rounds it. */
+ * L ≥ 0 (S only grows), so adding ½ and truncating rounds it. S is a function of the height
+ * alone (the cursors only save walking), so two shortcuts keep every value as it was: a low end
+ * at the height of the previous sample's high end (σ = step/2, as at level 1 with the default
+ * σ) takes its S instead of walking again, and once the low end is above the column's last run
+ * both ends read the column's whole solid length, L = 0 for the rest of the column. */
 static void field_column_lengths(const field_runs *column, int64_t first_y, int count, int step, double sigma,
                                  int64_t *out, size_t stride) {
     field_cursor low = { column, 0 }, high = low;
+    const double last_top = column->count ? column->runs[column->count - 1].top : TERRAIN_FLOOR_Y;
+    double previous_high = -INFINITY, previous_s_high = 0.0;
     for (int j = 0; j < count; j++) {
         double y = (double)(first_y + (int64_t)j * step) * TERRAIN_COLUMN_SIZE;
-        double s_high = field_cursor_solid_to(&high, y + sigma);
-        double s_low = field_cursor_solid_to(&low, y - sigma);
+        double y_low = y - sigma, y_high = y + sigma;
+        if (y_low >= last_top && y_low > TERRAIN_FLOOR_Y) {
+            for (; j < count; j++) out[(size_t)j * stride] = 0;
+            return;
+        }
+        double s_high = field_cursor_solid_to(&high, y_high);
+        double s_low = y_low == previous_high ? previous_s_high : field_cursor_solid_to(&low, y_low);
+        previous_high = y_high, previous_s_high = s_high;
         double length = (s_high - s_low) * TERRAIN_FIELD_FIXED;
         out[(size_t)j * stride] = length > 0.0 ? (int64_t)(length + 0.5) : 0;
     }
@@ -220,9 +251,10 @@ static void field_sample_strided(terrain_world *world, const terrain_field_desc 
     field_column_source src = { .world = world, .layer_capacity = 64 };
     src.layers = core_alloc(src.layer_capacity * sizeof *src.layers);
     field_runs column = { 0 };
+    const double limit = (double)(desc->first[1] + (int64_t)(ny - 1) * step) * TERRAIN_COLUMN_SIZE + (double)sigma;
     for (int row = 0; row < ncz; row++) {
         for (int col = 0; col < ncx; col++) {
-            field_runs_build(&column, src.layers, field_column_layers(&src, cols_x[col], cols_z[row]));
+            field_runs_of_column(&column, &src, cols_x[col], cols_z[row], limit);
             field_column_lengths(&column, desc->first[1], ny, step, (double)sigma, lengths + col, (size_t)ncx);
         }
         int64_t *inner = rows_inner + (size_t)row * row_samples, *edge = rows_edge + (size_t)row * row_samples;
@@ -304,11 +336,12 @@ bool terrain_field_sample(terrain_world *world, const terrain_field_desc *desc, 
     src.layers = core_alloc(src.layer_capacity * sizeof *src.layers);
     field_runs column = { 0 };
     const double scale = c * c / TERRAIN_FIELD_FIXED, to_f = 1.0 / (4.0 * (double)sigma * sigma * sigma);
+    const double limit = (double)(desc->first[1] + ny - 1) * TERRAIN_COLUMN_SIZE + (double)sigma;
 
     for (int row = 0; row < ncz; row++) {
         /* y pass: L for every column of this row. */
         for (int col = 0; col < ncx; col++) {
-            field_runs_build(&column, src.layers, field_column_layers(&src, column_x0 + col, column_z0 + row));
+            field_runs_of_column(&column, &src, column_x0 + col, column_z0 + row, limit);
             field_column_lengths(&column, desc->first[1], ny, 1, (double)sigma, lengths + col, (size_t)ncx);
         }
         /* x pass: for sample i the columns are i … i + window − 1 of the row. */

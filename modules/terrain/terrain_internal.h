@@ -144,6 +144,10 @@ bool terrain__mesh_finish(terrain__mesh_builder *b, const terrain_mesh_desc *des
 typedef bool (*terrain__field_sampler)(void *user, const terrain_field_desc *desc, terrain_field *out);
 bool terrain__mesh_chunk_with(terrain__field_sampler sample, void *user, terrain_world *weights_world, int64_t x,
                               int64_t y, int64_t z, const terrain_lod_desc *lod, terrain_mesh *out);
+/* The same without the shortcuts (every transition cell contoured, corner signs read one by
+ * one), for tests: its output must equal terrain__mesh_chunk_with's byte for byte. */
+bool terrain__mesh_chunk_reference(terrain__field_sampler sample, void *user, terrain_world *weights_world, int64_t x,
+                                   int64_t y, int64_t z, const terrain_lod_desc *lod, terrain_mesh *out);
 
 /* ==== end of the field and meshing section ================================================ */
 

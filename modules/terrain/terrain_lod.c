@@ -318,14 +318,20 @@ static void lod_transition_cell(lod_chunk *c, const int p[3]) {
     }
 }
 
-static void lod_table_cell(lod_chunk *c, const int p[3], const terrain__mc_case *table) {
+/* The corner configuration read corner by corner: the reference the sliding one is tested
+ * against (terrain__mesh_chunk_reference). */
+static unsigned lod_cell_config(const lod_chunk *c, const int p[3]) {
     unsigned config = 0;
     for (int v = 0; v < 8; v++) {
         int q[3] = { p[0] + (v & 1), p[1] + ((v >> 1) & 1), p[2] + ((v >> 2) & 1) };
         config |= (unsigned)(c->values[lod_index(q)] > 0.0f) << v;
     }
-    if (config == 0 || config == 0xff) return;
-    const terrain__mc_case *cell = &table[config];
+    return config;
+}
+
+/* A cell without split edges, of corner configuration `config` (not 0 or 0xff): the case
+ * table, its edges' vertices made on first use (so in the order the cells reach them). */
+static void lod_table_cell(lod_chunk *c, const int p[3], const terrain__mc_case *cell) {
     for (int t = 0; t < cell->triangle_count; t++) {
         uint32_t ids[3];
         for (int k = 0; k < 3; k++) {
@@ -348,6 +354,30 @@ static bool lod_cell_is_transition(const lod_chunk *c, const int p[3]) {
         }
     }
     return false;
+}
+
+/* Whether every sample a transition cell's faces could read has the same sign: the 8 coarse
+ * corners and all 3 × 3 fine points of each sampled chunk face the cell touches (from every such
+ * face, so a point on two faces is checked in both). Then every face's walk finds no run to cut
+ * off, the cell draws nothing and creates no vertex, and skipping it changes no output. Most
+ * border cells are all solid or all air; this is what keeps their cost near the table cells'. */
+static bool lod_transition_cell_empty(const lod_chunk *c, const int p[3]) {
+    const bool inside = c->values[lod_index(p)] > 0.0f;
+    for (int v = 1; v < 8; v++) {
+        int q[3] = { p[0] + (v & 1), p[1] + ((v >> 1) & 1), p[2] + ((v >> 2) & 1) };
+        if ((c->values[lod_index(q)] > 0.0f) != inside) return false;
+    }
+    for (int f = 0; f < 6; f++) {
+        int a = f / 2, u, w;
+        if (!c->faces[f].sampled || p[a] != (f % 2 ? LOD_CELLS : 1)) continue;
+        other_axes(a, &u, &w);
+        const float *values = c->faces[f].field.values;
+        for (int dw = 0; dw <= 2; dw++) {
+            const float *row = values + (size_t)(2 * p[w] - 2 + dw) * LOD_FINE + (size_t)(2 * p[u] - 2);
+            if ((row[0] > 0.0f) != inside || (row[1] > 0.0f) != inside || (row[2] > 0.0f) != inside) return false;
+        }
+    }
+    return true;
 }
 
 /* ---- the chunk ----------------------------------------------------------------------------- */
@@ -380,7 +410,7 @@ static void lod_rules(lod_chunk *c, uint32_t mask) {
 }
 
 static bool lod_mesh_transitions(terrain__field_sampler sample, void *user, terrain_world *weights_world,
-                                 const int64_t first[3], int level, uint32_t mask, terrain_mesh *out) {
+                                 const int64_t first[3], int level, uint32_t mask, bool reference, terrain_mesh *out) {
     const int64_t step = (int64_t)1 << level, half = step / 2;
     lod_chunk c = { .fine_spacing = (float)half * TERRAIN_COLUMN_SIZE };
     lod_rules(&c, mask);
@@ -425,14 +455,28 @@ static bool lod_mesh_transitions(terrain__field_sampler sample, void *user, terr
             memset(c.edges[a], 0xff, samples * sizeof(uint32_t));
         }
         const terrain__mc_case *table = terrain__mc_table();
+        const size_t row = LOD_SAMPLES, slice = (size_t)LOD_SAMPLES * LOD_SAMPLES;
         for (int z = 1; z <= LOD_CELLS; z++)
-            for (int y = 1; y <= LOD_CELLS; y++)
+            for (int y = 1; y <= LOD_CELLS; y++) {
+                /* The corner signs slide along x as in terrain_mesh.c: bits of the cell's x = 0
+                 * side y0z0 → 0, y1z0 → 2, y0z1 → 4, y1z1 → 6, the x = 1 side one bit up. */
+                const float *v = c.values + lod_index((const int[3]){ 1, y, z });
+                unsigned side = (v[0] > 0.0f) | (v[row] > 0.0f) << 2 | (v[slice] > 0.0f) << 4 | (v[row + slice] > 0.0f) << 6;
                 for (int x = 1; x <= LOD_CELLS; x++) {
+                    v++;
+                    unsigned next = (v[0] > 0.0f) | (v[row] > 0.0f) << 2 | (v[slice] > 0.0f) << 4 | (v[row + slice] > 0.0f) << 6;
+                    unsigned config = side | next << 1;
+                    side = next;
                     int p[3] = { x, y, z };
                     bool border = x == 1 || y == 1 || z == 1 || x == LOD_CELLS || y == LOD_CELLS || z == LOD_CELLS;
-                    if (border && lod_cell_is_transition(&c, p)) lod_transition_cell(&c, p);
-                    else lod_table_cell(&c, p, table);
+                    if (reference) config = lod_cell_config(&c, p);
+                    if (border && lod_cell_is_transition(&c, p)) {
+                        if (reference || !lod_transition_cell_empty(&c, p)) lod_transition_cell(&c, p);
+                    } else if (config != 0 && config != 0xff) {
+                        lod_table_cell(&c, p, &table[config]);
+                    }
                 }
+            }
         for (int a = 0; a < 3; a++) core_free(c.edges[a], samples * sizeof(uint32_t));
         ok = terrain__mesh_finish(&c.b, &(terrain_mesh_desc){ .world = weights_world }, field.origin, out);
         if (ok) memcpy(out->origin, field.origin, sizeof out->origin);
@@ -446,8 +490,8 @@ static bool lod_mesh_transitions(terrain__field_sampler sample, void *user, terr
     return ok;
 }
 
-bool terrain__mesh_chunk_with(terrain__field_sampler sample, void *user, terrain_world *weights_world, int64_t x,
-                              int64_t y, int64_t z, const terrain_lod_desc *lod_in, terrain_mesh *out) {
+static bool lod_mesh_chunk(terrain__field_sampler sample, void *user, terrain_world *weights_world, int64_t x,
+                           int64_t y, int64_t z, const terrain_lod_desc *lod_in, bool reference, terrain_mesh *out) {
     const terrain_lod_desc lod = lod_in ? *lod_in : (terrain_lod_desc){ 0 };
     memset(out, 0, sizeof *out);
     if (lod.level < 0 || lod.level > LOD_MAX_LEVEL || (lod.finer_neighbours >> 26) != 0 ||
@@ -470,7 +514,7 @@ bool terrain__mesh_chunk_with(terrain__field_sampler sample, void *user, terrain
     for (int dz = -1; dz <= 1; dz += 2)
         for (int dy = -1; dy <= 1; dy += 2)
             for (int dx = -1; dx <= 1; dx += 2) mask &= ~terrain_lod_neighbour_bit(dx, dy, dz);
-    if (mask) return lod_mesh_transitions(sample, user, weights_world, first, lod.level, mask, out);
+    if (mask) return lod_mesh_transitions(sample, user, weights_world, first, lod.level, mask, reference, out);
     /* No seam to close: the plain pair (at level 0 exactly the example of terrain.h). */
     terrain_field field;
     terrain_field_desc desc = { .size = { LOD_SAMPLES, LOD_SAMPLES, LOD_SAMPLES }, .step = (int)step };
@@ -479,6 +523,16 @@ bool terrain__mesh_chunk_with(terrain__field_sampler sample, void *user, terrain
     bool ok = terrain_mesh_build(&field, &(terrain_mesh_desc){ .world = weights_world, .apron = 1 }, out);
     terrain_field_free(&field);
     return ok;
+}
+
+bool terrain__mesh_chunk_with(terrain__field_sampler sample, void *user, terrain_world *weights_world, int64_t x,
+                              int64_t y, int64_t z, const terrain_lod_desc *lod, terrain_mesh *out) {
+    return lod_mesh_chunk(sample, user, weights_world, x, y, z, lod, false, out);
+}
+
+bool terrain__mesh_chunk_reference(terrain__field_sampler sample, void *user, terrain_world *weights_world, int64_t x,
+                                   int64_t y, int64_t z, const terrain_lod_desc *lod, terrain_mesh *out) {
+    return lod_mesh_chunk(sample, user, weights_world, x, y, z, lod, true, out);
 }
 
 static bool lod_world_sample(void *user, const terrain_field_desc *desc, terrain_field *out) {

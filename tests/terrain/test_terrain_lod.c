@@ -393,6 +393,55 @@ Test(terrain_lod, strided_samples_equal_unit_samples) {
     terrain_world_destroy(world);
 }
 
+/* ---- the fast paths against the reference -------------------------------------------------- */
+
+static bool world_sample(void *user, const terrain_field_desc *desc, terrain_field *out) {
+    return terrain_field_sample(user, desc, out);
+}
+
+static bool meshes_equal(const terrain_mesh *a, const terrain_mesh *b) {
+    return a->vertex_count == b->vertex_count && a->index_count == b->index_count &&
+           memcmp(a->origin, b->origin, sizeof a->origin) == 0 &&
+           memcmp(a->bounds_min, b->bounds_min, sizeof a->bounds_min) == 0 &&
+           memcmp(a->bounds_max, b->bounds_max, sizeof a->bounds_max) == 0 &&
+           (!a->vertex_count || memcmp(a->vertices, b->vertices, a->vertex_count * sizeof *a->vertices) == 0) &&
+           (!a->index_count || memcmp(a->indices, b->indices, a->index_count * sizeof *a->indices) == 0);
+}
+
+/* The shortcuts (empty transition cells skipped, sliding corner signs) must change no byte of
+ * the mesh, vertex order included: chunks at levels 1 and 2 with all neighbours finer, each face
+ * neighbour alone, an edge neighbour alone and hashed masks, on noise blobs and on terrain. */
+Test(terrain_lod, fast_paths_equal_the_reference) {
+    analytic blob = { .kind = 1, .centre = { 40, 40, 40 }, .radius = 70, .seed = 11, .scale = 3 };
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(5) });
+    int compared = 0, with_triangles = 0;
+    for (int level = 1; level <= 2; level++) {
+        uint32_t masks[9] = { (1u << 26) - 1, terrain_lod_neighbour_bit(1, 0, 0), terrain_lod_neighbour_bit(0, -1, 0),
+                              terrain_lod_neighbour_bit(0, 0, 1), terrain_lod_neighbour_bit(-1, 1, 0) };
+        for (int m = 5; m < 9; m++) masks[m] = (uint32_t)core_hash_u64((uint64_t)(level * 10 + m)) & ((1u << 26) - 1);
+        int64_t ground = ground_region(world, level);
+        for (int m = 0; m < 9; m++)
+            for (int source = 0; source < 2; source++) {
+                terrain_lod_desc lod = { .level = level, .finer_neighbours = masks[m] };
+                terrain_mesh fast, reference;
+                terrain__field_sampler sample = source ? world_sample : analytic_sample;
+                void *user = source ? (void *)world : (void *)&blob;
+                int64_t y = source ? ground : 0;
+                cr_assert(terrain__mesh_chunk_with(sample, user, source ? world : NULL, 0, y, 0, &lod, &fast));
+                cr_assert(terrain__mesh_chunk_reference(sample, user, source ? world : NULL, 0, y, 0, &lod, &reference));
+                cr_expect(meshes_equal(&fast, &reference), "level %d, mask 0x%x, %s", level, (unsigned)masks[m],
+                          source ? "terrain" : "blob");
+                compared++;
+                with_triangles += fast.index_count > 0;
+                terrain_mesh_free(&fast);
+                terrain_mesh_free(&reference);
+            }
+    }
+    cr_expect_eq(compared, 36);
+    cr_expect_eq(with_triangles, 36);
+    terrain_world_destroy(world);
+}
+
 Test(terrain_lod, bad_requests_are_refused) {
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(1) });
     terrain_mesh mesh;
