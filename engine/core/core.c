@@ -123,6 +123,14 @@ bool core_error_format(char *error, size_t error_size, const char *fmt, ...) {
     return false;
 }
 
+char *core_strjoin(const char *a, const char *b) {
+    size_t a_size = strlen(a), b_size = strlen(b);
+    char *joined = core_alloc(a_size + b_size + 1);
+    memcpy(joined, a, a_size);
+    memcpy(joined + a_size, b, b_size + 1);
+    return joined;
+}
+
 char *core_strdup(const char *s) {
     size_t size = strlen(s) + 1;
     return memcpy(core_alloc(size), s, size);

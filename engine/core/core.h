@@ -119,6 +119,7 @@ static inline void *core_grow(void *items, size_t *capacity, size_t needed, size
 void *core_alloc_aligned(size_t size, size_t align);
 size_t core_memory_in_use(void);                  /* live bytes through core_alloc & co. */
 char *core_strdup(const char *s);                 /* free with core_free(p, strlen(p) + 1) */
+char *core_strjoin(const char *a, const char *b); /* a then b; free like core_strdup's */
 /* For functions that report into a caller's buffer (`bool read(…, char *error, size_t size)`):
  * formats the message into `error` when there is one, and returns false to be returned on. */
 bool core_error_format(char *error, size_t error_size, const char *fmt, ...) CORE_PRINTF(3, 4);

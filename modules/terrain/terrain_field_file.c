@@ -114,14 +114,6 @@ static char *field_prefix(const char *path) {
     return prefix;
 }
 
-static char *path_with(const char *prefix, const char *suffix) {
-    size_t a = strlen(prefix), b = strlen(suffix);
-    char *path = core_alloc(a + b + 1);
-    memcpy(path, prefix, a);
-    memcpy(path + a, suffix, b + 1);
-    return path;
-}
-
 static void path_free(char *path) { core_free(path, strlen(path) + 1); }
 
 /* Writes `size` bytes to a temporary beside `path`, then renames it over `path`. */
@@ -147,7 +139,7 @@ bool terrain_field_write(const terrain_field *field, const char *prefix, char *e
     size_t count = (size_t)field->nx * field->ny * field->nz;
     uint8_t *bytes = core_alloc(count * 4);
     for (size_t i = 0; i < count; i++) put_f32le(bytes + 4 * i, field->values[i]);
-    char *raw = path_with(prefix, ".raw"), *json = path_with(prefix, ".json");
+    char *raw = core_strjoin(prefix, ".raw"), *json = core_strjoin(prefix, ".json");
     bool ok = write_whole_file(raw, bytes, count * 4, error, error_size);
     core_free(bytes, count * 4);
     if (ok) {
@@ -182,7 +174,7 @@ static bool read_small_file(const char *path, size_t limit, char **out, size_t *
 bool terrain_field_read(const char *path, terrain_field *out, char *error, size_t error_size) {
     memset(out, 0, sizeof *out);
     char *prefix = field_prefix(path);
-    char *json = path_with(prefix, ".json"), *raw = path_with(prefix, ".raw");
+    char *json = core_strjoin(prefix, ".json"), *raw = core_strjoin(prefix, ".raw");
     path_free(prefix);
     bool ok = false;
     char *text = NULL;

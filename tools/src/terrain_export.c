@@ -84,17 +84,9 @@ static bool parse_seed(const char *text, uint64_t *out) {
     return true;
 }
 
-static char *with_suffix(const char *prefix, const char *suffix) {
-    size_t a = strlen(prefix), b = strlen(suffix);
-    char *path = core_alloc(a + b + 1);
-    memcpy(path, prefix, a);
-    memcpy(path + a, suffix, b + 1);
-    return path;
-}
-
 /* Whether a file can be created beside PREFIX (the outputs go to temporaries there). */
 static bool can_write_beside(const char *prefix) {
-    char *probe = with_suffix(prefix, ".probe.tmp");
+    char *probe = core_strjoin(prefix, ".probe.tmp");
     FILE *file = fopen(probe, "wb");
     bool ok = file != NULL;
     if (file) {
@@ -164,7 +156,7 @@ int main(int argc, char **argv) {
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(seed) });
     terrain_field field = { 0 };
     terrain_mesh mesh = { 0 };
-    char *ply = with_suffix(out_prefix, ".ply");
+    char *ply = core_strjoin(out_prefix, ".ply");
     trace_zone_begin("field");
     bool sampled = terrain_field_sample(world, &(terrain_field_desc){ .first = { first[0], first[1], first[2] },
                                                                       .size = { size[0], size[1], size[2] },
