@@ -19,6 +19,19 @@ static input_gamepad_state decode_ok(input_decoder *d, const uint8_t *report, si
     return state;
 }
 
+/* The hat's values and the d-pad buttons they mean: 0 up, clockwise in eighths, 8+ centred. */
+static const uint32_t hat_dpad[16] = {
+    BIT(INPUT_BUTTON_DPAD_UP),
+    BIT(INPUT_BUTTON_DPAD_UP) | BIT(INPUT_BUTTON_DPAD_RIGHT),
+    BIT(INPUT_BUTTON_DPAD_RIGHT),
+    BIT(INPUT_BUTTON_DPAD_DOWN) | BIT(INPUT_BUTTON_DPAD_RIGHT),
+    BIT(INPUT_BUTTON_DPAD_DOWN),
+    BIT(INPUT_BUTTON_DPAD_DOWN) | BIT(INPUT_BUTTON_DPAD_LEFT),
+    BIT(INPUT_BUTTON_DPAD_LEFT),
+    BIT(INPUT_BUTTON_DPAD_UP) | BIT(INPUT_BUTTON_DPAD_LEFT),
+    0, 0, 0, 0, 0, 0, 0, 0,
+};
+
 /* A state no decoder would produce, to see that a rejected report changes nothing. */
 static const input_gamepad_state sentinel = { .lx = 0.25f, .ly = -0.5f, .rx = 0.125f, .ry = -0.75f,
                                               .lt = 0.5f, .rt = 0.0625f, .buttons = 0x15555u };

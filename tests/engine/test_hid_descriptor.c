@@ -130,19 +130,9 @@ Test(input_hid, plain_pad_axes) {
 
 Test(input_hid, plain_pad_hat_and_buttons) {
     input_decoder *d = generic_decoder(pad_plain, sizeof pad_plain);
-    const uint32_t dpad[8] = {
-        BIT(INPUT_BUTTON_DPAD_UP),
-        BIT(INPUT_BUTTON_DPAD_UP) | BIT(INPUT_BUTTON_DPAD_RIGHT),
-        BIT(INPUT_BUTTON_DPAD_RIGHT),
-        BIT(INPUT_BUTTON_DPAD_DOWN) | BIT(INPUT_BUTTON_DPAD_RIGHT),
-        BIT(INPUT_BUTTON_DPAD_DOWN),
-        BIT(INPUT_BUTTON_DPAD_DOWN) | BIT(INPUT_BUTTON_DPAD_LEFT),
-        BIT(INPUT_BUTTON_DPAD_LEFT),
-        BIT(INPUT_BUTTON_DPAD_UP) | BIT(INPUT_BUTTON_DPAD_LEFT),
-    };
     for (uint8_t hat = 0; hat < 8; hat++) {
         const uint8_t r[6] = { 0x80, 0x80, 0x80, 0x80, hat, 0x00 };
-        cr_expect_eq(decode_ok(d, r, sizeof r).buttons, dpad[hat], "hat %u", hat);
+        cr_expect_eq(decode_ok(d, r, sizeof r).buttons, hat_dpad[hat], "hat %u", hat);
     }
     /* Buttons 1 … 12 are bits 36 … 47: byte 4 bits 4-7, then byte 5. */
     const uint32_t order[12] = {

@@ -227,18 +227,6 @@ Test(input_decode, ds4_each_button_by_position) {
     input_decoder_destroy(d);
 }
 
-/* The hat's values and the d-pad buttons they mean: 0 up, clockwise in eighths, 8+ centred. */
-static const uint32_t hat_dpad[16] = {
-    BIT(INPUT_BUTTON_DPAD_UP),
-    BIT(INPUT_BUTTON_DPAD_UP) | BIT(INPUT_BUTTON_DPAD_RIGHT),
-    BIT(INPUT_BUTTON_DPAD_RIGHT),
-    BIT(INPUT_BUTTON_DPAD_DOWN) | BIT(INPUT_BUTTON_DPAD_RIGHT),
-    BIT(INPUT_BUTTON_DPAD_DOWN),
-    BIT(INPUT_BUTTON_DPAD_DOWN) | BIT(INPUT_BUTTON_DPAD_LEFT),
-    BIT(INPUT_BUTTON_DPAD_LEFT),
-    BIT(INPUT_BUTTON_DPAD_UP) | BIT(INPUT_BUTTON_DPAD_LEFT),
-    0, 0, 0, 0, 0, 0, 0, 0,
-};
 
 Test(input_decode, ds4_hat_values) {
     input_decoder *d = decoder_for(0x054c, 0x09cc);
