@@ -326,6 +326,7 @@ typedef struct terrain_renderer_desc {
     float sea_level;                  /* for the shore band; 0 = 0 m */
     float snow_height;                /* 0 = 120 m */
     float fog_density;                /* per metre; 0 = 0.0025 */
+    float cloud_cover;                /* 0 = 0.45; negative = a clear sky */
 } terrain_renderer_desc;
 
 /* NULL when the shaders do not build (their errors printed at file:line). */
@@ -350,6 +351,7 @@ typedef struct terrain_view {
     float aspect;                     /* width / height */
     float far_distance;               /* 0 = 4000 m */
     float sun_direction[3];           /* towards the sun; 0 = a morning sun */
+    float time;                       /* seconds; the clouds drift with it */
 } terrain_view;
 
 /* Draws the meshes, then the sky behind them, inside one pass named "terrain". */

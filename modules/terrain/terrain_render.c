@@ -106,6 +106,8 @@ terrain_renderer *terrain_renderer_create(gfx_context *gfx, const terrain_render
     *r = (terrain_renderer){ .gfx = gfx, .terrain = terrain, .sky = sky, .desc = desc ? *desc : (terrain_renderer_desc){ 0 } };
     if (r->desc.snow_height == 0) r->desc.snow_height = 120.0f;
     if (r->desc.fog_density == 0) r->desc.fog_density = 0.0025f;
+    if (r->desc.cloud_cover == 0) r->desc.cloud_cover = 0.45f;
+    if (r->desc.cloud_cover < 0) r->desc.cloud_cover = 0;
     r->materials = terrain_material_textures();
     glCreateVertexArrays(1, &r->empty.id);
     return r;
@@ -208,6 +210,8 @@ void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const 
     }
     gfx_program_use(gfx, r->sky);
     gfx_uniform_mat4(gfx, r->sky, "u_inverse_view_projection", (const float *)inverse);
+    gfx_uniform_float(gfx, r->sky, "u_cloud_cover", r->desc.cloud_cover);
+    gfx_uniform_float(gfx, r->sky, "u_time", view->time);
     gfx_draw(&(gfx_draw_desc){ .vertex_array = r->empty, .count = 3 });
     gfx_pass_end(gfx);
 }

@@ -263,3 +263,47 @@ Test(render_terrain, rings_of_detail_leave_no_open_edge_inside_the_area) {
     job_system_destroy(jobs);
     gfx_destroy(gfx);
 }
+
+/* Looks 50° up into an empty sky at time `t`. */
+static render_image render_sky(gfx_context *gfx, terrain_renderer *renderer, float t) {
+    terrain_view view = { .pitch = 0.87f, .aspect = (float)W / H, .time = t };
+    gfx_frame_begin(gfx);
+    terrain_renderer_draw(renderer, &view, NULL, 0);
+    render_image image = { W, H, malloc(W * H * 4) };
+    gfx_read_pixels(gfx, image.rgba);
+    gfx_frame_end(gfx);
+    return image;
+}
+
+static int pixels_that_differ(const render_image *a, const render_image *b) {
+    int differ = 0;
+    for (int i = 0; i < W * H; i++)
+        for (int c = 0; c < 3; c++)
+            if (abs((int)a->rgba[i * 4 + c] - (int)b->rgba[i * 4 + c]) > 8) { differ++; break; }
+    return differ;
+}
+
+Test(render_terrain, clouds_drift_with_time_and_a_clear_sky_has_none) {
+    gfx_context *gfx = render_offscreen(W, H);
+    terrain_renderer *cloudy = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .cloud_cover = 0.6f });
+    terrain_renderer *clear = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .cloud_cover = -1 });
+    render_image a = render_sky(gfx, cloudy, 0), b = render_sky(gfx, cloudy, 120);
+    render_image c = render_sky(gfx, clear, 0), d = render_sky(gfx, clear, 120);
+    cr_assert_gt(pixels_that_differ(&a, &b), W * H / 20, "two minutes later the clouds have moved");
+    cr_assert_eq(pixels_that_differ(&c, &d), 0, "a clear sky does not change with time");
+    cr_assert_gt(pixels_that_differ(&a, &c), W * H / 20, "cover 0.6 shows clouds");
+    /* A clear sky is blue everywhere; clouds are near-white, so some cloudy pixels are grey. */
+    int grey = 0;
+    for (int i = 0; i < W * H; i++) {
+        const uint8_t *p = a.rgba + i * 4;
+        grey += abs(p[0] - p[2]) < 30 && p[0] > 150;
+    }
+    cr_assert_gt(grey, 0, "white clouds");
+    render_image_free(&a);
+    render_image_free(&b);
+    render_image_free(&c);
+    render_image_free(&d);
+    terrain_renderer_destroy(cloudy);
+    terrain_renderer_destroy(clear);
+    gfx_destroy(gfx);
+}

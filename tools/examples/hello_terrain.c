@@ -94,7 +94,7 @@ int main(int argc, char **argv) {
     terrain_view view = { .camera = { 16.0, ground + 40.0, 40.0 }, .pitch = -0.35f };
     bool windowed = gfx_backend_get(gfx) == GFX_BACKEND_WINDOW;
     int frames = o.frames ? o.frames : (windowed ? 0 : 30);
-    uint64_t last = core_time_ns();
+    uint64_t start = core_time_ns(), last = start;
     for (int frame = 0; frames == 0 || frame < frames; frame++) {
         trace_frame_begin();
         uint64_t now = core_time_ns();
@@ -109,6 +109,7 @@ int main(int argc, char **argv) {
         ecs_progress(ecs, dt);                     /* generate, mesh and upload */
         gfx_size(gfx, &width, &height);
         view.aspect = (float)width / (float)height;
+        view.time = windowed ? (float)((now - start) * 1e-9) : (float)frame / 60.0f;
         terrain_ecs_draw(te, renderer, &view);
         if (o.screenshot && frames && frame + 1 == frames && !gfx_screenshot(gfx, o.screenshot)) rc = 1;
         gfx_frame_end(gfx);
