@@ -354,6 +354,18 @@ typedef struct terrain_view {
     float time;                       /* seconds; the clouds drift with it */
 } terrain_view;
 
+/* The view's frustum as six planes in camera-relative space, for culling mesh bounds. */
+typedef struct terrain_frustum {
+    float planes[6][4];               /* a·x + b·y + c·z + d ≥ 0 inside */
+    double camera[3];
+} terrain_frustum;
+
+terrain_frustum terrain_frustum_from_view(const terrain_view *view);
+/* Whether any part of the box origin + [bounds_min, bounds_max] may be inside (conservative:
+ * boxes near a corner of the frustum may pass; a box that is seen never fails). */
+bool terrain_frustum_sees(const terrain_frustum *frustum, const double origin[3], const float bounds_min[3],
+                          const float bounds_max[3]);
+
 /* Draws the meshes, then the sky behind them, inside one pass named "terrain". */
 void terrain_renderer_draw(terrain_renderer *renderer, const terrain_view *view,
                            const terrain_gpu_mesh *meshes, int mesh_count);
@@ -363,6 +375,7 @@ void terrain_renderer_draw(terrain_renderer *renderer, const terrain_view *view,
 /* Column chunks and mesh chunks are entities. Systems (registered by terrain_ecs_create):
  *   generate  "terrain_generate"  TerrainChunk without stacks → stacks (parallel)
  *   mesh      "terrain_mesh"      TerrainMeshChunk waiting → field + marching cubes (parallel)
+ *   cull      "terrain_cull"      meshed TerrainMeshChunk → visible in the view? (parallel)
  *   draw      "terrain_upload"    meshed TerrainMeshChunk → GPU (main thread)
  * terrain_ecs_draw then draws every uploaded mesh chunk and trims the world's cache (call it
  * outside ecs_progress, on the main thread). */
@@ -386,6 +399,7 @@ typedef struct TerrainMeshChunk {
     int64_t x, y, z;                    /* in chunks of its level */
     terrain_lod_desc lod;               /* level and finer neighbours (terrain_mesh_chunk) */
     terrain_mesh_state state;
+    bool visible;                       /* in the view's frustum (cull phase) */
     terrain_mesh mesh;
     terrain_gpu_mesh gpu;
 } TerrainMeshChunk;
@@ -410,6 +424,9 @@ void terrain_ecs_spawn_area(terrain_ecs *te, int64_t cx, int64_t cz, int radius,
  * are closed (terrain_mesh_chunk). All levels cover [y_min, y_max] rounded out to the coarsest
  * chunk height. Column-chunk entities are spawned for the level-0 area. */
 void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double y_min, double y_max);
+/* The view the cull phase tests against (copied); NULL = no culling, every chunk is drawn. */
+void terrain_ecs_set_view(terrain_ecs *te, const terrain_view *view);
+/* Draws the uploaded chunks the cull phase found visible. */
 void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view);
 terrain_ecs_stats terrain_ecs_stats_get(terrain_ecs *te);
 

@@ -18,6 +18,8 @@ struct terrain_ecs {
      * generate or mesh schedules no jobs at all. */
     ecs_component chunk_ready, mesh_ready, mesh_uploaded;
     ecs_query *chunks, *mesh_chunks;
+    terrain_frustum frustum;             /* of the view set for the cull phase */
+    bool culling;
     terrain_gpu_mesh *draw_list;         /* gathered each draw */
     size_t draw_capacity;
 };
@@ -58,6 +60,21 @@ static void terrain_mesh_system(ecs_iter *it) {
     }
 }
 
+static void terrain_cull_system(ecs_iter *it) {
+    terrain_ecs *te = it->user;
+    while (ecs_query_next(it)) {
+        TerrainMeshChunk *chunks = ecs_field(it, 0);
+        for (int i = 0; i < it->count; i++) {
+            TerrainMeshChunk *c = &chunks[i];
+            bool uploaded = c->state == TERRAIN_MESH_UPLOADED;
+            const double *origin = uploaded ? c->gpu.origin : c->mesh.origin;
+            const float *lo = uploaded ? c->gpu.bounds_min : c->mesh.bounds_min;
+            const float *hi = uploaded ? c->gpu.bounds_max : c->mesh.bounds_max;
+            c->visible = !te->culling || terrain_frustum_sees(&te->frustum, origin, lo, hi);
+        }
+    }
+}
+
 static void terrain_upload_system(ecs_iter *it) {
     terrain_ecs *te = it->user;
     while (ecs_query_next(it)) {
@@ -91,6 +108,10 @@ terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
         .query = { .with = { te->mesh_chunk }, .without = { te->mesh_ready } }, .writes = { te->mesh_chunk },
         .fn = terrain_mesh_system,
         .user = te, .parallel = true, .batch_size = 1 });
+    /* Meshed chunks (uploaded or not) have bounds: the cull phase runs before the upload. */
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_cull", .phase = "cull",
+        .query = { .with = { te->mesh_chunk, te->mesh_ready } }, .writes = { te->mesh_chunk },
+        .fn = terrain_cull_system, .user = te, .parallel = true, .batch_size = 256 });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_upload", .phase = "draw",
         .query = { .with = { te->mesh_chunk, te->mesh_ready }, .without = { te->mesh_uploaded } },
         .writes = { te->mesh_chunk }, .fn = terrain_upload_system,
@@ -176,6 +197,11 @@ void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double
     }
 }
 
+void terrain_ecs_set_view(terrain_ecs *te, const terrain_view *view) {
+    te->culling = view != NULL;
+    if (view) te->frustum = terrain_frustum_from_view(view);
+}
+
 void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view) {
     size_t count = 0;
     uint64_t triangles = 0;
@@ -184,6 +210,7 @@ void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain
         TerrainMeshChunk *chunks = ecs_field(&it, 0);
         for (int i = 0; i < it.count; i++) {
             if (chunks[i].state != TERRAIN_MESH_UPLOADED || chunks[i].gpu.index_count == 0) continue;
+            if (!chunks[i].visible) continue;
             te->draw_list = core_grow(te->draw_list, &te->draw_capacity, count + 1, sizeof *te->draw_list);
             te->draw_list[count++] = chunks[i].gpu;
             triangles += chunks[i].gpu.index_count / 3;

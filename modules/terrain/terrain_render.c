@@ -165,6 +165,40 @@ static void terrain_view_projection(const terrain_view *view, mat4 out) {
     glm_mat4_mul(projection, look, out);
 }
 
+/* Gribb and Hartmann: the planes are sums and differences of the clip matrix's rows. */
+terrain_frustum terrain_frustum_from_view(const terrain_view *view) {
+    mat4 m;
+    terrain_view_projection(view, m);
+    terrain_frustum f = { .camera = { view->camera[0], view->camera[1], view->camera[2] } };
+    for (int p = 0; p < 6; p++) {
+        int row = p / 2;
+        float sign = (p % 2) ? -1.0f : 1.0f;
+        float length = 0;
+        for (int c = 0; c < 4; c++) f.planes[p][c] = m[c][3] + sign * m[c][row];   /* cglm: m[column][row] */
+        for (int c = 0; c < 3; c++) length += f.planes[p][c] * f.planes[p][c];
+        length = sqrtf(length);
+        for (int c = 0; c < 4; c++) f.planes[p][c] /= length;
+    }
+    return f;
+}
+
+bool terrain_frustum_sees(const terrain_frustum *f, const double origin[3], const float bounds_min[3],
+                          const float bounds_max[3]) {
+    float lo[3], hi[3];
+    for (int a = 0; a < 3; a++) {
+        float offset = (float)(origin[a] - f->camera[a]);
+        lo[a] = offset + bounds_min[a];
+        hi[a] = offset + bounds_max[a];
+    }
+    for (int p = 0; p < 6; p++) {
+        const float *plane = f->planes[p];
+        /* The box corner furthest along the plane's normal: if even it is outside, all are. */
+        float x = plane[0] >= 0 ? hi[0] : lo[0], y = plane[1] >= 0 ? hi[1] : lo[1], z = plane[2] >= 0 ? hi[2] : lo[2];
+        if (plane[0] * x + plane[1] * y + plane[2] * z + plane[3] < 0) return false;
+    }
+    return true;
+}
+
 static double terrain_wrap(double value, double period) { return value - floor(value / period) * period; }
 
 void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,

@@ -307,3 +307,63 @@ Test(render_terrain, clouds_drift_with_time_and_a_clear_sky_has_none) {
     terrain_renderer_destroy(clear);
     gfx_destroy(gfx);
 }
+
+Test(render_terrain, frustum_keeps_what_is_seen_and_drops_what_is_behind) {
+    terrain_view view = { .camera = { 1000, 50, -2000 }, .yaw = 0, .pitch = 0, .aspect = 1.5f };
+    terrain_frustum f = terrain_frustum_from_view(&view);
+    const float lo[3] = { 0, 0, 0 }, hi[3] = { 32, 32, 32 };
+    /* Yaw 0 looks along −z: a box 100 m ahead is seen, one 100 m behind or 3 km above is not. */
+    cr_assert(terrain_frustum_sees(&f, (double[3]){ 984, 34, -2132 }, lo, hi));
+    cr_assert_not(terrain_frustum_sees(&f, (double[3]){ 984, 34, -1900 }, lo, hi));
+    cr_assert_not(terrain_frustum_sees(&f, (double[3]){ 984, 3050, -2132 }, lo, hi));
+    /* Beyond the far plane (4 km), and a box the camera stands in. */
+    cr_assert_not(terrain_frustum_sees(&f, (double[3]){ 984, 34, -6500 }, lo, hi));
+    cr_assert(terrain_frustum_sees(&f, (double[3]){ 990, 40, -2010 }, lo, hi));
+    /* Half the horizontal field is atan(tan(30°)·1.5) = 40.9°: 45° to the right is outside, 36° inside. */
+    double s_out = sin(45 * M_PI / 180), c_out = cos(45 * M_PI / 180), s_in = sin(36 * M_PI / 180), c_in = cos(36 * M_PI / 180);
+    const float point_lo[3] = { -0.5f, -0.5f, -0.5f }, point_hi[3] = { 0.5f, 0.5f, 0.5f };
+    cr_assert_not(terrain_frustum_sees(&f, (double[3]){ 1000 + 500 * s_out, 50, -2000 - 500 * c_out }, point_lo, point_hi));
+    cr_assert(terrain_frustum_sees(&f, (double[3]){ 1000 + 500 * s_in, 50, -2000 - 500 * c_in }, point_lo, point_hi));
+}
+
+/* The same generated area drawn with and without culling: the same pixels, fewer chunks drawn. */
+Test(render_terrain, culling_changes_no_pixel) {
+    render_image images[2];
+    uint64_t drawn[2];
+    for (int pass = 0; pass < 2; pass++) {
+        gfx_context *gfx = render_offscreen(W, H);
+        job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
+        ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
+        terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(7) });
+        terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .cloud_cover = -1 });
+        terrain_ecs *te = terrain_ecs_create(ecs, world);
+        terrain_ecs_spawn_area(te, 0, 0, 2, -2, 5);
+        float ground = terrain_stacks_surface(terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 }), 16, 16);
+        terrain_view view = { .camera = { 16, ground + 30, 16 }, .pitch = -0.2f, .aspect = (float)W / H };
+        terrain_ecs_set_view(te, pass ? &view : NULL);
+        ecs_progress(ecs, 1.0f / 60.0f);
+        gfx_frame_begin(gfx);
+        terrain_ecs_draw(te, renderer, &view);
+        images[pass] = (render_image){ W, H, malloc(W * H * 4) };
+        gfx_read_pixels(gfx, images[pass].rgba);
+        gfx_frame_end(gfx);
+        ecs_query *q = ecs_query_create(ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(ecs, "TerrainMeshChunk") } });
+        drawn[pass] = 0;
+        ecs_iter it = ecs_query_iter(ecs, q);
+        while (ecs_query_next(&it)) {
+            TerrainMeshChunk *chunks = ecs_field(&it, 0);
+            for (int i = 0; i < it.count; i++) drawn[pass] += chunks[i].visible && chunks[i].gpu.index_count > 0;
+        }
+        terrain_ecs_destroy(te);
+        terrain_renderer_destroy(renderer);
+        ecs_world_destroy(ecs);
+        terrain_world_destroy(world);
+        job_system_destroy(jobs);
+        gfx_destroy(gfx);
+    }
+    cr_assert(memcmp(images[0].rgba, images[1].rgba, W * H * 4) == 0, "culling changed the image");
+    cr_assert_lt(drawn[1], drawn[0], "culled %llu of %llu chunks", (unsigned long long)(drawn[0] - drawn[1]),
+                 (unsigned long long)drawn[0]);
+    render_image_free(&images[0]);
+    render_image_free(&images[1]);
+}

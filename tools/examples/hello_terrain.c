@@ -105,11 +105,12 @@ int main(int argc, char **argv) {
         if ((actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_QUIT)) || gfx_window_should_close(gfx)) break;
         if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_SCREENSHOT)) gfx_screenshot(gfx, "terrain.png");
         steer(&view, actions, input_frame_dt(input));
-        gfx_frame_begin(gfx);
-        ecs_progress(ecs, dt);                     /* generate, mesh and upload */
         gfx_size(gfx, &width, &height);
         view.aspect = (float)width / (float)height;
         view.time = windowed ? (float)((now - start) * 1e-9) : (float)frame / 60.0f;
+        terrain_ecs_set_view(te, &view);          /* what the cull phase tests against */
+        gfx_frame_begin(gfx);
+        ecs_progress(ecs, dt);                     /* generate, mesh, cull and upload */
         terrain_ecs_draw(te, renderer, &view);
         if (o.screenshot && frames && frame + 1 == frames && !gfx_screenshot(gfx, o.screenshot)) rc = 1;
         gfx_frame_end(gfx);
