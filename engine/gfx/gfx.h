@@ -255,6 +255,21 @@ typedef struct gfx_draw_desc {
 
 void gfx_draw(const gfx_draw_desc *desc);
 
+/* ---- text --------------------------------------------------------------------------------- */
+
+/* HUD text over the frame: queue strings during the frame, draw them once at its end.
+ *     gfx_text *hud = gfx_text_create(gfx);
+ *     gfx_text_print(hud, 8, 8, 2, (float[4]){ 1, 1, 1, 1 }, "%.1f ms", frame_ms);
+ *     gfx_text_draw(hud);                          // one pass named "hud"
+ * Positions in pixels from the top-left corner; glyphs are about 7 × 10 units (stb_easy_font) times
+ * `scale`, with a shadow one unit down and right. */
+typedef struct gfx_text gfx_text;
+gfx_text *gfx_text_create(gfx_context *gfx);      /* NULL when its shaders fail */
+void gfx_text_print(gfx_text *text, float x, float y, float scale, const float color[4], const char *fmt, ...)
+    __attribute__((format(printf, 6, 7)));
+void gfx_text_draw(gfx_text *text);
+void gfx_text_destroy(gfx_text *text);
+
 /* ---- a reference scene -------------------------------------------------------------------- */
 
 /* A lit sphere standing on a ground grid under a sky gradient: the scene the render tests, the

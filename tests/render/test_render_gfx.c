@@ -334,3 +334,39 @@ Test(render_gfx, a_window_that_cannot_open_falls_back_in_one_line) {
     free(log);
     gfx_destroy(gfx);
 }
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wshadow"
+#include <stb/stb_easy_font.h>
+#pragma GCC diagnostic pop
+
+Test(render_gfx, hud_text_lands_where_it_was_printed) {
+    gfx_context *gfx = render_offscreen(128, 64);
+    gfx_text *hud = gfx_text_create(gfx);
+    cr_assert(hud);
+    gfx_frame_begin(gfx);
+    gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "clear", .clear_color = true, .color = { 0, 0, 0, 1 } });
+    gfx_pass_end(gfx);
+    gfx_text_print(hud, 10, 20, 2, (const float[4]){ 1, 1, 1, 1 }, "HUD %d", 42);
+    gfx_text_draw(hud);
+    uint8_t *pixels = malloc(128 * 64 * 4);
+    gfx_read_pixels(gfx, pixels);
+    gfx_frame_end(gfx);
+    /* The text's box from stb_easy_font's own metrics, times the scale, plus the shadow's unit. */
+    char text[] = "HUD 42";
+    int right = 10 + stb_easy_font_width(text) * 2 + 2, bottom = 20 + stb_easy_font_height(text) * 2 + 2;
+    int white = 0, outside = 0;
+    for (int y = 0; y < 64; y++)
+        for (int x = 0; x < 128; x++) {
+            const uint8_t *p = pixels + (y * 128 + x) * 4;
+            if (p[0] < 128) continue;
+            white++;
+            outside += x < 10 || x >= right || y < 20 || y >= bottom;
+        }
+    cr_assert_gt(white, 60, "the text is drawn");
+    cr_assert_eq(outside, 0, "%d text pixels outside its box (10, 20)–(%d, %d)", outside, right, bottom);
+    free(pixels);
+    gfx_text_destroy(hud);
+    gfx_destroy(gfx);
+}

@@ -66,6 +66,19 @@ static void steer(terrain_view *view, const input_actions *a, float dt) {
     if (a->down & INPUT_ACTION_BIT(INPUT_ACTION_CROUCH)) view->camera[1] -= step;
 }
 
+/* Frame rate, chunk counts, position and seed in the top-left corner. */
+static void draw_hud(gfx_text *hud, terrain_ecs *te, const terrain_view *view, double frame_seconds, int seed) {
+    terrain_ecs_stats s = terrain_ecs_stats_get(te);
+    const float white[4] = { 1, 1, 1, 1 };
+    gfx_text_print(hud, 8, 8, 2, white, "%.0f fps  %.1f ms", frame_seconds > 0 ? 1.0 / frame_seconds : 0.0,
+                   frame_seconds * 1e3);
+    gfx_text_print(hud, 8, 30, 2, white, "chunks %d of %d meshed, %d waiting, %.2f M triangles",
+                   s.mesh_chunks_uploaded, s.mesh_chunks, s.mesh_chunks_waiting, (double)s.triangles * 1e-6);
+    gfx_text_print(hud, 8, 52, 2, white, "x %.1f  y %.1f  z %.1f  seed %d", view->camera[0], view->camera[1],
+                   view->camera[2], seed);
+    gfx_text_draw(hud);
+}
+
 int main(int argc, char **argv) {
     options o = { 0 };
     int width, height;
@@ -86,7 +99,8 @@ int main(int argc, char **argv) {
     double low = params.base_height - params.relief_height - 48, high = params.base_height + params.relief_height + 48;
     terrain_ecs_spawn_rings(te, 2 * o.radius, o.rings + 1, low, high);
     input_system *input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(gfx) });
-    if (!input) return 1;
+    gfx_text *hud = gfx_text_create(gfx);
+    if (!input || !hud) return 1;
 
     /* Start above the middle of chunk (0, 0), looking down the −z axis and a little down. */
     const terrain_stacks *origin = terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 });
@@ -98,7 +112,8 @@ int main(int argc, char **argv) {
     for (int frame = 0; frames == 0 || frame < frames; frame++) {
         trace_frame_begin();
         uint64_t now = core_time_ns();
-        float dt = windowed ? (float)((now - last) * 1e-9) : 1.0f / 60.0f;
+        double frame_seconds = (double)(now - last) * 1e-9;   /* measured, for the HUD */
+        float dt = windowed ? (float)frame_seconds : 1.0f / 60.0f;
         last = now;
         if (!input_update(input, dt)) break;
         const input_actions *actions = input_actions_get(input);
@@ -112,6 +127,7 @@ int main(int argc, char **argv) {
         gfx_frame_begin(gfx);
         ecs_progress(ecs, dt);                     /* generate, mesh, cull and upload */
         terrain_ecs_draw(te, renderer, &view);
+        draw_hud(hud, te, &view, frame_seconds, o.seed);
         if (o.screenshot && frames && frame + 1 == frames && !gfx_screenshot(gfx, o.screenshot)) rc = 1;
         gfx_frame_end(gfx);
         trace_frame_end();
@@ -121,6 +137,7 @@ int main(int argc, char **argv) {
            stats.mesh_chunks, stats.mesh_chunks_uploaded, (unsigned long long)stats.triangles,
            (unsigned long long)gfx_frame_index(gfx));
     input_destroy(input);
+    gfx_text_destroy(hud);
     terrain_ecs_destroy(te);
     terrain_renderer_destroy(renderer);
     ecs_world_destroy(ecs);
