@@ -36,7 +36,7 @@ if premake5 then workspace "engine" else solution "engine" end
   location(_OPTIONS["to"] or "build")
   objdir "build/obj"
   language "C"
-  includedirs { "engine", "modules", glad_dir .. "/include" }
+  includedirs { "engine", "modules", ".", glad_dir .. "/include" }   -- "." for game/*.h
   defines { "_GNU_SOURCE" }
   buildoptions { "-std=c11", "-Wall", "-Wextra", "-Wshadow", "-Wno-missing-field-initializers",
                  "-pthread", "-g" }
@@ -63,6 +63,11 @@ project "engine"
   kind "StaticLib"
   files { "engine/**.c", "engine/**.h" }
 
+-- The game: the walkable world built on the modules (game/**.c).
+project "game"
+  kind "StaticLib"
+  files { "game/**.c", "game/**.h" }
+
 -- Modules: one library each, built on the engine (modules/NAME/**.c).
 project "terrain"
   kind "StaticLib"
@@ -84,7 +89,7 @@ local function program(name, extra)
     files(extra.files)
     if extra.excludes then excludes(extra.excludes) end
     if extra.defines then defines(extra.defines) end
-    links { "terrain", "engine", "glad" }
+    links { "game", "terrain", "engine", "glad" }
     if extra.links then links(extra.links) end
     links(platform_libs)
     links { "m" }
@@ -115,3 +120,4 @@ program("terrain_mesh", { files = { "tools/src/terrain_mesh.c" } })
 program("test_render", { files = { "tests/render/**.c", "tests/render/**.h" }, links = { "criterion" } })
 program("hello_scene", { files = { "tools/examples/hello_scene.c" } })
 program("hello_terrain", { files = { "tools/examples/hello_terrain.c" } })
+program("test_game", { files = { "tests/game/**.c", "tests/game/**.h" }, links = { "criterion" } })

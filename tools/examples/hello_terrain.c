@@ -1,6 +1,8 @@
 /* hello_terrain — the terrain module on the engine: column chunks and mesh chunks as entities,
- * generated and meshed in parallel by the generate and mesh phases, drawn with triplanar
- * materials. Fly with the same controls as hello_scene.
+ * generated and meshed in parallel by the generate and mesh phases, culled, drawn with triplanar
+ * materials, and walked by the game's player controller (game/player.h): WASD or the left stick
+ * to walk, the mouse (click to capture) or the right stick to look, Space to jump, Shift to
+ * sprint, Ctrl or C to crouch, F to fly, F12 for a screenshot.
  *
  *   hello_terrain [--seed S] [--radius R] [--rings N] [--size WxH] [--headless] [--frames N]
  *                 [--screenshot FILE] [--threads N] [--trace FILE]
@@ -9,6 +11,7 @@
  * at half the resolution of the one inside, out to 2R·32·2^N metres, with closed seams.
  */
 #include "core/core.h"
+#include "game/player.h"
 #include "ecs/ecs.h"
 #include "gfx/gfx.h"
 #include "input/input.h"
@@ -54,18 +57,6 @@ static int parse(int argc, char **argv, options *o, int *width, int *height) {
     return -1;
 }
 
-/* Walk the view by the actions: heading from yaw, Space/Ctrl up and down, Shift faster. */
-static void steer(terrain_view *view, const input_actions *a, float dt) {
-    view->yaw += a->look_x;
-    view->pitch = fmaxf(-1.5f, fminf(1.5f, view->pitch + a->look_y));
-    double speed = (a->down & INPUT_ACTION_BIT(INPUT_ACTION_SPRINT)) ? 60.0 : 15.0;
-    double step = speed * dt, s = sin(view->yaw), c = cos(view->yaw);
-    view->camera[0] += (s * a->move_y + c * a->move_x) * step;
-    view->camera[2] += (-c * a->move_y + s * a->move_x) * step;
-    if (a->down & INPUT_ACTION_BIT(INPUT_ACTION_JUMP)) view->camera[1] += step;
-    if (a->down & INPUT_ACTION_BIT(INPUT_ACTION_CROUCH)) view->camera[1] -= step;
-}
-
 /* Frame rate, chunk counts, position and seed in the top-left corner. */
 static void draw_hud(gfx_text *hud, terrain_ecs *te, const terrain_view *view, double frame_seconds, int seed) {
     terrain_ecs_stats s = terrain_ecs_stats_get(te);
@@ -102,10 +93,13 @@ int main(int argc, char **argv) {
     gfx_text *hud = gfx_text_create(gfx);
     if (!input || !hud) return 1;
 
-    /* Start above the middle of chunk (0, 0), looking down the −z axis and a little down. */
-    const terrain_stacks *origin = terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 });
-    float ground = terrain_stacks_surface(origin, TERRAIN_CHUNK_COLUMNS / 2, TERRAIN_CHUNK_COLUMNS / 2);
-    terrain_view view = { .camera = { 16.0, ground + 40.0, 40.0 }, .pitch = -0.35f };
+    /* The player stands on solid ground near the middle of chunk (0, 0). */
+    game_player player;
+    game_player_init(&player, &(game_player_params){ 0 });
+    game_player_spawn(&player, world, 16.0, 16.0);
+    player.yaw = 3.14159265f;                  /* towards +z: the slopes in view face the sun */
+    player.pitch = -0.1f;
+    terrain_view view = { 0 };
     bool windowed = gfx_backend_get(gfx) == GFX_BACKEND_WINDOW;
     int frames = o.frames ? o.frames : (windowed ? 0 : 30);
     uint64_t start = core_time_ns(), last = start;
@@ -119,7 +113,10 @@ int main(int argc, char **argv) {
         const input_actions *actions = input_actions_get(input);
         if ((actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_QUIT)) || gfx_window_should_close(gfx)) break;
         if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_SCREENSHOT)) gfx_screenshot(gfx, "terrain.png");
-        steer(&view, actions, input_frame_dt(input));
+        game_player_update(&player, world, actions, input_frame_dt(input));
+        game_player_eye(&player, view.camera);
+        view.yaw = player.yaw;
+        view.pitch = player.pitch;
         gfx_size(gfx, &width, &height);
         view.aspect = (float)width / (float)height;
         view.time = windowed ? (float)((now - start) * 1e-9) : (float)frame / 60.0f;

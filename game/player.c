@@ -1,0 +1,444 @@
+/* The player controller (player.h): a capsule of sphere probes against the trilinear
+ * interpolation of the terrain field sampled around it. game/README.md explains the model. */
+#include "player.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#define PROBE_COUNT 5            /* spheres along the capsule's axis, bottom to top */
+#define RESOLVE_ITERATIONS 4
+#define SKIN 1e-4f               /* penetration below this is contact, not overlap (no jitter) */
+#define SNAP_EPSILON 1e-3f       /* a gap to walkable ground below this needs no snapping */
+#define GROUND_EPSILON 0.02f     /* airborne with walkable ground this close below = landed */
+#define MAX_SUBSTEPS 512
+#define SPAWN_FRAMES 1200
+#define SPAWN_SEARCH_RADIUS 64   /* columns */
+
+/* ---- the field around the player ------------------------------------------------------------ */
+
+/* Samples of f on integer grid points; `lo` is the local coordinate of sample (0, 0, 0). */
+typedef struct local_field {
+    terrain_field field;
+    float lo[3];
+} local_field;
+
+/* f and its gradient at local point p by trilinear interpolation of the cell around p (outside
+ * the grid the border cells are extended, which the margins keep from mattering). */
+static float field_eval(const local_field *lf, const float p[3], float grad[3]) {
+    const int n[3] = { lf->field.nx, lf->field.ny, lf->field.nz };
+    int cell[3];
+    float t[3];
+    for (int a = 0; a < 3; a++) {
+        float g = p[a] - lf->lo[a];
+        float c = floorf(g);
+        if (c < 0.0f) c = 0.0f;
+        if (c > (float)(n[a] - 2)) c = (float)(n[a] - 2);
+        cell[a] = (int)c;
+        t[a] = fminf(fmaxf(g - c, 0.0f), 1.0f);
+    }
+    const float *v = lf->field.values;
+    size_t row = (size_t)n[0], slab = (size_t)n[0] * (size_t)n[1];
+    size_t base = (size_t)cell[2] * slab + (size_t)cell[1] * row + (size_t)cell[0];
+    float c000 = v[base], c100 = v[base + 1];
+    float c010 = v[base + row], c110 = v[base + row + 1];
+    float c001 = v[base + slab], c101 = v[base + slab + 1];
+    float c011 = v[base + slab + row], c111 = v[base + slab + row + 1];
+    float tx = t[0], ty = t[1], tz = t[2];
+    /* along x first */
+    float c00 = c000 + (c100 - c000) * tx, c10 = c010 + (c110 - c010) * tx;
+    float c01 = c001 + (c101 - c001) * tx, c11 = c011 + (c111 - c011) * tx;
+    float c0 = c00 + (c10 - c00) * ty, c1 = c01 + (c11 - c01) * ty;
+    float dx00 = c100 - c000, dx10 = c110 - c010, dx01 = c101 - c001, dx11 = c111 - c011;
+    float dx0 = dx00 + (dx10 - dx00) * ty, dx1 = dx01 + (dx11 - dx01) * ty;
+    grad[0] = dx0 + (dx1 - dx0) * tz;
+    float dy0 = c10 - c00, dy1 = c11 - c01;
+    grad[1] = dy0 + (dy1 - dy0) * tz;
+    grad[2] = c1 - c0;
+    return c0 + (c1 - c0) * tz;
+}
+
+typedef struct contact {
+    float distance;              /* estimated distance from the point to the surface; < 0 inside */
+    float normal[3];             /* unit, pointing into the air */
+} contact;
+
+/* −f/|∇f|: exact where f is a clamped distance (flat ground, planar walls within 1 m of them).
+ * |∇f| is bounded below so that f's saturated plateaus (f = ±1 more than σ from any surface)
+ * read as far away rather than as a division by zero. */
+static contact probe(const local_field *lf, const float c[3]) {
+    float g[3];
+    float f = field_eval(lf, c, g);
+    float len = sqrtf(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    contact out;
+    if (len < 1e-6f) {
+        out.distance = f < 0.0f ? 2.0f : -2.0f;
+        out.normal[0] = 0.0f, out.normal[1] = 1.0f, out.normal[2] = 0.0f;
+        return out;
+    }
+    out.distance = -f / fmaxf(len, 0.5f);
+    for (int a = 0; a < 3; a++) out.normal[a] = -g[a] / len;
+    return out;
+}
+
+/* ---- the capsule ---------------------------------------------------------------------------- */
+
+typedef struct mover {
+    const game_player_params *params;
+    const local_field *lf;
+    float height;                /* of the capsule now */
+    float cos_max_slope;
+} mover;
+
+static float probe_y(const mover *m, float height, int i) {
+    float r = m->params->radius;
+    return r + (height - 2.0f * r) * (float)i / (float)(PROBE_COUNT - 1);
+}
+
+/* Whether a capsule of `height` with its feet at p overlaps nothing. */
+static bool capsule_clear(const mover *m, const float p[3], float height) {
+    for (int i = 0; i < PROBE_COUNT; i++) {
+        float c[3] = { p[0], p[1] + probe_y(m, height, i), p[2] };
+        if (probe(m->lf, c).distance < m->params->radius - SKIN) return false;
+    }
+    return true;
+}
+
+typedef struct resolve_result {
+    bool ground, wall, ceiling;
+} resolve_result;
+
+/* Pushes every overlapping probe out (each push at most r/2, so no probe is carried through a
+ * thin layer) and removes the velocity that goes into the surfaces. Walking: walkable contacts
+ * lift the player vertically (no sliding down slopes), steeper upward-facing ones push it
+ * horizontally only (running into a steep slope never lifts it). Flying: along the normal. */
+static resolve_result resolve(const mover *m, float p[3], float v[3], bool walking) {
+    resolve_result result = { 0 };
+    float r = m->params->radius, max_push = 0.5f * r;
+    for (int iteration = 0; iteration < RESOLVE_ITERATIONS; iteration++) {
+        bool pushed = false;
+        for (int i = 0; i < PROBE_COUNT; i++) {
+            float c[3] = { p[0], p[1] + probe_y(m, m->height, i), p[2] };
+            contact ct = probe(m->lf, c);
+            float depth = r - ct.distance;
+            if (depth <= SKIN) continue;
+            pushed = true;
+            const float *n = ct.normal;
+            if (walking && n[1] >= m->cos_max_slope) {
+                p[1] += fminf(depth / n[1], max_push);
+                if (v[1] < 0.0f) v[1] = 0.0f;
+                result.ground = true;
+            } else if (walking && n[1] >= 0.0f) {
+                float h = sqrtf(n[0] * n[0] + n[2] * n[2]);
+                float hx = n[0] / h, hz = n[2] / h;
+                float push = fminf(depth / h, max_push);
+                p[0] += hx * push, p[2] += hz * push;
+                float into = v[0] * hx + v[2] * hz;
+                if (into < 0.0f) v[0] -= into * hx, v[2] -= into * hz;
+                result.wall = true;
+            } else {
+                float push = fminf(depth, max_push);
+                for (int a = 0; a < 3; a++) p[a] += n[a] * push;
+                float into = v[0] * n[0] + v[1] * n[1] + v[2] * n[2];
+                if (into < 0.0f)
+                    for (int a = 0; a < 3; a++) v[a] -= into * n[a];
+                if (n[1] < 0.0f) result.ceiling = true;
+                else if (n[1] >= m->cos_max_slope) result.ground = true;
+                else result.wall = true;
+            }
+        }
+        if (!pushed) break;
+    }
+    return result;
+}
+
+/* Vertical gap from the bottom probe down to walkable ground, or +inf when what is below (within
+ * the field's reach) is not walkable. */
+static float ground_gap(const mover *m, const float p[3]) {
+    float c[3] = { p[0], p[1] + m->params->radius, p[2] };
+    contact ct = probe(m->lf, c);
+    if (ct.normal[1] < m->cos_max_slope) return INFINITY;
+    return (ct.distance - m->params->radius) / ct.normal[1];
+}
+
+/* Moves p down onto walkable ground at most max_drop below, in steps of at most r/2; false (p
+ * unchanged) when there is none. */
+static bool snap_down(const mover *m, float p[3], float max_drop) {
+    float q[3] = { p[0], p[1], p[2] }, dropped = 0.0f;
+    for (int i = 0; i < 64; i++) {
+        float gap = ground_gap(m, q);
+        if (gap <= SNAP_EPSILON) {
+            p[1] = q[1];
+            return true;
+        }
+        if (dropped + gap > max_drop) return false;
+        float step = fminf(gap, 0.5f * m->params->radius);
+        q[1] -= step, dropped += step;
+    }
+    return false;
+}
+
+/* Raises p by `amount` in steps of at most r/2 if the capsule stays clear all the way. */
+static bool lift_clear(const mover *m, float p[3], float amount) {
+    float q[3] = { p[0], p[1], p[2] }, lifted = 0.0f, step = 0.5f * m->params->radius;
+    while (lifted < amount) {
+        float s = fminf(step, amount - lifted);
+        q[1] += s, lifted += s;
+        if (!capsule_clear(m, q, m->height)) return false;
+    }
+    p[1] = q[1];
+    return true;
+}
+
+/* One walking substep of `h` seconds (the move is at most r/2 long). */
+static void walk_substep(const mover *m, float p[3], float v[3], bool *on_ground, float h) {
+    const game_player_params *pr = m->params;
+    if (*on_ground && v[1] <= 0.0f) {
+        v[1] = 0.0f;
+        float start[3] = { p[0], p[1], p[2] };
+        float moved[3] = { p[0] + v[0] * h, p[1], p[2] + v[2] * h };
+        float vm[3] = { v[0], v[1], v[2] };
+        resolve_result hit = resolve(m, moved, vm, true);
+        if (hit.wall && pr->step_height > 0.0f) {
+            /* step up: lift, move, come down on walkable ground; keep it if it got further */
+            float q[3] = { start[0], start[1], start[2] }, vq[3] = { v[0], v[1], v[2] };
+            if (lift_clear(m, q, pr->step_height)) {
+                q[0] += v[0] * h, q[2] += v[2] * h;
+                resolve(m, q, vq, true);
+                if (snap_down(m, q, pr->step_height + 0.05f) && capsule_clear(m, q, m->height)) {
+                    float speed2 = v[0] * v[0] + v[2] * v[2];
+                    float along_q = ((q[0] - start[0]) * v[0] + (q[2] - start[2]) * v[2]);
+                    float along_m = ((moved[0] - start[0]) * v[0] + (moved[2] - start[2]) * v[2]);
+                    if (speed2 > 0.0f && along_q > along_m + 1e-4f * sqrtf(speed2)) {
+                        memcpy(moved, q, sizeof q);
+                        vm[0] = v[0], vm[2] = v[2];
+                    }
+                }
+            }
+        }
+        memcpy(p, moved, sizeof moved);
+        memcpy(v, vm, sizeof vm);
+        *on_ground = snap_down(m, p, pr->step_height);
+        if (*on_ground) {
+            v[1] = 0.0f;
+            resolve(m, p, v, true);
+        }
+        return;
+    }
+    v[1] = fmaxf(v[1] - pr->gravity * h, -pr->terminal_speed);
+    for (int a = 0; a < 3; a++) p[a] += v[a] * h;
+    resolve_result hit = resolve(m, p, v, true);
+    *on_ground = v[1] <= 0.0f && (hit.ground || ground_gap(m, p) <= GROUND_EPSILON);
+    if (*on_ground) v[1] = 0.0f;
+}
+
+/* ---- the frame ------------------------------------------------------------------------------ */
+
+static float or_default(float value, float fallback) { return value > 0.0f ? value : fallback; }
+
+void game_player_init(game_player *player, const game_player_params *params) {
+    memset(player, 0, sizeof *player);
+    game_player_params p = params ? *params : (game_player_params){ 0 };
+    p.radius = or_default(p.radius, 0.35f);
+    p.height = or_default(p.height, 1.8f);
+    p.crouch_height = or_default(p.crouch_height, 1.2f);
+    p.eye_height = or_default(p.eye_height, 1.62f);
+    p.crouch_eye_height = or_default(p.crouch_eye_height, 1.05f);
+    p.walk_speed = or_default(p.walk_speed, 4.5f);
+    p.sprint_speed = or_default(p.sprint_speed, 8.0f);
+    p.crouch_speed = or_default(p.crouch_speed, 2.0f);
+    p.gravity = or_default(p.gravity, 20.0f);
+    p.jump_speed = or_default(p.jump_speed, sqrtf(2.0f * p.gravity * 1.1f));
+    p.terminal_speed = or_default(p.terminal_speed, 50.0f);
+    p.step_height = or_default(p.step_height, 0.5f);
+    p.max_slope_deg = or_default(p.max_slope_deg, 50.0f);
+    p.fly_speed = or_default(p.fly_speed, 12.0f);
+    p.fly_sprint_speed = or_default(p.fly_sprint_speed, 48.0f);
+    p.pitch_limit = or_default(p.pitch_limit, 1.55f);
+    p.max_dt = or_default(p.max_dt, 0.1f);
+    if (p.crouch_height > p.height) p.crouch_height = p.height;
+    if (p.crouch_height < 2.0f * p.radius) p.crouch_height = 2.0f * p.radius;
+    player->params = p;
+}
+
+float game_player_height(const game_player *player) {
+    return player->crouching ? player->params.crouch_height : player->params.height;
+}
+
+void game_player_eye(const game_player *player, double eye[3]) {
+    const game_player_params *p = &player->params;
+    eye[0] = player->position[0];
+    eye[1] = player->position[1] + (double)(player->crouching ? p->crouch_eye_height : p->eye_height);
+    eye[2] = player->position[2];
+}
+
+static bool down(const input_actions *a, input_action action) { return (a->down & INPUT_ACTION_BIT(action)) != 0; }
+static bool pressed(const input_actions *a, input_action action) {
+    return (a->pressed & INPUT_ACTION_BIT(action)) != 0;
+}
+
+/* The velocity the input asks for this frame. */
+static void wish_velocity(const game_player *pl, const input_actions *a, float out[3]) {
+    const game_player_params *p = &pl->params;
+    float mx = a->move_x, my = a->move_y, len = sqrtf(mx * mx + my * my);
+    if (len > 1.0f) mx /= len, my /= len;
+    float sy = sinf(pl->yaw), cy = cosf(pl->yaw);
+    if (pl->flying) {
+        float sp = sinf(pl->pitch), cp = cosf(pl->pitch);
+        float speed = down(a, INPUT_ACTION_SPRINT) ? p->fly_sprint_speed : p->fly_speed;
+        float up = (down(a, INPUT_ACTION_JUMP) ? 1.0f : 0.0f) - (down(a, INPUT_ACTION_CROUCH) ? 1.0f : 0.0f);
+        out[0] = (sy * cp * my + cy * mx) * speed;
+        out[1] = (sp * my + up) * speed;
+        out[2] = (-cy * cp * my + sy * mx) * speed;
+        return;
+    }
+    float speed = pl->crouching ? p->crouch_speed : down(a, INPUT_ACTION_SPRINT) ? p->sprint_speed : p->walk_speed;
+    out[0] = (sy * my + cy * mx) * speed;
+    out[1] = 0.0f;
+    out[2] = (-cy * my + sy * mx) * speed;
+}
+
+static void update(game_player *pl, terrain_world *world, const input_actions *a, float dt, bool ask_region) {
+    const game_player_params *p = &pl->params;
+    if (!(dt > 0.0f)) dt = 0.0f;
+    if (dt > p->max_dt) dt = p->max_dt;
+
+    pl->yaw = remainderf(pl->yaw + a->look_x, 6.28318530718f);
+    pl->pitch = fminf(fmaxf(pl->pitch + a->look_y, -p->pitch_limit), p->pitch_limit);
+    if (pressed(a, INPUT_ACTION_TOGGLE_FLY)) {
+        pl->flying = !pl->flying;
+        pl->velocity[0] = pl->velocity[1] = pl->velocity[2] = 0.0f;
+        pl->on_ground = false;
+    }
+    if (dt == 0.0f) return;
+
+    float wish[3];
+    bool want_crouch = !pl->flying && down(a, INPUT_ACTION_CROUCH);
+    if (want_crouch) pl->crouching = true;   /* shrinking always fits */
+    wish_velocity(pl, a, wish);
+    float v[3] = { wish[0], pl->flying ? wish[1] : pl->velocity[1], wish[2] };
+    if (!pl->flying && pl->on_ground && pressed(a, INPUT_ACTION_JUMP)) {
+        v[1] = p->jump_speed;
+        pl->on_ground = false;
+    }
+
+    /* the box this frame can reach: the capsule, the move, a step, pushes, and the cell around */
+    float speed_bound = sqrtf(v[0] * v[0] + v[2] * v[2]) + fabsf(v[1]) + (pl->flying ? 0.0f : p->gravity * dt);
+    float reach = speed_bound * dt + p->step_height + p->radius + 1.0f;
+    int64_t origin[3];
+    float feet[3];
+    for (int i = 0; i < 3; i++) {
+        origin[i] = (int64_t)floor(pl->position[i]);
+        feet[i] = (float)(pl->position[i] - (double)origin[i]);
+    }
+    int lo[3], size[3];
+    float box_lo[3] = { feet[0] - reach, feet[1] - reach, feet[2] - reach };
+    float box_hi[3] = { feet[0] + reach, feet[1] + p->height + reach, feet[2] + reach };
+    double region_min[3], region_max[3];
+    for (int i = 0; i < 3; i++) {
+        lo[i] = (int)floorf(box_lo[i]);
+        size[i] = (int)ceilf(box_hi[i]) - lo[i] + 1;
+        region_min[i] = (double)(origin[i] + lo[i]);
+        region_max[i] = (double)(origin[i] + lo[i] + size[i] - 1);
+    }
+    if (ask_region && p->region_ready && !p->region_ready(p->region_user, region_min, region_max)) {
+        pl->waiting = true;            /* hold still: no walking into it, no falling */
+        pl->velocity[0] = pl->velocity[1] = pl->velocity[2] = 0.0f;
+        return;
+    }
+    pl->waiting = false;
+
+    local_field lf = { .lo = { (float)lo[0], (float)lo[1], (float)lo[2] } };
+    if (!terrain_field_sample(world, &(terrain_field_desc){
+            .first = { origin[0] + lo[0], origin[1] + lo[1], origin[2] + lo[2] },
+            .size = { size[0], size[1], size[2] } }, &lf.field))
+        return;                        /* only for absurd positions (beyond ±2^52 m) */
+
+    mover m = { .params = p, .lf = &lf, .height = game_player_height(pl),
+                .cos_max_slope = cosf(p->max_slope_deg * 0.0174532925f) };
+    if (pl->crouching && !want_crouch && capsule_clear(&m, feet, p->height)) {
+        pl->crouching = false;
+        m.height = p->height;
+        wish_velocity(pl, a, wish);    /* back to walking speed */
+        v[0] = wish[0], v[2] = wish[2];
+    }
+
+    int substeps = (int)ceilf(speed_bound * dt / (0.5f * p->radius));
+    if (substeps < 1) substeps = 1;
+    if (substeps > MAX_SUBSTEPS) substeps = MAX_SUBSTEPS;
+    float h = dt / (float)substeps;
+    bool on_ground = pl->on_ground;
+    for (int s = 0; s < substeps; s++) {
+        if (pl->flying) {
+            for (int i = 0; i < 3; i++) feet[i] += v[i] * h;
+            resolve(&m, feet, v, false);
+        } else {
+            walk_substep(&m, feet, v, &on_ground, h);
+        }
+    }
+    terrain_field_free(&lf.field);
+
+    pl->on_ground = !pl->flying && on_ground;
+    memcpy(pl->velocity, v, sizeof v);
+    for (int i = 0; i < 3; i++) pl->position[i] = (double)origin[i] + (double)feet[i];
+}
+
+void game_player_update(game_player *player, terrain_world *world, const input_actions *actions, float dt) {
+    update(player, world, actions, dt, true);
+}
+
+/* ---- spawn ---------------------------------------------------------------------------------- */
+
+static int64_t floor_div(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+static void column_heights(terrain_world *world, int64_t gx, int64_t gz, float *top, float *surface) {
+    terrain_chunk_coord coord = { floor_div(gx, TERRAIN_CHUNK_COLUMNS), floor_div(gz, TERRAIN_CHUNK_COLUMNS) };
+    const terrain_stacks *stacks = terrain_world_stacks(world, coord);
+    int i = (int)(gx - coord.x * TERRAIN_CHUNK_COLUMNS), k = (int)(gz - coord.z * TERRAIN_CHUNK_COLUMNS);
+    *top = terrain_stacks_top(stacks, i, k);
+    if (surface) *surface = terrain_stacks_surface(stacks, i, k);
+}
+
+static bool column_dry(terrain_world *world, int64_t gx, int64_t gz) {
+    float top, surface;
+    column_heights(world, gx, gz, &top, &surface);
+    return surface <= top;
+}
+
+void game_player_spawn(game_player *player, terrain_world *world, double x, double z) {
+    int64_t gx = (int64_t)floor(x), gz = (int64_t)floor(z);
+    double cx = x, cz = z;
+    if (!column_dry(world, gx, gz)) {
+        /* square rings outwards, in a fixed order; the first dry column wins */
+        bool found = false;
+        for (int64_t ring = 1; ring <= SPAWN_SEARCH_RADIUS && !found; ring++)
+            for (int64_t dz = -ring; dz <= ring && !found; dz++)
+                for (int64_t dx = -ring; dx <= ring && !found; dx++) {
+                    if (dx != -ring && dx != ring && dz != -ring && dz != ring) continue;
+                    if (column_dry(world, gx + dx, gz + dz)) {
+                        found = true;
+                        gx += dx, gz += dz;
+                        cx = (double)gx + 0.5, cz = (double)gz + 0.5;
+                    }
+                }
+    }
+    /* above every solid top within the field's reach of the capsule's axis: f < 0 there */
+    float highest = TERRAIN_FLOOR_Y;
+    for (int64_t dz = -2; dz <= 2; dz++)
+        for (int64_t dx = -2; dx <= 2; dx++) {
+            float top;
+            column_heights(world, gx + dx, gz + dz, &top, NULL);
+            highest = fmaxf(highest, top);
+        }
+    game_player_params params = player->params;
+    memset(player, 0, sizeof *player);
+    player->params = params;
+    player->position[0] = cx;
+    player->position[1] = (double)highest + 1.0;
+    player->position[2] = cz;
+    /* fall onto it with the controller itself (the same collision as walking) */
+    input_actions idle = { 0 };
+    for (int frame = 0; frame < SPAWN_FRAMES && !player->on_ground; frame++)
+        update(player, world, &idle, 1.0f / 60.0f, false);
+    player->velocity[0] = player->velocity[1] = player->velocity[2] = 0.0f;
+}
