@@ -2,6 +2,8 @@
  * interpolation of the terrain field sampled around it. game/README.md explains the model. */
 #include "player.h"
 
+#include "trace/trace.h"
+
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
@@ -384,6 +386,7 @@ static void update(game_player *pl, terrain_world *world, const input_actions *a
 }
 
 void game_player_update(game_player *player, terrain_world *world, const input_actions *actions, float dt) {
+    TRACE_ZONE("game_player_update");
     update(player, world, actions, dt, true);
 }
 
