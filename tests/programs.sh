@@ -180,6 +180,15 @@ expect "hello_terrain: headless run" 0 "16 chunks, [0-9]+ mesh chunks \([0-9]+ d
   "$bin/hello_terrain" --headless --size 96x64 --radius 1 --rings 1 --frames 2 --seed 3 --screenshot "$tmp/terrain.png"
 expect "hello_terrain: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 -N4 "$tmp/terrain.png"
 expect "hello_terrain: bad --radius" 2 "bad value for '--radius'" -- "$bin/hello_terrain" --radius 99
+expect "hello_terrain: bad --walk" 2 "bad value for '--walk': 'sideways:5'" -- "$bin/hello_terrain" --walk sideways:5
+expect "hello_terrain: negative --walk" 2 "bad value for '--walk'" -- "$bin/hello_terrain" --walk straight:-5
+# A scripted walk over generated terrain: it gets there, the eye never enters the ground, and the
+# trace has every phase of the pipeline.
+expect "hello_terrain: scripted walk, eye always in the air" 0 "walked (1[0-9][0-9]|[2-9][0-9][0-9])\.[0-9] m in [0-9]+ frames, eye in solid on 0 frames" -- \
+  "$bin/hello_terrain" --headless --size 64x48 --radius 1 --rings 0 --walk straight:100 --seed 5 --trace "$tmp/walk.json"
+for phase in input game stream generate stabilize mesh lod cull draw; do
+  expect "hello_terrain: the walk's trace has phase $phase" 0 "(^| )$phase( |$)" -- "$bin/trace_report" "$tmp/walk.json"
+done
 
 echo "programs: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]

@@ -5,7 +5,11 @@
  * sprint, Ctrl or C to crouch, F to fly, F12 for a screenshot.
  *
  *   hello_terrain [--seed S] [--radius R] [--rings N] [--size WxH] [--headless] [--frames N]
- *                 [--screenshot FILE] [--threads N] [--trace FILE]
+ *                 [--walk straight:METRES] [--screenshot FILE] [--threads N] [--trace FILE]
+ *
+ * --walk straight:M walks the player M metres ahead, sprinting and jumping when it stalls, then
+ * stops, and reports how far it went and on how many frames its eye was inside the ground
+ * (which must be none).
  *
  * Full detail covers 2R × 2R chunks of 32 m around the start; each of N rings beyond it is meshed
  * at half the resolution of the one inside, out to 2R·32·2^N metres, with closed seams.
@@ -21,11 +25,14 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 
 typedef struct options {
     core_common_args common;
-    const char *size, *screenshot;
+    const char *size, *screenshot, *walk;
     int seed, radius, rings, frames;
+    double walk_metres;
     bool headless;
 } options;
 
@@ -39,6 +46,7 @@ static int parse(int argc, char **argv, options *o, int *width, int *height) {
         { "headless", CORE_OPTION_FLAG, &o->headless, NULL, "render offscreen with OSMesa" },
         { "frames", CORE_OPTION_INT, &o->frames, "N", "stop after N frames (0 = when closed)", 0, 100000000 },
         { "screenshot", CORE_OPTION_STRING, &o->screenshot, "FILE", "write the last frame as a PNG" },
+        { "walk", CORE_OPTION_STRING, &o->walk, "SCRIPT", "scripted walk: straight:METRES" },
     };
     core_cli cli = { .program = "hello_terrain", .summary = "generate, mesh and fly over terrain",
                      .options = list, .option_count = CORE_COUNTOF(list) };
@@ -54,7 +62,36 @@ static int parse(int argc, char **argv, options *o, int *width, int *height) {
         core_cli_print_usage(&cli, stderr);
         return 2;
     }
+    char *end = NULL;
+    if (o->walk && (strncmp(o->walk, "straight:", 9) != 0 || (o->walk_metres = strtod(o->walk + 9, &end)) <= 0 ||
+                    *end || o->walk_metres > 100000)) {
+        fprintf(stderr, "hello_terrain: bad value for '--walk': '%s' is not straight:METRES (0 < METRES <= 100000)\n",
+                o->walk);
+        core_cli_print_usage(&cli, stderr);
+        return 2;
+    }
     return -1;
+}
+
+/* The scripted walk: ahead at a sprint, with a jump (and a small turn) whenever the last half
+ * second covered less than half the distance a sprint would (a ledge or a slope too steep). The
+ * distance counts from the start in a straight line. */
+typedef struct walker {
+    double start[2], recent[30][2];
+    int frames;
+} walker;
+
+static input_actions walker_actions(walker *w, const game_player *player) {
+    int slot = w->frames % 30;
+    double moved = hypot(player->position[0] - w->recent[slot][0], player->position[2] - w->recent[slot][1]);
+    bool stalled = w->frames >= 30 && moved < 0.5 * 8.0 * 0.5;
+    w->recent[slot][0] = player->position[0];
+    w->recent[slot][1] = player->position[2];
+    w->frames++;
+    uint32_t down = INPUT_ACTION_BIT(INPUT_ACTION_SPRINT) | (stalled ? INPUT_ACTION_BIT(INPUT_ACTION_JUMP) : 0);
+    /* Stalled: jump, and turn a little, so a wall too high to jump is walked around. */
+    return (input_actions){ .move_y = 1, .look_x = stalled ? 0.05f : 0.0f, .down = down,
+                            .pressed = stalled ? INPUT_ACTION_BIT(INPUT_ACTION_JUMP) : 0 };
 }
 
 /* Frame rate, chunk counts, position and seed in the top-left corner. */
@@ -101,7 +138,10 @@ int main(int argc, char **argv) {
     player.pitch = -0.1f;
     terrain_view view = { 0 };
     bool windowed = gfx_backend_get(gfx) == GFX_BACKEND_WINDOW;
-    int frames = o.frames ? o.frames : (windowed ? 0 : 30);
+    int frames = o.frames ? o.frames : (windowed || o.walk ? 0 : 30);
+    walker walk = { .start = { player.position[0], player.position[2] } };
+    int eye_in_solid = 0;
+    double walked = 0;
     uint64_t start = core_time_ns(), last = start;
     for (int frame = 0; frames == 0 || frame < frames; frame++) {
         trace_frame_begin();
@@ -113,8 +153,17 @@ int main(int argc, char **argv) {
         const input_actions *actions = input_actions_get(input);
         if ((actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_QUIT)) || gfx_window_should_close(gfx)) break;
         if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_SCREENSHOT)) gfx_screenshot(gfx, "terrain.png");
+        input_actions scripted;
+        if (o.walk) {
+            scripted = walker_actions(&walk, &player);
+            actions = &scripted;
+        }
         game_player_update(&player, world, actions, input_frame_dt(input));
         game_player_eye(&player, view.camera);
+        eye_in_solid += terrain_field_at(world, view.camera[0], view.camera[1], view.camera[2], 0) >= 0;
+        walked = hypot(player.position[0] - walk.start[0], player.position[2] - walk.start[1]);
+        /* A walk ends at its distance, or after twice the time a sprint would take (stuck). */
+        bool walk_over = o.walk && (walked >= o.walk_metres || frame > (int)(o.walk_metres / 8.0 * 120.0) + 60);
         view.yaw = player.yaw;
         view.pitch = player.pitch;
         gfx_size(gfx, &width, &height);
@@ -125,10 +174,14 @@ int main(int argc, char **argv) {
         ecs_progress(ecs, dt);                     /* generate, mesh, cull and upload */
         terrain_ecs_draw(te, renderer, &view);
         draw_hud(hud, te, &view, frame_seconds, o.seed);
-        if (o.screenshot && frames && frame + 1 == frames && !gfx_screenshot(gfx, o.screenshot)) rc = 1;
+        bool last_frame = (frames && frame + 1 == frames) || walk_over;
+        if (o.screenshot && last_frame && !gfx_screenshot(gfx, o.screenshot)) rc = 1;
         gfx_frame_end(gfx);
         trace_frame_end();
+        if (walk_over) break;
     }
+    if (o.walk) printf("hello_terrain: walked %.1f m in %d frames, eye in solid on %d frames\n", walked, walk.frames,
+                       eye_in_solid);
     terrain_ecs_stats stats = terrain_ecs_stats_get(te);
     printf("hello_terrain: %d chunks, %d mesh chunks (%d drawn), %llu triangles, %llu frames\n", stats.chunks,
            stats.mesh_chunks, stats.mesh_chunks_uploaded, (unsigned long long)stats.triangles,
