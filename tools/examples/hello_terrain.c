@@ -5,7 +5,8 @@
  * sprint, Ctrl or C to crouch, F to fly, F12 for a screenshot.
  *
  *   hello_terrain [--seed S] [--radius R] [--rings N] [--size WxH] [--headless] [--frames N]
- *                 [--walk straight:METRES] [--screenshot FILE] [--threads N] [--trace FILE]
+ *                 [--walk straight:METRES] [--record FILE] [--replay FILE] [--bindings FILE]
+ *                 [--screenshot FILE] [--threads N] [--trace FILE]
  *
  * --walk straight:M walks the player M metres ahead, sprinting and jumping when it stalls, then
  * stops, and reports how far it went and on how many frames its eye was inside the ground
@@ -30,7 +31,7 @@
 
 typedef struct options {
     core_common_args common;
-    const char *size, *screenshot, *walk;
+    const char *size, *screenshot, *walk, *record, *replay, *bindings;
     int seed, radius, rings, frames;
     double walk_metres;
     bool headless;
@@ -47,6 +48,9 @@ static int parse(int argc, char **argv, options *o, int *width, int *height) {
         { "frames", CORE_OPTION_INT, &o->frames, "N", "stop after N frames (0 = when closed)", 0, 100000000 },
         { "screenshot", CORE_OPTION_STRING, &o->screenshot, "FILE", "write the last frame as a PNG" },
         { "walk", CORE_OPTION_STRING, &o->walk, "SCRIPT", "scripted walk: straight:METRES" },
+        { "record", CORE_OPTION_STRING, &o->record, "FILE", "record every frame's input" },
+        { "replay", CORE_OPTION_STRING, &o->replay, "FILE", "play recorded input back" },
+        { "bindings", CORE_OPTION_STRING, &o->bindings, "FILE", "input bindings (data/input/bindings.txt)" },
     };
     core_cli cli = { .program = "hello_terrain", .summary = "generate, mesh and fly over terrain",
                      .options = list, .option_count = CORE_COUNTOF(list) };
@@ -113,7 +117,7 @@ int main(int argc, char **argv) {
     int rc = parse(argc, argv, &o, &width, &height);
     if (rc >= 0) return rc;
     if (o.common.trace_path && !trace_start(o.common.trace_path)) return 2;
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "hello_terrain",
+    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "hello_terrain (loading)",
                                                .headless = o.headless });
     if (!gfx) return 1;
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = o.common.threads });
@@ -126,7 +130,10 @@ int main(int argc, char **argv) {
     /* Mesh layers that cover the relief, with a margin for overhangs. */
     double low = params.base_height - params.relief_height - 48, high = params.base_height + params.relief_height + 48;
     terrain_ecs_spawn_rings(te, 2 * o.radius, o.rings + 1, low, high);
-    input_system *input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(gfx) });
+    input_bindings *bindings = NULL;
+    if (o.bindings && !(bindings = input_bindings_load(o.bindings, NULL))) return 1;
+    input_system *input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(gfx), .bindings = bindings,
+                                                      .record_path = o.record, .replay_path = o.replay });
     gfx_text *hud = gfx_text_create(gfx);
     if (!input || !hud) return 1;
 
@@ -138,7 +145,7 @@ int main(int argc, char **argv) {
     player.pitch = -0.1f;
     terrain_view view = { 0 };
     bool windowed = gfx_backend_get(gfx) == GFX_BACKEND_WINDOW;
-    int frames = o.frames ? o.frames : (windowed || o.walk ? 0 : 30);
+    int frames = o.frames ? o.frames : (windowed || o.walk || o.replay ? 0 : 30);
     walker walk = { .start = { player.position[0], player.position[2] } };
     int eye_in_solid = 0;
     double walked = 0;
@@ -178,6 +185,7 @@ int main(int argc, char **argv) {
         if (o.screenshot && last_frame && !gfx_screenshot(gfx, o.screenshot)) rc = 1;
         gfx_frame_end(gfx);
         trace_frame_end();
+        if (frame == 0) gfx_window_set_title(gfx, "hello_terrain");   /* the first frame is meshed */
         if (walk_over) break;
     }
     if (o.walk) printf("hello_terrain: walked %.1f m in %d frames, eye in solid on %d frames\n", walked, walk.frames,
@@ -186,7 +194,9 @@ int main(int argc, char **argv) {
     printf("hello_terrain: %d chunks, %d mesh chunks (%d drawn), %llu triangles, %llu frames\n", stats.chunks,
            stats.mesh_chunks, stats.mesh_chunks_uploaded, (unsigned long long)stats.triangles,
            (unsigned long long)gfx_frame_index(gfx));
+    printf("hello_terrain: player at (%.4f, %.4f, %.4f)\n", player.position[0], player.position[1], player.position[2]);
     input_destroy(input);
+    input_bindings_destroy(bindings);
     gfx_text_destroy(hud);
     terrain_ecs_destroy(te);
     terrain_renderer_destroy(renderer);
