@@ -227,6 +227,29 @@ static int field_strided_columns(int n, int step, int reach, int64_t first, int6
     return count;
 }
 
+/* The z pass of the strided path for sample row k: its window's x-filtered rows, found at
+ * (map place) mod `slots` in rows_inner/rows_edge. */
+static void field_strided_z(terrain_field *out, const int *map_z, int k, int window, int slots, size_t row_samples,
+                            const int64_t *rows_inner, const int64_t *rows_edge, float sigma, double e, double e2) {
+    const double c = TERRAIN_COLUMN_SIZE;
+    const double scale = c * c / TERRAIN_FIELD_FIXED, to_f = 1.0 / (4.0 * (double)sigma * sigma * sigma);
+    const int *m = map_z + k * window;
+    float *values = out->values + (size_t)k * row_samples;
+    for (size_t n = 0; n < row_samples; n++) {
+        int64_t s1 = 0, se = 0, see = 0;
+        for (int d = 1; d < window - 1; d++) {
+            s1 += rows_inner[(size_t)(m[d] % slots) * row_samples + n];
+            se += rows_edge[(size_t)(m[d] % slots) * row_samples + n];
+        }
+        const size_t first = (size_t)(m[0] % slots) * row_samples + n;
+        const size_t last = (size_t)(m[window - 1] % slots) * row_samples + n;
+        se += rows_inner[first] + rows_inner[last];
+        see = rows_edge[first] + rows_edge[last];
+        double volume = scale * ((double)s1 + e * (double)se + e2 * (double)see);
+        values[n] = (float)(volume * to_f - 1.0);
+    }
+}
+
 /* step > 1: the samples are sparse, so the sliding windows would slide over columns no sample
  * reads. Instead L is computed for exactly the columns some kernel reaches (at the strided
  * heights), then the same interior/edge sums per sample, x then z. They are the same 64-bit
@@ -246,8 +269,14 @@ static void field_sample_strided(terrain_world *world, const terrain_field_desc 
     const size_t row_samples = (size_t)ny * nx;
     int64_t *lengths = core_alloc((size_t)ny * ncx * sizeof *lengths);
     /* Per column row (z), the x-filtered sums: [row][j][i]. */
-    int64_t *rows_inner = core_alloc((size_t)ncz * row_samples * sizeof *rows_inner);
-    int64_t *rows_edge = core_alloc((size_t)ncz * row_samples * sizeof *rows_edge);
+    /* Disjoint windows (step ≥ window, as for every coarse level with the default σ) use each
+     * column row for one sample k only, rows k·window … k·window + window − 1, so k is finished
+     * as soon as its last row is in and `window` rows of storage do; at level 2 the full set of
+     * rows would be 1.4 MB, fresh pages faulted in on every request. */
+    const bool disjoint = step >= window;
+    const int slots = disjoint ? window : ncz;
+    int64_t *rows_inner = core_alloc((size_t)slots * row_samples * sizeof *rows_inner);
+    int64_t *rows_edge = core_alloc((size_t)slots * row_samples * sizeof *rows_edge);
     field_column_source src = { .world = world, .layer_capacity = 64 };
     src.layers = core_alloc(src.layer_capacity * sizeof *src.layers);
     field_runs column = { 0 };
@@ -257,7 +286,8 @@ static void field_sample_strided(terrain_world *world, const terrain_field_desc 
             field_runs_of_column(&column, &src, cols_x[col], cols_z[row], limit);
             field_column_lengths(&column, desc->first[1], ny, step, (double)sigma, lengths + col, (size_t)ncx);
         }
-        int64_t *inner = rows_inner + (size_t)row * row_samples, *edge = rows_edge + (size_t)row * row_samples;
+        int64_t *inner = rows_inner + (size_t)(row % slots) * row_samples;
+        int64_t *edge = rows_edge + (size_t)(row % slots) * row_samples;
         for (int j = 0; j < ny; j++) {
             const int64_t *l = lengths + (size_t)j * ncx;
             for (int i = 0; i < nx; i++) {
@@ -268,29 +298,16 @@ static void field_sample_strided(terrain_world *world, const terrain_field_desc 
                 edge[(size_t)j * nx + i] = l[m[0]] + l[m[window - 1]];
             }
         }
+        if (disjoint && row % window == window - 1)
+            field_strided_z(out, map_z, row / window, window, slots, row_samples, rows_inner, rows_edge, sigma, e, e2);
     }
-    const double scale = c * c / TERRAIN_FIELD_FIXED, to_f = 1.0 / (4.0 * (double)sigma * sigma * sigma);
-    for (int k = 0; k < nz; k++) {
-        const int *m = map_z + k * window;
-        float *values = out->values + (size_t)k * row_samples;
-        for (size_t n = 0; n < row_samples; n++) {
-            int64_t s1 = 0, se = 0, see = 0;
-            for (int d = 1; d < window - 1; d++) {
-                s1 += rows_inner[(size_t)m[d] * row_samples + n];
-                se += rows_edge[(size_t)m[d] * row_samples + n];
-            }
-            const size_t first = (size_t)m[0] * row_samples + n, last = (size_t)m[window - 1] * row_samples + n;
-            se += rows_inner[first] + rows_inner[last];
-            see = rows_edge[first] + rows_edge[last];
-            double volume = scale * ((double)s1 + e * (double)se + e2 * (double)see);
-            values[n] = (float)(volume * to_f - 1.0);
-        }
-    }
+    for (int k = 0; !disjoint && k < nz; k++)
+        field_strided_z(out, map_z, k, window, slots, row_samples, rows_inner, rows_edge, sigma, e, e2);
     field_column_source_end(&src);
     if (column.runs) core_free(column.runs, column.capacity * sizeof *column.runs);
     core_free(lengths, (size_t)ny * ncx * sizeof *lengths);
-    core_free(rows_inner, (size_t)ncz * row_samples * sizeof *rows_inner);
-    core_free(rows_edge, (size_t)ncz * row_samples * sizeof *rows_edge);
+    core_free(rows_inner, (size_t)slots * row_samples * sizeof *rows_inner);
+    core_free(rows_edge, (size_t)slots * row_samples * sizeof *rows_edge);
     core_free(cols_x, (size_t)nx * window * sizeof *cols_x);
     core_free(cols_z, (size_t)nz * window * sizeof *cols_z);
     core_free(map_x, (size_t)nx * window * sizeof *map_x);
