@@ -81,6 +81,11 @@ void terrain_stacks_builder_end_column(terrain_stacks_builder *builder);
 /* After exactly TERRAIN_CHUNK_COLUMNS² columns; resets the builder for another chunk. */
 terrain_stacks *terrain_stacks_builder_finish(terrain_stacks_builder *builder);
 void terrain_stacks_builder_destroy(terrain_stacks_builder *builder);
+/* A chunk built by asking `column` for the layers of each of its columns (global column indices
+ * x, z), bottom-up through terrain_stacks_builder_push: worlds made by hand for tests and tools,
+ * or a game's own generator behind terrain_world_desc.generate. */
+typedef void (*terrain_column_fn)(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder);
+terrain_stacks *terrain_stacks_from_columns(terrain_chunk_coord coord, terrain_column_fn column, void *user);
 void terrain_stacks_destroy(terrain_stacks *stacks);
 
 /* Layers of column (i, k), 0 ≤ i, k < N, bottom-up from TERRAIN_FLOOR_Y; returns how many there

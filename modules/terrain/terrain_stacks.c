@@ -266,3 +266,15 @@ uint64_t terrain_stacks_hash(const terrain_stacks *stacks) {
     }
     return h;
 }
+
+terrain_stacks *terrain_stacks_from_columns(terrain_chunk_coord coord, terrain_column_fn column, void *user) {
+    terrain_stacks_builder *builder = terrain_stacks_builder_create();
+    for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
+        for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
+            column(user, coord.x * TERRAIN_CHUNK_COLUMNS + i, coord.z * TERRAIN_CHUNK_COLUMNS + k, builder);
+            terrain_stacks_builder_end_column(builder);
+        }
+    terrain_stacks *stacks = terrain_stacks_builder_finish(builder);
+    terrain_stacks_builder_destroy(builder);
+    return stacks;
+}

@@ -47,17 +47,15 @@ static void hand_column(const hand_world *w, int64_t gx, terrain_stacks_builder 
     }
 }
 
-static terrain_stacks *hand_generate(void *user, terrain_chunk_coord coord) {
+/* Global column x of the shifted world is column x − shift of the hand-made one. */
+static void hand_shifted_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
     const hand_world *hand = user;
-    terrain_stacks_builder *b = terrain_stacks_builder_create();
-    for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
-        for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
-            hand_column(hand, (coord.x - hand->shift_chunks) * TERRAIN_CHUNK_COLUMNS + i, b);
-            terrain_stacks_builder_end_column(b);
-        }
-    terrain_stacks *stacks = terrain_stacks_builder_finish(b);
-    terrain_stacks_builder_destroy(b);
-    return stacks;
+    (void)z;
+    hand_column(hand, x - hand->shift_chunks * TERRAIN_CHUNK_COLUMNS, b);
+}
+
+static terrain_stacks *hand_generate(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, hand_shifted_column, user);
 }
 
 static terrain_world *hand_world_create(hand_world *hand) {

@@ -19,17 +19,13 @@ typedef struct hand_world {
     double box_min[3], box_max[3];     /* a floating box of bedrock (columns within its x/z range) */
 } hand_world;
 
-static terrain_stacks *hand_generate(void *user, terrain_chunk_coord coord) {
+static void hand_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
     const hand_world *hand = user;
-    terrain_stacks_builder *b = terrain_stacks_builder_create();
-    for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
-        for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
-            hand->column(hand, coord.x * TERRAIN_CHUNK_COLUMNS + i, coord.z * TERRAIN_CHUNK_COLUMNS + k, b);
-            terrain_stacks_builder_end_column(b);
-        }
-    terrain_stacks *stacks = terrain_stacks_builder_finish(b);
-    terrain_stacks_builder_destroy(b);
-    return stacks;
+    hand->column(hand, x, z, b);
+}
+
+static terrain_stacks *hand_generate(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, hand_column, user);
 }
 
 static terrain_world *hand_world_create(hand_world *hand) {
