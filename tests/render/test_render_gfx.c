@@ -28,11 +28,18 @@ static const char *fragment_with_include =
 
 static const char *colour_red = "// colour.glsl\n#define COLOUR vec3(1.0, 0.0, 0.0)\n";
 
-Test(render_gfx, include_pastes_the_file) {
+/* An offscreen context whose shader folder holds quad.vert (vertex_ok), quad.frag and
+ * colour.glsl with the given texts; the folder's path goes to *folder when asked for. */
+static gfx_context *quad_context(const char *fragment, const char *include, const char **folder) {
     const char *names[] = { "quad.vert", "quad.frag", "colour.glsl" };
-    const char *texts[] = { vertex_ok, fragment_with_include, colour_red };
-    const char *folder = render_shader_folder(names, texts, 3);
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = 32, .height = 32, .headless = true, .shader_dir = folder });
+    const char *texts[] = { vertex_ok, fragment, include };
+    const char *made = render_shader_folder(names, texts, 3);
+    if (folder) *folder = made;
+    return gfx_create(&(gfx_desc){ .width = 32, .height = 32, .headless = true, .shader_dir = made });
+}
+
+Test(render_gfx, include_pastes_the_file) {
+    gfx_context *gfx = quad_context(fragment_with_include, colour_red, NULL);
     gfx_program program = gfx_program_load(gfx, "quad.vert", "quad.frag");
     cr_assert(program.id, "the program builds");
     cr_assert_neq(gfx_program_gl(gfx, program), 0);
@@ -41,10 +48,7 @@ Test(render_gfx, include_pastes_the_file) {
 
 /* Runs gfx_program_load on a folder whose files hold an error, and returns the log. */
 static char *load_errors(const char *fragment, const char *include, bool *built) {
-    const char *names[] = { "quad.vert", "quad.frag", "colour.glsl" };
-    const char *texts[] = { vertex_ok, fragment, include };
-    const char *folder = render_shader_folder(names, texts, 3);
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = 32, .height = 32, .headless = true, .shader_dir = folder });
+    gfx_context *gfx = quad_context(fragment, include, NULL);
     render_capture_begin();
     gfx_program program = gfx_program_load(gfx, "quad.vert", "quad.frag");
     char *log = render_capture_end();
@@ -96,11 +100,7 @@ Test(render_gfx, missing_include_is_reported) {
 }
 
 Test(render_gfx, include_cycle_is_harmless) {
-    const char *names[] = { "quad.vert", "quad.frag", "colour.glsl" };
-    const char *texts[] = { vertex_ok, fragment_with_include,
-                            "#include \"colour.glsl\"\n#define COLOUR vec3(1.0)\n" };
-    const char *folder = render_shader_folder(names, texts, 3);
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = 32, .height = 32, .headless = true, .shader_dir = folder });
+    gfx_context *gfx = quad_context(fragment_with_include, "#include \"colour.glsl\"\n#define COLOUR vec3(1.0)\n", NULL);
     cr_assert(gfx_program_load(gfx, "quad.vert", "quad.frag").id);
     gfx_destroy(gfx);
 }
@@ -196,10 +196,8 @@ static void touch_later(const char *folder, const char *name, const char *text) 
 }
 
 Test(render_gfx, changed_include_rebuilds_the_program_and_a_broken_edit_keeps_the_old_one) {
-    const char *names[] = { "quad.vert", "quad.frag", "colour.glsl" };
-    const char *texts[] = { vertex_ok, fragment_with_include, colour_red };
-    const char *folder = render_shader_folder(names, texts, 3);
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = 32, .height = 32, .headless = true, .shader_dir = folder });
+    const char *folder;
+    gfx_context *gfx = quad_context(fragment_with_include, colour_red, &folder);
     gfx_program program = gfx_program_load(gfx, "quad.vert", "quad.frag");
     GLuint first = gfx_program_gl(gfx, program);
     cr_assert_eq(gfx_programs_reload_changed(gfx), 0, "nothing changed yet");

@@ -98,33 +98,60 @@ Test(render_terrain, a_view_100_km_away_renders_exactly_as_at_the_origin) {
 #include "ecs/ecs.h"
 #include "jobs/jobs.h"
 
+/* Everything a generated area needs, made and unmade in one place. */
+typedef struct area {
+    gfx_context *gfx;
+    job_system *jobs;
+    ecs_world *ecs;
+    terrain_world *world;
+    terrain_renderer *renderer;
+    terrain_ecs *te;
+} area;
+
+static area area_open(int threads, uint64_t seed, int width, int height, terrain_renderer_desc renderer_desc) {
+    area a = { .gfx = render_offscreen(width, height) };
+    a.jobs = job_system_create(&(job_system_desc){ .threads = threads });
+    a.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = a.jobs });
+    a.world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(seed) });
+    a.renderer = terrain_renderer_create(a.gfx, &renderer_desc);
+    a.te = terrain_ecs_create(a.ecs, a.world);
+    return a;
+}
+
+static void area_close(area *a) {
+    terrain_ecs_destroy(a->te);
+    terrain_renderer_destroy(a->renderer);
+    ecs_world_destroy(a->ecs);
+    terrain_world_destroy(a->world);
+    job_system_destroy(a->jobs);
+    gfx_destroy(a->gfx);
+}
+
+/* Draws the area's uploaded chunks from `view` and reads the frame back. */
+static render_image area_draw(area *a, const terrain_view *view) {
+    gfx_frame_begin(a->gfx);
+    terrain_ecs_draw(a->te, a->renderer, view);
+    render_image image = { W, H, malloc(W * H * 4) };
+    gfx_read_pixels(a->gfx, image.rgba);
+    gfx_frame_end(a->gfx);
+    return image;
+}
+
+/* Height of the ground in the middle of chunk (0, 0). */
+static float area_ground(area *a) {
+    return terrain_stacks_surface(terrain_world_stacks(a->world, (terrain_chunk_coord){ 0, 0 }), 16, 16);
+}
+
 /* Generates, meshes and draws a 3 × 3-chunk area through the ECS on `threads` threads. */
 static terrain_ecs_stats render_generated(int threads, render_image *image) {
-    gfx_context *gfx = render_offscreen(W, H);
-    job_system *jobs = job_system_create(&(job_system_desc){ .threads = threads });
-    ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
-    terrain_generation_params params = terrain_generation_defaults(7);
-    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = params });
-    terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = params.sea_level });
-    terrain_ecs *te = terrain_ecs_create(ecs, world);
-    terrain_ecs_spawn_area(te, 0, 0, 1, -4, 8);
-    ecs_progress(ecs, 1.0f / 60.0f);
-    const terrain_stacks *middle = terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 });
-    float ground = terrain_stacks_surface(middle, 16, 16);
+    area a = area_open(threads, 7, W, H, (terrain_renderer_desc){ .sea_level = terrain_generation_defaults(7).sea_level });
+    terrain_ecs_spawn_area(a.te, 0, 0, 1, -4, 8);
+    ecs_progress(a.ecs, 1.0f / 60.0f);
     /* From 60 m above the middle of chunk (0, 0), looking north and down a little. */
-    terrain_view view = { .camera = { 16, ground + 60, 40 }, .pitch = -0.3f, .aspect = (float)W / H };
-    gfx_frame_begin(gfx);
-    terrain_ecs_draw(te, renderer, &view);
-    *image = (render_image){ W, H, malloc(W * H * 4) };
-    gfx_read_pixels(gfx, image->rgba);
-    gfx_frame_end(gfx);
-    terrain_ecs_stats stats = terrain_ecs_stats_get(te);
-    terrain_ecs_destroy(te);
-    terrain_renderer_destroy(renderer);
-    ecs_world_destroy(ecs);
-    terrain_world_destroy(world);
-    job_system_destroy(jobs);
-    gfx_destroy(gfx);
+    terrain_view view = { .camera = { 16, area_ground(&a) + 60, 40 }, .pitch = -0.3f, .aspect = (float)W / H };
+    *image = area_draw(&a, &view);
+    terrain_ecs_stats stats = terrain_ecs_stats_get(a.te);
+    area_close(&a);
     return stats;
 }
 
@@ -193,21 +220,17 @@ static void gather_gpu_meshes(const terrain_gpu_mesh *meshes, int count, ring_me
 }
 
 Test(render_terrain, rings_of_detail_leave_no_open_edge_inside_the_area) {
-    gfx_context *gfx = render_offscreen(32, 32);
-    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
-    ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
-    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(5) });
-    terrain_ecs *te = terrain_ecs_create(ecs, world);
+    area a = area_open(2, 5, 32, 32, (terrain_renderer_desc){ 0 });
     const int half_width = 2, levels = 2;
     const double y_min = -64, y_max = 192;       /* multiples of the coarsest chunk height (64 m) */
-    terrain_ecs_spawn_rings(te, half_width, levels, y_min, y_max);
-    ecs_progress(ecs, 1.0f / 60.0f);             /* generate, mesh and upload */
+    terrain_ecs_spawn_rings(a.te, half_width, levels, y_min, y_max);
+    ecs_progress(a.ecs, 1.0f / 60.0f);           /* generate, mesh and upload */
 
     /* The GPU meshes, via the query the draw uses: gather them through a renderer-free path. */
     terrain_gpu_mesh meshes[1024];
     int count = 0;
-    ecs_query *q = ecs_query_create(ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(ecs, "TerrainMeshChunk") } });
-    ecs_iter it = ecs_query_iter(ecs, q);
+    ecs_query *q = ecs_query_create(a.ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(a.ecs, "TerrainMeshChunk") } });
+    ecs_iter it = ecs_query_iter(a.ecs, q);
     while (ecs_query_next(&it)) {
         TerrainMeshChunk *chunks = ecs_field(&it, 0);
         for (int i = 0; i < it.count; i++) {
@@ -234,8 +257,8 @@ Test(render_terrain, rings_of_detail_leave_no_open_edge_inside_the_area) {
     size_t edge_count = 0;
     for (size_t t = 0; t + 2 < all.index_count; t += 3)
         for (int k = 0; k < 3; k++) {
-            uint64_t a = weld[all.triangles[t + k]], b = weld[all.triangles[t + (k + 1) % 3]];
-            if (a != b) edges[edge_count++] = a << 32 | b;
+            uint64_t from = weld[all.triangles[t + k]], to = weld[all.triangles[t + (k + 1) % 3]];
+            if (from != to) edges[edge_count++] = from << 32 | to;
         }
     qsort(edges, edge_count, sizeof *edges, u64_compare);
     const double outer = half_width * TERRAIN_MESH_CELLS * (double)(1 << (levels - 1));
@@ -245,9 +268,9 @@ Test(render_terrain, rings_of_detail_leave_no_open_edge_inside_the_area) {
         if (bsearch(&reverse, edges, edge_count, sizeof *edges, u64_compare)) continue;
         const double *p = unique[edges[e] >> 32].p, *q2 = unique[edges[e] & 0xffffffffu].p;
         bool on_box = false;
-        for (int a = 0; a < 3; a++) {
-            double lo = a == 1 ? y_min : -outer, hi = a == 1 ? y_max : outer;
-            on_box |= (p[a] == lo && q2[a] == lo) || (p[a] == hi && q2[a] == hi);
+        for (int axis = 0; axis < 3; axis++) {
+            double lo = axis == 1 ? y_min : -outer, hi = axis == 1 ? y_max : outer;
+            on_box |= (p[axis] == lo && q2[axis] == lo) || (p[axis] == hi && q2[axis] == hi);
         }
         open_inside += !on_box;
     }
@@ -257,11 +280,7 @@ Test(render_terrain, rings_of_detail_leave_no_open_edge_inside_the_area) {
     free(unique);
     free(all.points);
     free(all.triangles);
-    terrain_ecs_destroy(te);
-    ecs_world_destroy(ecs);
-    terrain_world_destroy(world);
-    job_system_destroy(jobs);
-    gfx_destroy(gfx);
+    area_close(&a);
 }
 
 /* Looks 50° up into an empty sky at time `t`. */
@@ -331,35 +350,20 @@ Test(render_terrain, culling_changes_no_pixel) {
     render_image images[2];
     uint64_t drawn[2];
     for (int pass = 0; pass < 2; pass++) {
-        gfx_context *gfx = render_offscreen(W, H);
-        job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
-        ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
-        terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(7) });
-        terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .cloud_cover = -1 });
-        terrain_ecs *te = terrain_ecs_create(ecs, world);
-        terrain_ecs_spawn_area(te, 0, 0, 2, -2, 5);
-        float ground = terrain_stacks_surface(terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 }), 16, 16);
-        terrain_view view = { .camera = { 16, ground + 30, 16 }, .pitch = -0.2f, .aspect = (float)W / H };
-        terrain_ecs_set_view(te, pass ? &view : NULL);
-        ecs_progress(ecs, 1.0f / 60.0f);
-        gfx_frame_begin(gfx);
-        terrain_ecs_draw(te, renderer, &view);
-        images[pass] = (render_image){ W, H, malloc(W * H * 4) };
-        gfx_read_pixels(gfx, images[pass].rgba);
-        gfx_frame_end(gfx);
-        ecs_query *q = ecs_query_create(ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(ecs, "TerrainMeshChunk") } });
+        area a = area_open(2, 7, W, H, (terrain_renderer_desc){ .cloud_cover = -1 });
+        terrain_ecs_spawn_area(a.te, 0, 0, 2, -2, 5);
+        terrain_view view = { .camera = { 16, area_ground(&a) + 30, 16 }, .pitch = -0.2f, .aspect = (float)W / H };
+        terrain_ecs_set_view(a.te, pass ? &view : NULL);
+        ecs_progress(a.ecs, 1.0f / 60.0f);
+        images[pass] = area_draw(&a, &view);
+        ecs_query *q = ecs_query_create(a.ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(a.ecs, "TerrainMeshChunk") } });
         drawn[pass] = 0;
-        ecs_iter it = ecs_query_iter(ecs, q);
+        ecs_iter it = ecs_query_iter(a.ecs, q);
         while (ecs_query_next(&it)) {
             TerrainMeshChunk *chunks = ecs_field(&it, 0);
             for (int i = 0; i < it.count; i++) drawn[pass] += chunks[i].visible && chunks[i].gpu.index_count > 0;
         }
-        terrain_ecs_destroy(te);
-        terrain_renderer_destroy(renderer);
-        ecs_world_destroy(ecs);
-        terrain_world_destroy(world);
-        job_system_destroy(jobs);
-        gfx_destroy(gfx);
+        area_close(&a);
     }
     cr_assert(memcmp(images[0].rgba, images[1].rgba, W * H * 4) == 0, "culling changed the image");
     cr_assert_lt(drawn[1], drawn[0], "culled %llu of %llu chunks", (unsigned long long)(drawn[0] - drawn[1]),
