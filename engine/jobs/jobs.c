@@ -200,6 +200,12 @@ static void make_ready(job_system *jobs, job_thread *self, uint32_t index) {
         wake_sleepers(jobs, true);
         return;
     }
+    if (slot->background) {
+        queue_push(&jobs->background_queue, index);
+        /* Only workers take it: a single signal could go to a waiting main thread and be lost. */
+        wake_sleepers(jobs, true);
+        return;
+    }
     queue_push(self ? &self->queue : &jobs->threads[0].queue, index);
     /* A waiter may take the signal instead of a worker; it then runs the job itself. */
     wake_sleepers(jobs, false);
@@ -264,9 +270,20 @@ static void run_job(job_system *jobs, job_thread *self, uint32_t index) {
     finish_job(jobs, self, index);
 }
 
+/* Whether the caller may run background jobs while looking for work: workers always; the main
+ * thread only when it is the only thread (someone has to). */
+static bool takes_background(const job_system *jobs, const job_thread *self) {
+    return self && (self->index > 0 || jobs->thread_count == 1);
+}
+
+static bool take_background(job_system *jobs, uint32_t *index) {
+    return !queue_looks_empty(&jobs->background_queue) && queue_steal(&jobs->background_queue, index, 1) == 1;
+}
+
 /* Finds a ready job for the caller: main-thread jobs (main thread only), its own queue, then
- * the others' (stealing). Returns false when there is none. */
-static bool find_job(job_system *jobs, job_thread *self, uint32_t *index) {
+ * the others' (stealing), then (if `background`) the oldest background job. Returns false when
+ * there is none. */
+static bool find_job(job_system *jobs, job_thread *self, uint32_t *index, bool background) {
     bool on_main = self && self->index == 0;
     if (on_main && !queue_looks_empty(&jobs->main_queue) && queue_pop_back(&jobs->main_queue, index)) return true;
     if (self && !queue_looks_empty(&self->queue) && queue_pop_back(&self->queue, index)) return true;
@@ -288,7 +305,7 @@ static bool find_job(job_system *jobs, job_thread *self, uint32_t *index) {
         *index = loot[0];
         return true;
     }
-    return false;
+    return background && take_background(jobs, index);
 }
 
 typedef bool (*wait_predicate)(job_system *jobs, const void *arg);
@@ -297,7 +314,7 @@ static bool has_work_for(job_system *jobs, const job_thread *self) {
     if (self && self->index == 0 && !queue_looks_empty(&jobs->main_queue)) return true;
     for (int i = 0; i < jobs->thread_count; i++)
         if (!queue_looks_empty(&jobs->threads[i].queue)) return true;
-    return false;
+    return takes_background(jobs, self) && !queue_looks_empty(&jobs->background_queue);
 }
 
 /* Sleeps until there may be work for `self` or `done` holds (a NULL predicate: work only). */
@@ -320,7 +337,10 @@ static void wait_until(job_system *jobs, wait_predicate done, const void *arg) {
     job_thread *self = caller_thread(jobs);
     while (!done(jobs, arg)) {
         uint32_t index;
-        if (find_job(jobs, self, &index)) {
+        /* A frame waiting for its own jobs never runs a background one on the main thread: that
+         * would stall the frame behind work meant to span frames. */
+        if (find_job(jobs, self, &index, self && self->index > 0) ||
+            (takes_background(jobs, self) && take_background(jobs, &index))) {
             run_job(jobs, self, index);
             continue;
         }
@@ -344,7 +364,7 @@ static void *worker_main(void *arg) {
          * is pushed steals one job per cache-line transfer; one that lets a few pile up takes
          * them in a batch. After the last round it sleeps. */
         for (int round = 0; round < JOB_SPIN_ROUNDS && !found; round++) {
-            found = find_job(jobs, self, &index);
+            found = find_job(jobs, self, &index, true);
             for (int p = 0; !found && p < (1 << CORE_MIN(round, 10)); p++) JOB_CPU_PAUSE();
         }
         if (found) run_job(jobs, self, index);
@@ -365,6 +385,7 @@ job_system *job_system_create(const job_system_desc *desc) {
     pthread_mutex_init(&jobs->sleep_lock, NULL);
     pthread_cond_init(&jobs->wake, NULL);
     queue_init(&jobs->main_queue);
+    queue_init(&jobs->background_queue);
     for (int i = 0; i < threads; i++) {
         jobs->threads[i] = (job_thread){ .system = jobs, .index = i, .steal_seed = 2654435761u * (uint32_t)(i + 1) };
         queue_init(&jobs->threads[i].queue);
@@ -391,6 +412,7 @@ void job_system_destroy(job_system *jobs) {
 
     for (int i = 0; i < jobs->thread_capacity; i++) queue_release(&jobs->threads[i].queue);
     queue_release(&jobs->main_queue);
+    queue_release(&jobs->background_queue);
     core_free(jobs->threads, (size_t)jobs->thread_capacity * sizeof *jobs->threads);
     uint32_t blocks = atomic_load(&jobs->block_count);
     for (uint32_t b = 0; b < blocks; b++) core_free(atomic_load(&jobs->blocks[b]), JOB_BLOCK_SIZE * sizeof(job_slot));
@@ -418,6 +440,7 @@ job_handle job_submit(job_system *jobs, const job_desc *desc) {
     slot->user = desc->user;
     slot->name = desc->name;
     slot->main_thread = desc->main_thread;
+    slot->background = desc->background && !desc->main_thread;
     slot->finished = false;
     slot->dependent_count = 0;
     job_handle handle = { index, atomic_load_explicit(&slot->generation, memory_order_relaxed) };
@@ -484,7 +507,7 @@ int job_help(job_system *jobs, uint64_t budget_ns) {
     uint64_t start = core_time_ns();
     int ran = 0;
     uint32_t index;
-    while (find_job(jobs, self, &index)) {
+    while (find_job(jobs, self, &index, true)) {
         run_job(jobs, self, index);
         ran++;
         if (core_time_ns() - start >= budget_ns) break;
@@ -581,7 +604,8 @@ job_stats job_system_stats(job_system *jobs) {
         .completed = sum_completed(jobs),
         .submitted = sum_submitted(jobs),
         .sleeps = atomic_load_explicit(&jobs->sleeps, memory_order_relaxed),
-        .queued = (int)atomic_load_explicit(&jobs->main_queue.size_hint, memory_order_relaxed),
+        .queued = (int)(atomic_load_explicit(&jobs->main_queue.size_hint, memory_order_relaxed) +
+                        atomic_load_explicit(&jobs->background_queue.size_hint, memory_order_relaxed)),
     };
     for (int i = 0; i < jobs->thread_count; i++) {
         stats.stolen += atomic_load_explicit(&jobs->threads[i].stolen, memory_order_relaxed);

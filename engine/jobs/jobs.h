@@ -30,6 +30,15 @@
  *   OpenGL thread): inside job_wait there, or in job_run_main_thread_jobs, which the frame loop
  *   calls once a frame.
  *
+ * BACKGROUND JOBS
+ *     job_submit(jobs, &(job_desc){ .fn = mesh_chunk, .user = task, .background = true });
+ *   Work that may take longer than a frame (streaming, generation) and that no frame waits for.
+ *   Background jobs run on workers, oldest first, after the workers' other jobs; the main thread
+ *   never picks one up while it waits for a frame's jobs (job_wait, job_parallel_for), so a
+ *   frame is never stalled behind one. The main thread runs them only in job_help, or when it
+ *   is the only thread (threads = 1) and has nothing else to do while it waits. Poll them with
+ *   job_is_done; job_wait_all and job_system_destroy wait for them too.
+ *
  * THREADS AND SLEEP
  *   Each worker owns a queue; an idle worker steals from the others, and with nothing to steal
  *   it sleeps on a condition variable (an idle engine uses ~0% CPU). Every job runs inside a
@@ -64,6 +73,7 @@ typedef struct job_desc {
     const job_handle *after; /* jobs that must finish first (zero handles are ignored) */
     int after_count;
     bool main_thread;        /* run only on the main thread */
+    bool background;         /* long work that may span frames (BACKGROUND JOBS above) */
 } job_desc;
 
 job_system *job_system_create(const job_system_desc *desc);

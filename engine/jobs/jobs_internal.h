@@ -33,6 +33,7 @@ typedef struct job_slot {
     atomic_flag lock;             /* guards finished and the dependents */
     bool finished;
     bool main_thread;
+    bool background;
 } job_slot;
 _Static_assert(sizeof(job_slot) == 64, "a job slot should fill one cache line");
 
@@ -66,6 +67,7 @@ struct job_system {
     pthread_t main_thread;
     job_thread *threads;          /* [0] is the main thread's */
     job_queue main_queue;         /* jobs pinned to the main thread */
+    job_queue background_queue;   /* long jobs, oldest first, for workers (jobs.h) */
 
     _Atomic(job_slot *) blocks[JOB_MAX_BLOCKS];
     _Atomic uint32_t block_count;

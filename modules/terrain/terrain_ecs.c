@@ -1,6 +1,6 @@
 /* terrain_ecs.c — the terrain as entities: column chunks generated in the generate phase, mesh
  * chunks meshed in the mesh phase (both in parallel on the job system), uploaded in draw. */
-#include "terrain.h"
+#include "terrain_internal.h"
 
 #include "core/core.h"
 #include "ecs/ecs.h"
@@ -10,19 +10,6 @@
 
 _Static_assert(TERRAIN_CHUNK_COLUMNS == TERRAIN_MESH_CELLS, "a level-0 mesh chunk is one column chunk wide");
 
-struct terrain_ecs {
-    ecs_world *ecs;
-    terrain_world *terrain;
-    ecs_component chunk, mesh_chunk;
-    /* Tags that move finished entities out of the systems' queries, so a frame with nothing to
-     * generate or mesh schedules no jobs at all. */
-    ecs_component chunk_ready, mesh_ready, mesh_uploaded;
-    ecs_query *chunks, *mesh_chunks;
-    terrain_frustum frustum;             /* of the view set for the cull phase */
-    bool culling;
-    terrain_gpu_mesh *draw_list;         /* gathered each draw */
-    size_t draw_capacity;
-};
 
 static void terrain_generate_system(ecs_iter *it) {
     terrain_ecs *te = it->user;
@@ -66,27 +53,46 @@ static void terrain_cull_system(ecs_iter *it) {
         TerrainMeshChunk *chunks = ecs_field(it, 0);
         for (int i = 0; i < it->count; i++) {
             TerrainMeshChunk *c = &chunks[i];
-            bool uploaded = c->state == TERRAIN_MESH_UPLOADED;
-            const double *origin = uploaded ? c->gpu.origin : c->mesh.origin;
-            const float *lo = uploaded ? c->gpu.bounds_min : c->mesh.bounds_min;
-            const float *hi = uploaded ? c->gpu.bounds_max : c->mesh.bounds_max;
-            c->visible = !te->culling || terrain_frustum_sees(&te->frustum, origin, lo, hi);
+            bool on_gpu = c->gpu.vertex_array != 0;
+            const double *origin = on_gpu ? c->gpu.origin : c->mesh.origin;
+            const float *lo = on_gpu ? c->gpu.bounds_min : c->mesh.bounds_min;
+            const float *hi = on_gpu ? c->gpu.bounds_max : c->mesh.bounds_max;
+            c->visible = !c->hidden && (!te->culling || terrain_frustum_sees(&te->frustum, origin, lo, hi));
         }
     }
 }
 
+size_t terrain__mesh_bytes(uint32_t vertex_count, uint32_t index_count) {
+    return (size_t)vertex_count * sizeof(terrain_vertex) + (size_t)index_count * sizeof(uint32_t);
+}
+
+/* Uploads meshed chunks (the CPU copy is freed), replacing what the chunk drew before; when
+ * streaming, only as many as the frame's budget allows, then queued frees. */
 static void terrain_upload_system(ecs_iter *it) {
     terrain_ecs *te = it->user;
-    while (ecs_query_next(it)) {
+    uint64_t budget = terrain__stream_upload_budget(te);
+    uint64_t start = core_time_ns(), deadline = budget == UINT64_MAX ? UINT64_MAX : start + budget;
+    bool over = false;
+    while (!over && ecs_query_next(it)) {
         TerrainMeshChunk *chunks = ecs_field(it, 0);
         for (int i = 0; i < it->count; i++) {
-            if (chunks[i].state != TERRAIN_MESH_MESHED) continue;
-            chunks[i].gpu = terrain_gpu_mesh_upload(&chunks[i].mesh);
-            terrain_mesh_free(&chunks[i].mesh);
-            chunks[i].state = TERRAIN_MESH_UPLOADED;
+            TerrainMeshChunk *c = &chunks[i];
+            if (c->state != TERRAIN_MESH_MESHED) continue;
+            if (deadline != UINT64_MAX && core_time_ns() >= deadline) {
+                over = true;
+                break;
+            }
+            size_t old_bytes = c->gpu_bytes, cpu_bytes = terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count);
+            terrain_gpu_mesh_destroy(&c->gpu);
+            c->gpu = terrain_gpu_mesh_upload(&c->mesh);
+            c->gpu_bytes = c->gpu.vertex_array ? cpu_bytes : 0;
+            terrain_mesh_free(&c->mesh);
+            c->state = TERRAIN_MESH_UPLOADED;
+            if (te->stream) terrain__stream_uploaded(te, cpu_bytes, c->gpu_bytes, old_bytes);
             ecs_defer_add(it->commands, it->entities[i], te->mesh_uploaded);
         }
     }
+    if (te->stream) terrain__stream_free_pending(te, deadline);
 }
 
 terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
@@ -98,6 +104,7 @@ terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
     te->chunk_ready = ECS_TAG(ecs, TerrainChunkReady);
     te->mesh_ready = ECS_TAG(ecs, TerrainMeshReady);
     te->mesh_uploaded = ECS_TAG(ecs, TerrainMeshUploaded);
+    te->streamed = ECS_TAG(ecs, TerrainMeshStreamed);
     te->chunks = ecs_query_create(ecs, &(ecs_query_desc){ .with = { te->chunk } });
     te->mesh_chunks = ecs_query_create(ecs, &(ecs_query_desc){ .with = { te->mesh_chunk } });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_generate", .phase = "generate",
@@ -105,8 +112,8 @@ terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
         .fn = terrain_generate_system,
         .user = te, .parallel = true, .batch_size = 1 });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_mesh", .phase = "mesh",
-        .query = { .with = { te->mesh_chunk }, .without = { te->mesh_ready } }, .writes = { te->mesh_chunk },
-        .fn = terrain_mesh_system,
+        .query = { .with = { te->mesh_chunk }, .without = { te->mesh_ready, te->streamed } },
+        .writes = { te->mesh_chunk }, .fn = terrain_mesh_system,
         .user = te, .parallel = true, .batch_size = 1 });
     /* Meshed chunks (uploaded or not) have bounds: the cull phase runs before the upload. */
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_cull", .phase = "cull",
@@ -121,6 +128,7 @@ terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
 
 void terrain_ecs_destroy(terrain_ecs *te) {
     if (!te) return;
+    terrain__stream_destroy(te);           /* waits for its background jobs */
     ecs_iter it = ecs_query_iter(te->ecs, te->mesh_chunks);
     while (ecs_query_next(&it)) {
         TerrainMeshChunk *chunks = ecs_field(&it, 0);
@@ -209,8 +217,8 @@ void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain
     while (ecs_query_next(&it)) {
         TerrainMeshChunk *chunks = ecs_field(&it, 0);
         for (int i = 0; i < it.count; i++) {
-            if (chunks[i].state != TERRAIN_MESH_UPLOADED || chunks[i].gpu.index_count == 0) continue;
-            if (!chunks[i].visible) continue;
+            /* The newest mesh on the GPU, or the one it replaces until it is up. */
+            if (chunks[i].gpu.index_count == 0 || !chunks[i].visible) continue;
             te->draw_list = core_grow(te->draw_list, &te->draw_capacity, count + 1, sizeof *te->draw_list);
             te->draw_list[count++] = chunks[i].gpu;
             triangles += chunks[i].gpu.index_count / 3;
@@ -220,7 +228,8 @@ void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain
     trace_counter("terrain.mesh_chunks_drawn", (double)count);
     trace_counter("terrain.triangles_drawn", (double)triangles);
     trace_counter("terrain.chunks_cached", (double)terrain_world_chunk_count(te->terrain));
-    /* Outside ecs_progress no job holds stacks: the moment to drop cached chunks no entity keeps. */
+    /* Outside ecs_progress no frame job holds stacks (background jobs bracket their reads with
+     * terrain_world_read_begin/end): the moment to drop cached chunks no entity keeps. */
     terrain_world_trim(te->terrain);
 }
 

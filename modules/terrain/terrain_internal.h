@@ -151,4 +151,39 @@ bool terrain__mesh_chunk_reference(terrain__field_sampler sample, void *user, te
 
 /* ==== end of the field and meshing section ================================================ */
 
+/* ==== the terrain in the ECS, streaming (terrain_ecs.c, terrain_stream.c) ================= */
+
+#include "ecs/ecs.h"
+
+typedef struct terrain__streamer terrain__streamer;
+
+struct terrain_ecs {
+    ecs_world *ecs;
+    terrain_world *terrain;
+    ecs_component chunk, mesh_chunk;
+    /* Tags that move finished entities out of the systems' queries, so a frame with nothing to
+     * generate or mesh schedules no jobs at all; `streamed` marks the streamer's mesh chunks,
+     * which the synchronous systems leave alone. */
+    ecs_component chunk_ready, mesh_ready, mesh_uploaded, streamed;
+    ecs_query *chunks, *mesh_chunks;
+    terrain_frustum frustum;             /* of the view set for the cull phase */
+    bool culling;
+    terrain_gpu_mesh *draw_list;         /* gathered each draw */
+    size_t draw_capacity;
+    terrain__streamer *stream;           /* NULL unless terrain_ecs_stream was called */
+};
+
+/* Bytes a mesh holds, on the CPU or (the same arrays) on the GPU. */
+size_t terrain__mesh_bytes(uint32_t vertex_count, uint32_t index_count);
+/* The upload system's budget: nanoseconds of uploads and frees this frame (UINT64_MAX when not
+ * streaming: everything at once). */
+uint64_t terrain__stream_upload_budget(const terrain_ecs *te);
+/* Called by the upload system: a mesh went from the CPU to the GPU (replacing `old_gpu_bytes`). */
+void terrain__stream_uploaded(terrain_ecs *te, size_t cpu_bytes, size_t gpu_bytes, size_t old_gpu_bytes);
+/* Frees queued GPU meshes until the deadline (core_time_ns), at least a few a frame. */
+void terrain__stream_free_pending(terrain_ecs *te, uint64_t deadline);
+void terrain__stream_destroy(terrain_ecs *te);
+
+/* ==== end of the ECS and streaming section ================================================ */
+
 #endif

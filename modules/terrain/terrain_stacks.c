@@ -21,10 +21,40 @@
 struct terrain_stacks {
     size_t bytes;                                  /* the whole allocation */
     uint32_t word_count;
+    float interface_low, interface_high;           /* terrain_stacks_interface_range */
     uint32_t row_start[TERRAIN_CHUNK_COLUMNS + 1];
     uint16_t column_start[TERRAIN__COLUMNS];       /* relative to the row's start */
     uint16_t words[];
 };
+
+/* The lowest and highest heights where a column changes between material in the field and
+ * material out of it. The floor counts (bedrock is below it), and so does the top of the last
+ * layer (air is above it). */
+static void stacks_find_interfaces(terrain_stacks *s) {
+    int64_t low = INT64_MAX, high = INT64_MIN;
+    for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
+        for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
+            terrain__column_cursor cursor = terrain__stacks_cursor(s, i, k);
+            terrain__qlayer layer;
+            int64_t height = 0;
+            bool solid = true;                     /* below the floor */
+            while (terrain__cursor_next(&cursor, &layer)) {
+                bool in_field = terrain_material_in_field((terrain_material)layer.material);
+                if (in_field != solid && layer.quanta > 0) {
+                    low = height < low ? height : low;
+                    high = height > high ? height : high;
+                    solid = in_field;
+                }
+                height += layer.quanta;
+            }
+            if (solid) {                           /* air above the last layer */
+                low = height < low ? height : low;
+                high = height > high ? height : high;
+            }
+        }
+    s->interface_low = TERRAIN_FLOOR_Y + (float)low * TERRAIN_HEIGHT_QUANTUM;
+    s->interface_high = TERRAIN_FLOOR_Y + (float)high * TERRAIN_HEIGHT_QUANTUM;
+}
 
 struct terrain_stacks_builder {
     uint16_t *words;
@@ -148,6 +178,7 @@ terrain_stacks *terrain_stacks_builder_finish(terrain_stacks_builder *builder) {
     s->row_start[TERRAIN_CHUNK_COLUMNS] = s->word_count;
     memcpy(s->column_start, builder->column_start, sizeof s->column_start);
     if (builder->word_count) memcpy(s->words, builder->words, builder->word_count * sizeof(uint16_t));
+    stacks_find_interfaces(s);
     builder->word_count = 0;
     builder->column_begin = 0;
     builder->columns = 0;
@@ -156,6 +187,11 @@ terrain_stacks *terrain_stacks_builder_finish(terrain_stacks_builder *builder) {
     builder->exact_top = 0.0;
     builder->rounded_top = 0;
     return s;
+}
+
+void terrain_stacks_interface_range(const terrain_stacks *stacks, float *lowest, float *highest) {
+    *lowest = stacks->interface_low;
+    *highest = stacks->interface_high;
 }
 
 void terrain_stacks_destroy(terrain_stacks *stacks) {

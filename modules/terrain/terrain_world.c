@@ -17,6 +17,8 @@
 #include <math.h>
 #include <pthread.h>
 
+#define WORLD_READER_EPOCHS 64               /* distinct trims that readers may span at once */
+
 typedef struct world_entry world_entry;
 struct world_entry {
     terrain_chunk_coord coord;
@@ -34,8 +36,15 @@ struct terrain_world {
     size_t max_chunks;
     world_entry **buckets;
     size_t bucket_count;                  /* a power of two */
-    size_t count;
+    size_t count, bytes;
     world_entry *lru_head, *lru_tail;
+    /* Readers that span trims (background jobs): how many began in each epoch, and the stacks
+     * trimmed while any of them may still hold a pointer. */
+    uint64_t epoch;                       /* trims so far */
+    struct { uint64_t epoch; int count; } readers[WORLD_READER_EPOCHS];
+    int reader_epochs;
+    struct { terrain_stacks *stacks; uint64_t epoch; } *graveyard;
+    size_t graveyard_count, graveyard_capacity;
 };
 
 static uint64_t coord_hash(terrain_chunk_coord c) {
@@ -60,6 +69,8 @@ terrain_world *terrain_world_create(const terrain_world_desc *desc) {
 
 void terrain_world_destroy(terrain_world *world) {
     if (!world) return;
+    for (size_t i = 0; i < world->graveyard_count; i++) terrain_stacks_destroy(world->graveyard[i].stacks);
+    core_free(world->graveyard, world->graveyard_capacity * sizeof *world->graveyard);
     for (world_entry *e = world->lru_head, *next; e; e = next) {
         next = e->lru_next;
         terrain_stacks_destroy(e->stacks);
@@ -126,6 +137,7 @@ static world_entry *insert_or_get(terrain_world *w, terrain_chunk_coord coord, t
     e->stacks = stacks;
     *slot = e;
     lru_push_front(w, e);
+    w->bytes += terrain_stacks_bytes(stacks);
     if (++w->count > w->bucket_count) grow_buckets(w);
     return e;
 }
@@ -175,6 +187,74 @@ void terrain_world_release(terrain_world *world, terrain_chunk_coord coord) {
                   (long long)coord.x, (long long)coord.z);
 }
 
+/* ---- readers across trims (lock held) --------------------------------------------------- */
+
+static uint64_t oldest_reader_epoch(const terrain_world *w) {
+    uint64_t oldest = UINT64_MAX;
+    for (int i = 0; i < w->reader_epochs; i++)
+        if (w->readers[i].epoch < oldest) oldest = w->readers[i].epoch;
+    return oldest;
+}
+
+/* Frees the trimmed stacks no reader can still hold: those trimmed in an epoch before every
+ * active reader began. */
+static void bury_dead(terrain_world *w) {
+    uint64_t oldest = oldest_reader_epoch(w);
+    size_t kept = 0;
+    for (size_t i = 0; i < w->graveyard_count; i++) {
+        if (w->graveyard[i].epoch < oldest) terrain_stacks_destroy(w->graveyard[i].stacks);
+        else w->graveyard[kept++] = w->graveyard[i];
+    }
+    w->graveyard_count = kept;
+}
+
+static void evict(terrain_world *w, world_entry *e) {
+    *find_slot(w, e->coord) = e->next_in_bucket;
+    lru_unlink(w, e);
+    w->bytes -= terrain_stacks_bytes(e->stacks);
+    if (w->reader_epochs > 0) {      /* a reader may hold it: free it once they are done */
+        w->graveyard = core_grow(w->graveyard, &w->graveyard_capacity, w->graveyard_count + 1, sizeof *w->graveyard);
+        w->graveyard[w->graveyard_count].stacks = e->stacks;
+        w->graveyard[w->graveyard_count++].epoch = w->epoch;
+    } else {
+        terrain_stacks_destroy(e->stacks);
+    }
+    core_free(e, sizeof *e);
+    w->count--;
+}
+
+uint64_t terrain_world_read_begin(terrain_world *world) {
+    pthread_mutex_lock(&world->lock);
+    uint64_t epoch = world->epoch;
+    int i = 0;
+    while (i < world->reader_epochs && world->readers[i].epoch != epoch) i++;
+    if (i == world->reader_epochs) {
+        if (i == WORLD_READER_EPOCHS) {    /* absurdly old readers: count under the oldest */
+            uint64_t oldest = oldest_reader_epoch(world);
+            for (i = 0; world->readers[i].epoch != oldest; i++) {}
+            epoch = oldest;
+        } else {
+            world->readers[i].epoch = epoch;
+            world->readers[i].count = 0;
+            world->reader_epochs++;
+        }
+    }
+    world->readers[i].count++;
+    pthread_mutex_unlock(&world->lock);
+    return epoch;
+}
+
+void terrain_world_read_end(terrain_world *world, uint64_t token) {
+    pthread_mutex_lock(&world->lock);
+    for (int i = 0; i < world->reader_epochs; i++) {
+        if (world->readers[i].epoch != token) continue;
+        if (--world->readers[i].count == 0) world->readers[i] = world->readers[--world->reader_epochs];
+        break;
+    }
+    bury_dead(world);
+    pthread_mutex_unlock(&world->lock);
+}
+
 size_t terrain_world_trim(terrain_world *world) {
     pthread_mutex_lock(&world->lock);
     size_t evicted = 0;
@@ -182,15 +262,13 @@ size_t terrain_world_trim(terrain_world *world) {
     while (world->count > world->max_chunks && e) {
         world_entry *prev = e->lru_prev;
         if (e->retained == 0) {
-            *find_slot(world, e->coord) = e->next_in_bucket;
-            lru_unlink(world, e);
-            terrain_stacks_destroy(e->stacks);
-            core_free(e, sizeof *e);
-            world->count--;
+            evict(world, e);
             evicted++;
         }
         e = prev;
     }
+    world->epoch++;
+    bury_dead(world);
     pthread_mutex_unlock(&world->lock);
     return evicted;
 }
@@ -200,6 +278,28 @@ size_t terrain_world_chunk_count(terrain_world *world) {
     size_t count = world->count;
     pthread_mutex_unlock(&world->lock);
     return count;
+}
+
+size_t terrain_world_bytes(terrain_world *world) {
+    pthread_mutex_lock(&world->lock);
+    size_t bytes = world->bytes;
+    pthread_mutex_unlock(&world->lock);
+    return bytes;
+}
+
+bool terrain_world_has(terrain_world *world, terrain_chunk_coord coord) {
+    pthread_mutex_lock(&world->lock);
+    bool has = *find_slot(world, coord) != NULL;
+    pthread_mutex_unlock(&world->lock);
+    return has;
+}
+
+const terrain_generation_params *terrain_world_generation(const terrain_world *world) { return &world->generation; }
+
+void terrain_world_set_max_chunks(terrain_world *world, size_t max_chunks) {
+    pthread_mutex_lock(&world->lock);
+    world->max_chunks = max_chunks ? max_chunks : 4096;
+    pthread_mutex_unlock(&world->lock);
 }
 
 terrain_material terrain_world_material_at(terrain_world *world, double x, double y, double z) {

@@ -284,3 +284,85 @@ Test(jobs, thread_indices) {
     cr_expect_eq(job_thread_index(jobs), 0);
     job_system_destroy(jobs);
 }
+
+/* ---- background jobs ------------------------------------------------------------------- */
+
+typedef struct background_probe {
+    _Atomic int ran_on_main, ran_on_worker, ran;
+    job_system *jobs;
+} background_probe;
+
+static void background_job(void *arg) {
+    background_probe *probe = arg;
+    if (job_thread_index(probe->jobs) == 0) atomic_fetch_add(&probe->ran_on_main, 1);
+    else atomic_fetch_add(&probe->ran_on_worker, 1);
+    atomic_fetch_add(&probe->ran, 1);
+}
+
+static void noop_range(void *user, size_t begin, size_t end) {
+    (void)user, (void)begin, (void)end;
+}
+
+/* A frame that waits for its own parallel loop must never run queued background work on the
+ * main thread: that is the whole point of the flag. */
+Test(jobs, background_jobs_never_run_inside_a_main_thread_wait) {
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
+    background_probe probe = { .jobs = jobs };
+    job_handle last = { 0, 0 };
+    for (int i = 0; i < 64; i++)
+        last = job_submit(jobs, &(job_desc){ .fn = background_job, .user = &probe, .background = true });
+    for (int frame = 0; frame < 50; frame++) job_parallel_for(jobs, 256, 8, noop_range, NULL, "frame");
+    job_wait(jobs, last);                       /* waits without running it: a worker does */
+    job_wait_all(jobs);
+    cr_expect_eq(atomic_load(&probe.ran), 64);
+    cr_expect_eq(atomic_load(&probe.ran_on_main), 0, "%d background jobs ran on the main thread",
+                 atomic_load(&probe.ran_on_main));
+    job_system_destroy(jobs);
+}
+
+/* With no workers the main thread is the only one that can run them: in job_help, and in a
+ * wait that cannot finish otherwise (no deadlock). */
+Test(jobs, background_jobs_run_on_a_lone_main_thread) {
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 1 });
+    background_probe probe = { .jobs = jobs };
+    for (int i = 0; i < 3; i++) job_submit(jobs, &(job_desc){ .fn = background_job, .user = &probe, .background = true });
+    job_parallel_for(jobs, 64, 8, noop_range, NULL, "frame");
+    cr_expect_eq(atomic_load(&probe.ran), 0, "a wait with other work done must not run background jobs");
+    cr_expect_eq(job_help(jobs, 1000000000ull), 3);
+    cr_expect_eq(atomic_load(&probe.ran), 3);
+    job_handle more = job_submit(jobs, &(job_desc){ .fn = background_job, .user = &probe, .background = true });
+    job_wait(jobs, more);
+    cr_expect_eq(atomic_load(&probe.ran), 4);
+    job_submit(jobs, &(job_desc){ .fn = background_job, .user = &probe, .background = true });
+    job_system_destroy(jobs);                   /* runs what is still queued */
+    cr_expect_eq(atomic_load(&probe.ran), 5);
+}
+
+/* Oldest first: submitted in priority order, they start in that order on a single worker. */
+typedef struct fifo_probe {
+    _Atomic int next;
+    int order[32];
+} fifo_probe;
+
+typedef struct fifo_item {
+    fifo_probe *probe;
+    int id;
+} fifo_item;
+
+static void fifo_job(void *arg) {
+    fifo_item *item = arg;
+    item->probe->order[item->id] = atomic_fetch_add(&item->probe->next, 1);
+}
+
+Test(jobs, background_jobs_start_oldest_first) {
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
+    fifo_probe probe = { 0 };
+    fifo_item items[32];
+    for (int i = 0; i < 32; i++) {
+        items[i] = (fifo_item){ &probe, i };
+        job_submit(jobs, &(job_desc){ .fn = fifo_job, .user = &items[i], .background = true });
+    }
+    job_wait_all(jobs);
+    for (int i = 0; i < 32; i++) cr_expect_eq(probe.order[i], i, "job %d ran %d-th", i, probe.order[i]);
+    job_system_destroy(jobs);
+}

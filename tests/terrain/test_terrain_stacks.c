@@ -331,3 +331,36 @@ Test(terrain_world, concurrent_requests_share_one_chunk) {
     terrain_world_destroy(job.world);
     job_system_destroy(jobs);
 }
+
+/* Interfaces: where in-field material meets air or water, over all columns. One column has a
+ * cave (bedrock 0–10 m, air 10–12, sand 12–14, water 14–20 above the floor); the rest are 5 m
+ * of bedrock under 3 m of water. Lowest: 5 m (the others' top); highest: 14 m (sand under water). */
+
+static void interface_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
+    (void)user;
+    if (x == 7 && z == 3) {
+        terrain_stacks_builder_push(b, TERRAIN_BEDROCK, 10.0f);
+        terrain_stacks_builder_push(b, TERRAIN_AIR, 2.0f);
+        terrain_stacks_builder_push(b, TERRAIN_SAND, 2.0f);
+        terrain_stacks_builder_push(b, TERRAIN_WATER, 6.0f);
+    } else {
+        terrain_stacks_builder_push(b, TERRAIN_BEDROCK, 5.0f);
+        terrain_stacks_builder_push(b, TERRAIN_WATER, 3.0f);
+    }
+}
+
+Test(terrain_stacks, interface_range_spans_caves_and_tops) {
+    terrain_stacks *s = terrain_stacks_from_columns((terrain_chunk_coord){ 0, 0 }, interface_column, NULL);
+    float low, high;
+    terrain_stacks_interface_range(s, &low, &high);
+    cr_expect_float_eq(low, TERRAIN_FLOOR_Y + 5.0f, 1e-4f, "lowest %g", (double)low);
+    cr_expect_float_eq(high, TERRAIN_FLOOR_Y + 14.0f, 1e-4f, "highest %g", (double)high);
+    terrain_stacks_destroy(s);
+    /* An empty chunk (air from the floor up): the floor itself is the interface. */
+    const hand_layer air[] = { { TERRAIN_AIR, 4.0f } };
+    s = make_uniform(air, 1);
+    terrain_stacks_interface_range(s, &low, &high);
+    cr_expect_float_eq(low, TERRAIN_FLOOR_Y, 1e-4f);
+    cr_expect_float_eq(high, TERRAIN_FLOOR_Y, 1e-4f);
+    terrain_stacks_destroy(s);
+}

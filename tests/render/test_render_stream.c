@@ -1,0 +1,249 @@
+/* Streaming (terrain.h, "streaming"): rings that follow viewers, background jobs, cancellation,
+ * memory budget, region readiness. Meshes are uploaded, hence the OSMesa context. The world is
+ * a hand-made rolling height field (a pure function of the column), so counts can be reasoned
+ * about and the same ground appears at the origin and 100 km out. */
+#include "render_util.h"
+
+#include "core/core.h"
+#include "ecs/ecs.h"
+#include "jobs/jobs.h"
+#include "terrain/terrain.h"
+
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+#include <time.h>
+
+#define DT (1.0f / 60.0f)
+
+/* Ground between −6 and +6 m, periodic: 40 m along x and 50 m along z. */
+static void rolling_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
+    (void)user;
+    double h = 4.0 * sin((double)x * (2.0 * M_PI / 40.0)) + 2.0 * cos((double)z * (2.0 * M_PI / 50.0));
+    terrain_stacks_builder_push(b, TERRAIN_BEDROCK, (float)(h - TERRAIN_FLOOR_Y));
+}
+
+static terrain_stacks *rolling_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, rolling_column, user);
+}
+
+typedef struct streamed {
+    gfx_context *gfx;
+    job_system *jobs;
+    ecs_world *ecs;
+    terrain_world *world;
+    terrain_ecs *te;
+} streamed;
+
+static const terrain_stream_desc small_rings = { .half_width = 2, .levels = 2, .y_min = -40, .y_max = 40 };
+
+/* desc NULL: no streaming (for areas spawned by hand). */
+static streamed streamed_open(int threads, const terrain_stream_desc *desc) {
+    streamed s = { .gfx = render_offscreen(64, 64) };
+    s.jobs = job_system_create(&(job_system_desc){ .threads = threads });
+    s.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = s.jobs });
+    s.world = terrain_world_create(&(terrain_world_desc){ .generate = rolling_chunk });
+    s.te = terrain_ecs_create(s.ecs, s.world);
+    if (desc) terrain_ecs_stream(s.te, desc);
+    return s;
+}
+
+static void streamed_close(streamed *s) {
+    terrain_ecs_destroy(s->te);
+    ecs_world_destroy(s->ecs);
+    terrain_world_destroy(s->world);
+    job_system_destroy(s->jobs);
+    gfx_destroy(s->gfx);
+}
+
+/* Frames (with the trim terrain_ecs_draw does, minus the drawing) until every wanted chunk is
+ * ready, or `limit` frames; returns the frames it took, or -1. */
+static int streamed_settle(streamed *s, const double (*eyes)[3], int count, int limit) {
+    for (int frame = 0; frame < limit; frame++) {
+        terrain_ecs_set_viewers(s->te, eyes, count);
+        ecs_progress(s->ecs, DT);
+        terrain_world_trim(s->world);
+        terrain_stream_stats st = terrain_ecs_stream_stats(s->te);
+        if (st.mesh_chunks_wanted > 0 && st.mesh_chunks_ready == st.mesh_chunks_wanted && st.jobs_in_flight == 0)
+            return frame + 1;
+        if (job_thread_count(s->jobs) > 1) nanosleep(&(struct timespec){ 0, 1000000 }, NULL);   /* let the worker get on */
+    }
+    return -1;
+}
+
+/* Wanted mesh chunks for one viewer, worked out from the ring rules: level 0 is (2w)² chunks
+ * across, each coarser level (2w)² less the w² its finer level covers, and each level has its
+ * own number of layers over [y_min, y_max] rounded out to the coarsest chunk height (64 m for
+ * two levels: −64 … 64, i.e. 4 layers of 32 m and 2 of 64 m). */
+Test(render_stream, one_viewer_wants_the_rings_and_all_become_ready) {
+    streamed s = streamed_open(2, &small_rings);
+    const double eye[1][3] = { { 10, 5, 10 } };
+    cr_assert(streamed_settle(&s, eye, 1, 2000) > 0, "streaming never settled");
+    terrain_stream_stats st = terrain_ecs_stream_stats(s.te);
+    int expected = 16 * 4 + (16 - 4) * 2;
+    cr_expect_eq(st.mesh_chunks_wanted, expected, "%d wanted, expected %d", st.mesh_chunks_wanted, expected);
+    cr_expect_eq(st.chunks_meshed + st.chunks_skipped_empty, (uint64_t)expected);
+    /* Ground only between −6 and 6 m: the layers above 32 m and below −32 m are skipped unsampled. */
+    cr_expect_gt(st.chunks_skipped_empty, 0);
+    cr_expect_gt(st.resident_bytes, 0);
+    streamed_close(&s);
+}
+
+/* The streamed rings around the origin are the static rings: the same chunks, masks and
+ * meshes, hence the same triangles. */
+Test(render_stream, rings_at_the_origin_equal_the_static_rings) {
+    streamed s = streamed_open(2, &small_rings);
+    const double eye[1][3] = { { 1, 5, 1 } };
+    cr_assert(streamed_settle(&s, eye, 1, 2000) > 0);
+    uint64_t streamed_triangles = terrain_ecs_stats_get(s.te).triangles;
+    streamed_close(&s);
+
+    streamed fixed = streamed_open(2, NULL);
+    terrain_ecs_spawn_rings(fixed.te, 2, 2, -40, 40);
+    ecs_progress(fixed.ecs, DT);
+    ecs_progress(fixed.ecs, DT);
+    uint64_t static_triangles = terrain_ecs_stats_get(fixed.te).triangles;
+    streamed_close(&fixed);
+    cr_expect_gt(static_triangles, 0);
+    cr_expect_eq(streamed_triangles, static_triangles, "streamed %llu, static %llu triangles",
+                 (unsigned long long)streamed_triangles, (unsigned long long)static_triangles);
+}
+
+/* 100.8 km out the rolling ground repeats exactly and so do the rings: 100 800 m is a multiple
+ * of both periods (lcm 200 m) and of the coarsest chunk (64 m). The same chunks mesh to the
+ * same triangles, and every mesh is stored relative to its own origin, so its vertex
+ * coordinates stay within one chunk's size. */
+Test(render_stream, a_hundred_kilometres_out_streams_the_same) {
+    uint64_t triangles[2];
+    float largest[2] = { 0, 0 };
+    for (int far = 0; far < 2; far++) {
+        streamed s = streamed_open(2, &small_rings);
+        double offset = far ? 100800.0 : 0.0;
+        const double eye[1][3] = { { offset + 1, 5, offset + 1 } };
+        cr_assert(streamed_settle(&s, eye, 1, 2000) > 0);
+        triangles[far] = terrain_ecs_stats_get(s.te).triangles;
+        ecs_query *q = ecs_query_create(s.ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(s.ecs, "TerrainMeshChunk") } });
+        ecs_iter it = ecs_query_iter(s.ecs, q);
+        while (ecs_query_next(&it)) {
+            TerrainMeshChunk *c = ecs_field(&it, 0);
+            for (int i = 0; i < it.count; i++)
+                for (int a = 0; a < 3; a++) {
+                    largest[far] = fmaxf(largest[far], fabsf(c[i].gpu.bounds_min[a]));
+                    largest[far] = fmaxf(largest[far], fabsf(c[i].gpu.bounds_max[a]));
+                }
+        }
+        streamed_close(&s);
+    }
+    cr_expect_eq(triangles[0], triangles[1], "origin %llu, 100 km %llu", (unsigned long long)triangles[0],
+                 (unsigned long long)triangles[1]);
+    /* A level-1 chunk spans 64 m, plus its apron sample of 2 m. */
+    cr_expect_leq(largest[1], 66.5f, "vertex coordinate %g m from its mesh's origin", (double)largest[1]);
+}
+
+/* Moving on: what the viewer left is cancelled or kept, never drawn once replaced, and the kept
+ * ones stay within the limits (no more than the wanted ones; evicted past that). */
+Test(render_stream, walking_away_cancels_keeps_and_evicts) {
+    streamed s = streamed_open(2, &small_rings);
+    double eye[1][3] = { { 1, 5, 1 } };
+    terrain_ecs_set_viewers(s.te, eye, 1);
+    ecs_progress(s.ecs, DT);                       /* jobs submitted for the start */
+    for (int step = 1; step <= 12; step++) {
+        eye[0][0] = 64.0 * step;                   /* one coarsest chunk a step */
+        cr_assert(streamed_settle(&s, eye, 1, 3000) > 0, "step %d never settled", step);
+        terrain_stream_stats st = terrain_ecs_stream_stats(s.te);
+        cr_expect_leq(st.mesh_chunks_kept, st.mesh_chunks_wanted, "step %d: %d kept, %d wanted", step,
+                      st.mesh_chunks_kept, st.mesh_chunks_wanted);
+    }
+    terrain_stream_stats st = terrain_ecs_stream_stats(s.te);
+    cr_expect_gt(st.chunks_cancelled, 0, "the first frame's jobs should have been cancelled");
+    cr_expect_gt(st.chunks_evicted, 0);
+    /* Every chunk drawn now is in the rings around the viewer: no old ground left behind. */
+    terrain_ecs_stats all = terrain_ecs_stats_get(s.te);
+    cr_expect_leq(all.mesh_chunks, 2 * st.mesh_chunks_wanted);
+    streamed_close(&s);
+}
+
+/* A tiny memory budget evicts everything out of range that is hidden. */
+Test(render_stream, memory_budget_evicts_out_of_range_chunks) {
+    terrain_stream_desc desc = small_rings;
+    desc.memory_budget = 1;                        /* a byte: nothing spare may be kept */
+    streamed s = streamed_open(2, &desc);
+    double eye[1][3] = { { 1, 5, 1 } };
+    cr_assert(streamed_settle(&s, eye, 1, 2000) > 0);
+    eye[0][2] = 64.0 * 6;
+    cr_assert(streamed_settle(&s, eye, 1, 3000) > 0);
+    ecs_progress(s.ecs, DT);                       /* the replaced ones hide, then go */
+    ecs_progress(s.ecs, DT);
+    terrain_stream_stats st = terrain_ecs_stream_stats(s.te);
+    cr_expect_eq(st.mesh_chunks_kept, 0, "%d kept over budget", st.mesh_chunks_kept);
+    streamed_close(&s);
+}
+
+/* Two viewers far apart want two full sets of rings; any two chunks that touch differ by at
+ * most one level, also where two viewers' rings meet. */
+Test(render_stream, two_viewers_get_rings_that_fit_together) {
+    streamed s = streamed_open(2, &small_rings);
+    const double apart[2][3] = { { 1, 5, 1 }, { 5000, 5, 1 } };
+    cr_assert(streamed_settle(&s, apart, 2, 3000) > 0);
+    int expected = 2 * (16 * 4 + (16 - 4) * 2);
+    cr_expect_eq(terrain_ecs_stream_stats(s.te).mesh_chunks_wanted, expected);
+    const double near[2][3] = { { 1, 5, 1 }, { 100, 5, 30 } };
+    cr_assert(streamed_settle(&s, near, 2, 3000) > 0);
+    ecs_progress(s.ecs, DT);
+    ecs_query *q = ecs_query_create(s.ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(s.ecs, "TerrainMeshChunk") } });
+    typedef struct box { double lo[3], hi[3]; int level; } box;
+    box *boxes = NULL;
+    int count = 0;
+    ecs_iter it = ecs_query_iter(s.ecs, q);
+    while (ecs_query_next(&it)) {
+        TerrainMeshChunk *c = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++) {
+            if (c[i].hidden) continue;
+            double size = 32.0 * (1 << c[i].lod.level);
+            boxes = realloc(boxes, (size_t)(count + 1) * sizeof *boxes);
+            boxes[count++] = (box){ { c[i].x * size, c[i].y * size, c[i].z * size },
+                                    { (c[i].x + 1) * size, (c[i].y + 1) * size, (c[i].z + 1) * size }, c[i].lod.level };
+        }
+    }
+    int touching = 0, overlapping = 0;
+    for (int a = 0; a < count; a++)
+        for (int b = a + 1; b < count; b++) {
+            bool touch = true, overlap = true;
+            for (int k = 0; k < 3; k++) {
+                touch = touch && boxes[a].lo[k] <= boxes[b].hi[k] && boxes[b].lo[k] <= boxes[a].hi[k];
+                overlap = overlap && boxes[a].lo[k] < boxes[b].hi[k] && boxes[b].lo[k] < boxes[a].hi[k];
+            }
+            if (!touch) continue;
+            touching++;
+            overlapping += overlap;
+            cr_expect_leq(abs(boxes[a].level - boxes[b].level), 1, "levels %d and %d touch", boxes[a].level,
+                          boxes[b].level);
+        }
+    cr_expect_gt(touching, 0);
+    cr_expect_eq(overlapping, 0, "%d drawn chunks overlap", overlapping);
+    free(boxes);
+    streamed_close(&s);
+}
+
+/* The player's hook: false until the column chunks under the box are generated, then true;
+ * asking never generates anything. */
+Test(render_stream, region_ready_waits_for_the_collision_chunks) {
+    streamed s = streamed_open(2, &small_rings);
+    const double lo[3] = { 3, 0, 3 }, hi[3] = { 4, 2, 4 };
+    cr_expect_not(terrain_ecs_region_ready(s.te, lo, hi));
+    cr_expect_eq(terrain_world_chunk_count(s.world), 0, "asking must not generate");
+    const double eye[1][3] = { { 3, 1, 3 } };
+    cr_assert(streamed_settle(&s, eye, 1, 2000) > 0);
+    cr_expect(terrain_ecs_region_ready(s.te, lo, hi));
+    const double far_lo[3] = { 9000, 0, 9000 }, far_hi[3] = { 9001, 1, 9001 };
+    cr_expect_not(terrain_ecs_region_ready(s.te, far_lo, far_hi));
+    streamed_close(&s);
+}
+
+/* One thread (no workers): the main thread runs the background jobs itself and gets there. */
+Test(render_stream, a_single_thread_streams_too) {
+    streamed s = streamed_open(1, &small_rings);
+    const double eye[1][3] = { { 1, 5, 1 } };
+    cr_expect(streamed_settle(&s, eye, 1, 5000) > 0);
+    streamed_close(&s);
+}
