@@ -1,0 +1,157 @@
+/* walk.h — scripted walks: `--walk SCRIPT` turned into the player's input, frame by frame, so a
+ * headless run (an end-to-end test, a benchmark, a screenshot) walks the world like a player.
+ *
+ *     game_walk walk;
+ *     char error[256];
+ *     if (!game_walk_parse(spec, &walk, error, sizeof error)) {    // "straight:2000" or a file
+ *         fprintf(stderr, "demo: bad value for '--walk': %s\n", error);
+ *         return 2;
+ *     }
+ *     game_walker walker;
+ *     game_walker_start(&walker, &walk, &player);                  // after game_player_spawn
+ *     while (!game_walker_done(&walker)) {                          // each frame
+ *         input_actions actions = game_walker_step(&walker, &player, dt);
+ *         game_player_update(&player, world, &actions, dt);
+ *         ...                                                       // draw, trace, HUD
+ *     }
+ *     printf("walked %.1f m, %s\n", walker.walked, walker.stuck ? "stuck" : "arrived");
+ *     game_walk_free(&walk);
+ *
+ * Scripts. `straight:METRES` (0 < METRES ≤ 100000) walks straight ahead from wherever the player
+ * starts, in the direction it faces. Anything else is the path of a waypoint file:
+ *
+ *     # a lap round a square, 40 m a side, starting where the player stands
+ *     relative            # waypoints are offsets from the start (world axes), not coordinates
+ *     radius 2            # a waypoint is reached within 2 m (the default)
+ *     40 0                # X Z, metres; sprinting is the default gait
+ *     40 40   walk        # at walking speed
+ *     0 40    jump        # hopping all the way
+ *     0 0     fly y=30    # flying, climbing to 30 m above the start's feet
+ *
+ * - A waypoint line is `X Z` (decimal numbers, world metres, |X|, |Z| ≤ 1e9) followed by words:
+ *   `sprint` (the default) or `walk`; `jump` (jump whenever on the ground); `fly` (fly mode for
+ *   this leg: toggled on before it, off again before a leg without `fly`); `y=H` with `fly`, the
+ *   height to fly at (without it a flying leg keeps the height it starts at).
+ * - Directives, each at most once and before the first waypoint: `relative` (X Z and y= are
+ *   offsets from the walker's start), `ahead` (offsets in the start's own frame: X metres to the
+ *   right, Z metres ahead, as straight:M is `ahead` + `0 M`), `radius R` (0.1 ≤ R ≤ 1000 m).
+ *   Without `relative` or `ahead` the coordinates are absolute (world metres, at any distance).
+ * - `#` starts a comment; blank lines are skipped; LF or CRLF line ends; a UTF-8 byte order mark
+ *   is skipped. Lines are at most 1024 bytes; at most 100000 waypoints; at least one.
+ * Errors name the place and the problem, "path.walk:7: z: 'abc' is not a number", and the parse
+ * fails as a whole (a half-read path would walk somewhere else than intended).
+ *
+ * The walker turns towards the next waypoint (look_x, at most GAME_WALKER_TURN_RATE), runs at it
+ * (move_y, slower while it faces away, turning on the spot when it faces more than 90° away), and
+ * keeps the pitch a little below level (GAME_WALKER_PITCH) so pictures show both the terrain and
+ * the sky. When the last half second covered less than half of what its gait would, it is
+ * stalled: it jumps and sidesteps (moves at 45° to the right of the waypoint, then after four
+ * stalls to the left, …) for a second, which clears low walls and slides round short tall ones.
+ * Flying (toggle_fly pressed once to switch, pitch level) it holds jump or crouch to reach the
+ * leg's height, and climbs instead of jumping when stalled. A waypoint is reached within the
+ * radius, horizontally (and in 3D for `fly y=H`, which is the feet's height). Each leg has a time
+ * limit of twice its length at the gait's speed plus 5 s; running out of it ends the walk with
+ * `stuck` set, so an unreachable waypoint ends the walk rather than looping forever.
+ *
+ * Deterministic: the walker reads only the player and the dt it is given (no clocks, no
+ * generator), so a walk replays bit for bit. Its rules are in seconds, so it behaves the same at
+ * 30 and at 144 frames a second. Frames in which the player waited for terrain (player.waiting)
+ * do not count against the time limit: a walk whose terrain never becomes ready waits as long as
+ * the player does, and the program's own frame limit is what ends that.
+ * Coordinates are doubles and every difference is taken in double before anything is rounded to
+ * float, so a walk 100 km out steers as it does at the origin (tests/game/test_walk.c walks the
+ * same relative path at both and compares the displacements).
+ */
+#ifndef GAME_WALK_H
+#define GAME_WALK_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "player.h"
+
+#define GAME_WALK_MAX_POINTS 100000
+#define GAME_WALK_MAX_LINE 1024           /* bytes before the '\n' (a CRLF's CR counts) */
+#define GAME_WALK_MAX_COORD 1e9           /* metres, for X, Z and y= */
+#define GAME_WALK_MAX_STRAIGHT 100000.0   /* metres, for straight:M */
+#define GAME_WALK_MAX_FILE (16 << 20)     /* bytes of a waypoint file */
+#define GAME_WALK_MIN_RADIUS 0.1
+#define GAME_WALK_MAX_RADIUS 1000.0
+#define GAME_WALK_DEFAULT_RADIUS 2.0f
+
+#define GAME_WALKER_TURN_RATE 6.0f        /* radians a second: 0.1 a frame at 60 Hz */
+#define GAME_WALKER_PITCH (-0.1f)         /* the view's pitch while walking */
+
+/* For a program's usage text. */
+#define GAME_WALK_USAGE "straight:METRES (0 < METRES <= 100000) or a waypoint file (game/walk.h)"
+
+/* What a waypoint's X Z (and y=) are measured from. */
+typedef enum game_walk_frame {
+    GAME_WALK_ABSOLUTE,               /* world metres */
+    GAME_WALK_RELATIVE,               /* offsets from the walker's start, world axes */
+    GAME_WALK_AHEAD,                  /* X to the right, Z ahead of the start's position and yaw */
+} game_walk_frame;
+
+typedef struct game_walk_point {
+    double x, z;
+    double y;                         /* the height to fly at, when has_y */
+    bool walk;                        /* walk instead of sprint */
+    bool jump;                        /* jump whenever on the ground */
+    bool fly;                         /* in fly mode */
+    bool has_y;                       /* only with fly */
+} game_walk_point;
+
+typedef struct game_walk {
+    game_walk_point *points;          /* count of them, owned (game_walk_free) */
+    int count;                        /* ≥ 1 after a successful parse */
+    game_walk_frame frame;
+    float radius;                     /* reach radius, metres; 0 = GAME_WALK_DEFAULT_RADIUS */
+} game_walk;
+
+/* `spec` is straight:METRES or the path of a waypoint file. On success *out holds the walk (free it
+ * with game_walk_free); on failure *out is zeroed (freeing it is harmless), `error` (when given)
+ * receives one line naming the problem, and false is returned. */
+bool game_walk_parse(const char *spec, game_walk *out, char *error, size_t error_size);
+/* A waypoint file's contents, text[0, size) (no NUL needed); `name` is what errors call it
+ * ("walk.txt:3: …"). Same outcome as game_walk_parse. */
+bool game_walk_parse_text(const char *text, size_t size, const char *name, game_walk *out, char *error,
+                          size_t error_size);
+void game_walk_free(game_walk *walk);
+
+#define GAME_WALKER_HISTORY 64
+
+/* Plain data; the fields above `private` are the progress a program may show. */
+typedef struct game_walker {
+    int index;                        /* the waypoint being walked to; count once all are reached */
+    int frames;                       /* steps taken */
+    double time;                      /* seconds walked (frames the player waited not counted) */
+    double walked;                    /* path length covered, horizontally, metres */
+    double from_start;                /* straight-line horizontal distance from the start, metres */
+    bool done;                        /* arrived, or gave up (stuck) */
+    bool stuck;                       /* gave up: a leg ran out of time */
+    int stalls;                       /* times a stall was detected (jump and sidestep) */
+
+    /* private */
+    const game_walk *walk;            /* borrowed: must outlive the walker */
+    double origin[3];                 /* the feet at the start */
+    float origin_yaw;
+    double last[2];                   /* position at the previous step */
+    float last_dt;                    /* the dt the previous step was given */
+    double leg_start, leg_limit;      /* seconds */
+    double fly_height;                /* for a flying leg without y= */
+    double detour_until;              /* sidestepping until then (seconds) */
+    int leg_stalls;
+    bool toggled;                     /* pressed toggle_fly on the previous step */
+    struct { double time, x, y, z; } history[GAME_WALKER_HISTORY];
+    int history_count, history_next;
+} game_walker;
+
+/* Starts the walk from where the player is now (position and yaw: relative and ahead walks are
+ * measured from there). `walk` must stay alive and unchanged while the walker uses it. */
+void game_walker_start(game_walker *walker, const game_walk *walk, const game_player *player);
+/* This frame's actions for the player, who is about to be updated with the same dt. Updates the
+ * progress first (waypoints reached, distance, the time limit); once done, returns no input. */
+input_actions game_walker_step(game_walker *walker, const game_player *player, float dt);
+bool game_walker_done(const game_walker *walker);
+
+#endif
