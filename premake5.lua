@@ -67,6 +67,7 @@ project "engine"
 project "game"
   kind "StaticLib"
   files { "game/**.c", "game/**.h" }
+  excludes { "game/main.c" }
 
 -- Modules: one library each, built on the engine (modules/NAME/**.c).
 project "terrain"
@@ -120,4 +121,5 @@ program("terrain_mesh", { files = { "tools/src/terrain_mesh.c" } })
 program("test_render", { files = { "tests/render/**.c", "tests/render/**.h" }, links = { "criterion" } })
 program("hello_scene", { files = { "tools/examples/hello_scene.c" } })
 program("hello_terrain", { files = { "tools/examples/hello_terrain.c" } })
+program("world", { files = { "game/main.c" } })
 program("test_game", { files = { "tests/game/**.c", "tests/game/**.h" }, links = { "criterion" } })

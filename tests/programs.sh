@@ -28,7 +28,7 @@ expect() {
   fi
 }
 
-for program in bench trace_report hello_systems hello_scene hello_terrain; do
+for program in bench trace_report hello_systems hello_scene hello_terrain world; do
   p=$bin/$program
   expect "$program: unknown flag" 2 "unknown option '--no-such-flag'.*" -- "$p" --no-such-flag
   expect "$program: usage on error" 2 "usage: $program" -- "$p" --no-such-flag
@@ -180,15 +180,27 @@ expect "hello_terrain: headless run" 0 "16 chunks, [0-9]+ mesh chunks \([0-9]+ d
   "$bin/hello_terrain" --headless --size 96x64 --radius 1 --rings 1 --frames 2 --seed 3 --screenshot "$tmp/terrain.png"
 expect "hello_terrain: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 -N4 "$tmp/terrain.png"
 expect "hello_terrain: bad --radius" 2 "bad value for '--radius'" -- "$bin/hello_terrain" --radius 99
-expect "hello_terrain: bad --walk" 2 "bad value for '--walk': 'sideways:5'" -- "$bin/hello_terrain" --walk sideways:5
-expect "hello_terrain: negative --walk" 2 "bad value for '--walk'" -- "$bin/hello_terrain" --walk straight:-5
-# A scripted walk over generated terrain: it gets there, the eye never enters the ground, and the
-# trace has every phase of the pipeline.
-expect "hello_terrain: scripted walk, eye always in the air" 0 "walked (1[0-9][0-9]|[2-9][0-9][0-9])\.[0-9] m in [0-9]+ frames, eye in solid on 0 frames" -- \
-  "$bin/hello_terrain" --headless --size 64x48 --radius 1 --rings 0 --walk straight:100 --seed 5 --trace "$tmp/walk.json"
+
+# The walkable world: bad values get usage; a short scripted walk over generated terrain gets
+# there, the eye never enters the ground, the trace has every phase of the pipeline and the
+# streaming counters, and the screenshot is a PNG.
+expect "world: bad --walk" 2 "bad value for '--walk': sideways:5: cannot open" -- "$bin/world" --walk sideways:5
+expect "world: negative --walk" 2 "bad value for '--walk': straight:-5: the distance must be" -- "$bin/world" --walk straight:-5
+printf 'relative\n10 10\n10 ten\n' >"$tmp/bad.walk"
+expect "world: bad waypoint file" 2 "bad value for '--walk': .*bad.walk:3: z: 'ten' is not a number" -- \
+  "$bin/world" --walk "$tmp/bad.walk"
+expect "world: bad --size" 2 "bad value for '--size'" -- "$bin/world" --size 10x10000000
+expect "world: --record with --replay" 2 "cannot be used together" -- "$bin/world" --record a --replay b
+expect "world: missing replay" 1 "$tmp/none.rec" -- "$bin/world" --headless --replay "$tmp/none.rec"
+expect "world: bad --memory" 2 "bad value for '--memory'" -- "$bin/world" --memory 1
+expect "world: scripted walk, eye always in the air" 0 "walked (8[0-9]|9[0-9]|1[0-9][0-9])\.[0-9] m .*eye in solid on 0 frames" -- \
+  "$bin/world" --headless --size 64x48 --radius 1 --levels 2 --walk straight:90 --seed 5 --trace "$tmp/walk.json" \
+  --screenshot "$tmp/world.png"
+expect "world: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 -N4 "$tmp/world.png"
 for phase in input game stream generate stabilize mesh lod cull draw; do
-  expect "hello_terrain: the walk's trace has phase $phase" 0 "(^| )$phase( |$)" -- "$bin/trace_report" "$tmp/walk.json"
+  expect "world: the walk's trace has phase $phase" 0 "(^| )$phase( |$)" -- "$bin/trace_report" "$tmp/walk.json"
 done
+expect "world: the walk's trace has streaming jobs" 0 "terrain stream mesh" -- "$bin/trace_report" "$tmp/walk.json"
 
 echo "programs: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]

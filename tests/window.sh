@@ -4,7 +4,7 @@
 #   1. the GLFW window test in test_render (open, ten frames, screenshot, not empty);
 #   2. record in a window with key presses sent through the X server (xdotool), then replay the
 #      recording offscreen: the camera ends at the same place, to the last printed digit;
-#   3. the same with hello_terrain's player (walk, jump, quit).
+#   3. the same with the world's player (walk, jump, quit).
 # Leak checking is off here: Mesa's X11 driver is unloaded before exit, so its leftovers cannot
 # even be named in a suppression. Ends with "N passed, N failed".
 set -uo pipefail
@@ -47,26 +47,26 @@ else
   sed 's/^/    replay: /' "$tmp/replay.out" | tail -5
 fi
 
-# The same with the terrain demo and its player: walk, jump, walk, quit; the replay offscreen
-# ends with the player at the same place.
-"$bin/hello_terrain" --size 160x90 --radius 1 --rings 0 --record "$tmp/terrain.rec" >"$tmp/terrain-record.out" 2>&1 &
+# The same with the world and its player: walk, jump, walk, quit; the replay offscreen ends with
+# the player at the same place.
+"$bin/world" --size 160x90 --radius 1 --levels 1 --record "$tmp/terrain.rec" >"$tmp/terrain-record.out" 2>&1 &
 terrain=$!
-if window=$(timeout 60 xdotool search --sync --name '^hello_terrain$' | head -1) && [[ -n $window ]]; then
+if window=$(timeout 120 xdotool search --sync --name '^world$' | head -1) && [[ -n $window ]]; then
   xdotool windowfocus --sync "$window"
   xdotool keydown w; sleep 0.5; xdotool key space; sleep 0.5; xdotool keyup w
   xdotool key Escape
 fi
-timeout 60 tail --pid="$terrain" -f /dev/null
+timeout 120 tail --pid="$terrain" -f /dev/null
 wait "$terrain"
 recorded=$?
-"$bin/hello_terrain" --headless --size 160x90 --radius 1 --rings 0 --replay "$tmp/terrain.rec" >"$tmp/terrain-replay.out" 2>&1
+"$bin/world" --headless --size 160x90 --radius 1 --levels 1 --replay "$tmp/terrain.rec" >"$tmp/terrain-replay.out" 2>&1
 replayed=$?
 player() { grep -o 'player at ([^)]*)' "$1"; }
-# The window's title loses "(loading)" once the first frame is meshed, so the keys reach a running
-# game; the player must have left its spawn column (16, 16).
+# The window's title loses "(loading)" once the start area is in, so the keys reach a running
+# game; the player must have left its spawn column (0, 0).
 if [[ $recorded -eq 0 && $replayed -eq 0 && -n $(player "$tmp/terrain-record.out") &&
       $(player "$tmp/terrain-record.out") == "$(player "$tmp/terrain-replay.out")" &&
-      ! $(player "$tmp/terrain-record.out") =~ \(16\.0000,\ [-0-9.]+,\ 16\.0000\) ]]; then
+      ! $(player "$tmp/terrain-record.out") =~ \(0\.0000,\ [-0-9.]+,\ 0\.0000\) ]]; then
   pass "window: recorded terrain walk replays offscreen to the same place ($(player "$tmp/terrain-replay.out"))"
 else
   fail "window: recorded terrain walk replays offscreen to the same place"

@@ -450,7 +450,7 @@ void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double
 /* ---- streaming ----------------------------------------------------------------------------
  *
  * Instead of a fixed area, chunks follow viewers (the player, a second camera):
- *     terrain_ecs_stream(te, &(terrain_stream_desc){ .half_width = 4, .levels = 3,
+ *     terrain_ecs_stream(te, &(terrain_stream_desc){ .half_width = 2, .levels = 3,
  *                                                   .y_min = -200, .y_max = 240 });
  *     each frame:  terrain_ecs_set_viewers(te, &eye, 1);  ecs_progress(ecs, dt);  terrain_ecs_draw(...)
  *
@@ -470,9 +470,10 @@ void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double
  * waits for them. A mesh chunk whose samples cannot reach any interface of its column chunks
  * (terrain_stacks_interface_range) is empty without being sampled. */
 typedef struct terrain_stream_desc {
-    int half_width;                   /* level-0 mesh chunks each way from the viewer; 0 = 4 */
+    int half_width;                   /* level-0 mesh chunks each way from the viewer; 0 = 2 */
     int levels;                       /* rings of detail (level 0 included); 0 = 3 */
-    double y_min, y_max;              /* metres the mesh layers cover; equal = −224 … 288 */
+    double y_min, y_max;              /* metres the mesh layers cover; equal = the generation
+                                         parameters' relief ± 48 m (base ± relief ± 48) */
     int collision_radius;             /* column chunks each way kept generated; 0 = 2 */
     float upload_budget_ms;           /* main-thread GPU uploads and frees a frame; 0 = 2 ms */
     size_t memory_budget;             /* bytes of stacks and meshes kept (CPU + GPU); 0 = 384 MB */

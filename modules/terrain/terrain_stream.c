@@ -596,7 +596,7 @@ static void terrain_stream_mesh_system(ecs_iter *it) {
 
 static terrain_stream_desc stream_defaults(const terrain_ecs *te, const terrain_stream_desc *desc) {
     terrain_stream_desc d = desc ? *desc : (terrain_stream_desc){ 0 };
-    if (d.half_width <= 0) d.half_width = 4;
+    if (d.half_width <= 0) d.half_width = 2;
     if (d.levels <= 0) d.levels = 3;
     if (d.levels > 12) d.levels = 12;
     if (d.levels > 1 && d.half_width % 2) d.half_width++;   /* rings align with coarser chunks */

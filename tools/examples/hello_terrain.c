@@ -1,22 +1,15 @@
-/* hello_terrain — the terrain module on the engine: column chunks and mesh chunks as entities,
- * generated and meshed in parallel by the generate and mesh phases, culled, drawn with triplanar
- * materials, and walked by the game's player controller (game/player.h): WASD or the left stick
- * to walk, the mouse (click to capture) or the right stick to look, Space to jump, Shift to
- * sprint, Ctrl or C to crouch, F to fly, F12 for a screenshot.
+/* hello_terrain — the terrain module in one short program: column chunks and mesh chunks as
+ * entities, generated and meshed in parallel by the generate and mesh phases, culled, and drawn
+ * with triplanar materials while the camera circles the start. The walkable, streaming world
+ * is game/ (the world program); this shows the module alone.
  *
  *   hello_terrain [--seed S] [--radius R] [--rings N] [--size WxH] [--headless] [--frames N]
- *                 [--walk straight:METRES] [--record FILE] [--replay FILE] [--bindings FILE]
  *                 [--screenshot FILE] [--threads N] [--trace FILE]
- *
- * --walk straight:M walks the player M metres ahead, sprinting and jumping when it stalls, then
- * stops, and reports how far it went and on how many frames its eye was inside the ground
- * (which must be none).
  *
  * Full detail covers 2R × 2R chunks of 32 m around the start; each of N rings beyond it is meshed
  * at half the resolution of the one inside, out to 2R·32·2^N metres, with closed seams.
  */
 #include "core/core.h"
-#include "game/player.h"
 #include "ecs/ecs.h"
 #include "gfx/gfx.h"
 #include "input/input.h"
@@ -31,9 +24,8 @@
 
 typedef struct options {
     core_common_args common;
-    const char *size, *screenshot, *walk, *record, *replay, *bindings;
+    const char *size, *screenshot;
     int seed, radius, rings, frames;
-    double walk_metres;
     bool headless;
 } options;
 
@@ -47,12 +39,8 @@ static int parse(int argc, char **argv, options *o, int *width, int *height) {
         { "headless", CORE_OPTION_FLAG, &o->headless, NULL, "render offscreen with OSMesa" },
         { "frames", CORE_OPTION_INT, &o->frames, "N", "stop after N frames (0 = when closed)", 0, 100000000 },
         { "screenshot", CORE_OPTION_STRING, &o->screenshot, "FILE", "write the last frame as a PNG" },
-        { "walk", CORE_OPTION_STRING, &o->walk, "SCRIPT", "scripted walk: straight:METRES" },
-        { "record", CORE_OPTION_STRING, &o->record, "FILE", "record every frame's input" },
-        { "replay", CORE_OPTION_STRING, &o->replay, "FILE", "play recorded input back" },
-        { "bindings", CORE_OPTION_STRING, &o->bindings, "FILE", "input bindings (data/input/bindings.txt)" },
     };
-    core_cli cli = { .program = "hello_terrain", .summary = "generate, mesh and fly over terrain",
+    core_cli cli = { .program = "hello_terrain", .summary = "generate, mesh and draw terrain",
                      .options = list, .option_count = CORE_COUNTOF(list) };
     o->seed = 1;
     o->radius = 2;
@@ -66,36 +54,7 @@ static int parse(int argc, char **argv, options *o, int *width, int *height) {
         core_cli_print_usage(&cli, stderr);
         return 2;
     }
-    char *end = NULL;
-    if (o->walk && (strncmp(o->walk, "straight:", 9) != 0 || (o->walk_metres = strtod(o->walk + 9, &end)) <= 0 ||
-                    *end || o->walk_metres > 100000)) {
-        fprintf(stderr, "hello_terrain: bad value for '--walk': '%s' is not straight:METRES (0 < METRES <= 100000)\n",
-                o->walk);
-        core_cli_print_usage(&cli, stderr);
-        return 2;
-    }
     return -1;
-}
-
-/* The scripted walk: ahead at a sprint, with a jump (and a small turn) whenever the last half
- * second covered less than half the distance a sprint would (a ledge or a slope too steep). The
- * distance counts from the start in a straight line. */
-typedef struct walker {
-    double start[2], recent[30][2];
-    int frames;
-} walker;
-
-static input_actions walker_actions(walker *w, const game_player *player) {
-    int slot = w->frames % 30;
-    double moved = hypot(player->position[0] - w->recent[slot][0], player->position[2] - w->recent[slot][1]);
-    bool stalled = w->frames >= 30 && moved < 0.5 * 8.0 * 0.5;
-    w->recent[slot][0] = player->position[0];
-    w->recent[slot][1] = player->position[2];
-    w->frames++;
-    uint32_t down = INPUT_ACTION_BIT(INPUT_ACTION_SPRINT) | (stalled ? INPUT_ACTION_BIT(INPUT_ACTION_JUMP) : 0);
-    /* Stalled: jump, and turn a little, so a wall too high to jump is walked around. */
-    return (input_actions){ .move_y = 1, .look_x = stalled ? 0.05f : 0.0f, .down = down,
-                            .pressed = stalled ? INPUT_ACTION_BIT(INPUT_ACTION_JUMP) : 0 };
 }
 
 /* Frame rate, chunk counts, position and seed in the top-left corner. */
@@ -125,78 +84,52 @@ int main(int argc, char **argv) {
     terrain_generation_params params = terrain_generation_defaults((uint64_t)o.seed);
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = params });
     terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = params.sea_level });
-    if (!renderer) return 1;
+    gfx_text *hud = gfx_text_create(gfx);
+    /* Input only to notice Escape and the window closing. */
+    input_system *input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(gfx) });
+    if (!renderer || !hud || !input) return 1;
     terrain_ecs *te = terrain_ecs_create(ecs, world);
     /* Mesh layers that cover the relief, with a margin for overhangs. */
     double low = params.base_height - params.relief_height - 48, high = params.base_height + params.relief_height + 48;
     terrain_ecs_spawn_rings(te, 2 * o.radius, o.rings + 1, low, high);
-    input_bindings *bindings = NULL;
-    if (o.bindings && !(bindings = input_bindings_load(o.bindings, NULL))) return 1;
-    input_system *input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(gfx), .bindings = bindings,
-                                                      .record_path = o.record, .replay_path = o.replay });
-    gfx_text *hud = gfx_text_create(gfx);
-    if (!input || !hud) return 1;
 
-    /* The player stands on solid ground near the middle of chunk (0, 0). */
-    game_player player;
-    game_player_init(&player, &(game_player_params){ 0 });
-    game_player_spawn(&player, world, 16.0, 16.0);
-    player.yaw = 3.14159265f;                  /* towards +z: the slopes in view face the sun */
-    player.pitch = -0.1f;
-    terrain_view view = { 0 };
+    /* The camera circles the start 40 m above the ground there, looking ahead and a little down. */
+    double ground = terrain_stacks_surface(terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 }), 0, 0);
+    terrain_view view = { .pitch = -0.25f };
     bool windowed = gfx_backend_get(gfx) == GFX_BACKEND_WINDOW;
-    int frames = o.frames ? o.frames : (windowed || o.walk || o.replay ? 0 : 30);
-    walker walk = { .start = { player.position[0], player.position[2] } };
-    int eye_in_solid = 0;
-    double walked = 0;
+    int frames = o.frames ? o.frames : (windowed ? 0 : 30);
     uint64_t start = core_time_ns(), last = start;
     for (int frame = 0; frames == 0 || frame < frames; frame++) {
+        if (!input_update(input, 1.0f / 60.0f) || gfx_window_should_close(gfx) ||
+            (input_actions_get(input)->pressed & INPUT_ACTION_BIT(INPUT_ACTION_QUIT)))
+            break;
         trace_frame_begin();
         uint64_t now = core_time_ns();
-        double frame_seconds = (double)(now - last) * 1e-9;   /* measured, for the HUD */
-        float dt = windowed ? (float)frame_seconds : 1.0f / 60.0f;
+        double frame_seconds = (double)(now - last) * 1e-9;
         last = now;
-        if (!input_update(input, dt)) break;
-        const input_actions *actions = input_actions_get(input);
-        if ((actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_QUIT)) || gfx_window_should_close(gfx)) break;
-        if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_SCREENSHOT)) gfx_screenshot(gfx, "terrain.png");
-        input_actions scripted;
-        if (o.walk) {
-            scripted = walker_actions(&walk, &player);
-            actions = &scripted;
-        }
-        game_player_update(&player, world, actions, input_frame_dt(input));
-        game_player_eye(&player, view.camera);
-        eye_in_solid += terrain_field_at(world, view.camera[0], view.camera[1], view.camera[2], 0) >= 0;
-        walked = hypot(player.position[0] - walk.start[0], player.position[2] - walk.start[1]);
-        /* A walk ends at its distance, or after twice the time a sprint would take (stuck). */
-        bool walk_over = o.walk && (walked >= o.walk_metres || frame > (int)(o.walk_metres / 8.0 * 120.0) + 60);
-        view.yaw = player.yaw;
-        view.pitch = player.pitch;
+        float t = windowed ? (float)((now - start) * 1e-9) : (float)frame / 60.0f;
+        view.yaw = 0.05f * t;
+        view.camera[0] = 60.0 * sin(view.yaw) + 16.0;
+        view.camera[1] = ground + 40.0;
+        view.camera[2] = 60.0 * cos(view.yaw) + 16.0;
         gfx_size(gfx, &width, &height);
         view.aspect = (float)width / (float)height;
-        view.time = windowed ? (float)((now - start) * 1e-9) : (float)frame / 60.0f;
+        view.time = t;
         terrain_ecs_set_view(te, &view);          /* what the cull phase tests against */
         gfx_frame_begin(gfx);
-        ecs_progress(ecs, dt);                     /* generate, mesh, cull and upload */
+        ecs_progress(ecs, 1.0f / 60.0f);           /* generate, mesh, cull and upload */
         terrain_ecs_draw(te, renderer, &view);
         draw_hud(hud, te, &view, frame_seconds, o.seed);
-        bool last_frame = (frames && frame + 1 == frames) || walk_over;
-        if (o.screenshot && last_frame && !gfx_screenshot(gfx, o.screenshot)) rc = 1;
+        if (o.screenshot && frames && frame + 1 == frames && !gfx_screenshot(gfx, o.screenshot)) rc = 1;
         gfx_frame_end(gfx);
         trace_frame_end();
         if (frame == 0) gfx_window_set_title(gfx, "hello_terrain");   /* the first frame is meshed */
-        if (walk_over) break;
     }
-    if (o.walk) printf("hello_terrain: walked %.1f m in %d frames, eye in solid on %d frames\n", walked, walk.frames,
-                       eye_in_solid);
     terrain_ecs_stats stats = terrain_ecs_stats_get(te);
     printf("hello_terrain: %d chunks, %d mesh chunks (%d drawn), %llu triangles, %llu frames\n", stats.chunks,
            stats.mesh_chunks, stats.mesh_chunks_uploaded, (unsigned long long)stats.triangles,
            (unsigned long long)gfx_frame_index(gfx));
-    printf("hello_terrain: player at (%.4f, %.4f, %.4f)\n", player.position[0], player.position[1], player.position[2]);
     input_destroy(input);
-    input_bindings_destroy(bindings);
     gfx_text_destroy(hud);
     terrain_ecs_destroy(te);
     terrain_renderer_destroy(renderer);

@@ -1,0 +1,284 @@
+/* app.c — the walkable world's frame loop (app.h). */
+#include "app.h"
+
+#include "core/core.h"
+#include "ecs/ecs.h"
+#include "gfx/gfx.h"
+#include "input/input.h"
+#include "jobs/jobs.h"
+#include "player.h"
+#include "trace/trace.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+
+#define APP_HITCH_MS 33.0
+
+struct game_app {
+    game_app_desc desc;
+    gfx_context *gfx;
+    job_system *jobs;
+    ecs_world *ecs;
+    terrain_world *world;
+    terrain_renderer *renderer;
+    terrain_ecs *terrain;
+    input_bindings *bindings;
+    input_system *input;
+    gfx_text *hud;
+    game_player player;
+    game_walker walker;
+    terrain_view view;
+    bool windowed, interactive, loading, over;
+    int frames, loading_frames;
+    uint64_t start_ns, last_ns;
+    double frame_seconds;
+    double *cpu_ms;
+    size_t cpu_count, cpu_capacity;
+    int eye_in_solid, waiting;
+};
+
+/* The player waits at the edge of what has streamed in (interactive play only, see app.h). */
+static bool app_region_ready(void *user, const double min[3], const double max[3]) {
+    game_app *app = user;
+    return terrain_ecs_region_ready(app->terrain, min, max);
+}
+
+static bool app_open_input(game_app *app) {
+    const game_app_desc *d = &app->desc;
+    if (d->bindings_path && !(app->bindings = input_bindings_load(d->bindings_path, NULL))) return false;
+    app->input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(app->gfx), .bindings = app->bindings,
+                                             .record_path = d->record_path, .replay_path = d->replay_path });
+    return app->input != NULL;
+}
+
+static void app_open_terrain(game_app *app) {
+    terrain_generation_params params = terrain_generation_defaults(app->desc.seed);
+    app->world = terrain_world_create(&(terrain_world_desc){ .generation = params, .generate = app->desc.generate,
+                                                             .generate_user = app->desc.generate_user });
+    app->ecs = ecs_world_create(&(ecs_world_desc){ .jobs = app->jobs });
+    app->terrain = terrain_ecs_create(app->ecs, app->world);
+    terrain_ecs_stream(app->terrain, &app->desc.stream);
+}
+
+static void app_spawn_player(game_app *app) {
+    const game_app_desc *d = &app->desc;
+    game_player_params params = { 0 };
+    if (app->interactive) {
+        params.region_ready = app_region_ready;
+        params.region_user = app;
+    }
+    game_player_init(&app->player, &params);
+    game_player_spawn(&app->player, app->world, d->spawn[0], d->spawn[1]);
+    app->player.yaw = 3.14159265f;             /* towards +z: the slopes in view face the sun */
+    app->player.pitch = GAME_WALKER_PITCH;
+}
+
+game_app *game_app_create(const game_app_desc *desc) {
+    game_app *app = core_calloc(1, sizeof *app);
+    app->desc = *desc;
+    game_app_desc *d = &app->desc;
+    if (!d->width || !d->height) d->width = 1280, d->height = 720;
+    if (!(d->max_loading_seconds > 0)) d->max_loading_seconds = 300.0;
+    app->gfx = gfx_create(&(gfx_desc){ .width = d->width, .height = d->height, .title = "world (loading)",
+                                       .headless = d->headless });
+    if (!app->gfx) goto fail;
+    app->windowed = gfx_backend_get(app->gfx) == GFX_BACKEND_WINDOW;
+    app->interactive = !d->walk && !d->record_path && !d->replay_path;
+    /* Offscreen nobody can close the window: something has to end the run. */
+    if (!app->windowed && !d->frames && !d->walk && !d->replay_path) d->frames = 300;
+    app->jobs = job_system_create(&(job_system_desc){ .threads = d->threads });
+    app_open_terrain(app);
+    app->renderer = terrain_renderer_create(app->gfx, &(terrain_renderer_desc){
+        .sea_level = terrain_world_generation(app->world)->sea_level });
+    if (!app->renderer || !app_open_input(app) || !(app->hud = gfx_text_create(app->gfx))) goto fail;
+    app_spawn_player(app);
+    app->loading = true;
+    app->start_ns = app->last_ns = core_time_ns();
+    return app;
+fail:
+    game_app_destroy(app);
+    return NULL;
+}
+
+void game_app_destroy(game_app *app) {
+    if (!app) return;
+    input_destroy(app->input);
+    input_bindings_destroy(app->bindings);
+    gfx_text_destroy(app->hud);
+    if (app->terrain) terrain_ecs_destroy(app->terrain);
+    terrain_renderer_destroy(app->renderer);
+    ecs_world_destroy(app->ecs);
+    terrain_world_destroy(app->world);
+    job_system_destroy(app->jobs);
+    gfx_destroy(app->gfx);
+    core_free(app->cpu_ms, app->cpu_capacity * sizeof *app->cpu_ms);
+    core_free(app, sizeof *app);
+}
+
+/* ---- one frame ---------------------------------------------------------------------------- */
+
+/* The start area is in: every chunk the rings want around the spawn is meshed (or known empty)
+ * and the player's collision chunks are generated. */
+static bool app_loaded(game_app *app) {
+    terrain_stream_stats s = terrain_ecs_stream_stats(app->terrain);
+    double feet[3] = { app->player.position[0], app->player.position[1], app->player.position[2] };
+    double lo[3] = { feet[0] - 8, feet[1] - 8, feet[2] - 8 }, hi[3] = { feet[0] + 8, feet[1] + 8, feet[2] + 8 };
+    bool ready = s.mesh_chunks_wanted > 0 && s.mesh_chunks_ready == s.mesh_chunks_wanted &&
+                 terrain_ecs_region_ready(app->terrain, lo, hi);
+    double waited = (double)(core_time_ns() - app->start_ns) * 1e-9;
+    if (!ready && waited >= app->desc.max_loading_seconds) {
+        core_warn("game", "start area not ready after %.0f s (%d of %d chunks): starting anyway", waited,
+                  s.mesh_chunks_ready, s.mesh_chunks_wanted);
+        return true;
+    }
+    return ready;
+}
+
+static void app_draw_hud(game_app *app) {
+    if (app->desc.no_hud) return;
+    terrain_stream_stats s = terrain_ecs_stream_stats(app->terrain);
+    const float white[4] = { 1, 1, 1, 1 };
+    double seconds = app->frame_seconds;
+    gfx_text_print(app->hud, 8, 8, 2, white, "%.0f fps  %.1f ms%s", seconds > 0 ? 1.0 / seconds : 0.0, seconds * 1e3,
+                   app->loading ? "  loading" : "");
+    gfx_text_print(app->hud, 8, 30, 2, white, "chunks %d resident, %d pending, %d jobs, %.0f MB",
+                   s.mesh_chunks_ready + s.mesh_chunks_kept, s.mesh_chunks_wanted - s.mesh_chunks_ready,
+                   s.jobs_in_flight, (double)s.resident_bytes / (1024.0 * 1024.0));
+    gfx_text_print(app->hud, 8, 52, 2, white, "x %.1f  y %.1f  z %.1f  seed %llu", app->view.camera[0],
+                   app->view.camera[1], app->view.camera[2], (unsigned long long)app->desc.seed);
+    gfx_text_draw(app->hud);
+}
+
+/* Input and the player; false when the run is over (quit, closed, end of a replay). */
+static bool app_update_player(game_app *app, float dt) {
+    static const input_actions none = { 0 };
+    const input_actions *actions = &none;
+    /* While loading, a recording neither records nor replays: loading takes however long it
+     * takes, and frame N of a recording must be frame N of its replay. */
+    bool read_input = !app->loading || app->interactive;
+    if (read_input) {
+        if (!input_update(app->input, dt)) return false;
+        actions = input_actions_get(app->input);
+    }
+    if ((actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_QUIT)) || gfx_window_should_close(app->gfx)) return false;
+    if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_SCREENSHOT)) gfx_screenshot(app->gfx, "world.png");
+    if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_FULLSCREEN)) gfx_window_toggle_fullscreen(app->gfx);
+    if (app->loading) return true;
+    float step = input_frame_dt(app->input);
+    input_actions scripted;
+    if (app->desc.walk) {
+        scripted = game_walker_step(&app->walker, &app->player, step);
+        actions = &scripted;
+    }
+    game_player_update(&app->player, app->world, actions, step);
+    app->waiting += app->player.waiting;
+    return true;
+}
+
+static void app_update_view(game_app *app) {
+    game_player_eye(&app->player, app->view.camera);
+    int width, height;
+    gfx_size(app->gfx, &width, &height);
+    app->view.yaw = app->player.yaw;
+    app->view.pitch = app->player.pitch;
+    app->view.aspect = (float)width / (float)height;
+    app->view.time = app->windowed ? (float)((double)(app->last_ns - app->start_ns) * 1e-9)
+                                   : (float)(app->frames + app->loading_frames) / 60.0f;
+    terrain_ecs_set_viewers(app->terrain, &app->view.camera, 1);
+    terrain_ecs_set_view(app->terrain, &app->view);   /* what the cull phase tests against */
+}
+
+static void app_record_cpu(game_app *app, double ms) {
+    app->cpu_ms = core_grow(app->cpu_ms, &app->cpu_capacity, app->cpu_count + 1, sizeof *app->cpu_ms);
+    app->cpu_ms[app->cpu_count++] = ms;
+}
+
+static bool app_last_frame(const game_app *app) {
+    if (app->loading) return false;
+    if (app->desc.frames && app->frames + 1 >= app->desc.frames) return true;
+    return app->desc.walk && game_walker_done(&app->walker);
+}
+
+static void app_finish_loading(game_app *app) {
+    app->loading = false;
+    if (app->desc.walk) game_walker_start(&app->walker, app->desc.walk, &app->player);
+    gfx_window_set_title(app->gfx, "world");
+}
+
+bool game_app_frame(game_app *app) {
+    if (app->over) return false;
+    trace_frame_begin();
+    uint64_t now = core_time_ns();
+    app->frame_seconds = (double)(now - app->last_ns) * 1e-9;
+    app->last_ns = now;
+    float dt = app->windowed ? (float)app->frame_seconds : 1.0f / 60.0f;
+    bool running = app_update_player(app, dt);
+    app_update_view(app);
+    if (!app->loading)
+        app->eye_in_solid += terrain_field_at(app->world, app->view.camera[0], app->view.camera[1],
+                                              app->view.camera[2], 0) >= 0;
+    gfx_frame_begin(app->gfx);
+    ecs_progress(app->ecs, dt);                /* stream, generate, mesh, lod, cull, upload */
+    terrain_ecs_draw(app->terrain, app->renderer, &app->view);
+    app_draw_hud(app);
+    double cpu_ms = (double)(core_time_ns() - now) * 1e-6;
+    bool last = !running || app_last_frame(app);
+    if (last && app->desc.screenshot_path && !gfx_screenshot(app->gfx, app->desc.screenshot_path)) running = false;
+    gfx_frame_end(app->gfx);
+    trace_frame_end();
+    if (app->loading) {
+        app->loading_frames++;
+        if (app_loaded(app)) app_finish_loading(app);
+    } else {
+        app->frames++;
+        app_record_cpu(app, cpu_ms);
+    }
+    app->over = last;
+    return !last;
+}
+
+/* ---- results ------------------------------------------------------------------------------ */
+
+static int compare_doubles(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double percentile(const double *sorted, size_t count, double p) {
+    if (count == 0) return 0.0;
+    size_t i = (size_t)ceil(p * (double)count);
+    return sorted[i == 0 ? 0 : (i > count ? count : i) - 1];
+}
+
+game_app_stats game_app_stats_get(const game_app *app) {
+    game_app_stats s = { .frames = app->frames, .loading_frames = app->loading_frames,
+                         .eye_in_solid_frames = app->eye_in_solid, .waiting_frames = app->waiting };
+    memcpy(s.eye, app->view.camera, sizeof s.eye);
+    memcpy(s.feet, app->player.position, sizeof s.feet);
+    if (app->desc.walk && !app->loading) {
+        s.walked = app->walker.walked;
+        s.from_start = app->walker.from_start;
+        s.walk_done = app->walker.done;
+        s.walk_stuck = app->walker.stuck;
+    }
+    double *sorted = core_alloc((app->cpu_count ? app->cpu_count : 1) * sizeof *sorted);
+    if (app->cpu_count) memcpy(sorted, app->cpu_ms, app->cpu_count * sizeof *sorted);
+    qsort(sorted, app->cpu_count, sizeof *sorted, compare_doubles);
+    s.cpu_ms_p50 = percentile(sorted, app->cpu_count, 0.50);
+    s.cpu_ms_p99 = percentile(sorted, app->cpu_count, 0.99);
+    s.cpu_ms_max = app->cpu_count ? sorted[app->cpu_count - 1] : 0.0;
+    for (size_t i = 0; i < app->cpu_count; i++) s.hitches += app->cpu_ms[i] > APP_HITCH_MS;
+    core_free(sorted, (app->cpu_count ? app->cpu_count : 1) * sizeof *sorted);
+    s.stream = terrain_ecs_stream_stats(app->terrain);
+    struct rusage usage;
+    if (getrusage(RUSAGE_SELF, &usage) == 0) s.peak_rss_bytes = (size_t)usage.ru_maxrss * 1024;
+    return s;
+}
+
+const double *game_app_frame_times(const game_app *app, int *count) {
+    *count = (int)app->cpu_count;
+    return app->cpu_ms;
+}

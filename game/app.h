@@ -1,0 +1,87 @@
+/* app.h — the walkable infinite world as one object: a window (or an offscreen OSMesa context),
+ * the job system, the ECS with the terrain's streaming systems and the far clipmap, the player,
+ * input (devices, a recording or a scripted walk) and the HUD. game/main.c is a command line
+ * around it; the benchmarks and the end-to-end tests drive it directly.
+ *
+ *     game_app *app = game_app_create(&(game_app_desc){ .seed = 7, .width = 1280, .height = 720 });
+ *     if (!app) return 1;                               // the reason is printed
+ *     while (game_app_frame(app)) {}                    // until closed, quit or the walk ends
+ *     game_app_stats stats = game_app_stats_get(app);
+ *     game_app_destroy(app);
+ *
+ * Start-up: the world streams in around the spawn point while a loading line shows. The player
+ * stands still (and, when recording or replaying, input is not read) until the chunks nearest it
+ * and its collision chunks are ready, so a recording replays frame for frame whatever the
+ * loading took. Then each frame: input (or the walk script) → player → viewers and view →
+ * ecs_progress (stream, generate, mesh, lod, cull, upload) → draw → HUD.
+ *
+ * Collision never waits on a frame of its own: the streamer keeps the column chunks around the
+ * player generated. Interactive play asks terrain_ecs_region_ready, so a player who outruns the
+ * streaming waits at the edge; scripted and recorded runs read the world directly (it generates
+ * a missing chunk on the spot), which gives the same result bit for bit however the background
+ * jobs were scheduled: a replay ends where the recording did.
+ */
+#ifndef GAME_APP_H
+#define GAME_APP_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "terrain/terrain.h"
+#include "walk.h"
+
+typedef struct game_app game_app;
+
+/* Zero means the default for every field. */
+typedef struct game_app_desc {
+    uint64_t seed;                    /* world seed */
+    int width, height;                /* framebuffer; 0 = 1280 × 720 */
+    bool headless;                    /* offscreen (OSMesa) even with a display */
+    int threads;                      /* job threads, the main one included; 0 = one per core */
+    int frames;                       /* stop after this many frames past loading; 0 = never (300
+                                         offscreen without a walk or a replay) */
+    const game_walk *walk;            /* scripted input (borrowed); NULL = devices */
+    const char *record_path;          /* record every frame's input */
+    const char *replay_path;          /* play a recording back */
+    const char *bindings_path;        /* input bindings; NULL = built-in defaults */
+    const char *screenshot_path;      /* written after the last frame */
+    double spawn[2];                  /* x, z of the spawn column; the player stands on top */
+    /* A world made by hand instead of generated (tests, tools): as terrain_world_desc's. */
+    terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);
+    void *generate_user;
+    terrain_stream_desc stream;       /* view distance and budgets; zero = defaults */
+    bool no_clipmap;                  /* only the volumetric chunks (no far terrain) */
+    bool no_hud;
+    double max_loading_seconds;       /* give up waiting for the start area; 0 = 300 s */
+} game_app_desc;
+
+/* NULL (with the reason printed) when the window, the shaders, the bindings or a recording
+ * cannot be opened. */
+game_app *game_app_create(const game_app_desc *desc);
+/* One frame; false once the run is over (window closed, quit action, frame limit, walk done,
+ * or the recording ended). */
+bool game_app_frame(game_app *app);
+void game_app_destroy(game_app *app);
+
+typedef struct game_app_stats {
+    int frames;                       /* past loading */
+    int loading_frames;
+    double eye[3], feet[3];           /* of the player now */
+    int eye_in_solid_frames;          /* frames whose eye had field ≥ 0: must stay 0 */
+    int waiting_frames;               /* frames the player waited for terrain */
+    double walked, from_start;        /* the walk's path length and straight-line distance, m */
+    bool walk_done, walk_stuck;
+    /* CPU time of each frame past loading: from its start to the hand-over to the GL driver
+     * (gfx_frame_end), i.e. every phase and the draw calls, not the driver's raster wait. */
+    double cpu_ms_p50, cpu_ms_p99, cpu_ms_max;
+    int hitches;                      /* frames past loading whose CPU time exceeded 33 ms */
+    terrain_stream_stats stream;
+    size_t peak_rss_bytes;            /* of the process (getrusage), driver memory included */
+} game_app_stats;
+
+game_app_stats game_app_stats_get(const game_app *app);
+/* The frame's CPU times (ms) past loading, in order; count in *count. */
+const double *game_app_frame_times(const game_app *app, int *count);
+
+#endif

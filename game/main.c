@@ -1,0 +1,119 @@
+/* world — the walkable infinite world (game/app.h) on the command line.
+ *
+ *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT] [--record FILE]
+ *         [--replay FILE] [--bindings FILE] [--screenshot FILE] [--radius R] [--levels N]
+ *         [--memory MB] [--threads N] [--trace FILE]
+ *
+ * In a window: WASD or the left stick to walk, the mouse (click to capture, Escape to let go) or
+ * the right stick to look, Space to jump, Shift to sprint, Ctrl or C to crouch, F to fly, F11
+ * fullscreen, F12 a screenshot. Without a display it renders offscreen; give it --frames or a
+ * --walk so it ends. At the end it prints what happened: frames, the walk, CPU frame times,
+ * streaming counts and memory, and where the player stands.
+ */
+#include "app.h"
+
+#include "core/core.h"
+#include "gfx/gfx.h"
+#include "trace/trace.h"
+
+#include <stdio.h>
+#include <string.h>
+
+typedef struct options {
+    core_common_args common;
+    const char *size, *screenshot, *walk, *record, *replay, *bindings;
+    int seed, frames, radius, levels, memory_mb;
+    bool headless;
+} options;
+
+static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_walk *walk) {
+    const core_option list[] = {
+        CORE_COMMON_OPTIONS(o->common),
+        { "seed", CORE_OPTION_INT, &o->seed, "S", "world seed (default 1)", 0, 2147483647 },
+        { "size", CORE_OPTION_STRING, &o->size, "WxH", "framebuffer size (default 1280x720)" },
+        { "headless", CORE_OPTION_FLAG, &o->headless, NULL, "render offscreen with OSMesa" },
+        { "frames", CORE_OPTION_INT, &o->frames, "N", "stop after N frames past loading (0 = when closed)", 0,
+          100000000 },
+        { "walk", CORE_OPTION_STRING, &o->walk, "SCRIPT", "scripted walk: " GAME_WALK_USAGE },
+        { "record", CORE_OPTION_STRING, &o->record, "FILE", "record every frame's input" },
+        { "replay", CORE_OPTION_STRING, &o->replay, "FILE", "play recorded input back" },
+        { "bindings", CORE_OPTION_STRING, &o->bindings, "FILE", "input bindings (data/input/bindings.txt)" },
+        { "screenshot", CORE_OPTION_STRING, &o->screenshot, "FILE", "write the last frame as a PNG" },
+        { "radius", CORE_OPTION_INT, &o->radius, "R", "full-detail chunks of 32 m each way (default 2)", 1, 32 },
+        { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
+        { "memory", CORE_OPTION_INT, &o->memory_mb, "MB", "memory budget for terrain (default 384)", 16, 65536 },
+    };
+    core_cli cli = { .program = "world", .summary = "walk an endless generated world",
+                     .options = list, .option_count = CORE_COUNTOF(list) };
+    o->seed = 1;
+    int rc = core_cli_parse(&cli, argc, argv);
+    if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
+    desc->width = 1280;
+    desc->height = 720;
+    if (o->size && !gfx_parse_size(o->size, &desc->width, &desc->height)) {
+        fprintf(stderr, "world: bad value for '--size': '%s' is not WxH (16 to 16384 each)\n", o->size);
+        core_cli_print_usage(&cli, stderr);
+        return 2;
+    }
+    char error[512];
+    if (o->walk && !game_walk_parse(o->walk, walk, error, sizeof error)) {
+        fprintf(stderr, "world: bad value for '--walk': %s\n", error);
+        core_cli_print_usage(&cli, stderr);
+        return 2;
+    }
+    if (o->record && o->replay) {
+        fprintf(stderr, "world: '--record' and '--replay' cannot be used together\n");
+        core_cli_print_usage(&cli, stderr);
+        return 2;
+    }
+    return -1;
+}
+
+static void print_results(const game_app_stats *s, bool walked) {
+    printf("world: %d frames after %d loading frames\n", s->frames, s->loading_frames);
+    if (walked)
+        printf("world: walked %.1f m (%.1f m from the start)%s, eye in solid on %d frames, waited %d frames\n",
+               s->walked, s->from_start, s->walk_stuck ? ", stuck" : "", s->eye_in_solid_frames, s->waiting_frames);
+    printf("world: cpu frame p50 %.2f ms, p99 %.2f ms, max %.2f ms, %d over 33 ms\n", s->cpu_ms_p50, s->cpu_ms_p99,
+           s->cpu_ms_max, s->hitches);
+    printf("world: chunks %d wanted, %d ready, %d kept; %llu meshed, %llu empty, %llu cancelled, %llu evicted\n",
+           s->stream.mesh_chunks_wanted, s->stream.mesh_chunks_ready, s->stream.mesh_chunks_kept,
+           (unsigned long long)s->stream.chunks_meshed, (unsigned long long)s->stream.chunks_skipped_empty,
+           (unsigned long long)s->stream.chunks_cancelled, (unsigned long long)s->stream.chunks_evicted);
+    printf("world: terrain memory %.1f MB (peak %.1f MB), process peak %.1f MB\n",
+           (double)s->stream.resident_bytes / 1048576.0, (double)s->stream.peak_resident_bytes / 1048576.0,
+           (double)s->peak_rss_bytes / 1048576.0);
+    printf("world: player at (%.4f, %.4f, %.4f)\n", s->feet[0], s->feet[1], s->feet[2]);
+}
+
+int main(int argc, char **argv) {
+    options o = { 0 };
+    game_app_desc desc = { 0 };
+    game_walk walk = { 0 };
+    int rc = parse(argc, argv, &o, &desc, &walk);
+    if (rc >= 0) return rc;
+    if (o.common.trace_path && !trace_start(o.common.trace_path)) return 2;
+    desc.seed = (uint64_t)o.seed;
+    desc.headless = o.headless;
+    desc.threads = o.common.threads;
+    desc.frames = o.frames;
+    desc.walk = o.walk ? &walk : NULL;
+    desc.record_path = o.record;
+    desc.replay_path = o.replay;
+    desc.bindings_path = o.bindings;
+    desc.screenshot_path = o.screenshot;
+    desc.stream = (terrain_stream_desc){ .half_width = o.radius, .levels = o.levels,
+                                         .memory_budget = (size_t)o.memory_mb << 20 };
+    game_app *app = game_app_create(&desc);
+    if (!app) {
+        game_walk_free(&walk);
+        return 1;
+    }
+    while (game_app_frame(app)) {}
+    game_app_stats stats = game_app_stats_get(app);
+    print_results(&stats, o.walk != NULL);
+    game_app_destroy(app);
+    game_walk_free(&walk);
+    trace_stop();
+    return stats.eye_in_solid_frames > 0 ? 1 : 0;
+}

@@ -1,0 +1,145 @@
+/* End to end: the walkable world (game/app.h) headless at a small size. A scripted walk over
+ * generated terrain keeps the eye in the air and the terrain within its memory budget and shows
+ * ground and sky; a recording replays to the same place; a walk 100 km out goes exactly as one
+ * at the origin. */
+#include "render_util.h"
+
+#include "core/core.h"
+#include "game/app.h"
+
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <stb/stb_image.h>
+
+static const terrain_stream_desc small_view = { .half_width = 2, .levels = 2, .memory_budget = 64u << 20 };
+
+static game_app_stats run_world(game_app_desc desc) {
+    game_app *app = game_app_create(&desc);
+    cr_assert(app, "the world did not start");
+    int guard = 0;
+    while (game_app_frame(app) && guard++ < 20000) {}
+    game_app_stats stats = game_app_stats_get(app);
+    game_app_destroy(app);
+    return stats;
+}
+
+static game_walk parse_walk(const char *text) {
+    game_walk walk;
+    char error[256];
+    cr_assert(game_walk_parse_text(text, strlen(text), "test.walk", &walk, error, sizeof error), "%s", error);
+    return walk;
+}
+
+/* Distinct colours, and how many of the top rows are sky-blue (blue above red) and of the bottom
+ * rows are not. */
+static void screenshot_facts(const char *path, int *colours, double *sky_top, double *ground_bottom) {
+    int w, h, n;
+    uint8_t *rgb = stbi_load(path, &w, &h, &n, 3);
+    cr_assert(rgb, "no screenshot at %s", path);
+    int seen = 0;
+    uint32_t *list = malloc((size_t)w * (size_t)h * sizeof *list);
+    int top = 0, top_blue = 0, bottom = 0, bottom_ground = 0;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            const uint8_t *p = rgb + 3 * (y * w + x);
+            uint32_t c = (uint32_t)p[0] << 16 | (uint32_t)p[1] << 8 | p[2];
+            int k = 0;
+            while (k < seen && list[k] != c) k++;
+            if (k == seen && seen < 4096) list[seen++] = c;
+            bool blue = p[2] > p[0] + 20;
+            if (y < h / 8) top++, top_blue += blue;
+            if (y >= h - h / 4) bottom++, bottom_ground += !blue;
+        }
+    *colours = seen;
+    *sky_top = (double)top_blue / top;
+    *ground_bottom = (double)bottom_ground / bottom;
+    free(list);
+    stbi_image_free(rgb);
+}
+
+Test(render_world, a_scripted_walk_stays_above_ground_within_budget_and_shows_ground_and_sky, .timeout = 600) {
+    game_walk walk = parse_walk("ahead\n0 120\n");
+    char shot[] = "/tmp/world_walk_XXXXXX.png";
+    int fd = mkstemps(shot, 4);
+    cr_assert(fd >= 0);
+    close(fd);
+    game_app_stats s = run_world((game_app_desc){ .seed = 5, .width = 96, .height = 64, .headless = true,
+                                                  .threads = 2, .walk = &walk, .stream = small_view,
+                                                  .screenshot_path = shot, .frames = 2000 });
+    cr_expect_gt(s.frames, 200, "only %d frames", s.frames);
+    cr_expect_eq(s.eye_in_solid_frames, 0, "the eye was in the ground on %d frames", s.eye_in_solid_frames);
+    cr_expect_geq(s.from_start, 100.0, "walked only %.1f m from the start", s.from_start);
+    cr_expect_leq(s.stream.peak_resident_bytes, small_view.memory_budget, "%.1f MB resident",
+                  (double)s.stream.peak_resident_bytes / 1048576.0);
+    cr_expect_gt(s.stream.chunks_meshed, 0);
+    int colours;
+    double sky, ground;
+    screenshot_facts(shot, &colours, &sky, &ground);
+    cr_expect_gt(colours, 50, "the screenshot has %d colours", colours);
+    cr_expect_gt(sky, 0.5, "%.0f%% of the top rows are sky", 100 * sky);
+    cr_expect_gt(ground, 0.5, "%.0f%% of the bottom rows are ground", 100 * ground);
+    remove(shot);
+    game_walk_free(&walk);
+}
+
+/* Recording and replaying go through the same loading wait, so frame N of the recording is
+ * frame N of the replay however long either took to load: the player ends where it did. */
+Test(render_world, a_recorded_walk_replays_to_the_same_place, .timeout = 600) {
+    game_walk walk = parse_walk("ahead\n0 40\n10 60 walk\n");
+    char rec[] = "/tmp/world_rec_XXXXXX";
+    int fd = mkstemp(rec);
+    cr_assert(fd >= 0);
+    close(fd);
+    game_app_desc desc = { .seed = 9, .width = 64, .height = 48, .headless = true, .threads = 2, .walk = &walk,
+                           .stream = small_view, .no_hud = true, .frames = 1500 };
+    desc.record_path = rec;
+    game_app_stats recorded = run_world(desc);
+    desc.record_path = NULL;
+    desc.replay_path = rec;
+    desc.threads = 1;                           /* other scheduling, other loading time */
+    game_app_stats replayed = run_world(desc);
+    cr_expect_gt(recorded.frames, 60);
+    cr_expect_eq(recorded.frames, replayed.frames);
+    for (int a = 0; a < 3; a++)
+        cr_expect_eq(recorded.feet[a], replayed.feet[a], "axis %d: %.6f recorded, %.6f replayed", a,
+                     recorded.feet[a], replayed.feet[a]);
+    remove(rec);
+    game_walk_free(&walk);
+}
+
+/* Rolling ground, periodic (40 m along x, 50 m along z), the same around (100 800, 100 800)
+ * as around the origin (both periods and the coarsest chunk divide 100 800 m). */
+static void rolling_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
+    (void)user;
+    double h = 3.0 * sin((double)x * (2.0 * M_PI / 40.0)) + 1.5 * cos((double)z * (2.0 * M_PI / 50.0));
+    terrain_stacks_builder_push(b, TERRAIN_BEDROCK, (float)(h - TERRAIN_FLOOR_Y));
+}
+
+static terrain_stacks *rolling_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, rolling_column, user);
+}
+
+Test(render_world, a_walk_a_hundred_kilometres_out_goes_as_at_the_origin, .timeout = 600) {
+    game_walk walk = parse_walk("relative\n30 30\n-20 60 walk\n");
+    game_app_stats at[2];
+    for (int far = 0; far < 2; far++) {
+        double offset = far ? 100800.0 : 0.0;
+        at[far] = run_world((game_app_desc){ .width = 64, .height = 48, .headless = true, .threads = 2,
+                                             .walk = &walk, .stream = small_view, .no_hud = true, .frames = 1500,
+                                             .spawn = { offset + 8, offset + 8 }, .generate = rolling_chunk });
+        at[far].feet[0] -= offset;
+        at[far].feet[2] -= offset;
+        cr_expect_eq(at[far].eye_in_solid_frames, 0);
+    }
+    cr_expect_eq(at[0].frames, at[1].frames, "%d frames at the origin, %d 100 km out", at[0].frames, at[1].frames);
+    /* Positions there are ~1e5 m, doubles keep ~1e-11 m; the controller works relative to a
+     * local origin, so the two walks may differ only in the last bits of the offset. */
+    for (int a = 0; a < 3; a++)
+        cr_expect(fabs(at[0].feet[a] - at[1].feet[a]) < 1e-6, "axis %d: %.9f at the origin, %.9f out there", a,
+                  at[0].feet[a], at[1].feet[a]);
+    game_walk_free(&walk);
+}
