@@ -35,8 +35,8 @@ struct game_app {
     int frames, loading_frames;
     uint64_t start_ns, last_ns;
     double frame_seconds;
-    double *cpu_ms;
-    size_t cpu_count, cpu_capacity;
+    double *cpu_ms, *engine_ms;             /* per frame past loading */
+    size_t cpu_count, cpu_capacity, engine_capacity;
     int eye_in_solid, waiting;
 };
 
@@ -115,6 +115,7 @@ void game_app_destroy(game_app *app) {
     job_system_destroy(app->jobs);
     gfx_destroy(app->gfx);
     core_free(app->cpu_ms, app->cpu_capacity * sizeof *app->cpu_ms);
+    core_free(app->engine_ms, app->engine_capacity * sizeof *app->engine_ms);
     core_free(app, sizeof *app);
 }
 
@@ -191,9 +192,11 @@ static void app_update_view(game_app *app) {
     terrain_ecs_set_view(app->terrain, &app->view);   /* what the cull phase tests against */
 }
 
-static void app_record_cpu(game_app *app, double ms) {
+static void app_record_cpu(game_app *app, double cpu_ms, double engine_ms) {
     app->cpu_ms = core_grow(app->cpu_ms, &app->cpu_capacity, app->cpu_count + 1, sizeof *app->cpu_ms);
-    app->cpu_ms[app->cpu_count++] = ms;
+    app->engine_ms = core_grow(app->engine_ms, &app->engine_capacity, app->cpu_count + 1, sizeof *app->engine_ms);
+    app->engine_ms[app->cpu_count] = engine_ms;
+    app->cpu_ms[app->cpu_count++] = cpu_ms;
 }
 
 static bool app_last_frame(const game_app *app) {
@@ -222,9 +225,11 @@ bool game_app_frame(game_app *app) {
                                               app->view.camera[2], 0) >= 0;
     gfx_frame_begin(app->gfx);
     ecs_progress(app->ecs, dt);                /* stream, generate, mesh, lod, cull, upload */
+    uint64_t drawing = core_time_ns();
     terrain_ecs_draw(app->terrain, app->renderer, &app->view);
     app_draw_hud(app);
-    double cpu_ms = (double)(core_time_ns() - now) * 1e-6;
+    uint64_t drawn = core_time_ns();
+    double cpu_ms = (double)(drawn - now) * 1e-6, engine_ms = (double)(drawing - now) * 1e-6;
     bool last = !running || app_last_frame(app);
     if (last && app->desc.screenshot_path && !gfx_screenshot(app->gfx, app->desc.screenshot_path)) running = false;
     gfx_frame_end(app->gfx);
@@ -234,7 +239,7 @@ bool game_app_frame(game_app *app) {
         if (app_loaded(app)) app_finish_loading(app);
     } else {
         app->frames++;
-        app_record_cpu(app, cpu_ms);
+        app_record_cpu(app, cpu_ms, engine_ms);
     }
     app->over = last;
     return !last;
@@ -271,6 +276,10 @@ game_app_stats game_app_stats_get(const game_app *app) {
     s.cpu_ms_p99 = percentile(sorted, app->cpu_count, 0.99);
     s.cpu_ms_max = app->cpu_count ? sorted[app->cpu_count - 1] : 0.0;
     for (size_t i = 0; i < app->cpu_count; i++) s.hitches += app->cpu_ms[i] > APP_HITCH_MS;
+    if (app->cpu_count) memcpy(sorted, app->engine_ms, app->cpu_count * sizeof *sorted);
+    qsort(sorted, app->cpu_count, sizeof *sorted, compare_doubles);
+    s.engine_ms_p50 = percentile(sorted, app->cpu_count, 0.50);
+    s.engine_ms_p99 = percentile(sorted, app->cpu_count, 0.99);
     core_free(sorted, (app->cpu_count ? app->cpu_count : 1) * sizeof *sorted);
     s.stream = terrain_ecs_stream_stats(app->terrain);
     struct rusage usage;

@@ -75,6 +75,9 @@ typedef struct game_app_stats {
     /* CPU time of each frame past loading: from its start to the hand-over to the GL driver
      * (gfx_frame_end), i.e. every phase and the draw calls, not the driver's raster wait. */
     double cpu_ms_p50, cpu_ms_p99, cpu_ms_max;
+    /* The same less the draw calls (terrain_ecs_draw and the HUD): input, player, every phase
+     * and the uploads. On llvmpipe the draw calls include the vertex shading a GPU does. */
+    double engine_ms_p50, engine_ms_p99;
     int hitches;                      /* frames past loading whose CPU time exceeded 33 ms */
     terrain_stream_stats stream;
     size_t peak_rss_bytes;            /* of the process (getrusage), driver memory included */

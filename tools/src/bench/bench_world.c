@@ -1,0 +1,78 @@
+/* bench_world.c — the walkable world (game/app.h) headless at 1280×720 over a scripted 2 km path,
+ * and how fast streaming fills in the start area.
+ *
+ * The path flies 2 km ahead at the player's fly-sprint speed (48 m/s, six times a sprint) 120 m
+ * above the start: it streams ground in six times as fast as a walk would, and at 60 frames a
+ * second it is 2 500 frames instead of 15 000 (llvmpipe rasterises each 1280×720 frame for tens
+ * of milliseconds, which the CPU frame time does not include but the wall clock does).
+ *
+ * Rows (one run each; the frame rows are percentiles over the run's frames):
+ *   world.walk.cpu_frame.p50 / .p99   ms from a frame's start to the hand-over to the driver
+ *   world.walk.engine_frame.p50 / .p99  the same less the draw calls (llvmpipe shades vertices
+ *                                     inside them on this thread; a GPU would not)
+ *   world.walk.hitches                frames over 33 ms
+ *   world.walk.memory                 peak process RSS, MB (driver memory included)
+ *   world.walk.terrain_memory         peak terrain stacks + meshes, MB
+ *   world.stream.chunks_per_s         mesh chunks made ready per second while the start area
+ *                                     loads (meshed or found empty; all cores)
+ *   world.stream.keep_up_speed        m/s of travel the streaming can sustain: chunks_per_s over
+ *                                     the chunks a metre of the path needed
+ */
+#include "bench.h"
+
+#include "core/core.h"
+#include "game/app.h"
+
+#include <string.h>
+
+static const char walk_text[] = "ahead\n0 2000 fly y=120\n";
+
+void bench_group_world(bench_context *ctx) {
+    if (!bench_wants(ctx, "world.")) return;
+    game_walk walk;
+    char error[256];
+    if (!game_walk_parse_text(walk_text, strlen(walk_text), "bench", &walk, error, sizeof error)) {
+        core_error("bench", "world: %s", error);
+        return;
+    }
+    game_app *app = game_app_create(&(game_app_desc){ .seed = 1, .width = 1280, .height = 720, .headless = true,
+                                                      .threads = bench_threads(ctx), .walk = &walk,
+                                                      .frames = 20000 });
+    if (!app) {
+        core_error("bench", "world: the world did not start; rows skipped");
+        game_walk_free(&walk);
+        return;
+    }
+    uint64_t start = core_time_ns(), loaded = 0;
+    uint64_t ready_at_load = 0;
+    while (game_app_frame(app)) {
+        if (loaded) continue;
+        game_app_stats s = game_app_stats_get(app);
+        if (s.frames > 0) {
+            loaded = core_time_ns();
+            ready_at_load = s.stream.chunks_meshed + s.stream.chunks_skipped_empty;
+        }
+    }
+    game_app_stats s = game_app_stats_get(app);
+    game_app_destroy(app);
+    game_walk_free(&walk);
+    double load_seconds = (double)(loaded - start) * 1e-9;
+    double chunks_per_s = load_seconds > 0 ? (double)ready_at_load / load_seconds : 0.0;
+    double walked_chunks = (double)(s.stream.chunks_meshed + s.stream.chunks_skipped_empty - ready_at_load);
+    double per_metre = s.walked > 0 ? walked_chunks / s.walked : 0.0;
+    double rows[][1] = { { s.cpu_ms_p50 }, { s.cpu_ms_p99 }, { s.engine_ms_p50 }, { s.engine_ms_p99 },
+                         { (double)s.hitches }, { (double)s.peak_rss_bytes / 1048576.0 },
+                         { (double)s.stream.peak_resident_bytes / 1048576.0 }, { chunks_per_s },
+                         { per_metre > 0 ? chunks_per_s / per_metre : 0.0 } };
+    bench_record(ctx, "world.walk.cpu_frame.p50", "ms", rows[0], 1);
+    bench_record(ctx, "world.walk.cpu_frame.p99", "ms", rows[1], 1);
+    bench_record(ctx, "world.walk.engine_frame.p50", "ms", rows[2], 1);
+    bench_record(ctx, "world.walk.engine_frame.p99", "ms", rows[3], 1);
+    bench_record(ctx, "world.walk.hitches", "frames", rows[4], 1);
+    bench_record(ctx, "world.walk.memory", "MB", rows[5], 1);
+    bench_record(ctx, "world.walk.terrain_memory", "MB", rows[6], 1);
+    bench_record(ctx, "world.stream.chunks_per_s", "chunks/s", rows[7], 1);
+    bench_record(ctx, "world.stream.keep_up_speed", "m/s", rows[8], 1);
+    core_info("bench", "world: %d frames, %.0f m walked%s, %d loading frames (%.1f s), %.3f chunks a metre",
+              s.frames, s.walked, s.walk_stuck ? " (stuck)" : "", s.loading_frames, load_seconds, per_metre);
+}
