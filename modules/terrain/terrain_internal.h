@@ -86,6 +86,17 @@ float terrain__ridged_from_octaves(const float *n, int octaves, float gain);
  * plus the vertical fBm perturbation (002 §3.1.3.1's "fractal sampled along y = 0"). */
 float terrain__ground_height(const terrain_generation_params *params, double x, double z);
 
+/* G for a grid `spacing` metres apart, at (x0 + j·dx, z) for j < count (the far terrain's
+ * clipmap, 002 §3.2). Only the detail such a grid can carry: the multifractal's octave count
+ * from the spacing (004 §4.1), the dropped octaves simply missing (the kept ones keep their
+ * weight); the y perturbation's octaves fade out towards their Nyquist spacing; cliff terraces
+ * fade out between 4 and 16 m. spacing ≤ TERRAIN_COLUMN_SIZE gives terrain__ground_height's
+ * values bit for bit. A value depends only on (params, x, z, spacing), not on the row. */
+void terrain__ground_row_spaced(const terrain_generation_params *params, double x0, double dx, double z, int count,
+                                float spacing, float *out);
+/* The multifractal octave count ν that terrain__ground_row_spaced uses for `spacing`. */
+float terrain__ground_octaves(const terrain_generation_params *params, float spacing);
+
 /* ==== end of the stacks/noise/generation section ========================================== */
 
 
