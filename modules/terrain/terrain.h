@@ -406,8 +406,8 @@ void terrain_renderer_draw(terrain_renderer *renderer, const terrain_view *view,
  * With the defaults (6 levels of 128² cells from 4 m) the finest level covers 512 m around the
  * camera and the outermost 16 km (8 km each way); the far plane (terrain_view.far_distance,
  * 4 km by default) ends the view first. Threads: update, set_hole and cull are CPU work for any
- * one thread at a time (update may fan out on desc.jobs); upload, the draw and destroy use
- * OpenGL: main thread. */
+ * one thread at a time, not while the clipmap is uploaded or drawn (update may fan out on
+ * desc.jobs); upload, the draw and destroy use OpenGL: main thread. */
 #define TERRAIN_CLIPMAP_MAX_LEVELS 12
 
 typedef struct job_system job_system;
@@ -457,7 +457,8 @@ void terrain_clipmap_set_hole(terrain_clipmap *clipmap, const double min_xz[2], 
  * every uncovered block is drawn. */
 int terrain_clipmap_cull(terrain_clipmap *clipmap, const terrain_frustum *frustum);
 /* Main thread, with a GL context: makes the GL objects on the first call, then uploads the
- * heights that changed since the last call. */
+ * heights that changed since the last call. The draw does it too when an update left heights
+ * behind, so calling it is only a way to choose when the upload's time is spent. */
 void terrain_clipmap_upload(terrain_clipmap *clipmap);
 /* The ground height drawn at (x, z) by the finest level around it (its triangles, morphed as
  * for the camera of the last update; the hole's sinking not included); NAN outside every level

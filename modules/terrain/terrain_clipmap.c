@@ -86,6 +86,7 @@ struct terrain_clipmap {
     clipmap_level levels[TERRAIN_CLIPMAP_MAX_LEVELS];
     bool has_camera;
     double camera[3];               /* of the last update */
+    bool upload_pending;            /* heights changed since the last upload */
     bool has_hole;
     double hole_min[2], hole_max[2];
     int cuts[SEGMENTS + 1];         /* cell cuts of the blocks */
@@ -382,6 +383,7 @@ uint64_t terrain_clipmap_update(terrain_clipmap *c, const double camera[3]) {
         if (c->levels[l].bounds_dirty) level_bounds(c, l);
     memcpy(c->camera, camera, sizeof c->camera);
     c->has_camera = true;
+    c->upload_pending |= texels > 0;
     c->stats.texels_updated = texels;
     c->stats.reach = 0.5 * c->cells * c->levels[c->level_count - 1].spacing - centre_offset_bound(c, c->level_count - 1);
     return texels;
@@ -571,6 +573,7 @@ void terrain_clipmap_upload(terrain_clipmap *c) {
         upload_runs(c, l, c->levels[l].dirty_rows, true);
     }
     glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+    c->upload_pending = false;
 }
 
 static void uniform_ivec2(GLuint program, const char *name, const int *value) {
@@ -609,7 +612,9 @@ void terrain__clipmap_draw(terrain_clipmap *c, gfx_context *gfx, uint32_t progra
     TRACE_ZONE("terrain_clipmap_draw");
     c->stats.blocks_drawn = 0;
     c->stats.triangles = 0;
-    if (!c->texture || !c->has_camera) return;
+    if (!c->has_camera) return;
+    /* Levels placed by an update whose heights are not on the GPU yet would draw stale ones. */
+    if (!c->texture || c->upload_pending) terrain_clipmap_upload(c);
     gfx_program program = { program_handle };
     GLuint gl_program = gfx_program_gl(gfx, program);
     draw_shared_uniforms(c, gfx, program, view);
