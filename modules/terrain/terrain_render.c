@@ -219,8 +219,8 @@ bool terrain_frustum_sees(const terrain_frustum *f, const double origin[3], cons
 
 static double terrain_wrap(double value, double period) { return value - floor(value / period) * period; }
 
-/* The far terrain after the meshes (the depth test keeps them in front where they overlap,
- * under the hole's sinking border), before the sky. */
+/* The far terrain after the meshes, so that the depth test drops its pit under them early, and
+ * before the sky, which fills only what nothing covered. */
 static void terrain_draw_clipmap(terrain_renderer *r, const terrain_view *view, mat4 view_projection) {
     gfx_context *gfx = r->gfx;
     float texture_offset[3];
