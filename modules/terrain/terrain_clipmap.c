@@ -37,9 +37,9 @@
  * 10 m). The clipmap goes under them instead: inside the hole it sinks, over hole_band metres
  * from the border, to hole_depth below the ground and stays there, a pit whose walls are a
  * skirt for the chunks' open border and whose floor lies deeper than the generator's caves.
- * A ray through a gap at the border therefore meets the wall or, having passed under the
- * chunks' edge, the floor or the far wall: ground, never sky, from inside the hole or outside,
- * above or below the border. Cutting the centre out instead (discarding it) lets rays that
+ * A ray heading down through a gap at the border therefore meets the wall or, having passed
+ * under the chunks' edge, the floor or the far wall: ground, never sky, whether it comes from
+ * inside the hole or from outside. Cutting the centre out instead (discarding it) lets rays that
  * pass under the chunks' edge from outside reach the sky (render-tested: a few pixels per
  * view), and would show sky through an unmeshed chunk; the pit costs only hidden fragments,
  * which the depth test drops early (the shader never discards). Its one condition: the hole's
