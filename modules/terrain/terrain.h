@@ -391,6 +391,101 @@ bool terrain_frustum_sees(const terrain_frustum *frustum, const double origin[3]
 void terrain_renderer_draw(terrain_renderer *renderer, const terrain_view *view,
                            const terrain_gpu_mesh *meshes, int mesh_count);
 
+/* ---- far terrain: geometry clipmaps (002 §3.2, §3.5) ---- */
+
+/* The terrain beyond the volumetric chunks, out to many kilometres: nested square grids of
+ * cells×cells cells around the camera, level L's vertices finest_spacing·2^L apart, displaced by
+ * heights kept in a toroidal array per level (GPU: one R32F texture layer per level) and
+ * recomputed only where a level moved (Losasso & Hoppe's geometry clipmaps, 002 §3.2). The
+ * heights are the generator's macro ground G (the stacks' top surface before the overhang shear
+ * and the caves) with the octave count the level's spacing can carry (004 §4.1), so distant
+ * levels do not alias. Each level's vertices morph towards the next coarser level's surface
+ * near its border and meet it exactly there: no cracks between levels. Where the volumetric
+ * chunks are drawn (terrain_clipmap_set_hole) the clipmap sinks into a pit under them, deeper
+ * than any cave, whose walls skirt the chunks' open border: whatever the mismatch between the
+ * two surfaces, a gap shows ground, never sky, from any side (002 §3.5 bends the meso mesh to
+ * the clipmap instead; that would be the chunks' mesher's work). The outermost level and the
+ * far plane fade into the sky (002 §4.4), so the world has no visible end.
+ *
+ *     terrain_clipmap *far = terrain_clipmap_create(&(terrain_clipmap_desc){
+ *         .generation = terrain_generation_defaults(42), .jobs = jobs });
+ *     terrain_renderer_set_clipmap(renderer, far);
+ *     each frame:
+ *         terrain_clipmap_update(far, camera);                 // CPU: recentre, new heights
+ *         terrain_clipmap_set_hole(far, volume_min, volume_max);  // where the chunks are (x, z)
+ *         terrain_frustum frustum = terrain_frustum_from_view(&view);
+ *         terrain_clipmap_cull(far, &frustum);                 // CPU: visible blocks
+ *         terrain_clipmap_upload(far);                         // main thread: changed texels
+ *         terrain_renderer_draw(renderer, &view, meshes, count);  // meshes, clipmap, sky
+ *     terrain_clipmap_destroy(far);                            // main thread (GL objects)
+ *
+ * With the defaults (6 levels of 128² cells from 4 m) the finest level covers 512 m around the
+ * camera and the outermost 16 km (8 km each way); the far plane (terrain_view.far_distance,
+ * 4 km by default) ends the view first. Threads: update, set_hole and cull are CPU work for any
+ * one thread at a time, not while the clipmap is uploaded or drawn (update may fan out on
+ * desc.jobs); upload, the draw and destroy use OpenGL: main thread. */
+#define TERRAIN_CLIPMAP_MAX_LEVELS 12
+
+typedef struct job_system job_system;
+typedef struct terrain_clipmap terrain_clipmap;
+
+typedef struct terrain_clipmap_desc {
+    int levels;                       /* nested levels; 0 = 6, at most TERRAIN_CLIPMAP_MAX_LEVELS */
+    int cells;                        /* cells along each side of a level, a multiple of 16 (16 …
+                                         1024); 0 = 128 */
+    float finest_spacing;             /* metres between level 0's vertices; 0 = 4 */
+    float hole_band;                  /* metres inside the hole's border over which the clipmap
+                                         sinks (the pit's wall); 0 = 2·finest_spacing */
+    float hole_depth;                 /* how deep it sinks (the pit's floor below the ground);
+                                         0 = below the generator's caves (156 m by default) */
+    terrain_generation_params generation;  /* copied; the world whose ground is drawn */
+    job_system *jobs;                 /* computes new heights in parallel; NULL = the caller */
+} terrain_clipmap_desc;
+
+typedef struct terrain_clipmap_stats {
+    int levels, cells;
+    float finest_spacing;
+    double reach;                     /* metres the outermost level reaches at least from the
+                                         camera of the last update, along x and z */
+    uint64_t texels_updated;          /* heights computed by the last terrain_clipmap_update */
+    int blocks_visible;               /* blocks the last terrain_clipmap_cull kept */
+    uint64_t triangles_visible;       /* in those blocks */
+    int blocks_drawn;                 /* by the last draw */
+    uint64_t triangles;               /* drawn by the last draw */
+} terrain_clipmap_stats;
+
+/* CPU only (no GL): the heights are computed on the first update. NULL never (bad fields are
+ * clamped to their range, with a warning). */
+terrain_clipmap *terrain_clipmap_create(const terrain_clipmap_desc *desc);
+/* Frees the CPU data and, if terrain_clipmap_upload made any, the GL objects: main thread. */
+void terrain_clipmap_destroy(terrain_clipmap *clipmap);
+/* Recentres the levels on the camera (world metres) and computes the heights that came into
+ * them (all of them the first time or after a jump); returns how many. */
+uint64_t terrain_clipmap_update(terrain_clipmap *clipmap, const double camera[3]);
+/* The square of the world (x, z in metres) where the volumetric chunks are drawn instead: inside
+ * it the clipmap sinks, over desc.hole_band from the border, to desc.hole_depth below the ground
+ * (hidden under the chunks). Put its border on level 0's vertex lines (multiples of
+ * finest_spacing: chunk borders are), else the sinking starts up to a cell outside it. min ≥ max
+ * on either axis (or NULL) = no hole. */
+void terrain_clipmap_set_hole(terrain_clipmap *clipmap, const double min_xz[2], const double max_xz[2]);
+/* Marks the blocks (each level is cut into 36) whose bounds the frustum may see, skipping those
+ * a finer level covers; returns how many will be drawn. Without a cull since the last update
+ * every uncovered block is drawn. */
+int terrain_clipmap_cull(terrain_clipmap *clipmap, const terrain_frustum *frustum);
+/* Main thread, with a GL context: makes the GL objects on the first call, then uploads the
+ * heights that changed since the last call. The draw does it too when an update left heights
+ * behind, so calling it is only a way to choose when the upload's time is spent. */
+void terrain_clipmap_upload(terrain_clipmap *clipmap);
+/* The ground height drawn at (x, z) by the finest level around it (its triangles, morphed as
+ * for the camera of the last update; the hole's sinking not included); NAN outside every level
+ * or before the first update. */
+float terrain_clipmap_height(const terrain_clipmap *clipmap, double x, double z);
+terrain_clipmap_stats terrain_clipmap_stats_get(const terrain_clipmap *clipmap);
+
+/* terrain_renderer_draw draws the clipmap after the meshes and before the sky (NULL = none);
+ * the clipmap is not owned and must outlive its use here. */
+void terrain_renderer_set_clipmap(terrain_renderer *renderer, terrain_clipmap *clipmap);
+
 /* ---- in the ECS --------------------------------------------------------------------------- */
 
 /* Column chunks and mesh chunks are entities. Systems (registered by terrain_ecs_create):

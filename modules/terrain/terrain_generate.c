@@ -117,6 +117,11 @@ typedef struct ground_model {
     float inverse_relief_wavelength, inverse_perturbation_wavelength;
     float base, relief, vertical_perturbation, sea_level;
     uint32_t cliff_seed;
+    /* Detail kept when G is sampled coarser than the columns (terrain__ground_row_spaced); all
+     * exactly 1 for the generator, so multiplying by them changes no bit of its output. */
+    float relief_scale;                                    /* Σ kept octave weights / Σ all */
+    float perturbation_weight[MAX_PERTURBATION_OCTAVES];
+    float cliff_weight;
 } ground_model;
 
 static uint32_t field_seed(const terrain_generation_params *p, uint64_t field) {
@@ -151,6 +156,9 @@ static ground_model ground_model_make(const terrain_generation_params *p) {
     g.vertical_perturbation = p->vertical_perturbation;
     g.cliff_seed = field_seed(p, 3);
     g.sea_level = p->sea_level;
+    g.relief_scale = 1.0f;
+    for (int k = 0; k < MAX_PERTURBATION_OCTAVES; k++) g.perturbation_weight[k] = 1.0f;
+    g.cliff_weight = 1.0f;
     return g;
 }
 
@@ -169,9 +177,12 @@ static void ground_row(const ground_model *g, const double *xs, double z, int co
     /* 002 §3.1.3.1: the y perturbation, a fractal sampled at y = 0, i.e. a height map. */
     float pz = (float)(z * g->inverse_perturbation_wavelength), amplitude = 1.0f, total = 0.0f, scale = 1.0f;
     for (int k = 0; k < g->perturbation_octaves; k++) {
-        terrain__noise2_row(g->perturbation_seed + (uint32_t)k * 0x9e3779b9u, perturbation_x, scale, pz * scale,
-                            count, octave);
-        for (int j = 0; j < count; j++) perturbation[j] += amplitude * octave[j];
+        float weight = amplitude * g->perturbation_weight[k];
+        if (weight > 0.0f) {
+            terrain__noise2_row(g->perturbation_seed + (uint32_t)k * 0x9e3779b9u, perturbation_x, scale, pz * scale,
+                                count, octave);
+            for (int j = 0; j < count; j++) perturbation[j] += weight * octave[j];
+        }
         total += amplitude;
         amplitude *= 0.5f;
         scale *= 2.0f;
@@ -185,7 +196,7 @@ static void ground_row(const ground_model *g, const double *xs, double z, int co
          * onto ±1. The shape keeps slope 0.6 at m = 0 on both sides but makes the highs convex
          * (m·(0.6 + 0.4m): peaks rise faster than valleys sink, lowlands stay gentle) and the
          * lows linear (seas no deeper than 0.6·relief for the usual range). */
-        float m = 2.5f * relief[j];
+        float m = 2.5f * (relief[j] * g->relief_scale);
         float shaped = m > 0.0f ? m * (0.6f + 0.4f * m) : 0.6f * m;
         float macro = g->base + g->relief * shaped;
         /* Cliffs: terraces of CLIFF_STEP·relief metres (15 m by default), each riser a quintic fade over the middle
@@ -193,7 +204,8 @@ static void ground_row(const ground_model *g, const double *xs, double z, int co
          * slope around them), blended in by the mask.
          * The shear of the overhang displacement turns steep risers into overhangs. Only
          * above the sea: under water the relief stays smooth. */
-        float strength = clampf(2.0f * cliffs[j] + 0.1f, 0.0f, 1.0f) * clampf(macro - g->sea_level, 0.0f, 8.0f) * 0.125f;
+        float strength = clampf(2.0f * cliffs[j] + 0.1f, 0.0f, 1.0f) * clampf(macro - g->sea_level, 0.0f, 8.0f) * 0.125f *
+                         g->cliff_weight;
         float step = CLIFF_STEP * g->relief;
         if (step < 0.5f) strength = 0.0f, step = 1.0f;   /* no relief, no cliffs */
         float steps = macro / step, bench = floorf(steps);
@@ -212,6 +224,63 @@ float terrain__ground_height(const terrain_generation_params *params, double x, 
     float h;
     ground_row(&g, &x, z, 1, &h);
     return h;
+}
+
+/* ---- G sampled coarsely: the far terrain's clipmap (002 §3.2, 004 §4.1) ------------------- */
+
+/* Terraces fade out between these sample spacings: a riser is CLIFF_RISER·CLIFF_STEP·relief
+ * (3 m by default) tall and 10–30 m wide on the usual 0.1–0.3 slopes, so 4 m samples still
+ * draw it and 16 m samples would only alias it into a staircase of random steps. */
+#define CLIFF_FULL_SPACING 4.0f
+#define CLIFF_GONE_SPACING 16.0f
+
+/* Σ of the multifractal's octave weights r^(−kH), the last weighted by frac(ν) (004 §4). */
+static float multifractal_weight_sum(const terrain__multifractal *mf) {
+    float r0 = powf(mf->lacunarity, -mf->hurst), amplitude = 1.0f, total = 0.0f;
+    int full = CORE_MIN((int)mf->octaves, 16);
+    for (int k = 0; k < full; k++, amplitude *= r0) total += amplitude;
+    return total + (mf->octaves - (float)full) * amplitude;
+}
+
+/* The generator's model with the detail a grid of `spacing` metres cannot carry taken out. */
+static ground_model ground_model_spaced(const terrain_generation_params *p, float spacing) {
+    ground_model g = ground_model_make(p);
+    if (!(spacing > TERRAIN_COLUMN_SIZE)) return g;        /* the columns' own G, bit for bit */
+    float relief = g.relief > 1.0f ? g.relief : 1.0f;
+    float full_octaves = g.multifractal.octaves;
+    /* 004 §4.1: ν = log σ / log r^−H with σ the grid spacing in units of the first octave's
+     * amplitude, as the generator does for its 1 m columns. */
+    g.multifractal.octaves = terrain__multifractal_octaves(g.multifractal.lacunarity, g.multifractal.hurst,
+                                                           spacing / relief, clamp_int(p->relief_octaves, 1, 16));
+    /* The multifractal normalises by the weights of the octaves it sums; rescale so that the
+     * octaves dropped are simply missing (a low-pass of G) rather than the kept ones louder. */
+    if (g.multifractal.octaves != full_octaves) {
+        terrain__multifractal all = g.multifractal;
+        all.octaves = full_octaves;
+        g.relief_scale = multifractal_weight_sum(&g.multifractal) / multifractal_weight_sum(&all);
+    }
+    /* The y perturbation's octave k has wavelength λ/2^k: whole while it spans 4 samples or
+     * more, gone at 2 (Nyquist), linear between. */
+    float wavelength = 1.0f / g.inverse_perturbation_wavelength;
+    for (int k = 0; k < g.perturbation_octaves; k++)
+        g.perturbation_weight[k] = clampf(ldexpf(wavelength, -k) / (2.0f * spacing) - 1.0f, 0.0f, 1.0f);
+    g.cliff_weight = clampf((CLIFF_GONE_SPACING - spacing) / (CLIFF_GONE_SPACING - CLIFF_FULL_SPACING), 0.0f, 1.0f);
+    return g;
+}
+
+void terrain__ground_row_spaced(const terrain_generation_params *params, double x0, double dx, double z, int count,
+                                float spacing, float *out) {
+    ground_model g = ground_model_spaced(params, spacing);
+    double xs[GROUND_ROW_MAX];
+    for (int done = 0; done < count; done += GROUND_ROW_MAX) {
+        int n = CORE_MIN(count - done, GROUND_ROW_MAX);
+        for (int j = 0; j < n; j++) xs[j] = x0 + (double)(done + j) * dx;
+        ground_row(&g, xs, z, n, out + done);
+    }
+}
+
+float terrain__ground_octaves(const terrain_generation_params *params, float spacing) {
+    return ground_model_spaced(params, spacing).multifractal.octaves;
 }
 
 /* ---- one chunk ------------------------------------------------------------------------- */

@@ -86,6 +86,17 @@ float terrain__ridged_from_octaves(const float *n, int octaves, float gain);
  * plus the vertical fBm perturbation (002 §3.1.3.1's "fractal sampled along y = 0"). */
 float terrain__ground_height(const terrain_generation_params *params, double x, double z);
 
+/* G for a grid `spacing` metres apart, at (x0 + j·dx, z) for j < count (the far terrain's
+ * clipmap, 002 §3.2). Only the detail such a grid can carry: the multifractal's octave count
+ * from the spacing (004 §4.1), the dropped octaves simply missing (the kept ones keep their
+ * weight); the y perturbation's octaves fade out towards their Nyquist spacing; cliff terraces
+ * fade out between 4 and 16 m. spacing ≤ TERRAIN_COLUMN_SIZE gives terrain__ground_height's
+ * values bit for bit. A value depends only on (params, x, z, spacing), not on the row. */
+void terrain__ground_row_spaced(const terrain_generation_params *params, double x0, double dx, double z, int count,
+                                float spacing, float *out);
+/* The multifractal octave count ν that terrain__ground_row_spaced uses for `spacing`. */
+float terrain__ground_octaves(const terrain_generation_params *params, float spacing);
+
 /* ==== end of the stacks/noise/generation section ========================================== */
 
 
@@ -185,5 +196,72 @@ void terrain__stream_free_pending(terrain_ecs *te, uint64_t deadline);
 void terrain__stream_destroy(terrain_ecs *te);
 
 /* ==== end of the ECS and streaming section ================================================ */
+
+/* ==== far terrain: geometry clipmaps (terrain_clipmap.c) =================================== */
+
+/* Level L's vertex (i, k), 0 ≤ i, k ≤ cells, is the world point ((first[0] + i)·s, (first[1] +
+ * k)·s) with s = finest_spacing·2^L; first[] is even, so the level's border lies on level L + 1's
+ * vertex lines. Each level is cut into 6 × 6 blocks along the cell cuts 0, n/4, n/4 + 1, n/2,
+ * 3n/4, 3n/4 + 1, n: the finer level always covers exactly the blocks of segments 1–3 or 2–4 on
+ * each axis, so a block is either all covered or not at all. */
+#define TERRAIN__CLIPMAP_SEGMENTS 6
+#define TERRAIN__CLIPMAP_BLOCKS (TERRAIN__CLIPMAP_SEGMENTS * TERRAIN__CLIPMAP_SEGMENTS)
+
+typedef struct terrain__clipmap_level_info {
+    int64_t first[2];                 /* grid index of vertex (0, 0), in units of `spacing` */
+    double spacing;
+    int cells;
+    float octaves;                    /* of the multifractal (004 §4.1) */
+    float morph_start, morph_width;   /* metres (see terrain__clipmap_morph) */
+} terrain__clipmap_level_info;
+
+terrain__clipmap_level_info terrain__clipmap_level(const terrain_clipmap *clipmap, int level);
+/* The stored height of grid point (i, k) of a level (world (i·s, k·s)); NAN when the level's
+ * window (its vertices and one more on every side) does not hold it. */
+float terrain__clipmap_texel(const terrain_clipmap *clipmap, int level, int64_t i, int64_t k);
+
+/* Geomorphing (Losasso & Hoppe's transition regions): a vertex at (dx, dz) from the camera of
+ * the clipmap's last update (the one its levels were placed for, not the one drawing them, so
+ * the guarantees below hold however far the view moved since) blends towards the coarser
+ * level's surface by
+ *     α = clamp((max(|dx|, |dz|) − start) / width, 0, 1),  and α = 1 on the level's border,
+ *     h = (1 − α)·h_fine + α·h_coarse,
+ * where h_coarse is the coarser level's triangle surface under the vertex: its vertex, the
+ * midpoint of its edge, or the midpoint of its cell's diagonal (from (i, k) to (i + 1, k + 1),
+ * the diagonal the triangles use), i.e. ½(H(c) + H(c + odd)) with c = the coarse vertex at or
+ * before the fine one and odd = the fine index's parity. start = half the footprint − the most
+ * the level's centre can be off the camera − width, so α reaches 1 before the border (the
+ * border term makes that exact against rounding), and the coarser level's own transition
+ * starts far outside the finer level, so the coarser vertices under the finer border are its
+ * unmorphed heights, the very ones the finer level reads. shaders/clipmap.vert
+ * computes the same expressions (`precise`), so the finer border's vertices lie exactly on the
+ * coarser level's edges (T-junctions without gaps; zero-area triangles along every level's
+ * border cover what rounding leaves). */
+static inline float terrain__clipmap_morph(float dx, float dz, float start, float inverse_width, bool border) {
+    float a = (fmaxf(fabsf(dx), fabsf(dz)) - start) * inverse_width;
+    a = a < 0.0f ? 0.0f : a > 1.0f ? 1.0f : a;
+    return border ? 1.0f : a;
+}
+
+/* What clipmap.vert computes for vertex (i, k) of a level with the camera at `camera`: its
+ * camera-relative x and z (floats, from one anchor shared by every level, so vertices that two
+ * levels share come out bit-identical) and its drawn height (morphed; hole sinking excluded). */
+void terrain__clipmap_vertex(const terrain_clipmap *clipmap, int level, int i, int k, const double camera[3],
+                             float position[2], float *height);
+
+typedef struct terrain__clipmap_block_info {
+    int cells_min[2], cells_max[2];   /* cells [min, max) of the level's grid along x and z */
+    double box_min[3], box_max[3];    /* world bounds the cull tests (heights conservative) */
+    bool covered;                     /* by the finer level: never drawn */
+    bool visible;                     /* drawn (not covered and, if culled, in the frustum) */
+} terrain__clipmap_block_info;
+
+terrain__clipmap_block_info terrain__clipmap_block(const terrain_clipmap *clipmap, int level, int block);
+
+/* Draws the visible blocks with `program` (shaders/clipmap.*), which terrain_renderer_draw has
+ * made current with the shared uniforms set; sets the draw counters and stats. Main thread. */
+void terrain__clipmap_draw(terrain_clipmap *clipmap, gfx_context *gfx, uint32_t program, const terrain_view *view);
+
+/* ==== end of the clipmap section ========================================================== */
 
 #endif

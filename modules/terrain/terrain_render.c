@@ -1,6 +1,7 @@
 /* terrain_render.c — drawing terrain meshes: triplanar materials (000 §6), height and slope tint
  * (002 §4.1), procedural material textures, camera-relative transforms. Main thread only. */
 #include "terrain.h"
+#include "terrain_internal.h"
 
 #include "core/core.h"
 #include "gfx/gfx.h"
@@ -16,10 +17,12 @@
 
 struct terrain_renderer {
     gfx_context *gfx;
-    gfx_program terrain, sky;
+    gfx_program terrain, sky, clipmap;
     gfx_texture materials;
     gfx_vertex_array empty;
     terrain_renderer_desc desc;
+    terrain_clipmap *far_terrain;         /* not owned; NULL = none */
+    float material_means[TERRAIN_TEXTURE_LAYERS][3];
 };
 
 /* ---- procedural material textures ---- */
@@ -80,7 +83,17 @@ static void texture_material_texel(int layer, float u, float v, uint8_t *rgba) {
     rgba[3] = 255;
 }
 
-static gfx_texture terrain_material_textures(void) {
+/* Each layer's mean colour: what its mipmaps tend to far away (the clipmap uses it there). */
+static void terrain_material_means(const uint8_t *texels, size_t layer_bytes, float means[][3]) {
+    for (int layer = 0; layer < TERRAIN_TEXTURE_LAYERS; layer++) {
+        double sum[3] = { 0, 0, 0 };
+        for (size_t t = 0; t < layer_bytes; t += 4)
+            for (int c = 0; c < 3; c++) sum[c] += texels[layer_bytes * (size_t)layer + t + (size_t)c];
+        for (int c = 0; c < 3; c++) means[layer][c] = (float)(sum[c] / (double)(layer_bytes / 4) / 255.0);
+    }
+}
+
+static gfx_texture terrain_material_textures(float means[][3]) {
     TRACE_ZONE("terrain_material_textures");
     const size_t layer_bytes = (size_t)TERRAIN_TEXTURE_SIZE * TERRAIN_TEXTURE_SIZE * 4;
     uint8_t *texels = core_alloc(layer_bytes * TERRAIN_TEXTURE_LAYERS);
@@ -92,6 +105,7 @@ static gfx_texture terrain_material_textures(void) {
     gfx_texture texture = gfx_texture_create(&(gfx_texture_desc){
         .width = TERRAIN_TEXTURE_SIZE, .height = TERRAIN_TEXTURE_SIZE, .layers = TERRAIN_TEXTURE_LAYERS,
         .data = texels, .mipmaps = true });
+    terrain_material_means(texels, layer_bytes, means);
     core_free(texels, layer_bytes * TERRAIN_TEXTURE_LAYERS);
     return texture;
 }
@@ -101,17 +115,21 @@ static gfx_texture terrain_material_textures(void) {
 terrain_renderer *terrain_renderer_create(gfx_context *gfx, const terrain_renderer_desc *desc) {
     gfx_program terrain = gfx_program_load(gfx, "terrain.vert", "terrain.frag");
     gfx_program sky = gfx_program_load(gfx, "sky.vert", "sky.frag");
-    if (!terrain.id || !sky.id) return NULL;
+    gfx_program clipmap = gfx_program_load(gfx, "clipmap.vert", "clipmap.frag");
+    if (!terrain.id || !sky.id || !clipmap.id) return NULL;
     terrain_renderer *r = core_calloc(1, sizeof *r);
-    *r = (terrain_renderer){ .gfx = gfx, .terrain = terrain, .sky = sky, .desc = desc ? *desc : (terrain_renderer_desc){ 0 } };
+    *r = (terrain_renderer){ .gfx = gfx, .terrain = terrain, .sky = sky, .clipmap = clipmap,
+                             .desc = desc ? *desc : (terrain_renderer_desc){ 0 } };
     if (r->desc.snow_height == 0) r->desc.snow_height = 120.0f;
     if (r->desc.fog_density == 0) r->desc.fog_density = 0.0025f;
     if (r->desc.cloud_cover == 0) r->desc.cloud_cover = 0.45f;
     if (r->desc.cloud_cover < 0) r->desc.cloud_cover = 0;
-    r->materials = terrain_material_textures();
+    r->materials = terrain_material_textures(r->material_means);
     glCreateVertexArrays(1, &r->empty.id);
     return r;
 }
+
+void terrain_renderer_set_clipmap(terrain_renderer *r, terrain_clipmap *clipmap) { r->far_terrain = clipmap; }
 
 void terrain_renderer_destroy(terrain_renderer *r) {
     if (!r) return;
@@ -201,6 +219,25 @@ bool terrain_frustum_sees(const terrain_frustum *f, const double origin[3], cons
 
 static double terrain_wrap(double value, double period) { return value - floor(value / period) * period; }
 
+/* The far terrain after the meshes, so that the depth test drops its pit under them early, and
+ * before the sky, which fills only what nothing covered. */
+static void terrain_draw_clipmap(terrain_renderer *r, const terrain_view *view, mat4 view_projection) {
+    gfx_context *gfx = r->gfx;
+    float texture_offset[3];
+    for (int a = 0; a < 3; a++) texture_offset[a] = (float)terrain_wrap(view->camera[a], TERRAIN_TEXTURE_METRES);
+    gfx_program_use(gfx, r->clipmap);
+    gfx_uniform_mat4(gfx, r->clipmap, "u_view_projection", (const float *)view_projection);
+    gfx_uniform_float(gfx, r->clipmap, "u_texture_scale", (float)(1.0 / TERRAIN_TEXTURE_METRES));
+    gfx_uniform_vec3(gfx, r->clipmap, "u_texture_offset", texture_offset);
+    gfx_uniform_float(gfx, r->clipmap, "u_sea_level", r->desc.sea_level);
+    gfx_uniform_float(gfx, r->clipmap, "u_snow_height", r->desc.snow_height);
+    gfx_uniform_int(gfx, r->clipmap, "u_materials", 0);
+    gfx_uniform_vec3(gfx, r->clipmap, "u_bedrock_mean", r->material_means[0]);
+    gfx_uniform_vec3(gfx, r->clipmap, "u_sand_mean", r->material_means[1]);
+    gfx_texture_bind(r->materials, 0);
+    terrain__clipmap_draw(r->far_terrain, gfx, r->clipmap.id, view);
+}
+
 void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,
                            int mesh_count) {
     TRACE_ZONE("terrain_renderer_draw");
@@ -214,8 +251,8 @@ void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const 
     const float zero[3] = { 0, 0, 0 };
 
     gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "terrain", .clear_depth = true });
-    gfx_program programs[2] = { r->terrain, r->sky };
-    for (int p = 0; p < 2; p++) {
+    gfx_program programs[3] = { r->terrain, r->sky, r->clipmap };
+    for (int p = 0; p < 3; p++) {
         gfx_uniform_vec3(gfx, programs[p], "u_sun_direction", sun);
         gfx_uniform_vec3(gfx, programs[p], "u_camera_position", zero);
         gfx_uniform_float(gfx, programs[p], "u_fog_density", r->desc.fog_density);
@@ -242,6 +279,7 @@ void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const 
         gfx_draw(&(gfx_draw_desc){ .vertex_array = { m->vertex_array }, .count = m->index_count,
                                    .index_type = GFX_INDEX_U32 });
     }
+    if (r->far_terrain) terrain_draw_clipmap(r, view, view_projection);
     gfx_program_use(gfx, r->sky);
     gfx_uniform_mat4(gfx, r->sky, "u_inverse_view_projection", (const float *)inverse);
     gfx_uniform_float(gfx, r->sky, "u_cloud_cover", r->desc.cloud_cover);

@@ -1,6 +1,7 @@
 /* The terrain world shared by jobs: many threads asking for the same chunks at once get the same
- * bytes a lone thread generates, and fields sampled concurrently agree. Also built into
- * test_threads, which tools/test runs under ThreadSanitizer. */
+ * bytes a lone thread generates, and fields sampled concurrently agree; the far terrain's
+ * clipmap computes the same heights on jobs as alone. Also built into test_threads, which
+ * tools/test runs under ThreadSanitizer. */
 #include "../engine/test.h"
 
 #include "jobs/jobs.h"
@@ -49,4 +50,32 @@ Test(terrain_threads, shared_world_gives_the_bytes_of_a_lone_thread) {
     job_system_destroy(jobs);
     terrain_world_destroy(lone);
     terrain_world_destroy(shared);
+}
+
+/* ---- the far terrain's clipmap, its heights computed on the job system ---- */
+
+#include "terrain/terrain_internal.h"
+
+/* Jumps make every update big enough to fan out (over 4096 heights); the heights must be those
+ * the calling thread alone computes. */
+Test(terrain_threads, clipmap_heights_on_jobs_equal_a_lone_threads) {
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
+    terrain_clipmap_desc desc = { .levels = 3, .cells = 64, .generation = terrain_generation_defaults(5) };
+    terrain_clipmap *lone = terrain_clipmap_create(&desc);
+    desc.jobs = jobs;
+    terrain_clipmap *shared = terrain_clipmap_create(&desc);
+    const double cameras[][3] = { { 0, 0, 0 }, { 5000, 0, -300 }, { 5100, 0, -260 }, { -90000, 0, 4000 } };
+    for (int n = 0; n < 4; n++) {
+        cr_assert_eq(terrain_clipmap_update(shared, cameras[n]), terrain_clipmap_update(lone, cameras[n]));
+        for (int l = 0; l < 3; l++) {
+            terrain__clipmap_level_info info = terrain__clipmap_level(lone, l);
+            for (int64_t k = info.first[1] - 1; k <= info.first[1] + info.cells + 1; k++)
+                for (int64_t i = info.first[0] - 1; i <= info.first[0] + info.cells + 1; i++)
+                    cr_assert(terrain__clipmap_texel(shared, l, i, k) == terrain__clipmap_texel(lone, l, i, k),
+                              "camera %d level %d texel (%lld, %lld)", n, l, (long long)i, (long long)k);
+        }
+    }
+    terrain_clipmap_destroy(shared);
+    terrain_clipmap_destroy(lone);
+    job_system_destroy(jobs);
 }

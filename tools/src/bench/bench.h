@@ -40,6 +40,7 @@ void bench_group_input(bench_context *ctx);
 void bench_group_gfx(bench_context *ctx);
 void bench_group_terrain_generate(bench_context *ctx);
 void bench_group_terrain_mesh(bench_context *ctx);
+void bench_group_terrain_clipmap(bench_context *ctx);
 void bench_group_world(bench_context *ctx);
 
 #endif

@@ -1,0 +1,643 @@
+/* terrain_clipmap.c — geometry clipmaps for the far terrain (002 §3.2, §3.5; Losasso & Hoppe,
+ * "Geometry clipmaps", SIGGRAPH 2004).
+ *
+ * Levels. Level L is a square grid of n × n cells of s_L = finest·2^L metres; its vertex (i, k)
+ * is the world point ((first_x + i)·s_L, (first_z + k)·s_L). Level 0 is centred on the camera,
+ * snapped to 2·s_0, and every coarser level is placed from the finer one inside it:
+ *     first_L = 2·⌊(first_{L−1}/2 − n/4) / 2⌋
+ * so first_L is even (its border lies on level L + 1's vertex lines), the finer level starts
+ * h = first_{L−1}/2 − first_L ∈ {n/4, n/4 + 1} cells in (only two cases per axis, see the
+ * blocks below), and a level's centre is at most s_L behind the finer one's: the camera is
+ * within s_0·(2^{L+1} − 1) of level L's centre.
+ *
+ * Heights. Each level keeps the heights of its vertices plus one ring (for normals) in a
+ * toroidal array of (n + 4)² floats: grid point (i, k) lives at (i mod T, k mod T), so when the
+ * level moves only the rows and columns that came in are computed (terrain__ground_row_spaced:
+ * G with the octaves the spacing carries, 004 §4.1) and uploaded, at the same toroidal place in
+ * one R32F texture layer per level. A value depends only on its grid point, so an incremental
+ * update gives exactly the array a fresh build at the new place would (tested).
+ *
+ * Blocks. The vertex and index data are one static grid of (n + 1)² vertices shared by every
+ * level (the vertex shader places and displaces them). Its cells are cut at 0, n/4, n/4 + 1,
+ * n/2, 3n/4, 3n/4 + 1, n along each axis into 6 × 6 blocks, each a contiguous range of the
+ * index buffer. The finer level covers exactly segments 1–3 or 2–4 of each axis (h above), so
+ * a block is wholly covered or not at all: level L draws the blocks the finer level leaves,
+ * those the frustum may see (bounds from the heights, the coarser level's under the morph and
+ * the pit's depth where the hole reaches).
+ *
+ * Seams. Each level's vertices geomorph to the coarser level's triangles near its border
+ * (terrain__clipmap_morph, mirrored in shaders/clipmap.vert), reaching them exactly on it: every
+ * finer border vertex lies on a coarser edge. Zero-area triangles along every level's border
+ * (Losasso & Hoppe §3.2) cover the last rounding slivers of those T-junctions.
+ *
+ * The hole. The volumetric chunks replace the clipmap's centre (002 §3.5). The paper bends the
+ * meso mesh's border to the clipmap's height; our chunks are meshed by another system, with open
+ * borders, and G leaves out the overhang shear and the finest octaves, so along the hole's
+ * border the chunks' surface lies above or below the clipmap (typically by a metre, rarely by
+ * 10 m). The clipmap goes under them instead: inside the hole it sinks, over hole_band metres
+ * from the border, to hole_depth below the ground and stays there, a pit whose walls are a
+ * skirt for the chunks' open border and whose floor lies deeper than the generator's caves.
+ * A ray heading down through a gap at the border therefore meets the wall or, having passed
+ * under the chunks' edge, the floor or the far wall: ground, never sky, whether it comes from
+ * inside the hole or from outside. Cutting the centre out instead (discarding it) lets rays that
+ * pass under the chunks' edge from outside reach the sky (render-tested: a few pixels per
+ * view), and would show sky through an unmeshed chunk; the pit costs only hidden fragments,
+ * which the depth test drops early (the shader never discards). Its one condition: the hole's
+ * border lies on the finest level's vertex lines inside it (chunk borders do, at 4 m), else a
+ * triangle straddling the border starts sinking outside it.
+ */
+#include "terrain_internal.h"
+
+#include "core/core.h"
+#include "gfx/gfx.h"
+#include "jobs/jobs.h"
+#include "trace/trace.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define SEGMENTS TERRAIN__CLIPMAP_SEGMENTS
+#define BLOCKS TERRAIN__CLIPMAP_BLOCKS
+#define EDGE_FADE 0.15f            /* the last 15 % of the outermost level fades into the sky */
+
+typedef struct clipmap_level {
+    int64_t first[2];               /* grid index of vertex (0, 0) (x, z), in spacings; even */
+    double spacing;
+    float octaves;
+    bool valid;                     /* heights hold the window around `first` */
+    float *heights;                 /* size × size, toroidal */
+    uint8_t *dirty_columns, *dirty_rows;  /* toroidal columns / rows to upload */
+    bool bounds_dirty;
+    float block_min[BLOCKS], block_max[BLOCKS];
+    bool in_frustum[BLOCKS];
+    bool culled;                    /* in_frustum is for the current placement */
+} clipmap_level;
+
+/* One run of new heights: grid row k, grid columns i0 … i0 + count − 1 of a level. */
+typedef struct row_task {
+    int level, count;
+    int64_t k, i0;
+} row_task;
+
+struct terrain_clipmap {
+    terrain_clipmap_desc desc;      /* with the defaults filled in */
+    int level_count, cells, size;   /* size = T = cells + 4 */
+    clipmap_level levels[TERRAIN_CLIPMAP_MAX_LEVELS];
+    bool has_camera;
+    double camera[3];               /* of the last update */
+    bool upload_pending;            /* heights changed since the last upload */
+    bool has_hole;
+    double hole_min[2], hole_max[2];
+    int cuts[SEGMENTS + 1];         /* cell cuts of the blocks */
+    uint32_t block_first[BLOCKS], block_count[BLOCKS];   /* index ranges */
+    uint32_t *indices;              /* CPU copy until the first upload */
+    size_t index_count;
+    row_task *tasks;
+    size_t task_count, task_capacity;
+    terrain_clipmap_stats stats;
+    GLuint texture, index_buffer, vertex_array;
+};
+
+/* ---- integer helpers ---- */
+
+static int64_t floor_div(int64_t a, int64_t b) {
+    int64_t q = a / b;
+    return (a % b != 0 && (a < 0) != (b < 0)) ? q - 1 : q;
+}
+
+static int floor_mod(int64_t a, int m) {
+    int64_t r = a % m;
+    return (int)(r < 0 ? r + m : r);
+}
+
+/* ---- creation: defaults, block cuts, the shared index buffer ---- */
+
+static terrain_clipmap_desc clipmap_defaults(const terrain_clipmap_desc *in) {
+    terrain_clipmap_desc d = *in;
+    if (d.levels == 0) d.levels = 6;
+    if (d.levels < 1 || d.levels > TERRAIN_CLIPMAP_MAX_LEVELS) {
+        core_warn("terrain", "clipmap: %d levels is out of range 1…%d; clamped", d.levels, TERRAIN_CLIPMAP_MAX_LEVELS);
+        d.levels = CORE_MAX(1, CORE_MIN(d.levels, TERRAIN_CLIPMAP_MAX_LEVELS));
+    }
+    if (d.cells == 0) d.cells = 128;
+    if (d.cells < 16 || d.cells > 1024 || d.cells % 16) {
+        int cells = CORE_MAX(16, CORE_MIN(d.cells, 1024)) / 16 * 16;
+        core_warn("terrain", "clipmap: %d cells is not a multiple of 16 in 16…1024; using %d", d.cells, cells);
+        d.cells = cells;
+    }
+    if (!(d.finest_spacing > 0.0f)) d.finest_spacing = 4.0f;
+    if (!(d.hole_band > 0.0f)) d.hole_band = 2.0f * d.finest_spacing;
+    /* The pit's floor below every cave the generator carves (they end cave_fade_height + 1.5
+     * cave wavelengths below G, 108 m by default), with room to spare. */
+    if (!(d.hole_depth > 0.0f))
+        d.hole_depth = CORE_MAX(d.generation.cave_fade_height + 1.5f * d.generation.cave_wavelength, 0.0f) + 48.0f;
+    return d;
+}
+
+static uint32_t grid_vertex(const terrain_clipmap *c, int i, int k) { return (uint32_t)(k * (c->cells + 1) + i); }
+
+static void push_triangle(terrain_clipmap *c, size_t *capacity, uint32_t a, uint32_t b, uint32_t d) {
+    c->indices = core_grow(c->indices, capacity, c->index_count + 3, sizeof *c->indices);
+    c->indices[c->index_count++] = a;
+    c->indices[c->index_count++] = b;
+    c->indices[c->index_count++] = d;
+}
+
+/* Zero-area triangles over each pair of border edges of the block's border cells, both ways
+ * round so that whichever way rounding opens a sliver, one of them faces the camera. */
+static void push_border_slivers(terrain_clipmap *c, size_t *capacity, int x0, int x1, int z0, int z1) {
+    int n = c->cells;
+    for (int side = 0; side < 4; side++) {
+        bool along_x = side < 2;
+        int line = side % 2 ? n : 0;
+        if (along_x ? (line == 0 ? z0 != 0 : z1 != n) : (line == 0 ? x0 != 0 : x1 != n)) continue;
+        int from = along_x ? x0 : z0, to = along_x ? x1 : z1;
+        for (int a = from + (from & 1); a < to && a + 2 <= n; a += 2) {
+            uint32_t v[3];
+            for (int t = 0; t < 3; t++) v[t] = along_x ? grid_vertex(c, a + t, line) : grid_vertex(c, line, a + t);
+            push_triangle(c, capacity, v[0], v[1], v[2]);
+            push_triangle(c, capacity, v[2], v[1], v[0]);
+        }
+    }
+}
+
+static void build_blocks(terrain_clipmap *c) {
+    int n = c->cells;
+    const int cuts[SEGMENTS + 1] = { 0, n / 4, n / 4 + 1, n / 2, 3 * n / 4, 3 * n / 4 + 1, n };
+    memcpy(c->cuts, cuts, sizeof cuts);
+    size_t capacity = 0;
+    for (int b = 0; b < BLOCKS; b++) {
+        int x0 = cuts[b % SEGMENTS], x1 = cuts[b % SEGMENTS + 1];
+        int z0 = cuts[b / SEGMENTS], z1 = cuts[b / SEGMENTS + 1];
+        c->block_first[b] = (uint32_t)c->index_count;
+        /* Counter-clockwise seen from above (+y), split along (i, k)–(i + 1, k + 1): the
+         * diagonal terrain__clipmap_morph's coarse surface assumes. */
+        for (int k = z0; k < z1; k++) {
+            for (int i = x0; i < x1; i++) {
+                push_triangle(c, &capacity, grid_vertex(c, i, k), grid_vertex(c, i, k + 1), grid_vertex(c, i + 1, k + 1));
+                push_triangle(c, &capacity, grid_vertex(c, i, k), grid_vertex(c, i + 1, k + 1), grid_vertex(c, i + 1, k));
+            }
+        }
+        push_border_slivers(c, &capacity, x0, x1, z0, z1);
+        c->block_count[b] = (uint32_t)c->index_count - c->block_first[b];
+    }
+    c->indices = core_realloc(c->indices, capacity * sizeof *c->indices, c->index_count * sizeof *c->indices);
+}
+
+terrain_clipmap *terrain_clipmap_create(const terrain_clipmap_desc *desc) {
+    terrain_clipmap *c = core_calloc(1, sizeof *c);
+    c->desc = clipmap_defaults(desc ? desc : &(terrain_clipmap_desc){ 0 });
+    c->level_count = c->desc.levels;
+    c->cells = c->desc.cells;
+    c->size = c->cells + 4;
+    size_t texels = (size_t)c->size * (size_t)c->size;
+    for (int l = 0; l < c->level_count; l++) {
+        clipmap_level *lv = &c->levels[l];
+        lv->spacing = ldexp((double)c->desc.finest_spacing, l);
+        lv->octaves = terrain__ground_octaves(&c->desc.generation, (float)lv->spacing);
+        lv->heights = core_calloc(texels, sizeof(float));
+        lv->dirty_columns = core_calloc((size_t)c->size, 1);
+        lv->dirty_rows = core_calloc((size_t)c->size, 1);
+    }
+    build_blocks(c);
+    c->stats = (terrain_clipmap_stats){ .levels = c->level_count, .cells = c->cells,
+                                        .finest_spacing = c->desc.finest_spacing };
+    return c;
+}
+
+void terrain_clipmap_destroy(terrain_clipmap *c) {
+    if (!c) return;
+    if (c->texture) glDeleteTextures(1, &c->texture);
+    if (c->index_buffer) glDeleteBuffers(1, &c->index_buffer);
+    if (c->vertex_array) glDeleteVertexArrays(1, &c->vertex_array);
+    size_t texels = (size_t)c->size * (size_t)c->size;
+    for (int l = 0; l < c->level_count; l++) {
+        core_free(c->levels[l].heights, texels * sizeof(float));
+        core_free(c->levels[l].dirty_columns, (size_t)c->size);
+        core_free(c->levels[l].dirty_rows, (size_t)c->size);
+    }
+    if (c->indices) core_free(c->indices, c->index_count * sizeof *c->indices);
+    if (c->tasks) core_free(c->tasks, c->task_capacity * sizeof *c->tasks);
+    core_free(c, sizeof *c);
+}
+
+/* ---- placement ---- */
+
+/* Where every level goes for a camera (see the file comment). */
+static void clipmap_place(const terrain_clipmap *c, const double camera[3], int64_t first[][2]) {
+    int n = c->cells;
+    for (int axis = 0; axis < 2; axis++) {
+        double s0 = c->levels[0].spacing, p = camera[axis ? 2 : 0];
+        first[0][axis] = 2 * (int64_t)floor(p / (2.0 * s0) + 0.5) - n / 2;
+        for (int l = 1; l < c->level_count; l++) first[l][axis] = 2 * floor_div(first[l - 1][axis] / 2 - n / 4, 2);
+    }
+}
+
+/* How far level L's centre can be from the camera of the update that placed it. */
+static double centre_offset_bound(const terrain_clipmap *c, int level) {
+    return c->levels[0].spacing * (ldexp(1.0, level + 1) - 1.0);
+}
+
+/* Where the finer level starts inside level L, in L's cells (n/4 or n/4 + 1). */
+static int finer_offset(const terrain_clipmap *c, int level, int axis) {
+    return (int)(c->levels[level - 1].first[axis] / 2 - c->levels[level].first[axis]);
+}
+
+static terrain__clipmap_level_info level_info(const terrain_clipmap *c, int level) {
+    const clipmap_level *lv = &c->levels[level];
+    double half = 0.5 * c->cells * lv->spacing;
+    double width = (double)(c->cells / 10) * lv->spacing;
+    return (terrain__clipmap_level_info){
+        .first = { lv->first[0], lv->first[1] }, .spacing = lv->spacing, .cells = c->cells, .octaves = lv->octaves,
+        .morph_start = (float)(half - centre_offset_bound(c, level) - width), .morph_width = (float)width };
+}
+
+terrain__clipmap_level_info terrain__clipmap_level(const terrain_clipmap *c, int level) { return level_info(c, level); }
+
+/* ---- heights: planning the new rows and columns, computing them ---- */
+
+static void add_task(terrain_clipmap *c, int level, int64_t k, int64_t i0, int count) {
+    if (count <= 0) return;
+    c->tasks = core_grow(c->tasks, &c->task_capacity, c->task_count + 1, sizeof *c->tasks);
+    c->tasks[c->task_count++] = (row_task){ .level = level, .count = count, .k = k, .i0 = i0 };
+}
+
+static void mark_range(uint8_t *flags, int size, int64_t from, int count) {
+    for (int j = 0; j < count && j < size; j++) flags[floor_mod(from + j, size)] = 1;
+}
+
+/* The rows and columns of level L's window [first − 1, first + n + 2) that the move from its
+ * current place to `next` brings in. */
+static void plan_level(terrain_clipmap *c, int level, const int64_t next[2]) {
+    clipmap_level *lv = &c->levels[level];
+    const int width = c->cells + 3;
+    int64_t old_lo[2] = { lv->first[0] - 1, lv->first[1] - 1 }, new_lo[2] = { next[0] - 1, next[1] - 1 };
+    bool moved = !lv->valid || next[0] != lv->first[0] || next[1] != lv->first[1];
+    bool full = !lv->valid || llabs(next[0] - lv->first[0]) >= width || llabs(next[1] - lv->first[1]) >= width;
+    for (int64_t k = new_lo[1]; k < new_lo[1] + width; k++) {
+        bool old_row = !full && k >= old_lo[1] && k < old_lo[1] + width;
+        if (!old_row) {
+            add_task(c, level, k, new_lo[0], width);
+            lv->dirty_rows[floor_mod(k, c->size)] = 1;
+        } else if (next[0] > lv->first[0]) {
+            add_task(c, level, k, old_lo[0] + width, (int)(next[0] - lv->first[0]));
+        } else if (next[0] < lv->first[0]) {
+            add_task(c, level, k, new_lo[0], (int)(lv->first[0] - next[0]));
+        }
+    }
+    if (!full && next[0] > lv->first[0]) mark_range(lv->dirty_columns, c->size, old_lo[0] + width, (int)(next[0] - lv->first[0]));
+    if (!full && next[0] < lv->first[0]) mark_range(lv->dirty_columns, c->size, new_lo[0], (int)(lv->first[0] - next[0]));
+    if (full) memset(lv->dirty_columns, 1, (size_t)c->size);
+    if (moved) {
+        lv->bounds_dirty = true;
+        lv->culled = false;
+        if (level > 0) c->levels[level - 1].bounds_dirty = true;   /* its morph target moved */
+    }
+    lv->first[0] = next[0];
+    lv->first[1] = next[1];
+    lv->valid = true;
+}
+
+static void run_task(terrain_clipmap *c, const row_task *t) {
+    clipmap_level *lv = &c->levels[t->level];
+    float *row = lv->heights + (size_t)floor_mod(t->k, c->size) * (size_t)c->size;
+    int64_t i = t->i0;
+    for (int left = t->count; left > 0;) {
+        int start = floor_mod(i, c->size), run = CORE_MIN(left, c->size - start);   /* split at the wrap */
+        terrain__ground_row_spaced(&c->desc.generation, (double)i * lv->spacing, lv->spacing, (double)t->k * lv->spacing,
+                                   run, (float)lv->spacing, row + start);
+        i += run;
+        left -= run;
+    }
+}
+
+static void run_task_range(void *user, size_t begin, size_t end) {
+    terrain_clipmap *c = user;
+    for (size_t t = begin; t < end; t++) run_task(c, &c->tasks[t]);
+}
+
+/* ---- block bounds ---- */
+
+static void texel_range(const terrain_clipmap *c, int level, int64_t i0, int64_t i1, int64_t k0, int64_t k1, float *lo,
+                        float *hi) {
+    const clipmap_level *lv = &c->levels[level];
+    int first_column = floor_mod(i0, c->size), columns = (int)(i1 - i0 + 1);
+    float low = *lo, high = *hi;                  /* locals: the loop then vectorises */
+    for (int64_t k = k0; k <= k1; k++) {
+        const float *row = lv->heights + (size_t)floor_mod(k, c->size) * (size_t)c->size;
+        /* The row's texels are one or two runs of the toroidal array. */
+        for (int column = first_column, left = columns; left > 0;) {
+            int run = CORE_MIN(left, c->size - column);
+            for (int j = column; j < column + run; j++) {
+                low = row[j] < low ? row[j] : low;
+                high = row[j] > high ? row[j] : high;
+            }
+            left -= run;
+            column = 0;
+        }
+    }
+    *lo = low;
+    *hi = high;
+}
+
+/* Heights a block can be drawn at: its own vertices (and one more cell around, for the border
+ * slivers) and, because it may morph, the coarser level's vertices under it. */
+static void level_bounds(terrain_clipmap *c, int level) {
+    clipmap_level *lv = &c->levels[level];
+    for (int b = 0; b < BLOCKS; b++) {
+        int x0 = CORE_MAX(c->cuts[b % SEGMENTS] - 1, 0), x1 = CORE_MIN(c->cuts[b % SEGMENTS + 1] + 1, c->cells);
+        int z0 = CORE_MAX(c->cuts[b / SEGMENTS] - 1, 0), z1 = CORE_MIN(c->cuts[b / SEGMENTS + 1] + 1, c->cells);
+        float lo = INFINITY, hi = -INFINITY;
+        texel_range(c, level, lv->first[0] + x0, lv->first[0] + x1, lv->first[1] + z0, lv->first[1] + z1, &lo, &hi);
+        if (level + 1 < c->level_count)
+            texel_range(c, level + 1, floor_div(lv->first[0] + x0, 2), floor_div(lv->first[0] + x1 + 1, 2),
+                        floor_div(lv->first[1] + z0, 2), floor_div(lv->first[1] + z1 + 1, 2), &lo, &hi);
+        lv->block_min[b] = lo;
+        lv->block_max[b] = hi;
+    }
+    lv->bounds_dirty = false;
+}
+
+/* ---- update ---- */
+
+uint64_t terrain_clipmap_update(terrain_clipmap *c, const double camera[3]) {
+    TRACE_ZONE("terrain_clipmap_update");
+    if (!isfinite(camera[0]) || !isfinite(camera[2]) || fabs(camera[0]) > 1e15 || fabs(camera[2]) > 1e15) {
+        core_warn("terrain", "clipmap: camera (%g, %g, %g) ignored", camera[0], camera[1], camera[2]);
+        return 0;
+    }
+    int64_t next[TERRAIN_CLIPMAP_MAX_LEVELS][2];
+    clipmap_place(c, camera, next);
+    c->task_count = 0;
+    for (int l = 0; l < c->level_count; l++) plan_level(c, l, next[l]);
+    uint64_t texels = 0;
+    for (size_t t = 0; t < c->task_count; t++) texels += (uint64_t)c->tasks[t].count;
+    /* A walk's step (a band two texels wide: about a microsecond a row) is not worth waking the
+     * workers for; a jump or the first build is. */
+    if (c->desc.jobs && texels > 4096)
+        job_parallel_for(c->desc.jobs, c->task_count, 0, run_task_range, c, "terrain.clipmap.heights");
+    else
+        run_task_range(c, 0, c->task_count);
+    for (int l = 0; l < c->level_count; l++)
+        if (c->levels[l].bounds_dirty) level_bounds(c, l);
+    memcpy(c->camera, camera, sizeof c->camera);
+    c->has_camera = true;
+    c->upload_pending |= texels > 0;
+    c->stats.texels_updated = texels;
+    c->stats.reach = 0.5 * c->cells * c->levels[c->level_count - 1].spacing - centre_offset_bound(c, c->level_count - 1);
+    return texels;
+}
+
+void terrain_clipmap_set_hole(terrain_clipmap *c, const double min_xz[2], const double max_xz[2]) {
+    c->has_hole = min_xz && max_xz && min_xz[0] < max_xz[0] && min_xz[1] < max_xz[1];
+    for (int a = 0; a < 2; a++) {
+        c->hole_min[a] = c->has_hole ? min_xz[a] : 0;
+        c->hole_max[a] = c->has_hole ? max_xz[a] : 0;
+    }
+}
+
+/* ---- blocks and culling ---- */
+
+static bool segment_in_finer(const terrain_clipmap *c, int level, int axis, int segment) {
+    int first = finer_offset(c, level, axis) == c->cells / 4 ? 1 : 2;
+    return segment >= first && segment <= first + 2;
+}
+
+terrain__clipmap_block_info terrain__clipmap_block(const terrain_clipmap *c, int level, int block) {
+    const clipmap_level *lv = &c->levels[level];
+    int sx = block % SEGMENTS, sz = block / SEGMENTS;
+    terrain__clipmap_block_info info = { .cells_min = { c->cuts[sx], c->cuts[sz] },
+                                         .cells_max = { c->cuts[sx + 1], c->cuts[sz + 1] } };
+    /* One cell more around, for the border slivers; heights from level_bounds. */
+    for (int a = 0; a < 2; a++) {
+        info.box_min[a ? 2 : 0] = (double)(lv->first[a] + info.cells_min[a] - 1) * lv->spacing;
+        info.box_max[a ? 2 : 0] = (double)(lv->first[a] + info.cells_max[a] + 1) * lv->spacing;
+    }
+    info.box_min[1] = lv->block_min[block];
+    info.box_max[1] = lv->block_max[block];
+    if (!lv->valid) return info;
+    bool in_finer = level > 0 && segment_in_finer(c, level, 0, sx) && segment_in_finer(c, level, 1, sz);
+    /* Blocks reaching into the hole are drawn sunk there (the pit). */
+    if (c->has_hole && info.box_max[0] > c->hole_min[0] && info.box_min[0] < c->hole_max[0] &&
+        info.box_max[2] > c->hole_min[1] && info.box_min[2] < c->hole_max[1])
+        info.box_min[1] -= c->desc.hole_depth;
+    info.covered = in_finer;
+    info.visible = !info.covered && (!lv->culled || lv->in_frustum[block]);
+    return info;
+}
+
+int terrain_clipmap_cull(terrain_clipmap *c, const terrain_frustum *frustum) {
+    TRACE_ZONE("terrain_clipmap_cull");
+    int visible = 0;
+    uint64_t triangles = 0;
+    for (int l = 0; l < c->level_count; l++) {
+        clipmap_level *lv = &c->levels[l];
+        if (!lv->valid) continue;
+        for (int b = 0; b < BLOCKS; b++) {
+            terrain__clipmap_block_info info = terrain__clipmap_block(c, l, b);
+            float size[3];
+            for (int a = 0; a < 3; a++) size[a] = (float)(info.box_max[a] - info.box_min[a]);
+            lv->in_frustum[b] = !info.covered && terrain_frustum_sees(frustum, info.box_min, (const float[3]){ 0, 0, 0 }, size);
+            visible += lv->in_frustum[b];
+            triangles += lv->in_frustum[b] ? c->block_count[b] / 3 : 0;
+        }
+        lv->culled = true;
+    }
+    c->stats.blocks_visible = visible;
+    c->stats.triangles_visible = triangles;
+    return visible;
+}
+
+/* ---- the CPU mirror of clipmap.vert ---- */
+
+float terrain__clipmap_texel(const terrain_clipmap *c, int level, int64_t i, int64_t k) {
+    const clipmap_level *lv = &c->levels[level];
+    if (!lv->valid || i < lv->first[0] - 1 || i > lv->first[0] + c->cells + 1 || k < lv->first[1] - 1 ||
+        k > lv->first[1] + c->cells + 1)
+        return NAN;
+    return lv->heights[(size_t)floor_mod(k, c->size) * (size_t)c->size + (size_t)floor_mod(i, c->size)];
+}
+
+/* The uniforms of one level, as the draw sets them: everything the GPU sees is small. */
+typedef struct level_uniforms {
+    float anchor[2];                /* the outermost level's vertex (0, 0) − camera (x, z) */
+    int offset[2];                  /* this level's vertex (0, 0) from the anchor, in its spacings */
+    float spacing, morph_start, morph_inverse_width;
+    float morph_centre[2];          /* the camera of the last update − this camera (x, z) */
+    int start[2], coarse_start[2];  /* toroidal texels of vertex (0, 0) here and in the coarser level */
+} level_uniforms;
+
+static level_uniforms uniforms_for(const terrain_clipmap *c, int level, const double camera[3]) {
+    const clipmap_level *lv = &c->levels[level], *top = &c->levels[c->level_count - 1];
+    terrain__clipmap_level_info info = level_info(c, level);
+    level_uniforms u = { .spacing = (float)lv->spacing, .morph_start = info.morph_start,
+                         .morph_inverse_width = 1.0f / info.morph_width };
+    int scale_shift = c->level_count - 1 - level;
+    for (int a = 0; a < 2; a++) {
+        /* In double: anchor and camera may be far from the origin, their difference is not. */
+        u.anchor[a] = (float)((double)top->first[a] * top->spacing - camera[a ? 2 : 0]);
+        u.morph_centre[a] = (float)(c->camera[a ? 2 : 0] - camera[a ? 2 : 0]);
+        u.offset[a] = (int)(lv->first[a] - top->first[a] * ((int64_t)1 << scale_shift));
+        u.start[a] = floor_mod(lv->first[a], c->size);
+        u.coarse_start[a] = floor_mod(lv->first[a] / 2, c->size);
+    }
+    return u;
+}
+
+static float level_vertex_height(const terrain_clipmap *c, int level, int i, int k, const level_uniforms *u,
+                                 const float position[2]) {
+    const clipmap_level *lv = &c->levels[level];
+    float fine = terrain__clipmap_texel(c, level, lv->first[0] + i, lv->first[1] + k);
+    if (level + 1 >= c->level_count) return fine;
+    int64_t ci = lv->first[0] / 2 + i / 2, ck = lv->first[1] / 2 + k / 2;
+    float coarse = 0.5f * (terrain__clipmap_texel(c, level + 1, ci, ck) +
+                           terrain__clipmap_texel(c, level + 1, ci + (i & 1), ck + (k & 1)));
+    bool border = i == 0 || k == 0 || i == c->cells || k == c->cells;
+    float alpha = terrain__clipmap_morph(position[0] - u->morph_centre[0], position[1] - u->morph_centre[1], u->morph_start,
+                                         u->morph_inverse_width, border);
+    return (1.0f - alpha) * fine + alpha * coarse;
+}
+
+void terrain__clipmap_vertex(const terrain_clipmap *c, int level, int i, int k, const double camera[3], float position[2],
+                             float *height) {
+    level_uniforms u = uniforms_for(c, level, camera);
+    position[0] = u.anchor[0] + (float)(u.offset[0] + i) * u.spacing;
+    position[1] = u.anchor[1] + (float)(u.offset[1] + k) * u.spacing;
+    *height = level_vertex_height(c, level, i, k, &u, position);
+}
+
+float terrain_clipmap_height(const terrain_clipmap *c, double x, double z) {
+    if (!c->has_camera) return NAN;
+    for (int l = 0; l < c->level_count; l++) {
+        const clipmap_level *lv = &c->levels[l];
+        double gx = x / lv->spacing - (double)lv->first[0], gz = z / lv->spacing - (double)lv->first[1];
+        if (!(gx >= 0 && gz >= 0 && gx <= c->cells && gz <= c->cells)) continue;
+        int i = CORE_MIN((int)gx, c->cells - 1), k = CORE_MIN((int)gz, c->cells - 1);
+        float fx = (float)(gx - i), fz = (float)(gz - k), h[2][2];
+        for (int dz = 0; dz < 2; dz++)
+            for (int dx = 0; dx < 2; dx++) {
+                float position[2];
+                terrain__clipmap_vertex(c, l, i + dx, k + dz, c->camera, position, &h[dz][dx]);
+            }
+        /* The triangle of the cell that holds the point (the diagonal runs (0, 0)–(1, 1)). */
+        if (fz >= fx) return h[0][0] + (h[1][1] - h[1][0]) * fx + (h[1][0] - h[0][0]) * fz;
+        return h[0][0] + (h[0][1] - h[0][0]) * fx + (h[1][1] - h[0][1]) * fz;
+    }
+    return NAN;
+}
+
+terrain_clipmap_stats terrain_clipmap_stats_get(const terrain_clipmap *c) { return c->stats; }
+
+/* ---- GPU ---- */
+
+static void upload_runs(const terrain_clipmap *c, int level, uint8_t *flags, bool rows) {
+    const clipmap_level *lv = &c->levels[level];
+    int size = c->size;
+    for (int a = 0; a < size;) {
+        if (!flags[a]) { a++; continue; }
+        int b = a;
+        while (b < size && flags[b]) flags[b++] = 0;
+        if (rows)
+            glTextureSubImage3D(c->texture, 0, 0, a, level, size, b - a, 1, GL_RED, GL_FLOAT, lv->heights + (size_t)a * size);
+        else
+            glTextureSubImage3D(c->texture, 0, a, 0, level, b - a, size, 1, GL_RED, GL_FLOAT, lv->heights + a);
+        a = b;
+    }
+}
+
+static void create_gpu_objects(terrain_clipmap *c) {
+    glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &c->texture);
+    glTextureStorage3D(c->texture, 1, GL_R32F, c->size, c->size, c->level_count);
+    /* texelFetch only: the shader wraps the toroidal indices itself. */
+    glTextureParameteri(c->texture, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(c->texture, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glCreateBuffers(1, &c->index_buffer);
+    glNamedBufferStorage(c->index_buffer, (GLsizeiptr)(c->index_count * sizeof *c->indices), c->indices, 0);
+    /* No vertex attributes: clipmap.vert makes (i, k) from gl_VertexID. */
+    glCreateVertexArrays(1, &c->vertex_array);
+    glVertexArrayElementBuffer(c->vertex_array, c->index_buffer);
+    core_free(c->indices, c->index_count * sizeof *c->indices);
+    c->indices = NULL;
+    for (int l = 0; l < c->level_count; l++) memset(c->levels[l].dirty_columns, 1, (size_t)c->size);
+}
+
+void terrain_clipmap_upload(terrain_clipmap *c) {
+    TRACE_ZONE("terrain_clipmap_upload");
+    if (!c->texture) create_gpu_objects(c);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, c->size);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    for (int l = 0; l < c->level_count; l++) {
+        if (!c->levels[l].valid) continue;
+        upload_runs(c, l, c->levels[l].dirty_columns, false);
+        upload_runs(c, l, c->levels[l].dirty_rows, true);
+    }
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+    c->upload_pending = false;
+}
+
+static void uniform_ivec2(GLuint program, const char *name, const int *value) {
+    GLint location = glGetUniformLocation(program, name);
+    if (location >= 0) glUniform2i(location, value[0], value[1]);
+}
+
+/* What every level shares: the heights, the hole and the fade into the sky. */
+static void draw_shared_uniforms(terrain_clipmap *c, gfx_context *gfx, gfx_program program, const terrain_view *view) {
+    const double *camera = view->camera;
+    gfx_uniform_int(gfx, program, "u_heights", 1);
+    gfx_uniform_int(gfx, program, "u_size", c->size);
+    gfx_uniform_int(gfx, program, "u_cells", c->cells);
+    gfx_uniform_float(gfx, program, "u_camera_y", (float)camera[1]);
+    float hole[4] = { 1, 1, -1, -1 };                       /* empty: min > max */
+    if (c->has_hole) {
+        hole[0] = (float)(c->hole_min[0] - camera[0]);
+        hole[1] = (float)(c->hole_min[1] - camera[2]);
+        hole[2] = (float)(c->hole_max[0] - camera[0]);
+        hole[3] = (float)(c->hole_max[1] - camera[2]);
+    }
+    gfx_uniform_vec4(gfx, program, "u_hole", hole);
+    gfx_uniform_float(gfx, program, "u_hole_band", c->desc.hole_band);
+    gfx_uniform_float(gfx, program, "u_hole_depth", c->desc.hole_depth);
+    /* 002 §4.4: the outermost level's last 15 % and the last 15 % before the far plane fade into
+     * the sky, so neither the clipmap's square edge nor the far plane's cut is ever seen. */
+    float reach = (float)c->stats.reach, far_distance = view->far_distance > 0 ? view->far_distance : 4000.0f;
+    gfx_uniform_vec2(gfx, program, "u_edge_fade", (const float[2]){ (1.0f - EDGE_FADE) * reach, reach });
+    gfx_uniform_vec2(gfx, program, "u_far_fade", (const float[2]){ (1.0f - EDGE_FADE) * far_distance, 0.98f * far_distance });
+    gfx_uniform_float(gfx, program, "u_water_level", c->desc.generation.sea_level);
+    gfx_uniform_float(gfx, program, "u_sand_max_slope", c->desc.generation.sand_max_slope);
+    gfx_uniform_float(gfx, program, "u_sand_depth", c->desc.generation.sand_depth);
+}
+
+void terrain__clipmap_draw(terrain_clipmap *c, gfx_context *gfx, uint32_t program_handle, const terrain_view *view) {
+    TRACE_ZONE("terrain_clipmap_draw");
+    c->stats.blocks_drawn = 0;
+    c->stats.triangles = 0;
+    if (!c->has_camera) return;
+    /* Levels placed by an update whose heights are not on the GPU yet would draw stale ones. */
+    if (!c->texture || c->upload_pending) terrain_clipmap_upload(c);
+    gfx_program program = { program_handle };
+    GLuint gl_program = gfx_program_gl(gfx, program);
+    draw_shared_uniforms(c, gfx, program, view);
+    glBindTextureUnit(1, c->texture);
+    for (int l = 0; l < c->level_count; l++) {
+        level_uniforms u = uniforms_for(c, l, view->camera);
+        gfx_uniform_int(gfx, program, "u_layer", l);
+        gfx_uniform_int(gfx, program, "u_coarse_layer", l + 1 < c->level_count ? l + 1 : -1);
+        gfx_uniform_vec2(gfx, program, "u_anchor", u.anchor);
+        gfx_uniform_float(gfx, program, "u_spacing", u.spacing);
+        gfx_uniform_vec2(gfx, program, "u_morph", (const float[2]){ u.morph_start, u.morph_inverse_width });
+        gfx_uniform_vec2(gfx, program, "u_morph_centre", u.morph_centre);
+        uniform_ivec2(gl_program, "u_offset", u.offset);
+        uniform_ivec2(gl_program, "u_start", u.start);
+        uniform_ivec2(gl_program, "u_coarse_start", u.coarse_start);
+        for (int b = 0; b < BLOCKS; b++) {
+            if (!terrain__clipmap_block(c, l, b).visible) continue;
+            gfx_draw(&(gfx_draw_desc){ .vertex_array = { c->vertex_array }, .first = c->block_first[b],
+                                       .count = c->block_count[b], .index_type = GFX_INDEX_U32 });
+            c->stats.blocks_drawn++;
+            c->stats.triangles += c->block_count[b] / 3;
+        }
+    }
+    trace_counter("terrain.clipmap_blocks_drawn", c->stats.blocks_drawn);
+    trace_counter("terrain.clipmap_triangles", (double)c->stats.triangles);
+}

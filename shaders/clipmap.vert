@@ -1,0 +1,81 @@
+#version 450 core
+// clipmap.vert — one level of the far terrain's geometry clipmap (002 §3.2; Losasso & Hoppe
+// 2004). The grid of (u_cells + 1)² vertices has no attributes: (i, k) comes from gl_VertexID.
+// Heights come from this level's layer of u_heights, a toroidal array: grid point (i, k) sits at
+// texel (i mod u_size, k mod u_size), so the indices are wrapped here and read with texelFetch.
+// Near the level's border each vertex morphs to the coarser level's triangles (the formula of
+// terrain__clipmap_morph in terrain_internal.h, which the CPU tests check; keep the two alike).
+// Everything arrives camera-relative: positions are small wherever the camera is.
+
+uniform mat4 u_view_projection;    // camera at the origin
+uniform sampler2DArray u_heights;  // R32F, one layer per level
+uniform int u_size;                // texels along each side of a layer (toroidal period)
+uniform int u_cells;               // cells along each side of a level
+uniform int u_layer, u_coarse_layer;   // this level's layer, the coarser level's (−1: none)
+uniform ivec2 u_start;             // texel of vertex (0, 0) in this layer
+uniform ivec2 u_coarse_start;      // texel of the coarser level's vertex at vertex (0, 0)
+uniform ivec2 u_offset;            // vertex (0, 0) from the anchor, in this level's spacings
+uniform vec2 u_anchor;             // the anchor (a vertex of every level) − camera, x and z
+uniform float u_spacing;           // metres between this level's vertices
+uniform float u_camera_y;
+uniform vec2 u_morph;              // where the morph starts (metres from the centre), 1 / width
+uniform vec2 u_morph_centre;       // the camera of the clipmap's last update, camera-relative
+uniform vec4 u_hole;               // the hole, camera-relative: min x, min z, max x, max z
+uniform float u_hole_band, u_hole_depth;
+
+out vec3 v_relative_position;      // to the camera
+out vec3 v_normal;
+out float v_height;                // world height of the ground (before any sinking)
+
+float height_at(int layer, ivec2 texel) {
+    return texelFetch(u_heights, ivec3((texel + u_size) % u_size, layer), 0).r;
+}
+
+// Central differences over the level's own grid (one texel ring beyond the vertices is kept).
+vec3 normal_at(int layer, ivec2 texel, float spacing) {
+    float left = height_at(layer, texel - ivec2(1, 0)), right = height_at(layer, texel + ivec2(1, 0));
+    float back = height_at(layer, texel - ivec2(0, 1)), front = height_at(layer, texel + ivec2(0, 1));
+    return normalize(vec3(left - right, 2.0 * spacing, back - front));
+}
+
+// How deep inside the hole a camera-relative point is (≤ 0 outside).
+float hole_depth_inside(vec2 p) {
+    return min(min(p.x - u_hole.x, u_hole.z - p.x), min(p.y - u_hole.y, u_hole.w - p.y));
+}
+
+void main() {
+    ivec2 grid = ivec2(gl_VertexID % (u_cells + 1), gl_VertexID / (u_cells + 1));
+    // The anchor is shared by all levels and (u_offset + grid)·u_spacing is exact, so a vertex
+    // that two levels share gets the same bits in both.
+    precise vec2 position = u_anchor + vec2(u_offset + grid) * u_spacing;
+    ivec2 texel = u_start + grid;
+    float fine = height_at(u_layer, texel);
+    vec3 normal = normal_at(u_layer, texel, u_spacing);
+    precise float height = fine;
+    if (u_coarse_layer >= 0) {
+        bool border = grid.x == 0 || grid.y == 0 || grid.x == u_cells || grid.y == u_cells;
+        // Measured from the camera the levels were placed for, so that the transition always
+        // ends inside the level and the coarser level is unmorphed under the finer border.
+        vec2 from_centre = position - u_morph_centre;
+        float alpha = clamp((max(abs(from_centre.x), abs(from_centre.y)) - u_morph.x) * u_morph.y, 0.0, 1.0);
+        alpha = border ? 1.0 : alpha;
+        if (alpha > 0.0) {
+            // The coarser triangles under the vertex: its vertex, an edge's midpoint, or the
+            // midpoint of the cell's (0, 0)–(1, 1) diagonal.
+            ivec2 c0 = u_coarse_start + (grid >> 1), c1 = c0 + (grid & 1);
+            precise float coarse = 0.5 * (height_at(u_coarse_layer, c0) + height_at(u_coarse_layer, c1));
+            vec3 coarse_normal = normal_at(u_coarse_layer, c0, 2.0 * u_spacing) + normal_at(u_coarse_layer, c1, 2.0 * u_spacing);
+            height = (1.0 - alpha) * fine + alpha * coarse;
+            normal = mix(normal, normalize(coarse_normal), alpha);
+        }
+    }
+    // Inside the hole the surface sinks within u_hole_band of the border to u_hole_depth below
+    // the ground: a pit under the volumetric chunks, whose walls are the skirt of their open
+    // border (terrain_clipmap.c says why it is a pit rather than a cut-out).
+    float inside = hole_depth_inside(position);
+    float sink = inside > 0.0 ? u_hole_depth * clamp(inside / u_hole_band, 0.0, 1.0) : 0.0;
+    v_relative_position = vec3(position.x, height - sink - u_camera_y, position.y);
+    v_normal = normal;
+    v_height = height;
+    gl_Position = u_view_projection * vec4(v_relative_position, 1.0);
+}

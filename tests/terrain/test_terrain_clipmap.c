@@ -1,0 +1,391 @@
+/* Geometry clipmaps for the far terrain (002 §3.2, §3.5): heights are the generator's ground at
+ * the level's spacing and lie within the generator's own bound of the stacks' top; incremental
+ * updates equal fresh builds; finer borders lie on coarser edges (no T-junction gaps); levels
+ * nest on each other's vertex lines anywhere in the world; culling keeps what can be seen. */
+#include "../engine/test.h"
+#include "terrain/terrain.h"
+#include "terrain/terrain_internal.h"
+
+#include "core/core.h"
+#include "jobs/jobs.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* A small clipmap keeps the debug build's tests quick; the code has no special case for size. */
+static terrain_clipmap *small_clipmap(uint64_t seed, int levels, int cells, float spacing, job_system *jobs) {
+    return terrain_clipmap_create(&(terrain_clipmap_desc){ .levels = levels, .cells = cells, .finest_spacing = spacing,
+                                                           .generation = terrain_generation_defaults(seed), .jobs = jobs });
+}
+
+/* Every texel a level holds: its vertices and one more ring. */
+#define FOR_WINDOW(info, i, k)                                                              \
+    for (int64_t k = (info).first[1] - 1; k <= (info).first[1] + (info).cells + 1; k++)     \
+        for (int64_t i = (info).first[0] - 1; i <= (info).first[0] + (info).cells + 1; i++)
+
+/* ---- heights ---- */
+
+Test(terrain_clipmap, texels_are_the_ground_at_the_levels_spacing) {
+    terrain_clipmap *c = small_clipmap(42, 4, 32, 4.0f, NULL);
+    terrain_generation_params p = terrain_generation_defaults(42);
+    uint64_t texels = terrain_clipmap_update(c, (double[3]){ 123.4, 50.0, -987.6 });
+    cr_assert_eq(texels, 4u * 35u * 35u, "the first update computes every level's window");
+    float previous_octaves = 100;
+    for (int l = 0; l < 4; l++) {
+        terrain__clipmap_level_info info = terrain__clipmap_level(c, l);
+        cr_assert_eq(info.spacing, 4.0 * (1 << l));
+        /* 004 §4.1: ν = log(s/relief) / log(r^−H), fewer octaves at every coarser level. */
+        float expected = logf((float)info.spacing / p.relief_height) / (-p.hurst * logf(p.lacunarity));
+        cr_assert_float_eq(info.octaves, fmaxf(expected, 1.0f), 1e-4, "level %d: %f octaves", l, info.octaves);
+        cr_assert_lt(info.octaves, previous_octaves + (l == 3 ? 1e-3f : 0));   /* level 3 is at the floor of 1 */
+        previous_octaves = info.octaves;
+        float row[64];
+        for (int64_t k = info.first[1] - 1; k <= info.first[1] + info.cells + 1; k++) {
+            int count = info.cells + 3;
+            terrain__ground_row_spaced(&p, (double)(info.first[0] - 1) * info.spacing, info.spacing,
+                                       (double)k * info.spacing, count, (float)info.spacing, row);
+            for (int j = 0; j < count; j++)
+                cr_assert_eq(terrain__clipmap_texel(c, l, info.first[0] - 1 + j, k), row[j], "level %d texel (%lld, %lld)", l,
+                             (long long)(info.first[0] - 1 + j), (long long)k);
+        }
+    }
+    cr_assert(isnan(terrain__clipmap_texel(c, 0, terrain__clipmap_level(c, 0).first[0] - 2, 0)), "outside the window");
+    terrain_clipmap_destroy(c);
+}
+
+Test(terrain_clipmap, at_column_spacing_the_texels_are_the_generators_ground_bit_for_bit) {
+    terrain_clipmap *c = small_clipmap(7, 2, 16, TERRAIN_COLUMN_SIZE, NULL);
+    terrain_generation_params p = terrain_generation_defaults(7);
+    terrain_clipmap_update(c, (double[3]){ -3000.2, 0, 411.7 });
+    terrain__clipmap_level_info info = terrain__clipmap_level(c, 0);
+    FOR_WINDOW(info, i, k)
+        cr_assert_eq(terrain__clipmap_texel(c, 0, i, k), terrain__ground_height(&p, (double)i, (double)k));
+    terrain_clipmap_destroy(c);
+}
+
+static int compare_floats(const void *a, const void *b) {
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* Largest |∇G| (1 m differences of the column ground) over the disc of radius r around (x, z). */
+static float ground_slope_max(const terrain_generation_params *p, double x, double z, int r) {
+    float grid[2 * 16 + 3][2 * 16 + 3];
+    int size = 2 * r + 3;
+    for (int k = 0; k < size; k++)
+        terrain__ground_row_spaced(p, x - r - 1, 1.0, z - r - 1 + k, size, 1.0f, grid[k]);
+    float slope = 0;
+    for (int k = 1; k + 1 < size; k++)
+        for (int i = 1; i + 1 < size; i++) {
+            if ((i - r - 1) * (i - r - 1) + (k - r - 1) * (k - r - 1) > r * r) continue;
+            float gx = 0.5f * (grid[k][i + 1] - grid[k][i - 1]), gz = 0.5f * (grid[k + 1][i] - grid[k - 1][i]);
+            slope = fmaxf(slope, sqrtf(gx * gx + gz * gz));
+        }
+    return slope;
+}
+
+/* The stacks' top is G at the sample point moved sideways by A·(u, w), |u|, |w| ≤ 1 (002 Fig. 8;
+ * terrain_generate.c), so |top − G| ≤ A·√2·max|∇G| within A·√2, plus half a height quantum for
+ * the packing and a few centimetres for the generator's linear placement of the crossing
+ * between 1 m density samples. 1 m differences under-estimate the steepest gradient by the
+ * detail finer than a metre: a margin of 25 % on the slope. The clipmap's G at spacing s
+ * differs from the columns' G by the octaves the spacing drops (004 §4.1), added as measured.
+ * Caves are switched off: a cave mouth cuts the top, and the clipmap does not draw caves. */
+Test(terrain_clipmap, heights_match_the_stacks_top_within_the_generators_bound) {
+    terrain_generation_params p = terrain_generation_defaults(42);
+    p.cave_threshold = 0.0f;
+    const float a = p.horizontal_perturbation, quantum = TERRAIN_HEIGHT_QUANTUM;
+    const int reach = (int)ceilf(a * 1.41422f);
+    enum { CHUNKS = 6, PER_CHUNK = 9 };
+    float errors_1m[CHUNKS * PER_CHUNK], errors_4m[CHUNKS * PER_CHUNK], errors_drawn[CHUNKS * PER_CHUNK];
+    float slopes[CHUNKS * PER_CHUNK], worst_ratio = 0, worst_gentle_1m = 0, worst_gentle_4m = 0;
+    int count = 0;
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = p });
+    /* What is drawn: level 0 of a clipmap of the default spacing around each chunk. */
+    terrain_clipmap *level0 = terrain_clipmap_create(&(terrain_clipmap_desc){ .levels = 1, .cells = 32, .generation = p });
+    for (int chunk = 0; chunk < CHUNKS; chunk++) {
+        terrain_chunk_coord coord = { chunk * 5 - 13, 7 - chunk * 3 };
+        const terrain_stacks *s = terrain_world_stacks(world, coord);
+        terrain_clipmap_update(level0, (double[3]){ coord.x * 32.0 + 16.0, 0.0, coord.z * 32.0 + 16.0 });
+        for (int sample = 0; sample < PER_CHUNK; sample++, count++) {
+            int i = 4 + (sample % 3) * 11, k = 4 + (sample / 3) * 11;
+            double x = (double)coord.x * TERRAIN_CHUNK_COLUMNS + i + 0.5, z = (double)coord.z * TERRAIN_CHUNK_COLUMNS + k + 0.5;
+            float top = terrain_stacks_top(s, i, k), g1, g4;
+            terrain__ground_row_spaced(&p, x, 1.0, z, 1, 1.0f, &g1);
+            terrain__ground_row_spaced(&p, x, 4.0, z, 1, 4.0f, &g4);
+            slopes[count] = ground_slope_max(&p, x, z, reach);
+            float bound = a * 1.41422f * 1.25f * slopes[count] + 0.5f * quantum + 0.05f;
+            errors_1m[count] = fabsf(top - g1);
+            errors_4m[count] = fabsf(top - g4);
+            errors_drawn[count] = fabsf(top - terrain_clipmap_height(level0, x, z));
+            cr_expect_leq(errors_1m[count], bound, "(%.1f, %.1f): top %.3f, G %.3f, bound %.3f", x, z, top, g1, bound);
+            cr_expect_leq(errors_4m[count], bound + fabsf(g4 - g1), "(%.1f, %.1f) at 4 m", x, z);
+            worst_ratio = fmaxf(worst_ratio, errors_1m[count] / bound);
+        }
+    }
+    terrain_clipmap_destroy(level0);
+    terrain_world_destroy(world);
+    /* The gentler half of the points (by the slope around them) says what a flat stretch gets. */
+    float sorted_slopes[CHUNKS * PER_CHUNK];
+    memcpy(sorted_slopes, slopes, sizeof slopes);
+    qsort(sorted_slopes, (size_t)count, sizeof(float), compare_floats);
+    for (int n = 0; n < count; n++)
+        if (slopes[n] <= sorted_slopes[count / 2]) {
+            worst_gentle_1m = fmaxf(worst_gentle_1m, errors_1m[n]);
+            worst_gentle_4m = fmaxf(worst_gentle_4m, errors_4m[n]);
+        }
+    qsort(errors_1m, (size_t)count, sizeof(float), compare_floats);
+    qsort(errors_4m, (size_t)count, sizeof(float), compare_floats);
+    qsort(errors_drawn, (size_t)count, sizeof(float), compare_floats);
+    printf("clipmap vs stacks top over %d columns: |top - G(1 m)| median %.2f max %.2f m (gentle half max %.2f), "
+           "|top - G(4 m)| median %.2f max %.2f m (gentle half max %.2f), drawn at 4 m median %.2f max %.2f m; "
+           "worst share of the bound %.2f\n",
+           count, errors_1m[count / 2], errors_1m[count - 1], worst_gentle_1m, errors_4m[count / 2], errors_4m[count - 1],
+           worst_gentle_4m, errors_drawn[count / 2], errors_drawn[count - 1], worst_ratio);
+    /* A regression guard on what the far view shows: the typical column within a metre or so. */
+    cr_expect_lt(errors_4m[count / 2], 1.5f);
+    cr_expect_lt(errors_drawn[count / 2], 1.5f);
+}
+
+/* ---- incremental updates ---- */
+
+static void expect_same_texels(terrain_clipmap *updated, terrain_clipmap *fresh, int levels, const double camera[3]) {
+    for (int l = 0; l < levels; l++) {
+        terrain__clipmap_level_info a = terrain__clipmap_level(updated, l), b = terrain__clipmap_level(fresh, l);
+        cr_assert_eq(a.first[0], b.first[0]);
+        cr_assert_eq(a.first[1], b.first[1]);
+        FOR_WINDOW(a, i, k) {
+            float x = terrain__clipmap_texel(updated, l, i, k), y = terrain__clipmap_texel(fresh, l, i, k);
+            cr_assert(x == y, "camera (%.1f, %.1f) level %d texel (%lld, %lld): %f != %f", camera[0], camera[2], l,
+                      (long long)i, (long long)k, x, y);
+        }
+    }
+}
+
+static void random_walk(job_system *jobs) {
+    const int levels = 4, cells = 32;
+    terrain_clipmap *c = small_clipmap(3, levels, cells, 4.0f, jobs);
+    double camera[3] = { -50.0, 30.0, 77.0 };
+    uint64_t state = 99;
+    uint64_t full = (uint64_t)levels * (cells + 3) * (cells + 3);
+    for (int step = 0; step < 40; step++) {
+        state = core_hash_u64(state);
+        double scale = step % 10 == 9 ? 3000.0 : step % 3 == 2 ? 90.0 : 9.0;   /* walks, runs and jumps */
+        camera[0] += ((double)(state & 0xffff) / 65536.0 - 0.5) * 2.0 * scale;
+        camera[2] += ((double)((state >> 16) & 0xffff) / 65536.0 - 0.5) * 2.0 * scale;
+        if (step == 20) camera[0] = -100000.3, camera[2] = -99999.1;           /* far out, negative */
+        uint64_t texels = terrain_clipmap_update(c, camera);
+        if (scale == 9.0 && step != 0 && step != 20) cr_assert_lt(texels, full / 3, "a short walk recomputes a few rows: %llu", (unsigned long long)texels);
+        terrain_clipmap *fresh = small_clipmap(3, levels, cells, 4.0f, NULL);
+        cr_assert_eq(terrain_clipmap_update(fresh, camera), full);
+        expect_same_texels(c, fresh, levels, camera);
+        terrain_clipmap_destroy(fresh);
+    }
+    terrain_clipmap_destroy(c);
+}
+
+Test(terrain_clipmap, incremental_updates_equal_fresh_builds_on_a_random_walk) { random_walk(NULL); }
+
+Test(terrain_clipmap, incremental_updates_on_the_job_system_equal_fresh_builds) {
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
+    random_walk(jobs);
+    job_system_destroy(jobs);
+}
+
+/* ---- nesting and seams ---- */
+
+static double random_coordinate(uint64_t *state, double range) {
+    *state = core_hash_u64(*state);
+    return ((double)(*state >> 11) / 9007199254740992.0 - 0.5) * 2.0 * range;
+}
+
+Test(terrain_clipmap, footprints_nest_on_the_coarser_levels_vertex_lines_anywhere) {
+    const int levels = 8, cells = 16;
+    terrain_clipmap *c = small_clipmap(5, levels, cells, 4.0f, NULL);
+    uint64_t state = 1;
+    for (int trial = 0; trial < 40; trial++) {
+        double range = trial < 20 ? 3000.0 : 100000.0;
+        double camera[3] = { random_coordinate(&state, range), 20.0, random_coordinate(&state, range) };
+        terrain_clipmap_update(c, camera);
+        for (int l = 0; l < levels; l++) {
+            terrain__clipmap_level_info info = terrain__clipmap_level(c, l);
+            double s = info.spacing;
+            for (int axis = 0; axis < 2; axis++) {
+                double lo = (double)info.first[axis] * s, hi = lo + cells * s, eye = camera[axis ? 2 : 0];
+                /* The camera is near the level's centre: level 0 within s, each coarser level at
+                 * most one of its cells further. */
+                cr_assert_leq(fabs(0.5 * (lo + hi) - eye), 4.0 * (ldexp(1.0, l + 1) - 1.0), "level %d axis %d", l, axis);
+                if (l + 1 == levels) continue;
+                terrain__clipmap_level_info coarse = terrain__clipmap_level(c, l + 1);
+                double coarse_lo = (double)coarse.first[axis] * coarse.spacing;
+                /* Inside the coarser level, a quarter of it in from each side (± one cell), and
+                 * both edges on its vertex lines. */
+                double in_cells = (lo - coarse_lo) / coarse.spacing;
+                cr_assert(in_cells == cells / 4 || in_cells == cells / 4 + 1, "level %d in %d: %f cells in", l, l + 1, in_cells);
+                cr_assert_eq(fmod(lo / coarse.spacing, 1.0), 0.0);
+                cr_assert_eq(fmod(hi / coarse.spacing, 1.0), 0.0);
+                cr_assert_leq(hi, coarse_lo + cells * coarse.spacing - cells / 4 * coarse.spacing + coarse.spacing);
+            }
+        }
+    }
+    terrain_clipmap_destroy(c);
+}
+
+/* For every finer-level border vertex: its camera-relative position and drawn height are those
+ * of the coarser level's vertex at the same place, or exactly the midpoint of the coarser edge
+ * it sits on. The camera at draw time is not the one of the update (the player moved on). */
+static void check_seams(terrain_clipmap *c, int levels, int cells, const double update_camera[3], const double draw_camera[3]) {
+    terrain_clipmap_update(c, update_camera);
+    double reach = terrain_clipmap_stats_get(c).reach;
+    for (int l = 0; l + 1 < levels; l++) {
+        terrain__clipmap_level_info fine = terrain__clipmap_level(c, l), coarse = terrain__clipmap_level(c, l + 1);
+        for (int e = 0; e < 4 * (cells + 1); e++) {
+            int side = e / (cells + 1), t = e % (cells + 1);
+            int i = side < 2 ? t : side == 2 ? 0 : cells;
+            int k = side == 0 ? 0 : side == 1 ? cells : t;
+            float p[2], h;
+            terrain__clipmap_vertex(c, l, i, k, draw_camera, p, &h);
+            cr_assert_lt(fabsf(p[0]), reach * 1.5, "positions reach the GPU camera-relative and small");
+            int64_t gx = fine.first[0] + i, gz = fine.first[1] + k;          /* in fine spacings */
+            int ci = (int)((gx - (gx & 1)) / 2 - coarse.first[0]), ck = (int)((gz - (gz & 1)) / 2 - coarse.first[1]);
+            if (gx % 2 == 0 && gz % 2 == 0) {
+                float q[2], hc;
+                terrain__clipmap_vertex(c, l + 1, ci, ck, draw_camera, q, &hc);
+                cr_assert(p[0] == q[0] && p[1] == q[1], "level %d vertex (%d, %d): at (%.9g, %.9g), coarse (%.9g, %.9g)", l, i, k,
+                          p[0], p[1], q[0], q[1]);
+                cr_assert(h == hc, "level %d vertex (%d, %d): height %.9g, coarse %.9g", l, i, k, h, hc);
+            } else {
+                float q0[2], q1[2], h0, h1;
+                int di = (int)(gx & 1), dk = (int)(gz & 1);
+                terrain__clipmap_vertex(c, l + 1, ci, ck, draw_camera, q0, &h0);
+                terrain__clipmap_vertex(c, l + 1, ci + di, ck + dk, draw_camera, q1, &h1);
+                cr_assert(p[0] == 0.5f * (q0[0] + q1[0]) && p[1] == 0.5f * (q0[1] + q1[1]), "level %d vertex (%d, %d)", l, i, k);
+                cr_assert(h == 0.5f * (h0 + h1), "level %d vertex (%d, %d): height %.9g, coarse edge %.9g … %.9g", l, i, k, h, h0, h1);
+            }
+        }
+    }
+}
+
+Test(terrain_clipmap, finer_borders_lie_on_the_coarser_edges) {
+    const int levels = 5, cells = 32;
+    terrain_clipmap *c = small_clipmap(11, levels, cells, 4.0f, NULL);
+    const double cameras[][3] = { { 0, 40, 0 }, { 1234.5, 80, -777.25 }, { -100003.7, 60, 100011.2 }, { 3.9, 10, 4.1 } };
+    for (size_t n = 0; n < CORE_COUNTOF(cameras); n++) {
+        check_seams(c, levels, cells, cameras[n], cameras[n]);
+        const double moved[3] = { cameras[n][0] + 37.0, cameras[n][1], cameras[n][2] - 21.0 };
+        check_seams(c, levels, cells, cameras[n], moved);
+    }
+    terrain_clipmap_destroy(c);
+}
+
+Test(terrain_clipmap, morph_is_zero_inside_one_at_the_border_and_continuous) {
+    /* By hand: start 100 m, width 20 m. */
+    cr_assert_eq(terrain__clipmap_morph(50, -99, 100, 0.05f, false), 0.0f);
+    cr_assert_float_eq(terrain__clipmap_morph(-110, 30, 100, 0.05f, false), 0.5f, 1e-6);
+    cr_assert_eq(terrain__clipmap_morph(20, 120, 100, 0.05f, false), 1.0f);
+    cr_assert_eq(terrain__clipmap_morph(0, 0, 100, 0.05f, true), 1.0f);
+    /* The drawn level 0 equals its texels where the morph is 0 (around the camera). */
+    terrain_clipmap *c = small_clipmap(2, 3, 32, 4.0f, NULL);
+    const double camera[3] = { 10, 20, 30 };
+    terrain_clipmap_update(c, camera);
+    terrain__clipmap_level_info info = terrain__clipmap_level(c, 0);
+    for (int k = 12; k <= 20; k++)
+        for (int i = 12; i <= 20; i++) {
+            float p[2], h;
+            terrain__clipmap_vertex(c, 0, i, k, camera, p, &h);
+            cr_assert_eq(h, terrain__clipmap_texel(c, 0, info.first[0] + i, info.first[1] + k));
+        }
+    cr_assert_gt(info.morph_start, 0.0f, "the transition lies inside the level");
+    cr_assert_leq(info.morph_start + info.morph_width, 0.5f * 32 * 4 - 4.0f, "and ends where the border may be nearest");
+    terrain_clipmap_destroy(c);
+}
+
+Test(terrain_clipmap, height_follows_the_finest_level_and_is_nan_outside) {
+    terrain_clipmap *c = small_clipmap(4, 3, 32, 4.0f, NULL);
+    cr_assert(isnan(terrain_clipmap_height(c, 0, 0)), "before the first update");
+    const double camera[3] = { 501.0, 30.0, -250.0 };
+    terrain_clipmap_update(c, camera);
+    terrain__clipmap_level_info info = terrain__clipmap_level(c, 0);
+    /* At a vertex of level 0 near the camera: its texel; halfway along a cell's edge: the mean. */
+    double x = (double)(info.first[0] + 16) * 4.0, z = (double)(info.first[1] + 15) * 4.0;
+    float h00 = terrain__clipmap_texel(c, 0, info.first[0] + 16, info.first[1] + 15);
+    float h10 = terrain__clipmap_texel(c, 0, info.first[0] + 17, info.first[1] + 15);
+    cr_assert_float_eq(terrain_clipmap_height(c, x, z), h00, 1e-4);
+    cr_assert_float_eq(terrain_clipmap_height(c, x + 2.0, z), 0.5f * (h00 + h10), 1e-4);
+    /* Far out only the outermost level covers (it reaches 32·16/2 = 256 m, less its offset). */
+    cr_assert(!isnan(terrain_clipmap_height(c, camera[0] + 200.0, camera[2])));
+    cr_assert(isnan(terrain_clipmap_height(c, camera[0] + 400.0, camera[2])));
+    terrain_clipmap_destroy(c);
+}
+
+/* ---- culling ---- */
+
+Test(terrain_clipmap, culling_drops_blocks_behind_and_keeps_the_one_under_the_camera) {
+    const int levels = 4;
+    terrain_clipmap *c = small_clipmap(8, levels, 64, 4.0f, NULL);
+    double camera[3] = { 2000.0, 0.0, -3000.0 };
+    terrain_clipmap_update(c, camera);
+    camera[1] = terrain_clipmap_height(c, camera[0], camera[2]) + 0.5;   /* standing on it */
+    int total = 0;
+    for (int l = 0; l < levels; l++)
+        for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) total += !terrain__clipmap_block(c, l, b).covered;
+    cr_assert_eq(total, levels * TERRAIN__CLIPMAP_BLOCKS - (levels - 1) * 9, "each coarser level leaves 3 × 3 to the finer");
+
+    /* Looking north (−z), level: nothing wholly behind the camera is kept. */
+    terrain_view view = { .camera = { camera[0], camera[1], camera[2] }, .aspect = 16.0f / 9.0f };
+    terrain_frustum frustum = terrain_frustum_from_view(&view);
+    int visible = terrain_clipmap_cull(c, &frustum);
+    cr_assert_gt(visible, 0);
+    cr_assert_lt(visible, total / 2, "%d of %d blocks kept looking one way", visible, total);
+    cr_assert_eq(terrain_clipmap_stats_get(c).blocks_visible, visible);
+    for (int l = 0; l < levels; l++)
+        for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) {
+            terrain__clipmap_block_info info = terrain__clipmap_block(c, l, b);
+            if (info.visible) cr_assert_lt(info.box_min[2], camera[2], "level %d block %d lies behind", l, b);
+        }
+
+    /* Any direction: the block under the camera stays. */
+    uint64_t state = 5;
+    for (int trial = 0; trial < 24; trial++) {
+        view.yaw = (float)random_coordinate(&state, 3.14159);
+        view.pitch = (float)random_coordinate(&state, 1.5);
+        frustum = terrain_frustum_from_view(&view);
+        terrain_clipmap_cull(c, &frustum);
+        bool found = false;
+        for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) {
+            terrain__clipmap_block_info info = terrain__clipmap_block(c, 0, b);
+            bool under = camera[0] >= info.box_min[0] && camera[0] <= info.box_max[0] && camera[2] >= info.box_min[2] &&
+                         camera[2] <= info.box_max[2];
+            if (!under) continue;
+            found = true;
+            cr_assert(info.visible, "yaw %.2f pitch %.2f culled block %d under the camera", view.yaw, view.pitch, b);
+        }
+        cr_assert(found);
+    }
+
+    /* A hole over the middle of level 0: the blocks reaching into it are drawn sunk there (the pit
+     * under the volumetric chunks), so their bounds reach down by hole_depth; none is skipped. */
+    terrain__clipmap_level_info info = terrain__clipmap_level(c, 0);
+    double lo[2] = { (double)(info.first[0] + 10) * 4.0, (double)(info.first[1] + 10) * 4.0 };
+    double hi[2] = { (double)(info.first[0] + 30) * 4.0, (double)(info.first[1] + 30) * 4.0 };
+    terrain__clipmap_block_info before[TERRAIN__CLIPMAP_BLOCKS];
+    for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) before[b] = terrain__clipmap_block(c, 0, b);
+    terrain_clipmap_set_hole(c, lo, hi);
+    int sunk = 0;
+    for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) {
+        terrain__clipmap_block_info block = terrain__clipmap_block(c, 0, b);
+        /* Cells [10, 30) on both axes; a block's box has one cell more around. */
+        bool reaches = block.cells_max[0] + 1 > 10 && block.cells_min[0] - 1 < 30 && block.cells_max[1] + 1 > 10 &&
+                       block.cells_min[1] - 1 < 30;
+        cr_assert_not(block.covered);
+        /* 156 m: the default pit below the generator's caves (12 + 1.5·64 + 48). */
+        cr_assert_float_eq(block.box_min[1], before[b].box_min[1] - (reaches ? 156.0 : 0.0), 1e-3, "block %d", b);
+        sunk += reaches;
+    }
+    cr_assert_eq(sunk, 9, "the blocks of segments 0–2 along both axes");
+    terrain_clipmap_set_hole(c, hi, lo);   /* min ≥ max: no hole */
+    for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) cr_assert_eq(terrain__clipmap_block(c, 0, b).box_min[1], before[b].box_min[1]);
+    terrain_clipmap_destroy(c);
+}
