@@ -24,6 +24,7 @@ struct game_app {
     ecs_world *ecs;
     terrain_world *world;
     terrain_renderer *renderer;
+    terrain_clipmap *clipmap;              /* the far terrain, or NULL */
     terrain_ecs *terrain;
     input_bindings *bindings;
     input_system *input;
@@ -91,9 +92,17 @@ game_app *game_app_create(const game_app_desc *desc) {
     if (!app->windowed && !d->frames && !d->walk && !d->replay_path) d->frames = 300;
     app->jobs = job_system_create(&(job_system_desc){ .threads = d->threads });
     app_open_terrain(app);
+    /* Thin fog: the clipmap shows ground out to several kilometres. */
     app->renderer = terrain_renderer_create(app->gfx, &(terrain_renderer_desc){
-        .sea_level = terrain_world_generation(app->world)->sea_level });
+        .sea_level = terrain_world_generation(app->world)->sea_level, .fog_density = d->no_clipmap ? 0 : 0.0005f });
     if (!app->renderer || !app_open_input(app) || !(app->hud = gfx_text_create(app->gfx))) goto fail;
+    if (!d->no_clipmap) {
+        app->clipmap = terrain_clipmap_create(&(terrain_clipmap_desc){
+            .generation = *terrain_world_generation(app->world), .jobs = app->jobs });
+        terrain_ecs_set_clipmap(app->terrain, app->clipmap);
+        terrain_renderer_set_clipmap(app->renderer, app->clipmap);
+        app->view.far_distance = 6000.0f;
+    }
     app_spawn_player(app);
     app->loading = true;
     app->start_ns = app->last_ns = core_time_ns();
@@ -109,6 +118,7 @@ void game_app_destroy(game_app *app) {
     input_bindings_destroy(app->bindings);
     gfx_text_destroy(app->hud);
     if (app->terrain) terrain_ecs_destroy(app->terrain);
+    terrain_clipmap_destroy(app->clipmap);
     terrain_renderer_destroy(app->renderer);
     ecs_world_destroy(app->ecs);
     terrain_world_destroy(app->world);

@@ -594,6 +594,13 @@ typedef struct terrain_stream_stats {
     size_t resident_bytes, peak_resident_bytes;   /* stacks cached + CPU and GPU meshes */
 } terrain_stream_stats;
 terrain_stream_stats terrain_ecs_stream_stats(terrain_ecs *te);
+/* Far terrain (after terrain_ecs_stream; the clipmap is not owned): the lod phase
+ * ("terrain_clipmap") re-centres it on viewer 0 and sinks it under the square viewer 0's rings
+ * cover once their chunks are all in; the cull phase ("terrain_clipmap_cull") culls its blocks
+ * against the view. Give the renderer the same clipmap (terrain_renderer_set_clipmap). Other
+ * viewers' rings are not cut out of it. */
+typedef struct terrain_clipmap terrain_clipmap;
+void terrain_ecs_set_clipmap(terrain_ecs *te, terrain_clipmap *clipmap);
 
 /* The view the cull phase tests against (copied); NULL = no culling, every chunk is drawn. */
 void terrain_ecs_set_view(terrain_ecs *te, const terrain_view *view);

@@ -88,6 +88,9 @@ struct terrain__streamer {
     size_t mesh_bytes;                     /* CPU and GPU meshes held */
     uint64_t frame;
     int64_t y_first[16], y_last[16];       /* mesh layers per level */
+    bool layout_ready;                     /* every wanted chunk of the current layout is ready */
+    terrain_clipmap *clipmap;              /* far terrain around viewer 0, or NULL */
+    double hole_min[2], hole_max[2];       /* the rings' square of the last layout that was ready */
     terrain_stream_stats stats;
 };
 
@@ -338,7 +341,9 @@ static bool stream_replaced(const terrain__streamer *s, const stream_record *r) 
                     if (c && c->wanted && !c->ready) return false;
                 }
     }
-    return true;
+    /* Nothing wanted overlaps it (behind the viewers): it stays until the new layout is all in,
+     * when the clipmap's hole moves over there (the far ground then covers it). */
+    return s->layout_ready;
 }
 
 static void stream_record_destroy(terrain_ecs *te, ecs_commands *commands, stream_record *r) {
@@ -561,6 +566,7 @@ static void stream_submit(terrain_ecs *te) {
     }
     s->stats.mesh_chunks_wanted = wanted;
     s->stats.mesh_chunks_ready = ready;
+    s->layout_ready = wanted > 0 && ready == wanted;
     if (free_slots <= 0 || waiting == 0) return;
     qsort(s->scratch, waiting, sizeof *s->scratch, compare_priority);
     for (size_t i = 0; i < waiting && (int)i < free_slots; i++) stream_task_submit(te, s->scratch[i]);
@@ -590,6 +596,39 @@ static void terrain_stream_mesh_system(ecs_iter *it) {
     trace_counter("terrain.stream.chunks_pending", s->stats.mesh_chunks_wanted - s->stats.mesh_chunks_ready);
     trace_counter("terrain.stream.jobs_in_flight", s->stats.jobs_in_flight);
     trace_counter("terrain.stream.resident_mb", (double)resident / (1024.0 * 1024.0));
+}
+
+/* ---- the far terrain around viewer 0 --------------------------------------------------------- */
+
+/* The square the rings of viewer 0 cover once all their chunks are in: the clipmap sinks there
+ * (its pit skirts the chunks' border). Until then the previous square stays, where the chunks
+ * of the previous layout are still drawn. */
+static void stream_update_hole(terrain__streamer *s) {
+    if (!s->layout_ready || s->centre_count == 0) return;
+    double coarsest = (double)TERRAIN_MESH_CELLS * (double)(1 << (s->desc.levels - 1));
+    double half = (double)s->desc.half_width * coarsest;
+    for (int a = 0; a < 2; a++) {
+        s->hole_min[a] = (double)s->centres[0][a] * coarsest - half;
+        s->hole_max[a] = (double)s->centres[0][a] * coarsest + half;
+    }
+}
+
+static void terrain_clipmap_lod_system(ecs_iter *it) {
+    terrain_ecs *te = it->user;
+    terrain__streamer *s = te->stream;
+    if (!s->clipmap || s->viewer_count == 0) return;
+    terrain_clipmap_update(s->clipmap, s->viewers[0]);
+    stream_update_hole(s);
+    terrain_clipmap_set_hole(s->clipmap, s->hole_min, s->hole_max);
+}
+
+static void terrain_clipmap_cull_system(ecs_iter *it) {
+    terrain_ecs *te = it->user;
+    if (te->stream->clipmap && te->culling) terrain_clipmap_cull(te->stream->clipmap, &te->frustum);
+}
+
+void terrain_ecs_set_clipmap(terrain_ecs *te, terrain_clipmap *clipmap) {
+    if (te->stream) te->stream->clipmap = clipmap;
 }
 
 /* ---- the API ------------------------------------------------------------------------------ */
@@ -636,6 +675,10 @@ void terrain_ecs_stream(terrain_ecs *te, const terrain_stream_desc *desc) {
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_stream_mesh", .phase = "mesh",
         .query = { .with = { te->mesh_chunk, te->streamed } }, .writes = { te->mesh_chunk },
         .fn = terrain_stream_mesh_system, .user = te, .main_thread = true });
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_clipmap", .phase = "lod",
+        .fn = terrain_clipmap_lod_system, .user = te, .main_thread = true });
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_clipmap_cull", .phase = "cull",
+        .fn = terrain_clipmap_cull_system, .user = te });
 }
 
 void terrain_ecs_set_viewers(terrain_ecs *te, const double (*eyes)[3], int count) {
