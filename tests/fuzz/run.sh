@@ -24,7 +24,7 @@ build_ok=1
 while IFS= read -r source; do
   object=bin/fuzz/obj/$(echo "${source%.c}" | tr / _).o
   clang "${cflags[@]}" -fsanitize=fuzzer-no-link -c "$source" -o "$object" || build_ok=0
-done < <(find engine modules game -name '*.c' | sort)
+done < <(find engine modules game -name '*.c' ! -path game/main.c | sort)   # main.c is a program
 rm -f bin/fuzz/libengine_fuzz.a
 ar rcs bin/fuzz/libengine_fuzz.a bin/fuzz/obj/*.o || build_ok=0
 platform_libs=(-lglfw -lhidapi-hidraw -lmeshoptimizer -ldl)
