@@ -40,5 +40,6 @@ void bench_group_input(bench_context *ctx);
 void bench_group_gfx(bench_context *ctx);
 void bench_group_terrain_generate(bench_context *ctx);
 void bench_group_terrain_mesh(bench_context *ctx);
+void bench_group_terrain_stabilize(bench_context *ctx);
 
 #endif
