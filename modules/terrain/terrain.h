@@ -526,8 +526,9 @@ int terrain_columns_changed_chunks(terrain_columns *columns, terrain_chunk_coord
 
 typedef enum terrain_stabilize_edge {
     TERRAIN_EDGE_WALL,                /* beyond the regions nothing exists: nothing flows there */
-    TERRAIN_EDGE_WAKE,                /* stop before an iteration that needs columns beyond the
-                                         regions and name their regions in result.woken */
+    TERRAIN_EDGE_WAKE,                /* stop before a pass that needs columns beyond the regions
+                                         and name their regions in result.woken; add them and call
+                                         again (at the world's end, call with WALL instead) */
 } terrain_stabilize_edge;
 
 typedef struct terrain_stabilize_params {
@@ -540,7 +541,10 @@ typedef struct terrain_stabilize_params {
     float tolerance;                  /* metres a slope may exceed d·tan(angle) by; 0 = none */
     int max_iterations;               /* per call (an iteration looks at every column once);
                                          0 = no limit */
-    uint64_t budget_ns;               /* per call, checked between iterations; 0 = no limit */
+    uint64_t budget_ns;               /* per call, checked between passes once an iteration has
+                                         run; 0 = no limit. For a world that is a pure function of
+                                         its edit log, budget in iterations: where a time budget
+                                         stops depends on the machine */
     terrain_stabilize_edge edge;
 } terrain_stabilize_params;
 
@@ -589,10 +593,11 @@ typedef struct terrain_deposit_desc {
 } terrain_deposit_desc;
 
 typedef enum terrain_erode_mode {
-    TERRAIN_ERODE_SURFACE,            /* the highest bedrock layer of each column under the disc
-                                         loses depth·falloff from its top */
+    TERRAIN_ERODE_SURFACE,            /* each column under the disc whose highest stable layer is
+                                         bedrock loses depth·falloff from its top */
     TERRAIN_ERODE_COLLAPSE,           /* all bedrock inside the ball of radius R around (x, y, z)
-                                         detaches; what it held up falls with it */
+                                         turns granular; with what lay on it, it falls to the next
+                                         stable layer below (bedrock above stays: it is stable) */
 } terrain_erode_mode;
 
 /* Turns bedrock into granular material where the tool reaches (000 §4.4): a share rocks_ratio

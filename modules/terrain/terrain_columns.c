@@ -81,6 +81,7 @@ terrain_columns *terrain_columns_create(const terrain_columns_desc *desc) {
     c->gift_rocks = core_calloc(c->cells, sizeof *c->gift_rocks);
     c->changed_span = core_calloc(rows, sizeof *c->changed_span);
     c->row_moved = core_calloc(rows, sizeof *c->row_moved);
+    c->row_gifts = core_calloc(rows, sizeof *c->row_gifts);
     c->water = core_calloc(columns, sizeof *c->water);
     c->lower_start = core_calloc(columns, sizeof *c->lower_start);
     c->lower_count = core_calloc(columns, sizeof *c->lower_count);
@@ -108,6 +109,7 @@ void terrain_columns_destroy(terrain_columns *c) {
     core_free(c->gift_rocks, c->cells * sizeof *c->gift_rocks);
     core_free(c->changed_span, rows * sizeof *c->changed_span);
     core_free(c->row_moved, rows * sizeof *c->row_moved);
+    core_free(c->row_gifts, rows * sizeof *c->row_gifts);
     core_free(c->water, columns * sizeof *c->water);
     core_free(c->lower_start, columns * sizeof *c->lower_start);
     core_free(c->lower_count, columns * sizeof *c->lower_count);

@@ -206,7 +206,8 @@ struct terrain_columns {
     terrain__span *changed_span;      /* per row, halo rows too (row k at k + 1) */
     uint32_t clock;                   /* passes run */
     uint32_t last_change;             /* the highest `changed` stamp written */
-    int64_t *row_moved;               /* per row, written by the row's own job */
+    int64_t *row_moved;               /* per row, written by the row's own job: quanta moved, */
+    uint8_t *row_gifts;               /* whether some went into the halo */
     /* Unpadded (index k·width + i). */
     int32_t *water;                   /* above the pile */
     uint32_t *lower_start;

@@ -201,7 +201,7 @@ static bool in_halo(const terrain_columns *c, int i, int k) { return i < 0 || k 
 /* Moves one column's sand, then its rocks (bottom layer first, 000 §3.4); returns the quanta
  * moved. */
 static int32_t settle(terrain_columns *c, const stabilize_rules *rules, int i, int k, const ptrdiff_t offset[8],
-                      uint32_t pass) {
+                      uint32_t pass, bool *gifts) {
     size_t cell = terrain__cell(c, i, k);
     bool border = i == 0 || k == 0 || i == c->width - 1 || k == c->depth - 1;
     int32_t moved = 0, out[8];
@@ -221,7 +221,10 @@ static int32_t settle(terrain_columns *c, const stabilize_rules *rules, int i, i
             if (m == 0) c->sand_top[n] += out[d];
             c->ground[n] += out[d];
             mark(c, ni, nk, n, pass);
-            if (border && in_halo(c, ni, nk)) *(m == 0 ? &c->gift_sand[n] : &c->gift_rocks[n]) += out[d];
+            if (border && in_halo(c, ni, nk)) {
+                *(m == 0 ? &c->gift_sand[n] : &c->gift_rocks[n]) += out[d];
+                *gifts = true;
+            }
         }
         moved += total;
     }
@@ -276,13 +279,16 @@ static void pass_row(const pass_work *w, terrain_columns *c, int k) {
     ptrdiff_t offset[8];
     neighbour_offsets(c, offset);
     int64_t moved = 0;
+    bool gifts = false;
     int lo, hi;
     if (row_range(c, k, w->pass, &lo, &hi)) {
         int first = lo + (int)floor_mod(w->colour_x - (c->x0 + lo), 3);
         for (int i = first; i <= hi; i += 3)
-            if (active(c, terrain__cell(c, i, k), offset, w->pass)) moved += settle(c, w->rules, i, k, offset, w->pass);
+            if (active(c, terrain__cell(c, i, k), offset, w->pass))
+                moved += settle(c, w->rules, i, k, offset, w->pass, &gifts);
     }
     c->row_moved[k + 1] = moved;
+    c->row_gifts[k + 1] = gifts;
 }
 
 static void pass_range(void *user, size_t begin, size_t end) {
@@ -292,29 +298,52 @@ static void pass_range(void *user, size_t begin, size_t end) {
 
 /* ---- regions side by side ------------------------------------------------------------------- */
 
-/* Copies region `from`'s columns along its side d into the halo of the neighbour there. */
-static void push_side(terrain_columns *from, int d) {
+/* Copies region `from`'s columns along its side d into the halo of the neighbour there: all of
+ * them, or (only ≠ 0) those changed in pass `only`, the rest being there already. */
+static void push_side(terrain_columns *from, int d, uint32_t only) {
     terrain_columns *to = from->neighbour[d];
     int dx = terrain__dir[d][0], dz = terrain__dir[d][1];
-    int i0 = dx > 0 ? from->width - 1 : 0, i1 = dx < 0 ? 0 : from->width - 1;
-    int k0 = dz > 0 ? from->depth - 1 : 0, k1 = dz < 0 ? 0 : from->depth - 1;
-    for (int k = k0; k <= k1; k++) {
-        for (int i = i0; i <= i1; i++) {
-            int ti = i - dx * from->width, tk = k - dz * from->depth;
-            size_t src = terrain__cell(from, i, k), dst = terrain__cell(to, ti, tk);
-            to->sand_top[dst] = from->sand_top[src];
-            to->ground[dst] = from->ground[src];
-            to->changed[dst] = from->changed[src];
-            if (!terrain__recent(from->changed[src], from->clock)) continue;
-            terrain__span_extend(&to->changed_span[tk + 1], ti, from->changed[src]);
-            to->last_change = CORE_MAX(to->last_change, from->changed[src]);
-        }
+    /* The side is a row, a column or a corner: its first cell, its length and its stride. */
+    int i = dx > 0 ? from->width - 1 : 0, k = dz > 0 ? from->depth - 1 : 0;
+    int length = dx == 0 ? from->width : dz == 0 ? from->depth : 1;
+    int ti = i - dx * from->width, tk = k - dz * from->depth;
+    size_t src = terrain__cell(from, i, k), dst = terrain__cell(to, ti, tk);
+    size_t stride = dx == 0 ? 1 : (size_t)from->pitch;
+    for (int n = 0; n < length; n++, src += stride, dst += stride) {
+        uint32_t stamp = from->changed[src];
+        if (only && stamp != only) continue;
+        to->sand_top[dst] = from->sand_top[src];
+        to->ground[dst] = from->ground[src];
+        to->changed[dst] = stamp;
+        if (!terrain__recent(stamp, from->clock)) continue;
+        terrain__span_extend(&to->changed_span[tk + (dx == 0 ? 0 : n) + 1], ti + (dx == 0 ? n : 0), stamp);
+        to->last_change = CORE_MAX(to->last_change, stamp);
     }
 }
 
-static void push_sides(terrain_columns *from) {
+static void push_sides(terrain_columns *from, uint32_t only) {
     for (int d = 0; d < 8; d++)
-        if (from->neighbour[d]) push_side(from, d);
+        if (from->neighbour[d]) push_side(from, d, only);
+}
+
+/* After pass `pass`: pushes the sides that the pass's changes reach (the rows' spans bound
+ * them; a span may hold older changes too, which only makes a side pushed for nothing). */
+static void push_changes(terrain_columns *from, uint32_t pass) {
+    int i0 = INT_MAX, i1 = INT_MIN, k0 = INT_MAX, k1 = INT_MIN;
+    for (int k = 0; k < from->depth; k++) {
+        const terrain__span *span = &from->changed_span[k + 1];
+        if (span->clock != pass) continue;
+        i0 = CORE_MIN(i0, span->lo);
+        i1 = CORE_MAX(i1, span->hi);
+        k0 = CORE_MIN(k0, k);
+        k1 = k;
+    }
+    for (int d = 0; d < 8; d++) {
+        int dx = terrain__dir[d][0], dz = terrain__dir[d][1];
+        bool reaches = (dx < 0 ? i0 <= 0 : dx > 0 ? i1 >= from->width - 1 : true) &&
+                       (dz < 0 ? k0 <= 0 : dz > 0 ? k1 >= from->depth - 1 : true);
+        if (from->neighbour[d] && reaches && k0 <= k1) push_side(from, d, pass);
+    }
 }
 
 /* Hands what region c's border columns gave into its halo on side d to the neighbour there. */
@@ -522,22 +551,21 @@ static pass_outcome run_pass(stabilizer *s) {
 
     int64_t moved = 0;
     for (size_t n = 0; n < rows; n++) {
-        int64_t m = s->items[n].region->row_moved[s->items[n].row + 1];
+        terrain_columns *c = s->items[n].region;
+        int64_t m = c->row_moved[s->items[n].row + 1];
         moved += m;
-        if (m) s->items[n].region->last_change = pass;
+        if (m) c->last_change = pass;
+        if (!c->row_gifts[s->items[n].row + 1] || s->count == 1) continue;
+        /* Hand over what this row's border columns gave into the halo (each halo cell once: a
+         * side's cells are zeroed as they go). */
+        for (int d = 0; d < 8; d++)
+            if (c->neighbour[d]) deliver_side(c, d, pass);
     }
     for (int r = 0; r < s->count; r++) s->regions[r]->clock = pass;
     if (moved && s->count > 1) {
-        /* Hand over what border columns gave into halos, then refresh the halos next to every
-         * region that changed. */
-        for (int r = 0; r < s->count; r++) {
-            terrain_columns *c = s->regions[r];
-            if (c->last_change != pass) continue;
-            for (int d = 0; d < 8; d++)
-                if (c->neighbour[d]) deliver_side(c, d, pass);
-        }
+        /* Refresh the halos next to every region that changed, with what changed. */
         for (int r = 0; r < s->count; r++)
-            if (s->regions[r]->last_change == pass) push_sides(s->regions[r]);
+            if (s->regions[r]->last_change == pass) push_changes(s->regions[r], pass);
     }
     s->result->moved += moved;
     return moved ? PASS_MOVED : PASS_QUIET;
@@ -579,7 +607,7 @@ static void prepare_regions(terrain_columns *const *regions, int count) {
         sort_flagged(regions[r]);
         wall_halo(regions[r]);
     }
-    for (int r = 0; r < count; r++) push_sides(regions[r]);
+    for (int r = 0; r < count; r++) push_sides(regions[r], 0);
 }
 
 bool terrain_stabilize_regions(terrain_columns *const *regions, int count, const terrain_stabilize_params *params,

@@ -56,11 +56,13 @@ Test(terrain_threads, shared_world_gives_the_bytes_of_a_lone_thread) {
  * checks that four threads give the bytes of one. */
 #define STABILIZE_SIDE 112
 
-static terrain_columns *bumpy_region(void) {
-    terrain_columns *c = terrain_columns_create(&(terrain_columns_desc){ .width = STABILIZE_SIDE, .depth = STABILIZE_SIDE });
-    for (int k = 0; k < STABILIZE_SIDE; k++)
-        for (int i = 0; i < STABILIZE_SIDE; i++) {
-            uint64_t h = (uint64_t)(k * STABILIZE_SIDE + i) * 0x9e3779b97f4a7c15ull;
+/* Bumpy piles of sand and rocks on flat bedrock, a pure function of the world column: the region
+ * of `side` columns from (x, z). */
+static terrain_columns *bumpy_part(int x, int z, int side) {
+    terrain_columns *c = terrain_columns_create(&(terrain_columns_desc){ .x = x, .z = z, .width = side, .depth = side });
+    for (int k = 0; k < side; k++)
+        for (int i = 0; i < side; i++) {
+            uint64_t h = (uint64_t)((z + k) * STABILIZE_SIDE + x + i) * 0x9e3779b97f4a7c15ull;
             terrain_layer layers[3] = { { TERRAIN_BEDROCK, 10.0f },
                                         { TERRAIN_SAND, (float)(h >> 59) * 0.25f },
                                         { TERRAIN_ROCKS, (float)((h >> 54) & 15) * 0.125f } };
@@ -69,11 +71,14 @@ static terrain_columns *bumpy_region(void) {
     return c;
 }
 
-static uint64_t columns_hash(const terrain_columns *c) {
+static terrain_columns *bumpy_region(void) { return bumpy_part(0, 0, STABILIZE_SIDE); }
+
+/* Of columns [x0, x0 + side) × [z0, z0 + side) of the region. */
+static uint64_t part_hash(const terrain_columns *c, int x0, int z0, int side) {
     uint64_t h = 0;
     terrain_layer layers[8];
-    for (int k = 0; k < STABILIZE_SIDE; k++)
-        for (int i = 0; i < STABILIZE_SIDE; i++) {
+    for (int k = z0; k < z0 + side; k++)
+        for (int i = x0; i < x0 + side; i++) {
             int n = terrain_columns_get(c, i, k, layers, 8);
             for (int l = 0; l < n && l < 8; l++)
                 h = h * 1000003u + (uint64_t)layers[l].material * 7919u + (uint64_t)(layers[l].thickness * 32.0f);
@@ -81,6 +86,8 @@ static uint64_t columns_hash(const terrain_columns *c) {
         }
     return h;
 }
+
+static uint64_t columns_hash(const terrain_columns *c) { return part_hash(c, 0, 0, STABILIZE_SIDE); }
 
 Test(terrain_threads, stabilization_on_four_threads_gives_the_bytes_of_one) {
     terrain_columns *lone = bumpy_region(), *shared = bumpy_region();
@@ -99,4 +106,21 @@ Test(terrain_threads, stabilization_on_four_threads_gives_the_bytes_of_one) {
     job_system_destroy(jobs);
     terrain_columns_destroy(lone);
     terrain_columns_destroy(shared);
+}
+
+Test(terrain_threads, regions_side_by_side_on_four_threads_give_the_bytes_of_one_region) {
+    enum { HALF = STABILIZE_SIDE / 2 };
+    terrain_columns *whole = bumpy_region(), *parts[4];
+    for (int n = 0; n < 4; n++) parts[n] = bumpy_part(n % 2 * HALF, n / 2 * HALF, HALF);
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 4 });
+    terrain_stabilize_result a, b;
+    cr_assert(terrain_stabilize_region(whole, &(terrain_stabilize_params){ 0 }, NULL, &a));
+    cr_assert(terrain_stabilize_regions(parts, 4, &(terrain_stabilize_params){ 0 }, jobs, &b));
+    cr_expect(a.converged && b.converged);
+    cr_expect_eq(a.moved, b.moved);
+    for (int n = 0; n < 4; n++)
+        cr_expect_eq(part_hash(whole, n % 2 * HALF, n / 2 * HALF, HALF), part_hash(parts[n], 0, 0, HALF), "part %d", n);
+    job_system_destroy(jobs);
+    for (int n = 0; n < 4; n++) terrain_columns_destroy(parts[n]);
+    terrain_columns_destroy(whole);
 }

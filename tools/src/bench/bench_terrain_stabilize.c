@@ -12,6 +12,9 @@
  *   terrain.stabilize.deposit.1thread   the same on one thread (no job system).
  *   terrain.stabilize.deposit.step_quarter   the same with step = 1/4 m, nearer the paper's
  *       "small constant amount": more iterations.
+ *   terrain.stabilize.deposit.chunks   the same with the region split into 8 × 8 regions of one
+ *       chunk stabilized together (terrain_stabilize_regions), as the engine keeps them: the
+ *       cost of the halos. Same result, byte for byte.
  *   terrain.stabilize.deposit.generated   the same deposit on generated terrain (seed 42, the
  *       8 × 8 chunks from (0, 0)): only the pile's columns are marked, so the generated slopes
  *       around it move only where the pile reaches them.
@@ -33,9 +36,10 @@ enum { REGION_CHUNKS = 8, REGION_COLUMNS = REGION_CHUNKS * TERRAIN_CHUNK_COLUMNS
 
 typedef struct stabilize_bench {
     job_system *jobs;                 /* NULL: one thread */
-    terrain_stacks *chunks[REGION_CHUNKS * REGION_CHUNKS];
+    terrain_stacks *stacks[REGION_CHUNKS * REGION_CHUNKS];
     terrain_stabilize_params params;
     bool erode;
+    bool per_chunk;                   /* one region per chunk instead of one big region */
     double iterations[32], moved[32];
     int runs_seen;
 } stabilize_bench;
@@ -47,31 +51,29 @@ static void flat_column(void *user, int64_t x, int64_t z, terrain_stacks_builder
 
 static void load_flat(stabilize_bench *b) {
     for (int n = 0; n < REGION_CHUNKS * REGION_CHUNKS; n++)
-        b->chunks[n] = terrain_stacks_from_columns((terrain_chunk_coord){ n % REGION_CHUNKS, n / REGION_CHUNKS },
+        b->stacks[n] = terrain_stacks_from_columns((terrain_chunk_coord){ n % REGION_CHUNKS, n / REGION_CHUNKS },
                                                    flat_column, NULL);
 }
 
 static void load_generated(stabilize_bench *b) {
     terrain_generation_params params = terrain_generation_defaults(42);
     for (int n = 0; n < REGION_CHUNKS * REGION_CHUNKS; n++)
-        b->chunks[n] = terrain_generate_chunk(&params, (terrain_chunk_coord){ n % REGION_CHUNKS, n / REGION_CHUNKS });
+        b->stacks[n] = terrain_generate_chunk(&params, (terrain_chunk_coord){ n % REGION_CHUNKS, n / REGION_CHUNKS });
 }
 
 static void free_chunks(stabilize_bench *b) {
-    for (int n = 0; n < REGION_CHUNKS * REGION_CHUNKS; n++) terrain_stacks_destroy(b->chunks[n]);
+    for (int n = 0; n < REGION_CHUNKS * REGION_CHUNKS; n++) terrain_stacks_destroy(b->stacks[n]);
 }
 
 static terrain_columns *fresh_region(const stabilize_bench *b) {
     terrain_columns *region = terrain_columns_create(
         &(terrain_columns_desc){ .width = REGION_COLUMNS, .depth = REGION_COLUMNS });
     for (int n = 0; n < REGION_CHUNKS * REGION_CHUNKS; n++)
-        terrain_columns_load(region, (terrain_chunk_coord){ n % REGION_CHUNKS, n / REGION_CHUNKS }, b->chunks[n]);
+        terrain_columns_load(region, (terrain_chunk_coord){ n % REGION_CHUNKS, n / REGION_CHUNKS }, b->stacks[n]);
     return region;
 }
 
-static double sample_stabilize(void *user) {
-    stabilize_bench *b = user;
-    terrain_columns *region = fresh_region(b);
+static void edit(const stabilize_bench *b, terrain_columns *region) {
     double centre = REGION_COLUMNS / 2;
     if (b->erode) {
         float ground = terrain_columns_top(region, REGION_COLUMNS / 2, REGION_COLUMNS / 2);
@@ -81,14 +83,49 @@ static double sample_stabilize(void *user) {
         terrain_deposit(region, &(terrain_deposit_desc){ .material = TERRAIN_SAND, .x = centre, .z = centre,
                                                          .radius = PILE_RADIUS, .volume = PILE_VOLUME }, NULL);
     }
+}
+
+/* The edited region cut into one region per chunk, with the columns under the brush marked as
+ * the brush marked them (copied with terrain_columns_set, which marks; the few extra columns at
+ * the rim hold no sand on flat ground and stay as they are). */
+static void split_region(terrain_columns *region, terrain_columns **chunks) {
+    for (int n = 0; n < REGION_CHUNKS * REGION_CHUNKS; n++) {
+        terrain_chunk_coord c = { n % REGION_CHUNKS, n / REGION_CHUNKS };
+        chunks[n] = terrain_columns_create(&(terrain_columns_desc){ .x = c.x * TERRAIN_CHUNK_COLUMNS,
+                                                                    .z = c.z * TERRAIN_CHUNK_COLUMNS,
+                                                                    .width = TERRAIN_CHUNK_COLUMNS,
+                                                                    .depth = TERRAIN_CHUNK_COLUMNS });
+        terrain_stacks *stacks = terrain_columns_to_stacks(region, c);
+        terrain_columns_load(chunks[n], c, stacks);
+        terrain_stacks_destroy(stacks);
+    }
+    int centre = REGION_COLUMNS / 2, reach = (int)PILE_RADIUS + 1;
+    terrain_layer layers[16];
+    for (int z = centre - reach; z <= centre + reach; z++)
+        for (int x = centre - reach; x <= centre + reach; x++) {
+            int count = terrain_columns_get(region, x, z, layers, 16);
+            int n = (z / TERRAIN_CHUNK_COLUMNS) * REGION_CHUNKS + x / TERRAIN_CHUNK_COLUMNS;
+            terrain_columns_set(chunks[n], x % TERRAIN_CHUNK_COLUMNS, z % TERRAIN_CHUNK_COLUMNS, layers, count);
+        }
+}
+
+static double sample_stabilize(void *user) {
+    stabilize_bench *b = user;
+    terrain_columns *region = fresh_region(b);
+    edit(b, region);
+    terrain_columns *chunks[REGION_CHUNKS * REGION_CHUNKS];
+    if (b->per_chunk) split_region(region, chunks);
     terrain_stabilize_result result;
     uint64_t start = core_time_ns();
-    terrain_stabilize_region(region, &b->params, b->jobs, &result);
+    if (b->per_chunk) terrain_stabilize_regions(chunks, REGION_CHUNKS * REGION_CHUNKS, &b->params, b->jobs, &result);
+    else terrain_stabilize_region(region, &b->params, b->jobs, &result);
     double ms = core_ns_to_ms(core_time_ns() - start);
     if (!result.converged) core_warn("bench", "stabilize: not converged");
     int slot = b->runs_seen++ % 32;
     b->iterations[slot] = result.iterations;
     b->moved[slot] = (double)result.moved / 32.0;
+    if (b->per_chunk)
+        for (int n = 0; n < REGION_CHUNKS * REGION_CHUNKS; n++) terrain_columns_destroy(chunks[n]);
     terrain_columns_destroy(region);
     return ms;
 }
@@ -116,6 +153,9 @@ void bench_group_terrain_stabilize(bench_context *ctx) {
     flat.jobs = NULL;
     run_row(ctx, "terrain.stabilize.deposit.1thread", &flat, false);
     flat.jobs = jobs;
+    flat.per_chunk = true;
+    run_row(ctx, "terrain.stabilize.deposit.chunks", &flat, true);
+    flat.per_chunk = false;
     flat.params.step = 0.25f;
     run_row(ctx, "terrain.stabilize.deposit.step_quarter", &flat, true);
     free_chunks(&flat);
