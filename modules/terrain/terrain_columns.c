@@ -87,6 +87,9 @@ terrain_columns *terrain_columns_create(const terrain_columns_desc *desc) {
     c->lower_count = core_calloc(columns, sizeof *c->lower_count);
     c->lower_capacity = core_calloc(columns, sizeof *c->lower_capacity);
     c->flags = core_calloc(columns, sizeof *c->flags);
+    /* Never NULL, so that an empty column's layers are a valid (empty) range of it. */
+    c->pool_capacity = 64;
+    c->pool = core_alloc(c->pool_capacity * sizeof *c->pool);
     c->clock = TERRAIN__CLOCK_START;
     /* The halo starts as walls; the stabilizer overwrites the sides that have a neighbour. */
     for (size_t n = 0; n < c->cells; n++) c->base[n] = c->sand_top[n] = c->ground[n] = TERRAIN__WALL_HEIGHT;
