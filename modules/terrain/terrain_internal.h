@@ -170,7 +170,7 @@ typedef struct terrain__clayer {
 #define TERRAIN__COLUMN_MAX_QUANTA (1 << 26)
 #define TERRAIN__MAX_SIDE 4096
 #define TERRAIN__MAX_REGION_COLUMNS (1 << 22)
-#define TERRAIN__FLOW_MAX 65535       /* a direction's outflow is a uint16 */
+#define TERRAIN__FLOW_MAX 65535       /* the largest step, in quanta (2 048 m) */
 
 /* A span of columns [lo, hi] of one row and the last pass that widened it. */
 typedef struct terrain__span {
@@ -206,8 +206,9 @@ struct terrain_columns {
     terrain__span *changed_span;      /* per row, halo rows too (row k at k + 1) */
     uint32_t clock;                   /* passes run */
     uint32_t last_change;             /* the highest `changed` stamp written */
-    int64_t *row_moved;               /* per row, written by the row's own job: quanta moved, */
-    uint8_t *row_gifts;               /* whether some went into the halo */
+    /* Per row, written by the job of the row during a pass: */
+    int64_t *row_moved;               /* quanta its columns gave */
+    uint8_t *row_gifts;               /* whether some of it went into the halo */
     /* Unpadded (index k·width + i). */
     int32_t *water;                   /* above the pile */
     uint32_t *lower_start;

@@ -641,6 +641,8 @@ bool terrain_stabilize_regions(terrain_columns *const *regions, int count, const
         }
     }
     result->iterations = (passes + TERRAIN__COLOURS - 1) / TERRAIN__COLOURS;
+    trace_counter("terrain.stabilize.iterations", result->iterations);
+    trace_counter("terrain.stabilize.moved_m3", (double)result->moved / TERRAIN__QUANTA_PER_METRE);
     core_free(s.items, s.item_capacity * sizeof *s.items);
     for (int r = 0; r < count; r++) memset(regions[r]->neighbour, 0, sizeof regions[r]->neighbour);
     return true;

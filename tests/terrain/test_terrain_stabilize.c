@@ -188,6 +188,25 @@ Test(terrain_stabilize, sand_over_a_cave_roof_stays_and_sand_without_a_roof_fall
     terrain_columns_destroy(c);
 }
 
+Test(terrain_stabilize, custom_materials_hold_like_bedrock) {
+    /* A game's own material (after the built-in ones) is stable: runs end at it. Bedrock 1, air 1,
+     * sand 1, custom 1, rocks 1, sand 1 → bedrock 1, sand 1, air 1, custom 1, sand 1, rocks 1. */
+    terrain_columns *c = region(0, 0, 1, 1);
+    terrain_material custom = TERRAIN_MATERIAL_BUILTIN_COUNT;
+    terrain_layer in[] = { { TERRAIN_BEDROCK, 1 }, { TERRAIN_AIR, 1 }, { TERRAIN_SAND, 1 }, { custom, 1 },
+                           { TERRAIN_ROCKS, 1 },   { TERRAIN_SAND, 1 } };
+    cr_assert(terrain_columns_set(c, 0, 0, in, 6));
+    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_layer out[8];
+    const terrain_material want[] = { TERRAIN_BEDROCK, TERRAIN_SAND, TERRAIN_AIR, custom, TERRAIN_SAND, TERRAIN_ROCKS };
+    cr_assert_eq(terrain_columns_get(c, 0, 0, out, 8), 6);
+    for (int l = 0; l < 6; l++) {
+        cr_expect_eq(out[l].material, want[l], "layer %d", l);
+        cr_expect_eq(out[l].thickness, 1.0f, "layer %d", l);
+    }
+    terrain_columns_destroy(c);
+}
+
 /* ---- one iteration by hand (000 §3.4) ------------------------------------------------- */
 
 /* Sand of height 2 m on one column of a flat 3 × 3 field. Its drop to every neighbour is 2 m;
@@ -294,7 +313,7 @@ Test(terrain_stabilize, rocks_rest_steeper_than_sand) {
 
 /* ---- random edits: mass of every material ------------------------------------------------ */
 
-static void hand_generated(terrain_columns *c, uint64_t seed) {
+static void load_generated(terrain_columns *c, uint64_t seed) {
     /* Generated chunks: bedrock, caves, sand on gentle slopes, water below the sea. */
     terrain_generation_params params = terrain_generation_defaults(seed);
     terrain_columns_desc e = terrain_columns_extent(c);
@@ -308,7 +327,7 @@ static void hand_generated(terrain_columns *c, uint64_t seed) {
 
 Test(terrain_stabilize, random_deposits_and_erosions_conserve_every_material) {
     terrain_columns *c = region(0, 0, 64, 64);
-    hand_generated(c, 7);
+    load_generated(c, 7);
     masses m = mass_of(c);
     for (int n = 0; n < 24; n++) {
         uint64_t h = core_hash_u64(0x5eed + (uint64_t)n);
@@ -353,7 +372,7 @@ Test(terrain_stabilize, random_deposits_and_erosions_conserve_every_material) {
 /* A region with piles and generated ground, edited the same way every time. */
 static terrain_columns *edited_region(int64_t x, int64_t z, int size) {
     terrain_columns *c = region(x, z, size, size);
-    hand_generated(c, 3);
+    load_generated(c, 3);
     terrain_columns_touch(c, 0, 0, size, size);   /* stabilize the generated chunks too */
     for (int n = 0; n < 6; n++) {
         double px = (double)x + 8 + n * (size - 16) / 5.0, pz = (double)z + size / 2.0 + (n % 2 ? 9 : -9);
