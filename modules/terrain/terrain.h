@@ -608,4 +608,187 @@ void terrain_ecs_set_view(terrain_ecs *te, const terrain_view *view);
 void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view);
 terrain_ecs_stats terrain_ecs_stats_get(terrain_ecs *te);
 
+
+/* ---- editing: columns, stabilization, brushes (000 §3.4, §4) ---- */
+
+/* Editing works on a mutable copy of some columns, a terrain_columns region: any W × D columns
+ * (one chunk, or several), thicknesses in integer quanta so that every edit conserves the mass
+ * of each material exactly. Brushes drop sand or rocks (000 §4.3) or turn bedrock into them
+ * (§4.4); stabilization then moves sand and rocks down slopes steeper than their angle of
+ * repose (§3.4), a little per iteration, until nothing moves or the call's budget is spent.
+ *
+ *     terrain_columns *region = terrain_columns_create(&(terrain_columns_desc){
+ *         .x = 0, .z = 0, .width = 64, .depth = 64 });           // chunks (0,0) … (1,1)
+ *     for (int n = 0; n < 4; n++) terrain_columns_load(region, chunks[n], stacks[n]);
+ *     terrain_deposit(region, &(terrain_deposit_desc){ .x = 32, .z = 32, .radius = 8,
+ *                                                      .volume = 500 }, NULL);    // sand
+ *     terrain_stabilize_result result;
+ *     terrain_stabilize_region(region, &(terrain_stabilize_params){ .budget_ns = 2000000 },
+ *                              jobs, &result);                   // again next frame until
+ *                                                                // result.converged
+ *     terrain_chunk_coord changed[4];
+ *     int n = terrain_columns_changed_chunks(region, changed, 4, true);
+ *     for (int c = 0; c < n; c++) replace(changed[c], terrain_columns_to_stacks(region, changed[c]));
+ *     terrain_columns_destroy(region);
+ *
+ * Layer order (000 §3.4): between two stable layers (bedrock, or a custom material) granular
+ * material is merged and sorted sand, rocks, water, air — what lies over a cave falls to its
+ * floor. Only the pile above a column's highest stable layer flows; sand and rocks on a cave's
+ * floor stay there (a cave roof holds what lies on it). Stabilization moves each material on its
+ * own surface, bottom layer first (sand on the sand surface, rocks on the ground), so a stable
+ * column has no neighbour lower than d·tan(angle) + tolerance below either surface, d the
+ * distance between column centres (1 m, or √2 m diagonally).
+ *
+ * Determinism: an iteration is nine passes, one per colour of a 3 × 3 pattern of columns (by
+ * world column index); columns of one colour are three apart, so their moves never touch the
+ * same column and a pass can move them all at once, in integer quanta. The result does not
+ * depend on the thread count, on how a pass is split into jobs, or on how the columns are split
+ * into regions (terrain_stabilize_regions), and a call that stops on its budget continues exactly
+ * where it stopped. Only columns next to a change are looked at: edits (brushes,
+ * terrain_columns_set, terrain_columns_touch) are changes, and so is every moved quantum.
+ *
+ * Threads: a region is plain data; one call at a time on it. Errors (a bad size, NaN, an unknown
+ * material) return false or NULL with a message logged, never a crash. */
+
+typedef struct job_system job_system;
+
+typedef struct terrain_columns terrain_columns;
+
+typedef struct terrain_columns_desc {
+    int64_t x, z;                     /* world column index of the first column (chunk c's first
+                                         column is c·TERRAIN_CHUNK_COLUMNS) */
+    int width, depth;                 /* columns along x and z: 1 … 4096, at most 2^22 in all */
+} terrain_columns_desc;
+
+/* Every column empty (only the implicit bedrock below the floor). NULL (message logged) for a
+ * bad size. Free with terrain_columns_destroy. */
+terrain_columns *terrain_columns_create(const terrain_columns_desc *desc);
+void terrain_columns_destroy(terrain_columns *columns);
+terrain_columns_desc terrain_columns_extent(const terrain_columns *columns);
+
+/* Copies the chunk's columns that lie in the region over the region's (not marked for
+ * stabilization; columns out of order are sorted by the next stabilization). False (message
+ * logged) when the chunk does not overlap the region or a column is absurdly tall. */
+bool terrain_columns_load(terrain_columns *columns, terrain_chunk_coord coord, const terrain_stacks *stacks);
+/* The chunk's columns as stacks (an unedited chunk comes back byte for byte); the chunk must lie
+ * inside the region, else NULL (message logged). Free with terrain_stacks_destroy. */
+terrain_stacks *terrain_columns_to_stacks(const terrain_columns *columns, terrain_chunk_coord coord);
+
+/* Column (i, k) of the region (0 ≤ i < width, 0 ≤ k < depth), bottom-up from TERRAIN_FLOOR_Y,
+ * adjacent equal materials merged; returns the count (writes at most `capacity`), −1 for a
+ * column outside the region. */
+int terrain_columns_get(const terrain_columns *columns, int i, int k, terrain_layer *layers, int capacity);
+/* Replaces column (i, k) by `layers` (bottom-up; thicknesses rounded to the quantum by their
+ * cumulative heights, as the stacks builder does) and marks it changed. False (message logged,
+ * column unchanged) for a column outside the region, an unknown material, or a thickness that is
+ * negative, NaN or too large. */
+bool terrain_columns_set(terrain_columns *columns, int i, int k, const terrain_layer *layers, int count);
+/* Top of the highest layer that is not air or water (as terrain_stacks_top). */
+float terrain_columns_top(const terrain_columns *columns, int i, int k);
+/* Volume of `material` in the region, in quanta·column (1/32 m³). */
+int64_t terrain_columns_mass(const terrain_columns *columns, terrain_material material);
+/* Marks columns [i0, i1) × [k0, k1) (clipped to the region) changed, so that the next
+ * stabilization looks at them — e.g. every column of a freshly generated chunk. */
+void terrain_columns_touch(terrain_columns *columns, int i0, int k0, int i1, int k1);
+/* The chunks with a column whose content changed (edits, sorting, stabilization) since the last
+ * clear, in z-major order; returns how many there are (writes at most `capacity`). With `clear`
+ * the record starts afresh. A remesh must also take the neighbours the field's kernel reaches. */
+int terrain_columns_changed_chunks(terrain_columns *columns, terrain_chunk_coord *out, int capacity, bool clear);
+
+/* ---- stabilization (000 §3.4) ---- */
+
+typedef enum terrain_stabilize_edge {
+    TERRAIN_EDGE_WALL,                /* beyond the regions nothing exists: nothing flows there */
+    TERRAIN_EDGE_WAKE,                /* stop before a pass that needs columns beyond the regions
+                                         and name their regions in result.woken; add them and call
+                                         again (at the world's end, call with WALL instead) */
+} terrain_stabilize_edge;
+
+typedef struct terrain_stabilize_params {
+    float sand_angle;                 /* degrees of repose, 0 < angle < 90; 0 = 33 (000: 30–35) */
+    float rocks_angle;                /* 0 = 42 (000: 40–45) */
+    float step;                       /* metres a column gives away per material and look at most
+                                         (000 §3.4's "small constant amount a"; it also never gives
+                                         more than levels it with its neighbours); rounded to the
+                                         quantum, at least one; 0 = 1 m */
+    float tolerance;                  /* metres a slope may exceed d·tan(angle) by; 0 = none */
+    int max_iterations;               /* per call (an iteration looks at every column once);
+                                         0 = no limit */
+    uint64_t budget_ns;               /* per call, checked between passes once an iteration has
+                                         run; 0 = no limit. For a world that is a pure function of
+                                         its edit log, budget in iterations: where a time budget
+                                         stops depends on the machine */
+    terrain_stabilize_edge edge;
+} terrain_stabilize_params;
+
+#define TERRAIN_STABILIZE_MAX_WOKEN 32
+
+typedef struct terrain_stabilize_result {
+    bool converged;                   /* nothing left to move: the regions are stable */
+    int iterations;                   /* run by this call */
+    int64_t moved;                    /* quanta·column moved between columns by this call */
+    /* Regions missing beyond the edge where material reached it (WALL) or is about to cross it
+     * (WAKE: add them and call again), as grid coordinates in units of the region size —
+     * chunk coordinates for regions of one chunk. woken_count may exceed the array. */
+    int woken_count;
+    terrain_chunk_coord woken[TERRAIN_STABILIZE_MAX_WOKEN];
+} terrain_stabilize_result;
+
+/* Stabilizes the region (its border is the edge). jobs may be NULL (one thread); the result is
+ * the same for any thread count. False (message logged, nothing changed) for bad parameters. */
+bool terrain_stabilize_region(terrain_columns *columns, const terrain_stabilize_params *params, job_system *jobs,
+                              terrain_stabilize_result *result);
+/* Stabilizes regions side by side as one: material flows across their borders, and the outcome
+ * equals that of a single region covering them all (same iterations, same bytes). The regions
+ * must have one size and lie on the grid of that size (origins multiples of it apart), e.g. one
+ * per chunk; the edge is where no region continues. False (message logged) for bad parameters,
+ * unequal sizes, misaligned or repeated regions. */
+bool terrain_stabilize_regions(terrain_columns *const *regions, int count, const terrain_stabilize_params *params,
+                               job_system *jobs, terrain_stabilize_result *result);
+
+/* ---- brushes (000 §4.3, §4.4) ---- */
+
+typedef enum terrain_falloff {
+    TERRAIN_FALLOFF_SMOOTH,           /* (1 − r²/R²)², 000 §4.1's g(r) */
+    TERRAIN_FALLOFF_FLAT,             /* the same everywhere inside R */
+} terrain_falloff;
+
+/* Drops `volume` m³ of sand or rocks on the columns whose centres lie within `radius` of (x, z)
+ * (world metres), distributed by the falloff and rounded so that the total is exact (to the
+ * quantum·column): a brush that overhangs the region's border puts it all on the columns inside.
+ * It lands on each column's pile (sorted: sand goes under rocks, both under water). */
+typedef struct terrain_deposit_desc {
+    terrain_material material;        /* TERRAIN_SAND or TERRAIN_ROCKS; 0 (air) = sand */
+    double x, z;
+    float radius;                     /* metres, > 0 */
+    double volume;                    /* m³, ≥ 0 */
+    terrain_falloff falloff;
+} terrain_deposit_desc;
+
+typedef enum terrain_erode_mode {
+    TERRAIN_ERODE_SURFACE,            /* each column under the disc whose highest stable layer is
+                                         bedrock loses depth·falloff from its top */
+    TERRAIN_ERODE_COLLAPSE,           /* all bedrock inside the ball of radius R around (x, y, z)
+                                         turns granular; with what lay on it, it falls to the next
+                                         stable layer below (bedrock above stays: it is stable) */
+} terrain_erode_mode;
+
+/* Turns bedrock into granular material where the tool reaches (000 §4.4): a share rocks_ratio
+ * (ρ) of it into rocks, the rest into sand, exactly (per column, bedrock quanta removed = sand +
+ * rocks quanta added). The material stays in its column until stabilization moves it. */
+typedef struct terrain_erode_desc {
+    terrain_erode_mode mode;
+    double x, y, z;                   /* centre, world metres (y: collapse only) */
+    float radius;                     /* metres, > 0 */
+    float depth;                      /* surface: metres eroded at the centre, ≥ 0 */
+    float rocks_ratio;                /* ρ ∈ [0, 1]; 0 = all sand */
+    terrain_falloff falloff;          /* surface only */
+} terrain_erode_desc;
+
+/* Both return false (message logged, region unchanged) for bad parameters or a deposit that
+ * misses the region; `quanta` (may be NULL) receives the quanta·column deposited or eroded.
+ * Changed columns are marked for the next stabilization. */
+bool terrain_deposit(terrain_columns *columns, const terrain_deposit_desc *desc, int64_t *quanta);
+bool terrain_erode(terrain_columns *columns, const terrain_erode_desc *desc, int64_t *quanta);
+
 #endif

@@ -79,3 +79,77 @@ Test(terrain_threads, clipmap_heights_on_jobs_equal_a_lone_threads) {
     terrain_clipmap_destroy(lone);
     job_system_destroy(jobs);
 }
+
+/* Stabilization's passes split into row jobs (000 §3.4): rows of one colour are three apart, so
+ * their 3 × 3 writes never meet. Under ThreadSanitizer this checks that claim; everywhere it
+ * checks that four threads give the bytes of one. */
+#define STABILIZE_SIDE 112
+
+/* Bumpy piles of sand and rocks on flat bedrock, a pure function of the world column: the region
+ * of `side` columns from (x, z). */
+static terrain_columns *bumpy_part(int x, int z, int side) {
+    terrain_columns *c = terrain_columns_create(&(terrain_columns_desc){ .x = x, .z = z, .width = side, .depth = side });
+    for (int k = 0; k < side; k++)
+        for (int i = 0; i < side; i++) {
+            uint64_t h = (uint64_t)((z + k) * STABILIZE_SIDE + x + i) * 0x9e3779b97f4a7c15ull;
+            terrain_layer layers[3] = { { TERRAIN_BEDROCK, 10.0f },
+                                        { TERRAIN_SAND, (float)(h >> 59) * 0.25f },
+                                        { TERRAIN_ROCKS, (float)((h >> 54) & 15) * 0.125f } };
+            terrain_columns_set(c, i, k, layers, 3);   /* marks the column for stabilization */
+        }
+    return c;
+}
+
+static terrain_columns *bumpy_region(void) { return bumpy_part(0, 0, STABILIZE_SIDE); }
+
+/* Of columns [x0, x0 + side) × [z0, z0 + side) of the region. */
+static uint64_t part_hash(const terrain_columns *c, int x0, int z0, int side) {
+    uint64_t h = 0;
+    terrain_layer layers[8];
+    for (int k = z0; k < z0 + side; k++)
+        for (int i = x0; i < x0 + side; i++) {
+            int n = terrain_columns_get(c, i, k, layers, 8);
+            for (int l = 0; l < n && l < 8; l++)
+                h = h * 1000003u + (uint64_t)layers[l].material * 7919u + (uint64_t)(layers[l].thickness * 32.0f);
+            h = h * 31u + 1u;
+        }
+    return h;
+}
+
+static uint64_t columns_hash(const terrain_columns *c) { return part_hash(c, 0, 0, STABILIZE_SIDE); }
+
+Test(terrain_threads, stabilization_on_four_threads_gives_the_bytes_of_one) {
+    terrain_columns *lone = bumpy_region(), *shared = bumpy_region();
+    int64_t sand = terrain_columns_mass(lone, TERRAIN_SAND), rocks = terrain_columns_mass(lone, TERRAIN_ROCKS);
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 4 });
+    terrain_stabilize_result a, b;
+    cr_assert(terrain_stabilize_region(lone, &(terrain_stabilize_params){ 0 }, NULL, &a));
+    cr_assert(terrain_stabilize_region(shared, &(terrain_stabilize_params){ 0 }, jobs, &b));
+    cr_expect(a.converged && b.converged);
+    cr_expect_gt(a.moved, 0);
+    cr_expect_eq(a.moved, b.moved);
+    cr_expect_eq(a.iterations, b.iterations);
+    cr_expect_eq(columns_hash(lone), columns_hash(shared));
+    cr_expect_eq(terrain_columns_mass(shared, TERRAIN_SAND), sand);
+    cr_expect_eq(terrain_columns_mass(shared, TERRAIN_ROCKS), rocks);
+    job_system_destroy(jobs);
+    terrain_columns_destroy(lone);
+    terrain_columns_destroy(shared);
+}
+
+Test(terrain_threads, regions_side_by_side_on_four_threads_give_the_bytes_of_one_region) {
+    enum { HALF = STABILIZE_SIDE / 2 };
+    terrain_columns *whole = bumpy_region(), *parts[4];
+    for (int n = 0; n < 4; n++) parts[n] = bumpy_part(n % 2 * HALF, n / 2 * HALF, HALF);
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 4 });
+    terrain_stabilize_result a, b;
+    cr_assert(terrain_stabilize_region(whole, &(terrain_stabilize_params){ 0 }, NULL, &a));
+    cr_assert(terrain_stabilize_regions(parts, 4, &(terrain_stabilize_params){ 0 }, jobs, &b));
+    cr_expect(a.converged && b.converged);
+    cr_expect_eq(a.moved, b.moved);
+    for (int n = 0; n < 4; n++)
+        cr_expect_eq(part_hash(whole, n % 2 * HALF, n / 2 * HALF, HALF), part_hash(parts[n], 0, 0, HALF), "part %d", n);
+    job_system_destroy(jobs);
+    for (int n = 0; n < 4; n++) terrain_columns_destroy(parts[n]);
+    terrain_columns_destroy(whole);
+}
