@@ -275,23 +275,32 @@ static void stream_want(terrain_ecs *te, ecs_commands *commands, stream_key key)
     if (r->task && r->task->lod.finer_neighbours != mask) stream_task_cancel(s, r);
 }
 
+/* Snaps the viewers to a grid of `cell` metres (rounded to the nearest line, or floored: the
+ * cell they stand in) into `centres`; true (and `centres` updated) when that differs from last
+ * time, or the first time. */
+static bool stream_centres_moved(const terrain__streamer *s, double cell, bool nearest,
+                                 int64_t (*centres)[2], int *count, bool *laid_out) {
+    int64_t now[TERRAIN_MAX_VIEWERS][2];
+    double shift = nearest ? 0.5 : 0.0;
+    for (int v = 0; v < s->viewer_count; v++) {
+        now[v][0] = (int64_t)floor(s->viewers[v][0] / cell + shift);
+        now[v][1] = (int64_t)floor(s->viewers[v][2] / cell + shift);
+    }
+    size_t bytes = sizeof now[0] * (size_t)s->viewer_count;
+    if (*laid_out && *count == s->viewer_count && memcmp(now, centres, bytes) == 0) return false;
+    memcpy(centres, now, bytes);
+    *count = s->viewer_count;
+    *laid_out = true;
+    return true;
+}
+
 /* Lays the rings out around the viewers' snapped centres when those moved. */
 static void stream_layout(terrain_ecs *te, ecs_commands *commands) {
     terrain__streamer *s = te->stream;
     int levels = s->desc.levels, w = s->desc.half_width;
     double coarsest = (double)TERRAIN_MESH_CELLS * (double)(1 << (levels - 1));
-    int64_t centres[TERRAIN_MAX_VIEWERS][2];
-    for (int v = 0; v < s->viewer_count; v++) {
-        centres[v][0] = (int64_t)floor(s->viewers[v][0] / coarsest + 0.5);
-        centres[v][1] = (int64_t)floor(s->viewers[v][2] / coarsest + 0.5);
-    }
-    if (s->laid_out && s->centre_count == s->viewer_count &&
-        memcmp(centres, s->centres, sizeof centres[0] * (size_t)s->viewer_count) == 0)
-        return;
+    if (!stream_centres_moved(s, coarsest, true, s->centres, &s->centre_count, &s->laid_out)) return;
     TRACE_ZONE("terrain_stream_layout");
-    memcpy(s->centres, centres, sizeof centres[0] * (size_t)s->viewer_count);
-    s->centre_count = s->viewer_count;
-    s->laid_out = true;
     for (size_t i = 0; i < s->meshes.capacity; i++) {
         stream_record *r = s->meshes.slots[i];
         if (r && r->wanted) {
@@ -426,18 +435,10 @@ static void terrain_stream_system(ecs_iter *it) {
 
 static void stream_columns_layout(terrain_ecs *te) {
     terrain__streamer *s = te->stream;
-    int64_t centres[TERRAIN_MAX_VIEWERS][2];
     double chunk = TERRAIN_CHUNK_COLUMNS * TERRAIN_COLUMN_SIZE;
-    for (int v = 0; v < s->viewer_count; v++) {
-        centres[v][0] = (int64_t)floor(s->viewers[v][0] / chunk);
-        centres[v][1] = (int64_t)floor(s->viewers[v][2] / chunk);
-    }
-    if (s->columns_laid_out && s->column_centre_count == s->viewer_count &&
-        memcmp(centres, s->column_centres, sizeof centres[0] * (size_t)s->viewer_count) == 0)
+    if (!stream_centres_moved(s, chunk, false, s->column_centres, &s->column_centre_count, &s->columns_laid_out))
         return;
-    memcpy(s->column_centres, centres, sizeof centres[0] * (size_t)s->viewer_count);
-    s->column_centre_count = s->viewer_count;
-    s->columns_laid_out = true;
+    int64_t (*centres)[2] = s->column_centres;
     for (size_t i = 0; i < s->columns.capacity; i++)
         if (s->columns.slots[i]) s->columns.slots[i]->wanted = false;
     int r = s->desc.collision_radius;

@@ -1,6 +1,8 @@
 /* render_util.c — see render_util.h. */
 #include "render_util.h"
 
+#include <math.h>
+
 #include "core/core.h"
 
 #include <stdio.h>
@@ -82,4 +84,14 @@ const char *render_shader_folder(const char *const *names, const char *const *te
     if (!mkdtemp(folder)) return NULL;
     for (int i = 0; i < count; i++) render_write_file(folder, names[i], texts[i]);
     return folder;
+}
+
+static void rolling_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
+    (void)user;
+    double h = 4.0 * sin((double)x * (2.0 * M_PI / 40.0)) + 2.0 * cos((double)z * (2.0 * M_PI / 50.0));
+    terrain_stacks_builder_push(b, TERRAIN_BEDROCK, (float)(h - TERRAIN_FLOOR_Y));
+}
+
+terrain_stacks *render_rolling_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, rolling_column, user);
 }

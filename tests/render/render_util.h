@@ -3,6 +3,7 @@
 #define RENDER_UTIL_H
 
 #include "gfx/gfx.h"
+#include "terrain/terrain.h"
 
 #include <stdbool.h>
 #include <stdint.h>
@@ -23,5 +24,10 @@ char *render_capture_end(void);
 /* A fresh folder under /tmp with the given files written into it; returns its path (static). */
 const char *render_shader_folder(const char *const *names, const char *const *texts, int count);
 void render_write_file(const char *folder, const char *name, const char *text);
+
+/* A hand-made world for terrain_world_desc.generate: bedrock rolling between −6 and +6 m,
+ * periodic (40 m along x, 50 m along z; both divide 100 800 m, so the ground there is the
+ * ground at the origin). */
+terrain_stacks *render_rolling_chunk(void *user, terrain_chunk_coord coord);
 
 #endif

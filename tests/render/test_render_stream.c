@@ -16,17 +16,6 @@
 
 #define DT (1.0f / 60.0f)
 
-/* Ground between −6 and +6 m, periodic: 40 m along x and 50 m along z. */
-static void rolling_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
-    (void)user;
-    double h = 4.0 * sin((double)x * (2.0 * M_PI / 40.0)) + 2.0 * cos((double)z * (2.0 * M_PI / 50.0));
-    terrain_stacks_builder_push(b, TERRAIN_BEDROCK, (float)(h - TERRAIN_FLOOR_Y));
-}
-
-static terrain_stacks *rolling_chunk(void *user, terrain_chunk_coord coord) {
-    return terrain_stacks_from_columns(coord, rolling_column, user);
-}
-
 typedef struct streamed {
     gfx_context *gfx;
     job_system *jobs;
@@ -42,7 +31,7 @@ static streamed streamed_open(int threads, const terrain_stream_desc *desc) {
     streamed s = { .gfx = render_offscreen(64, 64) };
     s.jobs = job_system_create(&(job_system_desc){ .threads = threads });
     s.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = s.jobs });
-    s.world = terrain_world_create(&(terrain_world_desc){ .generate = rolling_chunk });
+    s.world = terrain_world_create(&(terrain_world_desc){ .generate = render_rolling_chunk });
     s.te = terrain_ecs_create(s.ecs, s.world);
     if (desc) terrain_ecs_stream(s.te, desc);
     return s;

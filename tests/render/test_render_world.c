@@ -111,18 +111,6 @@ Test(render_world, a_recorded_walk_replays_to_the_same_place, .timeout = 600) {
     game_walk_free(&walk);
 }
 
-/* Rolling ground, periodic (40 m along x, 50 m along z), the same around (100 800, 100 800)
- * as around the origin (both periods and the coarsest chunk divide 100 800 m). */
-static void rolling_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
-    (void)user;
-    double h = 3.0 * sin((double)x * (2.0 * M_PI / 40.0)) + 1.5 * cos((double)z * (2.0 * M_PI / 50.0));
-    terrain_stacks_builder_push(b, TERRAIN_BEDROCK, (float)(h - TERRAIN_FLOOR_Y));
-}
-
-static terrain_stacks *rolling_chunk(void *user, terrain_chunk_coord coord) {
-    return terrain_stacks_from_columns(coord, rolling_column, user);
-}
-
 Test(render_world, a_walk_a_hundred_kilometres_out_goes_as_at_the_origin, .timeout = 600) {
     game_walk walk = parse_walk("relative\n30 30\n-20 60 walk\n");
     game_app_stats at[2];
@@ -130,7 +118,7 @@ Test(render_world, a_walk_a_hundred_kilometres_out_goes_as_at_the_origin, .timeo
         double offset = far ? 100800.0 : 0.0;
         at[far] = run_world((game_app_desc){ .width = 64, .height = 48, .headless = true, .threads = 2,
                                              .walk = &walk, .stream = small_view, .no_hud = true, .frames = 1500,
-                                             .spawn = { offset + 8, offset + 8 }, .generate = rolling_chunk });
+                                             .spawn = { offset + 8, offset + 8 }, .generate = render_rolling_chunk });
         at[far].feet[0] -= offset;
         at[far].feet[2] -= offset;
         cr_expect_eq(at[far].eye_in_solid_frames, 0);
