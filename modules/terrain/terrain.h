@@ -155,11 +155,16 @@ float terrain_fbm3(uint64_t seed, float x, float y, float z, int octaves);
  * whenever a chunk is needed; the world owns the stacks it returns (frees them with
  * terrain_stacks_destroy) as it does generated ones. It must be a pure function of the
  * coordinate and safe to call from any thread. */
+typedef struct terrain_edit_log terrain_edit_log;   /* persistent edits, below */
+
 typedef struct terrain_world_desc {
     terrain_generation_params generation;
     size_t max_chunks;                /* cached chunks kept (least recently used go); 0 = 4096 */
     terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);  /* NULL = generation */
     void *generate_user;              /* passed to generate */
+    terrain_edit_log *edits;          /* not owned; NULL = edits live only in the cache (an
+                                         edited chunk is then never evicted). See "edits in
+                                         the world" below */
 } terrain_world_desc;
 
 typedef struct terrain_world terrain_world;
@@ -790,5 +795,182 @@ typedef struct terrain_erode_desc {
  * Changed columns are marked for the next stabilization. */
 bool terrain_deposit(terrain_columns *columns, const terrain_deposit_desc *desc, int64_t *quanta);
 bool terrain_erode(terrain_columns *columns, const terrain_erode_desc *desc, int64_t *quanta);
+
+/* ---- sculpting and sweeping (000 §4.1, §4.2), picking ---- */
+
+/* Sculpt (000 §4.1): a point primitive f*(p) = g(|p − c|), g(r) = (1 − r²/R²)² inside R, is
+ * blended into the field — fe = f + f* to add, fe = f − f* to carve — with its centre δ inside
+ * the surface to add (c = v − δn) or outside to carve (c = v + δn), v the target on the surface
+ * and n the field's normal there. The columns under the ball are rebuilt along their central
+ * axes: within the ball's reach, material is where fe > 0 (roots of fe = 0 found by sampling and
+ * bisection to the height quantum); outside it the layers stay as they were. Only the layers
+ * the edit flips change: added material is `material`, carved material becomes air, and what
+ * lies untouched above or below keeps its kind.
+ *
+ *     terrain_ray_hit hit;
+ *     if (terrain_raycast(world, eye, forward, 64, &hit))
+ *         terrain_sculpt(region, &(terrain_sculpt_desc){ .target = { hit.position[0], … },
+ *                                                        .radius = 3, .carve = true }, NULL);
+ *
+ * The field is computed from the region's own columns, so the region must hold every column
+ * within R + 2 columns of the target (a region of whole chunks around it; terrain_world_edit
+ * does this). False (message logged, region unchanged) for bad parameters or a ball that does
+ * not fit the region with that margin. `changed` (may be NULL) receives the columns changed. */
+typedef struct terrain_sculpt_desc {
+    double target[3];                 /* v: a point on or near the surface (world metres) */
+    float radius;                     /* R, metres, 0 < R ≤ 32 */
+    float offset;                     /* δ / R, 0 … 1; 0 = 0.5 (000: δ = R/2 works well) */
+    bool carve;                       /* false: add material; true: carve it away */
+    terrain_material material;        /* what added material is; 0 (air) = bedrock */
+} terrain_sculpt_desc;
+
+bool terrain_sculpt(terrain_columns *columns, const terrain_sculpt_desc *desc, int64_t *changed);
+
+/* Sweep (000 §4.2): carves the union of swept balls around a graph of segments — a tunnel, a
+ * crack, a ravine, a cave network — as fe = min(f, −f*): everything within the profile radius
+ * of the skeleton becomes air, exactly (no surface projection: the graph is where it is). The
+ * radius is interpolated linearly along each segment from its end points' radii. Columns are
+ * rebuilt along their axes by the roots of fe as for sculpting (outside the swept volume they
+ * keep their layers). Granular material above a carved span stays where it is until
+ * stabilization lets it fall. Same region rule as terrain_sculpt (every column within the
+ * largest radius + 2 of the skeleton). */
+typedef struct terrain_sweep_desc {
+    const double (*points)[3];        /* skeleton vertices, world metres */
+    const float *radii;               /* per vertex, metres, 0 < r ≤ 32; NULL = `radius` for all */
+    int point_count;                  /* 1 … 4096 (1: a ball) */
+    const int (*segments)[2];         /* pairs of vertex indices; NULL = the polyline 0-1-2-… */
+    int segment_count;
+    float radius;                     /* when radii is NULL */
+} terrain_sweep_desc;
+
+bool terrain_sweep(terrain_columns *columns, const terrain_sweep_desc *desc, int64_t *changed);
+
+/* Picking: the first point along the ray where the field f crosses from air to solid (what the
+ * mesh shows), within max_distance metres; marches in steps of at most half a column and
+ * bisects. Generates the chunks it reads. Thread-safe as terrain_world_stacks. */
+typedef struct terrain_ray_hit {
+    double position[3];
+    float normal[3];                  /* unit, into the air (−∇f / |∇f|) */
+    float distance;                   /* metres from the origin along the unit direction */
+    terrain_material material;        /* of the column layer just inside the surface */
+} terrain_ray_hit;
+
+bool terrain_raycast(terrain_world *world, const double origin[3], const float direction[3], float max_distance,
+                     terrain_ray_hit *hit);
+
+/* ---- the edit log: persistent edits ----
+ *
+ * Every edit of a chunk is recorded as one entry of that chunk's log: the tool that made it and
+ * the columns it changed with their new layers (in quanta, exact). A chunk generated again —
+ * after eviction, or in a later run — replays its log over the generated stacks and comes back
+ * byte for byte as it was. The world does this itself when given a log
+ * (terrain_world_desc.edits, terrain_world_commit).
+ *
+ *     terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
+ *     terrain_edit_log_load(log, "saves/world1", &loaded);     // reports bad files, goes on
+ *     ... edits ...
+ *     terrain_edit_log_save(log, "saves/world1", error, sizeof error);
+ *
+ * Files: one per chunk, DIR/edits/<x>_<z>.tel, written to a temporary file in the same folder,
+ * flushed (fsync) and renamed over the old one, so a crash at any moment leaves the previous
+ * file or the new one, never a torn one. Each file carries the world's key (a different seed or
+ * generator refuses it) and a checksum. A file that is corrupt, truncated, from another world or
+ * otherwise unreadable is reported in the load result, renamed to <name>.bad (kept for a human
+ * to look at) and its chunk stays as generated; loading never crashes on a file's content.
+ *
+ * Threads: one mutex inside; record and replay may be called from any thread. */
+
+typedef enum terrain_edit_tool {
+    TERRAIN_EDIT_SET = 1,             /* columns set directly (terrain_columns_set) */
+    TERRAIN_EDIT_SCULPT_ADD,
+    TERRAIN_EDIT_SCULPT_CARVE,
+    TERRAIN_EDIT_SWEEP,
+    TERRAIN_EDIT_DEPOSIT,
+    TERRAIN_EDIT_ERODE,
+    TERRAIN_EDIT_STABILIZE,
+    TERRAIN_EDIT_COMPACTED,           /* several entries folded into one (terrain_edit_log_compact) */
+    TERRAIN_EDIT_TOOL_COUNT
+} terrain_edit_tool;
+
+const char *terrain_edit_tool_name(terrain_edit_tool tool);
+
+/* A key for the generator: equal for equal parameters (seed included), different otherwise
+ * with overwhelming probability. */
+uint64_t terrain_generation_key(const terrain_generation_params *params);
+
+typedef struct terrain_edit_log terrain_edit_log;
+terrain_edit_log *terrain_edit_log_create(uint64_t world_key);
+void terrain_edit_log_destroy(terrain_edit_log *log);
+
+/* Appends an entry for `coord`: the columns where `after` differs from `before` (nothing when
+ * they are equal: returns true, no entry). False (message logged) for NULL stacks. */
+bool terrain_edit_log_record(terrain_edit_log *log, terrain_chunk_coord coord, terrain_edit_tool tool,
+                             const terrain_stacks *before, const terrain_stacks *after);
+/* The chunk's entries replayed in order over `generated`: new stacks (free with
+ * terrain_stacks_destroy), or NULL when the chunk has no entries. */
+terrain_stacks *terrain_edit_log_replay(terrain_edit_log *log, terrain_chunk_coord coord,
+                                        const terrain_stacks *generated);
+int terrain_edit_log_entries(terrain_edit_log *log, terrain_chunk_coord coord);   /* 0 = unedited */
+int terrain_edit_log_chunks(terrain_edit_log *log);                              /* chunks with entries */
+/* Folds each chunk's entries into one (TERRAIN_EDIT_COMPACTED: the final layers of every column
+ * ever changed), so the log stops growing with repeated strokes; replay gives the same bytes. */
+void terrain_edit_log_compact(terrain_edit_log *log);
+
+/* Writes the chunks whose entries changed since the last save (or load) as above; false with
+ * the reason in `error` when a file cannot be written (the chunks stay marked, a later save
+ * retries them). */
+bool terrain_edit_log_save(terrain_edit_log *log, const char *dir, char *error, size_t error_size);
+
+typedef struct terrain_edit_log_load_result {
+    int chunks_loaded;                /* files read into the log */
+    int files_rejected;               /* files reported and renamed to .bad */
+    char first_problem[256];          /* "DIR/edits/3_-7.tel: checksum mismatch", or "" */
+} terrain_edit_log_load_result;
+
+/* Reads every chunk file DIR/edits/<x>_<z>.tel into the log (replacing what it held for those
+ * chunks). A missing DIR or DIR/edits is an empty world (true). False (reason in result.first_problem) only when
+ * the folder exists but cannot be listed. */
+bool terrain_edit_log_load(terrain_edit_log *log, const char *dir, terrain_edit_log_load_result *result);
+/* One file's bytes (what load reads; the fuzz target's entry point): true and the chunk's entries
+ * added to the log, or false with the reason in `error` and the log unchanged. */
+bool terrain_edit_log_parse(terrain_edit_log *log, const void *bytes, size_t size, char *error, size_t error_size);
+
+/* ---- edits in the world ----
+ *
+ * With terrain_world_desc.edits set, the world replays a chunk's log whenever it generates the
+ * chunk, and terrain_world_commit records what changes. A tool applied to the world:
+ *
+ *     terrain_chunk_coord changed[16];
+ *     int n = terrain_world_edit(world, &(terrain_edit){ .tool = TERRAIN_EDIT_SCULPT_CARVE,
+ *                                 .sculpt = { .target = { x, y, z }, .radius = 3 } },
+ *                                changed, 16);
+ *
+ * loads a region of the chunks the tool reaches (with the field's margin), applies the tool
+ * there and commits each changed chunk. Stabilization is separate (terrain_ecs does it on the
+ * chunks that changed, a few iterations a frame). */
+typedef struct terrain_edit {
+    terrain_edit_tool tool;           /* SCULPT_ADD/CARVE, SWEEP, DEPOSIT or ERODE */
+    terrain_sculpt_desc sculpt;       /* for SCULPT_* (carve is set from the tool) */
+    terrain_sweep_desc sweep;
+    terrain_deposit_desc deposit;
+    terrain_erode_desc erode;
+} terrain_edit;
+
+/* Applies the edit; returns how many chunks changed (their coordinates in `changed`, at most
+ * `capacity` written), or −1 (message logged, nothing changed) for a bad edit. Main thread,
+ * between frames' jobs (it replaces cached stacks; see terrain_world_commit). */
+int terrain_world_edit(terrain_world *world, const terrain_edit *edit, terrain_chunk_coord *changed, int capacity);
+/* Replaces the chunk's stacks by `stacks` (taken over) and records the difference in the log,
+ * tagged `tool`. The old stacks stay valid for readers until the next terrain_world_trim (and
+ * for terrain_world_read_begin readers until they end), like evicted ones. The chunk is
+ * retained while it differs from generation and no log keeps its edits (else evicting it would
+ * lose them). */
+void terrain_world_commit(terrain_world *world, terrain_chunk_coord coord, terrain_stacks *stacks,
+                          terrain_edit_tool tool);
+/* Chunks committed since the last call (each once, in commit order); returns how many (writes
+ * at most `capacity`; the rest stay for the next call). The streamer remeshes what they touch. */
+int terrain_world_take_changes(terrain_world *world, terrain_chunk_coord *out, int capacity);
+/* How many commits the chunk has had in this world (0 = as generated or replayed). */
+uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord coord);
 
 #endif
