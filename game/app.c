@@ -7,6 +7,7 @@
 #include "input/input.h"
 #include "jobs/jobs.h"
 #include "player.h"
+#include "tools.h"
 #include "trace/trace.h"
 
 #include <math.h>
@@ -31,6 +32,9 @@ struct game_app {
     gfx_text *hud;
     game_player player;
     game_walker walker;
+    game_tools tools;
+    terrain_edit_log *edits;               /* with a world folder, or NULL */
+    uint64_t last_save_ns;
     terrain_view view;
     bool windowed, interactive, loading, over;
     int frames, loading_frames;
@@ -55,13 +59,77 @@ static bool app_open_input(game_app *app) {
     return app->input != NULL;
 }
 
-static void app_open_terrain(game_app *app) {
+/* ---- the world folder ------------------------------------------------------------------- */
+
+bool game_world_dir_seed(const char *dir, uint64_t *seed, bool complain) {
+    char path[4096];
+    snprintf(path, sizeof path, "%s/world.txt", dir);
+    FILE *f = fopen(path, "r");
+    if (!f) return false;
+    unsigned long long value;
+    bool ok = fscanf(f, "seed %llu", &value) == 1;
+    fclose(f);
+    if (ok) *seed = value;
+    else if (complain) fprintf(stderr, "world: %s does not say 'seed N'\n", path);
+    return ok;
+}
+
+static bool app_write_world_file(const char *dir, uint64_t seed) {
+    char path[4096];
+    snprintf(path, sizeof path, "%s/world.txt", dir);
+    if (!core_make_dirs(dir)) {
+        fprintf(stderr, "world: cannot create the world folder %s\n", dir);
+        return false;
+    }
+    FILE *f = fopen(path, "w");
+    bool ok = f && fprintf(f, "seed %llu\n", (unsigned long long)seed) > 0;
+    if (f && fclose(f) != 0) ok = false;
+    if (!ok) fprintf(stderr, "world: cannot write %s\n", path);
+    return ok;
+}
+
+/* The edit log of the world folder: its seed checked, its files loaded (bad ones reported and
+ * set aside by the log). */
+static bool app_open_edits(game_app *app, const terrain_generation_params *params) {
+    const char *dir = app->desc.world_dir;
+    uint64_t seed;
+    bool known = game_world_dir_seed(dir, &seed, true);
+    if (known && seed != app->desc.seed) {
+        fprintf(stderr, "world: %s holds the world of seed %llu (run with --seed %llu, or another --world)\n",
+                dir, (unsigned long long)seed, (unsigned long long)seed);
+        return false;
+    }
+    if (!known && !app_write_world_file(dir, app->desc.seed)) return false;
+    app->edits = terrain_edit_log_create(terrain_generation_key(params));
+    terrain_edit_log_load_result loaded;
+    if (!terrain_edit_log_load(app->edits, dir, &loaded)) {
+        fprintf(stderr, "world: cannot read the edits in %s: %s\n", dir, loaded.first_problem);
+        return false;
+    }
+    if (loaded.files_rejected)
+        fprintf(stderr, "world: %d edit file(s) unreadable and set aside as .bad (first: %s); those chunks are "
+                "as generated\n", loaded.files_rejected, loaded.first_problem);
+    return true;
+}
+
+static void app_save_edits(game_app *app) {
+    if (!app->edits) return;
+    char error[512];
+    if (!terrain_edit_log_save(app->edits, app->desc.world_dir, error, sizeof error))
+        core_warn("game", "saving the edits failed (will retry): %s", error);
+    app->last_save_ns = core_time_ns();
+}
+
+static bool app_open_terrain(game_app *app) {
     terrain_generation_params params = terrain_generation_defaults(app->desc.seed);
+    if (app->desc.world_dir && !app_open_edits(app, &params)) return false;
     app->world = terrain_world_create(&(terrain_world_desc){ .generation = params, .generate = app->desc.generate,
-                                                             .generate_user = app->desc.generate_user });
+                                                             .generate_user = app->desc.generate_user,
+                                                             .edits = app->edits });
     app->ecs = ecs_world_create(&(ecs_world_desc){ .jobs = app->jobs });
     app->terrain = terrain_ecs_create(app->ecs, app->world);
     terrain_ecs_stream(app->terrain, &app->desc.stream);
+    return true;
 }
 
 static void app_spawn_player(game_app *app) {
@@ -91,7 +159,7 @@ game_app *game_app_create(const game_app_desc *desc) {
     /* Offscreen nobody can close the window: something has to end the run. */
     if (!app->windowed && !d->frames && !d->walk && !d->replay_path) d->frames = 300;
     app->jobs = job_system_create(&(job_system_desc){ .threads = d->threads });
-    app_open_terrain(app);
+    if (!app_open_terrain(app)) goto fail;
     /* Thin fog: the clipmap shows ground out to several kilometres. */
     app->renderer = terrain_renderer_create(app->gfx, &(terrain_renderer_desc){
         .sea_level = terrain_world_generation(app->world)->sea_level, .fog_density = d->no_clipmap ? 0 : 0.0005f });
@@ -104,6 +172,7 @@ game_app *game_app_create(const game_app_desc *desc) {
         app->view.far_distance = 6000.0f;
     }
     app_spawn_player(app);
+    game_tools_init(&app->tools);
     app->loading = true;
     app->start_ns = app->last_ns = core_time_ns();
     return app;
@@ -117,11 +186,13 @@ void game_app_destroy(game_app *app) {
     input_destroy(app->input);
     input_bindings_destroy(app->bindings);
     gfx_text_destroy(app->hud);
+    app_save_edits(app);
     if (app->terrain) terrain_ecs_destroy(app->terrain);
     terrain_clipmap_destroy(app->clipmap);
     terrain_renderer_destroy(app->renderer);
     ecs_world_destroy(app->ecs);
     terrain_world_destroy(app->world);
+    terrain_edit_log_destroy(app->edits);
     job_system_destroy(app->jobs);
     gfx_destroy(app->gfx);
     core_free(app->cpu_ms, app->cpu_capacity * sizeof *app->cpu_ms);
@@ -160,6 +231,10 @@ static void app_draw_hud(game_app *app) {
                    s.jobs_in_flight, (double)s.resident_bytes / (1024.0 * 1024.0));
     gfx_text_print(app->hud, 8, 52, 2, white, "x %.1f  y %.1f  z %.1f  seed %llu", app->view.camera[0],
                    app->view.camera[1], app->view.camera[2], (unsigned long long)app->desc.seed);
+    if (app->interactive) {
+        const float aim[4] = { 1, 1, 0.6f, 1 }, idle[4] = { 0.7f, 0.7f, 0.7f, 1 };
+        gfx_text_print(app->hud, 8, 74, 2, app->tools.aimed ? aim : idle, "%s", game_tools_hint(&app->tools));
+    }
     gfx_text_draw(app->hud);
 }
 
@@ -186,6 +261,9 @@ static bool app_update_player(game_app *app, float dt) {
     }
     game_player_update(&app->player, app->world, actions, step);
     app->waiting += app->player.waiting;
+    double eye[3];
+    game_player_eye(&app->player, eye);
+    game_tools_update(&app->tools, app->terrain, app->world, eye, app->player.yaw, app->player.pitch, actions, step);
     return true;
 }
 
@@ -251,6 +329,8 @@ bool game_app_frame(game_app *app) {
         app->frames++;
         app_record_cpu(app, cpu_ms, engine_ms);
     }
+    if (app->edits && (double)(core_time_ns() - app->last_save_ns) * 1e-9 >= GAME_APP_AUTOSAVE_SECONDS)
+        app_save_edits(app);
     app->over = last;
     return !last;
 }
@@ -292,6 +372,9 @@ game_app_stats game_app_stats_get(const game_app *app) {
     s.engine_ms_p99 = percentile(sorted, app->cpu_count, 0.99);
     core_free(sorted, (app->cpu_count ? app->cpu_count : 1) * sizeof *sorted);
     s.stream = terrain_ecs_stream_stats(app->terrain);
+    s.edits = terrain_ecs_edit_stats(app->terrain);
+    s.strokes = app->tools.strokes;
+    s.edited_chunks = app->edits ? terrain_edit_log_chunks(app->edits) : 0;
     struct rusage usage;
     if (getrusage(RUSAGE_SELF, &usage) == 0) s.peak_rss_bytes = (size_t)usage.ru_maxrss * 1024;
     return s;

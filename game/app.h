@@ -54,7 +54,18 @@ typedef struct game_app_desc {
     bool no_clipmap;                  /* only the volumetric chunks (no far terrain) */
     bool no_hud;
     double max_loading_seconds;       /* give up waiting for the start area; 0 = 300 s */
+    /* A folder that keeps the world's edits (terrain.h, the edit log): loaded at the start
+     * (bad files are reported and set aside), saved every GAME_APP_AUTOSAVE_SECONDS and at the
+     * end. It records its seed in DIR/world.txt; another seed is refused. NULL = edits last as
+     * long as the run. */
+    const char *world_dir;
 } game_app_desc;
+
+#define GAME_APP_AUTOSAVE_SECONDS 30.0
+
+/* The seed DIR/world.txt records: true and *seed set, or false when there is no such file (a
+ * new world) or it does not say (the reason printed when `complain`). */
+bool game_world_dir_seed(const char *dir, uint64_t *seed, bool complain);
 
 /* NULL (with the reason printed) when the window, the shaders, the bindings or a recording
  * cannot be opened. */
@@ -80,6 +91,9 @@ typedef struct game_app_stats {
     double engine_ms_p50, engine_ms_p99;
     int hitches;                      /* frames past loading whose CPU time exceeded 33 ms */
     terrain_stream_stats stream;
+    terrain_edit_stats edits;
+    uint64_t strokes;                 /* tool strokes the player made */
+    int edited_chunks;                /* chunks with logged edits (with a world folder) */
     size_t peak_rss_bytes;            /* of the process (getrusage), driver memory included */
 } game_app_stats;
 

@@ -2,11 +2,13 @@
  *
  *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT] [--record FILE]
  *         [--replay FILE] [--bindings FILE] [--screenshot FILE] [--radius R] [--levels N]
- *         [--memory MB] [--threads N] [--trace FILE]
+ *         [--memory MB] [--threads N] [--trace FILE] [--world DIR]
  *
  * In a window: WASD or the left stick to walk, the mouse (click to capture, Escape to let go) or
  * the right stick to look, Space to jump, Shift to sprint, Ctrl or C to crouch, F to fly, F11
- * fullscreen, F12 a screenshot. Without a display it renders offscreen; give it --frames or a
+ * fullscreen, F12 a screenshot. Terrain tools: left and right mouse buttons (or the triggers)
+ * use the tool on the HUD where the view meets the ground, Tab (right shoulder) picks the next
+ * one; --world DIR keeps the edits across runs. Without a display it renders offscreen; give it --frames or a
  * --walk so it ends. At the end it prints what happened: frames, the walk, CPU frame times,
  * streaming counts and memory, and where the player stands.
  */
@@ -21,7 +23,7 @@
 
 typedef struct options {
     core_common_args common;
-    const char *size, *screenshot, *walk, *record, *replay, *bindings;
+    const char *size, *screenshot, *walk, *record, *replay, *bindings, *world;
     int seed, frames, radius, levels, memory_mb;
     bool headless;
 } options;
@@ -29,7 +31,9 @@ typedef struct options {
 static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_walk *walk) {
     const core_option list[] = {
         CORE_COMMON_OPTIONS(o->common),
-        { "seed", CORE_OPTION_INT, &o->seed, "S", "world seed (default 1)", 0, 2147483647 },
+        { "seed", CORE_OPTION_INT, &o->seed, "S", "world seed (default 1, or the --world folder's)", 0,
+          2147483647 },
+        { "world", CORE_OPTION_STRING, &o->world, "DIR", "keep the world's edits in DIR (loaded, autosaved)" },
         { "size", CORE_OPTION_STRING, &o->size, "WxH", "framebuffer size (default 1280x720)" },
         { "headless", CORE_OPTION_FLAG, &o->headless, NULL, "render offscreen with OSMesa" },
         { "frames", CORE_OPTION_INT, &o->frames, "N", "stop after N frames past loading (0 = when closed)", 0,
@@ -45,9 +49,12 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
     };
     core_cli cli = { .program = "world", .summary = "walk an endless generated world",
                      .options = list, .option_count = CORE_COUNTOF(list) };
-    o->seed = 1;
+    o->seed = -1;
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
+    /* No --seed: the world folder's, else 1. */
+    uint64_t saved_seed;
+    if (o->seed < 0) o->seed = o->world && game_world_dir_seed(o->world, &saved_seed, false) ? (int)saved_seed : 1;
     desc->width = 1280;
     desc->height = 720;
     if (o->size && !gfx_parse_size(o->size, &desc->width, &desc->height)) {
@@ -83,6 +90,10 @@ static void print_results(const game_app_stats *s, bool walked) {
     printf("world: terrain memory %.1f MB (peak %.1f MB), process peak %.1f MB\n",
            (double)s->stream.resident_bytes / 1048576.0, (double)s->stream.peak_resident_bytes / 1048576.0,
            (double)s->peak_rss_bytes / 1048576.0);
+    if (s->strokes || s->edits.edits_applied || s->edited_chunks)
+        printf("world: %llu tool strokes, %llu edits applied, %llu refused, %d chunks with saved edits\n",
+               (unsigned long long)s->strokes, (unsigned long long)s->edits.edits_applied,
+               (unsigned long long)s->edits.edits_refused, s->edited_chunks);
     printf("world: player at (%.4f, %.4f, %.4f)\n", s->feet[0], s->feet[1], s->feet[2]);
 }
 
@@ -102,6 +113,7 @@ int main(int argc, char **argv) {
     desc.replay_path = o.replay;
     desc.bindings_path = o.bindings;
     desc.screenshot_path = o.screenshot;
+    desc.world_dir = o.world;
     desc.stream = (terrain_stream_desc){ .half_width = o.radius, .levels = o.levels,
                                          .memory_budget = (size_t)o.memory_mb << 20 };
     game_app *app = game_app_create(&desc);

@@ -1,12 +1,14 @@
 /* core.c — logging, time, memory accounting, arenas and hashing (see core.h). */
 #include "core.h"
 
+#include <errno.h>
 #include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 /* ---- logging ---------------------------------------------------------------------------- */
@@ -210,4 +212,27 @@ uint64_t core_hash_bytes(const void *data, size_t size, uint64_t seed) {
     uint64_t h = 0xcbf29ce484222325ull ^ core_hash_u64(seed);
     for (size_t i = 0; i < size; i++) h = (h ^ bytes[i]) * 0x100000001b3ull;
     return core_hash_u64(h ^ size);
+}
+
+bool core_make_dirs(const char *path) {
+    if (!path || !*path) {
+        errno = ENOENT;
+        return false;
+    }
+    size_t length = strlen(path);
+    char *copy = core_strdup(path);
+    bool ok = true;
+    /* Each prefix that ends before a '/' (and the whole path) in turn; existing ones are fine. */
+    for (size_t i = 1; i <= length && ok; i++) {
+        if (copy[i] != '/' && copy[i] != '\0') continue;
+        char saved = copy[i];
+        copy[i] = '\0';
+        if (mkdir(copy, 0777) != 0 && errno != EEXIST) ok = false;
+        copy[i] = saved;
+    }
+    struct stat info;
+    if (ok && stat(path, &info) != 0) ok = false;                 /* errno from stat */
+    else if (ok && !S_ISDIR(info.st_mode)) errno = ENOTDIR, ok = false;
+    core_free(copy, length + 1);
+    return ok;
 }

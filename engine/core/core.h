@@ -123,6 +123,9 @@ char *core_strjoin(const char *a, const char *b); /* a then b; free like core_st
 /* For functions that report into a caller's buffer (`bool read(…, char *error, size_t size)`):
  * formats the message into `error` when there is one, and returns false to be returned on. */
 bool core_error_format(char *error, size_t error_size, const char *fmt, ...) CORE_PRINTF(3, 4);
+/* Creates the folder and any missing parents (mkdir -p); true when it exists afterwards as a
+ * folder. On failure errno says why. */
+bool core_make_dirs(const char *path);
 
 typedef struct core_arena_block core_arena_block;
 typedef struct core_arena {

@@ -141,6 +141,8 @@ typedef enum input_action {
     INPUT_ACTION_FULLSCREEN,     /* F11 by default; the program calls gfx_window_toggle_fullscreen */
     INPUT_ACTION_CAPTURE_MOUSE,  /* click to capture, Escape to release (by default) */
     INPUT_ACTION_QUIT,
+    INPUT_ACTION_NEXT_TOOL,      /* the tool selector: Tab / right shoulder by default (after quit,
+                                    so recordings made before it keep their bits) */
     INPUT_ACTION_COUNT
 } input_action;
 #define INPUT_ACTION_BIT(action) (1u << (action))

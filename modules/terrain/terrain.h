@@ -525,6 +525,8 @@ typedef struct TerrainMeshChunk {
     terrain_mesh mesh;                  /* the newest mesh until uploaded */
     terrain_gpu_mesh gpu;               /* drawn; an older one stays until its successor is up */
     size_t gpu_bytes;
+    bool edited;                        /* meshed again after an edit: uploaded this frame,
+                                           whatever the upload budget */
 } TerrainMeshChunk;
 
 typedef struct terrain_ecs terrain_ecs;
@@ -972,5 +974,40 @@ void terrain_world_commit(terrain_world *world, terrain_chunk_coord coord, terra
 int terrain_world_take_changes(terrain_world *world, terrain_chunk_coord *out, int capacity);
 /* How many commits the chunk has had in this world (0 = as generated or replayed). */
 uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord coord);
+
+/* ---- editing in the ECS ----
+ *
+ * A running world (terrain_ecs) edits through a queue:
+ *     terrain_ecs_edit(te, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+ *                                           .deposit = { .x = x, .z = z, .radius = 4, .volume = 20 } });
+ * In the next frame's stabilize phase ("terrain_stabilize", main thread) queued edits are
+ * applied (terrain_world_edit) and the chunks they changed are stabilized (000 §3.4) as jobs,
+ * a budget's worth a frame, continuing over the next frames until nothing moves; material that
+ * reaches a chunk's border wakes the chunk beyond, so a slide crosses any number of chunks.
+ * Whatever changed is committed to the world (and its log) each frame. In the mesh phase every
+ * mesh chunk that reads a changed chunk is meshed again — streamed ones at once, as the frame's
+ * own jobs, and uploaded whatever the upload budget — so a stroke is drawn in the frame its
+ * edit is applied. Changes committed to the world by other code are remeshed the same way. */
+typedef struct terrain_edit_settings {
+    terrain_stabilize_params stabilize;   /* angles, step, tolerance; budget_ns per frame (0 with
+                                             max_iterations 0 = 2 ms); the edge is always WAKE */
+    int max_regions;                      /* chunks stabilized at once; 0 = 256 (beyond, the
+                                             border holds like a wall, with a warning) */
+} terrain_edit_settings;
+
+typedef struct terrain_edit_stats {
+    int queued;                           /* edits waiting for the next stabilize phase */
+    int stabilizing_chunks;               /* chunks not yet stable */
+    uint64_t edits_applied, edits_refused;
+    uint64_t iterations;                  /* of stabilization, in all */
+    uint64_t chunks_committed;            /* by stabilization */
+    double last_frame_ms;                 /* the stabilize phase's cost, the last frame it had work */
+} terrain_edit_stats;
+
+/* Queues the edit (copied, sweep arrays too); false (message logged) for a tool that is not a
+ * brush or a sweep without points. */
+bool terrain_ecs_edit(terrain_ecs *te, const terrain_edit *edit);
+void terrain_ecs_set_edit_settings(terrain_ecs *te, const terrain_edit_settings *settings);
+terrain_edit_stats terrain_ecs_edit_stats(terrain_ecs *te);
 
 #endif

@@ -72,22 +72,20 @@ static void terrain_upload_system(ecs_iter *it) {
     terrain_ecs *te = it->user;
     uint64_t budget = terrain__stream_upload_budget(te);
     uint64_t start = core_time_ns(), deadline = budget == UINT64_MAX ? UINT64_MAX : start + budget;
-    bool over = false;
-    while (!over && ecs_query_next(it)) {
+    while (ecs_query_next(it)) {
         TerrainMeshChunk *chunks = ecs_field(it, 0);
         for (int i = 0; i < it->count; i++) {
             TerrainMeshChunk *c = &chunks[i];
             if (c->state != TERRAIN_MESH_MESHED) continue;
-            if (deadline != UINT64_MAX && core_time_ns() >= deadline) {
-                over = true;
-                break;
-            }
+            /* Edited chunks go up whatever the budget: a stroke shows the frame it lands. */
+            if (!c->edited && deadline != UINT64_MAX && core_time_ns() >= deadline) continue;
             size_t old_bytes = c->gpu_bytes, cpu_bytes = terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count);
             terrain_gpu_mesh_destroy(&c->gpu);
             c->gpu = terrain_gpu_mesh_upload(&c->mesh);
             c->gpu_bytes = c->gpu.vertex_array ? cpu_bytes : 0;
             terrain_mesh_free(&c->mesh);
             c->state = TERRAIN_MESH_UPLOADED;
+            c->edited = false;
             if (te->stream) terrain__stream_uploaded(te, cpu_bytes, c->gpu_bytes, old_bytes);
             ecs_defer_add(it->commands, it->entities[i], te->mesh_uploaded);
         }
@@ -123,12 +121,14 @@ terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
         .query = { .with = { te->mesh_chunk, te->mesh_ready }, .without = { te->mesh_uploaded } },
         .writes = { te->mesh_chunk }, .fn = terrain_upload_system,
         .user = te, .main_thread = true });
+    terrain__editor_register(te);
     return te;
 }
 
 void terrain_ecs_destroy(terrain_ecs *te) {
     if (!te) return;
     terrain__stream_destroy(te);           /* waits for its background jobs */
+    terrain__editor_destroy(te);
     ecs_iter it = ecs_query_iter(te->ecs, te->mesh_chunks);
     while (ecs_query_next(&it)) {
         TerrainMeshChunk *chunks = ecs_field(&it, 0);

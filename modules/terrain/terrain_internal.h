@@ -167,6 +167,7 @@ bool terrain__mesh_chunk_reference(terrain__field_sampler sample, void *user, te
 #include "ecs/ecs.h"
 
 typedef struct terrain__streamer terrain__streamer;
+typedef struct terrain__editor terrain__editor;
 
 struct terrain_ecs {
     ecs_world *ecs;
@@ -182,6 +183,9 @@ struct terrain_ecs {
     terrain_gpu_mesh *draw_list;         /* gathered each draw */
     size_t draw_capacity;
     terrain__streamer *stream;           /* NULL unless terrain_ecs_stream was called */
+    terrain__editor *editor;             /* created by the first edit call */
+    terrain_chunk_coord *changed;        /* column chunks committed before this frame's mesh phase */
+    size_t changed_count, changed_capacity;
 };
 
 /* Bytes a mesh holds, on the CPU or (the same arrays) on the GPU. */
@@ -194,6 +198,13 @@ void terrain__stream_uploaded(terrain_ecs *te, size_t cpu_bytes, size_t gpu_byte
 /* Frees queued GPU meshes until the deadline (core_time_ns), at least a few a frame. */
 void terrain__stream_free_pending(terrain_ecs *te, uint64_t deadline);
 void terrain__stream_destroy(terrain_ecs *te);
+
+/* Editing (terrain_ecs_edit.c): the stabilize phase's system, and the editor's memory. */
+void terrain__editor_register(terrain_ecs *te);
+void terrain__editor_destroy(terrain_ecs *te);
+/* Whether mesh chunk (level, x, ·, z) reads any column of column chunk `chunk` (samples, apron,
+ * kernel and material weights): it must be meshed again when that chunk changes. */
+bool terrain__mesh_reads_chunk(int level, int64_t x, int64_t z, terrain_chunk_coord chunk);
 
 /* ==== end of the ECS and streaming section ================================================ */
 

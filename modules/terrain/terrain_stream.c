@@ -49,6 +49,7 @@ typedef struct stream_record {
     bool hidden;                           /* out of range and replaced */
     bool retained;                         /* column chunk: retained in the world */
     bool component_hidden;                 /* what the entity's TerrainMeshChunk.hidden says */
+    bool edited;                           /* a chunk it reads was edited: remesh this frame */
     uint64_t last_wanted;                  /* frame it was last wanted */
     double priority;                       /* lower first */
 } stream_record;
@@ -187,7 +188,7 @@ static void stream_task_run(void *user) {
     terrain_world_read_end(t->world, token);
 }
 
-static void stream_task_submit(terrain_ecs *te, stream_record *record) {
+static job_handle stream_task_start(terrain_ecs *te, stream_record *record, bool background) {
     terrain__streamer *s = te->stream;
     stream_task *t = core_calloc(1, sizeof *t);
     t->world = te->terrain;
@@ -197,10 +198,15 @@ static void stream_task_submit(terrain_ecs *te, stream_record *record) {
     record->task = t;
     bool column = record->key.level == STREAM_COLUMN_LEVEL;
     t->job = job_submit(ecs_world_jobs(te->ecs), &(job_desc){
-        .fn = stream_task_run, .user = t, .background = true,
-        .name = column ? "terrain stream generate" : "terrain stream mesh" });
+        .fn = stream_task_run, .user = t, .background = background,
+        .name = column ? "terrain stream generate" : background ? "terrain stream mesh" : "terrain remesh edit" });
     s->tasks = core_grow(s->tasks, &s->task_capacity, s->task_count + 1, sizeof *s->tasks);
     s->tasks[s->task_count++] = t;
+    return t->job;
+}
+
+static void stream_task_submit(terrain_ecs *te, stream_record *record) {
+    stream_task_start(te, record, true);
 }
 
 /* The record no longer wants its task's result: the job skips the work if it has not started,
@@ -488,6 +494,8 @@ static void stream_deliver(terrain_ecs *te, ecs_commands *commands, stream_task 
     }
     TerrainMeshChunk *c = ecs_get(te->ecs, r->entity, te->mesh_chunk);
     if (!c) return;
+    c->edited = r->edited;                         /* uploaded ahead of the budget */
+    r->edited = false;
     s->mesh_bytes -= terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count);
     terrain_mesh_free(&c->mesh);                   /* an older mesh never uploaded */
     c->mesh = t->mesh;
@@ -573,6 +581,36 @@ static void stream_submit(terrain_ecs *te) {
     for (size_t i = 0; i < waiting && (int)i < free_slots; i++) stream_task_submit(te, s->scratch[i]);
 }
 
+/* Edits (terrain_ecs_edit.c collected the changed column chunks): every record that reads one
+ * is meshed again — its task in flight has read the old stacks and is dropped — and those in
+ * range are meshed now, as the frame's own jobs, so the stroke is drawn this frame. */
+static void stream_remesh_edits(terrain_ecs *te, ecs_commands *commands) {
+    terrain__streamer *s = te->stream;
+    if (te->changed_count == 0) return;
+    TRACE_ZONE("terrain_stream_remesh_edits");
+    size_t urgent = 0;
+    for (size_t i = 0; i < s->meshes.capacity; i++) {
+        stream_record *r = s->meshes.slots[i];
+        if (!r) continue;
+        bool reads = false;
+        for (size_t c = 0; c < te->changed_count && !reads; c++)
+            reads = terrain__mesh_reads_chunk(r->key.level, r->key.x, r->key.z, te->changed[c]);
+        if (!reads) continue;
+        stream_task_cancel(s, r);
+        r->ready = false;
+        if (!r->wanted || !r->entity) continue;
+        r->edited = true;
+        s->scratch = core_grow(s->scratch, &s->scratch_capacity, urgent + 1, sizeof *s->scratch);
+        s->scratch[urgent++] = r;
+    }
+    job_system *jobs = ecs_world_jobs(te->ecs);
+    size_t first = s->task_count;
+    for (size_t i = 0; i < urgent; i++) stream_task_start(te, s->scratch[i], false);
+    for (size_t i = first; i < s->task_count; i++) job_wait(jobs, s->tasks[i]->job);
+    /* stream_collect delivers them with the rest, below. */
+    (void)commands;
+}
+
 static void terrain_stream_mesh_system(ecs_iter *it) {
     terrain_ecs *te = it->user;
     terrain__streamer *s = te->stream;
@@ -587,6 +625,7 @@ static void terrain_stream_mesh_system(ecs_iter *it) {
     job_system *jobs = ecs_world_jobs(te->ecs);
     /* Alone, the main thread is the only one that can run background jobs. */
     if (job_thread_count(jobs) == 1) job_help(jobs, (uint64_t)(s->desc.upload_budget_ms * 2e6f));
+    stream_remesh_edits(te, it->commands);
     stream_collect(te, it->commands);
     stream_submit(te);
     s->stats.jobs_in_flight = stream_jobs_in_flight(s);

@@ -16,6 +16,7 @@
 
 #include <math.h>
 #include <pthread.h>
+#include <string.h>
 
 #define WORLD_READER_EPOCHS 64               /* distinct trims that readers may span at once */
 
@@ -26,6 +27,8 @@ struct world_entry {
     world_entry *next_in_bucket;
     world_entry *lru_prev, *lru_next;     /* most recently used at the head */
     int retained;
+    uint32_t version;                     /* commits since it was cached */
+    bool pinned;                          /* edited with no log to keep the edits: never evicted */
 };
 
 struct terrain_world {
@@ -33,6 +36,9 @@ struct terrain_world {
     terrain_generation_params generation;
     terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);
     void *generate_user;
+    terrain_edit_log *edits;              /* replayed over generated chunks, or NULL */
+    terrain_chunk_coord *changes;         /* committed since the last terrain_world_take_changes */
+    size_t change_count, change_capacity;
     size_t max_chunks;
     world_entry **buckets;
     size_t bucket_count;                  /* a power of two */
@@ -61,6 +67,7 @@ terrain_world *terrain_world_create(const terrain_world_desc *desc) {
     w->generation = desc->generation;
     w->generate = desc->generate;
     w->generate_user = desc->generate_user;
+    w->edits = desc->edits;
     w->max_chunks = desc->max_chunks ? desc->max_chunks : 4096;
     w->bucket_count = 64;
     w->buckets = core_calloc(w->bucket_count, sizeof *w->buckets);
@@ -71,6 +78,7 @@ void terrain_world_destroy(terrain_world *world) {
     if (!world) return;
     for (size_t i = 0; i < world->graveyard_count; i++) terrain_stacks_destroy(world->graveyard[i].stacks);
     core_free(world->graveyard, world->graveyard_capacity * sizeof *world->graveyard);
+    core_free(world->changes, world->change_capacity * sizeof *world->changes);
     for (world_entry *e = world->lru_head, *next; e; e = next) {
         next = e->lru_next;
         terrain_stacks_destroy(e->stacks);
@@ -142,9 +150,15 @@ static world_entry *insert_or_get(terrain_world *w, terrain_chunk_coord coord, t
     return e;
 }
 
+/* The chunk as generated, with its logged edits replayed over it. */
 static terrain_stacks *generate(terrain_world *w, terrain_chunk_coord coord) {
-    if (w->generate) return w->generate(w->generate_user, coord);
-    return terrain_generate_chunk(&w->generation, coord);
+    terrain_stacks *stacks = w->generate ? w->generate(w->generate_user, coord)
+                                         : terrain_generate_chunk(&w->generation, coord);
+    if (!w->edits || !stacks) return stacks;
+    terrain_stacks *edited = terrain_edit_log_replay(w->edits, coord, stacks);
+    if (!edited) return stacks;
+    terrain_stacks_destroy(stacks);
+    return edited;
 }
 
 /* The entry for `coord`, generated if needed, touched; returns with the lock held. */
@@ -196,29 +210,35 @@ static uint64_t oldest_reader_epoch(const terrain_world *w) {
     return oldest;
 }
 
-/* Frees the trimmed stacks no reader can still hold: those trimmed in an epoch before every
- * active reader began. */
+/* Frees the stacks no reader can still hold: those buried in an epoch that has ended (a trim
+ * since: frame readers are done) and before every active spanning reader began. */
 static void bury_dead(terrain_world *w) {
     uint64_t oldest = oldest_reader_epoch(w);
     size_t kept = 0;
     for (size_t i = 0; i < w->graveyard_count; i++) {
-        if (w->graveyard[i].epoch < oldest) terrain_stacks_destroy(w->graveyard[i].stacks);
+        uint64_t epoch = w->graveyard[i].epoch;
+        if (epoch < oldest && epoch < w->epoch) terrain_stacks_destroy(w->graveyard[i].stacks);
         else w->graveyard[kept++] = w->graveyard[i];
     }
     w->graveyard_count = kept;
+}
+
+/* Stacks that left the cache: freed once no reader can hold them. Readers within a frame are
+ * done at the next trim; readers that span trims (read_begin) hold what was cached in their
+ * epoch. */
+static void bury(terrain_world *w, terrain_stacks *stacks) {
+    w->graveyard = core_grow(w->graveyard, &w->graveyard_capacity, w->graveyard_count + 1, sizeof *w->graveyard);
+    w->graveyard[w->graveyard_count].stacks = stacks;
+    w->graveyard[w->graveyard_count++].epoch = w->epoch;
 }
 
 static void evict(terrain_world *w, world_entry *e) {
     *find_slot(w, e->coord) = e->next_in_bucket;
     lru_unlink(w, e);
     w->bytes -= terrain_stacks_bytes(e->stacks);
-    if (w->reader_epochs > 0) {      /* a reader may hold it: free it once they are done */
-        w->graveyard = core_grow(w->graveyard, &w->graveyard_capacity, w->graveyard_count + 1, sizeof *w->graveyard);
-        w->graveyard[w->graveyard_count].stacks = e->stacks;
-        w->graveyard[w->graveyard_count++].epoch = w->epoch;
-    } else {
-        terrain_stacks_destroy(e->stacks);
-    }
+    /* Eviction runs in a trim, where no frame reader is left: only spanning readers matter. */
+    if (w->reader_epochs > 0) bury(w, e->stacks);
+    else terrain_stacks_destroy(e->stacks);
     core_free(e, sizeof *e);
     w->count--;
 }
@@ -261,7 +281,7 @@ size_t terrain_world_trim(terrain_world *world) {
     world_entry *e = world->lru_tail;
     while (world->count > world->max_chunks && e) {
         world_entry *prev = e->lru_prev;
-        if (e->retained == 0) {
+        if (e->retained == 0 && !e->pinned) {
             evict(world, e);
             evicted++;
         }
@@ -310,4 +330,51 @@ terrain_material terrain_world_material_at(terrain_world *world, double x, doubl
     const terrain_stacks *stacks =
         terrain_world_stacks(world, (terrain_chunk_coord){ (int64_t)chunk_x, (int64_t)chunk_z });
     return terrain_stacks_material_at(stacks, i, k, (float)y);
+}
+
+/* ---- edits -------------------------------------------------------------------------------- */
+
+void terrain_world_commit(terrain_world *world, terrain_chunk_coord coord, terrain_stacks *stacks,
+                          terrain_edit_tool tool) {
+    if (!stacks) {
+        core_warn("terrain", "commit of chunk (%lld, %lld) without stacks: ignored", (long long)coord.x,
+                  (long long)coord.z);
+        return;
+    }
+    world_entry *e = acquire(world, coord);
+    terrain_stacks *before = e->stacks;
+    /* The log diffs under the world's lock: the log has its own and never calls back. */
+    if (world->edits) terrain_edit_log_record(world->edits, coord, tool, before, stacks);
+    else e->pinned = true;
+    world->bytes += terrain_stacks_bytes(stacks) - terrain_stacks_bytes(before);
+    e->stacks = stacks;
+    e->version++;
+    bury(world, before);       /* a job of this frame may still read it: freed at a later trim */
+    bool queued = false;
+    for (size_t i = 0; i < world->change_count && !queued; i++) queued = coord_equal(world->changes[i], coord);
+    if (!queued) {
+        world->changes = core_grow(world->changes, &world->change_capacity, world->change_count + 1,
+                                   sizeof *world->changes);
+        world->changes[world->change_count++] = coord;
+    }
+    pthread_mutex_unlock(&world->lock);
+}
+
+int terrain_world_take_changes(terrain_world *world, terrain_chunk_coord *out, int capacity) {
+    pthread_mutex_lock(&world->lock);
+    size_t n = capacity > 0 ? (size_t)capacity : 0;
+    if (n > world->change_count) n = world->change_count;
+    if (n) memcpy(out, world->changes, n * sizeof *out);
+    memmove(world->changes, world->changes + n, (world->change_count - n) * sizeof *world->changes);
+    world->change_count -= n;
+    pthread_mutex_unlock(&world->lock);
+    return (int)n;
+}
+
+uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord coord) {
+    pthread_mutex_lock(&world->lock);
+    world_entry *e = *find_slot(world, coord);
+    uint32_t version = e ? e->version : 0;
+    pthread_mutex_unlock(&world->lock);
+    return version;
 }

@@ -236,3 +236,100 @@ Test(render_stream, a_single_thread_streams_too) {
     cr_expect(streamed_settle(&s, eye, 1, 5000) > 0);
     streamed_close(&s);
 }
+
+/* ---- editing a streamed world (terrain.h, "editing in the ECS") ---- */
+
+/* The level-0 mesh chunk (x, y, z), or NULL. */
+static TerrainMeshChunk *mesh_at(streamed *s, int64_t x, int64_t y, int64_t z) {
+    ecs_query *q = ecs_query_create(s->ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(s->ecs, "TerrainMeshChunk") } });
+    ecs_iter it = ecs_query_iter(s->ecs, q);
+    TerrainMeshChunk *found = NULL;
+    while (ecs_query_next(&it)) {
+        TerrainMeshChunk *c = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++)
+            if (c[i].lod.level == 0 && c[i].x == x && c[i].y == y && c[i].z == z) found = &c[i];
+    }
+    ecs_query_destroy(s->ecs, q);
+    return found;
+}
+
+static int64_t chunk_sand_quanta(terrain_world *w, int64_t cx, int64_t cz) {
+    int64_t q = 0;
+    terrain_layer layers[64];
+    const terrain_stacks *st = terrain_world_stacks(w, (terrain_chunk_coord){ cx, cz });
+    for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
+        for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
+            int n = terrain_stacks_column(st, i, k, layers, 64);
+            for (int l = 0; l < n && l < 64; l++)
+                if (layers[l].material == TERRAIN_SAND) q += llroundf(layers[l].thickness * 32.0f);
+        }
+    return q;
+}
+
+/* Sand in chunks [lo, hi]² (quanta·column). */
+static int64_t sand_quanta(terrain_world *w, int64_t lo, int64_t hi) {
+    int64_t q = 0;
+    for (int64_t cz = lo; cz <= hi; cz++)
+        for (int64_t cx = lo; cx <= hi; cx++) q += chunk_sand_quanta(w, cx, cz);
+    return q;
+}
+
+/* 000's tools are interactive: the frame that applies a stroke meshes and uploads what it
+ * changed (the issue asks for "within two frames"). The ground under (16, 16) lies between −6 and
+ * 6 m, in mesh layer y = 0 (0 … 32 m) and y = −1. */
+Test(render_stream, an_edit_is_drawn_the_frame_it_is_applied) {
+    streamed s = streamed_open(2, &small_rings);
+    const double eye[1][3] = { { 16, 8, 16 } };
+    cr_assert(streamed_settle(&s, eye, 1, 2000) > 0);
+    TerrainMeshChunk *before = mesh_at(&s, 0, 0, 0);
+    cr_assert_not_null(before);
+    uint32_t indices_before = before->gpu.index_count;
+    float top_before = before->gpu.bounds_max[1];
+    /* Sand piled 10 m high in a 3 m disc: the chunk's top rises. */
+    cr_assert(terrain_ecs_edit(s.te, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                      .deposit = { .x = 16, .z = 16, .radius = 3, .volume = 150 } }));
+    cr_expect_eq(terrain_ecs_edit_stats(s.te).queued, 1);
+    terrain_ecs_set_viewers(s.te, eye, 1);
+    ecs_progress(s.ecs, DT);
+    TerrainMeshChunk *after = mesh_at(&s, 0, 0, 0);
+    cr_assert_not_null(after);
+    cr_expect_eq(after->state, TERRAIN_MESH_UPLOADED, "meshed and uploaded in the frame of the edit");
+    cr_expect_gt(after->gpu.bounds_max[1], top_before + 2.0f, "the pile shows: top %g m, was %g m",
+                 (double)after->gpu.bounds_max[1], (double)top_before);
+    cr_expect_neq(after->gpu.index_count, indices_before);
+    terrain_edit_stats st = terrain_ecs_edit_stats(s.te);
+    cr_expect_eq(st.edits_applied, 1);
+    cr_expect_eq(st.queued, 0);
+    streamed_close(&s);
+}
+
+/* A steep pile on a chunk corner slides into all four chunks and on, frame after frame, until it
+ * is stable; not a quantum of sand is lost or made on the way, and what the world holds at the
+ * end is what the meshes show (every wanted chunk ready again). */
+Test(render_stream, stabilization_spreads_a_pile_across_chunks_and_keeps_its_mass) {
+    streamed s = streamed_open(2, &small_rings);
+    const double eye[1][3] = { { 0, 8, 0 } };
+    cr_assert(streamed_settle(&s, eye, 1, 2000) > 0);
+    terrain_ecs_set_edit_settings(s.te, &(terrain_edit_settings){ .stabilize = { .max_iterations = 8 } });
+    cr_assert(terrain_ecs_edit(s.te, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                      .deposit = { .x = 0.5, .z = 0.5, .radius = 2, .volume = 300 } }));
+    int frames = 0;
+    for (; frames < 3000; frames++) {
+        terrain_ecs_set_viewers(s.te, eye, 1);
+        ecs_progress(s.ecs, DT);
+        terrain_world_trim(s.world);
+        if (terrain_ecs_edit_stats(s.te).stabilizing_chunks == 0 && frames > 0) break;
+    }
+    cr_assert_lt(frames, 3000, "never stable");
+    terrain_edit_stats st = terrain_ecs_edit_stats(s.te);
+    cr_expect_gt(st.iterations, 8, "took several frames of 8 iterations");
+    cr_expect_geq(st.chunks_committed, 4);
+    cr_expect_eq(sand_quanta(s.world, -3, 2), 300 * 32, "sand in the world: exactly the deposit");
+    /* Every chunk of the four spread some sand: a 300 m³ cone at 33° reaches ~7.5 m out. */
+    for (int c = 0; c < 4; c++) {
+        int64_t cx = c & 1 ? 0 : -1, cz = c & 2 ? 0 : -1;
+        cr_expect_gt(chunk_sand_quanta(s.world, cx, cz), 1000, "chunk (%lld, %lld)", (long long)cx, (long long)cz);
+    }
+    cr_assert(streamed_settle(&s, eye, 1, 200) > 0, "every chunk ready again after the last commit");
+    streamed_close(&s);
+}
