@@ -802,28 +802,41 @@ bool terrain_erode(terrain_columns *columns, const terrain_erode_desc *desc, int
 
 /* Sculpt (000 §4.1): a point primitive f*(p) = g(|p − c|), g(r) = (1 − r²/R²)² inside R, is
  * blended into the field — fe = f + f* to add, fe = f − f* to carve — with its centre δ inside
- * the surface to add (c = v − δn) or outside to carve (c = v + δn), v the target on the surface
- * and n the field's normal there. The columns under the ball are rebuilt along their central
- * axes: within the ball's reach, material is where fe > 0 (roots of fe = 0 found by sampling and
- * bisection to the height quantum); outside it the layers stay as they were. Only the layers
- * the edit flips change: added material is `material`, carved material becomes air, and what
- * lies untouched above or below keeps its kind.
+ * the surface to add (c = v − δn) or outside to carve (c = v + δn), v the target moved onto the
+ * surface f = 0 along the field's normal n = −∇f/|∇f| (which points into the air), at most half a
+ * metre. The columns under the ball are rebuilt along their central axes: over the ball's chord,
+ * the signs of f and fe are sampled and their roots bisected to the height quantum (a quantum is
+ * solid where the field at its centre is > 0). Only the quanta the edit flips change, so a column
+ * stays exactly as it was wherever the edit does not change the field's sign (the ball's rim,
+ * above and below): adding turns the air and water where f ≤ 0 < fe into `material` (solid that
+ * is there keeps its kind), carving turns everything where fe ≤ 0 < f into air. A flipped stretch
+ * takes along the column's own quanta next to it that the field does not see — air over which
+ * added material would float (fe > 0), bedrock that would float over a carved gap (fe ≤ 0) — so
+ * no edit leaves a hidden sliver or gap. Granular material left over a carved span stays until
+ * stabilization.
  *
  *     terrain_ray_hit hit;
  *     if (terrain_raycast(world, eye, forward, 64, &hit))
  *         terrain_sculpt(region, &(terrain_sculpt_desc){ .target = { hit.position[0], … },
  *                                                        .radius = 3, .carve = true }, NULL);
  *
- * The field is computed from the region's own columns, so the region must hold every column
- * within R + 2 columns of the target (a region of whole chunks around it; terrain_world_edit
- * does this). False (message logged, region unchanged) for bad parameters or a ball that does
- * not fit the region with that margin. `changed` (may be NULL) receives the columns changed. */
+ * The field is computed from the region's own columns (a snapshot taken before anything is
+ * written), so the region must hold every column within R + δ + 2 metres of the target along x
+ * and z (the ball's centre may lie δ to the side on a wall; the field reads a column beyond the
+ * ball) — a region of whole chunks around it; terrain_world_edit does this. False (message
+ * logged, region unchanged) for bad parameters (NaN, R outside (0, 32], an offset outside
+ * [0, 1], a material other than bedrock or sand), a region without that margin, or a target
+ * with no surface within half a metre (the field is flat there). `changed` (may be NULL)
+ * receives how many columns changed; only those are marked for stabilization and reported by
+ * terrain_columns_changed_chunks. */
 typedef struct terrain_sculpt_desc {
-    double target[3];                 /* v: a point on or near the surface (world metres) */
+    double target[3];                 /* v: a point on the surface or within ½ m of it (world
+                                         metres; y within the floor − 64 … floor + 2^20) */
     float radius;                     /* R, metres, 0 < R ≤ 32 */
     float offset;                     /* δ / R, 0 … 1; 0 = 0.5 (000: δ = R/2 works well) */
     bool carve;                       /* false: add material; true: carve it away */
-    terrain_material material;        /* what added material is; 0 (air) = bedrock */
+    terrain_material material;        /* what added material is: bedrock or sand (in the field);
+                                         0 (air) = bedrock */
 } terrain_sculpt_desc;
 
 bool terrain_sculpt(terrain_columns *columns, const terrain_sculpt_desc *desc, int64_t *changed);
@@ -831,30 +844,43 @@ bool terrain_sculpt(terrain_columns *columns, const terrain_sculpt_desc *desc, i
 /* Sweep (000 §4.2): carves the union of swept balls around a graph of segments — a tunnel, a
  * crack, a ravine, a cave network — as fe = min(f, −f*): everything within the profile radius
  * of the skeleton becomes air, exactly (no surface projection: the graph is where it is). The
- * radius is interpolated linearly along each segment from its end points' radii. Columns are
- * rebuilt along their axes by the roots of fe as for sculpting (outside the swept volume they
- * keep their layers). Granular material above a carved span stays where it is until
- * stabilization lets it fall. Same region rule as terrain_sculpt (every column within the
- * largest radius + 2 of the skeleton). */
+ * radius is interpolated linearly along each segment from its end points' radii (a segment's
+ * volume is the convex hull of its two end balls). Columns are rebuilt along their axes by the
+ * roots of fe as for sculpting: a quantum whose centre lies inside the volume becomes air,
+ * whatever it held; outside the volume the layers stay as they were. Granular material above a
+ * carved span stays where it is until stabilization lets it fall. Same region rule as
+ * terrain_sculpt: every column within the largest radius + 2 metres of the skeleton (its
+ * bounding box grown by that). False (message logged, region unchanged) for bad parameters:
+ * no points, a count out of range, a NaN point, a radius outside (0, 32], a segment naming a
+ * point that does not exist. `changed` (may be NULL) receives how many columns changed. */
 typedef struct terrain_sweep_desc {
     const double (*points)[3];        /* skeleton vertices, world metres */
     const float *radii;               /* per vertex, metres, 0 < r ≤ 32; NULL = `radius` for all */
     int point_count;                  /* 1 … 4096 (1: a ball) */
-    const int (*segments)[2];         /* pairs of vertex indices; NULL = the polyline 0-1-2-… */
-    int segment_count;
+    const int (*segments)[2];         /* pairs of vertex indices (equal: a ball); NULL = the
+                                         polyline 0-1-2-… */
+    int segment_count;                /* with segments: 1 … 16384; ignored without */
     float radius;                     /* when radii is NULL */
 } terrain_sweep_desc;
 
 bool terrain_sweep(terrain_columns *columns, const terrain_sweep_desc *desc, int64_t *changed);
 
 /* Picking: the first point along the ray where the field f crosses from air to solid (what the
- * mesh shows), within max_distance metres; marches in steps of at most half a column and
- * bisects. Generates the chunks it reads. Thread-safe as terrain_world_stacks. */
+ * mesh shows; water is not in the field, so a ray goes through it to the ground), within
+ * max_distance metres; marches terrain_field_at in steps of at most half a metre and bisects the
+ * crossing. A feature the field shows over less than half a metre of the ray may be missed. An
+ * origin already inside (f > 0) is a hit at distance 0 there. The direction need not be unit
+ * length. Generates the chunks it reads. Thread-safe as terrain_world_stacks. False (message
+ * logged) for a NaN or zero direction, a NaN origin or max_distance outside (0, 100000]; false
+ * without a message for a miss. `hit` may be NULL. */
 typedef struct terrain_ray_hit {
     double position[3];
-    float normal[3];                  /* unit, into the air (−∇f / |∇f|) */
+    float normal[3];                  /* unit, into the air (−∇f / |∇f|, central differences ½ m
+                                         apart); −direction where the field is flat (deep inside) */
     float distance;                   /* metres from the origin along the unit direction */
-    terrain_material material;        /* of the column layer just inside the surface */
+    terrain_material material;        /* of the column layer just inside the surface: the first
+                                         sand or bedrock within 1 m along −normal, else what is at
+                                         the hit */
 } terrain_ray_hit;
 
 bool terrain_raycast(terrain_world *world, const double origin[3], const float direction[3], float max_distance,

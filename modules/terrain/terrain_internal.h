@@ -393,4 +393,28 @@ void terrain__columns_set_clock(terrain_columns *c, uint32_t clock);
 
 /* ==== end of the editing section ========================================================== */
 
+/* ==== sculpting, sweeping, picking (terrain_sculpt.c) ===================================== */
+
+/* The field of 000 §3.3 with σ = one column, computed from a terrain_columns region's own
+ * columns: a snapshot of the solid (sand and bedrock) runs of the region's columns
+ * [i0, i1) × [k0, k1), so that an edit computes f from the state before it wrote anything.
+ * Columns outside the window count as empty (only the implicit bedrock below the floor). */
+typedef struct terrain__region_field {
+    int64_t x0, z0;                   /* world column index of window column (0, 0) */
+    int width, depth;
+    uint32_t *first;                  /* per column (k·width + i): its first run; first[n + 1] ends it */
+    int32_t (*runs)[2];               /* solid runs [bottom, top) in quanta above the floor, bottom-up */
+    size_t run_capacity;
+} terrain__region_field;
+
+/* Snapshots the window (clipped to the region); free with terrain__region_field_free. */
+void terrain__region_field_init(terrain__region_field *field, const terrain_columns *columns, int i0, int k0, int i1,
+                                int k1);
+void terrain__region_field_free(terrain__region_field *field);
+/* f at the world point (x, y, z): what terrain_field_at(world, x, y, z, 0) gives for a world
+ * holding the same columns (to float rounding). */
+double terrain__region_field_at(const terrain__region_field *field, double x, double y, double z);
+
+/* ==== end of the sculpting section ======================================================== */
+
 #endif
