@@ -644,8 +644,8 @@ static bool parse_layers(reader *r, entry_builder *b, const char *where, char *e
                                  5 * (size_t)count, reader_left(r));
     uint64_t height = 0;
     for (uint32_t l = 0; l < count; l++) {
-        uint8_t material;
-        uint32_t quanta;
+        uint8_t material = 0;
+        uint32_t quanta = 0;
         read_u8(r, &material);                    /* the size was checked above */
         read_u32(r, &quanta);
         if (material >= TERRAIN_MATERIAL_MAX)
@@ -679,7 +679,7 @@ static bool parse_entry(reader *r, uint32_t index, entry_builder *b, edit_entry 
                                  index, columns, 4 * (size_t)columns, reader_left(r));
     b->column_count = b->layer_count = 0;
     for (uint32_t p = 0; p < columns; p++) {
-        uint16_t column;
+        uint16_t column = 0;
         read_u16(r, &column);                     /* at least 4 bytes per column are left */
         if (column >= TERRAIN__COLUMNS)
             return core_error_format(error, error_size, "entry %u: column index %u (at most %d)", index, column,
@@ -714,7 +714,7 @@ static bool parse_header(reader *r, uint64_t world_key, terrain_chunk_coord *coo
         return core_error_format(error, error_size, "checksum mismatch (stored %08x, computed %08x: damaged or "
                                  "truncated)", stored, computed);
     r->at += 12;
-    uint64_t key, x, z;
+    uint64_t key = 0, x = 0, z = 0;
     read_u64(r, &key), read_u64(r, &x), read_u64(r, &z), read_u32(r, entry_count);
     if (key != world_key)
         return core_error_format(error, error_size, "saved by another world (key %016" PRIx64 ", this world's is %016"
@@ -732,8 +732,8 @@ static bool parse_header(reader *r, uint64_t world_key, terrain_chunk_coord *coo
 static bool parse_file(const void *bytes, size_t size, uint64_t world_key, edit_chunk **out, char *error,
                        size_t error_size) {
     reader r = { bytes, (const uint8_t *)bytes + size };
-    terrain_chunk_coord coord;
-    uint32_t entry_count;
+    terrain_chunk_coord coord = { 0, 0 };
+    uint32_t entry_count = 0;
     if (!bytes && size > 0) return core_error_format(error, error_size, "no bytes");
     if (!bytes) r.at = r.end = (const uint8_t *)"";
     if (!parse_header(&r, world_key, &coord, &entry_count, error, error_size)) return false;
@@ -976,8 +976,8 @@ static bool read_file(const char *path, uint8_t **bytes, size_t *size, char *err
 /* One chunk file into the log; false with the reason (without the path) in `error`. */
 static bool load_file(terrain_edit_log *log, const char *path, terrain_chunk_coord named, char *error,
                       size_t error_size) {
-    uint8_t *bytes;
-    size_t size;
+    uint8_t *bytes = NULL;
+    size_t size = 0;
     if (!read_file(path, &bytes, &size, error, error_size)) return false;
     edit_chunk *parsed;
     bool ok = parse_file(bytes, size, log->world_key, &parsed, error, error_size);
