@@ -40,8 +40,9 @@
  * new one. Loading removes such temporaries (one process saves into a folder at a time).
  *
  * Threads: `lock` guards the map and the entries; every call holds it only briefly (replay
- * holds it while it builds the stacks, tens of microseconds). `io_lock` serialises saves and
- * loads, which write files outside `lock` so that replays on workers never wait for a disk.
+ * while it picks each column's last layers and copies them out, a few microseconds; it builds
+ * the stacks after). `io_lock` serialises saves and loads, which write and read files outside
+ * `lock`, so that replays on workers never wait for a disk.
  */
 #include "terrain_internal.h"
 
@@ -414,6 +415,8 @@ typedef struct replay_column {
 typedef struct replay_state {
     replay_column column[TERRAIN__COLUMNS];
     uint64_t row_head[TERRAIN_CHUNK_COLUMNS];   /* words of each row's columns but the last */
+    terrain__qlayer *own;                       /* the set columns' layers, copied */
+    size_t own_count;
 } replay_state;
 
 static uint32_t layers_words(const terrain__qlayer *layers, uint32_t count) {
@@ -456,6 +459,22 @@ static bool replay_apply(replay_state *r, const edit_entry *e) {
     return true;
 }
 
+/* Copies the layers the columns point to out of the entries, so that the stacks can be built
+ * without the lock (load and compact may free entries meanwhile). */
+static void replay_detach(replay_state *r) {
+    size_t total = 0, at = 0;
+    for (int n = 0; n < TERRAIN__COLUMNS; n++) total += r->column[n].layers ? r->column[n].count : 0;
+    r->own_count = total ? total : 1;            /* never NULL: a set empty column points here */
+    r->own = core_alloc(r->own_count * sizeof *r->own);
+    for (int n = 0; n < TERRAIN__COLUMNS; n++) {
+        replay_column *col = &r->column[n];
+        if (!col->layers) continue;
+        if (col->count) memcpy(r->own + at, col->layers, col->count * sizeof *r->own);
+        col->layers = r->own + at;
+        at += col->count;
+    }
+}
+
 static terrain_stacks *replay_build(const replay_state *r, const terrain_stacks *generated) {
     terrain_stacks_builder *builder = terrain_stacks_builder_create();
     for (int n = 0; n < TERRAIN__COLUMNS; n++) {
@@ -485,8 +504,8 @@ terrain_stacks *terrain_edit_log_replay(terrain_edit_log *log, terrain_chunk_coo
         return NULL;
     }
     replay_state *r = core_alloc(sizeof *r);
-    terrain_stacks *stacks = NULL;
-    /* Held while building: load and compact free entries, and the state points into them. */
+    r->own = NULL;
+    /* Under the lock only what reads entries: which layers each column ends with, copied out. */
     pthread_mutex_lock(&log->lock);
     edit_chunk *c = map_find(log, coord);
     if (c && c->entry_count > 0) {
@@ -497,9 +516,11 @@ terrain_stacks *terrain_edit_log_replay(terrain_edit_log *log, terrain_chunk_coo
                            "long for stacks (over %u layer words); skipped", (long long)coord.x,
                            (long long)coord.z, n, terrain_edit_tool_name((terrain_edit_tool)c->entries[n].tool),
                            TERRAIN__ROW_OFFSET_MAX);
-        stacks = replay_build(r, generated);
+        replay_detach(r);
     }
     pthread_mutex_unlock(&log->lock);
+    terrain_stacks *stacks = r->own ? replay_build(r, generated) : NULL;
+    if (r->own) core_free(r->own, r->own_count * sizeof *r->own);
     core_free(r, sizeof *r);
     return stacks;
 }
