@@ -43,5 +43,6 @@ void bench_group_terrain_mesh(bench_context *ctx);
 void bench_group_terrain_clipmap(bench_context *ctx);
 void bench_group_world(bench_context *ctx);
 void bench_group_terrain_stabilize(bench_context *ctx);
+void bench_group_terrain_edit_log(bench_context *ctx);
 
 #endif
