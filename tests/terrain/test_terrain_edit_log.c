@@ -399,7 +399,7 @@ static terrain_edit_log *load_new(const char *dir, uint64_t key, terrain_edit_lo
 Test(edit_log, save_then_load_replays_the_same_bytes) {
     world_fixture w;
     fixture_make(&w);
-    char error[512], path[256];
+    char error[512], path[512];
     cr_assert(terrain_edit_log_save(w.log, w.dir, error, sizeof error), "%s", error);
     for (int c = 0; c < 3; c++) {
         chunk_path(path, sizeof path, w.dir, w.coord[c]);
@@ -433,7 +433,7 @@ static bool rewritten(const char *path) {
 Test(edit_log, save_writes_only_chunks_changed_since) {
     world_fixture w;
     fixture_make(&w);
-    char error[512], path[3][256];
+    char error[512], path[3][512];
     cr_assert(terrain_edit_log_save(w.log, w.dir, error, sizeof error), "%s", error);
     for (int c = 0; c < 3; c++) chunk_path(path[c], sizeof path[c], w.dir, w.coord[c]), age(path[c]);
     cr_assert(terrain_edit_log_save(w.log, w.dir, error, sizeof error), "%s", error);
@@ -469,7 +469,7 @@ Test(edit_log, save_writes_only_chunks_changed_since) {
 Test(edit_log, save_failure_keeps_chunks_for_the_next_save) {
     world_fixture w;
     fixture_make(&w);
-    char error[512], blocker[256], path[256];
+    char error[512], blocker[512], path[512];
     /* DIR/edits is a file: the folder cannot be made. */
     snprintf(blocker, sizeof blocker, "%s/edits", w.dir);
     write_all(blocker, "x", 1);
@@ -495,7 +495,7 @@ Test(edit_log, save_failure_keeps_chunks_for_the_next_save) {
 }
 
 Test(edit_log, missing_folder_is_an_empty_world_and_a_file_is_refused) {
-    char dir[128], path[256];
+    char dir[128], path[512];
     make_temp_dir(dir, sizeof dir);
     terrain_edit_log_load_result result;
     snprintf(path, sizeof path, "%s/none", dir);
@@ -516,7 +516,7 @@ Test(edit_log, missing_folder_is_an_empty_world_and_a_file_is_refused) {
 Test(edit_log, load_ignores_other_files_and_removes_temporaries) {
     world_fixture w;
     fixture_make(&w);
-    char error[512], path[256];
+    char error[512], path[512];
     cr_assert(terrain_edit_log_save(w.log, w.dir, error, sizeof error), "%s", error);
     const char *others[] = { "notes.txt", "1_2.tel.bad", "01_2.tel", "+1_2.tel", "1_2.tel~", "1_2_3.tel" };
     for (size_t n = 0; n < CORE_COUNTOF(others); n++)
@@ -549,7 +549,7 @@ Test(edit_log, file_size_and_header_follow_the_format) {
         if (changed[n]) expected += 4 + 5 * (size_t)terrain_stacks_column(a, n % N, n / N, NULL, 0);
     terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
     cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_DEPOSIT, g, a));
-    char dir[128], path[256], error[512];
+    char dir[128], path[512], error[512];
     make_temp_dir(dir, sizeof dir);
     cr_assert(terrain_edit_log_save(log, dir, error, sizeof error), "%s", error);
     chunk_path(path, sizeof path, dir, coord);
@@ -582,7 +582,7 @@ Test(edit_log, extreme_coordinates_round_trip) {
     terrain_stacks *g = generated((terrain_chunk_coord){ 0, 0 }), *a = edited(g, (terrain_chunk_coord){ 0, 0 }, 8, 10);
     terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
     cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, g, a));
-    char dir[128], path[256], error[512];
+    char dir[128], path[512], error[512];
     make_temp_dir(dir, sizeof dir);
     cr_assert(terrain_edit_log_save(log, dir, error, sizeof error), "%s", error);
     snprintf(path, sizeof path, "%s/edits/-9223372036854775808_9223372036854775807.tel", dir);
@@ -762,7 +762,7 @@ Test(edit_log, an_entry_too_big_for_stacks_is_skipped_on_replay) {
 
 /* The bytes of chunk 1 of the fixture, saved (three entries). */
 static uint8_t *fixture_file(world_fixture *w, size_t *size) {
-    char error[512], path[256];
+    char error[512], path[512];
     cr_assert(terrain_edit_log_save(w->log, w->dir, error, sizeof error), "%s", error);
     chunk_path(path, sizeof path, w->dir, w->coord[1]);
     return read_all(path, size);
@@ -800,7 +800,7 @@ Test(edit_log, every_flipped_bit_and_every_truncation_is_refused) {
  * loaded. */
 static void expect_rejected(world_fixture *w, const uint8_t *bytes, size_t size, const char *name, uint64_t key,
                             const char *why) {
-    char path[256], bad[300];
+    char path[512], bad[600];
     snprintf(path, sizeof path, "%s/edits/%s", w->dir, name);
     snprintf(bad, sizeof bad, "%s.bad", path);
     unlink(bad);
@@ -862,7 +862,7 @@ Test(edit_log, damaged_files_are_reported_renamed_and_skipped) {
     /* Another chunk's name. */
     expect_rejected(&w, bytes, size, "-1_8.tel", key_of(SEED), "holds chunk (-1, 7)");
     /* Back intact: loads again. */
-    char path[256];
+    char path[512];
     chunk_path(path, sizeof path, w.dir, w.coord[1]);
     write_all(path, bytes, size);
     terrain_edit_log_load_result result;
