@@ -156,6 +156,13 @@ static int count_names(const char *dir, const char *part) {
     return count;
 }
 
+/* A new log with `key`, loaded from `dir` (the load itself must succeed). */
+static terrain_edit_log *load_new(const char *dir, uint64_t key, terrain_edit_log_load_result *result) {
+    terrain_edit_log *log = terrain_edit_log_create(key);
+    cr_assert(terrain_edit_log_load(log, dir, result), "%s", result->first_problem);
+    return log;
+}
+
 /* ---- names, keys, the stacks helpers ---------------------------------------------------- */
 
 Test(edit_log, tool_names) {
@@ -324,6 +331,56 @@ Test(edit_log, equal_stacks_record_nothing) {
     terrain_stacks_destroy(g);
 }
 
+/* `base` with column n replaced: `layers` layers alternating bedrock and sand, `quanta` each. */
+static terrain_stacks *with_column(const terrain_stacks *base, int column, uint32_t layers, uint32_t quanta) {
+    terrain_stacks_builder *b = terrain_stacks_builder_create();
+    for (int n = 0; n < N * N; n++) {
+        terrain__column_cursor cursor = terrain__stacks_cursor(base, n % N, n / N);
+        terrain__qlayer layer;
+        if (n == column)
+            for (uint32_t l = 0; l < layers; l++)
+                terrain__stacks_builder_push_quanta(b, l % 2 ? TERRAIN_SAND : TERRAIN_BEDROCK, quanta);
+        else
+            while (terrain__cursor_next(&cursor, &layer))
+                terrain__stacks_builder_push_quanta(b, (terrain_material)layer.material, layer.quanta);
+        terrain_stacks_builder_end_column(b);
+    }
+    terrain_stacks *s = terrain_stacks_builder_finish(b);
+    terrain_stacks_builder_destroy(b);
+    return s;
+}
+
+/* Columns no file could hold (65 536 layers; 2^26 quanta, where columns regions stop too) are
+ * refused whole; one layer less, one quantum less, they are recorded. The last column of a row
+ * may be that long in stacks. */
+Test(edit_log, record_refuses_columns_no_file_could_hold) {
+    terrain_chunk_coord coord = { 0, 0 };
+    terrain_stacks *g = generated(coord);
+    terrain_stacks *many = with_column(g, N - 1, 65536, 1), *tall = with_column(g, 40, 1, 1u << 26);
+    terrain_stacks *most = with_column(g, N - 1, 65535, 1), *tallest = with_column(g, 40, 1, (1u << 26) - 1);
+    terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+    cr_expect_not(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, g, many));
+    cr_expect_not(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, g, tall));
+    cr_expect_eq(terrain_edit_log_entries(log, coord), 0);
+    cr_expect(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, g, most));
+    expect_replay(log, coord, g, most);
+    cr_expect(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, most, tallest));
+    expect_replay(log, coord, g, tallest);   /* column 31 back to generated, column 40 tall */
+    /* And both survive a file. */
+    char dir[128], error[512];
+    make_temp_dir(dir, sizeof dir);
+    cr_assert(terrain_edit_log_save(log, dir, error, sizeof error), "%s", error);
+    terrain_edit_log_load_result result;
+    terrain_edit_log *loaded = load_new(dir, key_of(SEED), &result);
+    cr_expect_eq(result.chunks_loaded, 1, "%s", result.first_problem);
+    expect_replay(loaded, coord, g, tallest);
+    terrain_edit_log_destroy(loaded);
+    remove_tree(dir);
+    terrain_edit_log_destroy(log);
+    terrain_stacks *stacks[] = { g, many, tall, most, tallest };
+    for (size_t n = 0; n < CORE_COUNTOF(stacks); n++) terrain_stacks_destroy(stacks[n]);
+}
+
 Test(edit_log, compact_folds_to_one_entry_with_the_same_replay) {
     terrain_chunk_coord one = { 1, 1 }, two = { 4, -2 };
     terrain_stacks *g1 = generated(one), *g2 = generated(two);
@@ -388,12 +445,6 @@ static void fixture_free(world_fixture *w) {
     for (int c = 0; c < 3; c++) terrain_stacks_destroy(w->base[c]), terrain_stacks_destroy(w->final[c]);
     terrain_edit_log_destroy(w->log);
     remove_tree(w->dir);
-}
-
-static terrain_edit_log *load_new(const char *dir, uint64_t key, terrain_edit_log_load_result *result) {
-    terrain_edit_log *log = terrain_edit_log_create(key);
-    cr_assert(terrain_edit_log_load(log, dir, result), "%s", result->first_problem);
-    return log;
 }
 
 Test(edit_log, save_then_load_replays_the_same_bytes) {
