@@ -906,7 +906,9 @@ bool terrain_raycast(terrain_world *world, const double origin[3], const float d
  * otherwise unreadable is reported in the load result, renamed to <name>.bad (kept for a human
  * to look at) and its chunk stays as generated; loading never crashes on a file's content.
  *
- * Threads: one mutex inside; record and replay may be called from any thread. */
+ * Threads: one mutex inside; record and replay may be called from any thread. Saves and loads
+ * write and read files outside it (replays never wait for a disk), one at a time per log. One
+ * process saves into a folder at a time (loading removes the temporaries a crash left). */
 
 typedef enum terrain_edit_tool {
     TERRAIN_EDIT_SET = 1,             /* columns set directly (terrain_columns_set) */
@@ -922,8 +924,11 @@ typedef enum terrain_edit_tool {
 
 const char *terrain_edit_tool_name(terrain_edit_tool tool);
 
-/* A key for the generator: equal for equal parameters (seed included), different otherwise
- * with overwhelming probability. */
+/* A key for the generator: equal for equal parameters (seed included; −0 and +0 alike),
+ * different otherwise with overwhelming probability. It also hashes a revision of the generator
+ * (EDIT_GENERATOR_REVISION in terrain_edit_log.c): a change to what terrain_generate_chunk makes
+ * of the same parameters must bump it, so that old logs are refused, not replayed over other
+ * ground. */
 uint64_t terrain_generation_key(const terrain_generation_params *params);
 
 typedef struct terrain_edit_log terrain_edit_log;
@@ -931,22 +936,30 @@ terrain_edit_log *terrain_edit_log_create(uint64_t world_key);
 void terrain_edit_log_destroy(terrain_edit_log *log);
 
 /* Appends an entry for `coord`: the columns where `after` differs from `before` (nothing when
- * they are equal: returns true, no entry). False (message logged) for NULL stacks. */
+ * they are equal: returns true, no entry). False (message logged, nothing recorded) for NULL
+ * stacks, an unknown tool, or a changed column no file could hold (over 65 535 layers, or 2^26
+ * quanta tall: columns regions refuse those too). */
 bool terrain_edit_log_record(terrain_edit_log *log, terrain_chunk_coord coord, terrain_edit_tool tool,
                              const terrain_stacks *before, const terrain_stacks *after);
 /* The chunk's entries replayed in order over `generated`: new stacks (free with
- * terrain_stacks_destroy), or NULL when the chunk has no entries. */
+ * terrain_stacks_destroy), or NULL when the chunk has no entries (or `generated` is NULL,
+ * message logged). An entry whose columns would overflow packed stacks (a row over 65 535
+ * layer words; only a file made by hand gets there) is skipped with a message logged. */
 terrain_stacks *terrain_edit_log_replay(terrain_edit_log *log, terrain_chunk_coord coord,
                                         const terrain_stacks *generated);
 int terrain_edit_log_entries(terrain_edit_log *log, terrain_chunk_coord coord);   /* 0 = unedited */
 int terrain_edit_log_chunks(terrain_edit_log *log);                              /* chunks with entries */
 /* Folds each chunk's entries into one (TERRAIN_EDIT_COMPACTED: the final layers of every column
- * ever changed), so the log stops growing with repeated strokes; replay gives the same bytes. */
+ * ever changed), so the log stops growing with repeated strokes; replay gives the same bytes.
+ * Chunks of one entry are left as they are; folded ones are written again by the next save. */
 void terrain_edit_log_compact(terrain_edit_log *log);
 
-/* Writes the chunks whose entries changed since the last save (or load) as above; false with
- * the reason in `error` when a file cannot be written (the chunks stay marked, a later save
- * retries them). */
+/* Writes the chunks whose entries changed since the last save (or load, or parse) as above,
+ * creating DIR and DIR/edits as needed (nothing to write: nothing touched). A log loaded from one
+ * folder and saved to another writes only what changed. False with "PATH: reason (strerror)" in
+ * `error` when a file cannot be written (the others are still written; the chunks that failed
+ * stay marked, a later save retries them). A chunk whose file would pass 1 GiB is compacted
+ * first. */
 bool terrain_edit_log_save(terrain_edit_log *log, const char *dir, char *error, size_t error_size);
 
 typedef struct terrain_edit_log_load_result {
@@ -956,11 +969,15 @@ typedef struct terrain_edit_log_load_result {
 } terrain_edit_log_load_result;
 
 /* Reads every chunk file DIR/edits/<x>_<z>.tel into the log (replacing what it held for those
- * chunks). A missing DIR or DIR/edits is an empty world (true). False (reason in result.first_problem) only when
- * the folder exists but cannot be listed. */
+ * chunks; they are then clean). A rejected file changes nothing in the log (in a fresh log its
+ * chunk has no entries: it stays as generated). Leftover temporaries of a crashed save are
+ * removed; other names are left alone. A missing DIR or DIR/edits is an empty world (true).
+ * False (reason in result.first_problem) only when DIR or DIR/edits exists but is not a folder
+ * or cannot be listed. */
 bool terrain_edit_log_load(terrain_edit_log *log, const char *dir, terrain_edit_log_load_result *result);
 /* One file's bytes (what load reads; the fuzz target's entry point): true and the chunk's entries
- * added to the log, or false with the reason in `error` and the log unchanged. */
+ * put in the log in place of those it held (the chunk clean, as after a load), or false with
+ * the reason in `error` and the log unchanged. The file name's check is load's. */
 bool terrain_edit_log_parse(terrain_edit_log *log, const void *bytes, size_t size, char *error, size_t error_size);
 
 /* ---- edits in the world ----

@@ -417,4 +417,22 @@ double terrain__region_field_at(const terrain__region_field *field, double x, do
 
 /* ==== end of the sculpting section ======================================================== */
 
+/* ==== the edit log (terrain_edit_log.c; the two stacks helpers in terrain_stacks.c) ======== */
+
+/* Adds a layer of exactly `quanta` (no rounding through metres: any thickness up to 2^32 − 1
+ * quanta) on top of the column being built; merges with the layer below as the float push does. */
+void terrain__stacks_builder_push_quanta(terrain_stacks_builder *builder, terrain_material material,
+                                         uint32_t quanta);
+/* 16-bit words a logical layer of `quanta` takes in packed stacks (long runs split). A row of a
+ * chunk holds at most 65 535 words before its last column (column offsets are 16-bit), which
+ * the edit log checks before it builds stacks from a file's columns. */
+uint32_t terrain__stacks_layer_words(uint32_t quanta);
+#define TERRAIN__ROW_OFFSET_MAX 65535u
+
+/* CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320, as zlib's crc32): the edit files'
+ * checksum. `crc` is 0 to start, or the result so far to continue over more bytes. */
+uint32_t terrain__crc32(uint32_t crc, const void *data, size_t size);
+
+/* ==== end of the edit log section ========================================================= */
+
 #endif

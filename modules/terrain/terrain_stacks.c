@@ -127,6 +127,23 @@ static void builder_flush(terrain_stacks_builder *b) {
     b->pending_quanta = 0;
 }
 
+uint32_t terrain__stacks_layer_words(uint32_t quanta) {
+    /* As builder_flush splits: whole long entries of 2 words, then the rest in 1 or 2. */
+    uint32_t whole = quanta / TERRAIN__LAYER_LONG_MAX, rest = quanta % TERRAIN__LAYER_LONG_MAX;
+    return 2 * whole + (rest == 0 ? 0 : rest <= TERRAIN__LAYER_SHORT_MAX ? 1 : 2);
+}
+
+/* Adds `quanta` (> 0) of `material` on top of the column being built. */
+static void builder_append(terrain_stacks_builder *b, terrain_material material, int64_t quanta) {
+    if (b->pending_material == (int)material) {
+        b->pending_quanta += quanta;               /* same as the layer below: merged */
+        return;
+    }
+    builder_flush(b);
+    b->pending_material = (int)material;
+    b->pending_quanta = quanta;
+}
+
 void terrain_stacks_builder_push(terrain_stacks_builder *builder, terrain_material material, float thickness) {
     assert((unsigned)material < TERRAIN_MATERIAL_MAX);
     if (!(thickness > 0.0f)) return;               /* zero, negative and NaN add nothing */
@@ -135,13 +152,18 @@ void terrain_stacks_builder_push(terrain_stacks_builder *builder, terrain_materi
     int64_t quanta = rounded - builder->rounded_top;
     builder->rounded_top = rounded;
     if (quanta <= 0) return;                       /* rounds to nothing: dropped */
-    if (builder->pending_material == (int)material) {
-        builder->pending_quanta += quanta;         /* same as the layer below: merged */
-        return;
-    }
-    builder_flush(builder);
-    builder->pending_material = (int)material;
-    builder->pending_quanta = quanta;
+    builder_append(builder, material, quanta);
+}
+
+void terrain__stacks_builder_push_quanta(terrain_stacks_builder *builder, terrain_material material,
+                                         uint32_t quanta) {
+    assert((unsigned)material < TERRAIN_MATERIAL_MAX);
+    if (quanta == 0) return;
+    /* Both tops move by exactly `quanta` (a double holds quanta / 32 exactly), so float pushes
+     * after this one round as if the layer had been pushed in metres. */
+    builder->exact_top += (double)quanta / TERRAIN__QUANTA_PER_METRE;
+    builder->rounded_top += quanta;
+    builder_append(builder, material, quanta);
 }
 
 void terrain_stacks_builder_end_column(terrain_stacks_builder *builder) {

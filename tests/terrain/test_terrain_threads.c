@@ -153,3 +153,135 @@ Test(terrain_threads, regions_side_by_side_on_four_threads_give_the_bytes_of_one
     for (int n = 0; n < 4; n++) terrain_columns_destroy(parts[n]);
     terrain_columns_destroy(whole);
 }
+
+/* ---- the edit log: four threads replay while one records, compacts and parses ---- */
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#define LOG_REPLAYERS 4
+#define LOG_STEPS 240
+
+typedef struct log_share {
+    terrain_edit_log *log;
+    terrain_chunk_coord coord;
+    const terrain_stacks *generated, *state[2];   /* A, B */
+    const void *file_a;                           /* state A as its saved file */
+    size_t file_a_size;
+    atomic_bool done;
+} log_share;
+
+typedef struct log_replayer {
+    log_share *share;
+    int replays, wrong;
+} log_replayer;
+
+/* Column n set to bedrock of `height` quanta, plus `sand` quanta of sand. */
+static void set_column(terrain_columns *c, int n, int height, int sand) {
+    terrain_layer layers[2] = { { TERRAIN_BEDROCK, (float)height / 32.0f }, { TERRAIN_SAND, (float)sand / 32.0f } };
+    cr_assert(terrain_columns_set(c, n % TERRAIN_CHUNK_COLUMNS, n / TERRAIN_CHUNK_COLUMNS, layers, 2));
+}
+
+static bool same_stacks(const terrain_stacks *a, const terrain_stacks *b) {
+    return terrain_stacks_hash(a) == terrain_stacks_hash(b) && terrain_stacks_bytes(a) == terrain_stacks_bytes(b) &&
+           memcmp(a, b, terrain_stacks_bytes(a)) == 0;
+}
+
+static void *replay_loop(void *user) {
+    log_replayer *r = user;
+    log_share *s = r->share;
+    /* At least a few replays, however fast the recorder is. */
+    while (!atomic_load(&s->done) || r->replays < 8) {
+        terrain_stacks *got = terrain_edit_log_replay(s->log, s->coord, s->generated);
+        r->wrong += !got || !(same_stacks(got, s->state[0]) || same_stacks(got, s->state[1]));
+        r->replays++;
+        terrain_stacks_destroy(got);
+    }
+    return NULL;
+}
+
+/* Alternates the chunk between A and B; now and then compacts, or parses A's file over it. */
+static void record_loop(log_share *s) {
+    int current = 0;
+    char error[256];
+    for (int step = 0; step < LOG_STEPS; step++) {
+        cr_assert(terrain_edit_log_record(s->log, s->coord, TERRAIN_EDIT_SET, s->state[current],
+                                          s->state[1 - current]));
+        current = 1 - current;
+        if (step % 10 == 9) terrain_edit_log_compact(s->log);
+        if (step % 25 == 24) {
+            cr_assert(terrain_edit_log_parse(s->log, s->file_a, s->file_a_size, error, sizeof error), "%s", error);
+            current = 0;
+        }
+    }
+}
+
+/* State A saved by a log of its own; the file's bytes (free with free). */
+static void *file_of(const terrain_stacks *generated, const terrain_stacks *a, terrain_chunk_coord coord,
+                     uint64_t key, size_t *size) {
+    terrain_edit_log *log = terrain_edit_log_create(key);
+    cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, generated, a));
+    char dir[64], path[160], error[256];
+    snprintf(dir, sizeof dir, "/tmp/terrain_threads_log_XXXXXX");
+    cr_assert(mkdtemp(dir));
+    cr_assert(terrain_edit_log_save(log, dir, error, sizeof error), "%s", error);
+    snprintf(path, sizeof path, "%s/edits/%lld_%lld.tel", dir, (long long)coord.x, (long long)coord.z);
+    FILE *f = fopen(path, "rb");
+    cr_assert(f);
+    fseek(f, 0, SEEK_END);
+    *size = (size_t)ftell(f);
+    fseek(f, 0, SEEK_SET);
+    void *bytes = malloc(*size);
+    cr_assert_eq(fread(bytes, 1, *size, f), *size);
+    fclose(f);
+    unlink(path);
+    snprintf(path, sizeof path, "%s/edits", dir);
+    rmdir(path);
+    rmdir(dir);
+    terrain_edit_log_destroy(log);
+    return bytes;
+}
+
+Test(terrain_threads, edit_log_replays_on_four_threads_while_one_records) {
+    terrain_generation_params params = terrain_generation_defaults(17);
+    terrain_chunk_coord coord = { 1, -2 };
+    terrain_stacks *generated = terrain_generate_chunk(&params, coord);
+    terrain_columns *region = terrain_columns_create(&(terrain_columns_desc){
+        .x = coord.x * TERRAIN_CHUNK_COLUMNS, .z = coord.z * TERRAIN_CHUNK_COLUMNS,
+        .width = TERRAIN_CHUNK_COLUMNS, .depth = TERRAIN_CHUNK_COLUMNS });
+    cr_assert(terrain_columns_load(region, coord, generated));
+    for (int n = 0; n < 40; n++) set_column(region, n * 7, 8000 + n, 3);
+    terrain_stacks *a = terrain_columns_to_stacks(region, coord);
+    for (int n = 20; n < 60; n++) set_column(region, n * 7, 7000 - n, 40);
+    terrain_stacks *b = terrain_columns_to_stacks(region, coord);
+    terrain_columns_destroy(region);
+
+    uint64_t key = terrain_generation_key(&params);
+    log_share share = { .log = terrain_edit_log_create(key), .coord = coord, .generated = generated,
+                        .state = { a, b } };
+    share.file_a = file_of(generated, a, coord, key, &share.file_a_size);
+    cr_assert(terrain_edit_log_record(share.log, coord, TERRAIN_EDIT_SET, generated, a));
+    log_replayer replayers[LOG_REPLAYERS];
+    pthread_t threads[LOG_REPLAYERS];
+    for (int t = 0; t < LOG_REPLAYERS; t++) {
+        replayers[t] = (log_replayer){ .share = &share };
+        cr_assert_eq(pthread_create(&threads[t], NULL, replay_loop, &replayers[t]), 0);
+    }
+    record_loop(&share);
+    atomic_store(&share.done, true);
+    for (int t = 0; t < LOG_REPLAYERS; t++) {
+        pthread_join(threads[t], NULL);
+        cr_expect_eq(replayers[t].wrong, 0, "thread %d: %d of %d replays gave neither A nor B", t, replayers[t].wrong,
+                     replayers[t].replays);
+    }
+    cr_expect_leq(terrain_edit_log_entries(share.log, coord), 10, "compacted every 10 steps");
+    free((void *)share.file_a);
+    terrain_edit_log_destroy(share.log);
+    terrain_stacks_destroy(b);
+    terrain_stacks_destroy(a);
+    terrain_stacks_destroy(generated);
+}

@@ -45,5 +45,6 @@ void bench_group_world(bench_context *ctx);
 void bench_group_terrain_stabilize(bench_context *ctx);
 void bench_group_terrain_sculpt(bench_context *ctx);
 void bench_group_terrain_edit(bench_context *ctx);
+void bench_group_terrain_edit_log(bench_context *ctx);
 
 #endif
