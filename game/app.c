@@ -61,17 +61,16 @@ static bool app_open_input(game_app *app) {
 
 /* ---- the world folder ------------------------------------------------------------------- */
 
-bool game_world_dir_seed(const char *dir, uint64_t *seed, bool complain) {
+int game_world_dir_seed(const char *dir, uint64_t *seed) {
     char path[4096];
     snprintf(path, sizeof path, "%s/world.txt", dir);
     FILE *f = fopen(path, "r");
-    if (!f) return false;
+    if (!f) return 0;
     unsigned long long value;
     bool ok = fscanf(f, "seed %llu", &value) == 1;
     fclose(f);
     if (ok) *seed = value;
-    else if (complain) fprintf(stderr, "world: %s does not say 'seed N'\n", path);
-    return ok;
+    return ok ? 1 : -1;
 }
 
 static bool app_write_world_file(const char *dir, uint64_t seed) {
@@ -93,7 +92,12 @@ static bool app_write_world_file(const char *dir, uint64_t seed) {
 static bool app_open_edits(game_app *app, const terrain_generation_params *params) {
     const char *dir = app->desc.world_dir;
     uint64_t seed;
-    bool known = game_world_dir_seed(dir, &seed, true);
+    int known = game_world_dir_seed(dir, &seed);
+    if (known < 0) {
+        /* Never overwritten: it may be a world someone cares about. */
+        fprintf(stderr, "world: %s/world.txt does not say 'seed N'; fix or remove it\n", dir);
+        return false;
+    }
     if (known && seed != app->desc.seed) {
         fprintf(stderr, "world: %s holds the world of seed %llu (run with --seed %llu, or another --world)\n",
                 dir, (unsigned long long)seed, (unsigned long long)seed);
@@ -384,3 +388,7 @@ const double *game_app_frame_times(const game_app *app, int *count) {
     *count = (int)app->cpu_count;
     return app->cpu_ms;
 }
+
+terrain_world *game_app_world(game_app *app) { return app->world; }
+terrain_ecs *game_app_terrain(game_app *app) { return app->terrain; }
+bool game_app_loaded(const game_app *app) { return !app->loading; }

@@ -63,9 +63,9 @@ typedef struct game_app_desc {
 
 #define GAME_APP_AUTOSAVE_SECONDS 30.0
 
-/* The seed DIR/world.txt records: true and *seed set, or false when there is no such file (a
- * new world) or it does not say (the reason printed when `complain`). */
-bool game_world_dir_seed(const char *dir, uint64_t *seed, bool complain);
+/* The seed DIR/world.txt records: 1 and *seed set; 0 when there is no such file (a new world);
+ * −1 when the file exists but does not say "seed N". */
+int game_world_dir_seed(const char *dir, uint64_t *seed);
 
 /* NULL (with the reason printed) when the window, the shaders, the bindings or a recording
  * cannot be opened. */
@@ -98,6 +98,11 @@ typedef struct game_app_stats {
 } game_app_stats;
 
 game_app_stats game_app_stats_get(const game_app *app);
+/* The world and its ECS terrain, for code that extends the game (edits, more viewers, probes). */
+terrain_world *game_app_world(game_app *app);
+terrain_ecs *game_app_terrain(game_app *app);
+/* Whether the start area has loaded (the player moves from then on). */
+bool game_app_loaded(const game_app *app);
 /* The frame's CPU times (ms) past loading, in order; count in *count. */
 const double *game_app_frame_times(const game_app *app, int *count);
 

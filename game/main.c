@@ -54,7 +54,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
     /* No --seed: the world folder's, else 1. */
     uint64_t saved_seed;
-    if (o->seed < 0) o->seed = o->world && game_world_dir_seed(o->world, &saved_seed, false) ? (int)saved_seed : 1;
+    if (o->seed < 0) o->seed = o->world && game_world_dir_seed(o->world, &saved_seed) == 1 ? (int)saved_seed : 1;
     desc->width = 1280;
     desc->height = 720;
     if (o->size && !gfx_parse_size(o->size, &desc->width, &desc->height)) {

@@ -201,6 +201,17 @@ for phase in input game stream generate stabilize mesh lod cull draw; do
   expect "world: the walk's trace has phase $phase" 0 "(^| )$phase( |$)" -- "$bin/trace_report" "$tmp/walk.json"
 done
 expect "world: the walk's trace has streaming jobs" 0 "terrain stream mesh" -- "$bin/trace_report" "$tmp/walk.json"
+# A world folder: a file in its place is refused, its seed is kept and another one refused, a
+# damaged world.txt is reported.
+touch "$tmp/not_a_folder"
+expect "world: --world that is a file" 1 "cannot (create|read)" -- "$bin/world" --headless --frames 1 --world "$tmp/not_a_folder"
+mkdir -p "$tmp/saved"
+echo "seed 9" >"$tmp/saved/world.txt"
+expect "world: --world of another seed" 1 "holds the world of seed 9 \(run with --seed 9" -- \
+  "$bin/world" --headless --size 64x48 --frames 1 --seed 3 --world "$tmp/saved"
+echo "not a seed" >"$tmp/saved/world.txt"
+expect "world: damaged world.txt" 1 "world.txt does not say 'seed N'" -- \
+  "$bin/world" --headless --size 64x48 --frames 1 --seed 3 --world "$tmp/saved"
 
 echo "programs: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]

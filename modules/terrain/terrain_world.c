@@ -364,8 +364,10 @@ int terrain_world_take_changes(terrain_world *world, terrain_chunk_coord *out, i
     pthread_mutex_lock(&world->lock);
     size_t n = capacity > 0 ? (size_t)capacity : 0;
     if (n > world->change_count) n = world->change_count;
-    if (n) memcpy(out, world->changes, n * sizeof *out);
-    memmove(world->changes, world->changes + n, (world->change_count - n) * sizeof *world->changes);
+    if (n) {
+        memcpy(out, world->changes, n * sizeof *out);
+        memmove(world->changes, world->changes + n, (world->change_count - n) * sizeof *world->changes);
+    }
     world->change_count -= n;
     pthread_mutex_unlock(&world->lock);
     return (int)n;

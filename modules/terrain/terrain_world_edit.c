@@ -79,7 +79,7 @@ int terrain_world_edit(terrain_world *world, const terrain_edit *edit, terrain_c
         return -1;
     }
     if (!edit_extent(edit, &x0, &x1, &z0, &z1)) {
-        core_error("terrain", "edit: %s (tool %d) is not a brush with a finite extent: ignored",
+        core_error("terrain", "edit: %s (tool %d): not a brush, or its position is not finite: ignored",
                    terrain_edit_tool_name(edit->tool), (int)edit->tool);
         return -1;
     }

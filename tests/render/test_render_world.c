@@ -131,3 +131,82 @@ Test(render_world, a_walk_a_hundred_kilometres_out_goes_as_at_the_origin, .timeo
                   at[0].feet[a], at[1].feet[a]);
     game_walk_free(&walk);
 }
+
+/* ---- edits that last (--world DIR) ---- */
+
+typedef struct edited_run {
+    terrain_chunk_coord chunk;
+    uint64_t hash;                    /* the chunk after the edit settled */
+} edited_run;
+
+/* Loads the world, carves a ball where the ground is under the spawn, lets it settle and returns
+ * the hash of the chunk it changed; the app saves its edits as it closes. */
+static edited_run carve_and_close(const char *dir) {
+    game_app *app = game_app_create(&(game_app_desc){ .seed = 3, .width = 96, .height = 64, .headless = true,
+                                                      .threads = 2, .frames = 100000, .stream = small_view,
+                                                      .no_clipmap = true, .world_dir = dir });
+    cr_assert(app);
+    for (int guard = 0; !game_app_loaded(app) && guard < 20000; guard++) game_app_frame(app);
+    game_app_stats s = game_app_stats_get(app);
+    double origin[3] = { s.feet[0] + 3.5, s.feet[1] + 4, s.feet[2] + 3.5 };
+    terrain_ray_hit hit;
+    cr_assert(terrain_raycast(game_app_world(app), origin, (const float[3]){ 0, -1, 0 }, 40, &hit));
+    cr_assert(terrain_ecs_edit(game_app_terrain(app), &(terrain_edit){ .tool = TERRAIN_EDIT_SCULPT_CARVE,
+        .sculpt = { .target = { hit.position[0], hit.position[1], hit.position[2] }, .radius = 3 } }));
+    for (int frame = 0; frame < 5; frame++) game_app_frame(app);
+    cr_assert_eq(terrain_ecs_edit_stats(game_app_terrain(app)).edits_applied, 1);
+    double chunk = TERRAIN_CHUNK_COLUMNS * TERRAIN_COLUMN_SIZE;
+    edited_run run = { .chunk = { (int64_t)floor(hit.position[0] / chunk), (int64_t)floor(hit.position[2] / chunk) } };
+    run.hash = terrain_stacks_hash(terrain_world_stacks(game_app_world(app), run.chunk));
+    game_app_destroy(app);
+    return run;
+}
+
+static uint64_t chunk_hash_in(const char *dir, uint64_t seed, terrain_chunk_coord chunk, bool *started) {
+    game_app *app = game_app_create(&(game_app_desc){ .seed = seed, .width = 96, .height = 64, .headless = true,
+                                                      .threads = 2, .frames = 1, .stream = small_view,
+                                                      .no_clipmap = true, .world_dir = dir });
+    *started = app != NULL;
+    if (!app) return 0;
+    uint64_t hash = terrain_stacks_hash(terrain_world_stacks(game_app_world(app), chunk));
+    game_app_destroy(app);
+    return hash;
+}
+
+/* A carve saved in the world folder is there in the next run, byte for byte; a damaged save file
+ * is reported and set aside and its chunk comes back as generated; another seed is refused. */
+Test(render_world, edits_are_saved_and_come_back_and_a_damaged_file_is_set_aside) {
+    char dir[] = "/tmp/world_edits_XXXXXX";
+    cr_assert(mkdtemp(dir));
+    edited_run run = carve_and_close(dir);
+    terrain_generation_params params = terrain_generation_defaults(3);
+    terrain_stacks *fresh = terrain_generate_chunk(&params, run.chunk);
+    uint64_t generated = terrain_stacks_hash(fresh);
+    terrain_stacks_destroy(fresh);
+    cr_assert_neq(run.hash, generated, "the carve changed the chunk");
+    bool started;
+    cr_expect_eq(chunk_hash_in(dir, 3, run.chunk, &started), run.hash, "the next run has the edit");
+    cr_assert(started);
+    chunk_hash_in(dir, 4, run.chunk, &started);
+    cr_expect(!started, "a folder of seed 3 refuses seed 4");
+    /* Flip a byte in the middle of the chunk's file. */
+    char path[512];
+    snprintf(path, sizeof path, "%s/edits/%lld_%lld.tel", dir, (long long)run.chunk.x, (long long)run.chunk.z);
+    FILE *f = fopen(path, "r+b");
+    cr_assert(f, "no save file %s", path);
+    fseek(f, 0, SEEK_END);
+    long size = ftell(f);
+    fseek(f, size / 2, SEEK_SET);
+    int byte = fgetc(f);
+    fseek(f, size / 2, SEEK_SET);
+    fputc(byte ^ 0x5a, f);
+    fclose(f);
+    cr_expect_eq(chunk_hash_in(dir, 3, run.chunk, &started), generated, "the damaged file's chunk is as generated");
+    cr_expect(started, "a damaged file never stops the game");
+    char bad[520];
+    snprintf(bad, sizeof bad, "%s.bad", path);
+    cr_expect_eq(access(bad, F_OK), 0, "set aside as %s", bad);
+    char command[600];
+    snprintf(command, sizeof command, "rm -rf '%s'", dir);
+    cr_expect_eq(system(command), 0);
+}
