@@ -1012,9 +1012,17 @@ int terrain_world_edit(terrain_world *world, const terrain_edit *edit, terrain_c
  * lose them). */
 void terrain_world_commit(terrain_world *world, terrain_chunk_coord coord, terrain_stacks *stacks,
                           terrain_edit_tool tool);
-/* Chunks committed since the last call (each once, in commit order); returns how many (writes
- * at most `capacity`; the rest stay for the next call). The streamer remeshes what they touch. */
-int terrain_world_take_changes(terrain_world *world, terrain_chunk_coord *out, int capacity);
+/* A chunk committed since the last terrain_world_take_changes, and the box in which its
+ * materials changed (over all its commits since). */
+typedef struct terrain_world_change {
+    terrain_chunk_coord coord;
+    int column_min[2], column_max[2]; /* changed columns (i, k) of the chunk, inclusive */
+    float y_min, y_max;               /* world metres */
+} terrain_world_change;
+/* Chunks committed since the last call (each once, in commit order; a commit that changed
+ * nothing is not one); returns how many (writes at most `capacity`; the rest stay for the next
+ * call). The streamer remeshes the mesh chunks that read them. */
+int terrain_world_take_changes(terrain_world *world, terrain_world_change *out, int capacity);
 /* How many commits the chunk has had in this world (0 = as generated or replayed). */
 uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord coord);
 

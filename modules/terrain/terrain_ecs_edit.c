@@ -214,14 +214,18 @@ static void edits_apply(terrain_ecs *te) {
     ed->queue_count = 0;
 }
 
-/* Whether mesh chunk (level, x, z) reads any column of column chunk `c`: its samples reach one
- * apron sample and the kernel (one column) beyond it, and the material weights a column more. */
-bool terrain__mesh_reads_chunk(int level, int64_t x, int64_t z, terrain_chunk_coord c) {
+/* Its samples reach one apron sample and the kernel (one column, one metre up and down) beyond
+ * the chunk, and the material weights a column more. */
+bool terrain__mesh_reads_change(int level, int64_t x, int64_t y, int64_t z, const terrain_world_change *change) {
     int64_t step = (int64_t)1 << level, size = TERRAIN_MESH_CELLS * step, pad = step + 2;
     int64_t lo_x = x * size - pad, hi_x = (x + 1) * size + pad;
     int64_t lo_z = z * size - pad, hi_z = (z + 1) * size + pad;
-    int64_t cx0 = c.x * TERRAIN_CHUNK_COLUMNS, cz0 = c.z * TERRAIN_CHUNK_COLUMNS;
-    return hi_x >= cx0 && lo_x < cx0 + TERRAIN_CHUNK_COLUMNS && hi_z >= cz0 && lo_z < cz0 + TERRAIN_CHUNK_COLUMNS;
+    double lo_y = (double)(y * size - pad), hi_y = (double)((y + 1) * size + pad);
+    int64_t x0 = change->coord.x * TERRAIN_CHUNK_COLUMNS + change->column_min[0];
+    int64_t x1 = change->coord.x * TERRAIN_CHUNK_COLUMNS + change->column_max[0];
+    int64_t z0 = change->coord.z * TERRAIN_CHUNK_COLUMNS + change->column_min[1];
+    int64_t z1 = change->coord.z * TERRAIN_CHUNK_COLUMNS + change->column_max[1];
+    return hi_x >= x0 && lo_x <= x1 && hi_z >= z0 && lo_z <= z1 && hi_y >= change->y_min && lo_y <= change->y_max;
 }
 
 /* Static (not streamed) mesh chunks that read a changed chunk go back to waiting: the mesh
@@ -237,7 +241,7 @@ static void static_meshes_invalidate(terrain_ecs *te, ecs_commands *commands) {
             if (ecs_has(te->ecs, e, te->streamed) || m->state == TERRAIN_MESH_WAITING) continue;
             bool reads = false;
             for (size_t c = 0; c < te->changed_count && !reads; c++)
-                reads = terrain__mesh_reads_chunk(m->lod.level, m->x, m->z, te->changed[c]);
+                reads = terrain__mesh_reads_change(m->lod.level, m->x, m->y, m->z, &te->changed[c]);
             if (!reads) continue;
             terrain_mesh_free(&m->mesh);
             m->state = TERRAIN_MESH_WAITING;

@@ -184,7 +184,7 @@ struct terrain_ecs {
     size_t draw_capacity;
     terrain__streamer *stream;           /* NULL unless terrain_ecs_stream was called */
     terrain__editor *editor;             /* created by the first edit call */
-    terrain_chunk_coord *changed;        /* column chunks committed before this frame's mesh phase */
+    terrain_world_change *changed;       /* column chunks committed before this frame's mesh phase */
     size_t changed_count, changed_capacity;
 };
 
@@ -202,9 +202,9 @@ void terrain__stream_destroy(terrain_ecs *te);
 /* Editing (terrain_ecs_edit.c): the stabilize phase's system, and the editor's memory. */
 void terrain__editor_register(terrain_ecs *te);
 void terrain__editor_destroy(terrain_ecs *te);
-/* Whether mesh chunk (level, x, ·, z) reads any column of column chunk `chunk` (samples, apron,
- * kernel and material weights): it must be meshed again when that chunk changes. */
-bool terrain__mesh_reads_chunk(int level, int64_t x, int64_t z, terrain_chunk_coord chunk);
+/* Whether mesh chunk (level, x, y, z) reads a column of the changed chunk at a changed height
+ * (samples, apron, kernel and material weights): it must be meshed again. */
+bool terrain__mesh_reads_change(int level, int64_t x, int64_t y, int64_t z, const terrain_world_change *change);
 
 /* ==== end of the ECS and streaming section ================================================ */
 
@@ -434,5 +434,13 @@ uint32_t terrain__stacks_layer_words(uint32_t quanta);
 uint32_t terrain__crc32(uint32_t crc, const void *data, size_t size);
 
 /* ==== end of the edit log section ========================================================= */
+
+/* ==== edits in the world (terrain_world.c, terrain_world_edit.c, terrain_ecs_edit.c) ======= */
+
+/* Where two chunks' stacks hold different materials: the columns and heights of the box around
+ * every difference (change->coord is left alone); false when they are equal (terrain_stacks.c). */
+bool terrain__stacks_diff(const terrain_stacks *a, const terrain_stacks *b, terrain_world_change *box);
+
+/* ==== end of the edits-in-the-world section =============================================== */
 
 #endif

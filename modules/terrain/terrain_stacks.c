@@ -336,3 +336,52 @@ terrain_stacks *terrain_stacks_from_columns(terrain_chunk_coord coord, terrain_c
     terrain_stacks_builder_destroy(builder);
     return stacks;
 }
+
+/* One column's layers as a walk over heights: the material from `height` up to `next`. */
+typedef struct diff_walker {
+    terrain__column_cursor cursor;
+    int64_t next;                         /* where the current layer ends (INT64_MAX: air above) */
+    unsigned material;
+} diff_walker;
+
+static void diff_walker_advance(diff_walker *w) {
+    terrain__qlayer layer;
+    if (terrain__cursor_next(&w->cursor, &layer)) {
+        w->material = layer.material;
+        w->next += layer.quanta;
+    } else {
+        w->material = TERRAIN_AIR;
+        w->next = INT64_MAX;
+    }
+}
+
+bool terrain__stacks_diff(const terrain_stacks *a, const terrain_stacks *b, terrain_world_change *box) {
+    int64_t low = INT64_MAX, high = INT64_MIN;
+    int i0 = TERRAIN_CHUNK_COLUMNS, k0 = TERRAIN_CHUNK_COLUMNS, i1 = -1, k1 = -1;
+    for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
+        for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
+            diff_walker wa = { terrain__stacks_cursor(a, i, k), 0, 0 }, wb = { terrain__stacks_cursor(b, i, k), 0, 0 };
+            diff_walker_advance(&wa);
+            diff_walker_advance(&wb);
+            int64_t height = 0;
+            /* Past both columns' last layers both are air: nothing differs above. */
+            while (wa.next != INT64_MAX || wb.next != INT64_MAX) {
+                int64_t next = wa.next < wb.next ? wa.next : wb.next;
+                if (wa.material != wb.material) {
+                    if (height < low) low = height;
+                    if (next > high) high = next;
+                    i0 = i < i0 ? i : i0, i1 = i > i1 ? i : i1;
+                    k0 = k < k0 ? k : k0, k1 = k > k1 ? k : k1;
+                }
+                height = next;
+                if (wa.next == next) diff_walker_advance(&wa);
+                if (wb.next == next) diff_walker_advance(&wb);
+            }
+        }
+    if (low > high) return false;
+    box->column_min[0] = i0, box->column_min[1] = k0;
+    box->column_max[0] = i1, box->column_max[1] = k1;
+    box->y_min = TERRAIN_FLOOR_Y + (float)low / TERRAIN__QUANTA_PER_METRE;
+    box->y_max = TERRAIN_FLOOR_Y + (float)high / TERRAIN__QUANTA_PER_METRE;
+    return true;
+}

@@ -594,7 +594,7 @@ static void stream_remesh_edits(terrain_ecs *te, ecs_commands *commands) {
         if (!r) continue;
         bool reads = false;
         for (size_t c = 0; c < te->changed_count && !reads; c++)
-            reads = terrain__mesh_reads_chunk(r->key.level, r->key.x, r->key.z, te->changed[c]);
+            reads = terrain__mesh_reads_change(r->key.level, r->key.x, r->key.y, r->key.z, &te->changed[c]);
         if (!reads) continue;
         stream_task_cancel(s, r);
         r->ready = false;

@@ -37,7 +37,7 @@ struct terrain_world {
     terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);
     void *generate_user;
     terrain_edit_log *edits;              /* replayed over generated chunks, or NULL */
-    terrain_chunk_coord *changes;         /* committed since the last terrain_world_take_changes */
+    terrain_world_change *changes;        /* committed since the last terrain_world_take_changes */
     size_t change_count, change_capacity;
     size_t max_chunks;
     world_entry **buckets;
@@ -334,6 +334,23 @@ terrain_material terrain_world_material_at(terrain_world *world, double x, doubl
 
 /* ---- edits -------------------------------------------------------------------------------- */
 
+/* Lock held. One entry per chunk: a second commit widens the first's box. */
+static void queue_change(terrain_world *w, const terrain_world_change *change) {
+    for (size_t i = 0; i < w->change_count; i++) {
+        terrain_world_change *c = &w->changes[i];
+        if (!coord_equal(c->coord, change->coord)) continue;
+        for (int a = 0; a < 2; a++) {
+            if (change->column_min[a] < c->column_min[a]) c->column_min[a] = change->column_min[a];
+            if (change->column_max[a] > c->column_max[a]) c->column_max[a] = change->column_max[a];
+        }
+        c->y_min = fminf(c->y_min, change->y_min);
+        c->y_max = fmaxf(c->y_max, change->y_max);
+        return;
+    }
+    w->changes = core_grow(w->changes, &w->change_capacity, w->change_count + 1, sizeof *w->changes);
+    w->changes[w->change_count++] = *change;
+}
+
 void terrain_world_commit(terrain_world *world, terrain_chunk_coord coord, terrain_stacks *stacks,
                           terrain_edit_tool tool) {
     if (!stacks) {
@@ -343,24 +360,20 @@ void terrain_world_commit(terrain_world *world, terrain_chunk_coord coord, terra
     }
     world_entry *e = acquire(world, coord);
     terrain_stacks *before = e->stacks;
+    terrain_world_change change = { .coord = coord };
+    bool differs = terrain__stacks_diff(before, stacks, &change);
     /* The log diffs under the world's lock: the log has its own and never calls back. */
     if (world->edits) terrain_edit_log_record(world->edits, coord, tool, before, stacks);
-    else e->pinned = true;
+    else if (differs) e->pinned = true;
     world->bytes += terrain_stacks_bytes(stacks) - terrain_stacks_bytes(before);
     e->stacks = stacks;
     e->version++;
     bury(world, before);       /* a job of this frame may still read it: freed at a later trim */
-    bool queued = false;
-    for (size_t i = 0; i < world->change_count && !queued; i++) queued = coord_equal(world->changes[i], coord);
-    if (!queued) {
-        world->changes = core_grow(world->changes, &world->change_capacity, world->change_count + 1,
-                                   sizeof *world->changes);
-        world->changes[world->change_count++] = coord;
-    }
+    if (differs) queue_change(world, &change);
     pthread_mutex_unlock(&world->lock);
 }
 
-int terrain_world_take_changes(terrain_world *world, terrain_chunk_coord *out, int capacity) {
+int terrain_world_take_changes(terrain_world *world, terrain_world_change *out, int capacity) {
     pthread_mutex_lock(&world->lock);
     size_t n = capacity > 0 ? (size_t)capacity : 0;
     if (n > world->change_count) n = world->change_count;

@@ -69,8 +69,19 @@ Test(world_edit, deposit_across_chunk_corner_adds_exactly_its_volume_to_the_chun
     /* 40 m³ is 40·32 quanta·column, exactly. */
     cr_expect_eq(world_quanta(w, -2, 1, -2, 1, TERRAIN_SAND), 40 * QPM);
     cr_expect_eq(world_quanta(w, -2, 1, -2, 1, TERRAIN_BEDROCK), (int64_t)16 * N * N * 256 * QPM);
-    terrain_chunk_coord taken[16];
+    terrain_world_change taken[16];
     cr_expect_eq(terrain_world_take_changes(w, taken, 16), 4);
+    /* Sand on ground at y = 0: the materials changed from y = 0 up to the pile's top. */
+    for (int i = 0; i < 4; i++) {
+        cr_expect_eq(taken[i].y_min, 0.0f);
+        cr_expect(taken[i].y_max > 0.0f && taken[i].y_max < 5.0f, "top %g", (double)taken[i].y_max);
+        /* Columns whose centres lie within 5 m of the corner: the first or last five of a chunk. */
+        for (int a = 0; a < 2; a++) {
+            int64_t c = a ? taken[i].coord.z : taken[i].coord.x;
+            if (c == 0) cr_expect(taken[i].column_min[a] >= 0 && taken[i].column_max[a] <= 4);
+            else cr_expect(taken[i].column_min[a] >= N - 5 && taken[i].column_max[a] <= N - 1);
+        }
+    }
     cr_expect_eq(terrain_world_take_changes(w, taken, 16), 0, "each change is taken once");
     for (int i = 0; i < 4; i++) cr_expect_eq(terrain_world_chunk_version(w, changed[i]), 1);
     cr_expect_eq(terrain_world_chunk_version(w, (terrain_chunk_coord){ 1, 1 }), 0);
@@ -91,7 +102,8 @@ Test(world_edit, a_bad_edit_changes_nothing) {
                                                         .deposit = { .x = 0, .z = 0, .radius = 1000, .volume = 4 } },
                                     changed, 4), -1, "a brush wider than 8 × 8 chunks is refused");
     cr_expect_eq(terrain_world_edit(w, NULL, changed, 4), -1);
-    cr_expect_eq(terrain_world_take_changes(w, changed, 4), 0);
+    terrain_world_change none[4];
+    cr_expect_eq(terrain_world_take_changes(w, none, 4), 0);
     terrain_world_destroy(w);
 }
 
