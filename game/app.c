@@ -33,7 +33,7 @@ struct game_app {
     game_player player;
     game_walker walker;
     game_tools tools;
-    terrain_edit_log *edits;               /* with a world folder, or NULL */
+    terrain_edit_log *edits;               /* every edit; loaded and saved with a world folder */
     uint64_t last_save_ns;
     terrain_view view;
     bool windowed, interactive, loading, over;
@@ -89,7 +89,7 @@ static bool app_write_world_file(const char *dir, uint64_t seed) {
 
 /* The edit log of the world folder: its seed checked, its files loaded (bad ones reported and
  * set aside by the log). */
-static bool app_open_edits(game_app *app, const terrain_generation_params *params) {
+static bool app_open_edits(game_app *app) {
     const char *dir = app->desc.world_dir;
     uint64_t seed;
     int known = game_world_dir_seed(dir, &seed);
@@ -104,7 +104,6 @@ static bool app_open_edits(game_app *app, const terrain_generation_params *param
         return false;
     }
     if (!known && !app_write_world_file(dir, app->desc.seed)) return false;
-    app->edits = terrain_edit_log_create(terrain_generation_key(params));
     terrain_edit_log_load_result loaded;
     if (!terrain_edit_log_load(app->edits, dir, &loaded)) {
         fprintf(stderr, "world: cannot read the edits in %s: %s\n", dir, loaded.first_problem);
@@ -117,7 +116,7 @@ static bool app_open_edits(game_app *app, const terrain_generation_params *param
 }
 
 static void app_save_edits(game_app *app) {
-    if (!app->edits) return;
+    if (!app->edits || !app->desc.world_dir) return;
     char error[512];
     if (!terrain_edit_log_save(app->edits, app->desc.world_dir, error, sizeof error))
         core_warn("game", "saving the edits failed (will retry): %s", error);
@@ -126,7 +125,10 @@ static void app_save_edits(game_app *app) {
 
 static bool app_open_terrain(game_app *app) {
     terrain_generation_params params = terrain_generation_defaults(app->desc.seed);
-    if (app->desc.world_dir && !app_open_edits(app, &params)) return false;
+    /* Always a log: an edited chunk can then leave the cache like any other and come back as
+     * edited. With a world folder it is also loaded and saved. */
+    app->edits = terrain_edit_log_create(terrain_generation_key(&params));
+    if (app->desc.world_dir && !app_open_edits(app)) return false;
     app->world = terrain_world_create(&(terrain_world_desc){ .generation = params, .generate = app->desc.generate,
                                                              .generate_user = app->desc.generate_user,
                                                              .edits = app->edits });
@@ -333,7 +335,7 @@ bool game_app_frame(game_app *app) {
         app->frames++;
         app_record_cpu(app, cpu_ms, engine_ms);
     }
-    if (app->edits && (double)(core_time_ns() - app->last_save_ns) * 1e-9 >= GAME_APP_AUTOSAVE_SECONDS)
+    if (app->desc.world_dir && (double)(core_time_ns() - app->last_save_ns) * 1e-9 >= GAME_APP_AUTOSAVE_SECONDS)
         app_save_edits(app);
     app->over = last;
     return !last;
@@ -378,7 +380,7 @@ game_app_stats game_app_stats_get(const game_app *app) {
     s.stream = terrain_ecs_stream_stats(app->terrain);
     s.edits = terrain_ecs_edit_stats(app->terrain);
     s.strokes = app->tools.strokes;
-    s.edited_chunks = app->edits ? terrain_edit_log_chunks(app->edits) : 0;
+    s.edited_chunks = terrain_edit_log_chunks(app->edits);
     struct rusage usage;
     if (getrusage(RUSAGE_SELF, &usage) == 0) s.peak_rss_bytes = (size_t)usage.ru_maxrss * 1024;
     return s;

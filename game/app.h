@@ -93,7 +93,7 @@ typedef struct game_app_stats {
     terrain_stream_stats stream;
     terrain_edit_stats edits;
     uint64_t strokes;                 /* tool strokes the player made */
-    int edited_chunks;                /* chunks with logged edits (with a world folder) */
+    int edited_chunks;                /* chunks with logged edits */
     size_t peak_rss_bytes;            /* of the process (getrusage), driver memory included */
 } game_app_stats;
 

@@ -91,7 +91,7 @@ static void print_results(const game_app_stats *s, bool walked) {
            (double)s->stream.resident_bytes / 1048576.0, (double)s->stream.peak_resident_bytes / 1048576.0,
            (double)s->peak_rss_bytes / 1048576.0);
     if (s->strokes || s->edits.edits_applied || s->edited_chunks)
-        printf("world: %llu tool strokes, %llu edits applied, %llu refused, %d chunks with saved edits\n",
+        printf("world: %llu tool strokes, %llu edits applied, %llu refused, %d chunks edited\n",
                (unsigned long long)s->strokes, (unsigned long long)s->edits.edits_applied,
                (unsigned long long)s->edits.edits_refused, s->edited_chunks);
     printf("world: player at (%.4f, %.4f, %.4f)\n", s->feet[0], s->feet[1], s->feet[2]);

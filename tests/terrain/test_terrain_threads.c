@@ -285,3 +285,50 @@ Test(terrain_threads, edit_log_replays_on_four_threads_while_one_records) {
     terrain_stacks_destroy(a);
     terrain_stacks_destroy(generated);
 }
+
+/* ---- edits committed while workers read (terrain_world_commit) ---- */
+
+typedef struct commit_share {
+    terrain_world *world;
+    _Atomic bool stop;
+    _Atomic long reads;
+} commit_share;
+
+/* A background reader: brackets its reads as a streaming job does, and walks every column of
+ * the chunk the main thread keeps editing (ASan/TSan catch a freed or racing read). */
+static void *commit_reader(void *user) {
+    commit_share *s = user;
+    terrain_layer layers[64];
+    while (!atomic_load(&s->stop)) {
+        uint64_t token = terrain_world_read_begin(s->world);
+        const terrain_stacks *stacks = terrain_world_stacks(s->world, (terrain_chunk_coord){ 0, 0 });
+        long columns = 0;
+        for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
+            for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) columns += terrain_stacks_column(stacks, i, k, layers, 64) > 0;
+        terrain_world_read_end(s->world, token);
+        atomic_fetch_add(&s->reads, columns > 0);
+    }
+    return NULL;
+}
+
+Test(terrain_threads, workers_read_while_the_main_thread_commits_and_trims) {
+    terrain_edit_log *log = terrain_edit_log_create(1);
+    commit_share s = { .world = terrain_world_create(&(terrain_world_desc){
+                           .generation = terrain_generation_defaults(11), .edits = log, .max_chunks = 4 }) };
+    pthread_t readers[3];
+    for (int t = 0; t < 3; t++) pthread_create(&readers[t], NULL, commit_reader, &s);
+    for (int stroke = 0; stroke < 40; stroke++) {
+        terrain_world_edit(s.world, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                     .deposit = { .x = 4 + stroke % 24, .z = 16, .radius = 3,
+                                                                  .volume = 2 } }, NULL, 0);
+        terrain_world_change changes[8];
+        terrain_world_take_changes(s.world, changes, 8);
+        terrain_world_trim(s.world);
+    }
+    atomic_store(&s.stop, true);
+    for (int t = 0; t < 3; t++) pthread_join(readers[t], NULL);
+    cr_expect_gt(atomic_load(&s.reads), 0);
+    cr_expect_eq(terrain_edit_log_entries(log, (terrain_chunk_coord){ 0, 0 }), 40, "every stroke logged");
+    terrain_world_destroy(s.world);
+    terrain_edit_log_destroy(log);
+}
