@@ -74,5 +74,37 @@ else
   sed 's/^/    replay: /' "$tmp/terrain-replay.out" | tail -5
 fi
 
+# Terrain tools in a window: click to capture the mouse, look down, Tab to the sand tool, click to
+# drop sand, let go, quit. The stroke is saved in the world folder; the recording replayed
+# offscreen makes the same stroke.
+"$bin/world" --size 160x90 --radius 1 --levels 1 --world "$tmp/edited" --record "$tmp/tools.rec" \
+  >"$tmp/tools-record.out" 2>&1 &
+tools=$!
+if window=$(timeout 120 xdotool search --sync --name '^world$' | head -1) && [[ -n $window ]]; then
+  xdotool windowfocus --sync "$window"
+  xdotool mousemove --window "$window" 80 45 click 1; sleep 0.3
+  xdotool mousemove_relative --sync 0 240; sleep 0.3
+  xdotool key Tab; sleep 0.2; xdotool key Tab; sleep 0.2
+  xdotool click 1; sleep 0.5
+  xdotool key Escape; sleep 0.2; xdotool key Escape
+fi
+timeout 120 tail --pid="$tools" -f /dev/null
+wait "$tools"
+recorded=$?
+"$bin/world" --headless --size 160x90 --radius 1 --levels 1 --replay "$tmp/tools.rec" >"$tmp/tools-replay.out" 2>&1
+replayed=$?
+strokes() { grep -o '[0-9]* tool strokes, [0-9]* edits applied' "$1"; }
+if [[ $recorded -eq 0 && $replayed -eq 0 && -n $(strokes "$tmp/tools-record.out") &&
+      ! $(strokes "$tmp/tools-record.out") =~ ^0\  &&
+      $(strokes "$tmp/tools-record.out") == "$(strokes "$tmp/tools-replay.out")" ]] &&
+   compgen -G "$tmp/edited/edits/*.tel" >/dev/null; then
+  pass "window: a tool stroke in a window is saved and replays offscreen ($(strokes "$tmp/tools-record.out"))"
+else
+  fail "window: a tool stroke in a window is saved and replays offscreen"
+  sed 's/^/    record: /' "$tmp/tools-record.out" | tail -5
+  sed 's/^/    replay: /' "$tmp/tools-replay.out" | tail -5
+  ls -R "$tmp/edited" 2>&1 | sed 's/^/    folder: /' | head -10
+fi
+
 echo "window: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]
