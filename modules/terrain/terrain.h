@@ -504,10 +504,8 @@ typedef struct ecs_world ecs_world;
 
 typedef struct TerrainChunk {
     terrain_chunk_coord coord;
-    const terrain_stacks *stacks;        /* NULL until the generate phase has run; as generated:
-                                            after an edit commits the chunk, read it again with
-                                            terrain_world_stacks (the old stacks are freed at a
-                                            later trim) */
+    const terrain_stacks *stacks;        /* NULL until the generate phase has run; after an edit
+                                            the stabilize phase points it at the new stacks */
 } TerrainChunk;
 
 /* TERRAIN_MESH_CELLS³ cells of the sample grid; (x, y, z) counts mesh chunks. */

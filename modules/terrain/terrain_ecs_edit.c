@@ -252,6 +252,22 @@ static void static_meshes_invalidate(terrain_ecs *te, ecs_commands *commands) {
     }
 }
 
+/* Column-chunk entities point at their stacks: after a commit, at the new ones (the old ones are
+ * freed at a later trim). */
+static void chunk_entities_refresh(terrain_ecs *te) {
+    if (te->changed_count == 0) return;
+    ecs_iter it = ecs_query_iter(te->ecs, te->chunks);
+    while (ecs_query_next(&it)) {
+        TerrainChunk *chunks = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++) {
+            if (!chunks[i].stacks) continue;
+            for (size_t c = 0; c < te->changed_count; c++)
+                if (te->changed[c].coord.x == chunks[i].coord.x && te->changed[c].coord.z == chunks[i].coord.z)
+                    chunks[i].stacks = terrain_world_stacks(te->terrain, chunks[i].coord);
+        }
+    }
+}
+
 static void changes_collect(terrain_ecs *te) {
     te->changed_count = 0;
     for (;;) {
@@ -276,12 +292,13 @@ static void terrain_stabilize_system(ecs_iter *it) {
     }
     changes_collect(te);
     if (te->changed_count) trace_counter("terrain.edit.changed_chunks", (double)te->changed_count);
+    chunk_entities_refresh(te);
     static_meshes_invalidate(te, it->commands);
 }
 
 void terrain__editor_register(terrain_ecs *te) {
     ecs_system_add(te->ecs, &(ecs_system_desc){ .name = "terrain_stabilize", .phase = "stabilize",
-        .writes = { te->mesh_chunk }, .fn = terrain_stabilize_system, .user = te, .main_thread = true });
+        .writes = { te->chunk, te->mesh_chunk }, .fn = terrain_stabilize_system, .user = te, .main_thread = true });
 }
 
 void terrain__editor_destroy(terrain_ecs *te) {

@@ -333,3 +333,35 @@ Test(render_stream, stabilization_spreads_a_pile_across_chunks_and_keeps_its_mas
     cr_assert(streamed_settle(&s, eye, 1, 200) > 0, "every chunk ready again after the last commit");
     streamed_close(&s);
 }
+
+/* Chunks spawned by hand (not streamed) follow edits too: the mesh chunk under the stroke is
+ * meshed again in the frame that applies it, and the column chunk's entity points at the new
+ * stacks. */
+Test(render_stream, spawned_chunks_follow_edits_too) {
+    streamed s = streamed_open(2, NULL);
+    terrain_ecs_spawn_area(s.te, 0, 0, 1, -1, 0);
+    for (int frame = 0; frame < 3; frame++) ecs_progress(s.ecs, DT);
+    TerrainMeshChunk *before = mesh_at(&s, 0, 0, 0);
+    cr_assert(before && before->state == TERRAIN_MESH_UPLOADED);
+    float top_before = before->gpu.bounds_max[1];
+    cr_assert(terrain_ecs_edit(s.te, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                      .deposit = { .x = 16, .z = 16, .radius = 3, .volume = 150 } }));
+    ecs_progress(s.ecs, DT);
+    TerrainMeshChunk *after = mesh_at(&s, 0, 0, 0);
+    cr_assert_not_null(after);
+    cr_expect_eq(after->state, TERRAIN_MESH_UPLOADED);
+    cr_expect_gt(after->gpu.bounds_max[1], top_before + 2.0f, "top %g m, was %g m", (double)after->gpu.bounds_max[1],
+                 (double)top_before);
+    ecs_query *q = ecs_query_create(s.ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(s.ecs, "TerrainChunk") } });
+    ecs_iter it = ecs_query_iter(s.ecs, q);
+    int checked = 0;
+    while (ecs_query_next(&it)) {
+        TerrainChunk *c = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++, checked++)
+            cr_expect_eq(c[i].stacks, terrain_world_stacks(s.world, c[i].coord), "chunk (%lld, %lld)",
+                         (long long)c[i].coord.x, (long long)c[i].coord.z);
+    }
+    ecs_query_destroy(s.ecs, q);
+    cr_expect_eq(checked, 9);
+    streamed_close(&s);
+}
