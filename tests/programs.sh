@@ -28,7 +28,7 @@ expect() {
   fi
 }
 
-for program in bench trace_report hello_systems hello_scene hello_terrain world; do
+for program in bench trace_report hello_systems hello_scene hello_terrain hello_edit world; do
   p=$bin/$program
   expect "$program: unknown flag" 2 "unknown option '--no-such-flag'.*" -- "$p" --no-such-flag
   expect "$program: usage on error" 2 "usage: $program" -- "$p" --no-such-flag
@@ -201,6 +201,14 @@ for phase in input game stream generate stabilize mesh lod cull draw; do
   expect "world: the walk's trace has phase $phase" 0 "(^| )$phase( |$)" -- "$bin/trace_report" "$tmp/walk.json"
 done
 expect "world: the walk's trace has streaming jobs" 0 "terrain stream mesh" -- "$bin/trace_report" "$tmp/walk.json"
+# The editing example: carve, sweep, deposit, stabilize, save, reload the same bytes; a world
+# folder that cannot be made is reported.
+expect "hello_edit: edits saved and reloaded" 0 "reloaded: the same bytes" -- \
+  "$bin/hello_edit" --threads 2 --world "$tmp/hello_edit"
+expect "hello_edit: the tunnel is air" 0 "tunnel's axis at x = 20 is air" -- "$bin/hello_edit" --world "$tmp/hello_edit2"
+touch "$tmp/edit_file"
+expect "hello_edit: unwritable --world" 1 "edit_file" -- "$bin/hello_edit" --world "$tmp/edit_file"
+
 # A world folder: a file in its place is refused, its seed is kept and another one refused, a
 # damaged world.txt is reported.
 touch "$tmp/not_a_folder"
