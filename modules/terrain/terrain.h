@@ -612,10 +612,11 @@ typedef struct terrain_stream_stats {
 } terrain_stream_stats;
 terrain_stream_stats terrain_ecs_stream_stats(terrain_ecs *te);
 /* Far terrain (after terrain_ecs_stream; the clipmap is not owned): the lod phase
- * ("terrain_clipmap") re-centres it on viewer 0 and sinks it under the square viewer 0's rings
- * cover once their chunks are all in; the cull phase ("terrain_clipmap_cull") culls its blocks
- * against the view. Give the renderer the same clipmap (terrain_renderer_set_clipmap). Other
- * viewers' rings are not cut out of it. */
+ * ("terrain_clipmap") re-centres it on viewer 0 and sinks it under the squares every viewer's
+ * rings cover (one hole each, duplicates dropped; terrain_clipmap_set_holes) once all their
+ * chunks are in, keeping the previous squares until then; the cull phase
+ * ("terrain_clipmap_cull") culls its blocks against the view. Give the renderer the same
+ * clipmap (terrain_renderer_set_clipmap). */
 typedef struct terrain_clipmap terrain_clipmap;
 void terrain_ecs_set_clipmap(terrain_ecs *te, terrain_clipmap *clipmap);
 
