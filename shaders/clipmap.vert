@@ -20,7 +20,9 @@ uniform float u_spacing;           // metres between this level's vertices
 uniform float u_camera_y;
 uniform vec2 u_morph;              // where the morph starts (metres from the centre), 1 / width
 uniform vec2 u_morph_centre;       // the camera of the clipmap's last update, camera-relative
-uniform vec4 u_hole;               // the hole, camera-relative: min x, min z, max x, max z
+const int MAX_HOLES = 8;           // TERRAIN_CLIPMAP_MAX_HOLES: one per viewer's rings
+uniform vec4 u_holes[MAX_HOLES];   // the holes, camera-relative: min x, min z, max x, max z
+uniform int u_hole_count;          // how many of them are set
 uniform float u_hole_band, u_hole_depth;
 
 out vec3 v_relative_position;      // to the camera
@@ -38,9 +40,9 @@ vec3 normal_at(int layer, ivec2 texel, float spacing) {
     return normalize(vec3(left - right, 2.0 * spacing, back - front));
 }
 
-// How deep inside the hole a camera-relative point is (≤ 0 outside).
-float hole_depth_inside(vec2 p) {
-    return min(min(p.x - u_hole.x, u_hole.z - p.x), min(p.y - u_hole.y, u_hole.w - p.y));
+// How deep inside a hole a camera-relative point is (≤ 0 outside).
+float hole_depth_inside(vec4 hole, vec2 p) {
+    return min(min(p.x - hole.x, hole.z - p.x), min(p.y - hole.y, hole.w - p.y));
 }
 
 void main() {
@@ -69,11 +71,15 @@ void main() {
             normal = mix(normal, normalize(coarse_normal), alpha);
         }
     }
-    // Inside the hole the surface sinks within u_hole_band of the border to u_hole_depth below
+    // Inside a hole the surface sinks within u_hole_band of the border to u_hole_depth below
     // the ground: a pit under the volumetric chunks, whose walls are the skirt of their open
-    // border (terrain_clipmap.c says why it is a pit rather than a cut-out).
-    float inside = hole_depth_inside(position);
-    float sink = inside > 0.0 ? u_hole_depth * clamp(inside / u_hole_band, 0.0, 1.0) : 0.0;
+    // border (terrain_clipmap.c says why it is a pit rather than a cut-out). Where holes
+    // overlap the deepest pit wins, so their union is one pit (terrain__clipmap_sink mirrors it).
+    float sink = 0.0;
+    for (int h = 0; h < min(u_hole_count, MAX_HOLES); h++) {
+        float inside = hole_depth_inside(u_holes[h], position);
+        sink = max(sink, inside > 0.0 ? u_hole_depth * clamp(inside / u_hole_band, 0.0, 1.0) : 0.0);
+    }
     v_relative_position = vec3(position.x, height - sink - u_camera_y, position.y);
     v_normal = normal;
     v_height = height;

@@ -406,10 +406,11 @@ void terrain_renderer_draw(terrain_renderer *renderer, const terrain_view *view,
  * and the caves) with the octave count the level's spacing can carry (004 §4.1), so distant
  * levels do not alias. Each level's vertices morph towards the next coarser level's surface
  * near its border and meet it exactly there: no cracks between levels. Where the volumetric
- * chunks are drawn (terrain_clipmap_set_hole) the clipmap sinks into a pit under them, deeper
- * than any cave, whose walls skirt the chunks' open border: whatever the mismatch between the
- * two surfaces, a gap shows ground, never sky, from any side (002 §3.5 bends the meso mesh to
- * the clipmap instead; that would be the chunks' mesher's work). The outermost level and the
+ * chunks are drawn (terrain_clipmap_set_holes: one square per viewer's rings) the clipmap sinks
+ * into a pit under them, deeper than any cave, whose walls skirt the chunks' open border:
+ * whatever the mismatch between the two surfaces, a gap shows ground, never sky, from any side
+ * (002 §3.5 bends the meso mesh to the clipmap instead; that would be the chunks' mesher's
+ * work). The outermost level and the
  * far plane fade into the sky (002 §4.4), so the world has no visible end.
  *
  *     terrain_clipmap *far = terrain_clipmap_create(&(terrain_clipmap_desc){
@@ -417,7 +418,7 @@ void terrain_renderer_draw(terrain_renderer *renderer, const terrain_view *view,
  *     terrain_renderer_set_clipmap(renderer, far);
  *     each frame:
  *         terrain_clipmap_update(far, camera);                 // CPU: recentre, new heights
- *         terrain_clipmap_set_hole(far, volume_min, volume_max);  // where the chunks are (x, z)
+ *         terrain_clipmap_set_holes(far, volume_min, volume_max, n);  // where chunks are (x, z)
  *         terrain_frustum frustum = terrain_frustum_from_view(&view);
  *         terrain_clipmap_cull(far, &frustum);                 // CPU: visible blocks
  *         terrain_clipmap_upload(far);                         // main thread: changed texels
@@ -426,10 +427,11 @@ void terrain_renderer_draw(terrain_renderer *renderer, const terrain_view *view,
  *
  * With the defaults (6 levels of 128² cells from 4 m) the finest level covers 512 m around the
  * camera and the outermost 16 km (8 km each way); the far plane (terrain_view.far_distance,
- * 4 km by default) ends the view first. Threads: update, set_hole and cull are CPU work for any
+ * 4 km by default) ends the view first. Threads: update, set_holes and cull are CPU work for any
  * one thread at a time, not while the clipmap is uploaded or drawn (update may fan out on
  * desc.jobs); upload, the draw and destroy use OpenGL: main thread. */
 #define TERRAIN_CLIPMAP_MAX_LEVELS 12
+#define TERRAIN_CLIPMAP_MAX_HOLES 8       /* one per viewer: TERRAIN_MAX_VIEWERS */
 
 typedef struct job_system job_system;
 typedef struct terrain_clipmap terrain_clipmap;
@@ -467,11 +469,18 @@ void terrain_clipmap_destroy(terrain_clipmap *clipmap);
 /* Recentres the levels on the camera (world metres) and computes the heights that came into
  * them (all of them the first time or after a jump); returns how many. */
 uint64_t terrain_clipmap_update(terrain_clipmap *clipmap, const double camera[3]);
-/* The square of the world (x, z in metres) where the volumetric chunks are drawn instead: inside
- * it the clipmap sinks, over desc.hole_band from the border, to desc.hole_depth below the ground
- * (hidden under the chunks). Put its border on level 0's vertex lines (multiples of
- * finest_spacing: chunk borders are), else the sinking starts up to a cell outside it. min ≥ max
- * on either axis (or NULL) = no hole. */
+/* The rectangles of the world (x, z in metres; hole h spans min_xz[h] … max_xz[h]) where the
+ * volumetric chunks are drawn instead, typically one square per viewer's rings: inside a hole
+ * the clipmap sinks, over desc.hole_band from its border, to desc.hole_depth below the ground
+ * (hidden under the chunks). Where holes overlap, a point sinks by the deepest of their pits
+ * there, so no wall rises inside the union where the overlap is at least 2·hole_band wide
+ * (holes that only touch leave a ridge along the shared edge, rising to the ground). Put the
+ * borders on level 0's vertex lines (multiples of finest_spacing: chunk borders are), else the
+ * sinking starts up to a cell outside them. Replaces the previous holes; count is 0 …
+ * TERRAIN_CLIPMAP_MAX_HOLES (more are clamped, with a warning); holes with min ≥ max on either
+ * axis are left out. */
+void terrain_clipmap_set_holes(terrain_clipmap *clipmap, const double (*min_xz)[2], const double (*max_xz)[2], int count);
+/* One hole (terrain_clipmap_set_holes with count 1); min ≥ max on either axis (or NULL) = none. */
 void terrain_clipmap_set_hole(terrain_clipmap *clipmap, const double min_xz[2], const double max_xz[2]);
 /* Marks the blocks (each level is cut into 36) whose bounds the frustum may see, skipping those
  * a finer level covers; returns how many will be drawn. Without a cull since the last update
@@ -603,10 +612,11 @@ typedef struct terrain_stream_stats {
 } terrain_stream_stats;
 terrain_stream_stats terrain_ecs_stream_stats(terrain_ecs *te);
 /* Far terrain (after terrain_ecs_stream; the clipmap is not owned): the lod phase
- * ("terrain_clipmap") re-centres it on viewer 0 and sinks it under the square viewer 0's rings
- * cover once their chunks are all in; the cull phase ("terrain_clipmap_cull") culls its blocks
- * against the view. Give the renderer the same clipmap (terrain_renderer_set_clipmap). Other
- * viewers' rings are not cut out of it. */
+ * ("terrain_clipmap") re-centres it on viewer 0 and sinks it under the squares every viewer's
+ * rings cover (one hole each, duplicates dropped; terrain_clipmap_set_holes) once all their
+ * chunks are in, keeping the previous squares until then; the cull phase
+ * ("terrain_clipmap_cull") culls its blocks against the view. Give the renderer the same
+ * clipmap (terrain_renderer_set_clipmap). */
 typedef struct terrain_clipmap terrain_clipmap;
 void terrain_ecs_set_clipmap(terrain_ecs *te, terrain_clipmap *clipmap);
 

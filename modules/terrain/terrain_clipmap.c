@@ -23,7 +23,7 @@
  * index buffer. The finer level covers exactly segments 1–3 or 2–4 of each axis (h above), so
  * a block is wholly covered or not at all: level L draws the blocks the finer level leaves,
  * those the frustum may see (bounds from the heights, the coarser level's under the morph and
- * the pit's depth where the hole reaches).
+ * the pit's depth where any hole reaches).
  *
  * Seams. Each level's vertices geomorph to the coarser level's triangles near its border
  * (terrain__clipmap_morph, mirrored in shaders/clipmap.vert), reaching them exactly on it: every
@@ -45,6 +45,14 @@
  * which the depth test drops early (the shader never discards). Its one condition: the hole's
  * border lies on the finest level's vertex lines inside it (chunk borders do, at 4 m), else a
  * triangle straddling the border starts sinking outside it.
+ *
+ * Several holes. Every viewer's rings replace the clipmap where they are, so there is one hole
+ * per viewer (up to TERRAIN_CLIPMAP_MAX_HOLES), and the pit is their union's: a point sinks by
+ * the deepest of the pits of the holes that hold it, max_h depth·clamp(inside_h / band, 0, 1).
+ * Where two holes overlap by 2·band or more, every point of the overlap is a band inside one of
+ * them, so the floor runs on without a wall; holes that only touch leave a ridge up to the ground
+ * along the shared edge (each is 0 deep there). The exact distance to the union's border would
+ * close that too, at the cost of a loop over every pair in the vertex shader.
  */
 #include "terrain_internal.h"
 
@@ -87,8 +95,8 @@ struct terrain_clipmap {
     bool has_camera;
     double camera[3];               /* of the last update */
     bool upload_pending;            /* heights changed since the last upload */
-    bool has_hole;
-    double hole_min[2], hole_max[2];
+    int hole_count;                 /* the non-empty holes, 0 … TERRAIN_CLIPMAP_MAX_HOLES */
+    double hole_min[TERRAIN_CLIPMAP_MAX_HOLES][2], hole_max[TERRAIN_CLIPMAP_MAX_HOLES][2];
     int cuts[SEGMENTS + 1];         /* cell cuts of the blocks */
     uint32_t block_first[BLOCKS], block_count[BLOCKS];   /* index ranges */
     uint32_t *indices;              /* CPU copy until the first upload */
@@ -389,12 +397,53 @@ uint64_t terrain_clipmap_update(terrain_clipmap *c, const double camera[3]) {
     return texels;
 }
 
-void terrain_clipmap_set_hole(terrain_clipmap *c, const double min_xz[2], const double max_xz[2]) {
-    c->has_hole = min_xz && max_xz && min_xz[0] < max_xz[0] && min_xz[1] < max_xz[1];
-    for (int a = 0; a < 2; a++) {
-        c->hole_min[a] = c->has_hole ? min_xz[a] : 0;
-        c->hole_max[a] = c->has_hole ? max_xz[a] : 0;
+void terrain_clipmap_set_holes(terrain_clipmap *c, const double (*min_xz)[2], const double (*max_xz)[2], int count) {
+    if (count > TERRAIN_CLIPMAP_MAX_HOLES) {
+        core_warn("terrain", "clipmap: %d holes, at most %d; the rest are left out", count, TERRAIN_CLIPMAP_MAX_HOLES);
+        count = TERRAIN_CLIPMAP_MAX_HOLES;
     }
+    if (!min_xz || !max_xz) count = 0;
+    c->hole_count = 0;
+    for (int h = 0; h < count; h++) {
+        if (!(min_xz[h][0] < max_xz[h][0] && min_xz[h][1] < max_xz[h][1])) continue;   /* empty (or NaN) */
+        memcpy(c->hole_min[c->hole_count], min_xz[h], sizeof min_xz[h]);
+        memcpy(c->hole_max[c->hole_count], max_xz[h], sizeof max_xz[h]);
+        c->hole_count++;
+    }
+}
+
+void terrain_clipmap_set_hole(terrain_clipmap *c, const double min_xz[2], const double max_xz[2]) {
+    if (!min_xz || !max_xz) {
+        terrain_clipmap_set_holes(c, NULL, NULL, 0);
+        return;
+    }
+    const double lo[1][2] = { { min_xz[0], min_xz[1] } }, hi[1][2] = { { max_xz[0], max_xz[1] } };
+    terrain_clipmap_set_holes(c, lo, hi, 1);
+}
+
+int terrain__clipmap_holes(const terrain_clipmap *c, const double camera[3], float holes[][4]) {
+    for (int h = 0; h < c->hole_count; h++) {
+        holes[h][0] = (float)(c->hole_min[h][0] - camera[0]);
+        holes[h][1] = (float)(c->hole_min[h][1] - camera[2]);
+        holes[h][2] = (float)(c->hole_max[h][0] - camera[0]);
+        holes[h][3] = (float)(c->hole_max[h][1] - camera[2]);
+    }
+    return c->hole_count;
+}
+
+/* clipmap.vert's hole_depth_inside and sink, step for step (the tests hold the two alike). */
+float terrain__clipmap_sink(const terrain_clipmap *c, const double camera[3], const float position[2]) {
+    float holes[TERRAIN_CLIPMAP_MAX_HOLES][4];
+    int count = terrain__clipmap_holes(c, camera, holes);
+    float band = c->desc.hole_band, depth = c->desc.hole_depth, sink = 0.0f;
+    for (int h = 0; h < count; h++) {
+        const float *u = holes[h];
+        float inside = fminf(fminf(position[0] - u[0], u[2] - position[0]), fminf(position[1] - u[1], u[3] - position[1]));
+        float ratio = inside / band;
+        ratio = ratio < 0.0f ? 0.0f : ratio > 1.0f ? 1.0f : ratio;
+        sink = fmaxf(sink, inside > 0.0f ? depth * ratio : 0.0f);
+    }
+    return sink;
 }
 
 /* ---- blocks and culling ---- */
@@ -418,10 +467,13 @@ terrain__clipmap_block_info terrain__clipmap_block(const terrain_clipmap *c, int
     info.box_max[1] = lv->block_max[block];
     if (!lv->valid) return info;
     bool in_finer = level > 0 && segment_in_finer(c, level, 0, sx) && segment_in_finer(c, level, 1, sz);
-    /* Blocks reaching into the hole are drawn sunk there (the pit). */
-    if (c->has_hole && info.box_max[0] > c->hole_min[0] && info.box_min[0] < c->hole_max[0] &&
-        info.box_max[2] > c->hole_min[1] && info.box_min[2] < c->hole_max[1])
-        info.box_min[1] -= c->desc.hole_depth;
+    /* Blocks reaching into any hole are drawn sunk there (the pit). */
+    for (int h = 0; h < c->hole_count; h++)
+        if (info.box_max[0] > c->hole_min[h][0] && info.box_min[0] < c->hole_max[h][0] && info.box_max[2] > c->hole_min[h][1] &&
+            info.box_min[2] < c->hole_max[h][1]) {
+            info.box_min[1] -= c->desc.hole_depth;
+            break;
+        }
     info.covered = in_finer;
     info.visible = !info.covered && (!lv->culled || lv->in_frustum[block]);
     return info;
@@ -581,21 +633,18 @@ static void uniform_ivec2(GLuint program, const char *name, const int *value) {
     if (location >= 0) glUniform2i(location, value[0], value[1]);
 }
 
-/* What every level shares: the heights, the hole and the fade into the sky. */
+/* What every level shares: the heights, the holes and the fade into the sky. */
 static void draw_shared_uniforms(terrain_clipmap *c, gfx_context *gfx, gfx_program program, const terrain_view *view) {
     const double *camera = view->camera;
     gfx_uniform_int(gfx, program, "u_heights", 1);
     gfx_uniform_int(gfx, program, "u_size", c->size);
     gfx_uniform_int(gfx, program, "u_cells", c->cells);
     gfx_uniform_float(gfx, program, "u_camera_y", (float)camera[1]);
-    float hole[4] = { 1, 1, -1, -1 };                       /* empty: min > max */
-    if (c->has_hole) {
-        hole[0] = (float)(c->hole_min[0] - camera[0]);
-        hole[1] = (float)(c->hole_min[1] - camera[2]);
-        hole[2] = (float)(c->hole_max[0] - camera[0]);
-        hole[3] = (float)(c->hole_max[1] - camera[2]);
-    }
-    gfx_uniform_vec4(gfx, program, "u_hole", hole);
+    float holes[TERRAIN_CLIPMAP_MAX_HOLES][4];
+    int hole_count = terrain__clipmap_holes(c, camera, holes);
+    gfx_uniform_int(gfx, program, "u_hole_count", hole_count);
+    GLint holes_location = glGetUniformLocation(gfx_program_gl(gfx, program), "u_holes");
+    if (holes_location >= 0 && hole_count > 0) glUniform4fv(holes_location, hole_count, &holes[0][0]);
     gfx_uniform_float(gfx, program, "u_hole_band", c->desc.hole_band);
     gfx_uniform_float(gfx, program, "u_hole_depth", c->desc.hole_depth);
     /* 002 §4.4: the outermost level's last 15 % and the last 15 % before the far plane fade into

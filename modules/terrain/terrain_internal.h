@@ -260,6 +260,14 @@ static inline float terrain__clipmap_morph(float dx, float dz, float start, floa
 void terrain__clipmap_vertex(const terrain_clipmap *clipmap, int level, int i, int k, const double camera[3],
                              float position[2], float *height);
 
+/* The holes as clipmap.vert receives them (u_holes, u_hole_count) for the camera: min x, min z,
+ * max x, max z, camera-relative; returns how many (the empty ones are never kept). */
+int terrain__clipmap_holes(const terrain_clipmap *clipmap, const double camera[3], float holes[][4]);
+
+/* What clipmap.vert sinks a camera-relative position (terrain__clipmap_vertex's) by: the
+ * deepest of the holes' pits there, 0 outside every hole (the drawn height is height − sink). */
+float terrain__clipmap_sink(const terrain_clipmap *clipmap, const double camera[3], const float position[2]);
+
 typedef struct terrain__clipmap_block_info {
     int cells_min[2], cells_max[2];   /* cells [min, max) of the level's grid along x and z */
     double box_min[3], box_max[3];    /* world bounds the cull tests (heights conservative) */

@@ -91,7 +91,8 @@ struct terrain__streamer {
     int64_t y_first[16], y_last[16];       /* mesh layers per level */
     bool layout_ready;                     /* every wanted chunk of the current layout is ready */
     terrain_clipmap *clipmap;              /* far terrain around viewer 0, or NULL */
-    double hole_min[2], hole_max[2];       /* the rings' square of the last layout that was ready */
+    int hole_count;                        /* the rings' squares of the last layout that was ready, */
+    double hole_min[TERRAIN_MAX_VIEWERS][2], hole_max[TERRAIN_MAX_VIEWERS][2];   /* one per place */
     terrain_stream_stats stats;
 };
 
@@ -357,7 +358,7 @@ static bool stream_replaced(const terrain__streamer *s, const stream_record *r) 
                 }
     }
     /* Nothing wanted overlaps it (behind the viewers): it stays until the new layout is all in,
-     * when the clipmap's hole moves over there (the far ground then covers it). */
+     * when the clipmap's holes move over there (the far ground then covers it). */
     return s->layout_ready;
 }
 
@@ -640,16 +641,26 @@ static void terrain_stream_mesh_system(ecs_iter *it) {
 
 /* ---- the far terrain around viewer 0 --------------------------------------------------------- */
 
-/* The square the rings of viewer 0 cover once all their chunks are in: the clipmap sinks there
- * (its pit skirts the chunks' border). Until then the previous square stays, where the chunks
- * of the previous layout are still drawn. */
-static void stream_update_hole(terrain__streamer *s) {
+_Static_assert(TERRAIN_CLIPMAP_MAX_HOLES == TERRAIN_MAX_VIEWERS, "one clipmap hole per viewer's rings");
+
+/* The squares the rings of every viewer cover once all their chunks are in: the clipmap sinks
+ * there (002 §3.5: the volumetric chunks replace it; its pit skirts the chunks' border). Viewers
+ * whose rings share a centre share a square, kept once. Until then the previous squares stay,
+ * where the chunks of the previous layout are still drawn. */
+static void stream_update_holes(terrain__streamer *s) {
     if (!s->layout_ready || s->centre_count == 0) return;
     double coarsest = (double)TERRAIN_MESH_CELLS * (double)(1 << (s->desc.levels - 1));
     double half = (double)s->desc.half_width * coarsest;
-    for (int a = 0; a < 2; a++) {
-        s->hole_min[a] = (double)s->centres[0][a] * coarsest - half;
-        s->hole_max[a] = (double)s->centres[0][a] * coarsest + half;
+    s->hole_count = 0;
+    for (int v = 0; v < s->centre_count; v++) {
+        bool seen = false;
+        for (int u = 0; u < v && !seen; u++) seen = s->centres[u][0] == s->centres[v][0] && s->centres[u][1] == s->centres[v][1];
+        if (seen) continue;
+        for (int a = 0; a < 2; a++) {
+            s->hole_min[s->hole_count][a] = (double)s->centres[v][a] * coarsest - half;
+            s->hole_max[s->hole_count][a] = (double)s->centres[v][a] * coarsest + half;
+        }
+        s->hole_count++;
     }
 }
 
@@ -658,8 +669,8 @@ static void terrain_clipmap_lod_system(ecs_iter *it) {
     terrain__streamer *s = te->stream;
     if (!s->clipmap || s->viewer_count == 0) return;
     terrain_clipmap_update(s->clipmap, s->viewers[0]);
-    stream_update_hole(s);
-    terrain_clipmap_set_hole(s->clipmap, s->hole_min, s->hole_max);
+    stream_update_holes(s);
+    terrain_clipmap_set_holes(s->clipmap, s->hole_min, s->hole_max, s->hole_count);
 }
 
 static void terrain_clipmap_cull_system(ecs_iter *it) {

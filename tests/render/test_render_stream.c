@@ -8,6 +8,7 @@
 #include "ecs/ecs.h"
 #include "jobs/jobs.h"
 #include "terrain/terrain.h"
+#include "terrain/terrain_internal.h"
 
 #include <criterion/criterion.h>
 #include <math.h>
@@ -211,6 +212,54 @@ Test(render_stream, two_viewers_get_rings_that_fit_together) {
     cr_expect_gt(touching, 0);
     cr_expect_eq(overlapping, 0, "%d drawn chunks overlap", overlapping);
     free(boxes);
+    streamed_close(&s);
+}
+
+/* The clipmap's holes (terrain_ecs_set_clipmap): the square each viewer's rings cover (its
+ * centre snapped to the nearest line of the 64 m coarsest chunks, ± 2 of them), once all are in;
+ * the previous ones until then; one square for viewers that share it. */
+static int clipmap_holes(const terrain_clipmap *clipmap, float holes[][4]) {
+    return terrain__clipmap_holes(clipmap, (const double[3]){ 0, 0, 0 }, holes);   /* world x, z */
+}
+
+Test(render_stream, every_viewers_rings_are_a_hole_in_the_clipmap) {
+    streamed s = streamed_open(2, &small_rings);
+    terrain_clipmap *clipmap = terrain_clipmap_create(&(terrain_clipmap_desc){ .levels = 2, .cells = 16,
+                                                                              .generation = terrain_generation_defaults(1) });
+    terrain_ecs_set_clipmap(s.te, clipmap);
+    float holes[TERRAIN_CLIPMAP_MAX_HOLES][4];
+    const double apart[2][3] = { { 1, 5, 1 }, { 5000, 5, 1 } };
+    terrain_ecs_set_viewers(s.te, apart, 2);
+    ecs_progress(s.ecs, DT);
+    cr_assert_eq(clipmap_holes(clipmap, holes), 0, "no hole before the rings are in");
+    cr_assert(streamed_settle(&s, apart, 2, 3000) > 0);
+    ecs_progress(s.ecs, DT);
+    cr_assert_eq(clipmap_holes(clipmap, holes), 2);
+    /* 5000 / 64 = 78.1: centred on 78 · 64 = 4992. */
+    const float expected[2][4] = { { -128, -128, 128, 128 }, { 4864, -128, 5120, 128 } };
+    for (int h = 0; h < 2; h++)
+        for (int a = 0; a < 4; a++) cr_assert_eq(holes[h][a], expected[h][a], "hole %d side %d: %g", h, a, holes[h][a]);
+
+    /* The second viewer jumps 640 m on: until its new rings are in, the old squares stay. */
+    const double jumped[2][3] = { { 1, 5, 1 }, { 5640, 5, 1 } };
+    terrain_ecs_set_viewers(s.te, jumped, 2);
+    ecs_progress(s.ecs, DT);
+    cr_assert_lt(terrain_ecs_stream_stats(s.te).mesh_chunks_ready, terrain_ecs_stream_stats(s.te).mesh_chunks_wanted);
+    cr_assert_eq(clipmap_holes(clipmap, holes), 2);
+    cr_assert_eq(holes[1][0], 4864.0f);
+    cr_assert(streamed_settle(&s, jumped, 2, 3000) > 0);
+    ecs_progress(s.ecs, DT);
+    cr_assert_eq(clipmap_holes(clipmap, holes), 2);
+    cr_assert_eq(holes[1][0], 5504.0f, "5640 / 64 = 88.1: 88 · 64 − 128");
+
+    /* Two viewers in the same rings: one square. */
+    const double together[2][3] = { { 1, 5, 1 }, { 20, 5, -25 } };
+    cr_assert(streamed_settle(&s, together, 2, 3000) > 0);
+    ecs_progress(s.ecs, DT);
+    cr_assert_eq(clipmap_holes(clipmap, holes), 1);
+    for (int a = 0; a < 4; a++) cr_assert_eq(holes[0][a], expected[0][a]);
+    terrain_ecs_set_clipmap(s.te, NULL);
+    terrain_clipmap_destroy(clipmap);
     streamed_close(&s);
 }
 

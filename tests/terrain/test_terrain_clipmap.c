@@ -389,3 +389,186 @@ Test(terrain_clipmap, culling_drops_blocks_behind_and_keeps_the_one_under_the_ca
     for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) cr_assert_eq(terrain__clipmap_block(c, 0, b).box_min[1], before[b].box_min[1]);
     terrain_clipmap_destroy(c);
 }
+
+/* ---- holes: one pit per viewer's rings (002 §3.5) ---- */
+
+#define PIT_BAND 8.0f      /* two level-0 cells */
+#define PIT_DEPTH 100.0f
+
+/* A hole over level-0 cells [lo, hi) along x and z, in cell indices of the level's grid. */
+typedef struct cell_rect {
+    int lo[2], hi[2];
+} cell_rect;
+
+static terrain_clipmap *pit_clipmap(const double camera[3]) {
+    terrain_clipmap *c = terrain_clipmap_create(&(terrain_clipmap_desc){
+        .levels = 2, .cells = 64, .finest_spacing = 4.0f, .hole_band = PIT_BAND, .hole_depth = PIT_DEPTH,
+        .generation = terrain_generation_defaults(3) });
+    terrain_clipmap_update(c, camera);
+    return c;
+}
+
+static void set_cell_holes(terrain_clipmap *c, const cell_rect *rects, int count) {
+    terrain__clipmap_level_info info = terrain__clipmap_level(c, 0);
+    double lo[16][2], hi[16][2];
+    for (int h = 0; h < count; h++)
+        for (int a = 0; a < 2; a++) {
+            lo[h][a] = (double)(info.first[a] + rects[h].lo[a]) * 4.0;
+            hi[h][a] = (double)(info.first[a] + rects[h].hi[a]) * 4.0;
+        }
+    terrain_clipmap_set_holes(c, lo, hi, count);
+}
+
+/* Level-0 cells from vertex (i, k) inside the rectangle to its nearest side (≤ 0 outside). */
+static int cells_inside(const cell_rect *r, int i, int k) {
+    return CORE_MIN(CORE_MIN(i - r->lo[0], r->hi[0] - i), CORE_MIN(k - r->lo[1], r->hi[1] - k));
+}
+
+/* The pit's depth d cells from the border of the sunk area: a wall over the band, then the floor. */
+static float pit_at(int d) { return d <= 0 ? 0.0f : PIT_DEPTH * fminf((float)d * 4.0f / PIT_BAND, 1.0f); }
+
+/* What clipmap.vert sinks level-0 vertex (i, k) by, through the CPU mirror. */
+static float vertex_sink(const terrain_clipmap *c, const double camera[3], int i, int k) {
+    float p[2], h;
+    terrain__clipmap_vertex(c, 0, i, k, camera, p, &h);
+    return terrain__clipmap_sink(c, camera, p);
+}
+
+static bool block_reaches(const terrain__clipmap_block_info *b, const cell_rect *r) {
+    /* A block's box has one cell more around it. */
+    return b->cells_max[0] + 1 > r->lo[0] && b->cells_min[0] - 1 < r->hi[0] && b->cells_max[1] + 1 > r->lo[1] &&
+           b->cells_min[1] - 1 < r->hi[1];
+}
+
+Test(terrain_clipmap, two_disjoint_holes_sink_inside_either_and_nowhere_else) {
+    const double camera[3] = { 2000.0, 0.0, -3000.0 };   /* multiples of 4 m: every offset exact */
+    terrain_clipmap *c = pit_clipmap(camera);
+    terrain__clipmap_block_info before[TERRAIN__CLIPMAP_BLOCKS];
+    for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) before[b] = terrain__clipmap_block(c, 0, b);
+    const cell_rect holes[2] = { { { 4, 6 }, { 14, 16 } }, { { 40, 36 }, { 60, 58 } } };
+    set_cell_holes(c, holes, 2);
+    int floor_in[2] = { 0, 0 }, wall_in[2] = { 0, 0 }, outside = 0;
+    for (int k = 0; k <= 64; k++)
+        for (int i = 0; i <= 64; i++) {
+            float sink = vertex_sink(c, camera, i, k);
+            int in0 = cells_inside(&holes[0], i, k), in1 = cells_inside(&holes[1], i, k);
+            cr_assert(in0 <= 0 || in1 <= 0, "the holes are disjoint");
+            int h = in0 > 0 ? 0 : in1 > 0 ? 1 : -1, d = h == 0 ? in0 : in1;
+            if (h < 0) {
+                cr_assert_eq(sink, 0.0f, "vertex (%d, %d) outside both holes sinks by %g", i, k, sink);
+                outside++;
+            } else if (d >= 2) {   /* a band (8 m = 2 cells) or more inside: on the floor */
+                cr_assert_eq(sink, PIT_DEPTH, "vertex (%d, %d), %d cells inside hole %d, sinks by %g", i, k, d, h, sink);
+                floor_in[h]++;
+            } else {               /* one cell (4 m) in: half way down the wall */
+                cr_assert_eq(sink, 0.5f * PIT_DEPTH, "vertex (%d, %d) on hole %d's wall sinks by %g", i, k, h, sink);
+                wall_in[h]++;
+            }
+        }
+    /* Hole 0 is 10 × 10 cells: 9 × 9 vertices inside, of which those 2 or more cells in from
+     * every side, 7 × 7, on the floor; hole 1 is 20 × 22 cells. */
+    cr_assert_eq(floor_in[0], 7 * 7);
+    cr_assert_eq(floor_in[1], 17 * 19);
+    cr_assert_eq(wall_in[0], 9 * 9 - 7 * 7);
+    cr_assert_eq(wall_in[1], 19 * 21 - 17 * 19);
+    cr_assert_eq(outside, 65 * 65 - 9 * 9 - 19 * 21);
+
+    /* Culling: a block's box reaches hole_depth lower where it reaches into either hole. */
+    int sunk[2] = { 0, 0 };
+    for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) {
+        terrain__clipmap_block_info block = terrain__clipmap_block(c, 0, b);
+        bool r0 = block_reaches(&block, &holes[0]), r1 = block_reaches(&block, &holes[1]);
+        cr_assert_float_eq(block.box_min[1], before[b].box_min[1] - (r0 || r1 ? PIT_DEPTH : 0.0), 1e-3, "block %d", b);
+        sunk[0] += r0;
+        sunk[1] += r1 && !r0;
+    }
+    /* Cuts at 0, 16, 17, 32, 48, 49, 64, boxes a cell wider: hole 0 (cells 4 … 14, 6 … 16)
+     * reaches segment 0 along x and segments 0–1 along z, hole 1 segments 3–5 along both. */
+    cr_assert_eq(sunk[0], 2);
+    cr_assert_eq(sunk[1], 9, "the blocks of the second hole are sunk too");
+
+    /* The one-hole form replaces them all: the second hole is gone. */
+    double lo[2], hi[2];
+    terrain__clipmap_level_info info = terrain__clipmap_level(c, 0);
+    for (int a = 0; a < 2; a++) {
+        lo[a] = (double)(info.first[a] + holes[0].lo[a]) * 4.0;
+        hi[a] = (double)(info.first[a] + holes[0].hi[a]) * 4.0;
+    }
+    terrain_clipmap_set_hole(c, lo, hi);
+    cr_assert_eq(vertex_sink(c, camera, 8, 10), PIT_DEPTH);
+    cr_assert_eq(vertex_sink(c, camera, 50, 47), 0.0f);
+    /* More than TERRAIN_CLIPMAP_MAX_HOLES: the ninth is left out (with a warning). */
+    cell_rect nine[9];
+    for (int h = 0; h < 9; h++) nine[h] = (cell_rect){ { 2 + 6 * h, 2 }, { 6 + 6 * h, 6 } };
+    set_cell_holes(c, nine, 9);
+    cr_assert_eq(vertex_sink(c, camera, 4 + 6 * 7, 4), PIT_DEPTH, "the eighth hole is kept");
+    cr_assert_eq(vertex_sink(c, camera, 4 + 6 * 8, 4), 0.0f, "the ninth is not");
+    terrain_clipmap_set_holes(c, NULL, NULL, 0);
+    for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) cr_assert_eq(terrain__clipmap_block(c, 0, b).box_min[1], before[b].box_min[1]);
+    terrain_clipmap_destroy(c);
+}
+
+/* Chebyshev distance, in cells, from vertex (i, k) to the part of the plane outside every
+ * rectangle: brute force over the unit cells (each wholly in or wholly out; all rectangles lie
+ * well inside 0 … 64, so the cells there that are out are the nearest). */
+static int cells_to_outside(const cell_rect *rects, int count, int i, int k) {
+    int best = INT32_MAX;
+    for (int z = -1; z <= 64; z++)
+        for (int x = -1; x <= 64; x++) {
+            bool in = false;
+            for (int h = 0; h < count; h++)
+                in |= x >= rects[h].lo[0] && x < rects[h].hi[0] && z >= rects[h].lo[1] && z < rects[h].hi[1];
+            if (in) continue;
+            int dx = i < x ? x - i : i > x + 1 ? i - (x + 1) : 0, dz = k < z ? z - k : k > z + 1 ? k - (z + 1) : 0;
+            best = CORE_MIN(best, CORE_MAX(dx, dz));
+        }
+    return best;
+}
+
+/* Overlapping holes (by 8 cells, more than twice the band) make one pit: everywhere its depth is
+ * that of the union's own pit, the wall rising only at the union's border, none along a hole's
+ * side that runs inside the other hole. Once side by side (the union a rectangle), once offset
+ * (an L, with two inner corners). */
+Test(terrain_clipmap, overlapping_holes_sink_as_one_pit_without_a_wall_inside) {
+    const double camera[3] = { -4000.0, 0.0, 1200.0 };
+    terrain_clipmap *c = pit_clipmap(camera);
+    const cell_rect cases[2][2] = {
+        { { { 8, 8 }, { 24, 24 } }, { { 16, 8 }, { 32, 24 } } },    /* union: x 8 … 32, z 8 … 24 */
+        { { { 8, 8 }, { 24, 24 } }, { { 16, 16 }, { 32, 32 } } },   /* an L-shaped union */
+    };
+    for (int n = 0; n < 2; n++) {
+        set_cell_holes(c, cases[n], 2);
+        int floor = 0, inner_sides = 0;
+        for (int k = 0; k <= 64; k++)
+            for (int i = 0; i <= 64; i++) {
+                int d = cells_to_outside(cases[n], 2, i, k);
+                float sink = vertex_sink(c, camera, i, k);
+                cr_assert_eq(sink, pit_at(d), "case %d vertex (%d, %d): %d cells inside the union, sinks by %g", n, i, k, d, sink);
+                floor += d >= 2;
+                /* On one hole's side, inside the other: a single hole's pit would be 0 there. */
+                for (int h = 0; h < 2; h++)
+                    if (cells_inside(&cases[n][h], i, k) == 0 && cells_inside(&cases[n][1 - h], i, k) >= 2) {
+                        cr_assert_eq(sink, PIT_DEPTH, "case %d vertex (%d, %d): a wall inside the union", n, i, k);
+                        inner_sides++;
+                    }
+            }
+        /* Side by side, the floor is that of the 24 × 16-cell union: vertices 10 … 30 by 10 … 22. */
+        if (n == 0) cr_assert_eq(floor, 21 * 13);
+        cr_assert_gt(inner_sides, 0);
+    }
+
+    /* A block reaching into both holes is sunk once, by hole_depth. */
+    terrain_clipmap_set_holes(c, NULL, NULL, 0);
+    terrain__clipmap_block_info before[TERRAIN__CLIPMAP_BLOCKS];
+    for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) before[b] = terrain__clipmap_block(c, 0, b);
+    set_cell_holes(c, cases[0], 2);
+    int both = 0;
+    for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) {
+        terrain__clipmap_block_info block = terrain__clipmap_block(c, 0, b);
+        bool r0 = block_reaches(&block, &cases[0][0]), r1 = block_reaches(&block, &cases[0][1]);
+        cr_assert_float_eq(block.box_min[1], before[b].box_min[1] - (r0 || r1 ? PIT_DEPTH : 0.0), 1e-3, "block %d", b);
+        both += r0 && r1;
+    }
+    cr_assert_gt(both, 0);
+    terrain_clipmap_destroy(c);
+}
