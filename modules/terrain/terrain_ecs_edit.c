@@ -178,8 +178,10 @@ static void regions_stabilize(terrain_ecs *te) {
             return;
         }
         bool grew = false;
+        /* Woken chunks lie beyond the regions; a region already held is never reloaded here
+         * (that would drop this frame's moves). */
         for (int w = 0; w < result.woken_count && w < TERRAIN_STABILIZE_MAX_WOKEN; w++)
-            grew |= region_load(te, result.woken[w], false);
+            if (!region_find(ed, result.woken[w])) grew |= region_load(te, result.woken[w], false);
         uint64_t spent = core_time_ns() - start;
         bool out_of_time = params.budget_ns && spent >= ed->settings.stabilize.budget_ns;
         if (result.woken_count == 0 || out_of_time) break;
