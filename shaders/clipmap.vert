@@ -8,7 +8,7 @@
 // Everything arrives camera-relative: positions are small wherever the camera is.
 
 uniform mat4 u_view_projection;    // camera at the origin
-uniform sampler2DArray u_heights;  // R32F, one layer per level
+uniform sampler2DArray u_heights;  // RGBA32F, one layer per level: height, then the unit normal
 uniform int u_size;                // texels along each side of a layer (toroidal period)
 uniform int u_cells;               // cells along each side of a level
 uniform int u_layer, u_coarse_layer;   // this level's layer, the coarser level's (−1: none)
@@ -29,15 +29,11 @@ out vec3 v_relative_position;      // to the camera
 out vec3 v_normal;
 out float v_height;                // world height of the ground (before any sinking)
 
-float height_at(int layer, ivec2 texel) {
-    return texelFetch(u_heights, ivec3((texel + u_size) % u_size, layer), 0).r;
-}
-
-// Central differences over the level's own grid (one texel ring beyond the vertices is kept).
-vec3 normal_at(int layer, ivec2 texel, float spacing) {
-    float left = height_at(layer, texel - ivec2(1, 0)), right = height_at(layer, texel + ivec2(1, 0));
-    float back = height_at(layer, texel - ivec2(0, 1)), front = height_at(layer, texel + ivec2(0, 1));
-    return normalize(vec3(left - right, 2.0 * spacing, back - front));
+// The height and the normal (central differences over the level's own grid, one texel ring
+// beyond the vertices kept for them) in one read: the CPU packs them (packed_texel in
+// terrain_clipmap.c), which spares four reads per vertex.
+vec4 texel_at(int layer, ivec2 texel) {
+    return texelFetch(u_heights, ivec3((texel + u_size) % u_size, layer), 0);
 }
 
 // How deep inside a hole a camera-relative point is (≤ 0 outside).
@@ -51,8 +47,9 @@ void main() {
     // that two levels share gets the same bits in both.
     precise vec2 position = u_anchor + vec2(u_offset + grid) * u_spacing;
     ivec2 texel = u_start + grid;
-    float fine = height_at(u_layer, texel);
-    vec3 normal = normal_at(u_layer, texel, u_spacing);
+    vec4 here = texel_at(u_layer, texel);
+    float fine = here.r;
+    vec3 normal = here.gba;
     precise float height = fine;
     if (u_coarse_layer >= 0) {
         bool border = grid.x == 0 || grid.y == 0 || grid.x == u_cells || grid.y == u_cells;
@@ -65,8 +62,9 @@ void main() {
             // The coarser triangles under the vertex: its vertex, an edge's midpoint, or the
             // midpoint of the cell's (0, 0)–(1, 1) diagonal.
             ivec2 c0 = u_coarse_start + (grid >> 1), c1 = c0 + (grid & 1);
-            precise float coarse = 0.5 * (height_at(u_coarse_layer, c0) + height_at(u_coarse_layer, c1));
-            vec3 coarse_normal = normal_at(u_coarse_layer, c0, 2.0 * u_spacing) + normal_at(u_coarse_layer, c1, 2.0 * u_spacing);
+            vec4 t0 = texel_at(u_coarse_layer, c0), t1 = texel_at(u_coarse_layer, c1);
+            precise float coarse = 0.5 * (t0.r + t1.r);
+            vec3 coarse_normal = t0.gba + t1.gba;
             height = (1.0 - alpha) * fine + alpha * coarse;
             normal = mix(normal, normalize(coarse_normal), alpha);
         }

@@ -14,7 +14,8 @@
  * toroidal array of (n + 4)² floats: grid point (i, k) lives at (i mod T, k mod T), so when the
  * level moves only the rows and columns that came in are computed (terrain__ground_row_spaced:
  * G with the octaves the spacing carries, 004 §4.1) and uploaded, at the same toroidal place in
- * one R32F texture layer per level. A value depends only on its grid point, so an incremental
+ * one RGBA32F texture layer per level (the height and its normal, packed at upload: one read per
+ * vertex). A height depends only on its grid point, so an incremental
  * update gives exactly the array a fresh build at the new place would (tested).
  *
  * Blocks. The vertex and index data are one static grid of (n + 1)² vertices shared by every
@@ -95,6 +96,8 @@ struct terrain_clipmap {
     bool has_camera;
     double camera[3];               /* of the last update */
     bool upload_pending;            /* heights changed since the last upload */
+    uint8_t *upload_flags;          /* scratch of terrain_clipmap_upload: size */
+    float (*upload_texels)[4];      /* scratch: size² packed texels */
     int hole_count;                 /* the non-empty holes, 0 … TERRAIN_CLIPMAP_MAX_HOLES */
     double hole_min[TERRAIN_CLIPMAP_MAX_HOLES][2], hole_max[TERRAIN_CLIPMAP_MAX_HOLES][2];
     int cuts[SEGMENTS + 1];         /* cell cuts of the blocks */
@@ -226,6 +229,8 @@ void terrain_clipmap_destroy(terrain_clipmap *c) {
         core_free(c->levels[l].dirty_rows, (size_t)c->size);
     }
     if (c->indices) core_free(c->indices, c->index_count * sizeof *c->indices);
+    if (c->upload_flags) core_free(c->upload_flags, (size_t)c->size);
+    if (c->upload_texels) core_free(c->upload_texels, texels * sizeof *c->upload_texels);
     if (c->tasks) core_free(c->tasks, c->task_capacity * sizeof *c->tasks);
     core_free(c, sizeof *c);
 }
@@ -583,24 +588,49 @@ terrain_clipmap_stats terrain_clipmap_stats_get(const terrain_clipmap *c) { retu
 
 /* ---- GPU ---- */
 
-static void upload_runs(const terrain_clipmap *c, int level, uint8_t *flags, bool rows) {
+/* Texel (i, k) of a level as the GPU keeps it: the height and the normal from central
+ * differences over the level's own grid, so the vertex shader reads one texel where it read
+ * five (on llvmpipe those reads were a third of the clipmap's draw). Neighbours wrap like the
+ * grid; only the ring's own normals (which no vertex uses) see a stale neighbour. */
+static void packed_texel(const clipmap_level *lv, int size, int i, int k, float out[4]) {
+    const float *h = lv->heights;
+    int left = (i + size - 1) % size, right = (i + 1) % size, back = (k + size - 1) % size, front = (k + 1) % size;
+    float dx = h[(size_t)k * size + left] - h[(size_t)k * size + right];
+    float dz = h[(size_t)back * size + i] - h[(size_t)front * size + i];
+    float dy = 2.0f * (float)lv->spacing, length = sqrtf(dx * dx + dy * dy + dz * dz);
+    out[0] = h[(size_t)k * size + i];
+    out[1] = dx / length, out[2] = dy / length, out[3] = dz / length;
+}
+
+/* Uploads the flagged rows (or columns) and their neighbours, whose normals the new heights
+ * changed, and clears the flags. */
+static void upload_runs(terrain_clipmap *c, int level, uint8_t *flags, bool rows) {
     const clipmap_level *lv = &c->levels[level];
     int size = c->size;
+    if (size <= 0) return;
+    uint8_t *wide = c->upload_flags;
+    for (int a = 0; a < size; a++) wide[a] = flags[a] || flags[(a + 1) % size] || flags[(a + size - 1) % size];
+    memset(flags, 0, (size_t)size);
     for (int a = 0; a < size;) {
-        if (!flags[a]) { a++; continue; }
+        if (!wide[a]) { a++; continue; }
         int b = a;
-        while (b < size && flags[b]) flags[b++] = 0;
-        if (rows)
-            glTextureSubImage3D(c->texture, 0, 0, a, level, size, b - a, 1, GL_RED, GL_FLOAT, lv->heights + (size_t)a * size);
-        else
-            glTextureSubImage3D(c->texture, 0, a, 0, level, b - a, size, 1, GL_RED, GL_FLOAT, lv->heights + a);
+        while (b < size && wide[b]) b++;
+        int count = b - a;
+        float (*texels)[4] = c->upload_texels;
+        for (int n = 0; n < count; n++)
+            for (int m = 0; m < size; m++)
+                packed_texel(lv, size, rows ? m : a + n, rows ? a + n : m, texels[rows ? (size_t)n * size + m : (size_t)m * count + n]);
+        if (rows) glTextureSubImage3D(c->texture, 0, 0, a, level, size, count, 1, GL_RGBA, GL_FLOAT, texels);
+        else glTextureSubImage3D(c->texture, 0, a, 0, level, count, size, 1, GL_RGBA, GL_FLOAT, texels);
         a = b;
     }
 }
 
 static void create_gpu_objects(terrain_clipmap *c) {
     glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &c->texture);
-    glTextureStorage3D(c->texture, 1, GL_R32F, c->size, c->size, c->level_count);
+    glTextureStorage3D(c->texture, 1, GL_RGBA32F, c->size, c->size, c->level_count);
+    c->upload_flags = core_calloc((size_t)c->size, 1);
+    c->upload_texels = core_calloc((size_t)c->size * (size_t)c->size, sizeof *c->upload_texels);
     /* texelFetch only: the shader wraps the toroidal indices itself. */
     glTextureParameteri(c->texture, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTextureParameteri(c->texture, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
@@ -617,14 +647,12 @@ static void create_gpu_objects(terrain_clipmap *c) {
 void terrain_clipmap_upload(terrain_clipmap *c) {
     TRACE_ZONE("terrain_clipmap_upload");
     if (!c->texture) create_gpu_objects(c);
-    glPixelStorei(GL_UNPACK_ROW_LENGTH, c->size);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     for (int l = 0; l < c->level_count; l++) {
         if (!c->levels[l].valid) continue;
         upload_runs(c, l, c->levels[l].dirty_columns, false);
         upload_runs(c, l, c->levels[l].dirty_rows, true);
     }
-    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
     c->upload_pending = false;
 }
 
