@@ -15,6 +15,21 @@ trap 'rm -rf "$tmp"' EXIT
 passed=0 failed=0
 pass() { passed=$((passed + 1)); echo "[ ok ] $1"; }
 fail() { failed=$((failed + 1)); echo "[FAIL] $1"; }
+# in_window TITLE SECONDS KEYS OUT COMMAND…: runs COMMAND (output to OUT), waits up to SECONDS for
+# its window titled TITLE, focuses it and calls the function KEYS with the window id, then waits
+# for COMMAND to end; returns its exit status.
+in_window() {
+  local title=$1 seconds=$2 keys=$3 out=$4 window
+  shift 4
+  "$@" >"$out" 2>&1 &
+  local pid=$!
+  if window=$(timeout "$seconds" xdotool search --sync --name "^$title\$" | head -1) && [[ -n $window ]]; then
+    xdotool windowfocus --sync "$window"
+    "$keys" "$window"
+  fi
+  timeout "$seconds" tail --pid="$pid" -f /dev/null
+  wait "$pid"
+}
 
 if "$bin/test_render" --filter 'render_window/*' >"$tmp/window.log" 2>&1; then
   pass "window: ten frames and a screenshot"
@@ -23,16 +38,12 @@ else
 fi
 
 # Walk forward, then right, then quit with Escape, all through real X key events.
-"$bin/hello_scene" --size 160x90 --record "$tmp/walk.rec" >"$tmp/record.out" 2>&1 &
-scene=$!
-if window=$(timeout 20 xdotool search --sync --name '^hello_scene$' | head -1) && [[ -n $window ]]; then
-  xdotool windowfocus --sync "$window"
+scene_keys() {
   xdotool keydown w; sleep 0.4; xdotool keyup w
   xdotool keydown d; sleep 0.2; xdotool keyup d
   xdotool key Escape
-fi
-timeout 20 tail --pid="$scene" -f /dev/null
-wait "$scene"
+}
+in_window hello_scene 20 scene_keys "$tmp/record.out" "$bin/hello_scene" --size 160x90 --record "$tmp/walk.rec"
 recorded=$?
 "$bin/hello_scene" --headless --size 160x90 --replay "$tmp/walk.rec" >"$tmp/replay.out" 2>&1
 replayed=$?
@@ -49,15 +60,12 @@ fi
 
 # The same with the world and its player: walk, jump, walk, quit; the replay offscreen ends with
 # the player at the same place.
-"$bin/world" --size 160x90 --radius 1 --levels 1 --record "$tmp/terrain.rec" >"$tmp/terrain-record.out" 2>&1 &
-terrain=$!
-if window=$(timeout 120 xdotool search --sync --name '^world$' | head -1) && [[ -n $window ]]; then
-  xdotool windowfocus --sync "$window"
+walk_keys() {
   xdotool keydown w; sleep 0.5; xdotool key space; sleep 0.5; xdotool keyup w
   xdotool key Escape
-fi
-timeout 120 tail --pid="$terrain" -f /dev/null
-wait "$terrain"
+}
+in_window world 120 walk_keys "$tmp/terrain-record.out" \
+  "$bin/world" --size 160x90 --radius 1 --levels 1 --record "$tmp/terrain.rec"
 recorded=$?
 "$bin/world" --headless --size 160x90 --radius 1 --levels 1 --replay "$tmp/terrain.rec" >"$tmp/terrain-replay.out" 2>&1
 replayed=$?
@@ -77,19 +85,15 @@ fi
 # Terrain tools in a window: click to capture the mouse, look down, Tab to the sand tool, click to
 # drop sand, let go, quit. The stroke is saved in the world folder; the recording replayed
 # offscreen makes the same stroke.
-"$bin/world" --size 160x90 --radius 1 --levels 1 --world "$tmp/edited" --record "$tmp/tools.rec" \
-  >"$tmp/tools-record.out" 2>&1 &
-tools=$!
-if window=$(timeout 120 xdotool search --sync --name '^world$' | head -1) && [[ -n $window ]]; then
-  xdotool windowfocus --sync "$window"
-  xdotool mousemove --window "$window" 80 45 click 1; sleep 0.3
+tool_keys() {
+  xdotool mousemove --window "$1" 80 45 click 1; sleep 0.3
   xdotool mousemove_relative --sync 0 240; sleep 0.3
   xdotool key Tab; sleep 0.2; xdotool key Tab; sleep 0.2
   xdotool click 1; sleep 0.5
   xdotool key Escape; sleep 0.2; xdotool key Escape
-fi
-timeout 120 tail --pid="$tools" -f /dev/null
-wait "$tools"
+}
+in_window world 120 tool_keys "$tmp/tools-record.out" \
+  "$bin/world" --size 160x90 --radius 1 --levels 1 --world "$tmp/edited" --record "$tmp/tools.rec"
 recorded=$?
 "$bin/world" --headless --size 160x90 --radius 1 --levels 1 --replay "$tmp/tools.rec" >"$tmp/tools-replay.out" 2>&1
 replayed=$?

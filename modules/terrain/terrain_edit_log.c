@@ -832,25 +832,6 @@ static bool name_coord(const char *name, terrain_chunk_coord *coord) {
     return true;
 }
 
-/* mkdir -p: every missing folder along `path`. */
-static bool make_dirs(const char *path, char *error, size_t error_size) {
-    char *copy = path_format("%s", path);
-    bool ok = true;
-    for (char *slash = copy + 1; ok; slash++) {
-        if (*slash != '/' && *slash != '\0') continue;
-        char kept = *slash;
-        *slash = '\0';
-        struct stat info;
-        if (mkdir(copy, 0777) != 0 && (errno != EEXIST || stat(copy, &info) != 0 || !S_ISDIR(info.st_mode)))
-            ok = core_error_format(error, error_size, "%s: cannot create the folder (%s)", copy,
-                                   strerror(errno == EEXIST ? ENOTDIR : errno));
-        *slash = kept;
-        if (kept == '\0') break;
-    }
-    path_free(copy);
-    return ok;
-}
-
 /* ---- saving ----------------------------------------------------------------------------- */
 
 /* Writes `bytes` to folder/name through a temporary beside it (see the top of the file). */
@@ -958,7 +939,10 @@ bool terrain_edit_log_save(terrain_edit_log *log, const char *dir, char *error, 
     char *folder = path_format("%s/edits", dir);
     bool failed = false;
     char reason[512];
-    if (count > 0 && !make_dirs(folder, reason, sizeof reason)) save_failed(reason, &failed, error, error_size);
+    if (count > 0 && !core_make_dirs(folder)) {
+        core_error_format(reason, sizeof reason, "%s: cannot create the folder (%s)", folder, strerror(errno));
+        save_failed(reason, &failed, error, error_size);
+    }
     else if (count > 0) write_files(folder, files, count, &failed, error, error_size);
     mark_saved(log, files, count);
     for (size_t n = 0; n < count; n++) core_free(files[n].bytes, files[n].size);

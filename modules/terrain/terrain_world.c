@@ -363,7 +363,7 @@ void terrain_world_commit(terrain_world *world, terrain_chunk_coord coord, terra
     terrain_world_change change = { .coord = coord };
     bool differs = terrain__stacks_diff(before, stacks, &change);
     /* The log diffs under the world's lock: the log has its own and never calls back. */
-    if (world->edits) terrain_edit_log_record(world->edits, coord, tool, before, stacks);
+    if (world->edits && differs) terrain_edit_log_record(world->edits, coord, tool, before, stacks);
     else if (differs) e->pinned = true;
     world->bytes += terrain_stacks_bytes(stacks) - terrain_stacks_bytes(before);
     e->stacks = stacks;
