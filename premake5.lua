@@ -80,8 +80,9 @@ project "glad"
   files { glad_dir .. "/src/gl.c" }
   buildoptions { "-w" }
 
--- What the engine's platform layer links against (engine/gfx, engine/input).
-local platform_libs = { "glfw", "OSMesa", "hidapi-hidraw", "stb", "meshoptimizer", "dl" }
+-- What the engine's platform layer (engine/gfx, engine/input) and the world database
+-- (modules/terrain/terrain_store.c) link against.
+local platform_libs = { "glfw", "OSMesa", "hidapi-hidraw", "stb", "meshoptimizer", "sqlite3", "dl" }
 
 -- A program linked against the engine. `extra` may set files, links and build options.
 local function program(name, extra)

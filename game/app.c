@@ -34,9 +34,11 @@ struct game_app {
     game_walker walker;
     game_tools tools;
     terrain_edit_log *edits;               /* every edit; loaded and saved with a world folder */
+    terrain_store *store;                  /* the world folder's database, or NULL */
     uint64_t last_save_ns;
     terrain_view view;
     bool windowed, interactive, loading, over;
+    bool spawned;                          /* the player stands in the world (its pose is saved) */
     int frames, loading_frames;
     uint64_t start_ns, last_ns;
     double frame_seconds;
@@ -61,7 +63,8 @@ static bool app_open_input(game_app *app) {
 
 /* ---- the world folder ------------------------------------------------------------------- */
 
-int game_world_dir_seed(const char *dir, uint64_t *seed) {
+/* The seed an old folder's world.txt records (folders from before world.db). */
+static int app_world_txt_seed(const char *dir, uint64_t *seed) {
     char path[4096];
     snprintf(path, sizeof path, "%s/world.txt", dir);
     FILE *f = fopen(path, "r");
@@ -73,23 +76,17 @@ int game_world_dir_seed(const char *dir, uint64_t *seed) {
     return ok ? 1 : -1;
 }
 
-static bool app_write_world_file(const char *dir, uint64_t seed) {
-    char path[4096];
-    snprintf(path, sizeof path, "%s/world.txt", dir);
-    if (!core_make_dirs(dir)) {
-        fprintf(stderr, "world: cannot create the world folder %s\n", dir);
-        return false;
-    }
-    FILE *f = fopen(path, "w");
-    bool ok = f && fprintf(f, "seed %llu\n", (unsigned long long)seed) > 0;
-    if (f && fclose(f) != 0) ok = false;
-    if (!ok) fprintf(stderr, "world: cannot write %s\n", path);
-    return ok;
+int game_world_dir_seed(const char *dir, uint64_t *seed) {
+    /* world.db when it can be read; a damaged one is the store's to set aside, so the old
+     * world.txt (if any) speaks then. */
+    if (terrain_store_read_seed(dir, seed, NULL, 0) == 1) return 1;
+    return app_world_txt_seed(dir, seed);
 }
 
-/* The edit log of the world folder: its seed checked, its files loaded (bad ones reported and
- * set aside by the log). */
-static bool app_open_edits(game_app *app) {
+/* The world folder's database: its seed checked, its edits put in the log, the player's pose
+ * read back. A damaged database is reported and set aside by the store; another world's, or a
+ * world another process has open, ends the start. */
+static bool app_open_store(game_app *app) {
     const char *dir = app->desc.world_dir;
     uint64_t seed;
     int known = game_world_dir_seed(dir, &seed);
@@ -103,24 +100,60 @@ static bool app_open_edits(game_app *app) {
                 dir, (unsigned long long)seed, (unsigned long long)seed);
         return false;
     }
-    if (!known && !app_write_world_file(dir, app->desc.seed)) return false;
-    terrain_edit_log_load_result loaded;
-    if (!terrain_edit_log_load(app->edits, dir, &loaded)) {
-        fprintf(stderr, "world: cannot read the edits in %s: %s\n", dir, loaded.first_problem);
+    terrain_store_report report;
+    app->store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = app->edits, .seed = app->desc.seed },
+                                      &report);
+    if (!app->store) {
+        fprintf(stderr, "world: %s%s\n", report.error,
+                report.other_world ? " (made by another version of the generator: use another --world)" : "");
         return false;
     }
-    if (loaded.files_rejected)
-        fprintf(stderr, "world: %d edit file(s) unreadable and set aside as .bad (first: %s); those chunks are "
-                "as generated\n", loaded.files_rejected, loaded.first_problem);
+    if (report.notice[0]) fprintf(stderr, "world: %s\n", report.notice);
     return true;
 }
 
-static void app_save_edits(game_app *app) {
-    if (!app->edits || !app->desc.world_dir) return;
+/* The player's pose as the world folder keeps it: text, so `sqlite3 world.db` shows it. */
+#define APP_PLAYER_VALUE "game.player"
+
+static void app_put_player(game_app *app) {
+    char pose[160];
+    int length = snprintf(pose, sizeof pose, "%.17g %.17g %.17g %.9g %.9g %d", app->player.position[0],
+                          app->player.position[1], app->player.position[2], (double)app->player.yaw,
+                          (double)app->player.pitch, app->player.flying ? 1 : 0);
+    terrain_store_put(app->store, APP_PLAYER_VALUE, pose, (size_t)length);
+}
+
+/* Puts the player back where the last run left it (interactive play: walks and recordings
+ * start where their script says). False when the folder has no pose or a bad one. */
+static bool app_restore_player(game_app *app) {
+    char pose[160] = "";
+    int64_t size = app->store ? terrain_store_get(app->store, APP_PLAYER_VALUE, pose, sizeof pose - 1) : -1;
+    if (size <= 0 || size >= (int64_t)sizeof pose) return false;
+    pose[size] = '\0';
+    double x, y, z, yaw, pitch;
+    int flying;
+    if (sscanf(pose, "%lf %lf %lf %lf %lf %d", &x, &y, &z, &yaw, &pitch, &flying) != 6 || !isfinite(x) ||
+        !isfinite(y) || !isfinite(z) || !isfinite(yaw) || !isfinite(pitch)) {
+        core_warn("game", "%s in the world folder reads '%s'; spawning as new", APP_PLAYER_VALUE, pose);
+        return false;
+    }
+    app->player.position[0] = x, app->player.position[1] = y, app->player.position[2] = z;
+    app->player.yaw = (float)yaw, app->player.pitch = (float)pitch;
+    app->player.flying = flying != 0;
+    return true;
+}
+
+/* An autosave: a snapshot now, written on the store's thread (a save still in flight: next
+ * frame). The last save waits for the disk. */
+static void app_save(game_app *app, bool last) {
+    if (!app->store) return;
+    TRACE_ZONE("game.save");
+    if (app->spawned) app_put_player(app);
     char error[512];
-    if (!terrain_edit_log_save(app->edits, app->desc.world_dir, error, sizeof error))
-        core_warn("game", "saving the edits failed (will retry): %s", error);
-    app->last_save_ns = core_time_ns();
+    if (last) {
+        if (!terrain_store_save(app->store, error, sizeof error))
+            fprintf(stderr, "world: the last save failed: %s\n", error);
+    } else if (terrain_store_save_async(app->store)) app->last_save_ns = core_time_ns();
 }
 
 static bool app_open_terrain(game_app *app) {
@@ -128,7 +161,7 @@ static bool app_open_terrain(game_app *app) {
     /* Always a log: an edited chunk can then leave the cache like any other and come back as
      * edited. With a world folder it is also loaded and saved. */
     app->edits = terrain_edit_log_create(terrain_generation_key(&params));
-    if (app->desc.world_dir && !app_open_edits(app)) return false;
+    if (app->desc.world_dir && !app_open_store(app)) return false;
     app->world = terrain_world_create(&(terrain_world_desc){ .generation = params, .generate = app->desc.generate,
                                                              .generate_user = app->desc.generate_user,
                                                              .edits = app->edits });
@@ -149,6 +182,8 @@ static void app_spawn_player(game_app *app) {
     game_player_spawn(&app->player, app->world, d->spawn[0], d->spawn[1]);
     app->player.yaw = 3.14159265f;             /* towards +z: the slopes in view face the sun */
     app->player.pitch = GAME_WALKER_PITCH;
+    if (app->interactive) app_restore_player(app);
+    app->spawned = true;
 }
 
 game_app *game_app_create(const game_app_desc *desc) {
@@ -180,7 +215,7 @@ game_app *game_app_create(const game_app_desc *desc) {
     app_spawn_player(app);
     game_tools_init(&app->tools);
     app->loading = true;
-    app->start_ns = app->last_ns = core_time_ns();
+    app->start_ns = app->last_ns = app->last_save_ns = core_time_ns();
     return app;
 fail:
     game_app_destroy(app);
@@ -192,7 +227,8 @@ void game_app_destroy(game_app *app) {
     input_destroy(app->input);
     input_bindings_destroy(app->bindings);
     gfx_text_destroy(app->hud);
-    app_save_edits(app);
+    if (app->store) app_save(app, true);
+    terrain_store_destroy(app->store);
     if (app->terrain) terrain_ecs_destroy(app->terrain);
     terrain_clipmap_destroy(app->clipmap);
     terrain_renderer_destroy(app->renderer);
@@ -336,7 +372,7 @@ bool game_app_frame(game_app *app) {
         app_record_cpu(app, cpu_ms, engine_ms);
     }
     if (app->desc.world_dir && (double)(core_time_ns() - app->last_save_ns) * 1e-9 >= GAME_APP_AUTOSAVE_SECONDS)
-        app_save_edits(app);
+        app_save(app, false);
     app->over = last;
     return !last;
 }

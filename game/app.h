@@ -54,17 +54,20 @@ typedef struct game_app_desc {
     bool no_clipmap;                  /* only the volumetric chunks (no far terrain) */
     bool no_hud;
     double max_loading_seconds;       /* give up waiting for the start area; 0 = 300 s */
-    /* A folder that keeps the world's edits (terrain.h, the edit log): loaded at the start
-     * (bad files are reported and set aside), saved every GAME_APP_AUTOSAVE_SECONDS and at the
-     * end. It records its seed in DIR/world.txt; another seed is refused. NULL = edits last as
-     * long as the run. */
+    /* A folder that keeps the world (terrain.h, "the world folder"): DIR/world.db holds the
+     * seed, the edits and the player's pose. Loaded at the start (a damaged database is
+     * reported and set aside; an old DIR/edits folder is imported once), saved every
+     * GAME_APP_AUTOSAVE_SECONDS off the frame thread and at the end; each save is one
+     * transaction. Another seed is refused, and so is a world another process has open.
+     * Interactive play starts where the last run stood. NULL = edits last as long as the run. */
     const char *world_dir;
 } game_app_desc;
 
 #define GAME_APP_AUTOSAVE_SECONDS 30.0
 
-/* The seed DIR/world.txt records: 1 and *seed set; 0 when there is no such file (a new world);
- * −1 when the file exists but does not say "seed N". */
+/* The seed the world folder records (DIR/world.db, or an old folder's DIR/world.txt): 1 and
+ * *seed set; 0 when it records none (a new world); −1 when world.txt exists but does not say
+ * "seed N". */
 int game_world_dir_seed(const char *dir, uint64_t *seed);
 
 /* NULL (with the reason printed) when the window, the shaders, the bindings or a recording

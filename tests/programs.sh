@@ -220,6 +220,25 @@ expect "world: --world of another seed" 1 "holds the world of seed 9 \(run with 
 echo "not a seed" >"$tmp/saved/world.txt"
 expect "world: damaged world.txt" 1 "world.txt does not say 'seed N'" -- \
   "$bin/world" --headless --size 64x48 --frames 1 --seed 3 --world "$tmp/saved"
+# A world folder's database: it records its seed, a damaged one is set aside (the run goes on),
+# and a world another process holds is refused (python3's sqlite3 holds SQLite's lock here).
+expect "world: a new world folder" 0 "player at" -- \
+  "$bin/world" --headless --size 64x48 --frames 1 --seed 9 --world "$tmp/db"
+expect "world: world.db of another seed" 1 "holds the world of seed 9 \(run with --seed 9" -- \
+  "$bin/world" --headless --size 64x48 --frames 1 --seed 3 --world "$tmp/db"
+mkdir -p "$tmp/damaged_db"
+echo "not a database at all, a line of text long enough to be read" >"$tmp/damaged_db/world.db"
+expect "world: a damaged world.db is set aside" 0 "world.db: .*set aside as .*world.db.bad" -- \
+  "$bin/world" --headless --size 64x48 --frames 1 --world "$tmp/damaged_db"
+python3 -c 'import sqlite3, sys, time
+c = sqlite3.connect(sys.argv[1], isolation_level=None)
+c.execute("PRAGMA locking_mode = EXCLUSIVE"); c.execute("BEGIN EXCLUSIVE")
+open(sys.argv[1] + ".held", "w").close(); time.sleep(60)' "$tmp/db/world.db" &
+holder=$!
+for _ in $(seq 100); do [[ -e $tmp/db/world.db.held ]] && break; sleep 0.1; done
+expect "world: a world another process has open" 1 "world.db: in use by another process" -- \
+  "$bin/world" --headless --size 64x48 --frames 1 --seed 9 --world "$tmp/db"
+kill "$holder" 2>/dev/null; wait "$holder" 2>/dev/null
 
 echo "programs: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]

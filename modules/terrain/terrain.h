@@ -903,12 +903,19 @@ bool terrain_raycast(terrain_world *world, const double origin[3], const float d
  * the columns it changed with their new layers (in quanta, exact). A chunk generated again —
  * after eviction, or in a later run — replays its log over the generated stacks and comes back
  * byte for byte as it was. The world does this itself when given a log
- * (terrain_world_desc.edits, terrain_world_commit).
+ * (terrain_world_desc.edits, terrain_world_commit). A world folder keeps the log in one
+ * database with terrain_store (below), whose every save is one transaction:
  *
  *     terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
- *     terrain_edit_log_load(log, "saves/world1", &loaded);     // reports bad files, goes on
+ *     terrain_store *store = terrain_store_create(&(terrain_store_desc){
+ *         .dir = "saves/world1", .edits = log, .seed = params.seed }, &report);
  *     ... edits ...
- *     terrain_edit_log_save(log, "saves/world1", error, sizeof error);
+ *     terrain_store_save(store, error, sizeof error);
+ *
+ * The per-file layout (terrain_edit_log_save and _load) is how world folders were kept before
+ * world.db; terrain_store imports such a folder once. It stays for exporting and importing one
+ * chunk a file. Each file is atomic on its own, but a save that spans chunks is several files:
+ * a crash part-way leaves some chunks new and others old. Do not keep a world in it.
  *
  * Files: one per chunk, DIR/edits/<x>_<z>.tel, written to a temporary file in the same folder,
  * flushed (fsync) and renamed over the old one, so a crash at any moment leaves the previous
@@ -990,6 +997,103 @@ bool terrain_edit_log_load(terrain_edit_log *log, const char *dir, terrain_edit_
  * put in the log in place of those it held (the chunk clean, as after a load), or false with
  * the reason in `error` and the log unchanged. The file name's check is load's. */
 bool terrain_edit_log_parse(terrain_edit_log *log, const void *bytes, size_t size, char *error, size_t error_size);
+
+/* ---- the world folder: one database, every save one transaction ----
+ *
+ * A world folder DIR keeps everything a world saves in DIR/world.db, an SQLite database: the
+ * world's settings (its seed and generator key), every edited chunk's entries (each chunk as
+ * the bytes of its edit file, checksum included) and named values other code saves beside them
+ * (the game's player; the rocks' removals once rocks exist). A save writes every chunk and value
+ * that changed in one transaction, so a crash at any moment (kill -9, power loss) leaves the
+ * world as it was before the save or as it is after it, never some chunks of each.
+ *
+ *     terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
+ *     terrain_store_report report;
+ *     terrain_store *store = terrain_store_create(&(terrain_store_desc){
+ *         .dir = "saves/world1", .edits = log, .seed = params.seed }, &report);
+ *     if (!store) fprintf(stderr, "%s\n", report.error);    // in use, another world, unwritable
+ *     if (report.notice[0]) printf("%s\n", report.notice);  // a damaged file set aside, an import
+ *     ... a world with .edits = log ...
+ *     terrain_store_put(store, "game.player", &pose, sizeof pose);   // goes with the next save
+ *     terrain_store_save_async(store);       // from the frame: takes a snapshot, writes elsewhere
+ *     ...
+ *     terrain_store_save(store, error, sizeof error);   // at the end: waits, then saves
+ *     terrain_store_destroy(store);
+ *
+ * Opening (terrain_store_create):
+ *   - A missing folder or database is a new world: created, with the seed and key recorded.
+ *   - Another process that has the world open makes create fail with "in use by another
+ *     process" (report.in_use). The store holds SQLite's exclusive lock from create to destroy.
+ *   - A database of another world (another seed or generator) makes it fail (report.other_world,
+ *     report.recorded_seed). A database of a newer format makes it fail too. Neither is touched.
+ *   - A damaged or foreign file (not SQLite, not a world database, failing SQLite's checks, or
+ *     a chunk whose bytes fail their checksum) is reported in report.notice naming the file,
+ *     renamed to world.db.bad (then .bad.2, …; its -wal file goes with it) and replaced by a new
+ *     world: the world opens as generated. Nothing else in the folder is touched.
+ *   - A folder in the old layout (DIR/edits/X_Z.tel files) is imported once, in one transaction; after
+ *     the commit the old folder is renamed DIR/edits.imported (kept, never deleted). Old files
+ *     that cannot be read are reported and renamed .bad as terrain_edit_log_load does.
+ *   - Every chunk in the database is put in the log (replacing what it held for those chunks),
+ *     clean: the next save writes only what changes after.
+ *
+ * Saving: WAL mode, synchronous FULL: a commit appends to the write-ahead log and flushes it
+ * once, however many chunks it holds. terrain_store_save_async takes a snapshot of the changed
+ * chunks and values on the calling thread (serializing them: microseconds a chunk) and commits
+ * it on the store's own thread (trace zone "terrain.store.save" on the lane "terrain.store").
+ * A failed save (disk full, I/O error) rolls back and leaves everything marked changed, so the
+ * next save writes it again.
+ *
+ * Threads: every call may come from any thread; calls on one store are serialized inside. The
+ * store never reads the database after create: the log and the values live in memory. */
+
+typedef struct terrain_store terrain_store;
+
+typedef struct terrain_store_desc {
+    const char *dir;                  /* the world folder; created (with its parents) if missing */
+    terrain_edit_log *edits;          /* required, not owned: loaded into on create, saved from;
+                                         its key is the world's */
+    uint64_t seed;                    /* recorded in a new world (terrain_store_read_seed) */
+} terrain_store_desc;
+
+typedef struct terrain_store_report {
+    int chunks_loaded;                /* chunks with edits put in the log */
+    int chunks_imported;              /* of those, from an old DIR/edits folder this time */
+    int files_rejected;               /* old-layout files that could not be imported (.bad) */
+    bool set_aside;                   /* a damaged or foreign world.db was renamed (notice says) */
+    bool in_use;                      /* create failed: another process has the world open */
+    bool other_world;                 /* create failed: the database holds another world */
+    uint64_t recorded_seed;           /* with other_world: the seed the database records */
+    char notice[512];                 /* what was set aside or imported, or "" */
+    char error[512];                  /* why create returned NULL, naming the file, or "" */
+} terrain_store_report;
+
+/* The world folder's store, its edits put in desc->edits; NULL with report->error when the
+ * folder cannot be made, the world is in use or is another world's. `report` may be NULL. */
+terrain_store *terrain_store_create(const terrain_store_desc *desc, terrain_store_report *report);
+/* Waits for a save in flight and closes the database; it does not save (call terrain_store_save). */
+void terrain_store_destroy(terrain_store *store);
+
+/* Everything changed since the last save, in one transaction; waits for a save in flight first.
+ * False with "DIR/world.db: reason" in `error` (nothing of this save is kept; retried next time). */
+bool terrain_store_save(terrain_store *store, char *error, size_t error_size);
+/* A snapshot of what changed, committed on the store's thread; returns at once. False when the
+ * previous save is still in flight (nothing taken: call again later). Nothing changed: true,
+ * nothing written. */
+bool terrain_store_save_async(terrain_store *store);
+/* Waits for the save in flight, if any; its outcome (true when there was none), the reason in
+ * `error` as terrain_store_save gives it. */
+bool terrain_store_wait(terrain_store *store, char *error, size_t error_size);
+
+/* A named value saved with the next save (names up to 63 bytes, values up to 1 MiB); the same
+ * bytes as before change nothing. False for a bad name, size or NULL bytes (message logged). */
+bool terrain_store_put(terrain_store *store, const char *name, const void *bytes, size_t size);
+/* Copies up to `capacity` bytes of the named value; its size, or −1 when there is none. */
+int64_t terrain_store_get(terrain_store *store, const char *name, void *bytes, size_t capacity);
+
+/* The seed DIR/world.db records, without keeping the world open: 1 and *seed set; 0 when the
+ * folder has no world.db; −1 with the reason in `error` when it cannot be read (in use by
+ * another process, damaged). */
+int terrain_store_read_seed(const char *dir, uint64_t *seed, char *error, size_t error_size);
 
 /* ---- edits in the world ----
  *

@@ -868,27 +868,21 @@ static bool sync_folder(const char *folder, char *error, size_t error_size) {
     return ok;
 }
 
-/* A dirty chunk's file, taken under the lock and written outside it. */
-typedef struct pending_file {
-    terrain_chunk_coord coord;
-    uint64_t version;
-    uint8_t *bytes;
-    size_t size;
-    bool written;
-} pending_file;
+/* ---- what the store and the file layout share (terrain_internal.h) ---------------------- */
 
-static pending_file *collect_dirty(terrain_edit_log *log, size_t *count, size_t *capacity) {
-    pending_file *files = NULL;
+uint64_t terrain__edit_log_key(const terrain_edit_log *log) { return log->world_key; }
+
+static terrain__edit_files chunk_files(terrain_edit_log *log, bool all, size_t compact_above) {
+    terrain__edit_files files = { 0 };
     entry_builder b = { 0 };
-    *count = *capacity = 0;
     pthread_mutex_lock(&log->lock);
     for (size_t n = 0; n < log->chunk_count; n++) {
         edit_chunk *c = log->chunks[n];
-        if (c->version == c->saved_version || c->entry_count == 0) continue;
-        if (chunk_file_bytes(c) > EDIT_FILE_MAX_BYTES) chunk_compact(c, &b);   /* else load refuses it */
-        files = core_grow(files, capacity, *count + 1, sizeof *files);
-        pending_file *f = &files[(*count)++];
-        *f = (pending_file){ .coord = c->coord, .version = c->version };
+        if ((!all && c->version == c->saved_version) || c->entry_count == 0) continue;
+        if (chunk_file_bytes(c) > compact_above) chunk_compact(c, &b);   /* else a reader refuses it */
+        files.items = core_grow(files.items, &files.capacity, files.count + 1, sizeof *files.items);
+        terrain__edit_file *f = &files.items[files.count++];
+        *f = (terrain__edit_file){ .coord = c->coord, .version = c->version };
         f->bytes = chunk_serialize(c, log->world_key, &f->size);
     }
     pthread_mutex_unlock(&log->lock);
@@ -896,14 +890,58 @@ static pending_file *collect_dirty(terrain_edit_log *log, size_t *count, size_t 
     return files;
 }
 
-/* Marks what was written as saved: a chunk changed meanwhile stays dirty (its version moved). */
-static void mark_saved(terrain_edit_log *log, const pending_file *files, size_t count) {
+terrain__edit_files terrain__edit_log_dirty_files(terrain_edit_log *log, size_t compact_above) {
+    return chunk_files(log, false, compact_above);
+}
+
+terrain__edit_files terrain__edit_log_all_files(terrain_edit_log *log, size_t compact_above) {
+    return chunk_files(log, true, compact_above);
+}
+
+/* A chunk changed meanwhile stays dirty (its version moved). */
+void terrain__edit_log_mark_saved(terrain_edit_log *log, const terrain__edit_files *files) {
     pthread_mutex_lock(&log->lock);
-    for (size_t n = 0; n < count; n++) {
-        edit_chunk *c = map_find(log, files[n].coord);
-        if (files[n].written && c && files[n].version > c->saved_version) c->saved_version = files[n].version;
+    for (size_t n = 0; n < files->count; n++) {
+        const terrain__edit_file *f = &files->items[n];
+        edit_chunk *c = map_find(log, f->coord);
+        if (f->written && c && f->version > c->saved_version) c->saved_version = f->version;
     }
     pthread_mutex_unlock(&log->lock);
+}
+
+void terrain__edit_files_free(terrain__edit_files *files) {
+    for (size_t n = 0; n < files->count; n++) core_free(files->items[n].bytes, files->items[n].size);
+    core_free(files->items, files->capacity * sizeof *files->items);
+    *files = (terrain__edit_files){ 0 };
+}
+
+void terrain__edit_log_take(terrain_edit_log *to, terrain_edit_log *from) {
+    pthread_mutex_lock(&from->lock);
+    for (size_t n = 0; n < from->chunk_count; n++) {
+        edit_chunk *parsed = from->chunks[n];
+        if (parsed->entry_count == 0) continue;
+        pthread_mutex_lock(&to->lock);
+        edit_chunk *c = map_get(to, parsed->coord);
+        chunk_take_entries(c, parsed);
+        c->version++;
+        c->saved_version = c->version;
+        pthread_mutex_unlock(&to->lock);
+    }
+    pthread_mutex_unlock(&from->lock);
+}
+
+bool terrain__edit_log_parse_chunk(terrain_edit_log *log, const void *bytes, size_t size, terrain_chunk_coord named,
+                                   char *error, size_t error_size) {
+    edit_chunk *parsed;
+    if (!parse_file(bytes, size, log->world_key, &parsed, error, error_size)) return false;
+    if (parsed->coord.x != named.x || parsed->coord.z != named.z) {
+        core_error_format(error, error_size, "holds chunk (%lld, %lld), not (%lld, %lld)", (long long)parsed->coord.x,
+                          (long long)parsed->coord.z, (long long)named.x, (long long)named.z);
+        chunk_free(parsed);
+        return false;
+    }
+    install(log, parsed);
+    return true;
 }
 
 /* Logs a failure and keeps the first in the caller's buffer. */
@@ -914,18 +952,19 @@ static void save_failed(const char *reason, bool *failed, char *error, size_t er
 }
 
 /* Writes every file; each that fails is logged, the rest go on (save what can be saved). */
-static void write_files(const char *folder, pending_file *files, size_t count, bool *failed, char *error,
+static void write_files(const char *folder, terrain__edit_files *files, bool *failed, char *error,
                         size_t error_size) {
     char reason[512];
-    for (size_t n = 0; n < count; n++) {
+    for (size_t n = 0; n < files->count; n++) {
+        terrain__edit_file *f = &files->items[n];
         char name[64];
-        snprintf(name, sizeof name, "%lld_%lld" EDIT_SUFFIX, (long long)files[n].coord.x, (long long)files[n].coord.z);
-        files[n].written = write_atomic(folder, name, files[n].bytes, files[n].size, reason, sizeof reason);
-        if (!files[n].written) save_failed(reason, failed, error, error_size);
+        snprintf(name, sizeof name, "%lld_%lld" EDIT_SUFFIX, (long long)f->coord.x, (long long)f->coord.z);
+        f->written = write_atomic(folder, name, f->bytes, f->size, reason, sizeof reason);
+        if (!f->written) save_failed(reason, failed, error, error_size);
     }
     if (!sync_folder(folder, reason, sizeof reason)) {
         save_failed(reason, failed, error, error_size);
-        for (size_t n = 0; n < count; n++) files[n].written = false;   /* not durable: write again */
+        for (size_t n = 0; n < files->count; n++) files->items[n].written = false;   /* not durable: write again */
     }
 }
 
@@ -934,19 +973,17 @@ bool terrain_edit_log_save(terrain_edit_log *log, const char *dir, char *error, 
     if (!log || !dir || !dir[0])
         return core_error_format(error, error_size, "edit log: save with no %s", !log ? "log" : "folder");
     pthread_mutex_lock(&log->io_lock);
-    size_t count, capacity;
-    pending_file *files = collect_dirty(log, &count, &capacity);
+    terrain__edit_files files = terrain__edit_log_dirty_files(log, EDIT_FILE_MAX_BYTES);
     char *folder = path_format("%s/edits", dir);
     bool failed = false;
     char reason[512];
-    if (count > 0 && !core_make_dirs(folder)) {
+    if (files.count > 0 && !core_make_dirs(folder)) {
         core_error_format(reason, sizeof reason, "%s: cannot create the folder (%s)", folder, strerror(errno));
         save_failed(reason, &failed, error, error_size);
     }
-    else if (count > 0) write_files(folder, files, count, &failed, error, error_size);
-    mark_saved(log, files, count);
-    for (size_t n = 0; n < count; n++) core_free(files[n].bytes, files[n].size);
-    core_free(files, capacity * sizeof *files);
+    else if (files.count > 0) write_files(folder, &files, &failed, error, error_size);
+    terrain__edit_log_mark_saved(log, &files);
+    terrain__edit_files_free(&files);
     path_free(folder);
     pthread_mutex_unlock(&log->io_lock);
     return !failed;
@@ -984,15 +1021,8 @@ static bool load_file(terrain_edit_log *log, const char *path, terrain_chunk_coo
     uint8_t *bytes = NULL;
     size_t size = 0;
     if (!read_file(path, &bytes, &size, error, error_size)) return false;
-    edit_chunk *parsed;
-    bool ok = parse_file(bytes, size, log->world_key, &parsed, error, error_size);
+    bool ok = terrain__edit_log_parse_chunk(log, bytes, size, named, error, error_size);
     core_free(bytes, size + 1);
-    if (ok && (parsed->coord.x != named.x || parsed->coord.z != named.z)) {
-        ok = core_error_format(error, error_size, "holds chunk (%lld, %lld), not the one its name says",
-                               (long long)parsed->coord.x, (long long)parsed->coord.z);
-        chunk_free(parsed);
-    }
-    if (ok) install(log, parsed);
     return ok;
 }
 

@@ -441,6 +441,40 @@ uint32_t terrain__stacks_layer_words(uint32_t quanta);
  * checksum. `crc` is 0 to start, or the result so far to continue over more bytes. */
 uint32_t terrain__crc32(uint32_t crc, const void *data, size_t size);
 
+/* What the per-file layout (terrain_edit_log_save/load) and the world database (terrain_store.c)
+ * share: a chunk's edits travel as its file's bytes (the format at the top of
+ * terrain_edit_log.c, CRC-32 included) in both. */
+typedef struct terrain__edit_file {
+    terrain_chunk_coord coord;
+    uint64_t version;                 /* the chunk's version these bytes hold */
+    uint8_t *bytes;
+    size_t size;
+    bool written;                     /* set by the writer once durable */
+} terrain__edit_file;
+
+typedef struct terrain__edit_files {
+    terrain__edit_file *items;
+    size_t count, capacity;
+} terrain__edit_files;
+
+uint64_t terrain__edit_log_key(const terrain_edit_log *log);
+/* A snapshot of the chunks changed since their last save, each serialized (under the log's
+ * lock, for a few microseconds a chunk); a chunk whose bytes would pass `compact_above` is
+ * compacted first. Free with terrain__edit_files_free. */
+terrain__edit_files terrain__edit_log_dirty_files(terrain_edit_log *log, size_t compact_above);
+/* The same for every chunk with entries, changed or not. */
+terrain__edit_files terrain__edit_log_all_files(terrain_edit_log *log, size_t compact_above);
+/* Marks the files whose `written` is set as saved; a chunk changed since its snapshot stays dirty. */
+void terrain__edit_log_mark_saved(terrain_edit_log *log, const terrain__edit_files *files);
+void terrain__edit_files_free(terrain__edit_files *files);
+/* One chunk's bytes into the log in place of what it held (clean), when they parse and hold
+ * chunk `named`; false with the reason in `error` and the log unchanged. */
+bool terrain__edit_log_parse_chunk(terrain_edit_log *log, const void *bytes, size_t size, terrain_chunk_coord named,
+                                   char *error, size_t error_size);
+/* Moves every chunk with entries from `from` into `to` (replacing to's entries for those chunks;
+ * they are clean in `to`); `from` keeps its chunks, empty. */
+void terrain__edit_log_take(terrain_edit_log *to, terrain_edit_log *from);
+
 /* ==== end of the edit log section ========================================================= */
 
 /* ==== edits in the world (terrain_world.c, terrain_world_edit.c, terrain_ecs_edit.c) ======= */

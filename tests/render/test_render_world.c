@@ -11,6 +11,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <unistd.h>
 
 #include <stb/stb_image.h>
@@ -137,6 +138,7 @@ Test(render_world, a_walk_a_hundred_kilometres_out_goes_as_at_the_origin, .timeo
 typedef struct edited_run {
     terrain_chunk_coord chunk;
     uint64_t hash;                    /* the chunk after the edit settled */
+    double feet[3];                   /* where the player stood at the end */
 } edited_run;
 
 /* Loads the world, carves a ball where the ground is under the spawn, lets it settle and returns
@@ -158,23 +160,31 @@ static edited_run carve_and_close(const char *dir) {
     double chunk = TERRAIN_CHUNK_COLUMNS * TERRAIN_COLUMN_SIZE;
     edited_run run = { .chunk = { (int64_t)floor(hit.position[0] / chunk), (int64_t)floor(hit.position[2] / chunk) } };
     run.hash = terrain_stacks_hash(terrain_world_stacks(game_app_world(app), run.chunk));
+    game_app_stats end = game_app_stats_get(app);
+    memcpy(run.feet, end.feet, sizeof run.feet);
     game_app_destroy(app);
     return run;
 }
 
-static uint64_t chunk_hash_in(const char *dir, uint64_t seed, terrain_chunk_coord chunk, bool *started) {
+/* The chunk's hash in a run of the folder; *started false when the run was refused. `feet`
+ * (may be NULL) gets where the player stands as the run starts. */
+static uint64_t chunk_hash_in(const char *dir, uint64_t seed, terrain_chunk_coord chunk, bool *started,
+                              double *feet) {
     game_app *app = game_app_create(&(game_app_desc){ .seed = seed, .width = 96, .height = 64, .headless = true,
                                                       .threads = 2, .frames = 1, .stream = small_view,
                                                       .no_clipmap = true, .world_dir = dir });
     *started = app != NULL;
     if (!app) return 0;
     uint64_t hash = terrain_stacks_hash(terrain_world_stacks(game_app_world(app), chunk));
+    game_app_stats s = game_app_stats_get(app);
+    if (feet) memcpy(feet, s.feet, sizeof s.feet);
     game_app_destroy(app);
     return hash;
 }
 
-/* A carve saved in the world folder is there in the next run, byte for byte; a damaged save file
- * is reported and set aside and its chunk comes back as generated; another seed is refused. */
+/* A carve saved in the world folder is there in the next run, byte for byte, and the player
+ * stands where the last run ended; another seed is refused; a damaged database is reported and
+ * set aside, and the world comes back as generated. */
 Test(render_world, edits_are_saved_and_come_back_and_a_damaged_file_is_set_aside) {
     char dir[] = "/tmp/world_edits_XXXXXX";
     cr_assert(mkdtemp(dir));
@@ -185,24 +195,24 @@ Test(render_world, edits_are_saved_and_come_back_and_a_damaged_file_is_set_aside
     terrain_stacks_destroy(fresh);
     cr_assert_neq(run.hash, generated, "the carve changed the chunk");
     bool started;
-    cr_expect_eq(chunk_hash_in(dir, 3, run.chunk, &started), run.hash, "the next run has the edit");
+    double feet[3];
+    cr_expect_eq(chunk_hash_in(dir, 3, run.chunk, &started, feet), run.hash, "the next run has the edit");
     cr_assert(started);
-    chunk_hash_in(dir, 4, run.chunk, &started);
+    for (int a = 0; a < 3; a++)
+        cr_expect(fabs(feet[a] - run.feet[a]) < 1e-9, "axis %d: the run starts at %.6f, the last ended at %.6f", a,
+                  feet[a], run.feet[a]);
+    chunk_hash_in(dir, 4, run.chunk, &started, NULL);
     cr_expect(!started, "a folder of seed 3 refuses seed 4");
-    /* Flip a byte in the middle of the chunk's file. */
+    /* 64 bytes of the database's second page overwritten (a table's root page). */
     char path[512];
-    snprintf(path, sizeof path, "%s/edits/%lld_%lld.tel", dir, (long long)run.chunk.x, (long long)run.chunk.z);
+    snprintf(path, sizeof path, "%s/world.db", dir);
     FILE *f = fopen(path, "r+b");
-    cr_assert(f, "no save file %s", path);
-    fseek(f, 0, SEEK_END);
-    long size = ftell(f);
-    fseek(f, size / 2, SEEK_SET);
-    int byte = fgetc(f);
-    fseek(f, size / 2, SEEK_SET);
-    fputc(byte ^ 0x5a, f);
+    cr_assert(f, "no database %s", path);
+    fseek(f, 4096, SEEK_SET);
+    for (int b = 0; b < 64; b++) fputc(0xa5, f);
     fclose(f);
-    cr_expect_eq(chunk_hash_in(dir, 3, run.chunk, &started), generated, "the damaged file's chunk is as generated");
-    cr_expect(started, "a damaged file never stops the game");
+    cr_expect_eq(chunk_hash_in(dir, 3, run.chunk, &started, NULL), generated, "a damaged world comes back as generated");
+    cr_expect(started, "a damaged database never stops the game");
     char bad[520];
     snprintf(bad, sizeof bad, "%s.bad", path);
     cr_expect_eq(access(bad, F_OK), 0, "set aside as %s", bad);

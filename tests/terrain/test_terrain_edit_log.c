@@ -3,6 +3,7 @@
  * files written here by hand), corruption of every kind, and a saver killed at random moments.
  * Expected stacks are always the hand-edited ones, compared by hash and by bytes. */
 #include "../engine/test.h"
+#include "test_files.h"
 #include "terrain/terrain.h"
 #include "terrain/terrain_internal.h"
 
@@ -94,54 +95,8 @@ static int changed_columns(const terrain_stacks *a, const terrain_stacks *b, boo
     return count;
 }
 
-static void make_temp_dir(char *path, size_t size) {
-    snprintf(path, size, "/tmp/terrain_edit_log_XXXXXX");
-    cr_assert_not_null(mkdtemp(path));
-}
-
-/* rm -r of what the tests make: files and folders one level deep or two. */
-static void remove_tree(const char *path) {
-    DIR *dir = opendir(path);
-    if (!dir) {
-        unlink(path);
-        return;
-    }
-    for (struct dirent *e; (e = readdir(dir));) {
-        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-        char child[512];
-        snprintf(child, sizeof child, "%s/%s", path, e->d_name);
-        remove_tree(child);
-    }
-    closedir(dir);
-    rmdir(path);
-}
-
 static void chunk_path(char *out, size_t size, const char *dir, terrain_chunk_coord c) {
     snprintf(out, size, "%s/edits/%lld_%lld.tel", dir, (long long)c.x, (long long)c.z);
-}
-
-static bool exists(const char *path) {
-    struct stat info;
-    return stat(path, &info) == 0;
-}
-
-static uint8_t *read_all(const char *path, size_t *size) {
-    FILE *f = fopen(path, "rb");
-    cr_assert_not_null(f, "%s", path);
-    fseek(f, 0, SEEK_END);
-    *size = (size_t)ftell(f);
-    fseek(f, 0, SEEK_SET);
-    uint8_t *bytes = malloc(*size + 1);
-    cr_assert_eq(fread(bytes, 1, *size, f), *size);
-    fclose(f);
-    return bytes;
-}
-
-static void write_all(const char *path, const void *bytes, size_t size) {
-    FILE *f = fopen(path, "wb");
-    cr_assert_not_null(f, "%s", path);
-    cr_assert_eq(fwrite(bytes, 1, size, f), size);
-    fclose(f);
 }
 
 /* Count of names in DIR/edits containing `part`. */

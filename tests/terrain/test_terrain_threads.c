@@ -332,3 +332,54 @@ Test(terrain_threads, workers_read_while_the_main_thread_commits_and_trims) {
     terrain_world_destroy(s.world);
     terrain_edit_log_destroy(log);
 }
+
+/* ---- saves in the background while the main thread edits (terrain_store) ---- */
+
+/* The game's pattern: strokes committed every frame, an autosave now and then from the frame
+ * (a snapshot; the commit on the store's thread), values put between; then the last save and a
+ * fresh open that must hold every stroke. TSan watches the log, the values and the hand-over. */
+Test(terrain_threads, the_store_saves_in_the_background_while_the_main_thread_edits) {
+    char dir[64];
+    snprintf(dir, sizeof dir, "/tmp/terrain_threads_store_XXXXXX");
+    cr_assert(mkdtemp(dir));
+    terrain_generation_params params = terrain_generation_defaults(11);
+    terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
+    terrain_store_report report;
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = 11 }, &report);
+    cr_assert(store, "%s", report.error);
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = params, .edits = log });
+    int async_saves = 0;
+    for (int stroke = 0; stroke < 40; stroke++) {
+        terrain_world_edit(world, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                   .deposit = { .x = 4 + stroke % 40, .z = 16, .radius = 3,
+                                                                .volume = 2 } }, NULL, 0);
+        terrain_world_trim(world);
+        int frame = stroke;
+        terrain_store_put(store, "frame", &frame, sizeof frame);
+        if (stroke % 3 == 0) async_saves += terrain_store_save_async(store);
+    }
+    char error[256];
+    cr_expect(terrain_store_save(store, error, sizeof error), "%s", error);
+    cr_expect_gt(async_saves, 0);
+    uint64_t hash = terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 }));
+    uint64_t hash_east = terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 1, 0 }));
+    terrain_world_destroy(world);
+    terrain_store_destroy(store);
+
+    terrain_edit_log *again = terrain_edit_log_create(terrain_generation_key(&params));
+    store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = again }, &report);
+    cr_assert(store, "%s", report.error);
+    world = terrain_world_create(&(terrain_world_desc){ .generation = params, .edits = again });
+    cr_expect_eq(terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 })), hash);
+    cr_expect_eq(terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 1, 0 })), hash_east);
+    int frame = -1;
+    cr_expect_eq(terrain_store_get(store, "frame", &frame, sizeof frame), (int64_t)sizeof frame);
+    cr_expect_eq(frame, 39);
+    terrain_world_destroy(world);
+    terrain_store_destroy(store);
+    terrain_edit_log_destroy(again);
+    terrain_edit_log_destroy(log);
+    char command[128];
+    snprintf(command, sizeof command, "rm -rf '%s'", dir);
+    cr_expect_eq(system(command), 0);
+}

@@ -1,12 +1,12 @@
 /* hello_edit — terrain editing in one short program, no window: pick a point on the ground, carve
- * a tunnel and a crater, drop sand, let it slide to its angle of repose, save the edits, and see
- * them come back in a fresh world.
+ * a tunnel and a crater, drop sand, let it slide to its angle of repose, save the edits in a world
+ * folder (one transaction), and see them come back in a fresh world.
  *
  *   hello_edit [--seed S] [--world DIR] [--threads N] [--trace FILE]
  *
  * The steps are the ones a game takes (game/tools.c does the same from the mouse): aim with
  * terrain_raycast, apply with terrain_world_edit, stabilize the chunks that changed, keep an edit
- * log and save it. A running world (terrain_ecs) does the stabilizing and remeshing itself:
+ * log and keep it in a world folder (terrain_store: DIR/world.db). A running world (terrain_ecs) does the stabilizing and remeshing itself:
  * terrain_ecs_edit queues a stroke and the next frame shows it.
  */
 #include "core/core.h"
@@ -73,6 +73,17 @@ int main(int argc, char **argv) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = common.threads });
     terrain_generation_params params = terrain_generation_defaults((uint64_t)seed);
     terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
+    /* The world folder: its earlier edits (if any) come into the log, and it is held until
+     * destroyed (a second program opening it is refused). */
+    terrain_store_report report;
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log,
+                                                                       .seed = (uint64_t)seed }, &report);
+    if (!store) {
+        fprintf(stderr, "hello_edit: %s\n", report.error);
+        return 1;
+    }
+    if (report.notice[0]) printf("%s\n", report.notice);
+    if (report.chunks_loaded) printf("%s holds %d edited chunk(s) from earlier runs\n", dir, report.chunks_loaded);
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = params, .edits = log });
 
     /* Aim: straight down onto the ground at (16, 16). */
@@ -97,26 +108,29 @@ int main(int argc, char **argv) {
     printf("stabilized in %d iterations; the tunnel's axis at x = 20 is %s\n", settle(world, jobs, 0, 0),
            terrain_material_name(terrain_world_material_at(world, 20, hit.position[1] - 5.5, 4)));
 
-    /* Save, then a fresh world with the saved log: the same chunk, byte for byte. */
+    /* Save (every changed chunk in one transaction), close, then a fresh world from the folder:
+     * the same chunk, byte for byte. */
     char error[512];
-    if (!terrain_edit_log_save(log, dir, error, sizeof error)) {
+    bool saved = terrain_store_save(store, error, sizeof error);
+    terrain_store_destroy(store);
+    if (!saved) {
         fprintf(stderr, "hello_edit: %s\n", error);
         return 1;
     }
     uint64_t edited = terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 }));
     terrain_edit_log *loaded = terrain_edit_log_create(terrain_generation_key(&params));
-    terrain_edit_log_load_result result;
-    terrain_edit_log_load(loaded, dir, &result);
+    terrain_store *reopened = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = loaded }, &report);
     terrain_world *again = terrain_world_create(&(terrain_world_desc){ .generation = params, .edits = loaded });
     uint64_t reloaded = terrain_stacks_hash(terrain_world_stacks(again, (terrain_chunk_coord){ 0, 0 }));
-    printf("saved %d chunk(s) to %s/edits; reloaded: %s\n", terrain_edit_log_chunks(log), dir,
-           reloaded == edited ? "the same bytes" : "DIFFERENT");
+    printf("saved %d chunk(s) to %s/world.db; reloaded: %s\n", terrain_edit_log_chunks(log), dir,
+           reopened && reloaded == edited ? "the same bytes" : "DIFFERENT");
 
     terrain_world_destroy(again);
+    terrain_store_destroy(reopened);
     terrain_edit_log_destroy(loaded);
     terrain_world_destroy(world);
     terrain_edit_log_destroy(log);
     job_system_destroy(jobs);
     trace_stop();
-    return reloaded == edited ? 0 : 1;
+    return reopened && reloaded == edited ? 0 : 1;
 }

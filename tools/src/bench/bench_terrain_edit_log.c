@@ -1,13 +1,19 @@
-/* bench_terrain_edit_log.c — the persistent edit log (terrain.h, "the edit log").
+/* bench_terrain_edit_log.c — saving edits (terrain.h, "the edit log", "the world folder").
  *
- *   terrain.edit_log.save     ms for terrain_edit_log_save to write 64 edited chunks (8 × 8 from
- *       (0, 0), seed 42), each with one entry of about 40 changed columns (bedrock, sand, water
- *       of hashed heights), into a folder in /tmp: 64 files written, fsynced and renamed, and the
- *       folder fsynced. Each run records the chunks into a fresh log before the clock starts, so
- *       every chunk is dirty; the files of the previous run are replaced, as in a game that
- *       saves. Bound by the disk's fsync, not by the encoding.
- *   terrain.edit_log.load     ms for terrain_edit_log_load to read those 64 files back into a
- *       fresh log (checksums, checks, entries).
+ * The input: 64 edited chunks (8 × 8 from (0, 0), seed 42), each with one entry of about 40
+ * changed columns (bedrock, sand, water of hashed heights).
+ *
+ *   terrain.edit_log.save     ms for terrain_store_save to write the 64 chunks into world.db: one
+ *       transaction, one fsync of the write-ahead log. The store stays open across runs, as in a
+ *       game; each run flips every chunk between edited and generated and compacts (before the
+ *       clock starts), so all 64 are dirty and each holds one entry.
+ *   terrain.edit_log.save.tel_files  the same 64 chunks written the old way for comparison in the
+ *       same run (terrain_edit_log_save: one file each, fsynced and renamed, then the folder).
+ *   world.save.frame_ms       ms the calling thread spends in terrain_store_save_async on those
+ *       64 chunks (the snapshot; the commit runs on the store's thread): a game's frame cost.
+ *   terrain.edit_log.load     ms for terrain_store_create on that world.db into a fresh log
+ *       (open, lock, SQLite's quick_check, read and parse 64 blobs).
+ *   terrain.edit_log.load.tel_files  ms for terrain_edit_log_load of the 64 old files.
  *   terrain.edit_log.replay   µs for terrain_edit_log_replay of one chunk with 10 entries of
  *       about 40 columns each over its generated stacks (what a worker adds to generating an
  *       edited chunk); mean of 200 replays per run.
@@ -32,7 +38,10 @@ typedef struct edit_log_bench {
     terrain_stacks *generated[SAVE_CHUNKS], *edited[SAVE_CHUNKS];
     terrain_stacks *steps[REPLAY_ENTRIES + 1];   /* chunk 0 edited ten times in a row */
     terrain_edit_log *replay_log;
-    char dir[64];
+    char dir[64], store_dir[96], files_dir[96];
+    terrain_edit_log *store_log;      /* the open store's log, and the state its chunks are in */
+    terrain_store *store;
+    bool store_edited;
 } edit_log_bench;
 
 /* `from` with EDIT_COLUMNS columns, picked by hashing `salt`, set by hand. */
@@ -69,27 +78,34 @@ static void bench_setup(edit_log_bench *b) {
     }
     snprintf(b->dir, sizeof b->dir, "/tmp/bench_edit_log_XXXXXX");
     if (!mkdtemp(b->dir)) core_fatal("bench", "cannot make a folder in /tmp");
+    snprintf(b->store_dir, sizeof b->store_dir, "%s/db", b->dir);
+    snprintf(b->files_dir, sizeof b->files_dir, "%s/files", b->dir);
 }
 
-static void remove_saves(const char *dir) {
-    char folder[128], path[512];
-    snprintf(folder, sizeof folder, "%s/edits", dir);
-    DIR *listing = opendir(folder);
-    for (struct dirent *e; listing && (e = readdir(listing));) {
-        if (e->d_name[0] == '.') continue;
-        snprintf(path, sizeof path, "%s/%s", folder, e->d_name);
+/* rm -r of what the rows write: folders of files, two deep. */
+static void remove_tree(const char *path) {
+    DIR *listing = opendir(path);
+    if (!listing) {
         unlink(path);
+        return;
     }
-    if (listing) closedir(listing);
-    rmdir(folder);
-    rmdir(dir);
+    for (struct dirent *e; (e = readdir(listing));) {
+        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
+        char child[512];
+        snprintf(child, sizeof child, "%s/%s", path, e->d_name);
+        remove_tree(child);
+    }
+    closedir(listing);
+    rmdir(path);
 }
 
 static void bench_teardown(edit_log_bench *b) {
     for (int n = 0; n < SAVE_CHUNKS; n++) terrain_stacks_destroy(b->generated[n]), terrain_stacks_destroy(b->edited[n]);
     for (int e = 1; e <= REPLAY_ENTRIES; e++) terrain_stacks_destroy(b->steps[e]);
     terrain_edit_log_destroy(b->replay_log);
-    remove_saves(b->dir);
+    terrain_store_destroy(b->store);
+    terrain_edit_log_destroy(b->store_log);
+    remove_tree(b->dir);
 }
 
 static terrain_edit_log *recorded_log(const edit_log_bench *b) {
@@ -99,23 +115,76 @@ static terrain_edit_log *recorded_log(const edit_log_bench *b) {
     return log;
 }
 
-static double sample_save(void *user) {
+static double sample_save_files(void *user) {
     edit_log_bench *b = user;
     terrain_edit_log *log = recorded_log(b);
     char error[512];
     uint64_t start = core_time_ns();
-    if (!terrain_edit_log_save(log, b->dir, error, sizeof error)) core_fatal("bench", "%s", error);
+    if (!terrain_edit_log_save(log, b->files_dir, error, sizeof error)) core_fatal("bench", "%s", error);
     double ms = core_ns_to_ms(core_time_ns() - start);
     terrain_edit_log_destroy(log);
+    return ms;
+}
+
+static void open_store(edit_log_bench *b) {
+    if (b->store) return;
+    b->store_log = terrain_edit_log_create(b->key);
+    terrain_store_report report;
+    b->store = terrain_store_create(&(terrain_store_desc){ .dir = b->store_dir, .edits = b->store_log, .seed = 42 },
+                                    &report);
+    if (!b->store) core_fatal("bench", "%s", report.error);
+}
+
+/* Every chunk of the open store's log flipped between edited and generated, one entry each. */
+static void dirty_all(edit_log_bench *b) {
+    open_store(b);
+    for (int n = 0; n < SAVE_CHUNKS; n++)
+        terrain_edit_log_record(b->store_log, b->coord[n], TERRAIN_EDIT_SET, b->store_edited ? b->edited[n] : b->generated[n],
+                                b->store_edited ? b->generated[n] : b->edited[n]);
+    b->store_edited = !b->store_edited;
+    terrain_edit_log_compact(b->store_log);
+}
+
+static double sample_save(void *user) {
+    edit_log_bench *b = user;
+    dirty_all(b);
+    char error[512];
+    uint64_t start = core_time_ns();
+    if (!terrain_store_save(b->store, error, sizeof error)) core_fatal("bench", "%s", error);
+    return core_ns_to_ms(core_time_ns() - start);
+}
+
+static double sample_save_frame(void *user) {
+    edit_log_bench *b = user;
+    dirty_all(b);
+    uint64_t start = core_time_ns();
+    if (!terrain_store_save_async(b->store)) core_fatal("bench", "a save still in flight");
+    double ms = core_ns_to_ms(core_time_ns() - start);
+    char error[512];
+    if (!terrain_store_wait(b->store, error, sizeof error)) core_fatal("bench", "%s", error);
     return ms;
 }
 
 static double sample_load(void *user) {
     edit_log_bench *b = user;
     terrain_edit_log *log = terrain_edit_log_create(b->key);
+    terrain_store_report report;
+    uint64_t start = core_time_ns();
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = b->store_dir, .edits = log }, &report);
+    double ms = core_ns_to_ms(core_time_ns() - start);
+    if (!store || report.chunks_loaded != SAVE_CHUNKS || report.set_aside)
+        core_fatal("bench", "store load: %d loaded, %s%s", report.chunks_loaded, report.error, report.notice);
+    terrain_store_destroy(store);
+    terrain_edit_log_destroy(log);
+    return ms;
+}
+
+static double sample_load_files(void *user) {
+    edit_log_bench *b = user;
+    terrain_edit_log *log = terrain_edit_log_create(b->key);
     terrain_edit_log_load_result result;
     uint64_t start = core_time_ns();
-    bool ok = terrain_edit_log_load(log, b->dir, &result);
+    bool ok = terrain_edit_log_load(log, b->files_dir, &result);
     double ms = core_ns_to_ms(core_time_ns() - start);
     if (!ok || result.chunks_loaded != SAVE_CHUNKS || result.files_rejected)
         core_fatal("bench", "edit log load: %d loaded, %s", result.chunks_loaded, result.first_problem);
@@ -137,7 +206,7 @@ static double sample_replay(void *user) {
 }
 
 void bench_group_terrain_edit_log(bench_context *ctx) {
-    if (!bench_wants(ctx, "terrain.edit_log")) return;
+    if (!bench_wants(ctx, "terrain.edit_log") && !bench_wants(ctx, "world.save")) return;
     edit_log_bench *b = core_calloc(1, sizeof *b);
     bench_setup(b);
     /* The replayed chunk must be the last edit, byte for byte, or the row measures nothing. */
@@ -145,10 +214,19 @@ void bench_group_terrain_edit_log(bench_context *ctx) {
     if (!check || terrain_stacks_hash(check) != terrain_stacks_hash(b->steps[REPLAY_ENTRIES]))
         core_fatal("bench", "edit log replay differs from the recorded chunk");
     terrain_stacks_destroy(check);
-    bench_run(ctx, "terrain.edit_log.save", "ms", 9, sample_save, b);
+    bench_run(ctx, "terrain.edit_log.save", "ms", 15, sample_save, b);
+    bench_run(ctx, "terrain.edit_log.save.tel_files", "ms", 9, sample_save_files, b);
+    bench_run(ctx, "world.save.frame_ms", "ms", 15, sample_save_frame, b);
     if (bench_wants(ctx, "terrain.edit_log.load")) {
-        sample_save(b);                               /* the files to load, whatever the filter */
+        /* What to load, whatever the filter: the store closed (its WAL checkpointed) and the files. */
+        dirty_all(b);
+        char error[512];
+        if (!terrain_store_save(b->store, error, sizeof error)) core_fatal("bench", "%s", error);
+        terrain_store_destroy(b->store);
+        b->store = NULL;
+        sample_save_files(b);
         bench_run(ctx, "terrain.edit_log.load", "ms", 9, sample_load, b);
+        bench_run(ctx, "terrain.edit_log.load.tel_files", "ms", 9, sample_load_files, b);
     }
     if (bench_wants(ctx, "terrain.edit_log.replay")) bench_run(ctx, "terrain.edit_log.replay", "us", 9, sample_replay, b);
     bench_teardown(b);

@@ -33,7 +33,7 @@
 static const char walk_text[] = "ahead\n0 1 fly y=230\n0 2001 fly walk y=230\n";
 
 void bench_group_world(bench_context *ctx) {
-    if (!bench_wants(ctx, "world.")) return;
+    if (!bench_wants(ctx, "world.walk") && !bench_wants(ctx, "world.stream")) return;   /* not world.save */
     game_walk walk;
     char error[256];
     if (!game_walk_parse_text(walk_text, strlen(walk_text), "bench", &walk, error, sizeof error)) {
