@@ -242,8 +242,9 @@ Test(store, saves_in_the_background_keep_what_changed_meanwhile) {
 /* ---- a saver killed at random moments ------------------------------------------------------ */
 
 /* The child opens the world (its own connection: none crosses the fork) and saves forever,
- * switching the four chunks between A and B in each save, until killed. */
-static _Noreturn void save_forever(const char *dir, const corner_states *s) {
+ * switching the four chunks between A and B in each save, writing a byte to `progress` after
+ * each, until killed. */
+static _Noreturn void save_forever(const char *dir, const corner_states *s, int progress) {
     terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, NULL);
     if (!store) _exit(3);
@@ -257,47 +258,62 @@ static _Noreturn void save_forever(const char *dir, const corner_states *s) {
         terrain_edit_log_compact(log);
         if (!terrain_store_save(store, NULL, 0)) _exit(4);
         at_a = !at_a;
+        if (write(progress, "s", 1) != 1) _exit(5);
     }
     _exit(0);
 }
 
-/* Nanoseconds one open and `saves` saves of the four chunks take here (how long to let the
- * child run before the kill, so that kills land in opens and in saves alike). */
-static uint64_t time_open_and_saves(const char *dir, const corner_states *s, int saves) {
-    uint64_t start = core_time_ns();
+/* Nanoseconds one save of the four chunks takes here (a child is killed at a random moment
+ * within about one save after the saves it was let finish). */
+static uint64_t time_one_save(const char *dir, const corner_states *s) {
     terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, NULL);
     cr_assert_not_null(store);
-    for (int n = 0; n < saves; n++) {
+    uint64_t total = 0;
+    for (int n = 0; n < 8; n++) {              /* even: the world is at A again */
         record_states(log, s, n % 2 ? s->b : s->a, n % 2 ? s->a : s->b);
+        uint64_t start = core_time_ns();
         cr_assert(terrain_store_save(store, NULL, 0));
+        total += core_time_ns() - start;
     }
     terrain_store_destroy(store);
     terrain_edit_log_destroy(log);
-    return core_time_ns() - start;
+    return total / 8;
 }
 
+/* Kills land in the child's open (none of its saves done), between saves and inside them: each
+ * round lets 0 to 3 saves finish (the child reports each on a pipe), then kills after a random
+ * pause of up to one and a half saves. */
 Test(store, a_saver_killed_at_any_moment_leaves_the_world_before_or_after_never_torn, .timeout = 300) {
     corner_states s;
     corner_states_make(&s);
     char dir[128];
     make_temp_dir(dir, sizeof dir);
     save_state_a(dir, &s);
-    uint64_t window = time_open_and_saves(dir, &s, 8);     /* even saves: the world is at A again */
+    uint64_t save_ns = time_one_save(dir, &s);
     enum { ROUNDS = 200 };
     int seen_a = 0, seen_b = 0, torn = 0;
     for (int round = 0; round < ROUNDS; round++) {
+        int progress[2];
+        cr_assert_eq(pipe(progress), 0);
         fflush(NULL);
         pid_t child = fork();
         cr_assert_geq(child, 0);
-        if (child == 0) save_forever(dir, &s);
+        if (child == 0) {
+            close(progress[0]);
+            save_forever(dir, &s, progress[1]);
+        }
+        close(progress[1]);
         uint64_t h = core_hash_u64((uint64_t)round + 1000);
-        uint64_t pause_ns = 200000 + h % (window + 1);      /* 0.2 ms … one open and eight saves */
+        char byte;
+        for (uint64_t done = 0; done < h % 4; done++) cr_assert_eq(read(progress[0], &byte, 1), 1, "round %d", round);
+        uint64_t pause_ns = (h >> 8) % (save_ns * 3 / 2 + 1);
         struct timespec pause = { (time_t)(pause_ns / 1000000000u), (long)(pause_ns % 1000000000u) };
         nanosleep(&pause, NULL);
         kill(child, SIGKILL);
         int status;
         cr_assert_eq(waitpid(child, &status, 0), child);
+        close(progress[0]);
         cr_assert(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL, "round %d: the child ended by itself (%d)",
                   round, WIFEXITED(status) ? WEXITSTATUS(status) : -1);
 
@@ -315,7 +331,8 @@ Test(store, a_saver_killed_at_any_moment_leaves_the_world_before_or_after_never_
         terrain_store_destroy(store);
         terrain_edit_log_destroy(log);
     }
-    cr_log_info("killed savers left A %d times, B %d times, torn %d times", seen_a, seen_b, torn);
+    cr_log_info("killed savers left A %d times, B %d times, torn %d times (a save takes %.2f ms)", seen_a, seen_b,
+                torn, (double)save_ns * 1e-6);
     cr_expect_eq(torn, 0);
     /* Both states seen: kills landed after saves as well as before them. */
     cr_expect(seen_a > 0 && seen_b > 0, "A %d, B %d", seen_a, seen_b);
