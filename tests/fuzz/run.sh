@@ -27,7 +27,7 @@ while IFS= read -r source; do
 done < <(find engine modules game -name '*.c' ! -path game/main.c | sort)   # main.c is a program
 rm -f bin/fuzz/libengine_fuzz.a
 ar rcs bin/fuzz/libengine_fuzz.a bin/fuzz/obj/*.o || build_ok=0
-platform_libs=(-lglfw -lhidapi-hidraw -lmeshoptimizer -ldl)
+platform_libs=(-lglfw -lhidapi-hidraw -lmeshoptimizer -lsqlite3 -ldl)
 passed=0 failed=0
 for target in "${targets[@]}"; do
   name=$(basename "$target" .c)
