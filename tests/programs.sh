@@ -223,7 +223,8 @@ expect "world: damaged world.txt" 1 "world.txt does not say 'seed N'" -- \
 # A world folder's database: it records its seed, a damaged one is set aside (the run goes on),
 # and a world another process holds is refused (python3's sqlite3 holds SQLite's lock here).
 expect "world: a new world folder" 0 "player at" -- \
-  "$bin/world" --headless --size 64x48 --frames 1 --seed 9 --world "$tmp/db"
+  "$bin/world" --headless --size 64x48 --frames 1 --seed 9 --world "$tmp/db" --trace "$tmp/db.json"
+expect "world: the save shows in the trace" 0 "terrain.store.save" -- "$bin/trace_report" "$tmp/db.json"
 expect "world: world.db of another seed" 1 "holds the world of seed 9 \(run with --seed 9" -- \
   "$bin/world" --headless --size 64x48 --frames 1 --seed 3 --world "$tmp/db"
 mkdir -p "$tmp/damaged_db"
