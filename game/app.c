@@ -45,6 +45,12 @@ struct game_app {
     double *cpu_ms, *engine_ms;             /* per frame past loading */
     size_t cpu_count, cpu_capacity, engine_capacity;
     int eye_in_solid, waiting;
+    /* pictures at the walk's `shot` waypoints (walk.h): held frames, and each picture at half
+     * size for the contact sheet */
+    int shot_hold;
+    uint8_t **shots;
+    int shot_count;
+    size_t shot_capacity;
 };
 
 /* The player waits at the edge of what has streamed in (interactive play only, see app.h). */
@@ -171,6 +177,97 @@ static bool app_open_terrain(game_app *app) {
     return true;
 }
 
+/* ---- pictures along a walk (`shot` waypoints) ------------------------------------------- */
+
+#define APP_SHOT_MIN_FRAMES 8              /* frames held before a picture: the turn drawn */
+#define APP_SHOT_MAX_FRAMES 120            /* the most a picture waits for streaming to settle */
+
+/* The first held frame: face the most open view, and look down as much as the height above the
+ * ground asks (about the ground 400 m ahead, between 0.1 and 0.3 rad, so the sky stays in the
+ * picture). */
+static void app_frame_shot(game_app *app) {
+    game_player *pl = &app->player;
+    pl->yaw = game_player_open_yaw(pl, app->world, pl->yaw, NULL);
+    double eye[3];
+    game_player_eye(pl, eye);
+    float ground = terrain_world_top(app->world, eye[0], eye[2]);
+    double above = fmax(eye[1] - (double)ground, 0.0);
+    pl->pitch = -(float)fmin(fmax(atan2(above, 400.0), 0.1), 0.3);
+}
+
+/* Held long enough, and every chunk the rings want is in (or the wait is over). */
+static bool app_shot_ready(game_app *app) {
+    if (app->shot_hold < APP_SHOT_MIN_FRAMES) return false;
+    terrain_stream_stats s = terrain_ecs_stream_stats(app->terrain);
+    return s.mesh_chunks_ready == s.mesh_chunks_wanted || app->shot_hold >= APP_SHOT_MAX_FRAMES;
+}
+
+/* "out/play.png" → "out/play-3.png". */
+static void app_shot_path(const char *sheet, int number, char *out, size_t size) {
+    const char *dot = strrchr(sheet, '.'), *slash = strrchr(sheet, '/');
+    int stem = dot && (!slash || dot > slash) ? (int)(dot - sheet) : (int)strlen(sheet);
+    snprintf(out, size, "%.*s-%d%s", stem, sheet, number, dot && (!slash || dot > slash) ? dot : ".png");
+}
+
+/* The drawn frame: written as FILE-N.png beside --screenshot FILE, and kept at half size. */
+static void app_take_shot(game_app *app) {
+    int width, height;
+    gfx_size(app->gfx, &width, &height);
+    size_t size = (size_t)width * (size_t)height * 4;
+    uint8_t *rgba = core_alloc(size);
+    gfx_read_pixels(app->gfx, rgba);
+    for (size_t i = 3; i < size; i += 4) rgba[i] = 255;   /* no meaningful alpha */
+    int number = app->shot_count + 1;
+    char path[4096] = "";
+    if (app->desc.screenshot_path) {
+        app_shot_path(app->desc.screenshot_path, number, path, sizeof path);
+        if (!gfx_write_png(path, width, height, rgba)) path[0] = '\0';
+    }
+    int hw = width / 2, hh = height / 2;
+    uint8_t *half = core_alloc((size_t)hw * (size_t)hh * 4);
+    for (int y = 0; y < hh; y++)
+        for (int x = 0; x < hw; x++)
+            for (int c = 0; c < 4; c++) {
+                const uint8_t *q = rgba + ((size_t)(2 * y) * (size_t)width + (size_t)(2 * x)) * 4 + c;
+                half[((size_t)y * (size_t)hw + (size_t)x) * 4 + c] =
+                    (uint8_t)((q[0] + q[4] + q[(size_t)width * 4] + q[(size_t)width * 4 + 4] + 2) / 4);
+            }
+    core_free(rgba, size);
+    app->shots = core_grow(app->shots, &app->shot_capacity, (size_t)app->shot_count + 1, sizeof *app->shots);
+    app->shots[app->shot_count++] = half;
+    printf("world: picture %d at (%.0f, %.0f, %.0f)%s%s\n", number, app->player.position[0], app->player.position[1],
+           app->player.position[2], path[0] ? " -> " : "", path);
+    fflush(stdout);
+}
+
+/* The pictures side by side (two columns, up to four; three beyond), at half size. */
+static bool app_write_contact_sheet(game_app *app, const char *path) {
+    int width, height;
+    gfx_size(app->gfx, &width, &height);
+    int hw = width / 2, hh = height / 2, columns = app->shot_count <= 4 ? 2 : 3;
+    if (app->shot_count == 1) columns = 1;
+    int rows = (app->shot_count + columns - 1) / columns;
+    int sheet_w = columns * hw, sheet_h = rows * hh;
+    size_t size = (size_t)sheet_w * (size_t)sheet_h * 4;
+    uint8_t *sheet = core_calloc(size, 1);
+    for (size_t i = 3; i < size; i += 4) sheet[i] = 255;
+    for (int n = 0; n < app->shot_count; n++)
+        for (int y = 0; y < hh; y++)
+            memcpy(sheet + (((size_t)(n / columns * hh + y)) * (size_t)sheet_w + (size_t)(n % columns * hw)) * 4,
+                   app->shots[n] + (size_t)y * (size_t)hw * 4, (size_t)hw * 4);
+    bool ok = gfx_write_png(path, sheet_w, sheet_h, sheet);
+    core_free(sheet, size);
+    if (ok) printf("world: %d pictures side by side -> %s\n", app->shot_count, path);
+    return ok;
+}
+
+static void app_free_shots(game_app *app) {
+    int width = 0, height = 0;
+    if (app->gfx) gfx_size(app->gfx, &width, &height);
+    for (int n = 0; n < app->shot_count; n++) core_free(app->shots[n], (size_t)(width / 2) * (size_t)(height / 2) * 4);
+    core_free(app->shots, app->shot_capacity * sizeof *app->shots);
+}
+
 static void app_spawn_player(game_app *app) {
     const game_app_desc *d = &app->desc;
     game_player_params params = { 0 };
@@ -182,6 +279,10 @@ static void app_spawn_player(game_app *app) {
     game_player_spawn(&app->player, app->world, d->spawn[0], d->spawn[1]);
     app->player.yaw = 3.14159265f;             /* towards +z: the slopes in view face the sun */
     app->player.pitch = GAME_WALKER_PITCH;
+    /* A first view of the land, not of a hillside. Scripted walks keep +z: their paths and the
+     * benchmarks were laid out along it. */
+    if (app->interactive || d->face_open_view)
+        app->player.yaw = game_player_open_yaw(&app->player, app->world, app->player.yaw, NULL);
     if (app->interactive) app_restore_player(app);
     app->spawned = true;
 }
@@ -236,6 +337,7 @@ void game_app_destroy(game_app *app) {
     terrain_world_destroy(app->world);
     terrain_edit_log_destroy(app->edits);
     job_system_destroy(app->jobs);
+    app_free_shots(app);
     gfx_destroy(app->gfx);
     core_free(app->cpu_ms, app->cpu_capacity * sizeof *app->cpu_ms);
     core_free(app->engine_ms, app->engine_capacity * sizeof *app->engine_ms);
@@ -262,7 +364,7 @@ static bool app_loaded(game_app *app) {
 }
 
 static void app_draw_hud(game_app *app) {
-    if (app->desc.no_hud) return;
+    if (app->desc.no_hud || app->walker.shot_due) return;   /* pictures show the world alone */
     terrain_stream_stats s = terrain_ecs_stream_stats(app->terrain);
     const float white[4] = { 1, 1, 1, 1 };
     double seconds = app->frame_seconds;
@@ -300,6 +402,7 @@ static bool app_update_player(game_app *app, float dt) {
     if (app->desc.walk) {
         scripted = game_walker_step(&app->walker, &app->player, step);
         actions = &scripted;
+        if (app->walker.shot_due && app->shot_hold++ == 0) app_frame_shot(app);
     }
     game_player_update(&app->player, app->world, actions, step);
     app->waiting += app->player.waiting;
@@ -360,8 +463,17 @@ bool game_app_frame(game_app *app) {
     app_draw_hud(app);
     uint64_t drawn = core_time_ns();
     double cpu_ms = (double)(drawn - now) * 1e-6, engine_ms = (double)(drawing - now) * 1e-6;
+    if (app->walker.shot_due && app_shot_ready(app)) {
+        app_take_shot(app);
+        app->shot_hold = 0;
+        game_walker_resume(&app->walker, &app->player);
+    }
     bool last = !running || app_last_frame(app);
-    if (last && app->desc.screenshot_path && !gfx_screenshot(app->gfx, app->desc.screenshot_path)) running = false;
+    if (last && app->desc.screenshot_path) {
+        bool written = app->shot_count ? app_write_contact_sheet(app, app->desc.screenshot_path)
+                                       : gfx_screenshot(app->gfx, app->desc.screenshot_path);
+        if (!written) running = false;
+    }
     gfx_frame_end(app->gfx);
     trace_frame_end();
     if (app->loading) {

@@ -47,6 +47,8 @@ typedef struct game_app_desc {
     const char *bindings_path;        /* input bindings; NULL = built-in defaults */
     const char *screenshot_path;      /* written after the last frame */
     double spawn[2];                  /* x, z of the spawn column; the player stands on top */
+    bool face_open_view;              /* spawn facing the most open view (game_player_open_yaw);
+                                         interactive runs always do, walks keep yaw π (+z) */
     /* A world made by hand instead of generated (tests, tools): as terrain_world_desc's. */
     terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);
     void *generate_user;

@@ -1,6 +1,6 @@
 /* world — the walkable infinite world (game/app.h) on the command line.
  *
- *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT] [--record FILE]
+ *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT | --tour] [--record FILE]
  *         [--replay FILE] [--bindings FILE] [--screenshot FILE] [--radius R] [--levels N]
  *         [--memory MB] [--threads N] [--trace FILE] [--world DIR]
  *
@@ -21,11 +21,23 @@
 #include <stdio.h>
 #include <string.h>
 
+/* The tour `tools/play` shows with no display: into the most open view from the spawn, on foot
+ * (flying over what it cannot walk round), then up for the view to the horizon; a picture at
+ * each stop, each turned to the most open view there. */
+static const char game_tour_text[] =
+    "ahead\n"
+    "radius 3\n"
+    "fly-over\n"
+    "0 0 shot\n"                 /* where the player stands */
+    "0 50 shot\n"                /* 50 m on */
+    "-30 100 shot\n"             /* on, bearing left */
+    "-30 110 fly y=120 shot\n";  /* up 120 m */
+
 typedef struct options {
     core_common_args common;
     const char *size, *screenshot, *walk, *record, *replay, *bindings, *world;
     int seed, frames, radius, levels, memory_mb;
-    bool headless;
+    bool headless, tour;
 } options;
 
 static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_walk *walk) {
@@ -39,6 +51,8 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "frames", CORE_OPTION_INT, &o->frames, "N", "stop after N frames past loading (0 = when closed)", 0,
           100000000 },
         { "walk", CORE_OPTION_STRING, &o->walk, "SCRIPT", "scripted walk: " GAME_WALK_USAGE },
+        { "tour", CORE_OPTION_FLAG, &o->tour, NULL, "the built-in tour: pictures on foot and from above "
+          "(with --screenshot FILE: FILE-N.png and FILE side by side)" },
         { "record", CORE_OPTION_STRING, &o->record, "FILE", "record every frame's input" },
         { "replay", CORE_OPTION_STRING, &o->replay, "FILE", "play recorded input back" },
         { "bindings", CORE_OPTION_STRING, &o->bindings, "FILE", "input bindings (data/input/bindings.txt)" },
@@ -67,6 +81,15 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         fprintf(stderr, "world: bad value for '--walk': %s\n", error);
         core_cli_print_usage(&cli, stderr);
         return 2;
+    }
+    if (o->tour && o->walk) {
+        fprintf(stderr, "world: '--tour' and '--walk' cannot be used together\n");
+        core_cli_print_usage(&cli, stderr);
+        return 2;
+    }
+    if (o->tour && !game_walk_parse_text(game_tour_text, strlen(game_tour_text), "tour", walk, error, sizeof error)) {
+        fprintf(stderr, "world: the built-in tour does not parse: %s\n", error);   /* a programmer's error */
+        return 1;
     }
     if (o->record && o->replay) {
         fprintf(stderr, "world: '--record' and '--replay' cannot be used together\n");
@@ -108,7 +131,8 @@ int main(int argc, char **argv) {
     desc.headless = o.headless;
     desc.threads = o.common.threads;
     desc.frames = o.frames;
-    desc.walk = o.walk ? &walk : NULL;
+    desc.walk = o.walk || o.tour ? &walk : NULL;
+    desc.face_open_view = o.tour;
     desc.record_path = o.record;
     desc.replay_path = o.replay;
     desc.bindings_path = o.bindings;
@@ -123,7 +147,7 @@ int main(int argc, char **argv) {
     }
     while (game_app_frame(app)) {}
     game_app_stats stats = game_app_stats_get(app);
-    print_results(&stats, o.walk != NULL);
+    print_results(&stats, o.walk != NULL || o.tour);
     game_app_destroy(app);
     game_walk_free(&walk);
     trace_stop();

@@ -445,3 +445,37 @@ void game_player_spawn(game_player *player, terrain_world *world, double x, doub
         update(player, world, &idle, 1.0f / 60.0f, false);
     player->velocity[0] = player->velocity[1] = player->velocity[2] = 0.0f;
 }
+
+/* ---- the most open view --------------------------------------------------------------------- */
+
+#define OPEN_PI 3.14159265358979323846
+
+/* The steepest angle from the eye up to the ground tops along yaw, out to the view distance. */
+static double skyline_along(terrain_world *world, const double eye[3], double yaw) {
+    double forward_x = sin(yaw), forward_z = -cos(yaw);   /* yaw 0 looks along −z */
+    double steepest = -OPEN_PI / 2;
+    for (double d = 8.0; d <= GAME_PLAYER_VIEW_DISTANCE; d += 8.0) {
+        float top;
+        column_heights(world, (int64_t)floor(eye[0] + forward_x * d), (int64_t)floor(eye[2] + forward_z * d), &top, NULL);
+        steepest = fmax(steepest, atan2((double)top - eye[1], d));
+    }
+    return steepest;
+}
+
+float game_player_open_yaw(const game_player *player, terrain_world *world, float preferred, float *skyline) {
+    double eye[3], angle[GAME_PLAYER_VIEW_DIRECTIONS], lowest = INFINITY;
+    game_player_eye(player, eye);
+    for (int k = 0; k < GAME_PLAYER_VIEW_DIRECTIONS; k++) {
+        angle[k] = skyline_along(world, eye, (double)preferred + 2.0 * OPEN_PI * k / GAME_PLAYER_VIEW_DIRECTIONS);
+        lowest = fmin(lowest, angle[k]);
+    }
+    /* Within a hundredth of a radian of the lowest counts as a tie: then the smallest turn. */
+    int best = 0;
+    double best_turn = INFINITY;
+    for (int k = 0; k < GAME_PLAYER_VIEW_DIRECTIONS; k++) {
+        double turn = fabs(remainder(2.0 * OPEN_PI * k / GAME_PLAYER_VIEW_DIRECTIONS, 2.0 * OPEN_PI));
+        if (angle[k] <= lowest + 0.01 && turn < best_turn) best = k, best_turn = turn;
+    }
+    if (skyline) *skyline = (float)angle[best];
+    return (float)remainder((double)preferred + 2.0 * OPEN_PI * best / GAME_PLAYER_VIEW_DIRECTIONS, 2.0 * OPEN_PI);
+}

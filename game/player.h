@@ -93,6 +93,14 @@ void game_player_init(game_player *player, const game_player_params *params);
  * collision; there is no swimming yet). Velocity zeroed, walking mode. Reads the world directly
  * (region_ready is not asked). */
 void game_player_spawn(game_player *player, terrain_world *world, double x, double z);
+/* The most open view from where the player stands: of GAME_PLAYER_VIEW_DIRECTIONS yaws, the one
+ * whose skyline (the steepest angle up to the ground top along the view, sampled every 8 m out
+ * to GAME_PLAYER_VIEW_DISTANCE) is lowest; ties go to the direction nearest `preferred`. The
+ * skyline's angle in radians goes to *skyline (may be NULL): below 0 the view looks down over
+ * the land, above about 0.3 it faces a slope. Reads (generates) the columns it samples. */
+#define GAME_PLAYER_VIEW_DIRECTIONS 16
+#define GAME_PLAYER_VIEW_DISTANCE 96.0
+float game_player_open_yaw(const game_player *player, terrain_world *world, float preferred, float *skyline);
 /* One frame: look, then move (walk or fly) with collision. dt in seconds. */
 void game_player_update(game_player *player, terrain_world *world, const input_actions *actions, float dt);
 /* The eye, world metres. */

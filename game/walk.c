@@ -95,13 +95,20 @@ static bool coordinate(parser *p, token t, const char *what, double *value) {
     return true;
 }
 
-/* `relative`, `ahead`, `radius R`. */
+/* `relative`, `ahead`, `radius R`, `fly-over`. */
 static bool directive(parser *p, token word, const char *rest, const char *end) {
     token extra;
     bool frame = is(word, "relative") || is(word, "ahead");
-    if (!frame && !is(word, "radius"))
-        return FAIL(p, "unknown directive '%.*s' (a line is X Z [words], relative, ahead or radius R)", QUOTED(word));
+    if (!frame && !is(word, "radius") && !is(word, "fly-over"))
+        return FAIL(p, "unknown directive '%.*s' (a line is X Z [words], relative, ahead, radius R or fly-over)",
+                    QUOTED(word));
     if (p->walk.count > 0) return FAIL(p, "'%.*s' must come before the first waypoint", QUOTED(word));
+    if (is(word, "fly-over")) {
+        if (p->walk.fly_over) return FAIL(p, "fly-over given twice");
+        if (next_token(&rest, end, &extra)) return FAIL(p, "'fly-over' takes nothing after it");
+        p->walk.fly_over = true;
+        return true;
+    }
     if (frame) {
         if (p->framed) return FAIL(p, "only one of relative and ahead, once");
         if (next_token(&rest, end, &extra)) return FAIL(p, "'%.*s' takes nothing after it", QUOTED(word));
@@ -128,7 +135,7 @@ static bool point_words(parser *p, const char *rest, const char *end, game_walk_
     bool sprint = false;
     while (next_token(&rest, end, &t)) {
         bool *flag = is(t, "walk") ? &point->walk : is(t, "sprint") ? &sprint : is(t, "jump") ? &point->jump
-                   : is(t, "fly") ? &point->fly : NULL;
+                   : is(t, "fly") ? &point->fly : is(t, "shot") ? &point->shot : NULL;
         if (flag) {
             if (*flag) return FAIL(p, "'%.*s' given twice", QUOTED(t));
             *flag = true;
@@ -137,7 +144,7 @@ static bool point_words(parser *p, const char *rest, const char *end, game_walk_
             if (!coordinate(p, (token){ t.text + 2, t.size - 2 }, "y", &point->y)) return false;
             point->has_y = true;
         } else {
-            return FAIL(p, "unknown word '%.*s' (walk, sprint, jump, fly, y=H)", QUOTED(t));
+            return FAIL(p, "unknown word '%.*s' (walk, sprint, jump, fly, y=H, shot)", QUOTED(t));
         }
     }
     if (point->walk && sprint) return FAIL(p, "walk and sprint together");
@@ -335,6 +342,7 @@ static bool reached(const game_walker *w, const game_player *pl, int i) {
 static void start_leg(game_walker *w, const game_player *pl) {
     w->leg_start = w->time;
     w->leg_stalls = 0;
+    w->leg_flying_over = false;
     w->detour_until = w->time;
     w->history_count = 0;
     w->fly_height = pl->position[1];
@@ -357,6 +365,13 @@ void game_walker_start(game_walker *walker, const game_walk *walk, const game_pl
 }
 
 bool game_walker_done(const game_walker *walker) { return walker->done; }
+
+void game_walker_resume(game_walker *walker, const game_player *player) {
+    if (!walker->shot_due) return;
+    walker->shot_due = false;
+    walker->last[0] = player->position[0], walker->last[1] = player->position[2];
+    start_leg(walker, player);            /* the hold does not count against the next leg */
+}
 
 /* Time, distances and the frame count, from where the player got to. */
 static void progress(game_walker *w, const game_player *pl) {
@@ -406,8 +421,9 @@ static input_actions steer(game_walker *w, const game_player *pl, float dt) {
     double dx = t[0] - pl->position[0], dz = t[2] - pl->position[2], horizontal = hypot(dx, dz);
 
     bool flying = pl->flying;         /* as it will be in this frame's update */
-    bool toggle = pl->flying != p->fly && !w->toggled;   /* one press, then see it took */
-    if (toggle) a.pressed |= BIT(TOGGLE_FLY), flying = p->fly;
+    bool fly = p->fly || w->leg_flying_over;
+    bool toggle = pl->flying != fly && !w->toggled;   /* one press, then see it took */
+    if (toggle) a.pressed |= BIT(TOGGLE_FLY), flying = fly;
     w->toggled = toggle;
 
     /* yaw: forward is (sin yaw, −cos yaw), so the waypoint's bearing is atan2(dx, −dz) */
@@ -439,12 +455,17 @@ static input_actions steer(game_walker *w, const game_player *pl, float dt) {
         w->history_count = 0;
         detour = true;
         if (!flying) a.down |= BIT(JUMP), a.pressed |= BIT(JUMP);
+        /* Sidesteps to one side did not get past: fly over it, this leg only. */
+        if (!flying && w->walk->fly_over && w->leg_stalls > DETOURS_PER_SIDE) w->leg_flying_over = true;
     }
     if (detour) {
         /* sidestep while still heading for the waypoint: slides along a wall towards its end */
         float side = ((w->leg_stalls - 1) / DETOURS_PER_SIDE) % 2 ? -1.0f : 1.0f;
         a.move_x = side * 0.70710678f, a.move_y = 0.70710678f;     /* 45°, length 1 */
-        if (flying) a.down |= BIT(JUMP);                 /* and over it */
+        if (flying) {
+            a.down |= BIT(JUMP);                         /* and over it, */
+            w->fly_height = fmax(w->fly_height, pl->position[1]);   /* keeping the height won */
+        }
     }
     return a;
 }
@@ -454,10 +475,17 @@ input_actions game_walker_step(game_walker *walker, const game_player *player, f
     if (walker->done) return idle;
     if (!(dt > 0.0f)) dt = 0.0f;
     if (dt > player->params.max_dt) dt = player->params.max_dt;   /* as the player clamps it */
+    if (walker->shot_due) return idle;   /* holding still for the picture */
     progress(walker, player);
     while (walker->index < walker->walk->count && reached(walker, player, walker->index)) {
+        bool shot = walker->walk->points[walker->index].shot;
         walker->index++;
         start_leg(walker, player);
+        if (shot) {
+            walker->shot_due = true;
+            walker->shots++;
+            return idle;
+        }
     }
     if (walker->index >= walker->walk->count) {
         walker->done = true;

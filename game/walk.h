@@ -32,9 +32,15 @@
  *   `sprint` (the default) or `walk`; `jump` (jump whenever on the ground); `fly` (fly mode for
  *   this leg: toggled on before it, off again before a leg without `fly`); `y=H` with `fly`, the
  *   height to fly at (without it a flying leg keeps the height it starts at).
+ * - `shot`: once the waypoint is reached the walker holds still (shot_due) until
+ *   game_walker_resume, so a program can take a picture there (world --walk: FILE-N.png beside
+ *   --screenshot FILE, turned to the most open view).
  * - Directives, each at most once and before the first waypoint: `relative` (X Z and y= are
  *   offsets from the walker's start), `ahead` (offsets in the start's own frame: X metres to the
- *   right, Z metres ahead, as straight:M is `ahead` + `0 M`), `radius R` (0.1 ≤ R ≤ 1000 m).
+ *   right, Z metres ahead, as straight:M is `ahead` + `0 M`), `radius R` (0.1 ≤ R ≤ 1000 m),
+ *   `fly-over` (a walking leg whose sidesteps to one side have failed flies the rest of the leg,
+ *   climbing over what blocks it, and lands for the next: such a walk never ends stuck at a
+ *   wall it could fly over).
  *   Without `relative` or `ahead` the coordinates are absolute (world metres, at any distance).
  * - `#` starts a comment; blank lines are skipped; LF or CRLF line ends; a UTF-8 byte order mark
  *   is skipped. Lines are at most 1024 bytes; at most 100000 waypoints; at least one.
@@ -99,6 +105,7 @@ typedef struct game_walk_point {
     bool jump;                        /* jump whenever on the ground */
     bool fly;                         /* in fly mode */
     bool has_y;                       /* only with fly */
+    bool shot;                        /* hold still for a picture once reached */
 } game_walk_point;
 
 typedef struct game_walk {
@@ -106,6 +113,7 @@ typedef struct game_walk {
     int count;                        /* ≥ 1 after a successful parse */
     game_walk_frame frame;
     float radius;                     /* reach radius, metres; 0 = GAME_WALK_DEFAULT_RADIUS */
+    bool fly_over;                    /* a walking leg that sidesteps cannot pass flies over */
 } game_walk;
 
 /* `spec` is straight:METRES or the path of a waypoint file. On success *out holds the walk (free it
@@ -130,6 +138,8 @@ typedef struct game_walker {
     bool done;                        /* arrived, or gave up (stuck) */
     bool stuck;                       /* gave up: a leg ran out of time */
     int stalls;                       /* times a stall was detected (jump and sidestep) */
+    int shots;                        /* `shot` waypoints reached */
+    bool shot_due;                    /* holding still at a `shot` waypoint: game_walker_resume */
 
     /* private */
     const game_walk *walk;            /* borrowed: must outlive the walker */
@@ -141,6 +151,7 @@ typedef struct game_walker {
     double fly_height;                /* for a flying leg without y= */
     double detour_until;              /* sidestepping until then (seconds) */
     int leg_stalls;
+    bool leg_flying_over;             /* this walking leg gave up sidestepping and flies */
     bool toggled;                     /* pressed toggle_fly on the previous step */
     struct { double time, x, y, z; } history[GAME_WALKER_HISTORY];
     int history_count, history_next;
@@ -153,5 +164,8 @@ void game_walker_start(game_walker *walker, const game_walk *walk, const game_pl
  * progress first (waypoints reached, distance, the time limit); once done, returns no input. */
 input_actions game_walker_step(game_walker *walker, const game_player *player, float dt);
 bool game_walker_done(const game_walker *walker);
+/* After a `shot` waypoint: the walker returns no input (shot_due) until this, so the program can
+ * turn the view, let the world settle and take the picture; the hold counts against no leg. */
+void game_walker_resume(game_walker *walker, const game_player *player);
 
 #endif

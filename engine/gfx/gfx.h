@@ -91,6 +91,8 @@ uint64_t gfx_frame_index(const gfx_context *gfx);
 void gfx_read_pixels(gfx_context *gfx, uint8_t *rgba);
 /* Writes the default framebuffer as a PNG (stb_image_write). False, with a message, on failure. */
 bool gfx_screenshot(gfx_context *gfx, const char *path);
+/* Writes `rgba` (width × height × 4 bytes, top row first) as a PNG. False, with a message. */
+bool gfx_write_png(const char *path, int width, int height, const uint8_t *rgba);
 
 /* ---- passes and GPU timing ---------------------------------------------------------------- */
 

@@ -150,9 +150,14 @@ bool gfx_screenshot(gfx_context *gfx, const char *path) {
     gfx_read_pixels(gfx, rgba);
     /* The framebuffer has no meaningful alpha: write it opaque. */
     for (size_t i = 3; i < size; i += 4) rgba[i] = 255;
-    int ok = stbi_write_png(path, gfx->width, gfx->height, 4, rgba, gfx->width * 4);
+    bool ok = gfx_write_png(path, gfx->width, gfx->height, rgba);
     core_free(rgba, size);
-    if (!ok) core_error("gfx", "cannot write screenshot %s", path);
-    else core_info("gfx", "screenshot %s (%dx%d)", path, gfx->width, gfx->height);
+    return ok;
+}
+
+bool gfx_write_png(const char *path, int width, int height, const uint8_t *rgba) {
+    int ok = stbi_write_png(path, width, height, 4, rgba, width * 4);
+    if (!ok) core_error("gfx", "cannot write the picture %s", path);
+    else core_info("gfx", "picture %s (%dx%d)", path, width, height);
     return ok != 0;
 }

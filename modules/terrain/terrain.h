@@ -198,6 +198,8 @@ void terrain_world_set_max_chunks(terrain_world *world, size_t max_chunks);
 const terrain_generation_params *terrain_world_generation(const terrain_world *world);
 /* Material at a world point (generating its chunk if needed). */
 terrain_material terrain_world_material_at(terrain_world *world, double x, double y, double z);
+/* The top of the highest solid layer (terrain_stacks_top) of the column under world (x, z). */
+float terrain_world_top(terrain_world *world, double x, double z);
 
 /* ---- the implicit field (000 §3.3) -------------------------------------------------------- */
 

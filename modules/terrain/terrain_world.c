@@ -322,14 +322,25 @@ void terrain_world_set_max_chunks(terrain_world *world, size_t max_chunks) {
     pthread_mutex_unlock(&world->lock);
 }
 
-terrain_material terrain_world_material_at(terrain_world *world, double x, double y, double z) {
+/* The stacks holding the column under world (x, z), and the column's place in them. */
+static const terrain_stacks *column_at(terrain_world *world, double x, double z, int *i, int *k) {
     double column_x = floor(x / TERRAIN_COLUMN_SIZE), column_z = floor(z / TERRAIN_COLUMN_SIZE);
     double chunk_x = floor(column_x / TERRAIN_CHUNK_COLUMNS), chunk_z = floor(column_z / TERRAIN_CHUNK_COLUMNS);
-    int i = (int)(column_x - chunk_x * TERRAIN_CHUNK_COLUMNS);
-    int k = (int)(column_z - chunk_z * TERRAIN_CHUNK_COLUMNS);
-    const terrain_stacks *stacks =
-        terrain_world_stacks(world, (terrain_chunk_coord){ (int64_t)chunk_x, (int64_t)chunk_z });
+    *i = (int)(column_x - chunk_x * TERRAIN_CHUNK_COLUMNS);
+    *k = (int)(column_z - chunk_z * TERRAIN_CHUNK_COLUMNS);
+    return terrain_world_stacks(world, (terrain_chunk_coord){ (int64_t)chunk_x, (int64_t)chunk_z });
+}
+
+terrain_material terrain_world_material_at(terrain_world *world, double x, double y, double z) {
+    int i, k;
+    const terrain_stacks *stacks = column_at(world, x, z, &i, &k);
     return terrain_stacks_material_at(stacks, i, k, (float)y);
+}
+
+float terrain_world_top(terrain_world *world, double x, double z) {
+    int i, k;
+    const terrain_stacks *stacks = column_at(world, x, z, &i, &k);
+    return terrain_stacks_top(stacks, i, k);
 }
 
 /* ---- edits -------------------------------------------------------------------------------- */

@@ -431,3 +431,29 @@ Test(player, walks_generated_terrain_with_eye_in_air_and_feet_on_the_surface) {
     cr_expect_leq(deepest, allowed, "feet %f inside", deepest);
     terrain_world_destroy(world);
 }
+
+/* ---- the most open view ------------------------------------------------------------------- */
+
+/* A 20 m wall beyond x = 10, flat ground elsewhere. Every direction with a +x component meets
+ * the wall within the 96 m sampled, so its skyline rises above the horizon; every other one sees
+ * flat ground, whose skyline is the eye's drop over the farthest sample, atan2(−eye, 96). Of
+ * those ties the smallest turn from the preferred yaw (+x, into the wall) is a quarter turn, to
+ * yaw 0 (−z) or π (+z, the first of the two in the search), rather than a half turn to −x. */
+Test(player, the_most_open_view_turns_away_from_a_wall_by_the_smallest_turn) {
+    hand_world hand = { .kind = WALL, .edge = 10.0 };
+    terrain_world *world = hand_world_create(&hand);
+    game_player pl;
+    place(&pl, 0.5, 0.0, 0.5);
+    double eye[3];
+    game_player_eye(&pl, eye);
+    float skyline;
+    float yaw = game_player_open_yaw(&pl, world, YAW_PLUS_X, &skyline);
+    cr_expect_leq(fabs(remainder((double)yaw, 3.14159265358979)), 1e-5, "yaw %f: along the wall", (double)yaw);
+    cr_expect_float_eq(skyline, atan2(-eye[1], GAME_PLAYER_VIEW_DISTANCE), 1e-5, "skyline %f", (double)skyline);
+    /* On flat ground every direction ties: the preferred one is kept. */
+    hand_world flat = { .kind = FLAT };
+    terrain_world *plain = hand_world_create(&flat);
+    cr_expect_float_eq(game_player_open_yaw(&pl, plain, 1.0f, NULL), 1.0f, 1e-6);
+    terrain_world_destroy(plain);
+    terrain_world_destroy(world);
+}

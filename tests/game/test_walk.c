@@ -117,7 +117,7 @@ Test(walk_parse, file_with_comments_blank_lines_crlf_and_words) {
 Test(walk_parse, every_error_names_its_line) {
     const bad_case cases[] = {
         { "1 2\n\n# c\nfoo 3\n",
-          "t.walk:4: unknown directive 'foo' (a line is X Z [words], relative, ahead or radius R)" },
+          "t.walk:4: unknown directive 'foo' (a line is X Z [words], relative, ahead, radius R or fly-over)" },
         { "1 2\n3\n", "t.walk:2: a waypoint needs X and Z; Z is missing" },
         { "\n\n1.2.3 4\n", "t.walk:3: x: '1.2.3' is not a number" },
         { "1 abc\n", "t.walk:1: z: 'abc' is not a number" },
@@ -125,7 +125,11 @@ Test(walk_parse, every_error_names_its_line) {
         { "-inf 2\n", "t.walk:1: x: '-inf' is not a number" },
         { "1 2\r\n3 1e999\r\n", "t.walk:2: z: '1e999' is out of range (-1e9 ... 1e9 m)" },
         { "# x\n1000000001 0\n", "t.walk:2: x: '1000000001' is out of range (-1e9 ... 1e9 m)" },
-        { "1 2 sprnt\n", "t.walk:1: unknown word 'sprnt' (walk, sprint, jump, fly, y=H)" },
+        { "1 2 sprnt\n", "t.walk:1: unknown word 'sprnt' (walk, sprint, jump, fly, y=H, shot)" },
+        { "1 2 shot shot\n", "t.walk:1: 'shot' given twice" },
+        { "fly-over\nfly-over\n1 2\n", "t.walk:2: fly-over given twice" },
+        { "fly-over now\n", "t.walk:1: 'fly-over' takes nothing after it" },
+        { "1 2\nfly-over\n", "t.walk:2: 'fly-over' must come before the first waypoint" },
         { "1 2\n1 2 walk sprint\n", "t.walk:2: walk and sprint together" },
         { "1 2 jump jump\n", "t.walk:1: 'jump' given twice" },
         { "1 2 fly jump\n", "t.walk:1: jump and fly together (flying, there is nothing to jump from)" },
@@ -513,6 +517,68 @@ Test(walker, an_unreachable_waypoint_ends_stuck_at_the_time_limit) {
     /* done stays done and asks for nothing */
     input_actions a = game_walker_step(&w, &pl, 1.0f / 60.0f);
     cr_expect(a.move_x == 0.0f && a.move_y == 0.0f && a.look_x == 0.0f && a.down == 0 && a.pressed == 0);
+    game_walk_free(&walk);
+    terrain_world_destroy(world);
+}
+
+/* The same box with `fly-over`: sidestepping one way fails, so the leg flies, climbs the 20 m
+ * walls and reaches the waypoint inside instead of ending stuck. */
+Test(walker, fly_over_clears_what_it_cannot_walk_round) {
+    hand_world hand = { .kind = BOX };
+    terrain_world *world = hand_world_create(&hand);
+    game_walk walk = parsed("fly-over\n25 0\n");
+    game_player pl;
+    place(&pl, 4.5, 0.5, 0.0f);
+    game_walker w;
+    walk_run r = { 0 };
+    run_walk(world, &pl, &walk, &w, &r);
+    cr_assert(w.done, "still walking after %d frames", r.frames);
+    cr_expect(!w.stuck, "stuck at (%f, %f)", pl.position[0], pl.position[2]);
+    cr_expect_eq(w.index, 1);
+    cr_expect_gt(r.highest, 20.0, "flew over the 20 m walls (%f)", r.highest);
+    cr_expect_gt(r.flying_frames, 0);
+    cr_expect_leq(hypot(pl.position[0] - 25.0, pl.position[2]), 3.0, "ended at (%f, %f)", pl.position[0],
+                  pl.position[2]);
+    game_walk_free(&walk);
+    terrain_world_destroy(world);
+}
+
+/* A `shot` waypoint: the walker holds still (no input, no time) until resumed, then goes on. */
+Test(walker, a_shot_holds_until_resumed) {
+    hand_world hand = { .kind = FLAT };
+    terrain_world *world = hand_world_create(&hand);
+    game_walk walk = parsed("ahead\n0 10 shot\n0 20\n");
+    game_player pl;
+    place(&pl, 0.5, 0.5, 0.0f);
+    game_walker w;
+    game_walker_start(&w, &walk, &pl);
+    float dt = 1.0f / 60.0f;
+    int frame = 0;
+    for (; frame < 2000 && !w.shot_due; frame++) {
+        input_actions a = game_walker_step(&w, &pl, dt);
+        game_player_update(&pl, world, &a, dt);
+    }
+    cr_assert(w.shot_due, "no hold after %d frames", frame);
+    cr_expect_eq(w.shots, 1);
+    cr_expect_leq(hypot(pl.position[0] - 0.5, pl.position[2] - (0.5 - 10.0)), GAME_WALK_DEFAULT_RADIUS + 1e-9);
+    double time = w.time;
+    for (int hold = 0; hold < 100; hold++) {
+        input_actions a = game_walker_step(&w, &pl, dt);
+        cr_assert(a.move_x == 0.0f && a.move_y == 0.0f && a.look_x == 0.0f && a.down == 0 && a.pressed == 0,
+                  "input while holding (frame %d)", hold);
+        game_player_update(&pl, world, &a, dt);
+    }
+    cr_expect_eq(w.time, time, "the hold counts against no leg");
+    cr_expect(!game_walker_done(&w));
+    game_walker_resume(&w, &pl);
+    cr_expect(!w.shot_due);
+    for (; frame < 4000 && !game_walker_done(&w); frame++) {
+        input_actions a = game_walker_step(&w, &pl, dt);
+        game_player_update(&pl, world, &a, dt);
+    }
+    cr_expect(w.done && !w.stuck);
+    cr_expect_eq(w.shots, 1);
+    cr_expect_leq(hypot(pl.position[0] - 0.5, pl.position[2] - (0.5 - 20.0)), GAME_WALK_DEFAULT_RADIUS + 0.5);
     game_walk_free(&walk);
     terrain_world_destroy(world);
 }
