@@ -21,18 +21,6 @@
 #include <stdio.h>
 #include <string.h>
 
-/* The tour `tools/play` shows with no display: into the most open view from the spawn, on foot
- * (flying over what it cannot walk round), then up for the view to the horizon; a picture at
- * each stop, each turned to the most open view there. */
-static const char game_tour_text[] =
-    "ahead\n"
-    "radius 3\n"
-    "fly-over\n"
-    "0 0 shot\n"                 /* where the player stands */
-    "0 50 shot\n"                /* 50 m on */
-    "-30 100 shot\n"             /* on, bearing left */
-    "-30 110 fly y=120 shot\n";  /* up 120 m */
-
 typedef struct options {
     core_common_args common;
     const char *size, *screenshot, *walk, *record, *replay, *bindings, *world;
@@ -87,7 +75,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         core_cli_print_usage(&cli, stderr);
         return 2;
     }
-    if (o->tour && !game_walk_parse_text(game_tour_text, strlen(game_tour_text), "tour", walk, error, sizeof error)) {
+    if (o->tour && !game_walk_parse_text(game_walk_tour, strlen(game_walk_tour), "tour", walk, error, sizeof error)) {
         fprintf(stderr, "world: the built-in tour does not parse: %s\n", error);   /* a programmer's error */
         return 1;
     }

@@ -285,6 +285,17 @@ bool game_walk_parse(const char *spec, game_walk *out, char *error, size_t error
     return ok;
 }
 
+/* ---- the tour ---------------------------------------------------------------------------------- */
+
+const char game_walk_tour[] =
+    "ahead\n"
+    "radius 3\n"
+    "fly-over\n"
+    "0 0 shot\n"                 /* where the player stands */
+    "0 50 shot\n"                /* 50 m on */
+    "-30 100 shot\n"             /* on, bearing left */
+    "-30 110 fly y=120 shot\n";  /* up 120 m */
+
 /* ---- the walker -------------------------------------------------------------------------------- */
 
 #define STALL_WINDOW 0.5          /* seconds looked back to tell a stall */

@@ -116,6 +116,11 @@ typedef struct game_walk {
     bool fly_over;                    /* a walking leg that sidesteps cannot pass flies over */
 } game_walk;
 
+/* The tour `world --tour` takes (and tools/play with no display): from the spawn into the most
+ * open view on foot, flying over what it cannot walk round, then up 120 m for the view to the
+ * horizon; a picture at each of its four stops. A waypoint file's text. */
+extern const char game_walk_tour[];
+
 /* `spec` is straight:METRES or the path of a waypoint file. On success *out holds the walk (free it
  * with game_walk_free); on failure *out is zeroed (freeing it is harmless), `error` (when given)
  * receives one line naming the problem, and false is returned. */

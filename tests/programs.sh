@@ -241,5 +241,19 @@ expect "world: a world another process has open" 1 "world.db: in use by another 
   "$bin/world" --headless --size 64x48 --frames 1 --seed 9 --world "$tmp/db"
 kill "$holder" 2>/dev/null; wait "$holder" 2>/dev/null
 
+# tools/play with no display: the tour; the user's --trace and --screenshot win over the defaults,
+# are written, and are the paths it reports (the release build first: tools/play uses it).
+root=$(cd "$(dirname "$0")/.." && pwd)
+"$root/tools/build" release world trace_report >/dev/null 2>&1
+expect "tools/play: the user's --trace is written and reported" 0 "^trace: $tmp/p.json \(open" -- \
+  env -u DISPLAY -u WAYLAND_DISPLAY "$root/tools/play" --size 96x64 --trace "$tmp/p.json" --screenshot "$tmp/p.png"
+if grep -q "^pictures: $tmp/p.png (side by side)" "$tmp/out" && [[ -s $tmp/p.json && -s $tmp/p.png && -s $tmp/p-4.png ]] &&
+   grep -q "frames" "$tmp/out" && ! grep -q "out/play" "$tmp/out"; then
+  passed=$((passed + 1)); echo "[ ok ] tools/play: the user's --screenshot holds the tour's pictures, no default path named"
+else
+  failed=$((failed + 1)); echo "[FAIL] tools/play: the user's --screenshot holds the tour's pictures, no default path named"
+  sed 's/^/    /' "$tmp/out" | tail -20
+fi
+
 echo "programs: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]

@@ -220,3 +220,113 @@ Test(render_world, edits_are_saved_and_come_back_and_a_damaged_file_is_set_aside
     snprintf(command, sizeof command, "rm -rf '%s'", dir);
     cr_expect_eq(system(command), 0);
 }
+
+/* ---- the tour (world --tour, what tools/play shows with no display) ---- */
+
+/* Per quarter of a picture, the standard deviation of luminance (0…255); the share of the top
+ * eighth that is sky-blue (blue above red by 20), and of the bottom quarter that is not the sky:
+ * farther than 40 (RGB distance) from the top eighth's mean colour (water is blue too). */
+typedef struct picture_facts {
+    double spread[4];                 /* top-left, top-right, bottom-left, bottom-right */
+    double sky_top, ground_bottom;
+} picture_facts;
+
+static picture_facts picture_facts_of(const char *path) {
+    int w, h, n;
+    uint8_t *rgb = stbi_load(path, &w, &h, &n, 3);
+    cr_assert(rgb, "no picture at %s", path);
+    picture_facts f = { 0 };
+    double sum[4] = { 0 }, sum2[4] = { 0 };
+    int count[4] = { 0 }, top = 0, top_blue = 0, bottom = 0, bottom_ground = 0;
+    double sky[3] = { 0 };
+    for (int y = 0; y < h / 8; y++)
+        for (int x = 0; x < w; x++)
+            for (int c = 0; c < 3; c++) sky[c] += rgb[3 * (y * w + x) + c] / (double)(w * (h / 8));
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            const uint8_t *p = rgb + 3 * (y * w + x);
+            double luma = 0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2];
+            int q = (y >= h / 2) * 2 + (x >= w / 2);
+            sum[q] += luma, sum2[q] += luma * luma, count[q]++;
+            if (y < h / 8) top++, top_blue += p[2] > p[0] + 20;
+            double far = hypot(hypot(p[0] - sky[0], p[1] - sky[1]), p[2] - sky[2]);
+            if (y >= h - h / 4) bottom++, bottom_ground += far > 40.0;
+        }
+    for (int q = 0; q < 4; q++) {
+        double mean = sum[q] / count[q];
+        f.spread[q] = sqrt(fmax(sum2[q] / count[q] - mean * mean, 0.0));
+    }
+    f.sky_top = (double)top_blue / top;
+    f.ground_bottom = (double)bottom_ground / bottom;
+    stbi_image_free(rgb);
+    return f;
+}
+
+/* The tour's threshold on spread: between a wall filling the frame (the test below measures it)
+ * and the least spread quarter of the tour's pictures (water under the vista, 7.6 on seed 1 at
+ * 160 × 96; the others 10 to 70). A regression guard set from those measurements. */
+#define TOUR_MIN_SPREAD 5.0
+
+/* Flat ground at y = 0, and from z = 4 on a cliff 60 m tall across the whole width. */
+static void wall_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
+    (void)user, (void)x;
+    terrain_stacks_builder_push(b, TERRAIN_BEDROCK, -TERRAIN_FLOOR_Y + (z >= 4 ? 60.0f : 0.0f));
+}
+
+static terrain_stacks *wall_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, wall_column, user);
+}
+
+/* The control for the threshold: standing 3.5 m from a cliff and facing it (walks keep yaw π,
+ * +z), the picture is one surface, and at least one quarter falls under the threshold. */
+Test(render_world, a_picture_of_a_wall_falls_under_the_tours_spread_threshold, .timeout = 300) {
+    char shot[] = "/tmp/world_wall_XXXXXX.png";
+    int fd = mkstemps(shot, 4);
+    cr_assert(fd >= 0);
+    close(fd);
+    game_walk walk = parse_walk("ahead\n0 0.5\n");
+    run_world((game_app_desc){ .seed = 1, .width = 160, .height = 96, .headless = true, .threads = 2,
+                               .walk = &walk, .stream = small_view, .no_hud = true, .no_clipmap = true,
+                               .generate = wall_chunk, .screenshot_path = shot, .spawn = { 0.5, 0.5 } });
+    picture_facts f = picture_facts_of(shot);
+    double lowest = fmin(fmin(f.spread[0], f.spread[1]), fmin(f.spread[2], f.spread[3]));
+    cr_log_info("wall: spread %.1f %.1f %.1f %.1f", f.spread[0], f.spread[1], f.spread[2], f.spread[3]);
+    cr_expect_lt(lowest, TOUR_MIN_SPREAD, "the wall's quarters spread %.1f at the least", lowest);
+    game_walk_free(&walk);
+    unlink(shot);
+}
+
+Test(render_world, the_tour_ends_where_its_script_says_and_every_picture_shows_sky_over_land, .timeout = 600) {
+    char dir[] = "/tmp/world_tour_XXXXXX", sheet[64], path[80];
+    cr_assert(mkdtemp(dir));
+    snprintf(sheet, sizeof sheet, "%s/tour.png", dir);
+    game_walk walk = parse_walk(game_walk_tour);
+    game_app_stats s = run_world((game_app_desc){ .seed = 1, .width = 160, .height = 96, .headless = true,
+                                                  .threads = 2, .walk = &walk, .face_open_view = true,
+                                                  .stream = small_view, .screenshot_path = sheet });
+    cr_expect(s.walk_done && !s.walk_stuck, "the tour %s after %.1f m", s.walk_stuck ? "got stuck" : "did not end",
+              s.walked);
+    cr_expect_eq(s.eye_in_solid_frames, 0);
+    for (int n = 1; n <= 4; n++) {
+        snprintf(path, sizeof path, "%s/tour-%d.png", dir, n);
+        picture_facts f = picture_facts_of(path);
+        cr_expect_geq(f.sky_top, 0.5, "picture %d: sky over %.0f %% of the top eighth", n, 100 * f.sky_top);
+        cr_expect_geq(f.ground_bottom, 0.5, "picture %d: land or water below, %.0f %% of the bottom quarter not sky",
+                      n, 100 * f.ground_bottom);
+        for (int q = 0; q < 4; q++)
+            cr_expect_geq(f.spread[q], TOUR_MIN_SPREAD, "picture %d, quarter %d: spread %.1f (one surface?)", n, q,
+                          f.spread[q]);
+        cr_log_info("picture %d: spread %.1f %.1f %.1f %.1f, sky %.2f, ground %.2f", n, f.spread[0], f.spread[1],
+                    f.spread[2], f.spread[3], f.sky_top, f.ground_bottom);
+    }
+    /* The contact sheet: the four at half size, two by two. */
+    int w, h, c;
+    uint8_t *rgb = stbi_load(sheet, &w, &h, &c, 3);
+    cr_assert(rgb, "no contact sheet");
+    cr_expect(w == 160 && h == 96, "%d x %d", w, h);
+    stbi_image_free(rgb);
+    game_walk_free(&walk);
+    char command[64];
+    snprintf(command, sizeof command, "rm -rf '%s'", dir);
+    cr_expect_eq(system(command), 0);
+}
