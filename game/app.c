@@ -39,6 +39,8 @@ struct game_app {
     terrain_view view;
     bool windowed, interactive, loading, over;
     bool spawned;                          /* the player stands in the world (its pose is saved) */
+    bool hud_hidden;                       /* F1 (toggle_hud) */
+    uint64_t play_start_ns;                /* when loading ended: the hint's clock */
     int frames, loading_frames;
     uint64_t start_ns, last_ns;
     double frame_seconds;
@@ -363,21 +365,65 @@ static bool app_loaded(game_app *app) {
     return ready;
 }
 
+/* The HUD's text scale: 2 at 720 rows (what it was drawn for), in proportion elsewhere. */
+static float app_hud_scale(int height) { return fmaxf(1.0f, floorf((float)height / 360.0f + 0.5f)); }
+
+#define APP_HUD_LINES 4
+#define APP_HINT_SECONDS 6.0               /* the controls' hint shows this long, then fades */
+#define APP_HINT_FADE 1.5
+static const char app_hint[] = "WASD move   mouse look   Space jump   Shift sprint   F fly   "
+                               "mouse buttons use the tool   Tab next tool   F1 HUD   Esc quit";
+
+/* The controls, along the bottom for the first seconds of a run in a window, then faded out. */
+static void app_draw_hint(game_app *app, int width, int height, float scale) {
+    if (!app->windowed || !app->interactive || app->loading) return;
+    double shown = (double)(app->last_ns - app->play_start_ns) * 1e-9;
+    float alpha = (float)fmin(1.0, fmax(0.0, (APP_HINT_SECONDS + APP_HINT_FADE - shown) / APP_HINT_FADE));
+    if (alpha <= 0.0f) return;
+    while (scale > 1.0f && gfx_text_width(app_hint, scale) > 0.9f * (float)width) scale -= 1.0f;
+    float text_width = gfx_text_width(app_hint, scale);
+    if (text_width > 0.95f * (float)width) return;       /* too small a window for it */
+    const float colour[4] = { 1, 1, 1, alpha };
+    gfx_text_print(app->hud, 0.5f * ((float)width - text_width), (float)height - 20.0f * scale, scale, colour, "%s",
+                   app_hint);
+}
+
+/* Frame rate, streaming, position and the tool, in the top-left corner: at most half the width
+ * and a quarter of the height, shrunk or cut to fit (a tiny window shows none). F1 hides it. */
 static void app_draw_hud(game_app *app) {
     if (app->desc.no_hud || app->walker.shot_due) return;   /* pictures show the world alone */
+    int width, height;
+    gfx_size(app->gfx, &width, &height);
+    float scale = app_hud_scale(height);
+    app_draw_hint(app, width, height, scale);
+    if (app->hud_hidden) {
+        gfx_text_draw(app->hud);
+        return;
+    }
     terrain_stream_stats s = terrain_ecs_stream_stats(app->terrain);
-    const float white[4] = { 1, 1, 1, 1 };
     double seconds = app->frame_seconds;
-    gfx_text_print(app->hud, 8, 8, 2, white, "%.0f fps  %.1f ms%s", seconds > 0 ? 1.0 / seconds : 0.0, seconds * 1e3,
-                   app->loading ? "  loading" : "");
-    gfx_text_print(app->hud, 8, 30, 2, white, "chunks %d resident, %d pending, %d jobs, %.0f MB",
-                   s.mesh_chunks_ready + s.mesh_chunks_kept, s.mesh_chunks_wanted - s.mesh_chunks_ready,
-                   s.jobs_in_flight, (double)s.resident_bytes / (1024.0 * 1024.0));
-    gfx_text_print(app->hud, 8, 52, 2, white, "x %.1f  y %.1f  z %.1f  seed %llu", app->view.camera[0],
-                   app->view.camera[1], app->view.camera[2], (unsigned long long)app->desc.seed);
-    if (app->interactive) {
-        const float aim[4] = { 1, 1, 0.6f, 1 }, idle[4] = { 0.7f, 0.7f, 0.7f, 1 };
-        gfx_text_print(app->hud, 8, 74, 2, app->tools.aimed ? aim : idle, "%s", game_tools_hint(&app->tools));
+    char lines[APP_HUD_LINES][160];
+    int count = 0;
+    snprintf(lines[count++], sizeof lines[0], "%.0f fps  %.1f ms%s", seconds > 0 ? 1.0 / seconds : 0.0,
+             seconds * 1e3, app->loading ? "  loading" : "");
+    snprintf(lines[count++], sizeof lines[0], "chunks %d resident, %d pending, %d jobs, %.0f MB",
+             s.mesh_chunks_ready + s.mesh_chunks_kept, s.mesh_chunks_wanted - s.mesh_chunks_ready, s.jobs_in_flight,
+             (double)s.resident_bytes / (1024.0 * 1024.0));
+    snprintf(lines[count++], sizeof lines[0], "x %.1f  y %.1f  z %.1f  seed %llu", app->view.camera[0],
+             app->view.camera[1], app->view.camera[2], (unsigned long long)app->desc.seed);
+    if (app->interactive) snprintf(lines[count++], sizeof lines[0], "%s", game_tools_hint(&app->tools));
+    /* Shrink to the corner: a smaller scale, then fewer lines. */
+    for (; count > 0; count--) {
+        float widest = 0;
+        for (int n = 0; n < count; n++) widest = fmaxf(widest, gfx_text_width(lines[n], 1.0f));
+        while (scale > 1.0f && widest * scale > 0.5f * (float)width) scale -= 1.0f;
+        if (widest * scale <= 0.5f * (float)width && 11.0f * scale * (float)count <= 0.25f * (float)height) break;
+    }
+    float line_height = 11.0f * scale;
+    const float white[4] = { 1, 1, 1, 1 }, aim[4] = { 1, 1, 0.6f, 1 }, idle[4] = { 0.7f, 0.7f, 0.7f, 1 };
+    for (int n = 0; n < count; n++) {
+        const float *colour = app->interactive && n == 3 ? (app->tools.aimed ? aim : idle) : white;
+        gfx_text_print(app->hud, 4.0f * scale, 4.0f * scale + line_height * (float)n, scale, colour, "%s", lines[n]);
     }
     gfx_text_draw(app->hud);
 }
@@ -396,6 +442,7 @@ static bool app_update_player(game_app *app, float dt) {
     if ((actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_QUIT)) || gfx_window_should_close(app->gfx)) return false;
     if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_SCREENSHOT)) gfx_screenshot(app->gfx, "world.png");
     if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_FULLSCREEN)) gfx_window_toggle_fullscreen(app->gfx);
+    if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_TOGGLE_HUD)) app->hud_hidden = !app->hud_hidden;
     if (app->loading) return true;
     float step = input_frame_dt(app->input);
     input_actions scripted;
@@ -414,6 +461,7 @@ static bool app_update_player(game_app *app, float dt) {
 
 static void app_update_view(game_app *app) {
     game_player_eye(&app->player, app->view.camera);
+    if (!app->desc.no_head_bob) app->view.camera[1] -= game_player_bob(&app->player);
     int width, height;
     gfx_size(app->gfx, &width, &height);
     app->view.yaw = app->player.yaw;
@@ -440,6 +488,7 @@ static bool app_last_frame(const game_app *app) {
 
 static void app_finish_loading(game_app *app) {
     app->loading = false;
+    app->play_start_ns = core_time_ns();
     if (app->desc.walk) game_walker_start(&app->walker, app->desc.walk, &app->player);
     gfx_window_set_title(app->gfx, "world");
 }

@@ -55,6 +55,7 @@ typedef struct game_app_desc {
     terrain_stream_desc stream;       /* view distance and budgets; zero = defaults */
     bool no_clipmap;                  /* only the volumetric chunks (no far terrain) */
     bool no_hud;
+    bool no_head_bob;                 /* the view without the walking dip (game_player_bob) */
     double max_loading_seconds;       /* give up waiting for the start area; 0 = 300 s */
     /* A folder that keeps the world (terrain.h, "the world folder"): DIR/world.db holds the
      * seed, the edits and the player's pose. Loaded at the start (a damaged database is

@@ -25,7 +25,7 @@ typedef struct options {
     core_common_args common;
     const char *size, *screenshot, *walk, *record, *replay, *bindings, *world;
     int seed, frames, radius, levels, memory_mb;
-    bool headless, tour;
+    bool headless, tour, no_head_bob;
 } options;
 
 static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_walk *walk) {
@@ -36,6 +36,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "world", CORE_OPTION_STRING, &o->world, "DIR", "keep the world's edits in DIR (loaded, autosaved)" },
         { "size", CORE_OPTION_STRING, &o->size, "WxH", "framebuffer size (default 1280x720)" },
         { "headless", CORE_OPTION_FLAG, &o->headless, NULL, "render offscreen with OSMesa" },
+        { "no-head-bob", CORE_OPTION_FLAG, &o->no_head_bob, NULL, "keep the view level while walking" },
         { "frames", CORE_OPTION_INT, &o->frames, "N", "stop after N frames past loading (0 = when closed)", 0,
           100000000 },
         { "walk", CORE_OPTION_STRING, &o->walk, "SCRIPT", "scripted walk: " GAME_WALK_USAGE },
@@ -121,6 +122,7 @@ int main(int argc, char **argv) {
     desc.frames = o.frames;
     desc.walk = o.walk || o.tour ? &walk : NULL;
     desc.face_open_view = o.tour;
+    desc.no_head_bob = o.no_head_bob;
     desc.record_path = o.record;
     desc.replay_path = o.replay;
     desc.bindings_path = o.bindings;

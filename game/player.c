@@ -257,6 +257,10 @@ void game_player_init(game_player *player, const game_player_params *params) {
     p.fly_speed = or_default(p.fly_speed, 12.0f);
     p.fly_sprint_speed = or_default(p.fly_sprint_speed, 48.0f);
     p.pitch_limit = or_default(p.pitch_limit, 1.55f);
+    p.ground_accel = or_default(p.ground_accel, 60.0f);
+    p.air_accel = or_default(p.air_accel, 12.0f);
+    p.fly_accel = or_default(p.fly_accel, 120.0f);
+    p.bob_amplitude = or_default(p.bob_amplitude, 0.05f);
     p.max_dt = or_default(p.max_dt, 0.1f);
     if (p.crouch_height > p.height) p.crouch_height = p.height;
     if (p.crouch_height < 2.0f * p.radius) p.crouch_height = 2.0f * p.radius;
@@ -272,6 +276,24 @@ void game_player_eye(const game_player *player, double eye[3]) {
     eye[0] = player->position[0];
     eye[1] = player->position[1] + (double)(player->crouching ? p->crouch_eye_height : p->eye_height);
     eye[2] = player->position[2];
+}
+
+/* Moves v[0 … n) towards target by at most step (a negative step: all the way). */
+static void approach(float *v, const float *target, int n, float step) {
+    float d2 = 0.0f;
+    for (int i = 0; i < n; i++) d2 += (target[i] - v[i]) * (target[i] - v[i]);
+    float scale = step < 0.0f || d2 <= step * step ? 1.0f : step / sqrtf(d2);
+    for (int i = 0; i < n; i++) v[i] += (target[i] - v[i]) * scale;
+}
+
+#define BOB_STRIDE 1.2f                /* metres a half cycle: a dip per step */
+
+float game_player_bob(const game_player *player) {
+    const game_player_params *p = &player->params;
+    if (player->flying || !player->on_ground || p->bob_amplitude <= 0.0f) return 0.0f;
+    float speed = hypotf(player->velocity[0], player->velocity[2]);
+    float share = fminf(speed / p->sprint_speed, 1.0f);
+    return p->bob_amplitude * share * fabsf(sinf(player->bob_phase * 3.14159265f));
 }
 
 static bool down(const input_actions *a, input_action action) { return (a->down & INPUT_ACTION_BIT(action)) != 0; }
@@ -318,7 +340,14 @@ static void update(game_player *pl, terrain_world *world, const input_actions *a
     bool want_crouch = !pl->flying && down(a, INPUT_ACTION_CROUCH);
     if (want_crouch) pl->crouching = true;   /* shrinking always fits */
     wish_velocity(pl, a, wish);
-    float v[3] = { wish[0], pl->flying ? wish[1] : pl->velocity[1], wish[2] };
+    float v[3] = { pl->velocity[0], pl->velocity[1], pl->velocity[2] };
+    if (pl->flying) approach(v, wish, 3, p->fly_accel < 0.0f ? -1.0f : p->fly_accel * dt);
+    else {
+        float horizontal[2] = { v[0], v[2] }, target[2] = { wish[0], wish[2] };
+        float accel = pl->on_ground ? p->ground_accel : p->air_accel;
+        approach(horizontal, target, 2, accel < 0.0f ? -1.0f : accel * dt);
+        v[0] = horizontal[0], v[2] = horizontal[1];
+    }
     if (!pl->flying && pl->on_ground && pressed(a, INPUT_ACTION_JUMP)) {
         v[1] = p->jump_speed;
         pl->on_ground = false;
@@ -361,8 +390,6 @@ static void update(game_player *pl, terrain_world *world, const input_actions *a
     if (pl->crouching && !want_crouch && capsule_clear(&m, feet, p->height)) {
         pl->crouching = false;
         m.height = p->height;
-        wish_velocity(pl, a, wish);    /* back to walking speed */
-        v[0] = wish[0], v[2] = wish[2];
     }
 
     int substeps = (int)ceilf(speed_bound * dt / (0.5f * p->radius));
@@ -382,6 +409,7 @@ static void update(game_player *pl, terrain_world *world, const input_actions *a
 
     pl->on_ground = !pl->flying && on_ground;
     memcpy(pl->velocity, v, sizeof v);
+    if (pl->on_ground) pl->bob_phase = fmodf(pl->bob_phase + hypotf(v[0], v[2]) * dt / BOB_STRIDE, 2.0f);
     for (int i = 0; i < 3; i++) pl->position[i] = (double)origin[i] + (double)feet[i];
 }
 

@@ -31,6 +31,10 @@
  * (pushed out horizontally only, so running into them never lifts the player); downward-facing
  * ones are ceilings.
  *
+ * Motion eases: the horizontal velocity moves towards what the input asks by at most
+ * ground_accel·dt a frame on the ground (air_accel in the air, so a jump keeps most of its
+ * momentum and can be steered a little), the whole velocity by fly_accel·dt when flying.
+ *
  * Streaming: before a frame's motion, params.region_ready (when set) is asked whether the box the
  * frame will read is available; if not, the player does not move at all that frame (no walking,
  * no falling) and the field is not sampled, so unready chunks are never generated on the main
@@ -68,6 +72,12 @@ typedef struct game_player_params {
     float fly_speed;                  /* 0 = 12 m/s */
     float fly_sprint_speed;           /* 0 = 48 m/s */
     float pitch_limit;                /* radians; 0 = 1.55 (just under straight up/down) */
+    /* How fast the velocity reaches what the input asks (m/s²), so starts and stops ease in
+     * and out: on the ground 0 = 60 (a sprint reached in 0.13 s), in the air (air control)
+     * 0 = 12, flying 0 = 120. Negative: at once (the velocity is the input's). */
+    float ground_accel, air_accel, fly_accel;
+    float bob_amplitude;              /* head bob on the ground at a sprint, metres; 0 = 0.05,
+                                         negative = none (game_player_bob) */
     float max_dt;                     /* longer frames are clamped to this; 0 = 0.1 s */
     /* Whether the terrain inside [min, max] (world metres) may be read now. NULL = always
      * (terrain_world generates what it lacks synchronously). */
@@ -82,6 +92,7 @@ typedef struct game_player {
     float yaw, pitch;                 /* radians, the view */
     bool on_ground, crouching, flying;
     bool waiting;                     /* the last update did not move: region not ready */
+    float bob_phase;                  /* strides walked on the ground, for the head bob */
 } game_player;
 
 /* Fills in the defaults; the player stands at the origin, not spawned. */
@@ -105,6 +116,10 @@ float game_player_open_yaw(const game_player *player, terrain_world *world, floa
 void game_player_update(game_player *player, terrain_world *world, const input_actions *actions, float dt);
 /* The eye, world metres. */
 void game_player_eye(const game_player *player, double eye[3]);
+/* How far the view dips below the eye for the head bob, metres (0 … bob_amplitude): twice a
+ * stride (2.4 m), in proportion to the speed over the ground up to a sprint, none flying or in
+ * the air. The view only: collision and tools use game_player_eye. */
+float game_player_bob(const game_player *player);
 /* The capsule's current height (crouched or standing). */
 float game_player_height(const game_player *player);
 

@@ -270,6 +270,8 @@ gfx_text *gfx_text_create(gfx_context *gfx);      /* NULL when its shaders fail 
 void gfx_text_print(gfx_text *text, float x, float y, float scale, const float color[4], const char *fmt, ...)
     __attribute__((format(printf, 6, 7)));
 void gfx_text_draw(gfx_text *text);
+/* Pixels the text's widest line takes at `scale` (the shadow adds `scale` more). */
+float gfx_text_width(const char *text, float scale);
 void gfx_text_destroy(gfx_text *text);
 
 /* ---- a reference scene -------------------------------------------------------------------- */

@@ -89,6 +89,10 @@ void gfx_text_print(gfx_text *t, float x, float y, float scale, const float colo
     gfx_text_queue(t, x, y, scale, rgba, text);
 }
 
+float gfx_text_width(const char *text, float scale) {
+    return (float)stb_easy_font_width((char *)text) * scale;
+}
+
 void gfx_text_draw(gfx_text *t) {
     if (t->quad_count == 0) return;
     gfx_context *gfx = t->gfx;

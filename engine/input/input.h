@@ -143,6 +143,7 @@ typedef enum input_action {
     INPUT_ACTION_QUIT,
     INPUT_ACTION_NEXT_TOOL,      /* the tool selector: Tab / right shoulder by default (after quit,
                                     so recordings made before it keep their bits) */
+    INPUT_ACTION_TOGGLE_HUD,     /* F1 by default: the program shows or hides its HUD */
     INPUT_ACTION_COUNT
 } input_action;
 #define INPUT_ACTION_BIT(action) (1u << (action))

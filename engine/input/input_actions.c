@@ -35,6 +35,7 @@ static const char *const input_target_names[INPUT_TARGET_COUNT] = {
     [INPUT_ACTION_CAPTURE_MOUSE] = "capture_mouse",
     [INPUT_ACTION_QUIT] = "quit",
     [INPUT_ACTION_NEXT_TOOL] = "next_tool",
+    [INPUT_ACTION_TOGGLE_HUD] = "toggle_hud",
     [INPUT_TARGET_AXIS(INPUT_AXIS_MOVE_UP)] = "move_up",
     [INPUT_TARGET_AXIS(INPUT_AXIS_MOVE_DOWN)] = "move_down",
     [INPUT_TARGET_AXIS(INPUT_AXIS_MOVE_LEFT)] = "move_left",

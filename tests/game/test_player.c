@@ -301,7 +301,9 @@ Test(player, fly_toggles_and_moves_along_the_view) {
     double start[3];
     memcpy(start, pl.position, sizeof start);
     for (int i = 0; i < 60; i++) game_player_update(&pl, world, &(input_actions){ .move_y = 1 }, 1.0f / 60.0f);
-    double expected[3] = { 12.0 * sin(0.3) * cos(0.4), 12.0 * sin(0.4), -12.0 * cos(0.3) * cos(0.4) };
+    /* Easing in at fly_accel 120 m/s²: 2, 4, … 12 m/s over the first six frames, then 12: in one
+     * second (2 + 4 + 6 + 8 + 10 + 12 + 54·12) / 60 = 11.5 m along the view. */
+    double expected[3] = { 11.5 * sin(0.3) * cos(0.4), 11.5 * sin(0.4), -11.5 * cos(0.3) * cos(0.4) };
     for (int a = 0; a < 3; a++)
         cr_expect_float_eq(pl.position[a] - start[a], expected[a], 1e-3, "axis %d: %f", a, pl.position[a] - start[a]);
     game_player_update(&pl, world, &(input_actions){ .pressed = BIT(TOGGLE_FLY) }, 1.0f / 60.0f);
@@ -309,6 +311,38 @@ Test(player, fly_toggles_and_moves_along_the_view) {
     for (int i = 0; i < 120; i++) game_player_update(&pl, world, &(input_actions){ 0 }, 1.0f / 60.0f);
     cr_expect(pl.on_ground);
     cr_expect_float_eq(pl.position[1], 0.0, 1e-3);
+    terrain_world_destroy(world);
+}
+
+/* ---- easing in and out ------------------------------------------------------------------------ */
+
+/* Sprinting from rest on flat ground at 60 Hz: ground_accel 60 m/s² adds 1 m/s a frame, so
+ * 1, 2, … 8 m/s over eight frames, then 8: in a second (1 + … + 8 + 52·8) / 60 = 452/60 m. Let go,
+ * it slows by 1 m/s a frame: 7, 6, … 0, another 28/60 m. In the air the input steers at
+ * air_accel 12 m/s²: pushing back for 0.2 s takes 2.4 m/s off the 8. */
+Test(player, starts_and_stops_ease_and_the_air_steers_a_little) {
+    hand_world hand = { .kind = FLAT, .ground = 0 };
+    terrain_world *world = hand_world_create(&hand);
+    game_player pl;
+    place(&pl, 0.5, 0.0, 0.5);
+    input_actions run = { .move_y = 1, .down = BIT(SPRINT) };
+    for (int i = 0; i < 60; i++) game_player_update(&pl, world, &run, 1.0f / 60.0f);
+    cr_expect_float_eq(pl.position[0] - 0.5, 452.0 / 60.0, 1e-3, "ran %f m", pl.position[0] - 0.5);
+    cr_expect_float_eq(pl.velocity[0], 8.0f, 1e-4);
+    double before = pl.position[0];
+    for (int i = 0; i < 30; i++) game_player_update(&pl, world, &(input_actions){ 0 }, 1.0f / 60.0f);
+    cr_expect_float_eq(pl.position[0] - before, 28.0 / 60.0, 1e-3, "slid %f m", pl.position[0] - before);
+    cr_expect_float_eq(pl.velocity[0], 0.0f, 1e-6);
+    /* up to speed again, then a jump with the stick pulled back */
+    for (int i = 0; i < 30; i++) game_player_update(&pl, world, &run, 1.0f / 60.0f);
+    game_player_update(&pl, world, &(input_actions){ .move_y = -1, .down = BIT(SPRINT), .pressed = BIT(JUMP) },
+                       1.0f / 60.0f);
+    cr_assert_not(pl.on_ground);
+    for (int i = 0; i < 11; i++)
+        game_player_update(&pl, world, &(input_actions){ .move_y = -1, .down = BIT(SPRINT) }, 1.0f / 60.0f);
+    cr_expect_not(pl.on_ground);
+    /* the jump frame itself was on the ground (60 m/s², −1 m/s), then 11 frames in the air */
+    cr_expect_float_eq(pl.velocity[0], 8.0f - 1.0f - 11.0f * 12.0f / 60.0f, 1e-3, "%f m/s", pl.velocity[0]);
     terrain_world_destroy(world);
 }
 
