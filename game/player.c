@@ -484,7 +484,8 @@ static double skyline_along(terrain_world *world, const double eye[3], double ya
     double steepest = -OPEN_PI / 2;
     for (double d = 8.0; d <= GAME_PLAYER_VIEW_DISTANCE; d += 8.0) {
         float top;
-        column_heights(world, (int64_t)floor(eye[0] + forward_x * d), (int64_t)floor(eye[2] + forward_z * d), &top, NULL);
+        int64_t x = (int64_t)floor(eye[0] + forward_x * d), z = (int64_t)floor(eye[2] + forward_z * d);
+        column_heights(world, x, z, &top, NULL);
         steepest = fmax(steepest, atan2((double)top - eye[1], d));
     }
     return steepest;

@@ -800,9 +800,7 @@ bool terrain_edit_log_parse(terrain_edit_log *log, const void *bytes, size_t siz
 
 /* ---- paths ------------------------------------------------------------------------------ */
 
-/* printf into a new string; free with core_free(p, strlen(p) + 1). */
-static char *path_format(const char *fmt, ...) CORE_PRINTF(1, 2);
-static char *path_format(const char *fmt, ...) {
+char *terrain__text_format(const char *fmt, ...) {
     va_list args;
     va_start(args, fmt);
     int length = vsnprintf(NULL, 0, fmt, args);
@@ -814,7 +812,9 @@ static char *path_format(const char *fmt, ...) {
     return path;
 }
 
-static void path_free(char *path) { core_free(path, strlen(path) + 1); }
+void terrain__text_free(char *text) {
+    if (text) core_free(text, strlen(text) + 1);
+}
 
 /* The coordinate a file name "<x>_<z>.tel" stands for; false for any other name (only the
  * spelling "%lld_%lld.tel" writes counts: no "+3", "03" or "-0"). */
@@ -837,8 +837,8 @@ static bool name_coord(const char *name, terrain_chunk_coord *coord) {
 /* Writes `bytes` to folder/name through a temporary beside it (see the top of the file). */
 static bool write_atomic(const char *folder, const char *name, const uint8_t *bytes, size_t size, char *error,
                          size_t error_size) {
-    char *path = path_format("%s/%s", folder, name);
-    char *temporary = path_format("%s/.%s.tmp.%ld", folder, name, (long)getpid());
+    char *path = terrain__text_format("%s/%s", folder, name);
+    char *temporary = terrain__text_format("%s/.%s.tmp.%ld", folder, name, (long)getpid());
     const char *step = "cannot create the temporary";
     bool ok = false;
     FILE *file = fopen(temporary, "wb");
@@ -853,8 +853,8 @@ static bool write_atomic(const char *folder, const char *name, const uint8_t *by
         core_error_format(error, error_size, "%s: %s (%s)", path, step, strerror(errno));
         remove(temporary);
     }
-    path_free(temporary);
-    path_free(path);
+    terrain__text_free(temporary);
+    terrain__text_free(path);
     return ok;
 }
 
@@ -974,7 +974,7 @@ bool terrain_edit_log_save(terrain_edit_log *log, const char *dir, char *error, 
         return core_error_format(error, error_size, "edit log: save with no %s", !log ? "log" : "folder");
     pthread_mutex_lock(&log->io_lock);
     terrain__edit_files files = terrain__edit_log_dirty_files(log, EDIT_FILE_MAX_BYTES);
-    char *folder = path_format("%s/edits", dir);
+    char *folder = terrain__text_format("%s/edits", dir);
     bool failed = false;
     char reason[512];
     if (files.count > 0 && !core_make_dirs(folder)) {
@@ -984,7 +984,7 @@ bool terrain_edit_log_save(terrain_edit_log *log, const char *dir, char *error, 
     else if (files.count > 0) write_files(folder, &files, &failed, error, error_size);
     terrain__edit_log_mark_saved(log, &files);
     terrain__edit_files_free(&files);
-    path_free(folder);
+    terrain__text_free(folder);
     pthread_mutex_unlock(&log->io_lock);
     return !failed;
 }
@@ -1031,9 +1031,9 @@ static void reject(const char *path, const char *reason, terrain_edit_log_load_r
     core_error("terrain", "edit log: %s: %s; renamed to .bad, the chunk stays as generated", path, reason);
     if (result->files_rejected++ == 0)
         snprintf(result->first_problem, sizeof result->first_problem, "%s: %s", path, reason);
-    char *bad = path_format("%s.bad", path);
+    char *bad = terrain__text_format("%s.bad", path);
     if (rename(path, bad) != 0) core_error("terrain", "edit log: cannot rename %s to %s: %s", path, bad, strerror(errno));
-    path_free(bad);
+    terrain__text_free(bad);
 }
 
 /* Handles one folder entry: a chunk file, a leftover temporary, or something else (left). */
@@ -1041,17 +1041,17 @@ static void load_entry(terrain_edit_log *log, const char *folder, const char *na
                        terrain_edit_log_load_result *result) {
     terrain_chunk_coord coord;
     if (name[0] == '.' && strstr(name, EDIT_TEMP_MARK)) {
-        char *path = path_format("%s/%s", folder, name);
+        char *path = terrain__text_format("%s/%s", folder, name);
         if (remove(path) != 0) core_warn("terrain", "edit log: cannot remove %s: %s", path, strerror(errno));
-        path_free(path);
+        terrain__text_free(path);
         return;
     }
     if (!name_coord(name, &coord)) return;
-    char *path = path_format("%s/%s", folder, name);
+    char *path = terrain__text_format("%s/%s", folder, name);
     char reason[200];
     if (load_file(log, path, coord, reason, sizeof reason)) result->chunks_loaded++;
     else reject(path, reason, result);
-    path_free(path);
+    terrain__text_free(path);
 }
 
 /* Whether `path` is a folder: true and *exists false when it is missing. */
@@ -1079,7 +1079,7 @@ bool terrain_edit_log_load(terrain_edit_log *log, const char *dir, terrain_edit_
     bool exists;
     if (!check_folder(dir, &exists, result)) return false;
     if (!exists) return true;                     /* a new world */
-    char *folder = path_format("%s/edits", dir);
+    char *folder = terrain__text_format("%s/edits", dir);
     bool ok = check_folder(folder, &exists, result);
     DIR *listing = ok && exists ? opendir(folder) : NULL;
     if (ok && exists && !listing) {
@@ -1093,6 +1093,6 @@ bool terrain_edit_log_load(terrain_edit_log *log, const char *dir, terrain_edit_
         closedir(listing);
     }
     if (!ok) core_error("terrain", "edit log: %s", result->first_problem);
-    path_free(folder);
+    terrain__text_free(folder);
     return ok;
 }

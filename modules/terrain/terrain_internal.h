@@ -8,6 +8,8 @@
 
 #include "terrain/terrain.h"
 
+#include "core/core.h"
+
 #include <math.h>
 #include <stdint.h>
 
@@ -457,6 +459,9 @@ typedef struct terrain__edit_files {
     size_t count, capacity;
 } terrain__edit_files;
 
+/* printf into a new string (paths, messages); free with terrain__text_free (NULL is fine). */
+char *terrain__text_format(const char *fmt, ...) CORE_PRINTF(1, 2);
+void terrain__text_free(char *text);
 uint64_t terrain__edit_log_key(const terrain_edit_log *log);
 /* A snapshot of the chunks changed since their last save, each serialized (under the log's
  * lock, for a few microseconds a chunk); a chunk whose bytes would pass `compact_above` is

@@ -99,23 +99,6 @@ struct terrain_store {
 
 /* ---- small helpers ----------------------------------------------------------------------- */
 
-static char *text_format(const char *fmt, ...) CORE_PRINTF(1, 2);
-static char *text_format(const char *fmt, ...) {
-    va_list args;
-    va_start(args, fmt);
-    int length = vsnprintf(NULL, 0, fmt, args);
-    va_end(args);
-    char *text = core_alloc((size_t)length + 1);
-    va_start(args, fmt);
-    vsnprintf(text, (size_t)length + 1, fmt, args);
-    va_end(args);
-    return text;
-}
-
-static void text_free(char *text) {
-    if (text) core_free(text, strlen(text) + 1);
-}
-
 static bool path_exists(const char *path) {
     struct stat info;
     return stat(path, &info) == 0;
@@ -267,7 +250,8 @@ static open_outcome check_structure(opening *o) {
     open_outcome outcome = OPEN_OK;
     if (rc == SQLITE_ROW) {
         const char *verdict = (const char *)sqlite3_column_text(statement, 0);
-        if (!verdict || strcmp(verdict, "ok") != 0) outcome = damaged(o, "fails SQLite's check: %s", verdict ? verdict : "?");
+        if (!verdict || strcmp(verdict, "ok") != 0)
+            outcome = damaged(o, "fails SQLite's check: %s", verdict ? verdict : "?");
         for (char *c = o->problem; *c; c++)
             if (*c == '\n') *c = ' ';                /* the verdict's lines on one line */
     } else outcome = failed(o, rc, "cannot be checked");
@@ -412,8 +396,8 @@ static bool set_aside(opening *o) {
     terrain_store *s = o->store;
     char *target = NULL;
     for (int n = 1; n < 1000; n++) {
-        text_free(target);
-        target = n == 1 ? text_format("%s.bad", s->path) : text_format("%s.bad.%d", s->path, n);
+        terrain__text_free(target);
+        target = n == 1 ? terrain__text_format("%s.bad", s->path) : terrain__text_format("%s.bad.%d", s->path, n);
         if (!path_exists(target)) break;
     }
     bool ok = rename(s->path, target) == 0;
@@ -424,18 +408,19 @@ static bool set_aside(opening *o) {
     } else {
         const char *suffixes[] = { "-wal", "-journal" };
         for (int n = 0; n < 2; n++) {
-            char *from = text_format("%s%s", s->path, suffixes[n]), *to = text_format("%s%s", target, suffixes[n]);
+            char *from = terrain__text_format("%s%s", s->path, suffixes[n]);
+            char *to = terrain__text_format("%s%s", target, suffixes[n]);
             if (path_exists(from) && rename(from, to) != 0)
                 core_warn("terrain", "store: cannot rename %s to %s: %s", from, to, strerror(errno));
-            text_free(from);
-            text_free(to);
+            terrain__text_free(from);
+            terrain__text_free(to);
         }
         r->set_aside = true;
         snprintf(r->notice, sizeof r->notice, "%s: %s; set aside as %s, the world opens as generated", s->path,
                  o->problem, target);
         core_error("terrain", "store: %s", r->notice);
     }
-    text_free(target);
+    terrain__text_free(target);
     return ok;
 }
 
@@ -455,8 +440,9 @@ static bool prepare_statements(terrain_store *s, terrain_store_report *r) {
 static void rename_old_folder(terrain_store *s, const char *folder, terrain_store_report *r) {
     char *target = NULL;
     for (int n = 1; n < 1000; n++) {
-        text_free(target);
-        target = n == 1 ? text_format("%s.imported", folder) : text_format("%s.imported.%d", folder, n);
+        terrain__text_free(target);
+        target = n == 1 ? terrain__text_format("%s.imported", folder)
+                        : terrain__text_format("%s.imported.%d", folder, n);
         if (!path_exists(target)) break;
     }
     if (rename(folder, target) != 0)
@@ -467,14 +453,14 @@ static void rename_old_folder(terrain_store *s, const char *folder, terrain_stor
                  "%simported %d chunk(s) from %s (%d unreadable, renamed .bad); the old files are kept in %s",
                  r->notice[0] ? "; " : "", r->chunks_imported, folder, r->files_rejected, target);
     (void)s;
-    text_free(target);
+    terrain__text_free(target);
 }
 
 static bool write_snapshot(terrain_store *s, store_snapshot *snap, char *error, size_t error_size);
 
 /* The old DIR/edits folder of .tel files into the database in one transaction, once; then the folder is renamed. */
 static bool import_old_layout(terrain_store *s, terrain_store_report *r) {
-    char *folder = text_format("%s/edits", s->dir);
+    char *folder = terrain__text_format("%s/edits", s->dir);
     char marker[32];
     bool ok = true;
     if (!is_folder(folder)) goto done;
@@ -505,7 +491,7 @@ static bool import_old_layout(terrain_store *s, terrain_store_report *r) {
     }
     if (ok) rename_old_folder(s, folder, r);
 done:
-    text_free(folder);
+    terrain__text_free(folder);
     return ok;
 }
 
@@ -515,8 +501,8 @@ static void store_free(terrain_store *s) {
     close_db(s);
     values_clear(s);
     core_free(s->values, s->value_capacity * sizeof *s->values);
-    text_free(s->dir);
-    text_free(s->path);
+    terrain__text_free(s->dir);
+    terrain__text_free(s->path);
     pthread_cond_destroy(&s->done);
     pthread_cond_destroy(&s->wake);
     pthread_mutex_destroy(&s->lock);
@@ -568,8 +554,8 @@ terrain_store *terrain_store_create(const terrain_store_desc *desc, terrain_stor
         return NULL;
     }
     terrain_store *s = core_calloc(1, sizeof *s);
-    s->dir = text_format("%s", desc->dir);
-    s->path = text_format("%s/" STORE_FILE, desc->dir);
+    s->dir = terrain__text_format("%s", desc->dir);
+    s->path = terrain__text_format("%s/" STORE_FILE, desc->dir);
     s->edits = desc->edits;
     s->last_ok = true;
     pthread_mutex_init(&s->db_lock, NULL);
@@ -813,7 +799,8 @@ bool terrain_store_save_async(terrain_store *store) {
     }
     pthread_mutex_lock(&store->lock);
     if (!store->thread_started) {
-        if (pthread_create(&store->thread, NULL, save_thread, store) != 0) core_fatal("terrain", "store: cannot start its thread");
+        if (pthread_create(&store->thread, NULL, save_thread, store) != 0)
+            core_fatal("terrain", "store: cannot start its thread");
         store->thread_started = true;
     }
     store->queued = snap;
@@ -831,7 +818,7 @@ int terrain_store_read_seed(const char *dir, uint64_t *seed, char *error, size_t
         core_error_format(error, error_size, "store: no folder");
         return -1;
     }
-    char *path = text_format("%s/" STORE_FILE, dir);
+    char *path = terrain__text_format("%s/" STORE_FILE, dir);
     int result = 0;
     sqlite3 *db = NULL;
     if (!path_exists(path)) goto done;
@@ -846,11 +833,12 @@ int terrain_store_read_seed(const char *dir, uint64_t *seed, char *error, size_t
     unsigned long long value = strtoull(text, &end, 10);
     if ((rc & 0xff) == SQLITE_BUSY) core_error_format(error, error_size, "%s: in use by another process", path);
     else if (rc != SQLITE_OK)
-        core_error_format(error, error_size, "%s: cannot be read (%s)", path, db ? sqlite3_errmsg(db) : sqlite3_errstr(rc));
+        core_error_format(error, error_size, "%s: cannot be read (%s)", path,
+                          db ? sqlite3_errmsg(db) : sqlite3_errstr(rc));
     else if (!text[0] || *end) core_error_format(error, error_size, "%s: records no seed", path);
     else *seed = value, result = 1;
 done:
     sqlite3_close(db);
-    text_free(path);
+    terrain__text_free(path);
     return result;
 }
