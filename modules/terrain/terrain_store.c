@@ -27,8 +27,10 @@
  *     SQLite's own checks (quick_check) see a well-formed page.
  *
  * Threads: `db_lock` guards the connection (one transaction at a time: a save, or the store's
- * opening). `lock` guards the named values and the hand-over to the save thread. The save
- * thread starts on the first terrain_store_save_async and sleeps on `wake` otherwise.
+ * opening). `order` makes snapshots commit in the order they were taken (a save waits for the
+ * one in flight before taking its own). `lock` guards the named values and the hand-over to the
+ * save thread. The save thread starts on the first terrain_store_save_async and sleeps on
+ * `wake` otherwise.
  */
 #include "terrain_internal.h"
 
@@ -85,6 +87,7 @@ struct terrain_store {
     sqlite3 *db;
     sqlite3_stmt *put_chunk, *put_value;
     pthread_mutex_t db_lock;
+    pthread_mutex_t order;            /* snapshots are committed in the order they are taken */
     pthread_mutex_t lock;
     pthread_cond_t wake, done;
     pthread_t thread;
@@ -506,6 +509,7 @@ static void store_free(terrain_store *s) {
     pthread_cond_destroy(&s->done);
     pthread_cond_destroy(&s->wake);
     pthread_mutex_destroy(&s->lock);
+    pthread_mutex_destroy(&s->order);
     pthread_mutex_destroy(&s->db_lock);
     core_free(s, sizeof *s);
 }
@@ -559,6 +563,7 @@ terrain_store *terrain_store_create(const terrain_store_desc *desc, terrain_stor
     s->edits = desc->edits;
     s->last_ok = true;
     pthread_mutex_init(&s->db_lock, NULL);
+    pthread_mutex_init(&s->order, NULL);
     pthread_mutex_init(&s->lock, NULL);
     pthread_cond_init(&s->wake, NULL);
     pthread_cond_init(&s->done, NULL);
@@ -774,9 +779,13 @@ bool terrain_store_wait(terrain_store *store, char *error, size_t error_size) {
 bool terrain_store_save(terrain_store *store, char *error, size_t error_size) {
     if (error && error_size) error[0] = '\0';
     if (!store) return core_error_format(error, error_size, "store: save with no store");
+    /* An older snapshot committed after a newer one would put old bytes in the file while the
+     * chunks read as saved: snapshots are taken and committed in one order. */
+    pthread_mutex_lock(&store->order);
     terrain_store_wait(store, NULL, 0);
     store_snapshot *snap = snapshot_take(store);
     bool ok = snapshot_empty(snap) || commit_snapshot(store, snap, error, error_size);
+    pthread_mutex_unlock(&store->order);
     snapshot_free(snap);
     pthread_mutex_lock(&store->lock);
     store->last_ok = ok;
@@ -787,13 +796,18 @@ bool terrain_store_save(terrain_store *store, char *error, size_t error_size) {
 
 bool terrain_store_save_async(terrain_store *store) {
     if (!store) return false;
+    pthread_mutex_lock(&store->order);
     pthread_mutex_lock(&store->lock);
     bool busy = store->busy;
     pthread_mutex_unlock(&store->lock);
-    if (busy) return false;
+    if (busy) {
+        pthread_mutex_unlock(&store->order);
+        return false;
+    }
     TRACE_ZONE("terrain.store.snapshot");
     store_snapshot *snap = snapshot_take(store);
     if (snapshot_empty(snap)) {
+        pthread_mutex_unlock(&store->order);
         snapshot_free(snap);
         return true;
     }
@@ -807,6 +821,7 @@ bool terrain_store_save_async(terrain_store *store) {
     store->busy = true;
     pthread_cond_signal(&store->wake);
     pthread_mutex_unlock(&store->lock);
+    pthread_mutex_unlock(&store->order);
     return true;
 }
 

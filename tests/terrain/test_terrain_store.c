@@ -590,7 +590,7 @@ Test(store, another_worlds_database_is_refused_and_left_alone) {
     corner_states_free(&s);
 }
 
-Test(store, a_second_process_is_refused_and_the_first_goes_on_saving, .timeout = 60) {
+Test(store, a_second_process_is_refused_and_the_first_goes_on_saving) {
     corner_states s;
     corner_states_make(&s);
     char dir[128];

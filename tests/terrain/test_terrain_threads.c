@@ -335,6 +335,23 @@ Test(terrain_threads, workers_read_while_the_main_thread_commits_and_trims) {
 
 /* ---- saves in the background while the main thread edits (terrain_store) ---- */
 
+typedef struct store_share {
+    terrain_store *store;
+    atomic_bool stop;
+    int saves, failures;
+} store_share;
+
+/* Another thread saving now and then: snapshots must still commit in the order taken. */
+static void *store_saver(void *user) {
+    store_share *s = user;
+    while (!atomic_load(&s->stop)) {
+        s->failures += !terrain_store_save(s->store, NULL, 0);
+        s->saves++;
+        usleep(2000);
+    }
+    return NULL;
+}
+
 /* The game's pattern: strokes committed every frame, an autosave now and then from the frame
  * (a snapshot; the commit on the store's thread), values put between; then the last save and a
  * fresh open that must hold every stroke. TSan watches the log, the values and the hand-over. */
@@ -348,6 +365,9 @@ Test(terrain_threads, the_store_saves_in_the_background_while_the_main_thread_ed
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = 11 }, &report);
     cr_assert(store, "%s", report.error);
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = params, .edits = log });
+    store_share share = { .store = store };
+    pthread_t saver;
+    cr_assert_eq(pthread_create(&saver, NULL, store_saver, &share), 0);
     int async_saves = 0;
     for (int stroke = 0; stroke < 40; stroke++) {
         terrain_world_edit(world, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
@@ -358,6 +378,9 @@ Test(terrain_threads, the_store_saves_in_the_background_while_the_main_thread_ed
         terrain_store_put(store, "frame", &frame, sizeof frame);
         if (stroke % 3 == 0) async_saves += terrain_store_save_async(store);
     }
+    atomic_store(&share.stop, true);
+    pthread_join(saver, NULL);
+    cr_expect_eq(share.failures, 0, "of %d saves on the other thread", share.saves);
     char error[256];
     cr_expect(terrain_store_save(store, error, sizeof error), "%s", error);
     cr_expect_gt(async_saves, 0);
