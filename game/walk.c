@@ -423,6 +423,12 @@ static bool stalled(const game_walker *w, const game_player *pl, float speed, bo
     return false;
 }
 
+/* Metres the player needs to stop from `speed` at the controller's easing (player.h); 0 when
+ * it stops at once. */
+static double braking(float speed, float accel) {
+    return accel > 0.0f ? (double)speed * (double)speed / (2.0 * (double)accel) : 0.0;
+}
+
 /* The actions that head for waypoint w->index. */
 static input_actions steer(game_walker *w, const game_player *pl, float dt) {
     const game_walk_point *p = &w->walk->points[w->index];
@@ -449,9 +455,13 @@ static input_actions steer(game_walker *w, const game_player *pl, float dt) {
         /* up and down with jump and crouch, which fly mode moves by whatever the yaw, with a dead
          * band so it settles instead of bobbing */
         double radius = walk_radius(w->walk), dy = (p->has_y ? t[1] : w->fly_height) - pl->position[1];
-        if (dy > 0.5 * radius) a.down |= BIT(JUMP);
-        else if (dy < -0.5 * radius) a.down |= BIT(CROUCH);
-        if (horizontal < 0.5 * radius) a.move_y = 0.0f;  /* right above or below: just climb or sink */
+        /* let go early enough that the easing stops it inside the dead band, not past it */
+        float accel = pl->params.fly_accel, vy = pl->velocity[1];
+        double rise = vy > 0.0f ? braking(vy, accel) : 0.0, fall = vy < 0.0f ? braking(vy, accel) : 0.0;
+        if (dy > 0.5 * radius + rise) a.down |= BIT(JUMP);
+        else if (dy < -0.5 * radius - fall) a.down |= BIT(CROUCH);
+        double glide = braking(hypotf(pl->velocity[0], pl->velocity[2]), accel);
+        if (horizontal < 0.5 * radius + glide) a.move_y = 0.0f;  /* above or below it: climb or sink */
     } else if (p->jump && pl->on_ground) {
         a.down |= BIT(JUMP), a.pressed |= BIT(JUMP);
     }

@@ -543,6 +543,26 @@ Test(walker, fly_over_clears_what_it_cannot_walk_round) {
     terrain_world_destroy(world);
 }
 
+/* Flying 10 m ahead while climbing 120 m at sprint-fly speed (48 m/s), with the controller's
+ * easing (120 m/s²: 9.6 m to stop): the walker lets go early, horizontally and vertically, so
+ * the player stops over the waypoint instead of overshooting and circling it until the leg runs
+ * out of time (which the tour did before the walker knew about braking). */
+Test(walker, a_fast_climb_stops_at_its_height) {
+    hand_world hand = { .kind = FLAT };
+    terrain_world *world = hand_world_create(&hand);
+    game_walk walk = parsed("relative\nradius 3\n0 -10 fly y=120\n");   /* 10 m ahead, as the tour */
+    game_player pl;
+    place(&pl, 0.5, 0.5, 0.0f);
+    game_walker w;
+    walk_run r = { 0 };
+    run_walk(world, &pl, &walk, &w, &r);
+    cr_expect(w.done && !w.stuck, "stuck at height %f after %f s", pl.position[1], w.time);
+    cr_expect_lt(w.time, 120.0 / 48.0 + 1.5, "took %f s", w.time);
+    cr_expect_lt(r.highest, 120.0 + 3.0, "overshot to %f", r.highest);
+    game_walk_free(&walk);
+    terrain_world_destroy(world);
+}
+
 /* A `shot` waypoint: the walker holds still (no input, no time) until resumed, then goes on. */
 Test(walker, a_shot_holds_until_resumed) {
     hand_world hand = { .kind = FLAT };
