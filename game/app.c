@@ -50,7 +50,7 @@ struct game_app {
     /* pictures at the walk's `shot` waypoints (walk.h): held frames, and each picture at half
      * size for the contact sheet */
     int shot_hold;
-    uint8_t **shots;
+    struct app_shot { uint8_t *rgba; int width, height; } *shots;   /* each at half size */
     int shot_count;
     size_t shot_capacity;
 };
@@ -236,27 +236,29 @@ static void app_take_shot(game_app *app) {
             }
     core_free(rgba, size);
     app->shots = core_grow(app->shots, &app->shot_capacity, (size_t)app->shot_count + 1, sizeof *app->shots);
-    app->shots[app->shot_count++] = half;
+    app->shots[app->shot_count++] = (struct app_shot){ half, hw, hh };
     printf("world: picture %d at (%.0f, %.0f, %.0f)%s%s\n", number, app->player.position[0], app->player.position[1],
            app->player.position[2], path[0] ? " -> " : "", path);
     fflush(stdout);
 }
 
-/* The pictures side by side (two columns, up to four; three beyond), at half size. */
+/* The pictures side by side (two columns, up to four; three beyond), at half size, in cells of
+ * the first picture's size (a window resized meanwhile: the others are cropped or padded). */
 static bool app_write_contact_sheet(game_app *app, const char *path) {
-    int width, height;
-    gfx_size(app->gfx, &width, &height);
-    int hw = width / 2, hh = height / 2, columns = app->shot_count <= 4 ? 2 : 3;
+    int hw = app->shots[0].width, hh = app->shots[0].height, columns = app->shot_count <= 4 ? 2 : 3;
     if (app->shot_count == 1) columns = 1;
     int rows = (app->shot_count + columns - 1) / columns;
     int sheet_w = columns * hw, sheet_h = rows * hh;
     size_t size = (size_t)sheet_w * (size_t)sheet_h * 4;
     uint8_t *sheet = core_calloc(size, 1);
     for (size_t i = 3; i < size; i += 4) sheet[i] = 255;
-    for (int n = 0; n < app->shot_count; n++)
-        for (int y = 0; y < hh; y++)
+    for (int n = 0; n < app->shot_count; n++) {
+        const struct app_shot *shot = &app->shots[n];
+        int w = shot->width < hw ? shot->width : hw, h = shot->height < hh ? shot->height : hh;
+        for (int y = 0; y < h; y++)
             memcpy(sheet + (((size_t)(n / columns * hh + y)) * (size_t)sheet_w + (size_t)(n % columns * hw)) * 4,
-                   app->shots[n] + (size_t)y * (size_t)hw * 4, (size_t)hw * 4);
+                   shot->rgba + (size_t)y * (size_t)shot->width * 4, (size_t)w * 4);
+    }
     bool ok = gfx_write_png(path, sheet_w, sheet_h, sheet);
     core_free(sheet, size);
     if (ok) printf("world: %d pictures side by side -> %s\n", app->shot_count, path);
@@ -264,9 +266,8 @@ static bool app_write_contact_sheet(game_app *app, const char *path) {
 }
 
 static void app_free_shots(game_app *app) {
-    int width = 0, height = 0;
-    if (app->gfx) gfx_size(app->gfx, &width, &height);
-    for (int n = 0; n < app->shot_count; n++) core_free(app->shots[n], (size_t)(width / 2) * (size_t)(height / 2) * 4);
+    for (int n = 0; n < app->shot_count; n++)
+        core_free(app->shots[n].rgba, (size_t)app->shots[n].width * (size_t)app->shots[n].height * 4);
     core_free(app->shots, app->shot_capacity * sizeof *app->shots);
 }
 

@@ -742,6 +742,16 @@ static bool commit_snapshot(terrain_store *s, store_snapshot *snap, char *error,
     return ok;
 }
 
+/* What terrain_store_wait reports next. */
+static void record_outcome(terrain_store *s, bool ok, const char *error) {
+    pthread_mutex_lock(&s->lock);
+    s->last_ok = ok;
+    snprintf(s->last_error, sizeof s->last_error, "%s", ok || !error ? "" : error);
+    s->busy = false;
+    pthread_cond_broadcast(&s->done);
+    pthread_mutex_unlock(&s->lock);
+}
+
 static void *save_thread(void *arg) {
     terrain_store *s = arg;
     trace_thread_name("terrain.store");
@@ -755,11 +765,8 @@ static void *save_thread(void *arg) {
         char error[512] = "";
         bool ok = commit_snapshot(s, snap, error, sizeof error);
         snapshot_free(snap);
+        record_outcome(s, ok, error);
         pthread_mutex_lock(&s->lock);
-        s->last_ok = ok;
-        snprintf(s->last_error, sizeof s->last_error, "%s", error);
-        s->busy = false;
-        pthread_cond_broadcast(&s->done);
     }
     pthread_mutex_unlock(&s->lock);
     return NULL;
@@ -787,10 +794,7 @@ bool terrain_store_save(terrain_store *store, char *error, size_t error_size) {
     bool ok = snapshot_empty(snap) || commit_snapshot(store, snap, error, error_size);
     pthread_mutex_unlock(&store->order);
     snapshot_free(snap);
-    pthread_mutex_lock(&store->lock);
-    store->last_ok = ok;
-    snprintf(store->last_error, sizeof store->last_error, "%s", ok ? "" : error ? error : "");
-    pthread_mutex_unlock(&store->lock);
+    record_outcome(store, ok, error);
     return ok;
 }
 
