@@ -106,6 +106,7 @@ program("test_engine", { files = { "tests/engine/**.c", "tests/engine/**.h" },
 -- (tests/engine/test.h says why). tools/test builds and runs this in the tsan configuration.
 program("test_threads", { files = { "tests/engine/test_shim.c", "tests/engine/test_jobs.c",
                                     "tests/engine/test_ecs_scheduler.c", "tests/engine/test_ecs_commands.c",
+                                    "tests/engine/test_ecs_hooks.c",
                                     "tests/engine/test_trace.c", "tests/engine/test_input_threads.c",
                                     "tests/terrain/test_terrain_threads.c" },
                           defines = { "TEST_WITHOUT_CRITERION" } })

@@ -9,6 +9,12 @@
  *     typedef struct Position { float x, y; } Position;
  *     ecs_component position = ECS_COMPONENT(world, Position);
  *     ecs_component frozen = ECS_TAG(world, Frozen);
+ *   A component that owns resources releases them in an on_remove hook, which runs whatever
+ *   takes the component away (remove, destroy, a command buffer, ecs_world_destroy):
+ *     static void mesh_release(ecs_world *w, ecs_entity e, void *data, void *user) {
+ *         glDeleteBuffers(1, &((Mesh *)data)->vbo);
+ *     }
+ *     ecs_component_on_remove(world, mesh, mesh_release, NULL);
  *
  * ENTITIES are 64-bit ids: a 32-bit index and a 32-bit generation (0 is the null entity). A
  * destroyed entity's index is reused with a new generation, so an old id never reaches the
@@ -117,6 +123,17 @@ typedef struct ecs_component_desc {
 ecs_component ecs_component_register(ecs_world *world, const ecs_component_desc *desc);
 ecs_component ecs_component_lookup(const ecs_world *world, const char *name); /* 0 = unknown */
 size_t ecs_component_size(const ecs_world *world, ecs_component component);
+
+typedef void (*ecs_remove_fn)(ecs_world *world, ecs_entity entity, void *data, void *user);
+/* Calls fn(world, entity, data, user) with the component's data just before the component
+ * leaves an entity: ecs_remove, ecs_entity_destroy (directly or through a command buffer), and
+ * ecs_world_destroy for every entity still holding it. Not called when ecs_set overwrites a
+ * value. fn NULL clears the hook. Tags (size 0) get data NULL. The hook runs on the thread
+ * making the structural change (the thread that calls ecs_progress, when command buffers are
+ * applied), so it may call OpenGL when that is the main thread. The hook must not make
+ * structural changes itself. */
+void ecs_component_on_remove(ecs_world *world, ecs_component component, ecs_remove_fn fn,
+                             void *user);
 
 #define ECS_COMPONENT(world, Type)                                                             \
     ecs_component_register((world), &(ecs_component_desc){                                    \

@@ -32,6 +32,8 @@ static inline bool ecs_id_is_placeholder(ecs_entity e) { return (e & ECS_PLACEHO
 typedef struct ecs_component_info {
     char *name;
     uint32_t size, align;
+    ecs_remove_fn on_remove;         /* NULL = none; see ecs_component_on_remove */
+    void *on_remove_user;
 } ecs_component_info;
 
 /* ---- tables ----------------------------------------------------------------------------- */
@@ -164,12 +166,17 @@ struct ecs_world {
 
     core_arena frame;                /* scheduler scratch, reset every phase */
     bool in_phase;                   /* a phase is running: structural calls assert */
+    bool in_hook;                    /* an on_remove hook runs: structural calls assert */
     uint32_t command_serial;
 };
 
-/* Asserts that the world's structure may change now. */
+/* Asserts that the world's structure may change now. A hook runs in the middle of a change
+ * (the entity's row is about to move or go), so it may not start another. */
 #define ECS_ASSERT_STRUCTURAL(world)                                                          \
-    assert(!(world)->in_phase && "structural change while a phase runs: use it->commands")
+    do {                                                                                      \
+        assert(!(world)->in_phase && "structural change while a phase runs: use it->commands"); \
+        assert(!(world)->in_hook && "structural change inside an on_remove hook");            \
+    } while (0)
 
 #define ECS_ASSERT_COMPONENT(world, component)                                                \
     assert((component) > 0 && (component) < (world)->component_count && "unknown component")

@@ -106,8 +106,9 @@ ecs_table *ecs_table_for(ecs_world *world, const ecs_component *sorted, uint32_t
     uint64_t hash = components_hash(sorted, count);
     for (uint32_t i = 0; i < world->table_count; i++) {
         ecs_table *table = world->tables[i];
+        /* The empty table has no component array: memcmp may not be given its NULL. */
         if (table->hash == hash && table->component_count == count &&
-            memcmp(table->components, sorted, count * sizeof *sorted) == 0)
+            (count == 0 || memcmp(table->components, sorted, count * sizeof *sorted) == 0))
             return table;
     }
     return table_create(world, sorted, count, hash);
@@ -153,6 +154,25 @@ static ecs_table *table_without(ecs_world *world, ecs_table *table, ecs_componen
     return target;
 }
 
+/* ---- on_remove hooks -------------------------------------------------------------------- */
+
+/* Runs the hook of the component in `column` of the entity at `row`, if it has one. The row is
+ * still in place, so the hook sees the current value and ecs_get works on the entity. */
+static void hook_on_remove(ecs_world *world, ecs_table *table, uint32_t row, uint32_t column) {
+    const ecs_component_info *info = &world->components[table->components[column]];
+    if (!info->on_remove) return;
+    const ecs_column *data = &table->columns[column];
+    void *value = data->size ? data->data + (size_t)row * data->size : NULL;
+    world->in_hook = true;
+    info->on_remove(world, table->entities[row], value, info->on_remove_user);
+    world->in_hook = false;
+}
+
+/* Runs the hooks of every component the entity at `row` has, before it goes. */
+static void hooks_on_destroy(ecs_world *world, ecs_table *table, uint32_t row) {
+    for (uint32_t i = 0; i < table->component_count; i++) hook_on_remove(world, table, row, i);
+}
+
 /* ---- world ------------------------------------------------------------------------------ */
 
 ecs_world *ecs_world_create(const ecs_world_desc *desc) {
@@ -172,6 +192,11 @@ ecs_world *ecs_world_create(const ecs_world_desc *desc) {
 
 void ecs_world_destroy(ecs_world *world) {
     if (!world) return;
+    /* Every entity still alive loses its components here, so owners of resources get to free
+     * them; first, while every table and record is whole. */
+    for (uint32_t t = 0; t < world->table_count; t++)
+        for (uint32_t row = 0; row < world->tables[t]->count; row++)
+            hooks_on_destroy(world, world->tables[t], row);
     ecs_scheduler_free(world);
     for (uint32_t i = 0; i < world->query_count; i++) ecs_query_free(world->queries[i]);
     core_free(world->queries, world->query_capacity * sizeof *world->queries);
@@ -221,6 +246,16 @@ size_t ecs_component_size(const ecs_world *world, ecs_component component) {
     return world->components[component].size;
 }
 
+void ecs_component_on_remove(ecs_world *world, ecs_component component, ecs_remove_fn fn,
+                             void *user) {
+    /* Set up like a registration: outside phases, and not from a hook (swapping hooks while an
+     * entity's hooks run would make which of them ran hard to tell). */
+    ECS_ASSERT_STRUCTURAL(world);
+    ECS_ASSERT_COMPONENT(world, component);
+    world->components[component].on_remove = fn;
+    world->components[component].on_remove_user = fn ? user : NULL;
+}
+
 /* ---- entities --------------------------------------------------------------------------- */
 
 /* The record of a live entity, or NULL. */
@@ -268,6 +303,7 @@ void ecs_entity_destroy(ecs_world *world, ecs_entity entity) {
     ECS_ASSERT_STRUCTURAL(world);
     ecs_record *record = alive_record(world, entity);
     if (!record) return;
+    hooks_on_destroy(world, record->table, record->row);
     table_remove_row(world, record->table, record->row);
     /* A new generation makes every copy of the old id dead for good. */
     record->generation = (record->generation + 1) & ECS_GENERATION_MASK;
@@ -331,7 +367,9 @@ void ecs_remove(ecs_world *world, ecs_entity entity, ecs_component component) {
     ECS_ASSERT_STRUCTURAL(world);
     ECS_ASSERT_COMPONENT(world, component);
     ecs_record *record = alive_record(world, entity);
-    if (!record || ecs_table_column_of(record->table, component) < 0) return;
+    int column = record ? ecs_table_column_of(record->table, component) : -1;
+    if (column < 0) return;
+    hook_on_remove(world, record->table, record->row, (uint32_t)column);
     entity_move(world, record, table_without(world, record->table, component));
 }
 

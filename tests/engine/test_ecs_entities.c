@@ -152,6 +152,23 @@ Test(ecs_entities, tags_have_presence_but_no_data) {
     ecs_world_destroy(f.world);
 }
 
+/* {Position, Health} → {Health} → {}: {Health} is first reached by a removal, so no edge leads
+ * from it to the empty table yet; that lookup once handed memcmp the empty table's NULL array. */
+Test(ecs_entities, removing_every_component_returns_to_the_empty_table) {
+    fixture f = fixture_make();
+    ecs_entity e = ecs_entity_create(f.world);
+    ecs_set(f.world, e, f.position, &(Position){ 1, 2 });
+    ecs_set(f.world, e, f.health, &(Health){ 3 });
+    ecs_remove(f.world, e, f.position);
+    ecs_remove(f.world, e, f.health);
+    cr_expect(ecs_is_alive(f.world, e));
+    cr_expect_not(ecs_has(f.world, e, f.position));
+    cr_expect_not(ecs_has(f.world, e, f.health));
+    ecs_query *all = ecs_query_create(f.world, &(ecs_query_desc){ 0 });
+    cr_expect_eq(ecs_query_count(f.world, all), 1, "e is back among the component-less");
+    ecs_world_destroy(f.world);
+}
+
 Test(ecs_entities, components_are_found_by_name_and_registered_once) {
     fixture f = fixture_make();
     cr_expect_eq(ECS_COMPONENT(f.world, Position), f.position);
