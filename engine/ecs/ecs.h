@@ -262,6 +262,10 @@ bool ecs_phase_add(ecs_world *world, const char *name, const char *after);
 /* Returns 0 (and logs an error) when the phase does not exist. */
 ecs_system ecs_system_add(ecs_world *world, const ecs_system_desc *desc);
 
+/* A disabled system is skipped by ecs_progress (its phase runs as if it had none) until enabled
+ * again: for code that owns a system's `user` and goes away before the world does. */
+void ecs_system_enable(ecs_world *world, ecs_system system, bool enabled);
+
 /* Runs one frame: every phase in order, applying the phase's command buffers at its end.
  * Call from the thread that created the job system. */
 void ecs_progress(ecs_world *world, float dt);

@@ -26,6 +26,7 @@ struct ecs_system_info {
     ecs_system_fn fn;
     void *user;
     bool main_thread, parallel;
+    bool disabled;                   /* ecs_system_enable(…, false): planned with no invocation */
     int batch_size;
     uint32_t *conflicts;             /* positions in the phase of earlier conflicting systems */
     uint32_t conflict_count, conflict_capacity;
@@ -159,6 +160,12 @@ ecs_system ecs_system_add(ecs_world *world, const ecs_system_desc *desc) {
     return world->system_count;
 }
 
+void ecs_system_enable(ecs_world *world, ecs_system system, bool enabled) {
+    ECS_ASSERT_STRUCTURAL(world);
+    assert(system >= 1 && system <= world->system_count && "not a system of this world");
+    world->systems[system - 1]->disabled = !enabled;
+}
+
 static void system_free(ecs_system_info *system) {
     for (uint32_t i = 0; i < system->buffer_count; i++) ecs_commands_destroy(system->buffers[i]);
     core_free(system->buffers, system->buffer_capacity * sizeof *system->buffers);
@@ -203,9 +210,9 @@ static ecs_commands *system_buffer(ecs_world *world, ecs_system_info *system, ui
 
 /* Decides the system's invocations for this phase run: one, or one per batch. */
 static void system_plan(ecs_world *world, ecs_system_info *system, float dt) {
-    uint32_t count = 1;
+    uint32_t count = system->disabled ? 0 : 1;
     ecs_batch *batches = NULL;
-    if (system->parallel && system->query) {
+    if (count && system->parallel && system->query) {
         count = (uint32_t)ecs_query_batches(world, system->query, system->batch_size, NULL, 0);
         batches = core_arena_alloc(&world->frame, (count + 1) * sizeof *batches,
                                    alignof(ecs_batch));

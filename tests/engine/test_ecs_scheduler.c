@@ -361,3 +361,34 @@ Test(ecs_scheduler, structural_change_inside_a_phase_asserts, .signal = SIGABRT)
     ecs_progress(f.world, 0.016f);
 }
 #endif
+
+/* ---- enabling and disabling ------------------------------------------------------------ */
+
+static void count_calls(ecs_iter *it) { (*(int *)it->user)++; }
+
+/* A disabled system is not called (parallel or not, with or without a query) until enabled
+ * again; the systems beside it run as before. */
+Test(ecs_scheduler, a_disabled_system_is_skipped_until_enabled) {
+    fixture f = fixture_make(2);
+    ecs_entity e = ecs_entity_create(f.world);
+    ecs_set(f.world, e, f.position, &(Position){ 0, 0 });
+    int a = 0, b = 0, c = 0;
+    ecs_system sa = ecs_system_add(f.world, &(ecs_system_desc){ .name = "a", .phase = "game", .fn = count_calls,
+                                                                 .user = &a, .query = { .with = { f.position } },
+                                                                 .parallel = true });
+    ecs_system sb = ecs_system_add(f.world, &(ecs_system_desc){ .name = "b", .phase = "game", .fn = count_calls,
+                                                                 .user = &b });
+    ecs_system_add(f.world, &(ecs_system_desc){ .name = "c", .phase = "game", .fn = count_calls, .user = &c,
+                                                .writes = { f.position } });
+    ecs_progress(f.world, 0.016f);
+    ecs_system_enable(f.world, sa, false);
+    ecs_system_enable(f.world, sb, false);
+    ecs_progress(f.world, 0.016f);
+    ecs_progress(f.world, 0.016f);
+    ecs_system_enable(f.world, sa, true);
+    ecs_progress(f.world, 0.016f);
+    cr_expect_eq(a, 2, "a ran %d times", a);
+    cr_expect_eq(b, 1, "b ran %d times", b);
+    cr_expect_eq(c, 4, "c ran %d times", c);
+    fixture_free(&f);
+}
