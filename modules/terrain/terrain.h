@@ -365,6 +365,8 @@ void terrain_renderer_destroy(terrain_renderer *renderer);
 typedef struct terrain_gpu_mesh {
     uint32_t vertex_buffer, index_buffer, vertex_array;   /* GL names */
     uint32_t index_count;
+    uint64_t serial;                  /* unique per upload (GL reuses freed names): what was
+                                         derived from a mesh (grass) knows when it changed */
     double origin[3];
     float bounds_min[3], bounds_max[3];
 } terrain_gpu_mesh;
@@ -381,6 +383,12 @@ typedef struct terrain_view {
     float sun_direction[3];           /* towards the sun; 0 = a morning sun */
     float time;                       /* seconds; the clouds drift with it */
 } terrain_view;
+
+/* The view's projection × camera rotation (column-major, the camera at the origin: draw
+ * camera-relative positions with it), and its unit sun direction (the default when unset): for
+ * modules that draw into the terrain's frame (grass, water). */
+void terrain_view_matrix(const terrain_view *view, float out[16]);
+void terrain_view_sun(const terrain_view *view, float out[3]);
 
 /* The view's frustum as six planes in camera-relative space, for culling mesh bounds. */
 typedef struct terrain_frustum {

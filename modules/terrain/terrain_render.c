@@ -10,6 +10,7 @@
 #include <cglm/cglm.h>
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
 #define TERRAIN_TEXTURE_SIZE 256
 #define TERRAIN_TEXTURE_LAYERS 4          /* bedrock, sand, rocks, water bed */
@@ -140,7 +141,8 @@ void terrain_renderer_destroy(terrain_renderer *r) {
 
 terrain_gpu_mesh terrain_gpu_mesh_upload(const terrain_mesh *mesh) {
     TRACE_ZONE("terrain_gpu_mesh_upload");
-    terrain_gpu_mesh gpu = { .index_count = mesh->index_count };
+    static uint64_t uploads;                  /* main thread only, as every GL call */
+    terrain_gpu_mesh gpu = { .index_count = mesh->index_count, .serial = ++uploads };
     for (int a = 0; a < 3; a++) {
         gpu.origin[a] = mesh->origin[a];
         gpu.bounds_min[a] = mesh->bounds_min[a];
@@ -181,6 +183,19 @@ static void terrain_view_projection(const terrain_view *view, mat4 out) {
     glm_perspective(view->fov_y > 0 ? view->fov_y : glm_rad(60.0f), view->aspect > 0 ? view->aspect : 16.0f / 9.0f,
                     0.1f, far_distance, projection);
     glm_mat4_mul(projection, look, out);
+}
+
+void terrain_view_matrix(const terrain_view *view, float out[16]) {
+    mat4 m;
+    terrain_view_projection(view, m);
+    memcpy(out, m, sizeof m);
+}
+
+void terrain_view_sun(const terrain_view *view, float out[3]) {
+    vec3 sun = { view->sun_direction[0], view->sun_direction[1], view->sun_direction[2] };
+    if (glm_vec3_norm(sun) == 0) glm_vec3_copy((vec3){ -0.55f, 0.55f, -0.35f }, sun);
+    glm_vec3_normalize(sun);
+    memcpy(out, sun, sizeof sun);
 }
 
 /* Gribb and Hartmann: the planes are sums and differences of the clip matrix's rows. */
@@ -245,9 +260,8 @@ void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const 
     mat4 view_projection, inverse;
     terrain_view_projection(view, view_projection);
     glm_mat4_inv(view_projection, inverse);
-    vec3 sun = { view->sun_direction[0], view->sun_direction[1], view->sun_direction[2] };
-    if (glm_vec3_norm(sun) == 0) glm_vec3_copy((vec3){ -0.55f, 0.55f, -0.35f }, sun);
-    glm_vec3_normalize(sun);
+    vec3 sun;
+    terrain_view_sun(view, sun);
     const float zero[3] = { 0, 0, 0 };
 
     gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "terrain", .clear_depth = true });
