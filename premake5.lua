@@ -74,6 +74,10 @@ project "terrain"
   kind "StaticLib"
   files { "modules/terrain/**.c", "modules/terrain/**.h" }
 
+project "vegetation"
+  kind "StaticLib"
+  files { "modules/vegetation/**.c", "modules/vegetation/**.h" }
+
 -- Generated code: built with its own warnings off, so ours can stay strict.
 project "glad"
   kind "StaticLib"
@@ -91,7 +95,7 @@ local function program(name, extra)
     files(extra.files)
     if extra.excludes then excludes(extra.excludes) end
     if extra.defines then defines(extra.defines) end
-    links { "game", "terrain", "engine", "glad" }
+    links { "game", "vegetation", "terrain", "engine", "glad" }
     if extra.links then links(extra.links) end
     links(platform_libs)
     links { "m" }

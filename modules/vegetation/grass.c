@@ -1,0 +1,434 @@
+/* grass.c — grass patches (vegetation.h): the GrassPatch component, its placement system and
+ * drawing. Placement is grass_place.comp → grass_scan.comp → grass_place.comp on the GPU; the
+ * CPU only reads back one count per patch, to size the patch's tuft buffer. */
+#include "vegetation.h"
+#include "vegetation_internal.h"
+
+#include "core/core.h"
+#include "ecs/ecs.h"
+#include "gfx/gfx.h"
+#include "trace/trace.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define GRASS_PLACE_GROUP 64              /* grass_place.comp's local size */
+#define GRASS_TUFT_BYTES 32               /* two vec4 */
+#define GRASS_MAX_LEVEL 1                 /* levels 0 and 1 cover ≥ 64 m around the viewer */
+#define GRASS_REACH_AHEAD 32.0            /* patches are placed this far beyond the range … */
+#define GRASS_REACH_KEEP 96.0             /* … and released only this far beyond it */
+#define GRASS_WAVE_PERIOD 256.0           /* metres after which the gusts repeat */
+
+struct grass_system {
+    grass_desc desc;
+    gfx_program place, scan, draw;
+    gfx_texture blades;
+    gfx_vertex_array empty;
+    ecs_component mesh_chunk, patch;
+    ecs_query *patches;                   /* TerrainMeshChunk with GrassPatch */
+    ecs_system system;                    /* grass_place */
+    gfx_buffer counts, tops;              /* scratch of placement, grown as needed */
+    float *tops_cpu;
+    size_t tops_capacity;
+    terrain_view view;
+    bool has_view, has_feet;
+    double feet[3];
+    float sea_level;
+    uint32_t seed;
+    uint64_t place_ns;
+    grass_stats stats;
+};
+
+bool grass_parse_quality(const char *text, grass_quality *out) {
+    static const char *const names[] = { "off", "low", "high" };
+    for (int q = 0; q < 3; q++)
+        if (text && strcmp(text, names[q]) == 0) {
+            *out = (grass_quality)(GRASS_OFF + q);
+            return true;
+        }
+    return false;
+}
+
+const char *grass_quality_name(grass_quality quality) {
+    switch (quality) {
+    case GRASS_OFF: return "off";
+    case GRASS_HIGH: return "high";
+    default: return "low";
+    }
+}
+
+/* ---- the component's lifetime ---------------------------------------------------------- */
+
+static void grass_patch_release(GrassPatch *patch) {
+    if (patch->tuft_buffer) glDeleteBuffers(1, &patch->tuft_buffer);
+    if (patch->draw_buffer) glDeleteBuffers(1, &patch->draw_buffer);
+    patch->tuft_buffer = patch->draw_buffer = 0;
+    patch->tufts = 0;
+}
+
+/* Whatever removes a patch (the chunk evicted, out of reach, the world destroyed), its buffers
+ * go with it. Structural changes happen on the thread that runs ecs_progress: OpenGL's. */
+static void grass_patch_removed(ecs_world *world, ecs_entity entity, void *data, void *user) {
+    (void)world, (void)entity;
+    grass_system *grass = user;
+    GrassPatch *patch = data;
+    grass->stats.patches--;
+    grass->stats.tufts -= patch->tufts;
+    grass_patch_release(patch);
+}
+
+/* ---- placement ------------------------------------------------------------------------- */
+
+static void grass_buffer_reserve(gfx_buffer *buffer, size_t bytes) {
+    if (buffer->id && buffer->size >= bytes) return;
+    gfx_buffer_destroy(buffer);
+    size_t size = bytes < 4096 ? 4096 : bytes + bytes / 2;
+    *buffer = gfx_buffer_create(&(gfx_buffer_desc){ .size = size, .usage = GFX_BUFFER_DYNAMIC });
+}
+
+/* The top of each column under the chunk (terrain_stacks_top): a tuft needs sky above it. */
+static int grass_upload_tops(grass_system *g, const TerrainMeshChunk *chunk, float tops_origin[2]) {
+    int side = TERRAIN_MESH_CELLS << chunk->lod.level, per = TERRAIN_CHUNK_COLUMNS;
+    int64_t first_x = chunk->x * side, first_z = chunk->z * side;
+    size_t count = (size_t)side * (size_t)side;
+    g->tops_cpu = core_grow(g->tops_cpu, &g->tops_capacity, count, sizeof *g->tops_cpu);
+    for (int bz = 0; bz < side / per; bz++)
+        for (int bx = 0; bx < side / per; bx++) {
+            terrain_chunk_coord coord = { first_x / per + bx, first_z / per + bz };
+            const terrain_stacks *stacks = terrain_world_stacks(g->desc.world, coord);
+            for (int k = 0; k < per; k++)
+                for (int i = 0; i < per; i++)
+                    g->tops_cpu[(size_t)(bz * per + k) * (size_t)side + (size_t)(bx * per + i)] =
+                        terrain_stacks_top(stacks, i, k);
+        }
+    grass_buffer_reserve(&g->tops, count * sizeof(float));
+    gfx_buffer_update(g->tops, 0, g->tops_cpu, count * sizeof(float));
+    tops_origin[0] = (float)(chunk->gpu.origin[0] - (double)first_x);
+    tops_origin[1] = (float)(chunk->gpu.origin[2] - (double)first_z);
+    return side;
+}
+
+static void grass_uniform_uint(GLuint program, const char *name, uint32_t a) {
+    glProgramUniform1ui(program, glGetUniformLocation(program, name), a);
+}
+
+/* The uniforms of grass_place.comp for one chunk (both runs). */
+static void grass_place_uniforms(grass_system *g, const TerrainMeshChunk *chunk, uint32_t triangles) {
+    gfx_context *gfx = g->desc.gfx;
+    GLuint program = gfx_program_gl(gfx, g->place);
+    int density = g->desc.density;
+    float tops_origin[2];
+    int tops_size = grass_upload_tops(g, chunk, tops_origin);
+    gfx_program_use(gfx, g->place);
+    grass_uniform_uint(program, "u_triangle_count", triangles);
+    grass_uniform_uint(program, "u_seed", g->seed);
+    /* Mesh origins are whole metres (samples sit on the column grid), so the origin's lattice
+     * cell is exact; wrapping to 32 bits only repeats the lattice every 2^32 cells. */
+    uint32_t cell_x = (uint32_t)((int64_t)llround(chunk->gpu.origin[0]) * density);
+    uint32_t cell_z = (uint32_t)((int64_t)llround(chunk->gpu.origin[2]) * density);
+    glProgramUniform2ui(program, glGetUniformLocation(program, "u_origin_cell"), cell_x, cell_z);
+    gfx_uniform_int(gfx, g->place, "u_density", density);
+    gfx_uniform_float(gfx, g->place, "u_origin_y", (float)chunk->gpu.origin[1]);
+    gfx_uniform_vec2(gfx, g->place, "u_tops_origin", tops_origin);
+    gfx_uniform_int(gfx, g->place, "u_tops_size", tops_size);
+    gfx_uniform_float(gfx, g->place, "u_slope_limit", g->desc.slope_limit);
+    gfx_uniform_float(gfx, g->place, "u_sea_level", g->sea_level);
+    gfx_uniform_float(gfx, g->place, "u_snow_height", g->desc.snow_height);
+}
+
+/* Places the chunk's tufts into `patch` (whose buffers are released first). */
+static void grass_place(grass_system *g, const TerrainMeshChunk *chunk, GrassPatch *patch) {
+    TRACE_ZONE("grass_place_patch");
+    gfx_context *gfx = g->desc.gfx;
+    grass_patch_release(patch);
+    const terrain_gpu_mesh *mesh = &chunk->gpu;
+    uint32_t triangles = mesh->index_count / 3;
+    patch->source = mesh->serial;
+    memcpy(patch->origin, mesh->origin, sizeof patch->origin);
+    memcpy(patch->bounds_min, mesh->bounds_min, sizeof patch->bounds_min);
+    memcpy(patch->bounds_max, mesh->bounds_max, sizeof patch->bounds_max);
+    glCreateBuffers(1, &patch->draw_buffer);
+    glNamedBufferData(patch->draw_buffer, 4 * sizeof(uint32_t), NULL, GL_DYNAMIC_COPY);
+    grass_buffer_reserve(&g->counts, (size_t)triangles * sizeof(uint32_t));
+    grass_place_uniforms(g, chunk, triangles);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, mesh->vertex_buffer);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, mesh->index_buffer);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, g->counts.id);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, g->tops.id);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, patch->draw_buffer);
+    GLuint groups = (triangles + GRASS_PLACE_GROUP - 1) / GRASS_PLACE_GROUP;
+    gfx_uniform_int(gfx, g->place, "u_write", 0);
+    glDispatchCompute(groups, 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    gfx_program_use(gfx, g->scan);
+    grass_uniform_uint(gfx_program_gl(gfx, g->scan), "u_triangle_count", triangles);
+    glDispatchCompute(1, 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    /* The one value the CPU reads: the tufts, to size their buffer (a wait for this chunk's
+     * placement, once per placement, never per frame). */
+    uint32_t command[4];
+    glGetNamedBufferSubData(patch->draw_buffer, 0, sizeof command, command);
+    patch->tufts = command[1];
+    if (patch->tufts) {
+        glCreateBuffers(1, &patch->tuft_buffer);
+        glNamedBufferData(patch->tuft_buffer, (GLsizeiptr)patch->tufts * GRASS_TUFT_BYTES, NULL, GL_STATIC_DRAW);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, patch->tuft_buffer);
+        gfx_program_use(gfx, g->place);
+        gfx_uniform_int(gfx, g->place, "u_write", 1);
+        glDispatchCompute(groups, 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+    for (GLuint binding = 0; binding <= 5; binding++) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, 0);
+    g->stats.placements++;
+    trace_counter("grass.placed_tufts", (double)patch->tufts);
+}
+
+/* Horizontal distance from the camera to the chunk's box. */
+static double grass_box_distance(const grass_system *g, const double origin[3], const float lo[3], const float hi[3]) {
+    double squares = 0;
+    for (int a = 0; a < 3; a += 2) {
+        double c = g->view.camera[a], min = origin[a] + lo[a], max = origin[a] + hi[a];
+        double d = c < min ? min - c : c > max ? c - max : 0.0;
+        squares += d * d;
+    }
+    return sqrt(squares);
+}
+
+/* Whether the chunk should have a patch: a shown, uploaded chunk of a fine level near the view
+ * (kept a little further than it is placed, so a patch on the edge is not made and dropped in
+ * turn). */
+static bool grass_wants(const grass_system *g, const TerrainMeshChunk *c, bool has_patch) {
+    if (g->desc.quality == GRASS_OFF || !g->has_view || c->lod.level > GRASS_MAX_LEVEL || c->hidden ||
+        c->gpu.index_count == 0)
+        return false;
+    double reach = g->desc.range + (has_patch ? GRASS_REACH_KEEP : GRASS_REACH_AHEAD);
+    return grass_box_distance(g, c->gpu.origin, c->gpu.bounds_min, c->gpu.bounds_max) <= reach;
+}
+
+/* The draw phase, after terrain_upload (it reads what that writes): patches follow the chunks.
+ * A chunk re-uploaded after an edit is placed again in this frame, whatever the budget. */
+static void grass_place_system(ecs_iter *it) {
+    grass_system *g = it->user;
+    gfx_context *gfx = g->desc.gfx;
+    uint64_t start = core_time_ns();
+    int placed = 0;
+    bool pass_open = false;
+    while (ecs_query_next(it)) {
+        TerrainMeshChunk *chunks = ecs_field(it, 0);
+        GrassPatch *patches = ecs_field(it, 1);
+        for (int i = 0; i < it->count; i++) {
+            TerrainMeshChunk *c = &chunks[i];
+            GrassPatch *patch = patches ? &patches[i] : NULL;
+            bool wanted = grass_wants(g, c, patch != NULL);
+            if (patch && !wanted) ecs_defer_remove(it->commands, it->entities[i], g->patch);
+            if (!wanted || (patch && patch->source == c->gpu.serial)) continue;
+            if (!patch && placed >= g->desc.max_placements) continue;
+            if (!pass_open) gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "grass.place" });
+            pass_open = true;
+            if (patch) {
+                g->stats.tufts -= patch->tufts;
+                grass_place(g, c, patch);
+                g->stats.tufts += patch->tufts;
+                continue;
+            }
+            GrassPatch fresh = { 0 };
+            grass_place(g, c, &fresh);
+            /* Counted once the component is on the entity (the hook takes it off again). */
+            ecs_defer_set(it->commands, it->entities[i], g->patch, &fresh);
+            g->stats.patches++;
+            g->stats.tufts += fresh.tufts;
+            placed++;
+        }
+    }
+    if (pass_open) gfx_pass_end(gfx);
+    g->place_ns = core_time_ns() - start;
+    trace_counter("grass.patches", (double)g->stats.patches);
+    trace_counter("grass.tufts", (double)g->stats.tufts);
+}
+
+/* ---- the system ------------------------------------------------------------------------ */
+
+static void grass_defaults(grass_desc *d) {
+    bool high = d->quality == GRASS_HIGH;
+    if (d->quality == GRASS_DEFAULT) d->quality = GRASS_LOW;
+    if (d->density <= 0) d->density = high ? 3 : 2;
+    if (d->density > 8) d->density = 8;
+    if (!(d->range > 0)) d->range = high ? 70.0f : 35.0f;
+    if (!(d->slope_limit > 0)) d->slope_limit = 35.0f;
+    if (!(d->height > 0)) d->height = 0.5f;
+    if (d->snow_height == 0) d->snow_height = 120.0f;
+    if (d->fog_density == 0) d->fog_density = 0.0025f;
+    if (d->max_placements <= 0) d->max_placements = 4;
+}
+
+grass_system *grass_create(const grass_desc *desc) {
+    if (!desc || !desc->gfx || !desc->ecs || !desc->world) {
+        core_error("grass", "grass_create needs .gfx, .ecs and .world");
+        return NULL;
+    }
+    ecs_component mesh_chunk = ecs_component_lookup(desc->ecs, "TerrainMeshChunk");
+    if (!mesh_chunk) {
+        core_error("grass", "no TerrainMeshChunk in this ECS world: call terrain_ecs_create first");
+        return NULL;
+    }
+    gfx_program place = gfx_program_load_compute(desc->gfx, "grass_place.comp");
+    gfx_program scan = gfx_program_load_compute(desc->gfx, "grass_scan.comp");
+    gfx_program draw = gfx_program_load(desc->gfx, "grass.vert", "grass.frag");
+    if (!place.id || !scan.id || !draw.id) return NULL;
+    grass_system *g = core_calloc(1, sizeof *g);
+    g->desc = *desc;
+    grass_defaults(&g->desc);
+    g->place = place, g->scan = scan, g->draw = draw;
+    const terrain_generation_params *generation = terrain_world_generation(desc->world);
+    g->sea_level = generation->sea_level;
+    g->seed = (uint32_t)core_hash_u64(generation->seed ^ 0x6772617373ull);   /* "grass" */
+    g->blades = grass__blade_texture();
+    glCreateVertexArrays(1, &g->empty.id);
+    g->mesh_chunk = mesh_chunk;
+    g->patch = ECS_COMPONENT(desc->ecs, GrassPatch);
+    ecs_component_on_remove(desc->ecs, g->patch, grass_patch_removed, g);
+    g->patches = ecs_query_create(desc->ecs, &(ecs_query_desc){ .with = { mesh_chunk, g->patch } });
+    g->stats.patches = ecs_query_count(desc->ecs, g->patches);   /* left empty by an earlier system */
+    g->system = ecs_system_add(desc->ecs, &(ecs_system_desc){ .name = "grass_place", .phase = "draw",
+        .query = { .with = { mesh_chunk }, .optional = { g->patch } }, .writes = { g->patch },
+        .fn = grass_place_system, .user = g, .main_thread = true });
+    return g;
+}
+
+void grass_destroy(grass_system *g) {
+    if (!g) return;
+    /* The hook and the system would outlive `g` in the world: release the patches here (a
+     * released patch is empty, source 0: a later grass_create places it again), unhook, and
+     * disable the system. */
+    ecs_component_on_remove(g->desc.ecs, g->patch, NULL, NULL);
+    ecs_system_enable(g->desc.ecs, g->system, false);
+    ecs_iter it = ecs_query_iter(g->desc.ecs, g->patches);
+    while (ecs_query_next(&it)) {
+        GrassPatch *patches = ecs_field(&it, 1);
+        for (int i = 0; i < it.count; i++) {
+            grass_patch_release(&patches[i]);
+            patches[i].source = 0;
+        }
+    }
+    gfx_buffer_destroy(&g->counts);
+    gfx_buffer_destroy(&g->tops);
+    core_free(g->tops_cpu, g->tops_capacity * sizeof *g->tops_cpu);
+    gfx_texture_destroy(&g->blades);
+    gfx_vertex_array_destroy(&g->empty);
+    core_free(g, sizeof *g);
+}
+
+void grass_set_view(grass_system *g, const terrain_view *view, const double player_feet[3]) {
+    g->view = *view;
+    g->has_view = true;
+    g->has_feet = player_feet != NULL;
+    if (player_feet) memcpy(g->feet, player_feet, sizeof g->feet);
+}
+
+/* ---- drawing --------------------------------------------------------------------------- */
+
+static void grass_draw_uniforms(grass_system *g, const terrain_view *view) {
+    gfx_context *gfx = g->desc.gfx;
+    float view_projection[16], sun[3];
+    terrain_view_matrix(view, view_projection);
+    terrain_view_sun(view, sun);
+    const float zero[3] = { 0, 0, 0 };
+    float player[3] = { 0, -1e6f, 0 };           /* nothing bends */
+    if (g->has_feet)
+        for (int a = 0; a < 3; a++) player[a] = (float)(g->feet[a] - view->camera[a]);
+    gfx_program_use(gfx, g->draw);
+    gfx_uniform_mat4(gfx, g->draw, "u_view_projection", view_projection);
+    gfx_uniform_vec3(gfx, g->draw, "u_sun_direction", sun);
+    gfx_uniform_vec3(gfx, g->draw, "u_camera_position", zero);
+    gfx_uniform_float(gfx, g->draw, "u_fog_density", g->desc.fog_density);
+    gfx_uniform_vec3(gfx, g->draw, "u_player", player);
+    gfx_uniform_float(gfx, g->draw, "u_time", view->time);
+    gfx_uniform_float(gfx, g->draw, "u_range", g->desc.range);
+    gfx_uniform_float(gfx, g->draw, "u_height", g->desc.height);
+    gfx_uniform_int(gfx, g->draw, "u_blades", 0);
+    gfx_texture_bind(g->blades, 0);
+}
+
+static double grass_wrap(double value, double period) { return value - floor(value / period) * period; }
+
+void grass_draw(grass_system *g, const terrain_view *view) {
+    uint64_t start = core_time_ns();
+    g->stats.patches_drawn = 0;
+    g->stats.tufts_drawn = 0;
+    if (g->desc.quality != GRASS_OFF && g->stats.patches > 0) {
+        gfx_context *gfx = g->desc.gfx;
+        gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "grass" });
+        grass_draw_uniforms(g, view);
+        glDisable(GL_CULL_FACE);                 /* a billboard is seen from both sides */
+        ecs_iter it = ecs_query_iter(g->desc.ecs, g->patches);
+        while (ecs_query_next(&it)) {
+            const TerrainMeshChunk *chunks = ecs_field(&it, 0);
+            const GrassPatch *patches = ecs_field(&it, 1);
+            for (int i = 0; i < it.count; i++) {
+                const GrassPatch *p = &patches[i];
+                if (!p->tufts || !chunks[i].visible ||
+                    grass_box_distance(g, p->origin, p->bounds_min, p->bounds_max) > g->desc.range)
+                    continue;
+                float offset[3], wave[2];
+                for (int a = 0; a < 3; a++) offset[a] = (float)(p->origin[a] - view->camera[a]);
+                wave[0] = (float)grass_wrap(p->origin[0], GRASS_WAVE_PERIOD);
+                wave[1] = (float)grass_wrap(p->origin[2], GRASS_WAVE_PERIOD);
+                gfx_uniform_vec3(gfx, g->draw, "u_offset", offset);
+                gfx_uniform_vec2(gfx, g->draw, "u_wave_offset", wave);
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, p->tuft_buffer);
+                gfx_draw(&(gfx_draw_desc){ .vertex_array = g->empty,
+                                           .indirect = { .id = p->draw_buffer, .size = 16 } });
+                g->stats.patches_drawn++;
+                g->stats.tufts_drawn += p->tufts;
+            }
+        }
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
+        glEnable(GL_CULL_FACE);
+        gfx_pass_end(gfx);
+        trace_counter("grass.tufts_drawn", (double)g->stats.tufts_drawn);
+    }
+    g->stats.cpu_ms = (double)(g->place_ns + (core_time_ns() - start)) * 1e-6;
+    g->place_ns = 0;
+}
+
+grass_stats grass_stats_get(const grass_system *g) { return g->stats; }
+
+/* ---- reading back (tests, tools) -------------------------------------------------------- */
+
+typedef struct grass_digest_item { int64_t x, y, z, level; uint64_t hash; } grass_digest_item;   /* no padding */
+
+static int grass_digest_compare(const void *a, const void *b) {
+    const grass_digest_item *p = a, *q = b;
+    if (p->level != q->level) return p->level < q->level ? -1 : 1;
+    if (p->y != q->y) return p->y < q->y ? -1 : 1;
+    if (p->z != q->z) return p->z < q->z ? -1 : 1;
+    return (p->x > q->x) - (p->x < q->x);
+}
+
+uint64_t grass_tufts_digest(grass_system *g) {
+    grass_digest_item *items = NULL;
+    size_t count = 0, capacity = 0;
+    ecs_iter it = ecs_query_iter(g->desc.ecs, g->patches);
+    while (ecs_query_next(&it)) {
+        const TerrainMeshChunk *chunks = ecs_field(&it, 0);
+        const GrassPatch *patches = ecs_field(&it, 1);
+        for (int i = 0; i < it.count; i++) {
+            size_t bytes = (size_t)patches[i].tufts * GRASS_TUFT_BYTES;
+            uint64_t hash = core_hash_u64(patches[i].tufts);
+            if (bytes) {
+                void *data = core_alloc(bytes);
+                glGetNamedBufferSubData(patches[i].tuft_buffer, 0, (GLsizeiptr)bytes, data);
+                hash = core_hash_bytes(data, bytes, hash);
+                core_free(data, bytes);
+            }
+            items = core_grow(items, &capacity, count + 1, sizeof *items);
+            items[count++] = (grass_digest_item){ chunks[i].x, chunks[i].y, chunks[i].z, chunks[i].lod.level, hash };
+        }
+    }
+    qsort(items, count, sizeof *items, grass_digest_compare);
+    uint64_t digest = core_hash_u64(count);
+    for (size_t i = 0; i < count; i++) digest = core_hash_combine(digest, core_hash_bytes(&items[i], sizeof items[i], 7));
+    core_free(items, capacity * sizeof *items);
+    return digest;
+}
