@@ -27,6 +27,7 @@ struct game_app {
     terrain_renderer *renderer;
     terrain_clipmap *clipmap;              /* the far terrain, or NULL */
     terrain_ecs *terrain;
+    grass_system *grass;                   /* NULL with --grass off */
     input_bindings *bindings;
     input_system *input;
     gfx_text *hud;
@@ -47,6 +48,7 @@ struct game_app {
     double *cpu_ms, *engine_ms;             /* per frame past loading */
     size_t cpu_count, cpu_capacity, engine_capacity;
     int eye_in_solid, waiting;
+    double grass_ms_sum, grass_ms_max;     /* past loading */
     /* pictures at the walk's `shot` waypoints (walk.h): held frames, and each picture at half
      * size for the contact sheet */
     int shot_hold;
@@ -306,8 +308,9 @@ game_app *game_app_create(const game_app_desc *desc) {
     app->jobs = job_system_create(&(job_system_desc){ .threads = d->threads });
     if (!app_open_terrain(app)) goto fail;
     /* Thin fog: the clipmap shows ground out to several kilometres. */
+    float fog_density = d->no_clipmap ? 0 : 0.0005f;
     app->renderer = terrain_renderer_create(app->gfx, &(terrain_renderer_desc){
-        .sea_level = terrain_world_generation(app->world)->sea_level, .fog_density = d->no_clipmap ? 0 : 0.0005f });
+        .sea_level = terrain_world_generation(app->world)->sea_level, .fog_density = fog_density });
     if (!app->renderer || !app_open_input(app) || !(app->hud = gfx_text_create(app->gfx))) goto fail;
     if (!d->no_clipmap) {
         app->clipmap = terrain_clipmap_create(&(terrain_clipmap_desc){
@@ -316,6 +319,10 @@ game_app *game_app_create(const game_app_desc *desc) {
         terrain_renderer_set_clipmap(app->renderer, app->clipmap);
         app->view.far_distance = 6000.0f;
     }
+    if (d->grass != GRASS_OFF &&
+        !(app->grass = grass_create(&(grass_desc){ .gfx = app->gfx, .ecs = app->ecs, .world = app->world,
+                                                   .quality = d->grass, .fog_density = fog_density })))
+        goto fail;
     app_spawn_player(app);
     game_tools_init(&app->tools);
     app->loading = true;
@@ -333,6 +340,7 @@ void game_app_destroy(game_app *app) {
     gfx_text_destroy(app->hud);
     if (app->store) app_save(app, true);
     terrain_store_destroy(app->store);
+    grass_destroy(app->grass);               /* its patches live on the terrain's entities */
     if (app->terrain) terrain_ecs_destroy(app->terrain);
     terrain_clipmap_destroy(app->clipmap);
     terrain_renderer_destroy(app->renderer);
@@ -507,9 +515,11 @@ bool game_app_frame(game_app *app) {
         app->eye_in_solid += terrain_field_at(app->world, app->view.camera[0], app->view.camera[1],
                                               app->view.camera[2], 0) >= 0;
     gfx_frame_begin(app->gfx);
-    ecs_progress(app->ecs, dt);                /* stream, generate, mesh, lod, cull, upload */
+    if (app->grass) grass_set_view(app->grass, &app->view, app->player.position);
+    ecs_progress(app->ecs, dt);                /* stream, generate, mesh, lod, cull, upload, grass */
     uint64_t drawing = core_time_ns();
     terrain_ecs_draw(app->terrain, app->renderer, &app->view);
+    if (app->grass) grass_draw(app->grass, &app->view);
     app_draw_hud(app);
     uint64_t drawn = core_time_ns();
     double cpu_ms = (double)(drawn - now) * 1e-6, engine_ms = (double)(drawing - now) * 1e-6;
@@ -532,6 +542,9 @@ bool game_app_frame(game_app *app) {
     } else {
         app->frames++;
         app_record_cpu(app, cpu_ms, engine_ms);
+        double grass_ms = app->grass ? grass_stats_get(app->grass).cpu_ms : 0.0;
+        app->grass_ms_sum += grass_ms;
+        app->grass_ms_max = fmax(app->grass_ms_max, grass_ms);
     }
     if (app->desc.world_dir && (double)(core_time_ns() - app->last_save_ns) * 1e-9 >= GAME_APP_AUTOSAVE_SECONDS)
         app_save(app, false);
@@ -579,6 +592,13 @@ game_app_stats game_app_stats_get(const game_app *app) {
     s.edits = terrain_ecs_edit_stats(app->terrain);
     s.strokes = app->tools.strokes;
     s.edited_chunks = terrain_edit_log_chunks(app->edits);
+    if (app->grass) {
+        grass_stats g = grass_stats_get(app->grass);
+        s.grass_tufts = g.tufts;
+        s.grass_tufts_drawn = g.tufts_drawn;
+    }
+    s.grass_ms_mean = app->frames ? app->grass_ms_sum / app->frames : 0.0;
+    s.grass_ms_max = app->grass_ms_max;
     struct rusage usage;
     if (getrusage(RUSAGE_SELF, &usage) == 0) s.peak_rss_bytes = (size_t)usage.ru_maxrss * 1024;
     return s;
@@ -591,4 +611,5 @@ const double *game_app_frame_times(const game_app *app, int *count) {
 
 terrain_world *game_app_world(game_app *app) { return app->world; }
 terrain_ecs *game_app_terrain(game_app *app) { return app->terrain; }
+grass_system *game_app_grass(game_app *app) { return app->grass; }
 bool game_app_loaded(const game_app *app) { return !app->loading; }

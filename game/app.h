@@ -29,6 +29,7 @@
 #include <stdint.h>
 
 #include "terrain/terrain.h"
+#include "vegetation/vegetation.h"
 #include "walk.h"
 
 typedef struct game_app game_app;
@@ -55,6 +56,7 @@ typedef struct game_app_desc {
     terrain_stream_desc stream;       /* view distance and budgets; zero = defaults */
     bool no_clipmap;                  /* only the volumetric chunks (no far terrain) */
     bool no_hud;
+    grass_quality grass;              /* grass patches (vegetation.h); 0 = low */
     bool no_head_bob;                 /* the view without the walking dip (game_player_bob) */
     double max_loading_seconds;       /* give up waiting for the start area; 0 = 300 s */
     /* A folder that keeps the world (terrain.h, "the world folder"): DIR/world.db holds the
@@ -101,12 +103,17 @@ typedef struct game_app_stats {
     uint64_t strokes;                 /* tool strokes the player made */
     int edited_chunks;                /* chunks with logged edits */
     size_t peak_rss_bytes;            /* of the process (getrusage), driver memory included */
+    /* Grass (vegetation.h) past loading: CPU ms a frame placing and drawing it, and the tufts
+     * placed and drawn in the last frame. */
+    double grass_ms_mean, grass_ms_max;
+    uint64_t grass_tufts, grass_tufts_drawn;
 } game_app_stats;
 
 game_app_stats game_app_stats_get(const game_app *app);
 /* The world and its ECS terrain, for code that extends the game (edits, more viewers, probes). */
 terrain_world *game_app_world(game_app *app);
 terrain_ecs *game_app_terrain(game_app *app);
+grass_system *game_app_grass(game_app *app);     /* NULL with grass off */
 /* Whether the start area has loaded (the player moves from then on). */
 bool game_app_loaded(const game_app *app);
 /* The frame's CPU times (ms) past loading, in order; count in *count. */

@@ -2,7 +2,7 @@
  *
  *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT | --tour] [--record FILE]
  *         [--replay FILE] [--bindings FILE] [--screenshot FILE] [--radius R] [--levels N]
- *         [--memory MB] [--threads N] [--trace FILE] [--world DIR]
+ *         [--memory MB] [--grass off|low|high] [--threads N] [--trace FILE] [--world DIR]
  *
  * In a window: WASD or the left stick to walk, the mouse (click to capture, Escape to let go) or
  * the right stick to look, Space to jump, Shift to sprint, Ctrl or C to crouch, F to fly, F11
@@ -23,7 +23,7 @@
 
 typedef struct options {
     core_common_args common;
-    const char *size, *screenshot, *walk, *record, *replay, *bindings, *world;
+    const char *size, *screenshot, *walk, *record, *replay, *bindings, *world, *grass;
     int seed, frames, radius, levels, memory_mb;
     bool headless, tour, no_head_bob;
 } options;
@@ -48,6 +48,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "screenshot", CORE_OPTION_STRING, &o->screenshot, "FILE", "write the last frame as a PNG" },
         { "radius", CORE_OPTION_INT, &o->radius, "R", "full-detail chunks of 32 m each way (default 2)", 1, 32 },
         { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
+        { "grass", CORE_OPTION_STRING, &o->grass, "off|low|high", "grass patches (default low)" },
         { "memory", CORE_OPTION_INT, &o->memory_mb, "MB", "memory budget for terrain (default 384)", 16, 65536 },
     };
     core_cli cli = { .program = "world", .summary = "walk an endless generated world",
@@ -62,6 +63,11 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
     desc->height = 720;
     if (o->size && !gfx_parse_size(o->size, &desc->width, &desc->height)) {
         fprintf(stderr, "world: bad value for '--size': '%s' is not WxH (16 to 16384 each)\n", o->size);
+        core_cli_print_usage(&cli, stderr);
+        return 2;
+    }
+    if (o->grass && !grass_parse_quality(o->grass, &desc->grass)) {
+        fprintf(stderr, "world: bad value for '--grass': '%s' is not off, low or high\n", o->grass);
         core_cli_print_usage(&cli, stderr);
         return 2;
     }
@@ -106,6 +112,10 @@ static void print_results(const game_app_stats *s, bool walked) {
         printf("world: %llu tool strokes, %llu edits applied, %llu refused, %d chunks edited\n",
                (unsigned long long)s->strokes, (unsigned long long)s->edits.edits_applied,
                (unsigned long long)s->edits.edits_refused, s->edited_chunks);
+    if (s->grass_tufts)
+        printf("world: grass %llu tufts placed, %llu in the last frame's patches, %.3f ms a frame (max %.2f ms)\n",
+               (unsigned long long)s->grass_tufts, (unsigned long long)s->grass_tufts_drawn, s->grass_ms_mean,
+               s->grass_ms_max);
     printf("world: player at (%.4f, %.4f, %.4f)\n", s->feet[0], s->feet[1], s->feet[2]);
 }
 
