@@ -17,6 +17,7 @@
 #include <sys/resource.h>
 
 #define APP_HITCH_MS 33.0
+#define APP_PI 3.14159265358979323846
 
 struct game_app {
     game_app_desc desc;
@@ -40,6 +41,7 @@ struct game_app {
     terrain_view view;
     bool windowed, interactive, loading, over;
     bool spawned;                          /* the player stands in the world (its pose is saved) */
+    bool holding;                          /* the view desc.at/look asked for, until input moves it */
     bool hud_hidden;                       /* F1 (toggle_hud) */
     uint64_t play_start_ns;                /* when loading ended: the hint's clock */
     int frames, loading_frames;
@@ -273,6 +275,20 @@ static void app_free_shots(game_app *app) {
     core_free(app->shots, app->shot_capacity * sizeof *app->shots);
 }
 
+/* The eye at desc.at, standing where that keeps it there. Flying where standing would move it:
+ * the eye in the ground (the controller pushes a walker out) or nothing within a step below the
+ * feet (it would fall). */
+static void app_place_at(game_app *app) {
+    const double *at = app->desc.at;
+    game_player *pl = &app->player;
+    double feet = at[1] - (double)pl->params.eye_height;
+    pl->position[0] = at[0], pl->position[1] = feet, pl->position[2] = at[2];
+    memset(pl->velocity, 0, sizeof pl->velocity);
+    pl->crouching = pl->on_ground = false;
+    pl->flying = terrain_field_at(app->world, at[0], at[1], at[2], 0) >= 0 ||
+                 terrain_field_at(app->world, at[0], feet - (double)pl->params.step_height, at[2], 0) < 0;
+}
+
 static void app_spawn_player(game_app *app) {
     const game_app_desc *d = &app->desc;
     game_player_params params = { 0 };
@@ -281,15 +297,29 @@ static void app_spawn_player(game_app *app) {
         params.region_user = app;
     }
     game_player_init(&app->player, &params);
-    game_player_spawn(&app->player, app->world, d->spawn[0], d->spawn[1]);
+    if (d->at_set) app_place_at(app);          /* no spawn search: the default view from there */
+    else game_player_spawn(&app->player, app->world, d->spawn[0], d->spawn[1]);
     app->player.yaw = 3.14159265f;             /* towards +z: the slopes in view face the sun */
     app->player.pitch = GAME_WALKER_PITCH;
     /* A first view of the land, not of a hillside. Scripted walks keep +z: their paths and the
      * benchmarks were laid out along it. */
     if (app->interactive || d->face_open_view)
         app->player.yaw = game_player_open_yaw(&app->player, app->world, app->player.yaw, NULL);
-    if (app->interactive) app_restore_player(app);
+    /* --at and --look win over the saved pose, each over its own part of it. */
+    if (app->interactive && app_restore_player(app) && d->at_set) app_place_at(app);
+    if (d->look_set) {
+        app->player.yaw = (float)remainder(APP_PI + d->look[0] * (APP_PI / 180.0), 2.0 * APP_PI);
+        app->player.pitch = (float)(d->look[1] * (APP_PI / 180.0));
+    }
+    app->holding = d->at_set || d->look_set;
     app->spawned = true;
+}
+
+/* terrain_view's yaw and pitch as --look takes them (app.h): degrees, yaw in [0, 360). */
+static void app_look_degrees(float yaw, float pitch, double look[2]) {
+    look[0] = fmod((double)yaw * (180.0 / APP_PI) - 180.0, 360.0);
+    if (look[0] < 0) look[0] += 360.0;
+    look[1] = (double)pitch * (180.0 / APP_PI);
 }
 
 game_app *game_app_create(const game_app_desc *desc) {
@@ -418,8 +448,11 @@ static void app_draw_hud(game_app *app) {
     snprintf(lines[count++], sizeof lines[0], "chunks %d resident, %d pending, %d jobs, %.0f MB",
              s.mesh_chunks_ready + s.mesh_chunks_kept, s.mesh_chunks_wanted - s.mesh_chunks_ready, s.jobs_in_flight,
              (double)s.resident_bytes / (1024.0 * 1024.0));
-    snprintf(lines[count++], sizeof lines[0], "x %.1f  y %.1f  z %.1f  seed %llu", app->view.camera[0],
-             app->view.camera[1], app->view.camera[2], (unsigned long long)app->desc.seed);
+    double look[2];
+    app_look_degrees(app->view.yaw, app->view.pitch, look);   /* as --at and --look take them */
+    snprintf(lines[count++], sizeof lines[0], "x %.1f y %.1f z %.1f  yaw %.0f pitch %.0f  seed %llu",
+             app->view.camera[0], app->view.camera[1], app->view.camera[2], look[0], look[1],
+             (unsigned long long)app->desc.seed);
     if (app->interactive) snprintf(lines[count++], sizeof lines[0], "%s", game_tools_hint(&app->tools));
     /* Shrink to the corner: a smaller scale, then fewer lines. */
     for (; count > 0; count--) {
@@ -435,6 +468,13 @@ static void app_draw_hud(game_app *app) {
         gfx_text_print(app->hud, 4.0f * scale, 4.0f * scale + line_height * (float)n, scale, colour, "%s", lines[n]);
     }
     gfx_text_draw(app->hud);
+}
+
+/* Input that moves the player or turns the view (tools, pictures and the HUD do not). */
+static bool app_moves(const input_actions *a) {
+    uint32_t moving = INPUT_ACTION_BIT(INPUT_ACTION_JUMP) | INPUT_ACTION_BIT(INPUT_ACTION_CROUCH) |
+                      INPUT_ACTION_BIT(INPUT_ACTION_TOGGLE_FLY);
+    return a->move_x || a->move_y || a->look_x || a->look_y || ((a->down | a->pressed) & moving);
 }
 
 /* Input and the player; false when the run is over (quit, closed, end of a replay). */
@@ -460,7 +500,10 @@ static bool app_update_player(game_app *app, float dt) {
         actions = &scripted;
         if (app->walker.shot_due && app->shot_hold++ == 0) app_frame_shot(app);
     }
-    game_player_update(&app->player, app->world, actions, step);
+    /* A view asked for stays exactly so until the first move: the controller would push an eye
+     * out of the ground, let the feet settle or clamp the pitch to its own limit. */
+    app->holding = app->holding && !app_moves(actions);
+    if (!app->holding) game_player_update(&app->player, app->world, actions, step);
     app->waiting += app->player.waiting;
     double eye[3];
     game_player_eye(&app->player, eye);
@@ -511,7 +554,7 @@ bool game_app_frame(game_app *app) {
     float dt = app->windowed ? (float)app->frame_seconds : 1.0f / 60.0f;
     bool running = app_update_player(app, dt);
     app_update_view(app);
-    if (!app->loading)
+    if (!app->loading && !app->holding)       /* a held eye is where the user put it */
         app->eye_in_solid += terrain_field_at(app->world, app->view.camera[0], app->view.camera[1],
                                               app->view.camera[2], 0) >= 0;
     gfx_frame_begin(app->gfx);
@@ -570,6 +613,9 @@ game_app_stats game_app_stats_get(const game_app *app) {
                          .eye_in_solid_frames = app->eye_in_solid, .waiting_frames = app->waiting };
     memcpy(s.eye, app->view.camera, sizeof s.eye);
     memcpy(s.feet, app->player.position, sizeof s.feet);
+    s.flying = app->player.flying;
+    s.yaw = app->view.yaw, s.pitch = app->view.pitch;
+    app_look_degrees(s.yaw, s.pitch, s.look);
     if (app->desc.walk && !app->loading) {
         s.walked = app->walker.walked;
         s.from_start = app->walker.from_start;

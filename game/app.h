@@ -50,6 +50,14 @@ typedef struct game_app_desc {
     double spawn[2];                  /* x, z of the spawn column; the player stands on top */
     bool face_open_view;              /* spawn facing the most open view (game_player_open_yaw);
                                          interactive runs always do, walks keep yaw π (+z) */
+    /* A view asked for (world --at, --look), over the spawn, the walk's start and a world
+     * folder's pose. at: the eye, world metres; the player flies when standing would move it
+     * (the eye in the ground, or nothing within a step below the feet), else stands. look:
+     * degrees, yaw 0 along +z and positive to the right (towards −x: terrain_view's yaw is
+     * π + yaw), pitch positive up (±89). Either holds the view exactly until input moves or
+     * turns the player, so a --frames 1 picture shows just what was asked for. */
+    bool at_set, look_set;
+    double at[3], look[2];
     /* A world made by hand instead of generated (tests, tools): as terrain_world_desc's. */
     terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);
     void *generate_user;
@@ -87,7 +95,11 @@ typedef struct game_app_stats {
     int frames;                       /* past loading */
     int loading_frames;
     double eye[3], feet[3];           /* of the player now */
-    int eye_in_solid_frames;          /* frames whose eye had field ≥ 0: must stay 0 */
+    bool flying;
+    float yaw, pitch;                 /* the view's, radians (terrain_view's convention) */
+    double look[2];                   /* the same as --look takes it (game_app_desc.look) */
+    int eye_in_solid_frames;          /* frames whose eye had field ≥ 0: must stay 0 (a view
+                                         held as game_app_desc.at asked is not counted) */
     int waiting_frames;               /* frames the player waited for terrain */
     double walked, from_start;        /* the walk's path length and straight-line distance, m */
     bool walk_done, walk_stuck;

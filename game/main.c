@@ -3,6 +3,7 @@
  *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT | --tour] [--record FILE]
  *         [--replay FILE] [--bindings FILE] [--screenshot FILE] [--radius R] [--levels N]
  *         [--memory MB] [--grass off|low|high] [--threads N] [--trace FILE] [--world DIR]
+ *         [--at X,Y,Z] [--look YAW,PITCH]
  *
  * In a window: WASD or the left stick to walk, the mouse (click to capture, Escape to let go) or
  * the right stick to look, Space to jump, Shift to sprint, Ctrl or C to crouch, F to fly, F11
@@ -10,7 +11,13 @@
  * use the tool on the HUD where the view meets the ground, Tab (right shoulder) picks the next
  * one; --world DIR keeps the edits across runs. Without a display it renders offscreen; give it --frames or a
  * --walk so it ends. At the end it prints what happened: frames, the walk, CPU frame times,
- * streaming counts and memory, and where the player stands.
+ * streaming counts and memory, and where the player stands and looks.
+ *
+ * --at X,Y,Z puts the eye there (metres; flying where standing would move it: in the ground or
+ * above a drop) and --look YAW,PITCH turns the view (degrees: yaw 0 along +z, positive to the
+ * right, i.e. towards −x; pitch up, within ±89), over a walk's start and a world folder's saved
+ * pose; the view stays exactly so until input moves it. The HUD shows both, to copy a view:
+ *     world --headless --frames 1 --at 10,80,20 --look 90,-20 --screenshot view.png
  */
 #include "app.h"
 
@@ -18,15 +25,48 @@
 #include "gfx/gfx.h"
 #include "trace/trace.h"
 
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 typedef struct options {
     core_common_args common;
-    const char *size, *screenshot, *walk, *record, *replay, *bindings, *world, *grass;
+    const char *size, *screenshot, *walk, *record, *replay, *bindings, *world, *grass, *at, *look;
     int seed, frames, radius, levels, memory_mb;
     bool headless, tour, no_head_bob;
 } options;
+
+/* `text` as count finite numbers, comma-separated with nothing after them, each within
+ * ±limits[n]; false with the problem (naming the number) in `problem`. */
+static bool parse_numbers(const char *text, int count, const char *form, const char *const *names,
+                          const double *limits, double *out, char *problem, size_t size) {
+    const char *p = text;
+    for (int n = 0; n < count; n++) {
+        char *end;
+        out[n] = strtod(p, &end);
+        if (end == p || *end != (n + 1 < count ? ',' : '\0')) {
+            snprintf(problem, size, "'%s' is not %s (numbers separated by commas)", text, form);
+            return false;
+        }
+        if (!isfinite(out[n])) {
+            snprintf(problem, size, "'%s': %s is not a finite number", text, names[n]);
+            return false;
+        }
+        if (fabs(out[n]) > limits[n]) {
+            snprintf(problem, size, "'%s': %s is beyond ±%g", text, names[n], limits[n]);
+            return false;
+        }
+        p = end + 1;
+    }
+    return true;
+}
+
+static int bad_value(const core_cli *cli, const char *flag, const char *problem) {
+    fprintf(stderr, "world: bad value for '--%s': %s\n", flag, problem);
+    core_cli_print_usage(cli, stderr);
+    return 2;
+}
 
 static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_walk *walk) {
     const core_option list[] = {
@@ -50,6 +90,9 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
         { "grass", CORE_OPTION_STRING, &o->grass, "off|low|high", "grass patches (default low)" },
         { "memory", CORE_OPTION_INT, &o->memory_mb, "MB", "memory budget for terrain (default 384)", 16, 65536 },
+        { "at", CORE_OPTION_STRING, &o->at, "X,Y,Z", "start with the eye here, metres (flying if it must)" },
+        { "look", CORE_OPTION_STRING, &o->look, "YAW,PITCH", "start looking this way, degrees (yaw 0 = +z, "
+          "90 = -x; pitch up, within ±89)" },
     };
     core_cli cli = { .program = "world", .summary = "walk an endless generated world",
                      .options = list, .option_count = CORE_COUNTOF(list) };
@@ -61,22 +104,25 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
     if (o->seed < 0) o->seed = o->world && game_world_dir_seed(o->world, &saved_seed) == 1 ? (int)saved_seed : 1;
     desc->width = 1280;
     desc->height = 720;
+    char error[512];
     if (o->size && !gfx_parse_size(o->size, &desc->width, &desc->height)) {
-        fprintf(stderr, "world: bad value for '--size': '%s' is not WxH (16 to 16384 each)\n", o->size);
-        core_cli_print_usage(&cli, stderr);
-        return 2;
+        snprintf(error, sizeof error, "'%s' is not WxH (16 to 16384 each)", o->size);
+        return bad_value(&cli, "size", error);
     }
     if (o->grass && !grass_parse_quality(o->grass, &desc->grass)) {
-        fprintf(stderr, "world: bad value for '--grass': '%s' is not off, low or high\n", o->grass);
-        core_cli_print_usage(&cli, stderr);
-        return 2;
+        snprintf(error, sizeof error, "'%s' is not off, low or high", o->grass);
+        return bad_value(&cli, "grass", error);
     }
-    char error[512];
-    if (o->walk && !game_walk_parse(o->walk, walk, error, sizeof error)) {
-        fprintf(stderr, "world: bad value for '--walk': %s\n", error);
-        core_cli_print_usage(&cli, stderr);
-        return 2;
-    }
+    /* The world's limits: ±1e9 m along the ground (walk.h's), ±1e5 m up and down. */
+    static const char *const at_names[] = { "X", "Y", "Z" }, *const look_names[] = { "YAW", "PITCH" };
+    static const double at_limits[] = { 1e9, 1e5, 1e9 }, look_limits[] = { INFINITY, 89 };
+    desc->at_set = o->at != NULL;
+    if (o->at && !parse_numbers(o->at, 3, "X,Y,Z", at_names, at_limits, desc->at, error, sizeof error))
+        return bad_value(&cli, "at", error);
+    desc->look_set = o->look != NULL;
+    if (o->look && !parse_numbers(o->look, 2, "YAW,PITCH", look_names, look_limits, desc->look, error, sizeof error))
+        return bad_value(&cli, "look", error);
+    if (o->walk && !game_walk_parse(o->walk, walk, error, sizeof error)) return bad_value(&cli, "walk", error);
     if (o->tour && o->walk) {
         fprintf(stderr, "world: '--tour' and '--walk' cannot be used together\n");
         core_cli_print_usage(&cli, stderr);
@@ -116,7 +162,8 @@ static void print_results(const game_app_stats *s, bool walked) {
         printf("world: grass %llu tufts placed, %llu in the last frame's patches, %.3f ms a frame (max %.2f ms)\n",
                (unsigned long long)s->grass_tufts, (unsigned long long)s->grass_tufts_drawn, s->grass_ms_mean,
                s->grass_ms_max);
-    printf("world: player at (%.4f, %.4f, %.4f)\n", s->feet[0], s->feet[1], s->feet[2]);
+    printf("world: player at (%.4f, %.4f, %.4f), looking %.1f,%.1f\n", s->feet[0], s->feet[1], s->feet[2],
+           s->look[0], s->look[1]);
 }
 
 int main(int argc, char **argv) {

@@ -193,6 +193,25 @@ expect "world: bad --size" 2 "bad value for '--size'" -- "$bin/world" --size 10x
 expect "world: --record with --replay" 2 "cannot be used together" -- "$bin/world" --record a --replay b
 expect "world: missing replay" 1 "$tmp/none.rec" -- "$bin/world" --headless --replay "$tmp/none.rec"
 expect "world: bad --memory" 2 "bad value for '--memory'" -- "$bin/world" --memory 1
+# --at X,Y,Z and --look YAW,PITCH: each malformed form named, with the usage; a view asked for is
+# where the player ends two frames later (feet = eye − 1.62 m), looking that way.
+expect "world: --at of two numbers" 2 "bad value for '--at': '1,2' is not X,Y,Z" -- "$bin/world" --at 1,2
+expect "world: bad --at gets the usage" 2 "usage: world" -- "$bin/world" --at 1,2
+expect "world: --at of four numbers" 2 "bad value for '--at': '1,2,3,4' is not X,Y,Z" -- "$bin/world" --at 1,2,3,4
+expect "world: --at with trailing junk" 2 "bad value for '--at': '1,2,3m' is not X,Y,Z" -- "$bin/world" --at 1,2,3m
+expect "world: --at with an empty number" 2 "bad value for '--at': '1,,3' is not X,Y,Z" -- "$bin/world" --at 1,,3
+expect "world: --at of NaN" 2 "bad value for '--at': 'nan,2,3': X is not a finite number" -- "$bin/world" --at nan,2,3
+expect "world: --at of infinity" 2 "bad value for '--at': '1,-inf,3': Y is not a finite number" -- "$bin/world" --at 1,-inf,3
+expect "world: --at far out" 2 "bad value for '--at': '0,0,-2e9': Z is beyond" -- "$bin/world" --at 0,0,-2e9
+expect "world: --at far up" 2 "bad value for '--at': '0,1e6,0': Y is beyond" -- "$bin/world" --at 0,1e6,0
+expect "world: --look of one number" 2 "bad value for '--look': '90' is not YAW,PITCH" -- "$bin/world" --look 90
+expect "world: bad --look gets the usage" 2 "usage: world" -- "$bin/world" --look 90
+expect "world: --look with trailing junk" 2 "bad value for '--look': '90,0,' is not YAW,PITCH" -- "$bin/world" --look 90,0,
+expect "world: --look of NaN" 2 "bad value for '--look': 'NaN,0': YAW is not a finite number" -- "$bin/world" --look NaN,0
+expect "world: --look past straight up" 2 "bad value for '--look': '0,90': PITCH is beyond ±89" -- "$bin/world" --look 0,90
+expect "world: --look past straight down" 2 "bad value for '--look': '0,-89.5': PITCH is beyond" -- "$bin/world" --look 0,-89.5
+expect "world: --at and --look" 0 "player at \(10\.0000, 78\.3800, 20\.0000\), looking 90\.0,-20\.0" -- \
+  "$bin/world" --headless --size 64x48 --radius 1 --levels 2 --frames 2 --at 10,80,20 --look 90,-20
 expect "world: scripted walk, eye always in the air" 0 "walked (8[0-9]|9[0-9]|1[0-9][0-9])\.[0-9] m .*eye in solid on 0 frames" -- \
   "$bin/world" --headless --size 64x48 --radius 1 --levels 2 --walk straight:90 --seed 5 --trace "$tmp/walk.json" \
   --screenshot "$tmp/world.png"

@@ -330,3 +330,59 @@ Test(render_world, the_tour_ends_where_its_script_says_and_every_picture_shows_s
     snprintf(command, sizeof command, "rm -rf '%s'", dir);
     cr_expect_eq(system(command), 0);
 }
+
+/* ---- a view asked for (world --at X,Y,Z --look YAW,PITCH) ---- */
+
+static game_app_stats run_at(double x, double y, double z, double yaw, double pitch, const game_walk *walk) {
+    return run_world((game_app_desc){ .width = 64, .height = 48, .headless = true, .threads = 2, .walk = walk,
+                                      .frames = walk ? 2000 : 5, .stream = small_view, .no_clipmap = true,
+                                      .generate = wall_chunk, .at_set = true, .at = { x, y, z }, .look_set = true,
+                                      .look = { yaw, pitch } });
+}
+
+/* In the wall's world (flat ground at y = 0, solid up to 60 m from z = 4 on), five frames past
+ * loading: the eye is where it was put and the view turned as asked, flying where standing would
+ * have moved it. terrain_view looks along (sin yaw·cos pitch, sin pitch, −cos yaw·cos pitch);
+ * --look's yaw 0 is +z, 90 turns right to −x, 180 is −z, 270 is +x. */
+Test(render_world, a_view_asked_for_is_drawn_exactly_as_asked, .timeout = 600) {
+    const double d = 3.14159265358979323846 / 180.0;
+    struct {
+        double at[3], look[2];
+        bool flying;
+        double forward[3];
+    } cases[] = {
+        { { 0.5, 30, -20.5 }, { 90, -20 }, true, { -cos(20 * d), -sin(20 * d), 0 } },    /* over a drop */
+        { { 0.5, 30, 20.5 }, { 180, 0 }, true, { 0, 0, -1 } },                          /* inside the cliff */
+        { { 0.5, 1.82, -20.5 }, { 270, 89 }, false, { cos(89 * d), sin(89 * d), 0 } },   /* feet 0.2 m up */
+    };
+    for (size_t n = 0; n < sizeof cases / sizeof cases[0]; n++) {
+        game_app_stats s = run_at(cases[n].at[0], cases[n].at[1], cases[n].at[2], cases[n].look[0], cases[n].look[1],
+                                  NULL);
+        cr_expect_eq(s.frames, 5);
+        cr_expect_eq(s.flying, cases[n].flying, "case %zu: flying %d", n, s.flying);
+        cr_expect_eq(s.eye_in_solid_frames, 0, "case %zu: a held eye is not the controller's", n);
+        double forward[3] = { sin(s.yaw) * cos(s.pitch), sin(s.pitch), -cos(s.yaw) * cos(s.pitch) };
+        for (int a = 0; a < 3; a++) {
+            cr_expect(fabs(s.eye[a] - cases[n].at[a]) < 1e-6, "case %zu, axis %d: eye %.9f, asked %.9f", n, a,
+                      s.eye[a], cases[n].at[a]);
+            cr_expect(fabs(forward[a] - cases[n].forward[a]) < 1e-6, "case %zu, axis %d: forward %.9f, wanted %.9f",
+                      n, a, forward[a], cases[n].forward[a]);
+        }
+        cr_expect(fabs(s.feet[1] - (cases[n].at[1] - 1.62)) < 1e-6, "case %zu: feet at %.9f", n, s.feet[1]);
+        for (int a = 0; a < 2; a++)
+            cr_expect(fabs(s.look[a] - cases[n].look[a]) < 1e-3, "case %zu: look %.6f, asked %.6f", n, s.look[a],
+                      cases[n].look[a]);
+    }
+}
+
+/* A walk from a view asked for starts there and heads the way it looks: `ahead` 10 m from the
+ * flat ground facing +x (yaw 270) ends 10 m along +x, on the ground. */
+Test(render_world, a_walk_starts_from_the_view_asked_for, .timeout = 600) {
+    game_walk walk = parse_walk("ahead\n0 10 walk\n");
+    game_app_stats s = run_at(0.5, 1.62, -20.5, 270, 0, &walk);
+    cr_expect(s.walk_done && !s.walk_stuck, "the walk %s", s.walk_stuck ? "got stuck" : "did not end");
+    cr_expect_eq(s.eye_in_solid_frames, 0);
+    cr_expect(hypot(s.feet[0] - 10.5, s.feet[2] + 20.5) <= 2.0 + 1e-6, "ended at (%.2f, %.2f)", s.feet[0], s.feet[2]);
+    cr_expect(fabs(s.feet[1]) < 0.05, "feet at %.3f over flat ground at 0", s.feet[1]);
+    game_walk_free(&walk);
+}
