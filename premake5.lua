@@ -128,5 +128,6 @@ program("test_render", { files = { "tests/render/**.c", "tests/render/**.h" }, l
 program("hello_scene", { files = { "tools/examples/hello_scene.c" } })
 program("hello_terrain", { files = { "tools/examples/hello_terrain.c" } })
 program("hello_edit", { files = { "tools/examples/hello_edit.c" } })
+program("hello_grass", { files = { "tools/examples/hello_grass.c" } })
 program("world", { files = { "game/main.c" } })
 program("test_game", { files = { "tests/game/**.c", "tests/game/**.h" }, links = { "criterion" } })

@@ -28,7 +28,7 @@ expect() {
   fi
 }
 
-for program in bench trace_report hello_systems hello_scene hello_terrain hello_edit world; do
+for program in bench trace_report hello_systems hello_scene hello_terrain hello_edit hello_grass world; do
   p=$bin/$program
   expect "$program: unknown flag" 2 "unknown option '--no-such-flag'.*" -- "$p" --no-such-flag
   expect "$program: usage on error" 2 "usage: $program" -- "$p" --no-such-flag
@@ -180,6 +180,14 @@ expect "hello_terrain: headless run" 0 "16 chunks, [0-9]+ mesh chunks \([0-9]+ d
   "$bin/hello_terrain" --headless --size 96x64 --radius 1 --rings 1 --frames 2 --seed 3 --screenshot "$tmp/terrain.png"
 expect "hello_terrain: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 -N4 "$tmp/terrain.png"
 expect "hello_terrain: bad --radius" 2 "bad value for '--radius'" -- "$bin/hello_terrain" --radius 99
+
+# The grass example: a meadow drawn headless, with grass placed and drawn; bad qualities refused.
+expect "hello_grass: headless run" 0 "hello_grass: [1-9][0-9]* patches, [1-9][0-9]* tufts placed, [1-9][0-9]* drawn" -- \
+  "$bin/hello_grass" --headless --size 96x64 --frames 4 --grass low --screenshot "$tmp/grass.png"
+expect "hello_grass: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 -N4 "$tmp/grass.png"
+expect "hello_grass: bad --grass" 2 "bad value for '--grass'" -- "$bin/hello_grass" --grass lush
+expect "world: bad --grass" 2 "bad value for '--grass': 'lush' is not off, low or high" -- "$bin/world" --grass lush
+expect "world: --grass without value" 2 "option '--grass' needs a value" -- "$bin/world" --grass
 
 # The walkable world: bad values get usage; a short scripted walk over generated terrain gets
 # there, the eye never enters the ground, the trace has every phase of the pipeline and the

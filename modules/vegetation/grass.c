@@ -14,7 +14,8 @@
 #include <string.h>
 
 #define GRASS_PLACE_GROUP 64              /* grass_place.comp's local size */
-#define GRASS_TUFT_BYTES 32               /* two vec4 */
+#define GRASS_TUFT_BYTES 32               /* two vec4: as placed */
+#define GRASS_SHAPED_BYTES 64             /* four vec4: as the culling pass shapes it to draw */
 #define GRASS_MAX_LEVEL 1                 /* levels 0 and 1 cover ≥ 64 m around the viewer */
 #define GRASS_REACH_AHEAD 32.0            /* patches are placed this far beyond the range … */
 #define GRASS_REACH_KEEP 96.0             /* … and released only this far beyond it */
@@ -22,13 +23,15 @@
 
 struct grass_system {
     grass_desc desc;
-    gfx_program place, scan, draw;
+    gfx_program place, scan, cull, draw;
     gfx_texture blades;
-    gfx_vertex_array empty;
     ecs_component mesh_chunk, patch;
     ecs_query *patches;                   /* TerrainMeshChunk with GrassPatch */
-    ecs_system system;                    /* grass_place */
+    ecs_system system, cull_system;       /* grass_place, grass_cull */
     gfx_buffer counts, tops;              /* scratch of placement, grown as needed */
+    gfx_buffer visible, command;          /* each frame: the tufts that can show, and their draw */
+    gfx_vertex_array corners;             /* no attributes: the two quads' 12 indices */
+    gfx_buffer corner_indices;
     float *tops_cpu;
     size_t tops_capacity;
     terrain_view view;
@@ -242,12 +245,14 @@ static void grass_place_system(ecs_iter *it) {
         }
     }
     if (pass_open) gfx_pass_end(gfx);
-    g->place_ns = core_time_ns() - start;
+    g->place_ns += core_time_ns() - start;
     trace_counter("grass.patches", (double)g->stats.patches);
     trace_counter("grass.tufts", (double)g->stats.tufts);
 }
 
 /* ---- the system ------------------------------------------------------------------------ */
+
+static void grass_cull_system(ecs_iter *it);      /* with the drawing, below */
 
 static void grass_defaults(grass_desc *d) {
     bool high = d->quality == GRASS_HIGH;
@@ -274,17 +279,21 @@ grass_system *grass_create(const grass_desc *desc) {
     }
     gfx_program place = gfx_program_load_compute(desc->gfx, "grass_place.comp");
     gfx_program scan = gfx_program_load_compute(desc->gfx, "grass_scan.comp");
+    gfx_program cull = gfx_program_load_compute(desc->gfx, "grass_cull.comp");
     gfx_program draw = gfx_program_load(desc->gfx, "grass.vert", "grass.frag");
-    if (!place.id || !scan.id || !draw.id) return NULL;
+    if (!place.id || !scan.id || !cull.id || !draw.id) return NULL;
     grass_system *g = core_calloc(1, sizeof *g);
     g->desc = *desc;
     grass_defaults(&g->desc);
-    g->place = place, g->scan = scan, g->draw = draw;
+    g->place = place, g->scan = scan, g->cull = cull, g->draw = draw;
+    g->command = gfx_buffer_create(&(gfx_buffer_desc){ .size = 5 * sizeof(uint32_t), .usage = GFX_BUFFER_DYNAMIC });
+    static const uint32_t quads[12] = { 0, 1, 2, 2, 1, 3, 4, 5, 6, 6, 5, 7 };   /* corners as grass.vert numbers them */
+    g->corner_indices = gfx_buffer_create(&(gfx_buffer_desc){ .size = sizeof quads, .data = quads });
+    g->corners = gfx_vertex_array_create(&(gfx_vertex_array_desc){ .indices = g->corner_indices });
     const terrain_generation_params *generation = terrain_world_generation(desc->world);
     g->sea_level = generation->sea_level;
     g->seed = (uint32_t)core_hash_u64(generation->seed ^ 0x6772617373ull);   /* "grass" */
     g->blades = grass__blade_texture();
-    glCreateVertexArrays(1, &g->empty.id);
     g->mesh_chunk = mesh_chunk;
     g->patch = ECS_COMPONENT(desc->ecs, GrassPatch);
     ecs_component_on_remove(desc->ecs, g->patch, grass_patch_removed, g);
@@ -293,6 +302,9 @@ grass_system *grass_create(const grass_desc *desc) {
     g->system = ecs_system_add(desc->ecs, &(ecs_system_desc){ .name = "grass_place", .phase = "draw",
         .query = { .with = { mesh_chunk }, .optional = { g->patch } }, .writes = { g->patch },
         .fn = grass_place_system, .user = g, .main_thread = true });
+    g->cull_system = ecs_system_add(desc->ecs, &(ecs_system_desc){ .name = "grass_cull", .phase = "draw",
+        .query = { .with = { mesh_chunk, g->patch } }, .writes = { g->patch },
+        .fn = grass_cull_system, .user = g, .main_thread = true });
     return g;
 }
 
@@ -303,6 +315,7 @@ void grass_destroy(grass_system *g) {
      * disable the system. */
     ecs_component_on_remove(g->desc.ecs, g->patch, NULL, NULL);
     ecs_system_enable(g->desc.ecs, g->system, false);
+    ecs_system_enable(g->desc.ecs, g->cull_system, false);
     ecs_iter it = ecs_query_iter(g->desc.ecs, g->patches);
     while (ecs_query_next(&it)) {
         GrassPatch *patches = ecs_field(&it, 1);
@@ -313,9 +326,12 @@ void grass_destroy(grass_system *g) {
     }
     gfx_buffer_destroy(&g->counts);
     gfx_buffer_destroy(&g->tops);
+    gfx_buffer_destroy(&g->visible);
+    gfx_buffer_destroy(&g->command);
+    gfx_vertex_array_destroy(&g->corners);
+    gfx_buffer_destroy(&g->corner_indices);
     core_free(g->tops_cpu, g->tops_capacity * sizeof *g->tops_cpu);
     gfx_texture_destroy(&g->blades);
-    gfx_vertex_array_destroy(&g->empty);
     core_free(g, sizeof *g);
 }
 
@@ -326,7 +342,79 @@ void grass_set_view(grass_system *g, const terrain_view *view, const double play
     if (player_feet) memcpy(g->feet, player_feet, sizeof g->feet);
 }
 
-/* ---- drawing --------------------------------------------------------------------------- */
+/* ---- drawing ----------------------------------------------------------------------------
+ *
+ * Each frame: grass_cull.comp over every patch worth drawing appends the tufts that can show to
+ * one buffer (camera-relative), then one indirect draw of them all. The CPU sets a few uniforms
+ * per patch and never learns the count. */
+
+static double grass_wrap(double value, double period) { return value - floor(value / period) * period; }
+
+/* Whether the patch is drawn this frame: its chunk visible, its box within the range. */
+static bool grass_patch_drawn(const grass_system *g, const TerrainMeshChunk *chunk, const GrassPatch *p) {
+    return p->tufts && chunk->visible && grass_box_distance(g, p->origin, p->bounds_min, p->bounds_max) <= g->desc.range;
+}
+
+/* What shapes a tuft in grass_cull.comp: the wind's clock and place, and the player's feet. */
+static void grass_shape_uniforms(grass_system *g, const terrain_view *view) {
+    gfx_context *gfx = g->desc.gfx;
+    float player[3] = { 0, -1e6f, 0 };           /* nothing bends */
+    if (g->has_feet)
+        for (int a = 0; a < 3; a++) player[a] = (float)(g->feet[a] - view->camera[a]);
+    float camera_wave[2] = { (float)grass_wrap(view->camera[0], GRASS_WAVE_PERIOD),
+                             (float)grass_wrap(view->camera[2], GRASS_WAVE_PERIOD) };
+    gfx_uniform_vec3(gfx, g->cull, "u_player", player);
+    gfx_uniform_vec2(gfx, g->cull, "u_camera_wave", camera_wave);
+    gfx_uniform_float(gfx, g->cull, "u_time", view->time);
+}
+
+/* Appends the tufts of the patches in view to g->visible; returns the tufts looked at. It runs
+ * in the draw phase, before anything of the frame is drawn: the barrier that makes its results
+ * visible to the draw then waits for nothing (after the terrain's draws it would wait for them:
+ * llvmpipe finishes every pending draw there). */
+static uint64_t grass_cull(grass_system *g, const terrain_view *view) {
+    gfx_context *gfx = g->desc.gfx;
+    uint64_t considered = 0;
+    ecs_iter it = ecs_query_iter(g->desc.ecs, g->patches);
+    while (ecs_query_next(&it)) {
+        const TerrainMeshChunk *chunks = ecs_field(&it, 0);
+        const GrassPatch *patches = ecs_field(&it, 1);
+        for (int i = 0; i < it.count; i++)
+            if (grass_patch_drawn(g, &chunks[i], &patches[i])) considered += patches[i].tufts;
+    }
+    if (!considered) return 0;
+    grass_buffer_reserve(&g->visible, (size_t)considered * GRASS_SHAPED_BYTES);
+    const uint32_t reset[5] = { 12, 0, 0, 0, 0 };         /* two crossed quads, no tuft yet */
+    gfx_buffer_update(g->command, 0, reset, sizeof reset);
+    terrain_frustum frustum = terrain_frustum_from_view(view);
+    GLuint program = gfx_program_gl(gfx, g->cull);
+    gfx_program_use(gfx, g->cull);
+    glProgramUniform4fv(program, glGetUniformLocation(program, "u_planes"), 6, &frustum.planes[0][0]);
+    gfx_uniform_float(gfx, g->cull, "u_range", g->desc.range);
+    gfx_uniform_float(gfx, g->cull, "u_height", g->desc.height);
+    grass_shape_uniforms(g, view);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, g->command.id);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, g->visible.id);
+    it = ecs_query_iter(g->desc.ecs, g->patches);
+    while (ecs_query_next(&it)) {
+        const TerrainMeshChunk *chunks = ecs_field(&it, 0);
+        const GrassPatch *patches = ecs_field(&it, 1);
+        for (int i = 0; i < it.count; i++) {
+            const GrassPatch *p = &patches[i];
+            if (!grass_patch_drawn(g, &chunks[i], p)) continue;
+            float offset[3];
+            for (int a = 0; a < 3; a++) offset[a] = (float)(p->origin[a] - view->camera[a]);
+            gfx_uniform_vec3(gfx, g->cull, "u_offset", offset);
+            grass_uniform_uint(program, "u_tuft_count", p->tufts);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, p->tuft_buffer);
+            glDispatchCompute((p->tufts + GRASS_PLACE_GROUP - 1) / GRASS_PLACE_GROUP, 1, 1);
+            g->stats.patches_drawn++;
+        }
+    }
+    for (GLuint binding = 0; binding <= 6; binding++) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, 0);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    return considered;
+}
 
 static void grass_draw_uniforms(grass_system *g, const terrain_view *view) {
     gfx_context *gfx = g->desc.gfx;
@@ -334,62 +422,55 @@ static void grass_draw_uniforms(grass_system *g, const terrain_view *view) {
     terrain_view_matrix(view, view_projection);
     terrain_view_sun(view, sun);
     const float zero[3] = { 0, 0, 0 };
-    float player[3] = { 0, -1e6f, 0 };           /* nothing bends */
-    if (g->has_feet)
-        for (int a = 0; a < 3; a++) player[a] = (float)(g->feet[a] - view->camera[a]);
     gfx_program_use(gfx, g->draw);
     gfx_uniform_mat4(gfx, g->draw, "u_view_projection", view_projection);
     gfx_uniform_vec3(gfx, g->draw, "u_sun_direction", sun);
     gfx_uniform_vec3(gfx, g->draw, "u_camera_position", zero);
     gfx_uniform_float(gfx, g->draw, "u_fog_density", g->desc.fog_density);
-    gfx_uniform_vec3(gfx, g->draw, "u_player", player);
-    gfx_uniform_float(gfx, g->draw, "u_time", view->time);
-    gfx_uniform_float(gfx, g->draw, "u_range", g->desc.range);
-    gfx_uniform_float(gfx, g->draw, "u_height", g->desc.height);
     gfx_uniform_int(gfx, g->draw, "u_blades", 0);
     gfx_texture_bind(g->blades, 0);
 }
 
-static double grass_wrap(double value, double period) { return value - floor(value / period) * period; }
-
-void grass_draw(grass_system *g, const terrain_view *view) {
+/* The draw phase, after grass_place: the frame's tufts in view, ready for grass_draw. */
+static void grass_cull_system(ecs_iter *it) {
+    grass_system *g = it->user;
     uint64_t start = core_time_ns();
     g->stats.patches_drawn = 0;
     g->stats.tufts_drawn = 0;
-    if (g->desc.quality != GRASS_OFF && g->stats.patches > 0) {
+    if (g->has_view && g->stats.patches > 0) {
+        gfx_pass_begin(g->desc.gfx, &(gfx_pass_desc){ .name = "grass.cull" });
+        g->stats.tufts_drawn = grass_cull(g, &g->view);
+        gfx_pass_end(g->desc.gfx);
+        trace_counter("grass.tufts_culled", (double)g->stats.tufts_drawn);
+    }
+    g->place_ns += core_time_ns() - start;
+}
+
+void grass_draw(grass_system *g, const terrain_view *view) {
+    uint64_t start = core_time_ns();
+    if (g->desc.quality != GRASS_OFF) {
         gfx_context *gfx = g->desc.gfx;
-        gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "grass" });
-        grass_draw_uniforms(g, view);
-        glDisable(GL_CULL_FACE);                 /* a billboard is seen from both sides */
-        ecs_iter it = ecs_query_iter(g->desc.ecs, g->patches);
-        while (ecs_query_next(&it)) {
-            const TerrainMeshChunk *chunks = ecs_field(&it, 0);
-            const GrassPatch *patches = ecs_field(&it, 1);
-            for (int i = 0; i < it.count; i++) {
-                const GrassPatch *p = &patches[i];
-                if (!p->tufts || !chunks[i].visible ||
-                    grass_box_distance(g, p->origin, p->bounds_min, p->bounds_max) > g->desc.range)
-                    continue;
-                float offset[3], wave[2];
-                for (int a = 0; a < 3; a++) offset[a] = (float)(p->origin[a] - view->camera[a]);
-                wave[0] = (float)grass_wrap(p->origin[0], GRASS_WAVE_PERIOD);
-                wave[1] = (float)grass_wrap(p->origin[2], GRASS_WAVE_PERIOD);
-                gfx_uniform_vec3(gfx, g->draw, "u_offset", offset);
-                gfx_uniform_vec2(gfx, g->draw, "u_wave_offset", wave);
-                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, p->tuft_buffer);
-                gfx_draw(&(gfx_draw_desc){ .vertex_array = g->empty,
-                                           .indirect = { .id = p->draw_buffer, .size = 16 } });
-                g->stats.patches_drawn++;
-                g->stats.tufts_drawn += p->tufts;
-            }
+        if (g->stats.tufts_drawn) {
+            gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "grass" });
+            grass_draw_uniforms(g, view);
+            glDisable(GL_CULL_FACE);             /* a billboard is seen from both sides */
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, g->visible.id);
+            gfx_draw(&(gfx_draw_desc){ .vertex_array = g->corners, .index_type = GFX_INDEX_U32,
+                                       .indirect = g->command });
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
+            glEnable(GL_CULL_FACE);
+            gfx_pass_end(gfx);
         }
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
-        glEnable(GL_CULL_FACE);
-        gfx_pass_end(gfx);
-        trace_counter("grass.tufts_drawn", (double)g->stats.tufts_drawn);
     }
     g->stats.cpu_ms = (double)(g->place_ns + (core_time_ns() - start)) * 1e-6;
     g->place_ns = 0;
+}
+
+uint64_t grass_visible_tufts(grass_system *g) {
+    if (!g->stats.tufts_drawn) return 0;
+    uint32_t command[5];
+    glGetNamedBufferSubData(g->command.id, 0, sizeof command, command);
+    return command[1];
 }
 
 grass_stats grass_stats_get(const grass_system *g) { return g->stats; }

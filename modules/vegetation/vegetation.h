@@ -34,8 +34,12 @@
  * stands (each tuft shrinks out as its share passes), so no ring of grass appears or vanishes;
  * beyond range the terrain's own grass tint, which the blades' colours match, carries on.
  *
- * Threads: main thread only (OpenGL). The GPU passes are "grass.place" (placement) and "grass"
- * (drawing) on the trace's GPU lane.
+ * Each frame a compute pass keeps the tufts in view and not yet faded out, from every patch near
+ * enough, in one buffer, and one indirect draw shows them: the CPU's work is a few uniforms a
+ * patch, whatever the number of tufts.
+ *
+ * Threads: main thread only (OpenGL). The GPU passes are "grass.place" (placement),
+ * "grass.cull" and "grass" (drawing) on the trace's GPU lane.
  */
 #ifndef VEGETATION_H
 #define VEGETATION_H
@@ -106,13 +110,17 @@ typedef struct GrassPatch {
 typedef struct grass_stats {
     int patches;                      /* GrassPatch components now */
     uint64_t tufts;                   /* placed over all patches now (two billboards each) */
-    uint64_t tufts_drawn;             /* in the patches drawn by the last grass_draw */
+    uint64_t tufts_drawn;             /* in the patches the last grass_draw looked at (its culling
+                                         pass keeps those in view and not faded out) */
     int patches_drawn;
     uint64_t placements;              /* patches placed since creation (re-placements too) */
     double cpu_ms;                    /* CPU ms of the last frame: placing and drawing */
 } grass_stats;
 
 grass_stats grass_stats_get(const grass_system *grass);
+/* The tufts the last grass_draw drew: those its culling pass kept (reads the GPU back, a wait:
+ * tests, benchmarks). Two billboards each. */
+uint64_t grass_visible_tufts(grass_system *grass);
 /* A hash of every patch's tufts, in order of their chunks' coordinates (reads the GPU back:
  * tests and tools only). */
 uint64_t grass_tufts_digest(grass_system *grass);

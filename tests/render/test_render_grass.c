@@ -194,6 +194,38 @@ Test(render_grass, grass_is_drawn_on_flat_ground) {
     meadow_close(&m);
 }
 
+/* The culling pass keeps every tuft well inside the view and nearer than 0.4·range (where every
+ * tuft stands), and none beyond the range or well outside the frustum: the count it draws lies
+ * between the two counts made here on the CPU from the tufts read back. */
+Test(render_grass, culling_keeps_what_is_in_view_and_nothing_beyond) {
+    meadow m;
+    meadow_open(&m, GROUND_FLAT, 2, 2, 0, 0);
+    for (int frame = 0; frame < 4; frame++) meadow_frame(&m, true);
+    uint64_t drawn = grass_visible_tufts(m.grass);
+    size_t count;
+    tuft *tufts = meadow_tufts(&m, &count);
+    terrain_frustum frustum = terrain_frustum_from_view(&m.view);
+    const float range = 70.0f;                         /* GRASS_HIGH's */
+    uint64_t surely = 0, possibly = 0;
+    for (size_t t = 0; t < count; t++) {
+        float p[3] = { tufts[t].x - (float)m.view.camera[0], tufts[t].y - (float)m.view.camera[1],
+                       tufts[t].z - (float)m.view.camera[2] };
+        float distance = sqrtf(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]), inside = 1e9f;
+        for (int k = 0; k < 6; k++) {
+            const float *plane = frustum.planes[k];
+            inside = fminf(inside, plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3]);
+        }
+        surely += distance < 0.4f * range - 0.5f && inside > 1.0f;
+        possibly += distance < range && inside > -2.0f;
+    }
+    cr_expect_gt(surely, 1000, "the view holds grass: %llu", (unsigned long long)surely);
+    cr_expect(drawn >= surely && drawn <= possibly, "drawn %llu, between %llu and %llu", (unsigned long long)drawn,
+              (unsigned long long)surely, (unsigned long long)possibly);
+    cr_expect_lt(possibly, count, "some tufts are behind the camera");
+    core_free(tufts, count * sizeof *tufts);
+    meadow_close(&m);
+}
+
 /* Where grass must not grow, no tuft is placed at all (so none can be drawn). */
 static uint64_t tufts_on(ground_kind kind, int64_t y_first, int64_t y_last) {
     meadow m;
