@@ -1,13 +1,10 @@
 #version 450 core
-// grass.frag — the blade texture alpha-tested, lit with the ground's normal (so far tufts take
-// the ground's shading and melt into its grass tint), darker at the root, then fogged.
-
-#include "common.glsl"
+// grass.frag — the blade texture alpha-tested, times the tuft's light (grass_cull.comp lit it
+// with the ground's normal), darker at the root, then its fog.
 
 in vec2 v_uv;
-in vec3 v_relative_position;
-in vec3 v_normal;
-in vec3 v_tint;
+in vec3 v_light;
+in vec4 v_fog;
 
 uniform sampler2D u_blades;
 
@@ -16,7 +13,6 @@ out vec4 frag_color;
 void main() {
     vec4 blade = texture(u_blades, v_uv);
     if (blade.a < 0.5) discard;
-    vec3 albedo = blade.rgb * v_tint * (0.75 + 0.25 * v_uv.y);
-    vec3 color = light_surface(albedo, normalize(v_normal));
-    frag_color = vec4(apply_fog(color, v_relative_position), 1.0);
+    vec3 color = blade.rgb * v_light * (0.75 + 0.25 * v_uv.y);
+    frag_color = vec4(mix(color, v_fog.rgb, v_fog.a), 1.0);
 }

@@ -6,17 +6,21 @@
 // turn, colour, the wind and the player's push) is done here once, not at each of its corners.
 //
 // A tuft is two crossed quads around an up halfway between the ground's normal and the vertical
-// (002 §3.3 uses the normal alone, which tilts tufts on slopes more than grass grows). Written
-// per tuft, four vec4: (root, tint), (first quad's half side, normal.x), (second quad's half
-// side, normal.y), (root-to-top, normal.z); roots camera-relative, as the terrain is drawn.
+// (002 §3.3 uses the normal alone, which tilts tufts on slopes more than grass grows). A tuft is
+// lit with the ground's normal (so far tufts take the ground's shading and melt into its grass
+// tint) and fogged at its root, here, once: the fragments only read the blade texture. Written
+// per tuft, five vec4: (root, fog), (first quad's half side, light.r), (second quad's half side,
+// light.g), (root-to-top, light.b), (fog colour, 0); roots camera-relative, as the terrain is
+// drawn (common.glsl's u_camera_position is then 0).
 
+#include "common.glsl"
 #include "grass.glsl"
 
 layout(local_size_x = 64) in;
 
 layout(std430, binding = 0) readonly buffer Tufts { vec4 tufts[]; };        // the patch's, 2 per tuft
 layout(std430, binding = 5) buffer Command { uint command[5]; };           // DrawElementsIndirectCommand
-layout(std430, binding = 6) writeonly buffer Visible { vec4 visible[]; };  // 4 per tuft
+layout(std430, binding = 6) writeonly buffer Visible { vec4 visible[]; };  // 5 per tuft
 
 uniform uint u_tuft_count;
 uniform vec3 u_offset;             // patch origin − camera
@@ -67,9 +71,14 @@ void main() {
     vec3 side0 = normalize(across - up * dot(across, up)) * 0.55 * height;
     vec3 side1 = normalize(beside - up * dot(beside, up)) * 0.55 * height;
     vec3 tint = mix(vec3(0.85, 0.92, 0.80), vec3(1.15, 1.08, 0.90), grass_unit(grass_hash(seed ^ 0x2c1b3c6du)));
+    vec3 light = light_surface(tint, normal);
+    float distance = length(root);
+    float fog = 1.0 - exp(-distance * u_fog_density);                 // as common.glsl's apply_fog
+    vec3 fog_color = sky_color(root / max(distance, 1e-4));
     uint slot = atomicAdd(command[1], 1u);
-    visible[4u * slot] = vec4(root, uintBitsToFloat(packUnorm4x8(vec4(tint / 1.2, 1.0))));
-    visible[4u * slot + 1u] = vec4(side0, normal.x);
-    visible[4u * slot + 2u] = vec4(side1, normal.y);
-    visible[4u * slot + 3u] = vec4(tuft_top(root, up, height, seed), normal.z);
+    visible[5u * slot] = vec4(root, fog);
+    visible[5u * slot + 1u] = vec4(side0, light.r);
+    visible[5u * slot + 2u] = vec4(side1, light.g);
+    visible[5u * slot + 3u] = vec4(tuft_top(root, up, height, seed), light.b);
+    visible[5u * slot + 4u] = vec4(fog_color, 0.0);
 }

@@ -7,6 +7,7 @@
 #include "trace/trace.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 _Static_assert(TERRAIN_CHUNK_COLUMNS == TERRAIN_MESH_CELLS, "a level-0 mesh chunk is one column chunk wide");
 
@@ -210,6 +211,22 @@ void terrain_ecs_set_view(terrain_ecs *te, const terrain_view *view) {
     if (view) te->frustum = terrain_frustum_from_view(view);
 }
 
+/* Squared distance from the camera to the mesh's box. */
+static double terrain_mesh_distance2(const terrain_gpu_mesh *m, const double camera[3]) {
+    double sum = 0;
+    for (int a = 0; a < 3; a++) {
+        double lo = m->origin[a] + m->bounds_min[a], hi = m->origin[a] + m->bounds_max[a];
+        double d = camera[a] < lo ? lo - camera[a] : camera[a] > hi ? camera[a] - hi : 0.0;
+        sum += d * d;
+    }
+    return sum;
+}
+
+static int terrain_compare_nearer(const void *a, const void *b, void *camera) {
+    double x = terrain_mesh_distance2(a, camera), y = terrain_mesh_distance2(b, camera);
+    return (x > y) - (x < y);
+}
+
 void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view) {
     size_t count = 0;
     uint64_t triangles = 0;
@@ -224,6 +241,11 @@ void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain
             triangles += chunks[i].gpu.index_count / 3;
         }
     }
+    /* Nearest first: the depth test then rejects what nearer ground hides before it is shaded
+     * (triplanar shading is most of a frame on llvmpipe), whatever order the ECS's tables hold
+     * the chunks in (a component added to some chunks, as grass does, reorders them). */
+    double camera[3] = { view->camera[0], view->camera[1], view->camera[2] };
+    qsort_r(te->draw_list, count, sizeof *te->draw_list, terrain_compare_nearer, camera);
     terrain_renderer_draw(renderer, view, te->draw_list, (int)count);
     trace_counter("terrain.mesh_chunks_drawn", (double)count);
     trace_counter("terrain.triangles_drawn", (double)triangles);

@@ -15,7 +15,7 @@
 
 #define GRASS_PLACE_GROUP 64              /* grass_place.comp's local size */
 #define GRASS_TUFT_BYTES 32               /* two vec4: as placed */
-#define GRASS_SHAPED_BYTES 64             /* four vec4: as the culling pass shapes it to draw */
+#define GRASS_SHAPED_BYTES 80             /* five vec4: as the culling pass shapes it to draw */
 #define GRASS_MAX_LEVEL 1                 /* levels 0 and 1 cover ≥ 64 m around the viewer */
 #define GRASS_REACH_AHEAD 32.0            /* patches are placed this far beyond the range … */
 #define GRASS_REACH_KEEP 96.0             /* … and released only this far beyond it */
@@ -363,6 +363,12 @@ static void grass_shape_uniforms(grass_system *g, const terrain_view *view) {
         for (int a = 0; a < 3; a++) player[a] = (float)(g->feet[a] - view->camera[a]);
     float camera_wave[2] = { (float)grass_wrap(view->camera[0], GRASS_WAVE_PERIOD),
                              (float)grass_wrap(view->camera[2], GRASS_WAVE_PERIOD) };
+    float sun[3];
+    const float zero[3] = { 0, 0, 0 };
+    terrain_view_sun(view, sun);
+    gfx_uniform_vec3(gfx, g->cull, "u_sun_direction", sun);
+    gfx_uniform_vec3(gfx, g->cull, "u_camera_position", zero);
+    gfx_uniform_float(gfx, g->cull, "u_fog_density", g->desc.fog_density);
     gfx_uniform_vec3(gfx, g->cull, "u_player", player);
     gfx_uniform_vec2(gfx, g->cull, "u_camera_wave", camera_wave);
     gfx_uniform_float(gfx, g->cull, "u_time", view->time);
@@ -418,15 +424,10 @@ static uint64_t grass_cull(grass_system *g, const terrain_view *view) {
 
 static void grass_draw_uniforms(grass_system *g, const terrain_view *view) {
     gfx_context *gfx = g->desc.gfx;
-    float view_projection[16], sun[3];
+    float view_projection[16];
     terrain_view_matrix(view, view_projection);
-    terrain_view_sun(view, sun);
-    const float zero[3] = { 0, 0, 0 };
     gfx_program_use(gfx, g->draw);
     gfx_uniform_mat4(gfx, g->draw, "u_view_projection", view_projection);
-    gfx_uniform_vec3(gfx, g->draw, "u_sun_direction", sun);
-    gfx_uniform_vec3(gfx, g->draw, "u_camera_position", zero);
-    gfx_uniform_float(gfx, g->draw, "u_fog_density", g->desc.fog_density);
     gfx_uniform_int(gfx, g->draw, "u_blades", 0);
     gfx_texture_bind(g->blades, 0);
 }
