@@ -245,7 +245,7 @@ void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain
      * (triplanar shading is most of a frame on llvmpipe), whatever order the ECS's tables hold
      * the chunks in (a component added to some chunks, as grass does, reorders them). */
     double camera[3] = { view->camera[0], view->camera[1], view->camera[2] };
-    qsort_r(te->draw_list, count, sizeof *te->draw_list, terrain_compare_nearer, camera);
+    if (count > 1) qsort_r(te->draw_list, count, sizeof *te->draw_list, terrain_compare_nearer, camera);
     terrain_renderer_draw(renderer, view, te->draw_list, (int)count);
     trace_counter("terrain.mesh_chunks_drawn", (double)count);
     trace_counter("terrain.triangles_drawn", (double)triangles);
