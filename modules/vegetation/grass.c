@@ -187,10 +187,11 @@ static void grass_place(grass_system *g, const TerrainMeshChunk *chunk, GrassPat
     trace_counter("grass.placed_tufts", (double)patch->tufts);
 }
 
-/* Horizontal distance from the camera to the chunk's box. */
+/* Distance from the camera to the chunk's box: in three dimensions, as the tufts fade (a player
+ * flying high over a meadow is out of its grass's range, and nothing is placed for it). */
 static double grass_box_distance(const grass_system *g, const double origin[3], const float lo[3], const float hi[3]) {
     double squares = 0;
-    for (int a = 0; a < 3; a += 2) {
+    for (int a = 0; a < 3; a++) {
         double c = g->view.camera[a], min = origin[a] + lo[a], max = origin[a] + hi[a];
         double d = c < min ? min - c : c > max ? c - max : 0.0;
         squares += d * d;
@@ -226,7 +227,11 @@ static void grass_place_system(ecs_iter *it) {
             bool wanted = grass_wants(g, c, patch != NULL);
             if (patch && !wanted) ecs_defer_remove(it->commands, it->entities[i], g->patch);
             if (!wanted || (patch && patch->source == c->gpu.serial)) continue;
-            if (!patch && placed >= g->desc.max_placements) continue;
+            /* The budget spreads the patches placed ahead of need over frames; a chunk already in
+             * range (one that replaced a coarser chunk around the player) is placed at once, or
+             * its ground would show bare until the budget came round to it. */
+            bool in_range = grass_box_distance(g, c->gpu.origin, c->gpu.bounds_min, c->gpu.bounds_max) <= g->desc.range;
+            if (!patch && !in_range && placed >= g->desc.max_placements) continue;
             if (!pass_open) gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "grass.place" });
             pass_open = true;
             if (patch) {

@@ -76,8 +76,9 @@ typedef struct grass_desc {
     float height;                     /* metres of an average tuft; 0 = 0.5 */
     float snow_height;                /* as terrain_renderer_desc's; 0 = 120 m */
     float fog_density;                /* as terrain_renderer_desc's; 0 = 0.0025 */
-    int max_placements;               /* new patches placed per frame; 0 = 4 (patches whose
-                                         chunk was remeshed are always placed that frame) */
+    int max_placements;               /* new patches placed per frame ahead of need; 0 = 4
+                                         (chunks within range, and chunks remeshed, are always
+                                         placed in the frame they are uploaded) */
 } grass_desc;
 
 typedef struct grass_system grass_system;
