@@ -2,12 +2,12 @@
 // grass_scan.comp — the per-triangle tuft counts of grass_place.comp become each triangle's first
 // tuft (an exclusive prefix sum, in place) in one work group: each invocation sums a contiguous
 // run of triangles, the 256 sums are scanned in shared memory (Hillis and Steele), and each run
-// is then rewritten as offsets. The total goes into the patch's indirect draw command.
+// is then rewritten as offsets. The total is what the CPU reads back to size the patch.
 
 layout(local_size_x = 256) in;
 
 layout(std430, binding = 2) buffer Counts { uint counts[]; };
-layout(std430, binding = 5) writeonly buffer Command { uint command[4]; };  // DrawArraysIndirectCommand
+layout(std430, binding = 5) writeonly buffer Total { uint total_tufts; };
 
 uniform uint u_triangle_count;
 
@@ -33,10 +33,5 @@ void main() {
         counts[t] = offset;
         offset += count;
     }
-    if (lane == 255u) {
-        command[0] = 12u;              // two crossed quads, two triangles each
-        command[1] = sums[255];        // instances: the tufts
-        command[2] = 0u;
-        command[3] = 0u;
-    }
+    if (lane == 255u) total_tufts = sums[255];
 }

@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define GRASS_PLACE_GROUP 64              /* grass_place.comp's local size */
+#define GRASS_GROUP_SIZE 64               /* grass_place.comp's and grass_cull.comp's local size */
 #define GRASS_TUFT_BYTES 32               /* two vec4: as placed */
 #define GRASS_SHAPED_BYTES 80             /* five vec4: as the culling pass shapes it to draw */
 #define GRASS_MAX_LEVEL 1                 /* levels 0 and 1 cover ≥ 64 m around the viewer */
@@ -29,6 +29,7 @@ struct grass_system {
     ecs_query *patches;                   /* TerrainMeshChunk with GrassPatch */
     ecs_system system, cull_system;       /* grass_place, grass_cull */
     gfx_buffer counts, tops;              /* scratch of placement, grown as needed */
+    gfx_buffer total;                     /* placement's tuft count, read back to size a patch */
     gfx_buffer visible, command;          /* each frame: the tufts that can show, and their draw */
     gfx_vertex_array corners;             /* no attributes: the two quads' 12 indices */
     gfx_buffer corner_indices;
@@ -65,8 +66,7 @@ const char *grass_quality_name(grass_quality quality) {
 
 static void grass_patch_release(GrassPatch *patch) {
     if (patch->tuft_buffer) glDeleteBuffers(1, &patch->tuft_buffer);
-    if (patch->draw_buffer) glDeleteBuffers(1, &patch->draw_buffer);
-    patch->tuft_buffer = patch->draw_buffer = 0;
+    patch->tuft_buffer = 0;
     patch->tufts = 0;
 }
 
@@ -117,12 +117,11 @@ static void grass_uniform_uint(GLuint program, const char *name, uint32_t a) {
 }
 
 /* The uniforms of grass_place.comp for one chunk (both runs). */
-static void grass_place_uniforms(grass_system *g, const TerrainMeshChunk *chunk, uint32_t triangles) {
+static void grass_place_uniforms(grass_system *g, const TerrainMeshChunk *chunk, uint32_t triangles,
+                                 const float tops_origin[2], int tops_size) {
     gfx_context *gfx = g->desc.gfx;
     GLuint program = gfx_program_gl(gfx, g->place);
     int density = g->desc.density;
-    float tops_origin[2];
-    int tops_size = grass_upload_tops(g, chunk, tops_origin);
     gfx_program_use(gfx, g->place);
     grass_uniform_uint(program, "u_triangle_count", triangles);
     grass_uniform_uint(program, "u_seed", g->seed);
@@ -151,16 +150,16 @@ static void grass_place(grass_system *g, const TerrainMeshChunk *chunk, GrassPat
     memcpy(patch->origin, mesh->origin, sizeof patch->origin);
     memcpy(patch->bounds_min, mesh->bounds_min, sizeof patch->bounds_min);
     memcpy(patch->bounds_max, mesh->bounds_max, sizeof patch->bounds_max);
-    glCreateBuffers(1, &patch->draw_buffer);
-    glNamedBufferData(patch->draw_buffer, 4 * sizeof(uint32_t), NULL, GL_DYNAMIC_COPY);
     grass_buffer_reserve(&g->counts, (size_t)triangles * sizeof(uint32_t));
-    grass_place_uniforms(g, chunk, triangles);
+    float tops_origin[2];
+    int tops_size = grass_upload_tops(g, chunk, tops_origin);
+    grass_place_uniforms(g, chunk, triangles, tops_origin, tops_size);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, mesh->vertex_buffer);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, mesh->index_buffer);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, g->counts.id);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, g->tops.id);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, patch->draw_buffer);
-    GLuint groups = (triangles + GRASS_PLACE_GROUP - 1) / GRASS_PLACE_GROUP;
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, g->total.id);
+    GLuint groups = (triangles + GRASS_GROUP_SIZE - 1) / GRASS_GROUP_SIZE;
     gfx_uniform_int(gfx, g->place, "u_write", 0);
     glDispatchCompute(groups, 1, 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
@@ -170,9 +169,7 @@ static void grass_place(grass_system *g, const TerrainMeshChunk *chunk, GrassPat
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
     /* The one value the CPU reads: the tufts, to size their buffer (a wait for this chunk's
      * placement, once per placement, never per frame). */
-    uint32_t command[4];
-    glGetNamedBufferSubData(patch->draw_buffer, 0, sizeof command, command);
-    patch->tufts = command[1];
+    glGetNamedBufferSubData(g->total.id, 0, sizeof patch->tufts, &patch->tufts);
     if (patch->tufts) {
         glCreateBuffers(1, &patch->tuft_buffer);
         glNamedBufferData(patch->tuft_buffer, (GLsizeiptr)patch->tufts * GRASS_TUFT_BYTES, NULL, GL_STATIC_DRAW);
@@ -202,12 +199,11 @@ static double grass_box_distance(const grass_system *g, const double origin[3], 
 /* Whether the chunk should have a patch: a shown, uploaded chunk of a fine level near the view
  * (kept a little further than it is placed, so a patch on the edge is not made and dropped in
  * turn). */
-static bool grass_wants(const grass_system *g, const TerrainMeshChunk *c, bool has_patch) {
+static bool grass_wants(const grass_system *g, const TerrainMeshChunk *c, double distance, bool has_patch) {
     if (g->desc.quality == GRASS_OFF || !g->has_view || c->lod.level > GRASS_MAX_LEVEL || c->hidden ||
         c->gpu.index_count == 0)
         return false;
-    double reach = g->desc.range + (has_patch ? GRASS_REACH_KEEP : GRASS_REACH_AHEAD);
-    return grass_box_distance(g, c->gpu.origin, c->gpu.bounds_min, c->gpu.bounds_max) <= reach;
+    return distance <= g->desc.range + (has_patch ? GRASS_REACH_KEEP : GRASS_REACH_AHEAD);
 }
 
 /* The draw phase, after terrain_upload (it reads what that writes): patches follow the chunks.
@@ -224,14 +220,14 @@ static void grass_place_system(ecs_iter *it) {
         for (int i = 0; i < it->count; i++) {
             TerrainMeshChunk *c = &chunks[i];
             GrassPatch *patch = patches ? &patches[i] : NULL;
-            bool wanted = grass_wants(g, c, patch != NULL);
+            double distance = grass_box_distance(g, c->gpu.origin, c->gpu.bounds_min, c->gpu.bounds_max);
+            bool wanted = grass_wants(g, c, distance, patch != NULL);
             if (patch && !wanted) ecs_defer_remove(it->commands, it->entities[i], g->patch);
             if (!wanted || (patch && patch->source == c->gpu.serial)) continue;
             /* The budget spreads the patches placed ahead of need over frames; a chunk already in
              * range (one that replaced a coarser chunk around the player) is placed at once, or
              * its ground would show bare until the budget came round to it. */
-            bool in_range = grass_box_distance(g, c->gpu.origin, c->gpu.bounds_min, c->gpu.bounds_max) <= g->desc.range;
-            if (!patch && !in_range && placed >= g->desc.max_placements) continue;
+            if (!patch && distance > g->desc.range && placed >= g->desc.max_placements) continue;
             if (!pass_open) gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "grass.place" });
             pass_open = true;
             if (patch) {
@@ -291,6 +287,7 @@ grass_system *grass_create(const grass_desc *desc) {
     g->desc = *desc;
     grass_defaults(&g->desc);
     g->place = place, g->scan = scan, g->cull = cull, g->draw = draw;
+    g->total = gfx_buffer_create(&(gfx_buffer_desc){ .size = sizeof(uint32_t), .usage = GFX_BUFFER_DYNAMIC });
     g->command = gfx_buffer_create(&(gfx_buffer_desc){ .size = 5 * sizeof(uint32_t), .usage = GFX_BUFFER_DYNAMIC });
     static const uint32_t quads[12] = { 0, 1, 2, 2, 1, 3, 4, 5, 6, 6, 5, 7 };   /* corners as grass.vert numbers them */
     g->corner_indices = gfx_buffer_create(&(gfx_buffer_desc){ .size = sizeof quads, .data = quads });
@@ -331,6 +328,7 @@ void grass_destroy(grass_system *g) {
     }
     gfx_buffer_destroy(&g->counts);
     gfx_buffer_destroy(&g->tops);
+    gfx_buffer_destroy(&g->total);
     gfx_buffer_destroy(&g->visible);
     gfx_buffer_destroy(&g->command);
     gfx_vertex_array_destroy(&g->corners);
@@ -418,7 +416,7 @@ static uint64_t grass_cull(grass_system *g, const terrain_view *view) {
             gfx_uniform_vec3(gfx, g->cull, "u_offset", offset);
             grass_uniform_uint(program, "u_tuft_count", p->tufts);
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, p->tuft_buffer);
-            glDispatchCompute((p->tufts + GRASS_PLACE_GROUP - 1) / GRASS_PLACE_GROUP, 1, 1);
+            glDispatchCompute((p->tufts + GRASS_GROUP_SIZE - 1) / GRASS_GROUP_SIZE, 1, 1);
             g->stats.patches_drawn++;
         }
     }

@@ -100,7 +100,6 @@ void grass_draw(grass_system *grass, const terrain_view *view);
  * within reach). Its GPU buffers are released when the component leaves the entity. */
 typedef struct GrassPatch {
     uint32_t tuft_buffer;             /* GL name: 2 vec4 per tuft (position, seed; normal, grow) */
-    uint32_t draw_buffer;             /* GL name: the DrawArraysIndirectCommand */
     uint32_t tufts;
     uint64_t source;                  /* the mesh upload the tufts were placed from
                                          (terrain_gpu_mesh.serial) */
