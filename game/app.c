@@ -34,6 +34,7 @@ struct game_app {
     gfx_text *hud;
     game_player player;
     game_walker walker;
+    game_walk walk;                        /* the app's copy of desc.walk: its cave lines resolved */
     game_tools tools;
     terrain_edit_log *edits;               /* every edit; loaded and saved with a world folder */
     terrain_store *store;                  /* the world folder's database, or NULL */
@@ -193,6 +194,12 @@ static bool app_open_terrain(game_app *app) {
  * picture). */
 static void app_frame_shot(game_app *app) {
     game_player *pl = &app->player;
+    const game_walk_point *point = &app->walk.points[app->walker.index - 1];   /* the one reached */
+    if (point->has_look) {                 /* the walk says where to look (a cave's mouth) */
+        pl->yaw = (float)remainder(APP_PI + point->look_yaw * (APP_PI / 180.0), 2.0 * APP_PI);
+        pl->pitch = (float)(point->look_pitch * (APP_PI / 180.0));
+        return;
+    }
     pl->yaw = game_player_open_yaw(pl, app->world, pl->yaw, NULL);
     double eye[3];
     game_player_eye(pl, eye);
@@ -326,6 +333,13 @@ game_app *game_app_create(const game_app_desc *desc) {
     game_app *app = core_calloc(1, sizeof *app);
     app->desc = *desc;
     game_app_desc *d = &app->desc;
+    if (d->walk) {                         /* a copy: resolving `cave` lines rewrites points */
+        app->walk = *d->walk;
+        size_t size = (size_t)app->walk.count * sizeof *app->walk.points;
+        app->walk.points = core_alloc(size ? size : 1);
+        if (size) memcpy(app->walk.points, d->walk->points, size);
+        d->walk = &app->walk;
+    }
     if (!d->width || !d->height) d->width = 1280, d->height = 720;
     if (!(d->max_loading_seconds > 0)) d->max_loading_seconds = 300.0;
     app->gfx = gfx_create(&(gfx_desc){ .width = d->width, .height = d->height, .title = "world (loading)",
@@ -379,6 +393,7 @@ void game_app_destroy(game_app *app) {
     terrain_edit_log_destroy(app->edits);
     job_system_destroy(app->jobs);
     app_free_shots(app);
+    if (app->walk.points) core_free(app->walk.points, app->walk.count ? (size_t)app->walk.count * sizeof *app->walk.points : 1);
     gfx_destroy(app->gfx);
     core_free(app->cpu_ms, app->cpu_capacity * sizeof *app->cpu_ms);
     core_free(app->engine_ms, app->engine_capacity * sizeof *app->engine_ms);
@@ -541,7 +556,11 @@ static bool app_last_frame(const game_app *app) {
 static void app_finish_loading(game_app *app) {
     app->loading = false;
     app->play_start_ns = core_time_ns();
-    if (app->desc.walk) game_walker_start(&app->walker, app->desc.walk, &app->player);
+    if (app->desc.walk) {
+        int caves = game_walk_resolve_caves(&app->walk, app->world, &app->player);
+        if (caves) printf("world: %d look%s into a cave or under an arch on the walk\n", caves, caves == 1 ? "" : "s");
+        game_walker_start(&app->walker, app->desc.walk, &app->player);
+    }
     gfx_window_set_title(app->gfx, "world");
 }
 

@@ -129,6 +129,23 @@ static bool directive(parser *p, token word, const char *rest, const char *end) 
     return true;
 }
 
+/* `look=YAW,PITCH`'s value: degrees as --look (yaw any, wrapped to [0, 360); pitch within ±89). */
+static bool look_word(parser *p, token value, game_walk_point *point) {
+    const char *comma = memchr(value.text, ',', (size_t)value.size);
+    if (!comma) return FAIL(p, "look=: '%.*s' is not YAW,PITCH (degrees)", QUOTED(value));
+    token yaw_text = { value.text, (int)(comma - value.text) };
+    token pitch_text = { comma + 1, value.size - (int)(comma - value.text) - 1 };
+    double yaw, pitch;
+    if (!decimal(yaw_text, &yaw) || !(fabs(yaw) <= 1e6)) return FAIL(p, "look=: yaw '%.*s' is not a number", QUOTED(yaw_text));
+    if (!decimal(pitch_text, &pitch)) return FAIL(p, "look=: pitch '%.*s' is not a number", QUOTED(pitch_text));
+    if (!(fabs(pitch) <= 89.0)) return FAIL(p, "look=: pitch '%.*s' is out of range (-89 ... 89)", QUOTED(pitch_text));
+    yaw = fmod(yaw, 360.0);
+    point->look_yaw = (float)(yaw < 0.0 ? yaw + 360.0 : yaw);
+    point->look_pitch = (float)pitch;
+    point->has_look = true;
+    return true;
+}
+
 /* The words after X Z. */
 static bool point_words(parser *p, const char *rest, const char *end, game_walk_point *point) {
     token t;
@@ -139,17 +156,42 @@ static bool point_words(parser *p, const char *rest, const char *end, game_walk_
         if (flag) {
             if (*flag) return FAIL(p, "'%.*s' given twice", QUOTED(t));
             *flag = true;
+        } else if (t.size >= 5 && memcmp(t.text, "look=", 5) == 0) {
+            if (point->has_look) return FAIL(p, "'look=' given twice");
+            if (!look_word(p, (token){ t.text + 5, t.size - 5 }, point)) return false;
         } else if (t.size >= 2 && t.text[0] == 'y' && t.text[1] == '=') {
             if (point->has_y) return FAIL(p, "'y=' given twice");
             if (!coordinate(p, (token){ t.text + 2, t.size - 2 }, "y", &point->y)) return false;
             point->has_y = true;
         } else {
-            return FAIL(p, "unknown word '%.*s' (walk, sprint, jump, fly, y=H, shot)", QUOTED(t));
+            return FAIL(p, "unknown word '%.*s' (walk, sprint, jump, fly, y=H, shot, look=YAW,PITCH)", QUOTED(t));
         }
     }
     if (point->walk && sprint) return FAIL(p, "walk and sprint together");
     if (point->jump && point->fly) return FAIL(p, "jump and fly together (flying, there is nothing to jump from)");
     if (point->has_y && !point->fly) return FAIL(p, "y=H needs fly (walking, the ground sets the height)");
+    if (point->has_look && !point->shot) return FAIL(p, "look= needs shot (it is the picture's direction)");
+    return true;
+}
+
+/* `cave R [words]`: resolved later (game_walk_resolve_caves), so only shot may follow. */
+static bool cave_line(parser *p, const char *rest, const char *end) {
+    game_walk_point point = { 0 };
+    token value, word;
+    double radius;
+    if (!next_token(&rest, end, &value)) return FAIL(p, "cave needs a radius (metres)");
+    if (!decimal(value, &radius)) return FAIL(p, "cave: '%.*s' is not a number", QUOTED(value));
+    if (!(radius >= 1.0 && radius <= 1000.0)) return FAIL(p, "cave: '%.*s' is out of range (1 ... 1000 m)", QUOTED(value));
+    while (next_token(&rest, end, &word)) {
+        if (!is(word, "shot")) return FAIL(p, "cave: unknown word '%.*s' (only shot; the flight and the view are found)",
+                                           QUOTED(word));
+        if (point.shot) return FAIL(p, "'shot' given twice");
+        point.shot = true;
+    }
+    point.cave_radius = (float)radius;
+    if (p->walk.count >= GAME_WALK_MAX_POINTS) return FAIL(p, "more than %d waypoints", GAME_WALK_MAX_POINTS);
+    p->walk.points = core_grow(p->walk.points, &p->capacity, (size_t)p->walk.count + 1, sizeof point);
+    p->walk.points[p->walk.count++] = point;
     return true;
 }
 
@@ -179,6 +221,7 @@ static bool line(parser *p, const char *begin, const char *end) {
     if (!next_token(&at, end, &first)) return true;     /* blank or a comment */
     char c = first.text[0];
     if ((c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.') return waypoint(p, first, at, end);
+    if (is(first, "cave")) return cave_line(p, at, end);
     return directive(p, first, at, end);
 }
 
@@ -294,7 +337,65 @@ const char game_walk_tour[] =
     "0 0 shot\n"                 /* where the player stands */
     "0 50 shot\n"                /* 50 m on */
     "-30 100 shot\n"             /* on, bearing left */
+    "cave 150 shot\n"            /* into the nearest cave or under the nearest arch */
     "-30 110 fly y=120 shot\n";  /* up 120 m */
+
+/* ---- cave stops -------------------------------------------------------------------------------- */
+
+static void target(const game_walker *w, int i, double out[3]);
+
+/* World point `world_xz` (and feet height y) as coordinates of the walk's frame, from the start
+ * `origin` facing `yaw`: the inverse of the walker's target(). */
+static void to_walk_frame(const game_walk *walk, const double origin[3], float yaw, const double world[3],
+                          game_walk_point *point) {
+    double dx = world[0] - origin[0], dz = world[2] - origin[2];
+    switch (walk->frame) {
+    case GAME_WALK_ABSOLUTE: point->x = world[0], point->y = world[1], point->z = world[2]; return;
+    case GAME_WALK_RELATIVE: point->x = dx, point->y = world[1] - origin[1], point->z = dz; return;
+    case GAME_WALK_AHEAD: {
+        /* target() maps (X, Z) to o + X·(c, s) + Z·(s, −c); that matrix is its own inverse */
+        double s = sin((double)yaw), c = cos((double)yaw);
+        point->x = dx * c + dz * s;
+        point->z = dx * s - dz * c;
+        point->y = world[1] - origin[1];
+        return;
+    }
+    }
+}
+
+int game_walk_resolve_caves(game_walk *walk, terrain_world *world, const game_player *player) {
+    game_walker frame = { .walk = walk, .origin_yaw = player->yaw };   /* target()'s frame */
+    memcpy(frame.origin, player->position, sizeof frame.origin);
+    int found = 0, kept = 0;
+    double centre[3] = { player->position[0], player->position[1], player->position[2] };
+    for (int i = 0; i < walk->count; i++) {
+        game_walk_point point = walk->points[i];
+        if (point.cave_radius > 0.0f) {
+            game_cave_view view;
+            if (!game_find_cave_view(world, centre[0], centre[2], point.cave_radius, &view)) {
+                core_info("walk", "no cave or arch within %.0f m of waypoint %d: that stop is skipped",
+                         (double)point.cave_radius, i);
+                continue;
+            }
+            double feet[3] = { view.eye[0], view.eye[1] - (double)player->params.eye_height, view.eye[2] };
+            to_walk_frame(walk, frame.origin, frame.origin_yaw, feet, &point);
+            point.fly = point.has_y = point.has_look = true;
+            point.look_yaw = view.yaw, point.look_pitch = view.pitch;
+            point.cave_radius = 0.0f;
+            found++;
+        }
+        walk->points[kept++] = point;
+        frame.walk = walk;
+        target(&frame, kept - 1, centre);
+    }
+    if (kept < walk->count) {   /* game_walk_free takes the array's size from the count */
+        size_t old_size = (size_t)walk->count * sizeof *walk->points, new_size = (size_t)kept * sizeof *walk->points;
+        if (kept == 0) core_free(walk->points, old_size), walk->points = NULL;
+        else walk->points = core_realloc(walk->points, old_size, new_size);
+        walk->count = kept;
+    }
+    return found;
+}
 
 /* ---- the walker -------------------------------------------------------------------------------- */
 
@@ -339,8 +440,10 @@ static float gait_speed(const game_player *pl, const game_walk_point *p) {
     return p->walk ? pr->walk_speed : pr->sprint_speed;
 }
 
-/* Horizontally within the radius; also vertically for `fly y=H`. */
+/* Horizontally within the radius; also vertically for `fly y=H`. An unresolved `cave` line
+ * (game_walk_resolve_caves never ran) is passed over at once. */
 static bool reached(const game_walker *w, const game_player *pl, int i) {
+    if (w->walk->points[i].cave_radius > 0.0f) return true;
     double t[3];
     target(w, i, t);
     double dx = t[0] - pl->position[0], dz = t[2] - pl->position[2], d2 = dx * dx + dz * dz;
@@ -499,7 +602,8 @@ input_actions game_walker_step(game_walker *walker, const game_player *player, f
     if (walker->shot_due) return idle;   /* holding still for the picture */
     progress(walker, player);
     while (walker->index < walker->walk->count && reached(walker, player, walker->index)) {
-        bool shot = walker->walk->points[walker->index].shot;
+        const game_walk_point *point = &walker->walk->points[walker->index];
+        bool shot = point->shot && !(point->cave_radius > 0.0f);
         walker->index++;
         start_leg(walker, player);
         if (shot) {

@@ -34,7 +34,12 @@
  *   height to fly at (without it a flying leg keeps the height it starts at).
  * - `shot`: once the waypoint is reached the walker holds still (shot_due) until
  *   game_walker_resume, so a program can take a picture there (world --walk: FILE-N.png beside
- *   --screenshot FILE, turned to the most open view).
+ *   --screenshot FILE, turned to the most open view, or with `look=YAW,PITCH` that way: degrees
+ *   as --look takes them, yaw 0 = +z and 90 = −x, pitch up within ±89).
+ * - `cave R [shot]` instead of X Z: a look into the nearest cave mouth or under the nearest arch
+ *   within R metres (1 ≤ R ≤ 1000) of the previous waypoint. The program resolves it when the walk
+ *   starts (game_walk_resolve_caves: the world program does) into a flight to a view of it that
+ *   faces the mouth; a walker given an unresolved one skips it.
  * - Directives, each at most once and before the first waypoint: `relative` (X Z and y= are
  *   offsets from the walker's start), `ahead` (offsets in the start's own frame: X metres to the
  *   right, Z metres ahead, as straight:M is `ahead` + `0 M`), `radius R` (0.1 ≤ R ≤ 1000 m),
@@ -106,6 +111,10 @@ typedef struct game_walk_point {
     bool fly;                         /* in fly mode */
     bool has_y;                       /* only with fly */
     bool shot;                        /* hold still for a picture once reached */
+    bool has_look;                    /* at the shot, face look_yaw, look_pitch instead of the
+                                         most open view */
+    float look_yaw, look_pitch;       /* degrees as --look: yaw 0 = +z, 90 = −x; pitch up */
+    float cave_radius;                /* > 0: a `cave R` line not yet resolved (the walker skips it) */
 } game_walk_point;
 
 typedef struct game_walk {
@@ -117,9 +126,17 @@ typedef struct game_walk {
 } game_walk;
 
 /* The tour `world --tour` takes (and tools/play with no display): from the spawn into the most
- * open view on foot, flying over what it cannot walk round, then up 120 m for the view to the
- * horizon; a picture at each of its four stops. A waypoint file's text. */
+ * open view on foot, flying over what it cannot walk round, a look into the nearest cave or under
+ * the nearest arch, then up 120 m for the view to the horizon; a picture at each of its five
+ * stops (four where no cave is found). A waypoint file's text. */
 extern const char game_walk_tour[];
+
+/* Turns each `cave R` waypoint into a flight to a view into the nearest cave or arch within R
+ * metres of the waypoint before it (of the player, for the first): game_find_cave_view, the view's
+ * eye as a `fly y=H` point in the walk's own frame, facing the mouth (has_look). A cave line with
+ * nothing to find is dropped, with a notice. Call it with the player where the walker will start
+ * (game_walker_start measures relative and ahead walks from there). Returns the caves found. */
+int game_walk_resolve_caves(game_walk *walk, terrain_world *world, const game_player *player);
 
 /* `spec` is straight:METRES or the path of a waypoint file. On success *out holds the walk (free it
  * with game_walk_free); on failure *out is zeroed (freeing it is harmless), `error` (when given)
@@ -130,6 +147,21 @@ bool game_walk_parse(const char *spec, game_walk *out, char *error, size_t error
 bool game_walk_parse_text(const char *text, size_t size, const char *name, game_walk *out, char *error,
                           size_t error_size);
 void game_walk_free(game_walk *walk);
+
+/* A look into a cave mouth or under an arch: where to stand and which way to face. */
+typedef struct game_cave_view {
+    double eye[3];                    /* world metres, over open ground outside the mouth */
+    double mouth[3];                  /* the sheltered point looked at, mid-height in the gap */
+    float yaw, pitch;                 /* degrees as --look: yaw 0 = +z, 90 = −x; pitch up */
+    float depth;                      /* metres of roof between that point and the open ground */
+} game_cave_view;
+
+/* Searches the columns within `radius` metres of (x, z) for a sheltered floor (an air gap above
+ * the sea with ground under it and a roof over it: a cave, an arch, an overhang) that a level
+ * path leads out of onto open ground, and a view from that ground into it with a clear line of
+ * sight and the roof low enough in the picture to leave sky at its top. The deepest shelter wins,
+ * then the nearest. False when there is none. Generates the chunks it reads (walk_cave.c). */
+bool game_find_cave_view(terrain_world *world, double x, double z, double radius, game_cave_view *out);
 
 #define GAME_WALKER_HISTORY 64
 

@@ -125,7 +125,7 @@ Test(walk_parse, every_error_names_its_line) {
         { "-inf 2\n", "t.walk:1: x: '-inf' is not a number" },
         { "1 2\r\n3 1e999\r\n", "t.walk:2: z: '1e999' is out of range (-1e9 ... 1e9 m)" },
         { "# x\n1000000001 0\n", "t.walk:2: x: '1000000001' is out of range (-1e9 ... 1e9 m)" },
-        { "1 2 sprnt\n", "t.walk:1: unknown word 'sprnt' (walk, sprint, jump, fly, y=H, shot)" },
+        { "1 2 sprnt\n", "t.walk:1: unknown word 'sprnt' (walk, sprint, jump, fly, y=H, shot, look=YAW,PITCH)" },
         { "1 2 shot shot\n", "t.walk:1: 'shot' given twice" },
         { "fly-over\nfly-over\n1 2\n", "t.walk:2: fly-over given twice" },
         { "fly-over now\n", "t.walk:1: 'fly-over' takes nothing after it" },
