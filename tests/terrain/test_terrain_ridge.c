@@ -50,7 +50,7 @@ static double longest_edge(const terrain_mesh *m, double cell) {
 
 Test(terrain_ridge, no_chunk_triangle_is_longer_than_its_cells_diagonal_at_any_level) {
     terrain_generation_params params = terrain_generation_defaults(1);
-    double x, z, top;
+    double x = 0.0, z = 0.0, top;
     ridge_summit(&params, &x, &z, &top);
     cr_assert_gt(top, 120.0, "seed 1 has a mountain near the spawn (summit %.1f m)", top);
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = params });
@@ -79,7 +79,7 @@ Test(terrain_ridge, no_chunk_triangle_is_longer_than_its_cells_diagonal_at_any_l
 
 Test(terrain_ridge, the_far_clipmap_has_no_tooth_along_the_ridge) {
     terrain_generation_params params = terrain_generation_defaults(1);
-    double x, z, top;
+    double x = 0.0, z = 0.0, top;
     ridge_summit(&params, &x, &z, &top);
     terrain_clipmap *far = terrain_clipmap_create(&(terrain_clipmap_desc){ .generation = params });
     const double camera[3] = { 0.0, 62.0, 0.0 };   /* 60 m over the spawn */
