@@ -247,11 +247,18 @@ float terrain_field_at(terrain_world *world, double x, double y, double z, float
 
 /* ---- meshes ------------------------------------------------------------------------------- */
 
+/* 32 bytes, laid out for the GPU (terrain_render.c's attributes; grass_place.comp reads the
+ * buffer as 8 words a vertex): position at byte 0, normal at 12, weights at 24, occlusion at 28. */
 typedef struct terrain_vertex {
     float position[3];                /* metres, relative to terrain_mesh.origin */
     float normal[3];                  /* unit, pointing into the air */
-    uint8_t weights[4];               /* visible bedrock, sand, rocks, water around the vertex, /255 */
+    uint8_t weights[4];               /* visible bedrock, sand, rocks, water around the vertex;
+                                         they sum to 255 (000 §6) */
+    uint8_t occlusion;                /* ambient occlusion, /255: 0 = open sky (so a zeroed vertex
+                                         is open), 255 = enclosed; openness = 1 − occlusion/255 */
+    uint8_t reserved[3];              /* 0 */
 } terrain_vertex;
+_Static_assert(sizeof(terrain_vertex) == 32, "terrain_vertex is 8 words on the GPU");
 
 typedef struct terrain_mesh {
     double origin[3];                 /* world position of the vertices' (0, 0, 0) */
@@ -262,10 +269,12 @@ typedef struct terrain_mesh {
 } terrain_mesh;
 
 typedef struct terrain_mesh_desc {
-    terrain_world *world;             /* for material weights; NULL = all bedrock */
+    terrain_world *world;             /* for material weights and occlusion; NULL = all
+                                         bedrock, occlusion 0 (open) */
     int apron;                        /* samples along each border that are read for gradients
                                          but not meshed (1 makes normals agree across chunks) */
     bool no_optimize;                 /* skip meshoptimizer's vertex-cache reordering */
+    bool no_occlusion;                /* occlusion 0 everywhere (skips its cost) */
 } terrain_mesh_desc;
 
 /* Marching cubes over every cell of the field (nx−1 × ny−1 × nz−1 cells, less the apron) with
@@ -355,6 +364,7 @@ typedef struct terrain_renderer_desc {
     float snow_height;                /* 0 = 120 m */
     float fog_density;                /* per metre; 0 = 0.0025 */
     float cloud_cover;                /* 0 = 0.45; negative = a clear sky */
+    bool no_occlusion;                /* ignore the vertices' openness (ambient occlusion off) */
 } terrain_renderer_desc;
 
 /* NULL when the shaders do not build (their errors printed at file:line). */
