@@ -279,7 +279,11 @@ typedef struct terrain_mesh_desc {
 
 /* Marching cubes over every cell of the field (nx−1 × ny−1 × nz−1 cells, less the apron) with
  * shared vertices; watertight for closed surfaces (ambiguous faces always keep the inside
- * corners apart). mesh.origin is the field's origin. An empty or full field gives an empty mesh
+ * corners apart). mesh.origin is the field's origin. With a world, each vertex also gets its
+ * material weights (000 §6: each material's share of a 1 m segment just under the surface,
+ * exact layer lengths, bilinear over the four columns around it) and its ambient occlusion
+ * (rays through the stacks up to 8 m around the normal; 0 on open ground), both functions of the
+ * vertex's world position and normal alone, so neighbouring chunks agree on shared vertices. An empty or full field gives an empty mesh
  * (NULL arrays) at once. False (message logged) for a field without values or a negative apron.
  * Free with terrain_mesh_free. */
 bool terrain_mesh_build(const terrain_field *field, const terrain_mesh_desc *desc, terrain_mesh *out);

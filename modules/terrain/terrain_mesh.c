@@ -19,9 +19,16 @@
  * The apron samples are read for these differences but their cells are not meshed.
  *
  * Material weights (000 §6: textures blended "according to the ratio of neighboring
- * materials"): we read "visible materials around the vertex" as the non-air materials found at
- * the 8 corners of a box one column wide centred half a column inside the surface (along −n),
- * counted per material and scaled to 255 (all bedrock when only air is found, or without a world).
+ * materials"): we read "neighbouring materials" as what a one-metre vertical segment centred half
+ * a column inside the surface (along −n) holds: the exact length of each material's layers in it
+ * (the stacks are run-length layers), in the four columns around it with bilinear weights, scaled
+ * to 255 (all bedrock when only air is found, or without a world). Continuous in the vertex's
+ * position: no bands (the 8 point samples this replaced gave 9 levels).
+ *
+ * Occlusion (terrain_vertex.occlusion, "openness" = 1 − occlusion/255): how much of the sky the
+ * vertex sees within 8 m, from rays through the stacks' solid slabs (below, "openness"). Like the
+ * weights, a function of the vertex's world position and normal only, so chunks agree on their
+ * shared vertices; computed once here, so the renderer pays nothing a frame for it.
  *
  * Then the triangles are reordered for the GPU's vertex cache with meshoptimizer (unless
  * desc.no_optimize), and the arrays trimmed to their exact sizes (terrain_mesh_free needs them).
@@ -179,14 +186,14 @@ static void mesh_weights(const mesh_builder *b, terrain_world *world, const doub
 /* How much sky a vertex sees, from the terrain itself, once when the mesh is made (no cost a
  * frame; the shader scales its sky light by it). Rays leave the vertex, lifted MESH_AO_LIFT along
  * its normal, in MESH_AO_DIRECTIONS fixed directions of the hemisphere around the normal; each
- * ray reads the solid fraction s of a one-metre box at MESH_AO_STEPS distances from 1 to 8 m
+ * ray reads the solid fraction s of a one-metre box at MESH_AO_STEPS distances (1, 3 and 7 m)
  * and lets through ∏(1 − strength·s), nearer solid counting more; openness is the mean over the
  * rays. The directions are spread cosine-weighted (a golden-angle spiral), so the mean
  * estimates the cosine-weighted visibility of the usual ambient-occlusion integral, and they stop
  * 60° from the normal: the stacks are 1 m stairs under a smooth surface, and grazing rays would
- * find the stair beside them on any slope. With that, a plane of slope up to ~25° (the stairs'
- * steps stay below the lifted rays) reads exactly 1, so open ground is unchanged and meets the
- * far clipmap, which has no occlusion, without a seam.
+ * find the stair beside them on any slope. With that, a plane reads exactly 1 (measured on
+ * stepped planes of 11° to 45°: the stairs stay below the lifted rays), so open ground is
+ * unchanged and meets the far clipmap, which has no occlusion, without a seam.
  *
  * s is the field's own reading of the stacks (000 §3.3: solid = sand and bedrock): the exact
  * solid length of each column in each 1 m slab [J, J + 1), read trilinearly between the slabs'
@@ -197,7 +204,7 @@ static void mesh_weights(const mesh_builder *b, terrain_world *world, const doub
 #define MESH_AO_STEPS 3
 #define MESH_AO_LIFT 1.0
 #define MESH_AO_CAP_SIN 0.8660254037844386   /* sin 60° */
-#define MESH_AO_MARGIN 11                    /* columns: lift + 8 m + the tent's column + 1 */
+#define MESH_AO_MARGIN TERRAIN__MESH_OCCLUSION_REACH   /* lift + 7 m + the tent + a slab, and 1 */
 static const double mesh_ao_distance[MESH_AO_STEPS] = { 1.0, 3.0, 7.0 };
 static const double mesh_ao_strength[MESH_AO_STEPS] = { 1.0, 1.0, 0.85 };
 
