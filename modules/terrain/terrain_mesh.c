@@ -126,11 +126,11 @@ static void mesh_column_overlaps(mesh_material_probe *probe, int64_t gx, int64_t
     terrain__column_cursor cursor = terrain__stacks_cursor(probe->stacks, (int)(gx - chunk.x * TERRAIN_CHUNK_COLUMNS),
                                                            (int)(gz - chunk.z * TERRAIN_CHUNK_COLUMNS));
     const double q0 = (y0 - TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE, q1 = (y1 - TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE;
-    if (q0 < 0.0) sums[0] += w * (fmin(q1, 0.0) - q0);
+    if (q0 < 0.0) sums[0] += w * ((q1 < 0.0 ? q1 : 0.0) - q0);
     terrain__qlayer layer;
     double bottom = 0.0;
     while (bottom < q1 && terrain__cursor_next(&cursor, &layer)) {
-        double top = bottom + layer.quanta, lo = fmax(q0, bottom), hi = fmin(q1, top);
+        double top = bottom + layer.quanta, lo = q0 > bottom ? q0 : bottom, hi = q1 < top ? q1 : top;
         if (hi > lo && layer.material >= TERRAIN_BEDROCK && layer.material <= TERRAIN_WATER)
             sums[layer.material - TERRAIN_BEDROCK] += w * (hi - lo);
         bottom = top;
@@ -145,8 +145,7 @@ static void mesh_column_overlaps(mesh_material_probe *probe, int64_t gx, int64_t
  * its layers inside the segment, so the weights move continuously with the vertex (8 point
  * samples gave 9 levels, which banded), and only from world position and normal: shared border
  * vertices get the same bytes in every chunk. */
-void terrain__mesh_vertex_weights(terrain_world *world, const double p[3], const float n[3], uint8_t out[4]) {
-    mesh_material_probe probe = { .world = world };
+static void mesh_vertex_weights(mesh_material_probe *probe, const double p[3], const float n[3], uint8_t out[4]) {
     const double half = 0.5 * TERRAIN_COLUMN_SIZE;
     double centre[3];
     for (int a = 0; a < 3; a++) centre[a] = p[a] - half * n[a];
@@ -158,7 +157,7 @@ void terrain__mesh_vertex_weights(terrain_world *world, const double p[3], const
     for (int column = 0; column < 4; column++) {
         double w = ((column & 1) ? fx : 1.0 - fx) * ((column >> 1) ? fz : 1.0 - fz);
         if (w > 0.0)
-            mesh_column_overlaps(&probe, gx0 + (column & 1), gz0 + (column >> 1), centre[1] - half, centre[1] + half, w, sums);
+            mesh_column_overlaps(probe, gx0 + (column & 1), gz0 + (column >> 1), centre[1] - half, centre[1] + half, w, sums);
     }
     double total = sums[0] + sums[1] + sums[2] + sums[3];
     out[0] = 255, out[1] = out[2] = out[3] = 0;
@@ -172,12 +171,18 @@ void terrain__mesh_vertex_weights(terrain_world *world, const double p[3], const
     out[largest] = (uint8_t)(out[largest] + 255 - sum);   /* they sum to 255 */
 }
 
+void terrain__mesh_vertex_weights(terrain_world *world, const double p[3], const float n[3], uint8_t out[4]) {
+    mesh_material_probe probe = { .world = world };
+    mesh_vertex_weights(&probe, p, n, out);
+}
+
 static void mesh_weights(const mesh_builder *b, terrain_world *world, const double origin[3]) {
+    mesh_material_probe probe = { .world = world };   /* keeps the last chunk's stacks at hand */
     for (size_t i = 0; i < b->vertex_count; i++) {
         terrain_vertex *v = &b->vertices[i];
         double p[3];
         for (int a = 0; a < 3; a++) p[a] = origin[a] + v->position[a];
-        terrain__mesh_vertex_weights(world, p, v->normal, v->weights);
+        mesh_vertex_weights(&probe, p, v->normal, v->weights);
     }
 }
 
@@ -198,8 +203,8 @@ static void mesh_weights(const mesh_builder *b, terrain_world *world, const doub
  * s is the field's own reading of the stacks (000 §3.3: solid = sand and bedrock): the exact
  * solid length of each column in each 1 m slab [J, J + 1), read trilinearly between the slabs'
  * centres, so openness changes continuously with the vertex (no bands) and depends only on its
- * world position and normal (shared border vertices agree). A mesh reads each column it needs
- * once, into a window of slabs over its bounds. */
+ * world position and normal (shared border vertices agree). A mesh reads each column of a window
+ * over its bounds once, into bytes of slabs. */
 #define MESH_AO_DIRECTIONS 8
 #define MESH_AO_STEPS 3
 #define MESH_AO_LIFT 1.0
@@ -213,17 +218,16 @@ typedef struct mesh_ao {
     int64_t x0, z0, y0;            /* the window's first column and slab */
     int width, depth, height;      /* columns along x and z, slabs along y */
     uint8_t *slabs;                /* the solid quanta in slab [J, J + 1) of each column, y fastest */
-    uint8_t *filled;               /* per column: its slabs are read */
-    int32_t *tops;                 /* per column: slabs below tops[i] hold solid; then, per 2 × 2
-                                      block from column (i, k), the largest of its four */
+    int32_t *tops;                 /* per 2 × 2 block of columns from (i, k): no solid from this
+                                      slab up in any of them */
 } mesh_ao;
 
 #define MESH_AO_MAX_SLABS (1u << 24)   /* 16 MB; a larger window (chunks of level ≥ 3) gets none */
 
 /* Column (gx, gz)'s slabs: one walk up its layers, each slab the exact solid length inside it in
  * quanta (layers are whole quanta, so a slab holds 0 … 32 of them: a byte, exact). Below the
- * floor is bedrock. */
-static void mesh_ao_fill_column(mesh_ao *ao, int64_t gx, int64_t gz, uint8_t *slabs) {
+ * floor is bedrock. Returns the slab above its highest solid quantum. */
+static int32_t mesh_ao_fill_column(mesh_ao *ao, int64_t gx, int64_t gz, uint8_t *slabs) {
     mesh_material_probe *probe = &ao->stacks;
     terrain_chunk_coord chunk = { mesh_floor_div(gx, TERRAIN_CHUNK_COLUMNS), mesh_floor_div(gz, TERRAIN_CHUNK_COLUMNS) };
     if (!probe->stacks || chunk.x != probe->chunk.x || chunk.z != probe->chunk.z) {
@@ -236,7 +240,7 @@ static void mesh_ao_fill_column(mesh_ao *ao, int64_t gx, int64_t gz, uint8_t *sl
     /* Heights in quanta above the window's first slab; a solid run [bottom, top) fills the slabs
      * it covers and adds its ends' parts to the slabs they fall in. */
     const int64_t Q = TERRAIN__QUANTA_PER_METRE, last = (int64_t)ao->height * Q;
-    int64_t height = ((int64_t)TERRAIN_FLOOR_Y - ao->y0) * Q, bottom = INT64_MIN / 2;
+    int64_t height = ((int64_t)TERRAIN_FLOOR_Y - ao->y0) * Q, bottom = INT64_MIN / 2, top = 0;
     bool solid = true;
     terrain__qlayer layer;
     for (;;) {
@@ -245,42 +249,32 @@ static void mesh_ao_fill_column(mesh_ao *ao, int64_t gx, int64_t gz, uint8_t *sl
         bool run_ends = solid && (!more || !next_solid || height >= last);
         if (run_ends && height > 0 && bottom < last) {
             int64_t lo = bottom > 0 ? bottom : 0, hi = height < last ? height : last;
-            for (int64_t j = lo / Q; j * Q < hi; j++) {
-                int64_t a = j * Q > lo ? j * Q : lo, b = (j + 1) * Q < hi ? (j + 1) * Q : hi;
-                slabs[j] = (uint8_t)(slabs[j] + (b - a));
+            int64_t first_full = (lo + Q - 1) / Q, end_full = hi / Q;
+            if (first_full > end_full) {                       /* inside one slab */
+                slabs[lo / Q] = (uint8_t)(slabs[lo / Q] + (hi - lo));
+            } else {
+                if (lo < first_full * Q) slabs[lo / Q] = (uint8_t)(slabs[lo / Q] + (first_full * Q - lo));
+                if (end_full > first_full) memset(slabs + first_full, (int)Q, (size_t)(end_full - first_full));
+                if (hi > end_full * Q) slabs[end_full] = (uint8_t)(slabs[end_full] + (hi - end_full * Q));
             }
+            top = hi;
         }
         if (!more || height >= last) break;
         if (next_solid && !solid) bottom = height;
         solid = next_solid;
         height += layer.quanta;
     }
+    return (int32_t)((top + Q - 1) / Q);
 }
 
-/* The slab above column (gx, gz)'s highest solid quantum, counted from the window's first. */
-static int32_t mesh_ao_column_top(mesh_ao *ao, int64_t gx, int64_t gz) {
-    mesh_material_probe *probe = &ao->stacks;
-    terrain_chunk_coord chunk = { mesh_floor_div(gx, TERRAIN_CHUNK_COLUMNS), mesh_floor_div(gz, TERRAIN_CHUNK_COLUMNS) };
-    if (!probe->stacks || chunk.x != probe->chunk.x || chunk.z != probe->chunk.z) {
-        probe->stacks = terrain_world_stacks(probe->world, chunk);
-        probe->chunk = chunk;
-    }
-    terrain__column_cursor cursor = terrain__stacks_cursor(probe->stacks, (int)(gx - chunk.x * TERRAIN_CHUNK_COLUMNS),
-                                                           (int)(gz - chunk.z * TERRAIN_CHUNK_COLUMNS));
-    const int64_t Q = TERRAIN__QUANTA_PER_METRE;
-    int64_t height = ((int64_t)TERRAIN_FLOOR_Y - ao->y0) * Q, top = height;
-    terrain__qlayer layer;
-    while (terrain__cursor_next(&cursor, &layer)) {
-        height += layer.quanta;
-        if (terrain_material_in_field((terrain_material)layer.material)) top = height;
-    }
-    int64_t slab = top <= 0 ? 0 : (top + Q - 1) / Q;
-    return (int32_t)(slab < ao->height ? slab : ao->height);
-}
-
-static void mesh_ao_tops(mesh_ao *ao) {
+/* Every column of the window, and per 2 × 2 block of columns from (i, k) the highest of their
+ * tops (a point above it reads no solid: most rays in the open stop there). */
+static void mesh_ao_fill(mesh_ao *ao) {
     for (int k = 0; k < ao->depth; k++)
-        for (int i = 0; i < ao->width; i++) ao->tops[k * ao->width + i] = mesh_ao_column_top(ao, ao->x0 + i, ao->z0 + k);
+        for (int i = 0; i < ao->width; i++) {
+            size_t column = (size_t)k * (size_t)ao->width + (size_t)i;
+            ao->tops[column] = mesh_ao_fill_column(ao, ao->x0 + i, ao->z0 + k, ao->slabs + column * (size_t)ao->height);
+        }
     for (int k = 0; k + 1 < ao->depth; k++)   /* in place: each block reads only later entries */
         for (int i = 0; i + 1 < ao->width; i++) {
             int32_t *t = &ao->tops[k * ao->width + i];
@@ -292,31 +286,25 @@ static void mesh_ao_tops(mesh_ao *ao) {
 /* The solid fraction around a point: the slabs' values sit at the centres of 1 m boxes (column
  * centres in x and z, slab centres in y), read trilinearly — a tent kernel one column wide in
  * each axis, so the value moves continuously with the point. */
-static double mesh_ao_solid(mesh_ao *ao, double x, double y, double z) {
+static double mesh_ao_solid(const mesh_ao *ao, double x, double y, double z) {
     double u = x / TERRAIN_COLUMN_SIZE - 0.5, v = z / TERRAIN_COLUMN_SIZE - 0.5, w = y - 0.5;
     int64_t gx = mesh_floor(u), gz = mesh_floor(v), J = mesh_floor(w);
-    double fx = u - (double)gx, fz = v - (double)gz, fy = w - (double)J;
     int64_t i = gx - ao->x0, k = gz - ao->z0, j = J - ao->y0;
     /* The window's margin keeps every ray inside; a point outside would be a bug, read as air. */
     if (i < 0 || i + 1 >= ao->width || k < 0 || k + 1 >= ao->depth || j < 0 || j + 1 >= ao->height) return 0.0;
-    if (j >= ao->tops[k * ao->width + i]) return 0.0;   /* above all four columns: most rays in the open */
-    double solid = 0.0;
-    for (int c = 0; c < 4; c++) {
-        size_t column = (size_t)(k + (c >> 1)) * (size_t)ao->width + (size_t)(i + (c & 1));
-        uint8_t *slabs = ao->slabs + column * (size_t)ao->height;
-        if (!ao->filled[column]) {
-            mesh_ao_fill_column(ao, ao->x0 + i + (c & 1), ao->z0 + k + (c >> 1), slabs);
-            ao->filled[column] = 1;
-        }
-        double weight = ((c & 1) ? fx : 1.0 - fx) * ((c >> 1) ? fz : 1.0 - fz);
-        double below = slabs[j], above = slabs[j + 1];
-        solid += weight * (below + fy * (above - below));
-    }
-    return solid * (1.0 / TERRAIN__QUANTA_PER_METRE);
+    size_t column = (size_t)k * (size_t)ao->width + (size_t)i;
+    if (j >= ao->tops[column]) return 0.0;
+    double fx = u - (double)gx, fz = v - (double)gz, fy = w - (double)J;
+    const size_t row = (size_t)ao->width * (size_t)ao->height, h = (size_t)ao->height;
+    const uint8_t *s00 = ao->slabs + column * h + (size_t)j, *s10 = s00 + h, *s01 = s00 + row, *s11 = s01 + h;
+    double a00 = s00[0] + fy * (s00[1] - s00[0]), a10 = s10[0] + fy * (s10[1] - s10[0]);
+    double a01 = s01[0] + fy * (s01[1] - s01[0]), a11 = s11[0] + fy * (s11[1] - s11[0]);
+    double near = a00 + fx * (a10 - a00), far = a01 + fx * (a11 - a01);
+    return (near + fz * (far - near)) * (1.0 / TERRAIN__QUANTA_PER_METRE);
 }
 
 /* Openness of one vertex (world position p, unit normal n) in [0, 1]. */
-static double mesh_ao_openness(mesh_ao *ao, const double directions[MESH_AO_DIRECTIONS][3], const double p[3],
+static double mesh_ao_openness(const mesh_ao *ao, const double directions[MESH_AO_DIRECTIONS][3], const double p[3],
                                const float nf[3]) {
     double n[3] = { nf[0], nf[1], nf[2] };
     /* A tangent frame continuous in n but at n = −y (Duff et al. 2017's basis, built around +y):
@@ -375,9 +363,8 @@ static void mesh_openness(const mesh_builder *b, terrain_world *world, const dou
     size_t column_count = (size_t)ao.width * (size_t)ao.depth, slab_count = column_count * (size_t)ao.height;
     if (slab_count > MESH_AO_MAX_SLABS) return;
     ao.slabs = core_alloc(slab_count * sizeof *ao.slabs);
-    ao.filled = core_calloc(column_count, 1);
     ao.tops = core_alloc(column_count * sizeof *ao.tops);
-    mesh_ao_tops(&ao);
+    mesh_ao_fill(&ao);
     for (size_t i = 0; i < b->vertex_count; i++) {
         terrain_vertex *v = &b->vertices[i];
         double p[3];
@@ -386,7 +373,6 @@ static void mesh_openness(const mesh_builder *b, terrain_world *world, const dou
         v->occlusion = (uint8_t)(255 - (int)floor(fmin(fmax(open, 0.0), 1.0) * 255.0 + 0.5));
     }
     core_free(ao.slabs, slab_count * sizeof *ao.slabs);
-    core_free(ao.filled, column_count);
     core_free(ao.tops, column_count * sizeof *ao.tops);
 }
 
