@@ -523,6 +523,9 @@ terrain_clipmap_stats terrain_clipmap_stats_get(const terrain_clipmap *clipmap);
 /* terrain_renderer_draw draws the clipmap after the meshes and before the sky (NULL = none);
  * the clipmap is not owned and must outlive its use here. */
 void terrain_renderer_set_clipmap(terrain_renderer *renderer, terrain_clipmap *clipmap);
+/* Turns the vertices' ambient occlusion on or off from the next draw (as the desc's
+ * no_occlusion; for comparisons and benchmarks). */
+void terrain_renderer_set_occlusion(terrain_renderer *renderer, bool on);
 
 /* ---- in the ECS --------------------------------------------------------------------------- */
 

@@ -132,6 +132,8 @@ terrain_renderer *terrain_renderer_create(gfx_context *gfx, const terrain_render
 
 void terrain_renderer_set_clipmap(terrain_renderer *r, terrain_clipmap *clipmap) { r->far_terrain = clipmap; }
 
+void terrain_renderer_set_occlusion(terrain_renderer *r, bool on) { r->desc.no_occlusion = !on; }
+
 void terrain_renderer_destroy(terrain_renderer *r) {
     if (!r) return;
     gfx_texture_destroy(&r->materials);

@@ -5,8 +5,8 @@
  *   gfx.ao.frame_ms.640x360       frame ms the occlusion adds on the world walk's start view
  *                                 (seed 1, the spawn, facing +z, the walker's pitch; grass off),
  *                                 640×360: the frame's wall time lit with the vertices' openness
- *                                 less the same frame with terrain_renderer_desc.no_occlusion
- *                                 (peers in one run). The openness is computed when a chunk is
+ *                                 less the same frames just before with the occlusion off
+ *                                 (terrain_renderer_set_occlusion; paired runs in one app). The openness is computed when a chunk is
  *                                 meshed (terrain.mesh.chunk32 against .no_ao), so a frame only
  *                                 reads one more byte a vertex and does two multiplies a fragment:
  *                                 expected ≈ 0, within the noise.
@@ -16,54 +16,42 @@
 
 #include "core/core.h"
 #include "game/app.h"
+#include "terrain/terrain.h"
 
 #include <math.h>
 
 #define AO_BENCH_FRAMES 20
 #define AO_BENCH_RUNS 7
 
-static double sample_frames(void *user) {
-    game_app *app = user;
+static double sample_frames(game_app *app) {
     uint64_t start = core_time_ns();
     for (int i = 0; i < AO_BENCH_FRAMES; i++) game_app_frame(app);
     return (double)(core_time_ns() - start) * 1e-6 / AO_BENCH_FRAMES;
 }
 
-/* AO_BENCH_RUNS samples of AO_BENCH_FRAMES frames each, once the start area is loaded. */
-static bool view_frames(bench_context *ctx, bool no_occlusion, double *frame_ms) {
+/* One app, loaded once; each run times AO_BENCH_FRAMES frames with the occlusion and as many
+ * without, back to back, so that what else the machine does weighs on both alike. */
+void bench_group_terrain_ao(bench_context *ctx) {
+    if (!bench_wants(ctx, "gfx.ao.frame_ms")) return;
     game_app *app = game_app_create(&(game_app_desc){ .seed = 1, .width = 640, .height = 360, .headless = true,
                                                       .threads = bench_threads(ctx), .frames = 1000000,
                                                       .grass = GRASS_OFF, .no_hud = true,
-                                                      .no_occlusion = no_occlusion,
                                                       .look_set = true, .look = { 0, -0.1 * 180 / M_PI } });
-    if (!app) return false;
-    while (!game_app_loaded(app)) game_app_frame(app);
-    for (int i = 0; i < 30; i++) game_app_frame(app);   /* what streams in after loading */
-    for (int r = 0; r < AO_BENCH_RUNS; r++) frame_ms[r] = sample_frames(app);
-    game_app_destroy(app);
-    return true;
-}
-
-static double median_of(const double *samples, int count) {
-    double sorted[AO_BENCH_RUNS];
-    for (int i = 0; i < count; i++) sorted[i] = samples[i];
-    for (int i = 1; i < count; i++)
-        for (int j = i; j > 0 && sorted[j] < sorted[j - 1]; j--) {
-            double t = sorted[j];
-            sorted[j] = sorted[j - 1], sorted[j - 1] = t;
-        }
-    return sorted[count / 2];
-}
-
-void bench_group_terrain_ao(bench_context *ctx) {
-    if (!bench_wants(ctx, "gfx.ao.frame_ms")) return;
-    double with[AO_BENCH_RUNS], without[AO_BENCH_RUNS], added[AO_BENCH_RUNS];
-    if (!view_frames(ctx, true, without) || !view_frames(ctx, false, with)) {
+    if (!app) {
         core_error("bench", "gfx.ao: the world did not start; rows skipped");
         return;
     }
-    double base = median_of(without, AO_BENCH_RUNS);
-    for (int r = 0; r < AO_BENCH_RUNS; r++) added[r] = with[r] - base;
+    while (!game_app_loaded(app)) game_app_frame(app);
+    for (int i = 0; i < 30; i++) game_app_frame(app);   /* what streams in after loading */
+    terrain_renderer *renderer = game_app_renderer(app);
+    double added[AO_BENCH_RUNS], without[AO_BENCH_RUNS];
+    for (int r = 0; r < AO_BENCH_RUNS; r++) {
+        terrain_renderer_set_occlusion(renderer, false);
+        without[r] = sample_frames(app);
+        terrain_renderer_set_occlusion(renderer, true);
+        added[r] = sample_frames(app) - without[r];
+    }
+    game_app_destroy(app);
     bench_record(ctx, "gfx.ao.frame_ms.640x360", "ms", added, AO_BENCH_RUNS);
     bench_record(ctx, "gfx.ao.frame_ms.640x360.off", "ms", without, AO_BENCH_RUNS);
 }
