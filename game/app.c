@@ -354,7 +354,8 @@ game_app *game_app_create(const game_app_desc *desc) {
     /* Thin fog: the clipmap shows ground out to several kilometres. */
     float fog_density = d->no_clipmap ? 0 : 0.0005f;
     app->renderer = terrain_renderer_create(app->gfx, &(terrain_renderer_desc){
-        .sea_level = terrain_world_generation(app->world)->sea_level, .fog_density = fog_density });
+        .sea_level = terrain_world_generation(app->world)->sea_level, .fog_density = fog_density,
+        .no_occlusion = d->no_occlusion });
     if (!app->renderer || !app_open_input(app) || !(app->hud = gfx_text_create(app->gfx))) goto fail;
     if (!d->no_clipmap) {
         app->clipmap = terrain_clipmap_create(&(terrain_clipmap_desc){
@@ -677,4 +678,5 @@ const double *game_app_frame_times(const game_app *app, int *count) {
 terrain_world *game_app_world(game_app *app) { return app->world; }
 terrain_ecs *game_app_terrain(game_app *app) { return app->terrain; }
 grass_system *game_app_grass(game_app *app) { return app->grass; }
+terrain_renderer *game_app_renderer(game_app *app) { return app->renderer; }
 bool game_app_loaded(const game_app *app) { return !app->loading; }

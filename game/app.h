@@ -66,6 +66,8 @@ typedef struct game_app_desc {
     bool no_hud;
     grass_quality grass;              /* grass patches (vegetation.h); 0 = low */
     bool no_head_bob;                 /* the view without the walking dip (game_player_bob) */
+    bool no_occlusion;                /* terrain lit without its ambient occlusion
+                                         (terrain_renderer_desc.no_occlusion) */
     double max_loading_seconds;       /* give up waiting for the start area; 0 = 300 s */
     /* A folder that keeps the world (terrain.h, "the world folder"): DIR/world.db holds the
      * seed, the edits and the player's pose. Loaded at the start (a damaged database is
@@ -126,6 +128,7 @@ game_app_stats game_app_stats_get(const game_app *app);
 terrain_world *game_app_world(game_app *app);
 terrain_ecs *game_app_terrain(game_app *app);
 grass_system *game_app_grass(game_app *app);     /* NULL with grass off */
+terrain_renderer *game_app_renderer(game_app *app);
 /* Whether the start area has loaded (the player moves from then on). */
 bool game_app_loaded(const game_app *app);
 /* The frame's CPU times (ms) past loading, in order; count in *count. */

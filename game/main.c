@@ -34,7 +34,7 @@ typedef struct options {
     core_common_args common;
     const char *size, *screenshot, *walk, *record, *replay, *bindings, *world, *grass, *at, *look;
     int seed, frames, radius, levels, memory_mb;
-    bool headless, tour, no_head_bob;
+    bool headless, tour, no_head_bob, no_ao;
 } options;
 
 /* `text` as count finite numbers, comma-separated with nothing after them, each within
@@ -77,6 +77,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "size", CORE_OPTION_STRING, &o->size, "WxH", "framebuffer size (default 1280x720)" },
         { "headless", CORE_OPTION_FLAG, &o->headless, NULL, "render offscreen with OSMesa" },
         { "no-head-bob", CORE_OPTION_FLAG, &o->no_head_bob, NULL, "keep the view level while walking" },
+        { "no-ao", CORE_OPTION_FLAG, &o->no_ao, NULL, "light the terrain without its ambient occlusion" },
         { "frames", CORE_OPTION_INT, &o->frames, "N", "stop after N frames past loading (0 = when closed)", 0,
           100000000 },
         { "walk", CORE_OPTION_STRING, &o->walk, "SCRIPT", "scripted walk: " GAME_WALK_USAGE },
@@ -180,6 +181,7 @@ int main(int argc, char **argv) {
     desc.walk = o.walk || o.tour ? &walk : NULL;
     desc.face_open_view = o.tour;
     desc.no_head_bob = o.no_head_bob;
+    desc.no_occlusion = o.no_ao;
     desc.record_path = o.record;
     desc.replay_path = o.replay;
     desc.bindings_path = o.bindings;

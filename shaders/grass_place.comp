@@ -14,7 +14,7 @@
 
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 0) readonly buffer Vertices { uint vertex_words[]; };   // terrain_vertex, 7 words
+layout(std430, binding = 0) readonly buffer Vertices { uint vertex_words[]; };   // terrain_vertex, 8 words
 layout(std430, binding = 1) readonly buffer Indices { uint indices[]; };
 layout(std430, binding = 2) buffer Counts { uint counts[]; };
 layout(std430, binding = 3) writeonly buffer Tufts { vec4 tufts[]; };           // 2 per tuft
@@ -35,14 +35,14 @@ uniform float u_snow_height;
 const float SKY_MARGIN = 1.5;      // metres of solid allowed above a tuft (the field's smoothing)
 
 vec3 vertex_position(uint v) {
-    return vec3(uintBitsToFloat(vertex_words[v * 7u]), uintBitsToFloat(vertex_words[v * 7u + 1u]),
-                uintBitsToFloat(vertex_words[v * 7u + 2u]));
+    return vec3(uintBitsToFloat(vertex_words[v * 8u]), uintBitsToFloat(vertex_words[v * 8u + 1u]),
+                uintBitsToFloat(vertex_words[v * 8u + 2u]));
 }
 vec3 vertex_normal(uint v) {
-    return vec3(uintBitsToFloat(vertex_words[v * 7u + 3u]), uintBitsToFloat(vertex_words[v * 7u + 4u]),
-                uintBitsToFloat(vertex_words[v * 7u + 5u]));
+    return vec3(uintBitsToFloat(vertex_words[v * 8u + 3u]), uintBitsToFloat(vertex_words[v * 8u + 4u]),
+                uintBitsToFloat(vertex_words[v * 8u + 5u]));
 }
-vec4 vertex_weights(uint v) { return unpackUnorm4x8(vertex_words[v * 7u + 6u]); }
+vec4 vertex_weights(uint v) { return unpackUnorm4x8(vertex_words[v * 8u + 6u]); }
 
 // How much the ground at a point carries grass, 0 … 1: soil (bedrock's weight) below the snow
 // line as the terrain shader tints it green, sand thinly, rocks and water beds never.

@@ -9,12 +9,14 @@ in vec3 v_relative_position;
 in vec3 v_texture_position;
 in vec3 v_normal;
 in vec4 v_weights;
+in float v_openness;
 in float v_height;
 
 uniform sampler2DArray u_materials;          // layers: bedrock, sand, rocks, water bed
 uniform float u_texture_scale;               // texture repeats per metre
 uniform float u_sea_level;
 uniform float u_snow_height;
+uniform float u_occlusion;                   // 1: light by v_openness; 0: as if all open
 
 out vec4 frag_color;
 
@@ -47,6 +49,15 @@ vec3 bedrock_tint(vec3 rock, float height, float slope_degrees) {
     return mix(c, snow, snow_amount);
 }
 
+// common.glsl's light_surface with the mesher's openness (terrain_mesh.c): the sky ambient
+// comes only through the open part of the hemisphere, and the sun a little less in hollows (no
+// shadows to keep it out of a cave yet). Openness 1 gives light_surface exactly.
+vec3 light_surface_open(vec3 albedo, vec3 normal, float openness) {
+    float diffuse = max(dot(normal, u_sun_direction), 0.0) * mix(0.4, 1.0, openness);
+    vec3 ambient = mix(GROUND_BOUNCE, SKY_ZENITH, normal.y * 0.5 + 0.5) * 0.35 * openness;
+    return albedo * (SUN_COLOR * diffuse + ambient);
+}
+
 void main() {
     vec3 n = normalize(v_normal);
     vec3 blend = triplanar_weights(n);
@@ -57,7 +68,7 @@ void main() {
     if (w.y > 0.01) albedo += w.y * material_color(1.0, v_texture_position, blend);
     if (w.z > 0.01) albedo += w.z * material_color(2.0, v_texture_position, blend);
     if (w.w > 0.01) albedo += w.w * material_color(3.0, v_texture_position, blend);
-    vec3 color = light_surface(albedo, n);
+    vec3 color = light_surface_open(albedo, n, mix(1.0, v_openness, u_occlusion));
     // common.glsl's fog works in world space around u_camera_position; here the camera is the
     // origin, so pass relative positions with u_camera_position = 0.
     frag_color = vec4(apply_fog(color, v_relative_position), 1.0);

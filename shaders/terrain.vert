@@ -6,6 +6,7 @@
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec4 a_weights;      // bedrock, sand, rocks, water (unorm8)
+layout(location = 3) in float a_occlusion;   // ambient occlusion from the mesher, 0 = open sky
 
 uniform mat4 u_view_projection;              // camera at the origin
 uniform vec3 u_offset;                       // mesh origin − camera position
@@ -16,6 +17,7 @@ out vec3 v_relative_position;                // to the camera
 out vec3 v_texture_position;                 // for the triplanar projections
 out vec3 v_normal;
 out vec4 v_weights;
+out float v_openness;
 out float v_height;
 
 void main() {
@@ -24,6 +26,7 @@ void main() {
     v_texture_position = a_position + u_texture_offset;
     v_normal = a_normal;
     v_weights = a_weights;
+    v_openness = 1.0 - a_occlusion;
     v_height = a_position.y + u_mesh_y;
     gl_Position = u_view_projection * vec4(relative, 1.0);
 }

@@ -247,11 +247,18 @@ float terrain_field_at(terrain_world *world, double x, double y, double z, float
 
 /* ---- meshes ------------------------------------------------------------------------------- */
 
+/* 32 bytes, laid out for the GPU (terrain_render.c's attributes; grass_place.comp reads the
+ * buffer as 8 words a vertex): position at byte 0, normal at 12, weights at 24, occlusion at 28. */
 typedef struct terrain_vertex {
     float position[3];                /* metres, relative to terrain_mesh.origin */
     float normal[3];                  /* unit, pointing into the air */
-    uint8_t weights[4];               /* visible bedrock, sand, rocks, water around the vertex, /255 */
+    uint8_t weights[4];               /* visible bedrock, sand, rocks, water around the vertex;
+                                         they sum to 255 (000 §6) */
+    uint8_t occlusion;                /* ambient occlusion, /255: 0 = open sky (so a zeroed vertex
+                                         is open), 255 = enclosed; openness = 1 − occlusion/255 */
+    uint8_t reserved[3];              /* 0 */
 } terrain_vertex;
+_Static_assert(sizeof(terrain_vertex) == 32, "terrain_vertex is 8 words on the GPU");
 
 typedef struct terrain_mesh {
     double origin[3];                 /* world position of the vertices' (0, 0, 0) */
@@ -262,15 +269,21 @@ typedef struct terrain_mesh {
 } terrain_mesh;
 
 typedef struct terrain_mesh_desc {
-    terrain_world *world;             /* for material weights; NULL = all bedrock */
+    terrain_world *world;             /* for material weights and occlusion; NULL = all
+                                         bedrock, occlusion 0 (open) */
     int apron;                        /* samples along each border that are read for gradients
                                          but not meshed (1 makes normals agree across chunks) */
     bool no_optimize;                 /* skip meshoptimizer's vertex-cache reordering */
+    bool no_occlusion;                /* occlusion 0 everywhere (skips its cost) */
 } terrain_mesh_desc;
 
 /* Marching cubes over every cell of the field (nx−1 × ny−1 × nz−1 cells, less the apron) with
  * shared vertices; watertight for closed surfaces (ambiguous faces always keep the inside
- * corners apart). mesh.origin is the field's origin. An empty or full field gives an empty mesh
+ * corners apart). mesh.origin is the field's origin. With a world, each vertex also gets its
+ * material weights (000 §6: each material's share of a 1 m segment just under the surface,
+ * exact layer lengths, bilinear over the four columns around it) and its ambient occlusion
+ * (rays through the stacks up to 8 m around the normal; 0 on open ground), both functions of the
+ * vertex's world position and normal alone, so neighbouring chunks agree on shared vertices. An empty or full field gives an empty mesh
  * (NULL arrays) at once. False (message logged) for a field without values or a negative apron.
  * Free with terrain_mesh_free. */
 bool terrain_mesh_build(const terrain_field *field, const terrain_mesh_desc *desc, terrain_mesh *out);
@@ -355,6 +368,7 @@ typedef struct terrain_renderer_desc {
     float snow_height;                /* 0 = 120 m */
     float fog_density;                /* per metre; 0 = 0.0025 */
     float cloud_cover;                /* 0 = 0.45; negative = a clear sky */
+    bool no_occlusion;                /* ignore the vertices' openness (ambient occlusion off) */
 } terrain_renderer_desc;
 
 /* NULL when the shaders do not build (their errors printed at file:line). */
@@ -509,6 +523,9 @@ terrain_clipmap_stats terrain_clipmap_stats_get(const terrain_clipmap *clipmap);
 /* terrain_renderer_draw draws the clipmap after the meshes and before the sky (NULL = none);
  * the clipmap is not owned and must outlive its use here. */
 void terrain_renderer_set_clipmap(terrain_renderer *renderer, terrain_clipmap *clipmap);
+/* Turns the vertices' ambient occlusion on or off from the next draw (as the desc's
+ * no_occlusion; for comparisons and benchmarks). */
+void terrain_renderer_set_occlusion(terrain_renderer *renderer, bool on);
 
 /* ---- in the ECS --------------------------------------------------------------------------- */
 

@@ -217,9 +217,10 @@ static void edits_apply(terrain_ecs *te) {
 }
 
 /* Its samples reach one apron sample and the kernel (one column, one metre up and down) beyond
- * the chunk, and the material weights a column more. */
+ * the chunk, and the material weights a column more; its occlusion's rays reach farther still. */
 bool terrain__mesh_reads_change(int level, int64_t x, int64_t y, int64_t z, const terrain_world_change *change) {
     int64_t step = (int64_t)1 << level, size = TERRAIN_MESH_CELLS * step, pad = step + 2;
+    if (pad < TERRAIN__MESH_OCCLUSION_REACH) pad = TERRAIN__MESH_OCCLUSION_REACH;   /* the occlusion's rays */
     int64_t lo_x = x * size - pad, hi_x = (x + 1) * size + pad;
     int64_t lo_z = z * size - pad, hi_z = (z + 1) * size + pad;
     double lo_y = (double)(y * size - pad), hi_y = (double)((y + 1) * size + pad);

@@ -162,6 +162,14 @@ bool terrain__mesh_chunk_with(terrain__field_sampler sample, void *user, terrain
 bool terrain__mesh_chunk_reference(terrain__field_sampler sample, void *user, terrain_world *weights_world, int64_t x,
                                    int64_t y, int64_t z, const terrain_lod_desc *lod, terrain_mesh *out);
 
+/* How far (metres, columns) beyond its vertices a mesh's occlusion reads the stacks: its rays'
+ * lift and reach, the tent and a slab (terrain_mesh.c). An edit that near remeshes the chunk. */
+#define TERRAIN__MESH_OCCLUSION_REACH 11
+
+/* The material weights the mesher gives a vertex at world position p with unit normal n (000 §6;
+ * terrain_mesh.c says how), summing to 255: for tests that work them out by hand. */
+void terrain__mesh_vertex_weights(terrain_world *world, const double p[3], const float n[3], uint8_t out[4]);
+
 /* ==== end of the field and meshing section ================================================ */
 
 /* ==== the terrain in the ECS, streaming (terrain_ecs.c, terrain_stream.c) ================= */

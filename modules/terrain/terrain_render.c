@@ -132,6 +132,8 @@ terrain_renderer *terrain_renderer_create(gfx_context *gfx, const terrain_render
 
 void terrain_renderer_set_clipmap(terrain_renderer *r, terrain_clipmap *clipmap) { r->far_terrain = clipmap; }
 
+void terrain_renderer_set_occlusion(terrain_renderer *r, bool on) { r->desc.no_occlusion = !on; }
+
 void terrain_renderer_destroy(terrain_renderer *r) {
     if (!r) return;
     gfx_texture_destroy(&r->materials);
@@ -158,7 +160,9 @@ terrain_gpu_mesh terrain_gpu_mesh_upload(const terrain_mesh *mesh) {
         .attributes = { { .components = 3, .offset = offsetof(terrain_vertex, position) },
                         { .components = 3, .offset = offsetof(terrain_vertex, normal) },
                         { .components = 4, .type = GL_UNSIGNED_BYTE, .normalized = true,
-                          .offset = offsetof(terrain_vertex, weights) } } });
+                          .offset = offsetof(terrain_vertex, weights) },
+                        { .components = 1, .type = GL_UNSIGNED_BYTE, .normalized = true,
+                          .offset = offsetof(terrain_vertex, occlusion) } } });
     gpu.vertex_buffer = vertices.id;
     gpu.index_buffer = indices.id;
     gpu.vertex_array = array.id;
@@ -277,6 +281,7 @@ void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const 
     gfx_uniform_float(gfx, r->terrain, "u_sea_level", r->desc.sea_level);
     gfx_uniform_float(gfx, r->terrain, "u_snow_height", r->desc.snow_height);
     gfx_uniform_int(gfx, r->terrain, "u_materials", 0);
+    gfx_uniform_float(gfx, r->terrain, "u_occlusion", r->desc.no_occlusion ? 0.0f : 1.0f);
     gfx_texture_bind(r->materials, 0);
     for (int i = 0; i < mesh_count; i++) {
         const terrain_gpu_mesh *m = &meshes[i];

@@ -7,6 +7,9 @@
  *                                generation is done before timing (the chunks and their
  *                                neighbours are cached first). Target ≤ 2 ms.
  *   terrain.field.chunk32, terrain.mesh.chunk32   the two halves of the row above, same runs.
+ *   terrain.mesh.chunk32.no_ao   the meshing half again on the same fields without ambient
+ *                                occlusion (terrain_mesh_desc.no_occlusion), same runs: the
+ *                                occlusion's cost is the difference.
  *   terrain.mesh.256             ms to mesh a 256³-sample field (a generated region across the
  *                                surface, sampled beforehand, read from memory), same options.
  *   terrain.mesh.*.ns_per_cell   both meshing rows per cell, and their ratio: how meshing scales
@@ -39,7 +42,7 @@ typedef struct mesh_bench {
     terrain_world *world;
     int64_t chunks[CHUNK_COUNT][3];
     /* Per-run halves of the chunk row, recorded as rows of their own afterwards. */
-    double field_ms[64], mesh_ms[64];
+    double field_ms[64], mesh_ms[64], mesh_no_ao_ms[64];
     int runs_seen;
     double cells_meshed;            /* per chunk, for ns/cell */
     uint64_t triangles;
@@ -70,7 +73,7 @@ static void pick_chunks(mesh_bench *b) {
 
 static double sample_field_mesh_chunk(void *user) {
     mesh_bench *b = user;
-    double field_total = 0.0, mesh_total = 0.0;
+    double field_total = 0.0, mesh_total = 0.0, no_ao_total = 0.0;
     uint64_t triangles = 0;
     for (int c = 0; c < CHUNK_COUNT; c++) {
         const int64_t *chunk = b->chunks[c];
@@ -88,12 +91,19 @@ static double sample_field_mesh_chunk(void *user) {
         mesh_total += core_ns_to_ms(t2 - t1);
         triangles += mesh.index_count / 3;
         terrain_mesh_free(&mesh);
+        /* The same mesh without ambient occlusion (a peer in the same run; not in the row). */
+        uint64_t t3 = core_time_ns();
+        terrain_mesh_build(&field, &(terrain_mesh_desc){ .world = b->world, .apron = CHUNK_APRON, .no_occlusion = true },
+                           &mesh);
+        no_ao_total += core_ns_to_ms(core_time_ns() - t3);
+        terrain_mesh_free(&mesh);
         terrain_field_free(&field);
     }
     /* The harness calls once to warm up, then `runs` times: keep the timed runs' halves. */
     if (b->runs_seen > 0 && b->runs_seen <= (int)CORE_COUNTOF(b->field_ms)) {
         b->field_ms[b->runs_seen - 1] = field_total / CHUNK_COUNT;
         b->mesh_ms[b->runs_seen - 1] = mesh_total / CHUNK_COUNT;
+        b->mesh_no_ao_ms[b->runs_seen - 1] = no_ao_total / CHUNK_COUNT;
     }
     b->runs_seen++;
     b->triangles = triangles / CHUNK_COUNT;
@@ -213,6 +223,7 @@ void bench_group_terrain_mesh(bench_context *ctx) {
             double per_cell[64];
             for (int i = 0; i < recorded; i++) per_cell[i] = b->mesh_ms[i] * 1e6 / chunk_cells;
             bench_record(ctx, "terrain.mesh.chunk32.ns_per_cell", "ns", per_cell, recorded);
+            bench_record(ctx, "terrain.mesh.chunk32.no_ao", "ms", b->mesh_no_ao_ms, recorded);
             chunk_mesh_ms = median(b->mesh_ms, recorded);
         }
         printf("  (chunk32: %llu triangles per chunk on average)\n", (unsigned long long)b->triangles);
