@@ -2,8 +2,17 @@
 // terrain.frag — triplanar texturing with blend exponent p = 8 (000 §6), materials mixed by the
 // per-vertex weights of visible material (000 §6), and bedrock tinted by height bands and slope
 // (002 §4.1: α = (1 − n_y)·90°), then the sun, sky ambient and distance fog of common.glsl.
+//
+// Materials (materials.glsl, textures from terrain_textures.c): per projection the 8 m base is
+// mixed with itself at 25 m (share from the macro layer), then, within u_detail_distance, a 1 m
+// detail layer multiplies the shade (mean 1, so a region's colour does not change) and adds its
+// slopes to the base's normal map (UDN). The summed tangent slopes of each projection meet the
+// geometric normal in a whiteout blend, and the three are mixed with the triplanar weights. The
+// macro layer (200 m) scales brightness and hue. Fetches per material and projection: 2 base, +1
+// detail near the camera; +1 per fragment for the macro layer.
 
 #include "common.glsl"
+#include "materials.glsl"
 
 in vec3 v_relative_position;
 in vec3 v_texture_position;
@@ -11,10 +20,10 @@ in vec3 v_normal;
 in vec4 v_weights;
 in float v_height;
 
-uniform sampler2DArray u_materials;          // layers: bedrock, sand, rocks, water bed
-uniform float u_texture_scale;               // texture repeats per metre
 uniform float u_sea_level;
 uniform float u_snow_height;
+uniform float u_detail_scale;                // detail repeats per metre (1 / 1 m)
+uniform float u_detail_distance;             // metres; 0 = no detail layer
 
 out vec4 frag_color;
 
@@ -25,13 +34,38 @@ vec3 triplanar_weights(vec3 n) {
     return w / max(w.x + w.y + w.z, 1e-6);
 }
 
-vec3 material_color(float layer, vec3 position, vec3 blend) {
-    vec3 p = position * u_texture_scale;
-    vec3 c = vec3(0.0);
-    if (blend.x > 0.01) c += blend.x * texture(u_materials, vec3(p.zy, layer)).rgb;
-    if (blend.y > 0.01) c += blend.y * texture(u_materials, vec3(p.xz, layer)).rgb;
-    if (blend.z > 0.01) c += blend.z * texture(u_materials, vec3(p.xy, layer)).rgb;
-    return c;
+// One material's shade over the projections; its tangent slopes, times its weight, are added to
+// `slopes` (per projection, in that projection's texture axes).
+float material_shade(float layer, float weight, vec3 blend, float detail, float coarse, inout vec2 slopes[3]) {
+    vec2 uv[3] = vec2[3](v_texture_position.zy, v_texture_position.xz, v_texture_position.xy);
+    float shade = 0.0;
+    for (int i = 0; i < 3; i++) {
+        if (blend[i] <= 0.01) continue;
+        vec3 base = mix(texture(u_materials, vec3(uv[i] * u_texture_scale, layer)).rgb,
+                        texture(u_materials, vec3(uv[i] * u_texture_scale2, layer)).rgb, coarse);
+        float s = base.r;
+        vec2 slope = base.gb * 2.0 - 1.0;
+        if (detail > 0.0) {
+            vec3 d = texture(u_detail, vec3(uv[i] * u_detail_scale, layer)).rgb;
+            s *= mix(1.0, d.r * 2.0, detail);
+            slope += (d.gb * 2.0 - 1.0) * detail;   // UDN: the slopes of two height maps add
+        }
+        shade += blend[i] * s;
+        slopes[i] += weight * slope;
+    }
+    return shade;
+}
+
+// Triplanar normal mapping, whiteout blend per axis: projection x reads (z, y), y reads (x, z),
+// z reads (x, y). Each projection's slopes are added to the geometric normal's components in its
+// texture axes and the axis' own component is the normal's, sign included, so faces looking down
+// an axis are lit as those looking up. The coordinates are world positions, never mirrored, so a
+// height map's slope points the same world way on both faces of an axis: no flip is needed.
+vec3 triplanar_normal(vec3 n, vec3 blend, vec2 slopes[3]) {
+    vec3 along_x = vec3(n.x, n.y + slopes[0].y, n.z + slopes[0].x);
+    vec3 along_y = vec3(n.x + slopes[1].x, n.y, n.z + slopes[1].y);
+    vec3 along_z = vec3(n.x + slopes[2].x, n.y + slopes[2].y, n.z);
+    return normalize(along_x * blend.x + along_y * blend.y + along_z * blend.z);
 }
 
 // 002 §4.1: bands by height (wet shore, grass, bare rock, snow), with steep slopes bare.
@@ -52,12 +86,20 @@ void main() {
     vec3 blend = triplanar_weights(n);
     vec4 w = v_weights / max(dot(v_weights, vec4(1.0)), 1e-4);
     float slope = (1.0 - clamp(n.y, 0.0, 1.0)) * 90.0;
+    // The detail fades out over the second half of its reach: further away its 1 m repeat is a
+    // few pixels, averaged by the mipmaps to 1 anyway, and its fetches are saved.
+    float detail = u_detail_distance > 0.0
+                 ? 1.0 - smoothstep(0.5 * u_detail_distance, u_detail_distance, length(v_relative_position)) : 0.0;
+    vec4 macro = macro_sample(v_texture_position);
+    float coarse = macro_coarse_share(macro);
+    vec2 slopes[3] = vec2[3](vec2(0.0), vec2(0.0), vec2(0.0));
     vec3 albedo = vec3(0.0);
-    if (w.x > 0.01) albedo += w.x * bedrock_tint(material_color(0.0, v_texture_position, blend), v_height, slope);
-    if (w.y > 0.01) albedo += w.y * material_color(1.0, v_texture_position, blend);
-    if (w.z > 0.01) albedo += w.z * material_color(2.0, v_texture_position, blend);
-    if (w.w > 0.01) albedo += w.w * material_color(3.0, v_texture_position, blend);
-    vec3 color = light_surface(albedo, n);
+    if (w.x > 0.01) albedo += w.x * bedrock_tint(u_material_tints[0] * material_shade(0.0, w.x, blend, detail, coarse, slopes), v_height, slope);
+    if (w.y > 0.01) albedo += w.y * u_material_tints[1] * material_shade(1.0, w.y, blend, detail, coarse, slopes);
+    if (w.z > 0.01) albedo += w.z * u_material_tints[2] * material_shade(2.0, w.z, blend, detail, coarse, slopes);
+    if (w.w > 0.01) albedo += w.w * u_material_tints[3] * material_shade(3.0, w.w, blend, detail, coarse, slopes);
+    albedo *= macro_tint(macro);
+    vec3 color = light_surface(albedo, triplanar_normal(n, blend, slopes));
     // common.glsl's fog works in world space around u_camera_position; here the camera is the
     // origin, so pass relative positions with u_camera_position = 0.
     frag_color = vec4(apply_fog(color, v_relative_position), 1.0);

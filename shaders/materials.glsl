@@ -1,0 +1,29 @@
+// materials.glsl — what terrain.frag and clipmap.frag share about the material textures
+// (made in modules/terrain/terrain_textures.c; layouts in terrain_internal.h).
+
+uniform sampler2DArray u_materials;   // per material, 8 m a repeat: R shade, GB normal x, y
+uniform sampler2DArray u_detail;      // per material, 1 m: R albedo multiplier / 2, GB normal;
+                                      // layer 4, 200 m: the macro variation
+uniform vec3 u_material_tints[4];     // albedo = tint · shade
+uniform float u_texture_scale;        // base repeats per metre (1 / 8 m)
+uniform float u_texture_scale2;       // the base again, coarser (1 / 25 m), against repeats
+uniform float u_macro_scale;          // macro repeats per metre (1 / 200 m)
+
+const float MACRO_LAYER = 4.0;
+
+// Low-frequency variation over the ground's plan, so a hillside at 200 m shows no grid of 8 m
+// repeats: brightness and a warm/cool hue shift, both with a mean of 1 over the layer (the far
+// colours stay the material means), and how much of the coarser base to blend in.
+vec4 macro_sample(vec3 texture_position) {
+    return texture(u_detail, vec3(texture_position.xz * u_macro_scale, MACRO_LAYER));
+}
+
+vec3 macro_tint(vec4 macro) {
+    float brightness = macro.r * 2.0;
+    float hue = macro.g * 2.0 - 1.0;
+    return brightness * vec3(1.0 + 0.4 * hue, 1.0, 1.0 - 0.4 * hue);
+}
+
+// The share of the 25 m sample in the base: varies over the plan so neither scale's repeats
+// line up into a grid.
+float macro_coarse_share(vec4 macro) { return 0.2 + 0.5 * macro.b; }
