@@ -48,7 +48,8 @@ static void terrain_material_textures(terrain_renderer *r) {
     r->texture_ms = (double)(core_time_ns() - start) * 1e-6;
 }
 
-/* The uniforms both terrain programs read for their materials. */
+/* The uniforms both terrain programs read for their materials. The detail array goes on unit 2:
+ * the clipmap keeps its heights on unit 1 (terrain_clipmap.c). */
 static void terrain_material_uniforms(terrain_renderer *r, gfx_program program) {
     static const char *const tints[TERRAIN__MATERIAL_LAYERS] = {
         "u_material_tints[0]", "u_material_tints[1]", "u_material_tints[2]", "u_material_tints[3]" };
@@ -59,9 +60,9 @@ static void terrain_material_uniforms(terrain_renderer *r, gfx_program program) 
     gfx_uniform_float(gfx, program, "u_texture_scale2", 1.0f / TERRAIN__BASE2_METRES);
     gfx_uniform_float(gfx, program, "u_macro_scale", 1.0f / TERRAIN__MACRO_METRES);
     gfx_uniform_int(gfx, program, "u_materials", 0);
-    gfx_uniform_int(gfx, program, "u_detail", 1);
+    gfx_uniform_int(gfx, program, "u_detail", 2);
     gfx_texture_bind(r->materials, 0);
-    gfx_texture_bind(r->detail, 1);
+    gfx_texture_bind(r->detail, 2);
 }
 
 double terrain_renderer_texture_ms(const terrain_renderer *r) { return r->texture_ms; }

@@ -125,13 +125,13 @@ static texture_texel detail_texel(int layer, float u, float v) {
     if (layer == 0) {        /* bedrock: cracks along the edges of cells, not all of them open
                                 (a noise picks which), over fine strata and grain */
         /* The cells' coordinates bent by a tiling noise: crooked cracks, not straight edges. */
-        float bend_u = 0.04f * (texture_fbm(115, u, v, 4, 2) - 0.5f), bend_v = 0.04f * (texture_fbm(116, u, v, 4, 2) - 0.5f);
+        float bend_u = 0.08f * (texture_fbm(115, u, v, 4, 2) - 0.5f), bend_v = 0.08f * (texture_fbm(116, u, v, 4, 2) - 0.5f);
         texture_cell c = texture_cells(111, u + bend_u, v + bend_v, 5);
         float open = fminf(fmaxf((texture_fbm(114, u, v, 4, 2) - 0.4f) * 5.0f, 0.0f), 1.0f);
         float crack = (1.0f - fminf((c.f2 - c.f1) * 16.0f, 1.0f)) * open;
         float strata = 0.5f + 0.5f * sinf((v * 20.0f + texture_fbm(112, u, v, 3, 2) * 2.0f) * 6.2831853f);
         float grain = texture_fbm(113, u, v, 64, 2);
-        return (texture_texel){ 0.9f + 0.05f * strata + 0.25f * grain - 0.5f * crack,
+        return (texture_texel){ 0.9f + 0.05f * strata + 0.25f * grain - 0.35f * crack,
                                 0.3f * strata + 0.6f * grain - 1.5f * crack };
     } else if (layer == 1) { /* sand: grains (two texels each) over small wind ripples */
         float grain = texture_value_noise(121, u * 128.0f, v * 128.0f, 128);
