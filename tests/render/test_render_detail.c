@@ -182,3 +182,58 @@ Test(render_detail, from_afar_the_detail_averages_out) {
     render_image_free(&off);
     render_image_free(&near_default);
 }
+
+/* A wall in the plane x = 0 facing `facing` (+1 or −1), both windings (culling keeps one). */
+static terrain_mesh wall(float facing) {
+    terrain_mesh mesh = { .vertex_count = 4, .index_count = 12 };
+    mesh.vertices = calloc(4, sizeof *mesh.vertices);
+    mesh.indices = malloc(12 * sizeof *mesh.indices);
+    const float corners[4][2] = { { -50, -50 }, { -50, 50 }, { 50, 50 }, { 50, -50 } };   /* y, z */
+    for (int i = 0; i < 4; i++)
+        mesh.vertices[i] = (terrain_vertex){ .position = { 0, corners[i][0], corners[i][1] }, .normal = { facing, 0, 0 },
+                                             .weights = { 255, 0, 0, 0 } };
+    const uint32_t indices[12] = { 0, 1, 2, 0, 2, 3, 0, 2, 1, 0, 3, 2 };
+    memcpy(mesh.indices, indices, sizeof indices);
+    mesh.bounds_min[1] = mesh.bounds_min[2] = -50;
+    mesh.bounds_max[1] = mesh.bounds_max[2] = 50;
+    return mesh;
+}
+
+/* Mean luminance of the wall facing `facing`, seen from 4 m in front of it, the sun along
+ * `sun_x` (±1) and a little above. */
+static double wall_luminance(float facing, float sun_x) {
+    gfx_context *gfx = render_offscreen(W, H);
+    terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){
+        .sea_level = -100, .fog_density = 1e-9f, .cloud_cover = -1 });
+    cr_assert(renderer);
+    terrain_mesh mesh = wall(facing);
+    terrain_gpu_mesh gpu = terrain_gpu_mesh_upload(&mesh);
+    /* yaw 0 looks along −z and +90° along +x: −90° looks at the +x face from +x. */
+    terrain_view view = { .camera = { 4.0 * facing, 1.3, 2.1 }, .yaw = -1.5707963f * facing, .aspect = (float)W / H,
+                          .sun_direction = { sun_x, 0.3f, 0 } };
+    gfx_frame_begin(gfx);
+    terrain_renderer_draw(renderer, &view, &gpu, 1);
+    render_image image = { W, H, malloc(W * H * 4) };
+    gfx_read_pixels(gfx, image.rgba);
+    gfx_frame_end(gfx);
+    double sum = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) sum += render_luminance(render_pixel(&image, x, y));
+    render_image_free(&image);
+    terrain_gpu_mesh_destroy(&gpu);
+    free(mesh.vertices);
+    free(mesh.indices);
+    terrain_renderer_destroy(renderer);
+    gfx_destroy(gfx);
+    return sum / (W * H);
+}
+
+/* Normal mapping keeps each projection's sign: a face looking down −x, lit from −x, is as bright
+ * as the face looking up +x lit from +x (both sample the same texels, mirrored in the picture,
+ * and a slope leans the same world way on both), and both are far brighter than a face lit from
+ * behind (ambient only). A normal map that dropped the sign would light the −x face from +x. */
+Test(render_detail, normal_mapping_lights_both_faces_of_an_axis_alike) {
+    double plus = wall_luminance(1, 1), minus = wall_luminance(-1, -1), behind = wall_luminance(1, -1);
+    cr_assert_lt(fabs(plus - minus), 0.03 * plus, "+x face %.1f, −x face %.1f", plus, minus);
+    cr_assert_gt(plus, 1.5 * behind, "lit %.1f, lit from behind %.1f", plus, behind);
+}
