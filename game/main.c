@@ -89,7 +89,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "radius", CORE_OPTION_INT, &o->radius, "R", "full-detail chunks of 32 m each way (default 2)", 1, 32 },
         { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
         { "grass", CORE_OPTION_STRING, &o->grass, "off|low|high", "grass patches (default low)" },
-        { "detail", CORE_OPTION_STRING, &o->detail, "on|off", "the ground's 1 m detail layer (default on)" },
+        { "detail", CORE_OPTION_STRING, &o->detail, "on|off", "the ground's 1 m detail layer and scale blend (default on)" },
         { "memory", CORE_OPTION_INT, &o->memory_mb, "MB", "memory budget for terrain (default 384)", 16, 65536 },
         { "at", CORE_OPTION_STRING, &o->at, "X,Y,Z", "start with the eye here, metres (flying if it must)" },
         { "look", CORE_OPTION_STRING, &o->look, "YAW,PITCH", "start looking this way, degrees (yaw 0 = +z, "

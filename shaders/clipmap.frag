@@ -33,8 +33,9 @@ const float TEXTURE_FAR = 400.0;      // metres: beyond, an 8 m texture repeat i
 // colour, what its mipmaps tend to anyway, for no fetch. No normal map or detail layer: at the
 // clipmap's distances they average out (the detail to 1, the slopes to 0).
 float base_shade(float layer, vec2 uv, float coarse) {
-    return mix(texture(u_materials, vec3(uv * u_texture_scale, layer)).r,
-               texture(u_materials, vec3(uv * u_texture_scale2, layer)).r, coarse);
+    float s = texture(u_materials, vec3(uv * u_texture_scale, layer)).r;
+    if (coarse > 0.0) s = mix(s, texture(u_materials, vec3(uv * u_texture_scale2, layer)).r, coarse);
+    return s;
 }
 
 vec3 material(float layer, vec3 tint, vec3 mean, vec3 position, vec3 w, float far, float coarse) {

@@ -8,6 +8,7 @@ uniform vec3 u_material_tints[4];     // albedo = tint · shade
 uniform float u_texture_scale;        // base repeats per metre (1 / 8 m)
 uniform float u_texture_scale2;       // the base again, coarser (1 / 25 m), against repeats
 uniform float u_macro_scale;          // macro repeats per metre (1 / 200 m)
+uniform float u_scale_blend;          // 1: mix in the 25 m sample; 0: not (the low quality)
 
 const float MACRO_LAYER = 4.0;
 
@@ -25,5 +26,5 @@ vec3 macro_tint(vec4 macro) {
 }
 
 // The share of the 25 m sample in the base: varies over the plan so neither scale's repeats
-// line up into a grid.
-float macro_coarse_share(vec4 macro) { return 0.2 + 0.5 * macro.b; }
+// line up into a grid. Zero skips the sample's fetch (llvmpipe skips what no pixel needs).
+float macro_coarse_share(vec4 macro) { return (0.2 + 0.5 * macro.b) * u_scale_blend; }

@@ -357,8 +357,9 @@ typedef struct terrain_renderer_desc {
     float cloud_cover;                /* 0 = 0.45; negative = a clear sky */
     float detail_distance;            /* metres to which the 1 m detail layer (grains, cracks,
                                          pebbles) reaches, fading out over the second half;
-                                         0 = 16 m; negative = no detail layer (the quality
-                                         setting: its texture fetches are skipped) */
+                                         0 = 16 m; negative = the low quality: no detail layer
+                                         and no 25 m scale blend (their fetches skipped; normal
+                                         maps and the macro variation stay) */
 } terrain_renderer_desc;
 
 /* NULL when the shaders do not build (their errors printed at file:line). */

@@ -62,6 +62,8 @@ static void terrain_material_uniforms(terrain_renderer *r, gfx_program program) 
     gfx_uniform_float(gfx, program, "u_texture_scale", 1.0f / TERRAIN__BASE_METRES);
     gfx_uniform_float(gfx, program, "u_texture_scale2", 1.0f / TERRAIN__BASE2_METRES);
     gfx_uniform_float(gfx, program, "u_macro_scale", 1.0f / TERRAIN__MACRO_METRES);
+    /* The low quality (no detail) drops the 25 m sample too: the two extra fetches that cost. */
+    gfx_uniform_float(gfx, program, "u_scale_blend", r->desc.detail_distance > 0 ? 1.0f : 0.0f);
     gfx_uniform_int(gfx, program, "u_materials", 0);
     gfx_uniform_int(gfx, program, "u_detail", 2);
     gfx_texture_bind(r->materials, 0);

@@ -99,7 +99,9 @@ static terrain_mesh flat_bedrock(float size) {
 }
 
 /* The ground from `height` metres above (3.3, ·, 5.6), looking straight down, under a low sun
- * (so that relief shows), with the detail layer reaching `detail_distance` (< 0: none). */
+ * (so that relief shows), with the detail layer reaching `detail_distance` (< 0: the low
+ * quality, also without the 25 m scale blend; NO_DETAIL: no detail, all else as by default). */
+#define NO_DETAIL 0.001f
 static render_image render_ground(float detail_distance, double height) {
     gfx_context *gfx = render_offscreen(W, H);
     terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){
@@ -143,7 +145,7 @@ static void region_mean(const render_image *image, double mean[3]) {
 }
 
 Test(render_detail, a_metre_above_bedrock_the_detail_sharpens_the_ground) {
-    render_image on = render_ground(0, 1.0), off = render_ground(-1, 1.0);
+    render_image on = render_ground(0, 1.0), off = render_ground(NO_DETAIL, 1.0);
     double contrast_on = local_contrast(&on), contrast_off = local_contrast(&off);
     /* From 1 m the 8 m base is magnified ~5× (32 texels a metre over ~170 pixels): nearly
      * smooth. The detail's 256 texels a metre put grains and cracks on every few pixels. */
@@ -163,7 +165,7 @@ Test(render_detail, a_metre_above_bedrock_the_detail_sharpens_the_ground) {
 Test(render_detail, from_afar_the_detail_averages_out) {
     /* The detail forced to reach 1 km, so that what is compared is its average through the
      * mipmaps (by default it has faded out long before 60 m). */
-    render_image on = render_ground(1000, 60.0), off = render_ground(-1, 60.0);
+    render_image on = render_ground(1000, 60.0), off = render_ground(NO_DETAIL, 60.0);
     double mean_on[3], mean_off[3];
     region_mean(&on, mean_on);
     region_mean(&off, mean_off);
@@ -178,6 +180,14 @@ Test(render_detail, from_afar_the_detail_averages_out) {
         if (d > worst) worst = d;
     }
     cr_assert_eq(worst, 0, "largest channel difference %d at 60 m", worst);
+    /* The low quality differs there only by the 25 m scale blend, which keeps the mean. */
+    render_image low = render_ground(-1, 60.0);
+    double mean_low[3];
+    region_mean(&low, mean_low);
+    for (int c = 0; c < 3; c++)
+        cr_assert_lt(fabs(mean_low[c] - mean_off[c]), 0.03 * mean_off[c], "channel %d: %.2f low, %.2f default", c,
+                     mean_low[c], mean_off[c]);
+    render_image_free(&low);
     render_image_free(&on);
     render_image_free(&off);
     render_image_free(&near_default);
