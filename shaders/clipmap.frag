@@ -34,7 +34,8 @@ const float TEXTURE_FAR = 400.0;      // metres: beyond, an 8 m texture repeat i
 // clipmap's distances they average out (the detail to 1, the slopes to 0).
 float base_shade(float layer, vec2 uv, float coarse) {
     float s = texture(u_materials, vec3(uv * u_texture_scale, layer)).r;
-    if (coarse > 0.0) s = mix(s, texture(u_materials, vec3(uv * u_texture_scale2, layer)).r, coarse);
+    // On a uniform: llvmpipe skips only such branches (the low quality saves the fetch).
+    if (u_scale_blend > 0.0) s = mix(s, texture(u_materials, vec3(uv * u_texture_scale2, layer)).r, coarse);
     return s;
 }
 
@@ -71,7 +72,10 @@ void main() {
     w *= w; w *= w; w *= w;
     w /= max(w.x + w.y + w.z, 1e-6);
     float slope = (1.0 - clamp(n.y, 0.0, 1.0)) * 90.0;
-    vec4 macro = macro_sample(texture_position);
+    // The macro layer where textures are (beyond, the means show no repeats to break up), for
+    // a fetch saved per pixel on most of the far terrain.
+    vec4 macro = far < 1.0 ? macro_sample(texture_position) : vec4(0.5, 0.5, 0.0, 1.0);
+    macro.rg = mix(macro.rg, vec2(0.5), far);
     float coarse = macro_coarse_share(macro);
     vec3 albedo = rock_bands(material(0.0, u_material_tints[0], u_bedrock_mean, texture_position, w, far, coarse), v_height, slope);
     // Sand: the generator lays sand_depth·(1 − tan/sand_max_slope) metres of it per column, by

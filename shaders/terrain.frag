@@ -3,14 +3,15 @@
 // per-vertex weights of visible material (000 §6), and bedrock tinted by height bands and slope
 // (002 §4.1: α = (1 − n_y)·90°), then the sun, sky ambient and distance fog of common.glsl.
 //
-// Materials (materials.glsl, textures from terrain_textures.c): per projection the 8 m base is
-// mixed with itself at 25 m (share from the macro layer, from 24–48 m out), then, within
-// u_detail_distance, a 1 m detail layer multiplies the shade (mean 1, so a region's colour does
-// not change) and adds its slopes to the base's normal map (UDN). The summed tangent slopes of each projection meet the
+// Materials (materials.glsl, textures from terrain_textures.c): per material and projection the
+// 8 m base gives a shade and tangent slopes. For the dominant material, per projection, the base
+// at 25 m multiplies the albedo (over its mean, from 24–48 m out, share from the macro layer),
+// and within u_detail_distance a 1 m detail layer does too (mean 1, so a region's colour does
+// not change) and adds its slopes (UDN). The summed tangent slopes of each projection meet the
 // geometric normal in a whiteout blend, and the three are mixed with the triplanar weights. The
-// macro layer (200 m) scales brightness and hue. Fetches per material and projection: 1 base, +1
-// for the 25 m sample past 24 m, +1 detail within u_detail_distance; +1 per fragment for the
-// macro layer.
+// macro layer (200 m, read per vertex in terrain.vert) scales brightness and hue. Fetches: 12
+// base (4 materials × 3 projections: llvmpipe runs every branch), +3 at 25 m, +3 detail; the
+// low quality (u_scale_blend = 0, u_detail_distance = 0) skips the last six.
 
 #include "common.glsl"
 #include "materials.glsl"
@@ -20,6 +21,7 @@ in vec3 v_texture_position;
 in vec3 v_normal;
 in vec4 v_weights;
 in float v_height;
+in vec4 v_macro;                             // per vertex: it varies over tens of metres
 
 uniform float u_sea_level;
 uniform float u_snow_height;
@@ -35,35 +37,49 @@ vec3 triplanar_weights(vec3 n) {
     return w / max(w.x + w.y + w.z, 1e-6);
 }
 
-// One projection of one material: its shade (times the detail's multiplier), and its tangent
-// slopes added to `slope`. The 25 m sample only where `coarse` > 0 (away from the camera, where
-// repeats show) and the detail only where `detail` > 0: llvmpipe skips a fetch no pixel of a
-// block needs, and a fetch costs it more than anything else here.
-float projection_shade(float layer, vec2 uv, float detail, float coarse, inout vec2 slope) {
+// One projection of one material: its shade, and its tangent slopes added to `slope`.
+float projection_shade(float layer, vec2 uv, inout vec2 slope) {
     vec3 base = texture(u_materials, vec3(uv * u_texture_scale, layer)).rgb;
-    if (coarse > 0.0) base = mix(base, texture(u_materials, vec3(uv * u_texture_scale2, layer)).rgb, coarse);
-    float s = base.r;
     slope += base.gb * 2.0 - 1.0;
-    if (detail > 0.0) {
-        vec3 d = texture(u_detail, vec3(uv * u_detail_scale, layer)).rgb;
-        s *= mix(1.0, d.r * 2.0, detail);
-        slope += (d.gb * 2.0 - 1.0) * detail;   // UDN: the slopes of two height maps add
-    }
-    return s;
+    return base.r;
 }
 
 // One material's shade over the projections; its tangent slopes, times its weight, are added to
-// `slopes` (per projection, in that projection's texture axes: x reads (z, y), y reads (x, z),
-// z reads (x, y)).
-float material_shade(float layer, float weight, vec3 blend, float detail, float coarse,
-                     inout vec2 slope_x, inout vec2 slope_y, inout vec2 slope_z) {
+// the projections' (each in its texture axes: x reads (z, y), y reads (x, z), z reads (x, y)).
+float material_shade(float layer, float weight, vec3 blend, inout vec2 slope_x, inout vec2 slope_y, inout vec2 slope_z) {
     vec3 p = v_texture_position;
     float shade = 0.0;
     vec2 slope;
-    if (blend.x > 0.01) { slope = vec2(0.0); shade += blend.x * projection_shade(layer, p.zy, detail, coarse, slope); slope_x += weight * slope; }
-    if (blend.y > 0.01) { slope = vec2(0.0); shade += blend.y * projection_shade(layer, p.xz, detail, coarse, slope); slope_y += weight * slope; }
-    if (blend.z > 0.01) { slope = vec2(0.0); shade += blend.z * projection_shade(layer, p.xy, detail, coarse, slope); slope_z += weight * slope; }
+    if (blend.x > 0.01) { slope = vec2(0.0); shade += blend.x * projection_shade(layer, p.zy, slope); slope_x += weight * slope; }
+    if (blend.y > 0.01) { slope = vec2(0.0); shade += blend.y * projection_shade(layer, p.xz, slope); slope_y += weight * slope; }
+    if (blend.z > 0.01) { slope = vec2(0.0); shade += blend.z * projection_shade(layer, p.xy, slope); slope_z += weight * slope; }
     return shade;
+}
+
+// llvmpipe runs both sides of a branch that differs between pixels, fetches included; only a
+// branch on a uniform is really skipped. So what the quality setting leaves out sits under
+// uniform conditions, and the extra layers are read once per projection for the dominant
+// material (`layer`), not once per material: three fetches each.
+
+// The 25 m sample of the dominant material as a factor with a mean of 1 (its shade over its
+// mean shade), mixed in by `coarse`: a pattern that never lines up with the 8 m repeats.
+float coarse_factor(float layer, vec3 blend, float coarse) {
+    vec3 p = v_texture_position * u_texture_scale2;
+    float shade = blend.x * texture(u_materials, vec3(p.zy, layer)).r + blend.y * texture(u_materials, vec3(p.xz, layer)).r
+                + blend.z * texture(u_materials, vec3(p.xy, layer)).r;
+    return mix(1.0, shade / u_mean_shades[int(layer)], coarse);
+}
+
+// The 1 m detail of the dominant material: its multiplier (mean 1), faded by `detail`, and its
+// slopes added to the projections' (UDN: the slopes of two height maps add).
+float detail_factor(float layer, vec3 blend, float detail, inout vec2 slope_x, inout vec2 slope_y, inout vec2 slope_z) {
+    vec3 p = v_texture_position * u_detail_scale;
+    vec3 dx = texture(u_detail, vec3(p.zy, layer)).rgb, dy = texture(u_detail, vec3(p.xz, layer)).rgb;
+    vec3 dz = texture(u_detail, vec3(p.xy, layer)).rgb;
+    slope_x += (dx.gb * 2.0 - 1.0) * detail;
+    slope_y += (dy.gb * 2.0 - 1.0) * detail;
+    slope_z += (dz.gb * 2.0 - 1.0) * detail;
+    return mix(1.0, 2.0 * (blend.x * dx.r + blend.y * dy.r + blend.z * dz.r), detail);
 }
 
 // Triplanar normal mapping, whiteout blend per axis: projection x reads (z, y), y reads (x, z),
@@ -99,18 +115,23 @@ void main() {
     // The detail fades out over the second half of its reach: further away its 1 m repeat is a
     // few pixels, averaged by the mipmaps to 1 anyway, and its fetches are saved.
     float distance = length(v_relative_position);
-    float detail = u_detail_distance > 0.0 ? 1.0 - smoothstep(0.5 * u_detail_distance, u_detail_distance, distance) : 0.0;
-    vec4 macro = macro_sample(v_texture_position);
-    // The 25 m sample fades in from 24 to 48 m: nearer, a screen holds too little ground for the
-    // 8 m repeat to show, and the fetch is saved.
-    float coarse = macro_coarse_share(macro) * smoothstep(24.0, 48.0, distance);
     vec2 slope_x = vec2(0.0), slope_y = vec2(0.0), slope_z = vec2(0.0);
     vec3 albedo = vec3(0.0);
-    if (w.x > 0.01) albedo += w.x * bedrock_tint(u_material_tints[0] * material_shade(0.0, w.x, blend, detail, coarse, slope_x, slope_y, slope_z), v_height, slope);
-    if (w.y > 0.01) albedo += w.y * u_material_tints[1] * material_shade(1.0, w.y, blend, detail, coarse, slope_x, slope_y, slope_z);
-    if (w.z > 0.01) albedo += w.z * u_material_tints[2] * material_shade(2.0, w.z, blend, detail, coarse, slope_x, slope_y, slope_z);
-    if (w.w > 0.01) albedo += w.w * u_material_tints[3] * material_shade(3.0, w.w, blend, detail, coarse, slope_x, slope_y, slope_z);
-    albedo *= macro_tint(macro);
+    if (w.x > 0.01) albedo += w.x * bedrock_tint(u_material_tints[0] * material_shade(0.0, w.x, blend, slope_x, slope_y, slope_z), v_height, slope);
+    if (w.y > 0.01) albedo += w.y * u_material_tints[1] * material_shade(1.0, w.y, blend, slope_x, slope_y, slope_z);
+    if (w.z > 0.01) albedo += w.z * u_material_tints[2] * material_shade(2.0, w.z, blend, slope_x, slope_y, slope_z);
+    if (w.w > 0.01) albedo += w.w * u_material_tints[3] * material_shade(3.0, w.w, blend, slope_x, slope_y, slope_z);
+    float dominant = w.x >= max(w.y, max(w.z, w.w)) ? 0.0 : w.y >= max(w.z, w.w) ? 1.0 : w.z >= w.w ? 2.0 : 3.0;
+    // The 25 m factor fades in from 24 to 48 m: nearer, a screen holds too little ground for
+    // the 8 m repeat to show.
+    if (u_scale_blend > 0.0)
+        albedo *= coarse_factor(dominant, blend, macro_coarse_share(v_macro) * smoothstep(24.0, 48.0, distance));
+    // The detail fades out over the second half of its reach: further away its 1 m repeat is a
+    // few pixels, averaged by the mipmaps to 1 anyway.
+    if (u_detail_distance > 0.0)
+        albedo *= detail_factor(dominant, blend, 1.0 - smoothstep(0.5 * u_detail_distance, u_detail_distance, distance),
+                                slope_x, slope_y, slope_z);
+    albedo *= macro_tint(v_macro);
     vec3 color = light_surface(albedo, triplanar_normal(n, blend, slope_x, slope_y, slope_z));
     // common.glsl's fog works in world space around u_camera_position; here the camera is the
     // origin, so pass relative positions with u_camera_position = 0.

@@ -56,9 +56,13 @@ static void terrain_material_textures(terrain_renderer *r) {
 static void terrain_material_uniforms(terrain_renderer *r, gfx_program program) {
     static const char *const tints[TERRAIN__MATERIAL_LAYERS] = {
         "u_material_tints[0]", "u_material_tints[1]", "u_material_tints[2]", "u_material_tints[3]" };
+    static const char *const mean_shades[TERRAIN__MATERIAL_LAYERS] = {
+        "u_mean_shades[0]", "u_mean_shades[1]", "u_mean_shades[2]", "u_mean_shades[3]" };
     gfx_context *gfx = r->gfx;
-    for (int layer = 0; layer < TERRAIN__MATERIAL_LAYERS; layer++)
+    for (int layer = 0; layer < TERRAIN__MATERIAL_LAYERS; layer++) {
         gfx_uniform_vec3(gfx, program, tints[layer], r->material_tints[layer]);
+        gfx_uniform_float(gfx, program, mean_shades[layer], r->material_means[layer][0] / r->material_tints[layer][0]);
+    }
     gfx_uniform_float(gfx, program, "u_texture_scale", 1.0f / TERRAIN__BASE_METRES);
     gfx_uniform_float(gfx, program, "u_texture_scale2", 1.0f / TERRAIN__BASE2_METRES);
     gfx_uniform_float(gfx, program, "u_macro_scale", 1.0f / TERRAIN__MACRO_METRES);
