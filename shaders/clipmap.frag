@@ -6,15 +6,14 @@
 // the sky (002 §4.4).
 
 #include "common.glsl"
+#include "materials.glsl"
 
 in vec3 v_relative_position;
 in vec3 v_normal;
 in float v_height;
 
-uniform sampler2DArray u_materials;   // bedrock, sand, rocks, water bed (terrain_render.c)
-uniform vec3 u_bedrock_mean, u_sand_mean;  // their layers' mean colours
-uniform float u_texture_scale;        // texture repeats per metre
-uniform vec3 u_texture_offset;        // camera position modulo the texture period
+uniform vec3 u_bedrock_mean, u_sand_mean;  // their layers' mean colours (tint · mean shade)
+uniform vec3 u_texture_offset;        // camera position modulo the textures' period (200 m)
 uniform float u_sea_level;            // the shore band of the renderer
 uniform float u_snow_height;
 uniform float u_water_level;          // the generator's sea level: water fills below it
@@ -30,16 +29,24 @@ const vec3 WATER_DEEP = vec3(0.05, 0.16, 0.28);
 const float TEXTURE_FAR = 400.0;      // metres: beyond, an 8 m texture repeat is a few pixels
 
 // 000 §6's triplanar blend with weights w = |n_i|^8 / Σ|n_j|^8 (projections under 5 % left
-// out); far away the material's mean colour, what its mipmaps tend to anyway, for no fetch.
-vec3 material(float layer, vec3 mean, vec3 position, vec3 w, float far) {
+// out), the base mixed with itself at 25 m as terrain.frag does; far away the material's mean
+// colour, what its mipmaps tend to anyway, for no fetch. No normal map or detail layer: at the
+// clipmap's distances they average out (the detail to 1, the slopes to 0).
+float base_shade(float layer, vec2 uv, float coarse) {
+    float s = texture(u_materials, vec3(uv * u_texture_scale, layer)).r;
+    // On a uniform: llvmpipe skips only such branches (the low quality saves the fetch).
+    if (u_scale_blend > 0.0) s = mix(s, texture(u_materials, vec3(uv * u_texture_scale2, layer)).r, coarse);
+    return s;
+}
+
+vec3 material(float layer, vec3 tint, vec3 mean, vec3 position, vec3 w, float far, float coarse) {
     if (far >= 1.0) return mean;
-    vec3 p = position * u_texture_scale;
-    vec3 c = vec3(0.0);
+    float c = 0.0;
     float total = 0.0;
-    if (w.x > 0.05) { c += w.x * texture(u_materials, vec3(p.zy, layer)).rgb; total += w.x; }
-    if (w.y > 0.05) { c += w.y * texture(u_materials, vec3(p.xz, layer)).rgb; total += w.y; }
-    if (w.z > 0.05) { c += w.z * texture(u_materials, vec3(p.xy, layer)).rgb; total += w.z; }
-    return mix(c / total, mean, far);
+    if (w.x > 0.05) { c += w.x * base_shade(layer, position.zy, coarse); total += w.x; }
+    if (w.y > 0.05) { c += w.y * base_shade(layer, position.xz, coarse); total += w.y; }
+    if (w.z > 0.05) { c += w.z * base_shade(layer, position.xy, coarse); total += w.z; }
+    return mix(tint * (c / total), mean, far);
 }
 
 // The bands of terrain.frag's bedrock tint: wet near the sea, grass on flat ground, bare rock
@@ -65,7 +72,12 @@ void main() {
     w *= w; w *= w; w *= w;
     w /= max(w.x + w.y + w.z, 1e-6);
     float slope = (1.0 - clamp(n.y, 0.0, 1.0)) * 90.0;
-    vec3 albedo = rock_bands(material(0.0, u_bedrock_mean, texture_position, w, far), v_height, slope);
+    // The macro layer where textures are (beyond, the means show no repeats to break up), for
+    // a fetch saved per pixel on most of the far terrain.
+    vec4 macro = far < 1.0 ? macro_sample(texture_position) : vec4(0.5, 0.5, 0.0, 1.0);
+    macro.rg = mix(macro.rg, vec2(0.5), far);
+    float coarse = macro_coarse_share(macro);
+    vec3 albedo = rock_bands(material(0.0, u_material_tints[0], u_bedrock_mean, texture_position, w, far, coarse), v_height, slope);
     // Sand: the generator lays sand_depth·(1 − tan/sand_max_slope) metres of it per column, by
     // the slope of the rough 1 m ground, so seen from afar it covers a share of the ground that
     // falls with the smooth slope drawn here. Measured on generated chunks (seed 42, defaults:
@@ -74,7 +86,9 @@ void main() {
     float tangent = sqrt(max(1.0 - n.y * n.y, 0.0)) / max(n.y, 0.05);
     float sand = u_sand_max_slope > 0.0 && u_sand_depth > 0.0
                ? 0.1 + 0.55 * (1.0 - smoothstep(0.0, 1.33 * u_sand_max_slope, tangent)) : 0.0;
-    if (sand > 0.0) albedo = mix(albedo, material(1.0, u_sand_mean, texture_position, w, far), sand);
+    if (sand > 0.0) albedo = mix(albedo, material(1.0, u_material_tints[1], u_sand_mean, texture_position, w, far, coarse), sand);
+    // The macro variation, as on the meshes, so the near-far seam keeps matching.
+    albedo *= macro_tint(macro);
     // The sea: the surface stays on the ground (the meshes' sea bed meets it at the hole), and
     // ground under water takes the water's colour, deeper blue with depth, lit as a flat surface.
     float depth = u_water_level - v_height;

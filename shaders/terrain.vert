@@ -3,6 +3,8 @@
 // origin, and u_offset (mesh origin − camera, subtracted in double precision on the CPU) keeps
 // every float small however far from the world's origin the camera is.
 
+#include "materials.glsl"
+
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec4 a_weights;      // bedrock, sand, rocks, water (unorm8)
@@ -19,6 +21,7 @@ out vec3 v_normal;
 out vec4 v_weights;
 out float v_openness;
 out float v_height;
+out vec4 v_macro;                            // the macro layer here (materials.glsl)
 
 void main() {
     vec3 relative = a_position + u_offset;
@@ -28,5 +31,6 @@ void main() {
     v_weights = a_weights;
     v_openness = 1.0 - a_occlusion;
     v_height = a_position.y + u_mesh_y;
+    v_macro = macro_sample(v_texture_position);
     gl_Position = u_view_projection * vec4(relative, 1.0);
 }

@@ -188,6 +188,7 @@ expect "hello_grass: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 
 expect "hello_grass: bad --grass" 2 "bad value for '--grass'" -- "$bin/hello_grass" --grass lush
 expect "world: bad --grass" 2 "bad value for '--grass': 'lush' is not off, low or high" -- "$bin/world" --grass lush
 expect "world: --grass without value" 2 "option '--grass' needs a value" -- "$bin/world" --grass
+expect "world: bad --detail" 2 "bad value for '--detail': 'high' is not on or off" -- "$bin/world" --detail high
 
 # The walkable world: bad values get usage; a short scripted walk over generated terrain gets
 # there, the eye never enters the ground, the trace has every phase of the pipeline and the

@@ -369,11 +369,18 @@ typedef struct terrain_renderer_desc {
     float fog_density;                /* per metre; 0 = 0.0025 */
     float cloud_cover;                /* 0 = 0.45; negative = a clear sky */
     bool no_occlusion;                /* ignore the vertices' openness (ambient occlusion off) */
+    float detail_distance;            /* metres to which the 1 m detail layer (grains, cracks,
+                                         pebbles) reaches, fading out over the second half;
+                                         0 = 16 m; negative = the low quality: no detail layer
+                                         and no 25 m scale blend (their fetches skipped; normal
+                                         maps and the macro variation stay) */
 } terrain_renderer_desc;
 
 /* NULL when the shaders do not build (their errors printed at file:line). */
 terrain_renderer *terrain_renderer_create(gfx_context *gfx, const terrain_renderer_desc *desc);
 void terrain_renderer_destroy(terrain_renderer *renderer);
+/* Milliseconds terrain_renderer_create spent making the material textures (CPU and upload). */
+double terrain_renderer_texture_ms(const terrain_renderer *renderer);
 
 /* A mesh on the GPU. */
 typedef struct terrain_gpu_mesh {

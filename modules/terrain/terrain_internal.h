@@ -498,4 +498,33 @@ bool terrain__stacks_diff(const terrain_stacks *a, const terrain_stacks *b, terr
 
 /* ==== end of the edits-in-the-world section =============================================== */
 
+/* ---- material textures (terrain_textures.c) ---- */
+
+/* Base layers: TERRAIN__BASE_SIZE² RGBA8 per material, one repeat per TERRAIN__BASE_METRES:
+ * R the shade (albedo = tint · R), GB the tangent-space normal's x, y (0.5 + 0.5·n).
+ * Detail layers: TERRAIN__DETAIL_SIZE² RGBA8 per material, one repeat per
+ * TERRAIN__DETAIL_METRES: R an albedo multiplier as 2·R with a mean of 1, GB the normal as above;
+ * then one macro layer of the same size, one repeat per TERRAIN__MACRO_METRES: R brightness and
+ * G hue (2·texel, mean 1), B the share of the coarser base sample (TERRAIN__BASE2_METRES). */
+#define TERRAIN__MATERIAL_LAYERS 4          /* bedrock, sand, rocks, water bed */
+#define TERRAIN__DETAIL_LAYERS (TERRAIN__MATERIAL_LAYERS + 1)
+#define TERRAIN__BASE_SIZE 256
+#define TERRAIN__DETAIL_SIZE 256
+#define TERRAIN__BASE_METRES 8.0f
+#define TERRAIN__BASE2_METRES 25.0f         /* the base again, coarser, against repeats */
+#define TERRAIN__DETAIL_METRES 1.0f
+#define TERRAIN__MACRO_METRES 200.0f        /* a multiple of every period above: texture
+                                               coordinates wrap the origin modulo this */
+
+typedef struct terrain__material_texels {
+    uint8_t *base, *detail;                 /* layouts above; core_alloc'd */
+    size_t base_bytes, detail_bytes;
+    float tints[TERRAIN__MATERIAL_LAYERS][3];
+    float means[TERRAIN__MATERIAL_LAYERS][3];  /* tint · mean shade: the far colour */
+} terrain__material_texels;
+
+/* Fills `out`; free with terrain__material_texels_free. Deterministic. */
+void terrain__material_texels_make(terrain__material_texels *out);
+void terrain__material_texels_free(terrain__material_texels *texels);
+
 #endif

@@ -1,5 +1,6 @@
-/* terrain_render.c — drawing terrain meshes: triplanar materials (000 §6), height and slope tint
- * (002 §4.1), procedural material textures, camera-relative transforms. Main thread only. */
+/* terrain_render.c — drawing terrain meshes: triplanar materials (000 §6) with normal maps, a
+ * detail layer near the camera and macro variation (textures made in terrain_textures.c), height
+ * and slope tint (002 §4.1), camera-relative transforms. Main thread only. */
 #include "terrain.h"
 #include "terrain_internal.h"
 
@@ -12,104 +13,68 @@
 #include <stddef.h>
 #include <string.h>
 
-#define TERRAIN_TEXTURE_SIZE 256
-#define TERRAIN_TEXTURE_LAYERS 4          /* bedrock, sand, rocks, water bed */
-#define TERRAIN_TEXTURE_METRES 8.0        /* one texture repeat covers this many metres */
+/* Texture coordinates take mesh origins modulo the longest texture period (the macro layer's),
+ * a multiple of all the others, so every layer lines up across meshes. */
+#define TERRAIN_TEXTURE_PERIOD ((double)TERRAIN__MACRO_METRES)
 
 struct terrain_renderer {
     gfx_context *gfx;
     gfx_program terrain, sky, clipmap;
-    gfx_texture materials;
+    gfx_texture materials, detail;        /* terrain_textures.c */
     gfx_vertex_array empty;
     terrain_renderer_desc desc;
     terrain_clipmap *far_terrain;         /* not owned; NULL = none */
-    float material_means[TERRAIN_TEXTURE_LAYERS][3];
+    float material_means[TERRAIN__MATERIAL_LAYERS][3];
+    float material_tints[TERRAIN__MATERIAL_LAYERS][3];
+    double texture_ms;                    /* how long the textures took to make */
 };
 
 /* ---- procedural material textures ---- */
 
-/* Value noise on a lattice that wraps every `period` cells, so the texture tiles seamlessly. */
-static float texture_lattice(uint64_t seed, int x, int y, int period) {
-    x = ((x % period) + period) % period;
-    y = ((y % period) + period) % period;
-    uint64_t h = core_hash_combine(core_hash_u64(seed), core_hash_u64((uint64_t)(uint32_t)x << 32 | (uint32_t)y));
-    return (float)(h >> 40) * (1.0f / 16777216.0f);
-}
-
-static float texture_value_noise(uint64_t seed, float x, float y, int period) {
-    int xi = (int)floorf(x), yi = (int)floorf(y);
-    float fx = x - (float)xi, fy = y - (float)yi;
-    fx = fx * fx * (3 - 2 * fx);
-    fy = fy * fy * (3 - 2 * fy);
-    float a = texture_lattice(seed, xi, yi, period), b = texture_lattice(seed, xi + 1, yi, period);
-    float c = texture_lattice(seed, xi, yi + 1, period), d = texture_lattice(seed, xi + 1, yi + 1, period);
-    return (a + (b - a) * fx) + ((c + (d - c) * fx) - (a + (b - a) * fx)) * fy;
-}
-
-/* fBm of tiling value noise over the unit square (u, v ∈ [0, 1)), first octave `cells` across. */
-static float texture_fbm(uint64_t seed, float u, float v, int cells, int octaves) {
-    float sum = 0, amplitude = 0.5f, total = 0;
-    for (int o = 0; o < octaves; o++, cells *= 2, amplitude *= 0.5f) {
-        sum += amplitude * texture_value_noise(seed + (uint64_t)o, u * (float)cells, v * (float)cells, cells);
-        total += amplitude;
-    }
-    return sum / total;
-}
-
-static void texture_material_texel(int layer, float u, float v, uint8_t *rgba) {
-    float r, g, b;
-    if (layer == 0) {        /* bedrock: grey-brown strata with cracks */
-        float strata = texture_fbm(11, u * 0.25f, v, 8, 5);
-        float grain = texture_fbm(12, u, v, 32, 3);
-        float shade = 0.45f + 0.35f * strata + 0.2f * grain;
-        r = 0.52f * shade; g = 0.48f * shade; b = 0.43f * shade;
-    } else if (layer == 1) { /* sand: fine, warm, with ripples */
-        float grain = texture_fbm(21, u, v, 64, 3);
-        float ripple = 0.5f + 0.5f * sinf((u * 12.0f + texture_fbm(22, u, v, 4, 3) * 3.0f) * 6.2831853f);
-        float shade = 0.8f + 0.12f * grain + 0.08f * ripple;
-        r = 0.86f * shade; g = 0.76f * shade; b = 0.55f * shade;
-    } else if (layer == 2) { /* rocks: pebbles as cells of high noise */
-        float cells = texture_fbm(31, u, v, 16, 2);
-        float detail = texture_fbm(32, u, v, 64, 2);
-        float shade = 0.35f + 0.5f * cells * cells + 0.15f * detail;
-        r = 0.48f * shade; g = 0.47f * shade; b = 0.46f * shade;
-    } else {                 /* water bed: dark silt */
-        float silt = texture_fbm(41, u, v, 16, 4);
-        float shade = 0.5f + 0.3f * silt;
-        r = 0.30f * shade; g = 0.33f * shade; b = 0.28f * shade;
-    }
-    rgba[0] = (uint8_t)fminf(255.0f, r * 255.0f);
-    rgba[1] = (uint8_t)fminf(255.0f, g * 255.0f);
-    rgba[2] = (uint8_t)fminf(255.0f, b * 255.0f);
-    rgba[3] = 255;
-}
-
-/* Each layer's mean colour: what its mipmaps tend to far away (the clipmap uses it there). */
-static void terrain_material_means(const uint8_t *texels, size_t layer_bytes, float means[][3]) {
-    for (int layer = 0; layer < TERRAIN_TEXTURE_LAYERS; layer++) {
-        double sum[3] = { 0, 0, 0 };
-        for (size_t t = 0; t < layer_bytes; t += 4)
-            for (int c = 0; c < 3; c++) sum[c] += texels[layer_bytes * (size_t)layer + t + (size_t)c];
-        for (int c = 0; c < 3; c++) means[layer][c] = (float)(sum[c] / (double)(layer_bytes / 4) / 255.0);
-    }
-}
-
-static gfx_texture terrain_material_textures(float means[][3]) {
+static void terrain_material_textures(terrain_renderer *r) {
     TRACE_ZONE("terrain_material_textures");
-    const size_t layer_bytes = (size_t)TERRAIN_TEXTURE_SIZE * TERRAIN_TEXTURE_SIZE * 4;
-    uint8_t *texels = core_alloc(layer_bytes * TERRAIN_TEXTURE_LAYERS);
-    for (int layer = 0; layer < TERRAIN_TEXTURE_LAYERS; layer++)
-        for (int y = 0; y < TERRAIN_TEXTURE_SIZE; y++)
-            for (int x = 0; x < TERRAIN_TEXTURE_SIZE; x++)
-                texture_material_texel(layer, (float)x / TERRAIN_TEXTURE_SIZE, (float)y / TERRAIN_TEXTURE_SIZE,
-                                       texels + layer_bytes * (size_t)layer + ((size_t)y * TERRAIN_TEXTURE_SIZE + (size_t)x) * 4);
-    gfx_texture texture = gfx_texture_create(&(gfx_texture_desc){
-        .width = TERRAIN_TEXTURE_SIZE, .height = TERRAIN_TEXTURE_SIZE, .layers = TERRAIN_TEXTURE_LAYERS,
-        .data = texels, .mipmaps = true });
-    terrain_material_means(texels, layer_bytes, means);
-    core_free(texels, layer_bytes * TERRAIN_TEXTURE_LAYERS);
-    return texture;
+    uint64_t start = core_time_ns();
+    terrain__material_texels texels;
+    terrain__material_texels_make(&texels);
+    r->materials = gfx_texture_create(&(gfx_texture_desc){
+        .width = TERRAIN__BASE_SIZE, .height = TERRAIN__BASE_SIZE, .layers = TERRAIN__MATERIAL_LAYERS,
+        .data = texels.base, .mipmaps = true });
+    r->detail = gfx_texture_create(&(gfx_texture_desc){
+        .width = TERRAIN__DETAIL_SIZE, .height = TERRAIN__DETAIL_SIZE, .layers = TERRAIN__DETAIL_LAYERS,
+        .data = texels.detail, .mipmaps = true });
+    /* The detail within one mip level (bilinear, not trilinear): half its fetches on llvmpipe,
+     * and a step between levels is hidden where it shows at all, the detail fading out. */
+    glTextureParameteri(r->detail.id, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
+    memcpy(r->material_means, texels.means, sizeof r->material_means);
+    memcpy(r->material_tints, texels.tints, sizeof r->material_tints);
+    terrain__material_texels_free(&texels);
+    r->texture_ms = (double)(core_time_ns() - start) * 1e-6;
 }
+
+/* The uniforms both terrain programs read for their materials. The detail array goes on unit 2:
+ * the clipmap keeps its heights on unit 1 (terrain_clipmap.c). */
+static void terrain_material_uniforms(terrain_renderer *r, gfx_program program) {
+    static const char *const tints[TERRAIN__MATERIAL_LAYERS] = {
+        "u_material_tints[0]", "u_material_tints[1]", "u_material_tints[2]", "u_material_tints[3]" };
+    static const char *const mean_shades[TERRAIN__MATERIAL_LAYERS] = {
+        "u_mean_shades[0]", "u_mean_shades[1]", "u_mean_shades[2]", "u_mean_shades[3]" };
+    gfx_context *gfx = r->gfx;
+    for (int layer = 0; layer < TERRAIN__MATERIAL_LAYERS; layer++) {
+        gfx_uniform_vec3(gfx, program, tints[layer], r->material_tints[layer]);
+        gfx_uniform_float(gfx, program, mean_shades[layer], r->material_means[layer][0] / r->material_tints[layer][0]);
+    }
+    gfx_uniform_float(gfx, program, "u_texture_scale", 1.0f / TERRAIN__BASE_METRES);
+    gfx_uniform_float(gfx, program, "u_texture_scale2", 1.0f / TERRAIN__BASE2_METRES);
+    gfx_uniform_float(gfx, program, "u_macro_scale", 1.0f / TERRAIN__MACRO_METRES);
+    /* The low quality (no detail) drops the 25 m sample too: the two extra fetches that cost. */
+    gfx_uniform_float(gfx, program, "u_scale_blend", r->desc.detail_distance > 0 ? 1.0f : 0.0f);
+    gfx_uniform_int(gfx, program, "u_materials", 0);
+    gfx_uniform_int(gfx, program, "u_detail", 2);
+    gfx_texture_bind(r->materials, 0);
+    gfx_texture_bind(r->detail, 2);
+}
+
+double terrain_renderer_texture_ms(const terrain_renderer *r) { return r->texture_ms; }
 
 /* ---- renderer ---- */
 
@@ -125,7 +90,9 @@ terrain_renderer *terrain_renderer_create(gfx_context *gfx, const terrain_render
     if (r->desc.fog_density == 0) r->desc.fog_density = 0.0025f;
     if (r->desc.cloud_cover == 0) r->desc.cloud_cover = 0.45f;
     if (r->desc.cloud_cover < 0) r->desc.cloud_cover = 0;
-    r->materials = terrain_material_textures(r->material_means);
+    if (r->desc.detail_distance == 0) r->desc.detail_distance = 16.0f;
+    if (r->desc.detail_distance < 0) r->desc.detail_distance = 0;
+    terrain_material_textures(r);
     glCreateVertexArrays(1, &r->empty.id);
     return r;
 }
@@ -137,6 +104,7 @@ void terrain_renderer_set_occlusion(terrain_renderer *r, bool on) { r->desc.no_o
 void terrain_renderer_destroy(terrain_renderer *r) {
     if (!r) return;
     gfx_texture_destroy(&r->materials);
+    gfx_texture_destroy(&r->detail);
     gfx_vertex_array_destroy(&r->empty);
     core_free(r, sizeof *r);
 }
@@ -243,17 +211,15 @@ static double terrain_wrap(double value, double period) { return value - floor(v
 static void terrain_draw_clipmap(terrain_renderer *r, const terrain_view *view, mat4 view_projection) {
     gfx_context *gfx = r->gfx;
     float texture_offset[3];
-    for (int a = 0; a < 3; a++) texture_offset[a] = (float)terrain_wrap(view->camera[a], TERRAIN_TEXTURE_METRES);
+    for (int a = 0; a < 3; a++) texture_offset[a] = (float)terrain_wrap(view->camera[a], TERRAIN_TEXTURE_PERIOD);
     gfx_program_use(gfx, r->clipmap);
     gfx_uniform_mat4(gfx, r->clipmap, "u_view_projection", (const float *)view_projection);
-    gfx_uniform_float(gfx, r->clipmap, "u_texture_scale", (float)(1.0 / TERRAIN_TEXTURE_METRES));
+    terrain_material_uniforms(r, r->clipmap);
     gfx_uniform_vec3(gfx, r->clipmap, "u_texture_offset", texture_offset);
     gfx_uniform_float(gfx, r->clipmap, "u_sea_level", r->desc.sea_level);
     gfx_uniform_float(gfx, r->clipmap, "u_snow_height", r->desc.snow_height);
-    gfx_uniform_int(gfx, r->clipmap, "u_materials", 0);
     gfx_uniform_vec3(gfx, r->clipmap, "u_bedrock_mean", r->material_means[0]);
     gfx_uniform_vec3(gfx, r->clipmap, "u_sand_mean", r->material_means[1]);
-    gfx_texture_bind(r->materials, 0);
     terrain__clipmap_draw(r->far_terrain, gfx, r->clipmap.id, view);
 }
 
@@ -277,12 +243,12 @@ void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const 
     }
     gfx_program_use(gfx, r->terrain);
     gfx_uniform_mat4(gfx, r->terrain, "u_view_projection", (const float *)view_projection);
-    gfx_uniform_float(gfx, r->terrain, "u_texture_scale", (float)(1.0 / TERRAIN_TEXTURE_METRES));
     gfx_uniform_float(gfx, r->terrain, "u_sea_level", r->desc.sea_level);
     gfx_uniform_float(gfx, r->terrain, "u_snow_height", r->desc.snow_height);
-    gfx_uniform_int(gfx, r->terrain, "u_materials", 0);
+    gfx_uniform_float(gfx, r->terrain, "u_detail_scale", 1.0f / TERRAIN__DETAIL_METRES);
+    gfx_uniform_float(gfx, r->terrain, "u_detail_distance", r->desc.detail_distance);
+    terrain_material_uniforms(r, r->terrain);
     gfx_uniform_float(gfx, r->terrain, "u_occlusion", r->desc.no_occlusion ? 0.0f : 1.0f);
-    gfx_texture_bind(r->materials, 0);
     for (int i = 0; i < mesh_count; i++) {
         const terrain_gpu_mesh *m = &meshes[i];
         if (m->index_count == 0) continue;
@@ -290,7 +256,7 @@ void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const 
         float offset[3], texture_offset[3];
         for (int a = 0; a < 3; a++) {
             offset[a] = (float)(m->origin[a] - view->camera[a]);
-            texture_offset[a] = (float)terrain_wrap(m->origin[a], TERRAIN_TEXTURE_METRES);
+            texture_offset[a] = (float)terrain_wrap(m->origin[a], TERRAIN_TEXTURE_PERIOD);
         }
         gfx_uniform_vec3(gfx, r->terrain, "u_offset", offset);
         gfx_uniform_vec3(gfx, r->terrain, "u_texture_offset", texture_offset);

@@ -220,9 +220,10 @@ Test(render_clipmap, the_hole_leaves_nothing_at_ground_level) {
 
 Test(render_clipmap, a_view_100_km_away_renders_as_at_the_origin) {
     far_scene s = far_scene_open(flat_world(12.0f), (terrain_renderer_desc){ .cloud_cover = -1, .fog_density = 0.0008f });
-    /* 100 096 m is a multiple of the outermost level's snapping (2 · 128 m) and of the texture
-     * period (8 m), so every level lands on the same cells relative to the camera. */
-    const double shift = 100096.0;
+    /* 102 400 m is a multiple of the outermost level's snapping (2 · 128 m) and of the textures'
+     * period (200 m, the macro layer's), so every level lands on the same cells relative to the
+     * camera and every texture on the same texels. */
+    const double shift = 102400.0;
     terrain_view near = { .camera = { 3.3, 60.0, -7.1 }, .yaw = 0.7f, .pitch = -0.4f, .aspect = (float)W / H };
     terrain_view far = near;
     far.camera[0] += shift;

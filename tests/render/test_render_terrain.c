@@ -78,7 +78,7 @@ Test(render_terrain, a_view_100_km_away_renders_exactly_as_at_the_origin) {
     gfx_context *gfx = render_offscreen(W, H);
     terrain_renderer *renderer = terrain_renderer_create(gfx, NULL);
     const uint8_t mixed[4] = { 128, 64, 63, 0 };
-    /* The same square and camera, shifted by 100 km (a multiple of the texture period). */
+    /* The same square and camera, shifted by 100 km (a multiple of the textures' 200 m period). */
     terrain_mesh near = flat_square(3.25, -7.5, 30, mixed), far = flat_square(100003.25, 99992.5, 30, mixed);
     render_image a = render_mesh(gfx, renderer, &near, 1.0, -6.0, 12), b = render_mesh(gfx, renderer, &far, 100001.0, 99994.0, 12);
     int worst = 0;
