@@ -65,6 +65,7 @@ typedef struct game_app_desc {
     bool no_clipmap;                  /* only the volumetric chunks (no far terrain) */
     bool no_hud;
     grass_quality grass;              /* grass patches (vegetation.h); 0 = low */
+    terrain_shadow_quality shadows;   /* the sun's shadow map (terrain.h); 0 = low */
     bool no_head_bob;                 /* the view without the walking dip (game_player_bob) */
     double max_loading_seconds;       /* give up waiting for the start area; 0 = 300 s */
     /* A folder that keeps the world (terrain.h, "the world folder"): DIR/world.db holds the

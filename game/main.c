@@ -2,8 +2,8 @@
  *
  *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT | --tour] [--record FILE]
  *         [--replay FILE] [--bindings FILE] [--screenshot FILE] [--radius R] [--levels N]
- *         [--memory MB] [--grass off|low|high] [--threads N] [--trace FILE] [--world DIR]
- *         [--at X,Y,Z] [--look YAW,PITCH]
+ *         [--memory MB] [--grass off|low|high] [--shadows off|low|high] [--threads N]
+ *         [--trace FILE] [--world DIR] [--at X,Y,Z] [--look YAW,PITCH]
  *
  * In a window: WASD or the left stick to walk, the mouse (click to capture, Escape to let go) or
  * the right stick to look, Space to jump, Shift to sprint, Ctrl or C to crouch, F to fly, F11
@@ -32,7 +32,8 @@
 
 typedef struct options {
     core_common_args common;
-    const char *size, *screenshot, *walk, *record, *replay, *bindings, *world, *grass, *at, *look;
+    const char *size, *screenshot, *walk, *record, *replay, *bindings, *world, *grass, *shadows, *at,
+        *look;
     int seed, frames, radius, levels, memory_mb;
     bool headless, tour, no_head_bob;
 } options;
@@ -89,6 +90,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "radius", CORE_OPTION_INT, &o->radius, "R", "full-detail chunks of 32 m each way (default 2)", 1, 32 },
         { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
         { "grass", CORE_OPTION_STRING, &o->grass, "off|low|high", "grass patches (default low)" },
+        { "shadows", CORE_OPTION_STRING, &o->shadows, "off|low|high", "sun shadows (default low)" },
         { "memory", CORE_OPTION_INT, &o->memory_mb, "MB", "memory budget for terrain (default 384)", 16, 65536 },
         { "at", CORE_OPTION_STRING, &o->at, "X,Y,Z", "start with the eye here, metres (flying if it must)" },
         { "look", CORE_OPTION_STRING, &o->look, "YAW,PITCH", "start looking this way, degrees (yaw 0 = +z, "
@@ -112,6 +114,10 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
     if (o->grass && !grass_parse_quality(o->grass, &desc->grass)) {
         snprintf(error, sizeof error, "'%s' is not off, low or high", o->grass);
         return bad_value(&cli, "grass", error);
+    }
+    if (o->shadows && !terrain_parse_shadow_quality(o->shadows, &desc->shadows)) {
+        snprintf(error, sizeof error, "'%s' is not off, low or high", o->shadows);
+        return bad_value(&cli, "shadows", error);
     }
     /* The world's limits: ±1e9 m along the ground (walk.h's), ±1e5 m up and down. */
     static const char *const at_names[] = { "X", "Y", "Z" }, *const look_names[] = { "YAW", "PITCH" };

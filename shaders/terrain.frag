@@ -4,6 +4,7 @@
 // (002 §4.1: α = (1 − n_y)·90°), then the sun, sky ambient and distance fog of common.glsl.
 
 #include "common.glsl"
+#include "shadow.glsl"
 
 in vec3 v_relative_position;
 in vec3 v_texture_position;
@@ -57,7 +58,7 @@ void main() {
     if (w.y > 0.01) albedo += w.y * material_color(1.0, v_texture_position, blend);
     if (w.z > 0.01) albedo += w.z * material_color(2.0, v_texture_position, blend);
     if (w.w > 0.01) albedo += w.w * material_color(3.0, v_texture_position, blend);
-    vec3 color = light_surface(albedo, n);
+    vec3 color = light_surface_shadowed(albedo, n, shadow_visibility(v_relative_position, n));
     // common.glsl's fog works in world space around u_camera_position; here the camera is the
     // origin, so pass relative positions with u_camera_position = 0.
     frag_color = vec4(apply_fog(color, v_relative_position), 1.0);

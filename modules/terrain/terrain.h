@@ -350,11 +350,25 @@ double terrain_mesh_area(const terrain_mesh *mesh);
 typedef struct gfx_context gfx_context;
 typedef struct terrain_renderer terrain_renderer;
 
+/* Sun shadows: a cascaded shadow map over the near terrain (terrain_shadow.c; the README's
+ * "Sun shadows" says what each costs). The meshes cast; the meshes and the far terrain receive. */
+typedef enum terrain_shadow_quality {
+    TERRAIN_SHADOWS_DEFAULT = 0,      /* low */
+    TERRAIN_SHADOWS_OFF,              /* no shadow pass, nothing sampled */
+    TERRAIN_SHADOWS_LOW,              /* 2 cascades of 1024² out to 100 m, 2 × 2 bilinear taps */
+    TERRAIN_SHADOWS_HIGH,             /* 3 cascades of 2048² out to 300 m, 4 × 4 bilinear taps */
+} terrain_shadow_quality;
+
+/* Parses "off", "low" or "high" (--shadows); false for anything else. */
+bool terrain_parse_shadow_quality(const char *text, terrain_shadow_quality *out);
+const char *terrain_shadow_quality_name(terrain_shadow_quality quality);
+
 typedef struct terrain_renderer_desc {
     float sea_level;                  /* for the shore band; 0 = 0 m */
     float snow_height;                /* 0 = 120 m */
     float fog_density;                /* per metre; 0 = 0.0025 */
     float cloud_cover;                /* 0 = 0.45; negative = a clear sky */
+    terrain_shadow_quality shadows;   /* 0 = low */
 } terrain_renderer_desc;
 
 /* NULL when the shaders do not build (their errors printed at file:line). */
@@ -402,9 +416,16 @@ terrain_frustum terrain_frustum_from_view(const terrain_view *view);
 bool terrain_frustum_sees(const terrain_frustum *frustum, const double origin[3], const float bounds_min[3],
                           const float bounds_max[3]);
 
-/* Draws the meshes, then the sky behind them, inside one pass named "terrain". */
+/* Draws the meshes, then the sky behind them, inside one pass named "terrain". With shadows on,
+ * a pass named "shadows" comes first: the sun's shadow map, cast by the meshes given to
+ * terrain_renderer_draw_shadows since the last draw or else by these. */
 void terrain_renderer_draw(terrain_renderer *renderer, const terrain_view *view,
                            const terrain_gpu_mesh *meshes, int mesh_count);
+/* The shadow pass for the next terrain_renderer_draw, cast by `casters`: every mesh on the GPU
+ * near the view, not only those in it (a hill behind the camera shades the ground in front). Each
+ * cascade draws those whose bounds reach its footprint. Nothing happens with shadows off. */
+void terrain_renderer_draw_shadows(terrain_renderer *renderer, const terrain_view *view,
+                                   const terrain_gpu_mesh *casters, int caster_count);
 
 /* ---- far terrain: geometry clipmaps (002 §3.2, §3.5) ---- */
 

@@ -15,6 +15,7 @@
 #define TERRAIN_TEXTURE_SIZE 256
 #define TERRAIN_TEXTURE_LAYERS 4          /* bedrock, sand, rocks, water bed */
 #define TERRAIN_TEXTURE_METRES 8.0        /* one texture repeat covers this many metres */
+#define TERRAIN_SHADOW_UNIT 3             /* the shadow map's texture unit (the clipmap uses 0 and 1) */
 
 struct terrain_renderer {
     gfx_context *gfx;
@@ -23,6 +24,8 @@ struct terrain_renderer {
     gfx_vertex_array empty;
     terrain_renderer_desc desc;
     terrain_clipmap *far_terrain;         /* not owned; NULL = none */
+    terrain__shadows *shadows;            /* NULL with shadows off */
+    bool shadows_drawn;                   /* terrain_renderer_draw_shadows ran for the next draw */
     float material_means[TERRAIN_TEXTURE_LAYERS][3];
 };
 
@@ -126,6 +129,12 @@ terrain_renderer *terrain_renderer_create(gfx_context *gfx, const terrain_render
     if (r->desc.cloud_cover == 0) r->desc.cloud_cover = 0.45f;
     if (r->desc.cloud_cover < 0) r->desc.cloud_cover = 0;
     r->materials = terrain_material_textures(r->material_means);
+    if (r->desc.shadows == TERRAIN_SHADOWS_DEFAULT) r->desc.shadows = TERRAIN_SHADOWS_LOW;
+    r->shadows = terrain__shadows_create(gfx, r->desc.shadows);
+    if (!r->shadows && r->desc.shadows != TERRAIN_SHADOWS_OFF) {
+        terrain_renderer_destroy(r);
+        return NULL;
+    }
     glCreateVertexArrays(1, &r->empty.id);
     return r;
 }
@@ -134,6 +143,7 @@ void terrain_renderer_set_clipmap(terrain_renderer *r, terrain_clipmap *clipmap)
 
 void terrain_renderer_destroy(terrain_renderer *r) {
     if (!r) return;
+    terrain__shadows_destroy(r->shadows);
     gfx_texture_destroy(&r->materials);
     gfx_vertex_array_destroy(&r->empty);
     core_free(r, sizeof *r);
@@ -250,13 +260,25 @@ static void terrain_draw_clipmap(terrain_renderer *r, const terrain_view *view, 
     gfx_uniform_vec3(gfx, r->clipmap, "u_bedrock_mean", r->material_means[0]);
     gfx_uniform_vec3(gfx, r->clipmap, "u_sand_mean", r->material_means[1]);
     gfx_texture_bind(r->materials, 0);
+    terrain__shadows_bind(r->shadows, gfx, r->clipmap.id, TERRAIN_SHADOW_UNIT);
     terrain__clipmap_draw(r->far_terrain, gfx, r->clipmap.id, view);
+}
+
+void terrain_renderer_draw_shadows(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *casters,
+                                   int caster_count) {
+    if (!r->shadows) return;
+    vec3 sun;
+    terrain_view_sun(view, sun);
+    terrain__shadows_render(r->shadows, view, sun, casters, caster_count);
+    r->shadows_drawn = true;
 }
 
 void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,
                            int mesh_count) {
     TRACE_ZONE("terrain_renderer_draw");
     gfx_context *gfx = r->gfx;
+    if (!r->shadows_drawn) terrain_renderer_draw_shadows(r, view, meshes, mesh_count);
+    r->shadows_drawn = false;
     mat4 view_projection, inverse;
     terrain_view_projection(view, view_projection);
     glm_mat4_inv(view_projection, inverse);
@@ -278,6 +300,7 @@ void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const 
     gfx_uniform_float(gfx, r->terrain, "u_snow_height", r->desc.snow_height);
     gfx_uniform_int(gfx, r->terrain, "u_materials", 0);
     gfx_texture_bind(r->materials, 0);
+    terrain__shadows_bind(r->shadows, gfx, r->terrain.id, TERRAIN_SHADOW_UNIT);
     for (int i = 0; i < mesh_count; i++) {
         const terrain_gpu_mesh *m = &meshes[i];
         if (m->index_count == 0) continue;

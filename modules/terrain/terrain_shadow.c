@@ -1,0 +1,291 @@
+/* terrain_shadow.c — the sun's cascaded shadow map (shaders/shadow.*; the receivers' side is
+ * shadow.glsl). Main thread only.
+ *
+ * Cascades. The view's depth is split at fixed distances; each slice of the frustum is enclosed
+ * in its bounding sphere, and the cascade is an orthographic box along the sun around that
+ * sphere. A sphere does not change size as the view turns, so the box keeps one size, and its
+ * centre is snapped to whole texels along the light's axes in world coordinates (doubles): the
+ * texels sit still on the ground as the camera moves and turns, and shadow edges do not swim.
+ * The boxes hold more than the slices (a sphere is rounder than a frustum slice) in exchange.
+ *
+ * Everything stays camera-relative as the terrain draws it: the matrices take camera-relative
+ * positions, their translations worked out in double, so the map is as sharp 100 km out.
+ *
+ * Casters above a box (towards the sun) are clamped onto its near plane (GL_DEPTH_CLAMP), so the
+ * box need not reach up to every hill that may shade it. Acne: the lookup moves off the surface
+ * along its normal by about a texel of its cascade (shadow.glsl), and the casters are drawn with
+ * a slope-scaled polygon offset; both are small enough that a wall's shadow still meets its foot.
+ */
+#include "terrain.h"
+#include "terrain_internal.h"
+
+#include "core/core.h"
+#include "gfx/gfx.h"
+#include "trace/trace.h"
+
+#include <math.h>
+#include <string.h>
+
+#define SHADOW_MAX_CASCADES 4
+
+typedef struct shadow_settings {
+    int cascades, size, taps;
+    float splits[SHADOW_MAX_CASCADES];       /* far end of each slice, metres along the view */
+} shadow_settings;
+
+/* Low keeps llvmpipe's frame cheap: two small maps and 2 × 2 bilinear taps (a 3 × 3 texel
+ * footprint). High: a third, wider cascade, four times the texels and 4 × 4 taps (5 × 5). */
+static const shadow_settings shadow_low = { 2, 1024, 2, { 20.0f, 100.0f } };
+static const shadow_settings shadow_high = { 3, 2048, 4, { 16.0f, 64.0f, 300.0f } };
+
+/* The receiver's lookup moves this many texels of its cascade along its normal. */
+#define SHADOW_NORMAL_OFFSET_TEXELS 1.5f
+/* The box reaches this many sphere radii above its sphere (towards the sun) before the clamp. */
+#define SHADOW_REACH_ABOVE 1.0
+
+typedef struct shadow_cascade {
+    GLuint framebuffer;
+    float texture_matrix[16];                /* camera-relative → (u, v, depth) in [0, 1] */
+    float clip_matrix[16];                   /* camera-relative → the cascade's clip space */
+    float normal_offset;                     /* metres */
+    double centre[3];                        /* the box's centre, camera-relative (culling) */
+    double radius, depth_bottom;             /* half the box's side; its far side along the sun */
+} shadow_cascade;
+
+struct terrain__shadows {
+    gfx_context *gfx;
+    gfx_program program;
+    GLuint texture;
+    shadow_settings settings;
+    shadow_cascade cascades[SHADOW_MAX_CASCADES];
+    double right[3], up[3], sun[3];          /* the light's axes (world = camera-relative) */
+    int cascades_ready;                      /* rendered this frame: the receivers may read them */
+};
+
+bool terrain_parse_shadow_quality(const char *text, terrain_shadow_quality *out) {
+    static const char *const names[] = { "off", "low", "high" };
+    for (int q = 0; q < 3; q++)
+        if (text && strcmp(text, names[q]) == 0) {
+            *out = (terrain_shadow_quality)(TERRAIN_SHADOWS_OFF + q);
+            return true;
+        }
+    return false;
+}
+
+const char *terrain_shadow_quality_name(terrain_shadow_quality quality) {
+    switch (quality) {
+    case TERRAIN_SHADOWS_OFF: return "off";
+    case TERRAIN_SHADOWS_HIGH: return "high";
+    default: return "low";
+    }
+}
+
+terrain__shadows *terrain__shadows_create(gfx_context *gfx, terrain_shadow_quality quality) {
+    if (quality == TERRAIN_SHADOWS_OFF) return NULL;
+    gfx_program program = gfx_program_load(gfx, "shadow.vert", "shadow.frag");
+    if (!program.id) return NULL;
+    terrain__shadows *s = core_calloc(1, sizeof *s);
+    s->gfx = gfx;
+    s->program = program;
+    s->settings = quality == TERRAIN_SHADOWS_HIGH ? shadow_high : shadow_low;
+    int size = s->settings.size;
+    glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &s->texture);
+    glTextureStorage3D(s->texture, 1, GL_DEPTH_COMPONENT32F, size, size, s->settings.cascades);
+    /* Linear filtering on a comparing sampler: each lookup is a bilinear 2 × 2 PCF for free. */
+    glTextureParameteri(s->texture, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(s->texture, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(s->texture, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(s->texture, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(s->texture, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    glTextureParameteri(s->texture, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    for (int c = 0; c < s->settings.cascades; c++) {
+        GLuint fb;
+        glCreateFramebuffers(1, &fb);
+        glNamedFramebufferTextureLayer(fb, GL_DEPTH_ATTACHMENT, s->texture, 0, c);
+        glNamedFramebufferDrawBuffer(fb, GL_NONE);
+        glNamedFramebufferReadBuffer(fb, GL_NONE);
+        s->cascades[c].framebuffer = fb;
+        if (glCheckNamedFramebufferStatus(fb, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+            core_error("terrain", "the shadow map's depth target is incomplete; shadows off");
+            terrain__shadows_destroy(s);
+            return NULL;
+        }
+    }
+    return s;
+}
+
+void terrain__shadows_destroy(terrain__shadows *s) {
+    if (!s) return;
+    for (int c = 0; c < s->settings.cascades; c++)
+        if (s->cascades[c].framebuffer) glDeleteFramebuffers(1, &s->cascades[c].framebuffer);
+    glDeleteTextures(1, &s->texture);
+    core_free(s, sizeof *s);
+}
+
+static double dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/* Axes across the light (right, up) and along it (towards the sun): fixed for a sun, so the
+ * texel grid in the world is too. */
+static void shadow_axes(terrain__shadows *s, const float sun[3]) {
+    double d[3] = { sun[0], sun[1], sun[2] };
+    double ref[3] = { 0, 1, 0 };
+    if (fabs(d[1]) > 0.99) ref[1] = 0, ref[2] = 1;     /* the sun overhead: any other axis */
+    double r[3] = { d[1] * ref[2] - d[2] * ref[1], d[2] * ref[0] - d[0] * ref[2], d[0] * ref[1] - d[1] * ref[0] };
+    double length = sqrt(dot3(r, r));
+    for (int a = 0; a < 3; a++) r[a] /= length;
+    double u[3] = { r[1] * d[2] - r[2] * d[1], r[2] * d[0] - r[0] * d[2], r[0] * d[1] - r[1] * d[0] };
+    memcpy(s->right, r, sizeof r);
+    memcpy(s->up, u, sizeof u);
+    memcpy(s->sun, d, sizeof d);
+}
+
+/* The bounding sphere of the frustum slice [near, far] along the view: its centre's distance
+ * along the view axis and its radius. A slice's corners lie k·d off the axis at distance d
+ * (k² = tan²(fov_x/2) + tan²(fov_y/2)); the centre that makes the near and far corners equally
+ * far is at (near + far)(1 + k²)/2, or the far end when that lies beyond it. */
+static void shadow_slice_sphere(double near, double far, double k2, double *centre, double *radius) {
+    double c = 0.5 * (near + far) * (1.0 + k2);
+    if (c >= far) {
+        *centre = far;
+        *radius = far * sqrt(k2);
+    } else {
+        *centre = c;
+        *radius = sqrt((far - c) * (far - c) + far * far * k2);
+    }
+}
+
+/* Row-major 4 × 3 rows into a column-major mat4 with (0, 0, 0, 1) as its last row. */
+static void shadow_matrix(const double rows[3][4], float out[16]) {
+    for (int row = 0; row < 3; row++)
+        for (int col = 0; col < 4; col++) out[col * 4 + row] = (float)rows[row][col];
+    out[3] = out[7] = out[11] = 0.0f;
+    out[15] = 1.0f;
+}
+
+static void shadow_fit(terrain__shadows *s, const terrain_view *view) {
+    const shadow_settings *set = &s->settings;
+    float fov_y = view->fov_y > 0 ? view->fov_y : 1.04719755f;
+    float aspect = view->aspect > 0 ? view->aspect : 16.0f / 9.0f;
+    double ty = tan(0.5 * (double)fov_y), tx = ty * (double)aspect, k2 = tx * tx + ty * ty;
+    double cos_pitch = cos((double)view->pitch);
+    double forward[3] = { sin((double)view->yaw) * cos_pitch, sin((double)view->pitch),
+                          -cos((double)view->yaw) * cos_pitch };
+    double near = 0.1;
+    for (int c = 0; c < set->cascades; c++) {
+        shadow_cascade *cascade = &s->cascades[c];
+        double along, radius;
+        shadow_slice_sphere(near, set->splits[c], k2, &along, &radius);
+        near = set->splits[c];
+        double texel = 2.0 * radius / set->size;
+        /* The centre in world coordinates on the light's axes, snapped to whole texels across
+         * the light; along it no snapping is needed (depth is not quantised to texels). */
+        double world[3], light[3];
+        for (int a = 0; a < 3; a++) world[a] = view->camera[a] + forward[a] * along;
+        light[0] = floor(dot3(world, s->right) / texel) * texel;
+        light[1] = floor(dot3(world, s->up) / texel) * texel;
+        light[2] = dot3(world, s->sun);
+        /* Offsets of the camera from the box's centre along each axis, in double. */
+        double ox = dot3(view->camera, s->right) - light[0], oy = dot3(view->camera, s->up) - light[1],
+               oz = dot3(view->camera, s->sun) - light[2];
+        double top = radius * (1.0 + SHADOW_REACH_ABOVE), bottom = -radius, range = top - bottom;
+        const double *axes[3] = { s->right, s->up, s->sun };
+        double rows[3][4];
+        for (int a = 0; a < 3; a++) {
+            rows[0][a] = axes[0][a] * 0.5 / radius;
+            rows[1][a] = axes[1][a] * 0.5 / radius;
+            rows[2][a] = -axes[2][a] / range;
+        }
+        rows[0][3] = 0.5 + 0.5 * ox / radius;
+        rows[1][3] = 0.5 + 0.5 * oy / radius;
+        rows[2][3] = (top - oz) / range;
+        shadow_matrix(rows, cascade->texture_matrix);
+        for (int r = 0; r < 3; r++) {            /* [0, 1] → [−1, 1]: clip = 2·t − 1 */
+            for (int a = 0; a < 3; a++) rows[r][a] *= 2.0;
+            rows[r][3] = 2.0 * rows[r][3] - 1.0;
+        }
+        shadow_matrix(rows, cascade->clip_matrix);
+        cascade->normal_offset = (float)(SHADOW_NORMAL_OFFSET_TEXELS * texel);
+        for (int a = 0; a < 3; a++)
+            cascade->centre[a] = -(ox * s->right[a] + oy * s->up[a] + oz * s->sun[a]);
+        cascade->radius = radius;
+        cascade->depth_bottom = bottom;
+    }
+}
+
+/* Whether a mesh's box can shade anything in the cascade: its shadow falls along the light, so
+ * it must overlap the box across the light and not lie wholly below the box's far side. */
+static bool shadow_cascade_sees(const terrain__shadows *s, const shadow_cascade *cascade, const double camera[3],
+                                const terrain_gpu_mesh *mesh) {
+    double centre[3], half[3];
+    for (int a = 0; a < 3; a++) {
+        double lo = mesh->origin[a] - camera[a] + mesh->bounds_min[a];
+        double hi = mesh->origin[a] - camera[a] + mesh->bounds_max[a];
+        centre[a] = 0.5 * (lo + hi) - cascade->centre[a];
+        half[a] = 0.5 * (hi - lo);
+    }
+    const double *axes[3] = { s->right, s->up, s->sun };
+    for (int k = 0; k < 3; k++) {
+        double reach = fabs(axes[k][0]) * half[0] + fabs(axes[k][1]) * half[1] + fabs(axes[k][2]) * half[2];
+        double at = dot3(centre, axes[k]);
+        if (k < 2 && fabs(at) - reach > cascade->radius) return false;
+        if (k == 2 && at + reach < cascade->depth_bottom) return false;
+    }
+    return true;
+}
+
+void terrain__shadows_render(terrain__shadows *s, const terrain_view *view, const float sun[3],
+                             const terrain_gpu_mesh *casters, int caster_count) {
+    TRACE_ZONE("terrain_shadows");
+    shadow_axes(s, sun);
+    shadow_fit(s, view);
+    const shadow_settings *set = &s->settings;
+    gfx_framebuffer target = { .id = s->cascades[0].framebuffer, .width = set->size, .height = set->size };
+    gfx_pass_begin(s->gfx, &(gfx_pass_desc){ .name = "shadows", .target = &target, .clear_depth = true });
+    glEnable(GL_DEPTH_CLAMP);
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.5f, 2.0f);
+    glDisable(GL_CULL_FACE);                 /* a mesh chunk is an open sheet: both sides cast */
+    gfx_program_use(s->gfx, s->program);
+    GLint offset_location = glGetUniformLocation(gfx_program_gl(s->gfx, s->program), "u_offset");
+    for (int c = 0; c < set->cascades; c++) {
+        shadow_cascade *cascade = &s->cascades[c];
+        if (c > 0) {
+            glBindFramebuffer(GL_FRAMEBUFFER, cascade->framebuffer);
+            glClear(GL_DEPTH_BUFFER_BIT);
+        }
+        gfx_uniform_mat4(s->gfx, s->program, "u_light_projection", cascade->clip_matrix);
+        for (int i = 0; i < caster_count; i++) {
+            const terrain_gpu_mesh *m = &casters[i];
+            if (m->index_count == 0 || !shadow_cascade_sees(s, cascade, view->camera, m)) continue;
+            float offset[3];
+            for (int a = 0; a < 3; a++) offset[a] = (float)(m->origin[a] - view->camera[a]);
+            glProgramUniform3fv(gfx_program_gl(s->gfx, s->program), offset_location, 1, offset);
+            gfx_draw(&(gfx_draw_desc){ .vertex_array = { m->vertex_array }, .count = m->index_count,
+                                       .index_type = GFX_INDEX_U32 });
+        }
+    }
+    glEnable(GL_CULL_FACE);
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glDisable(GL_DEPTH_CLAMP);
+    gfx_pass_end(s->gfx);
+    s->cascades_ready = set->cascades;
+}
+
+void terrain__shadows_bind(const terrain__shadows *s, gfx_context *gfx, uint32_t program_handle, int unit) {
+    gfx_program program = { program_handle };
+    gfx_uniform_int(gfx, program, "u_shadow_map", unit);
+    int cascades = s ? s->cascades_ready : 0;
+    gfx_uniform_int(gfx, program, "u_shadow_cascades", cascades);
+    if (!cascades) return;
+    GLuint gl = gfx_program_gl(gfx, program);
+    float matrices[SHADOW_MAX_CASCADES * 16], offsets[SHADOW_MAX_CASCADES];
+    for (int c = 0; c < cascades; c++) {
+        memcpy(matrices + c * 16, s->cascades[c].texture_matrix, sizeof s->cascades[c].texture_matrix);
+        offsets[c] = s->cascades[c].normal_offset;
+    }
+    glProgramUniformMatrix4fv(gl, glGetUniformLocation(gl, "u_shadow_matrix"), cascades, GL_FALSE, matrices);
+    glProgramUniform1fv(gl, glGetUniformLocation(gl, "u_shadow_normal_offset"), cascades, offsets);
+    gfx_uniform_float(gfx, program, "u_shadow_texel", 1.0f / (float)s->settings.size);
+    gfx_uniform_int(gfx, program, "u_shadow_taps", s->settings.taps);
+    glBindTextureUnit((GLuint)unit, s->texture);
+}
