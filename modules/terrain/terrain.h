@@ -343,7 +343,8 @@ double terrain_mesh_area(const terrain_mesh *mesh);
 /* ---- rendering (main thread; needs a gfx context) ---------------------------------------- */
 
 /* Triplanar texturing with blend exponent 8 (000 §6), materials mixed by the vertices' weights,
- * bedrock tinted by height band and slope (002 §4.1), sun, sky ambient and fog. Material
+ * bedrock tinted by height band and slope (002 §4.1), sun, sky ambient and fog, and shadows of
+ * the sun from a cascaded shadow map (desc.shadows: off, low by default, high). Material
  * textures are generated procedurally when the renderer is made. Meshes are drawn
  * camera-relative (origins subtracted in double precision), so a view 100 km from the world's
  * origin renders exactly as one near it. */

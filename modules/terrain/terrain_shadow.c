@@ -50,10 +50,12 @@ typedef struct shadow_cascade {
     float normal_offset;                     /* metres */
     double centre[3];                        /* the box's centre, camera-relative (culling) */
     double radius, depth_bottom;             /* half the box's side; its far side along the sun */
+    double planes[6][4];                     /* the view's slice, camera-relative, inside ≥ 0 */
 } shadow_cascade;
 
 struct terrain__shadows {
     gfx_context *gfx;
+    float forward[3];                        /* the view's axis: receivers pick a cascade by depth */
     gfx_program program;
     GLuint texture;
     shadow_settings settings;
@@ -133,7 +135,9 @@ static void shadow_axes(terrain__shadows *s, const float sun[3]) {
     double r[3] = { d[1] * ref[2] - d[2] * ref[1], d[2] * ref[0] - d[0] * ref[2], d[0] * ref[1] - d[1] * ref[0] };
     double length = sqrt(dot3(r, r));
     for (int a = 0; a < 3; a++) r[a] /= length;
-    double u[3] = { r[1] * d[2] - r[2] * d[1], r[2] * d[0] - r[0] * d[2], r[0] * d[1] - r[1] * d[0] };
+    /* up = sun × right, so that right × up = sun: the light's view is not mirrored and the
+     * meshes' winding tells faces towards the sun from faces away from it. */
+    double u[3] = { d[1] * r[2] - d[2] * r[1], d[2] * r[0] - d[0] * r[2], d[0] * r[1] - d[1] * r[0] };
     memcpy(s->right, r, sizeof r);
     memcpy(s->up, u, sizeof u);
     memcpy(s->sun, d, sizeof d);
@@ -170,8 +174,19 @@ static void shadow_fit(terrain__shadows *s, const terrain_view *view) {
     double cos_pitch = cos((double)view->pitch);
     double forward[3] = { sin((double)view->yaw) * cos_pitch, sin((double)view->pitch),
                           -cos((double)view->yaw) * cos_pitch };
+    terrain_frustum frustum = terrain_frustum_from_view(view);
+    for (int a = 0; a < 3; a++) s->forward[a] = (float)forward[a];
     double near = 0.1;
     for (int c = 0; c < set->cascades; c++) {
+        /* The view's side planes, and its depth cut to this slice. */
+        for (int p = 0; p < 4; p++)
+            for (int k = 0; k < 4; k++) s->cascades[c].planes[p][k] = frustum.planes[p][k];
+        for (int a = 0; a < 3; a++) {
+            s->cascades[c].planes[4][a] = forward[a];
+            s->cascades[c].planes[5][a] = -forward[a];
+        }
+        s->cascades[c].planes[4][3] = -near;
+        s->cascades[c].planes[5][3] = set->splits[c];
         shadow_cascade *cascade = &s->cascades[c];
         double along, radius;
         shadow_slice_sphere(near, set->splits[c], k2, &along, &radius);
@@ -212,16 +227,20 @@ static void shadow_fit(terrain__shadows *s, const terrain_view *view) {
     }
 }
 
-/* Whether a mesh's box can shade anything in the cascade: its shadow falls along the light, so
- * it must overlap the box across the light and not lie wholly below the box's far side. */
+/* Whether a mesh's box can shade anything the cascade's slice of the view holds. Its shadow is
+ * the box swept away from the sun, so the box is out when it lies wholly across the light from
+ * the cascade's box, or wholly outside one of the slice's planes that the sweep cannot cross
+ * (the plane's inside does not lie further from the sun). Most of a big cascade's box is beside
+ * the view: these tests keep the casters near to what is seen, which is what llvmpipe's triangle
+ * setup pays for. */
 static bool shadow_cascade_sees(const terrain__shadows *s, const shadow_cascade *cascade, const double camera[3],
                                 const terrain_gpu_mesh *mesh) {
-    double centre[3], half[3];
+    double lo[3], hi[3], centre[3], half[3];
     for (int a = 0; a < 3; a++) {
-        double lo = mesh->origin[a] - camera[a] + mesh->bounds_min[a];
-        double hi = mesh->origin[a] - camera[a] + mesh->bounds_max[a];
-        centre[a] = 0.5 * (lo + hi) - cascade->centre[a];
-        half[a] = 0.5 * (hi - lo);
+        lo[a] = mesh->origin[a] - camera[a] + mesh->bounds_min[a];
+        hi[a] = mesh->origin[a] - camera[a] + mesh->bounds_max[a];
+        centre[a] = 0.5 * (lo[a] + hi[a]) - cascade->centre[a];
+        half[a] = 0.5 * (hi[a] - lo[a]);
     }
     const double *axes[3] = { s->right, s->up, s->sun };
     for (int k = 0; k < 3; k++) {
@@ -229,6 +248,12 @@ static bool shadow_cascade_sees(const terrain__shadows *s, const shadow_cascade 
         double at = dot3(centre, axes[k]);
         if (k < 2 && fabs(at) - reach > cascade->radius) return false;
         if (k == 2 && at + reach < cascade->depth_bottom) return false;
+    }
+    for (int p = 0; p < 6; p++) {
+        const double *plane = cascade->planes[p];
+        if (dot3(plane, s->sun) < 0) continue;   /* away from the sun lies inside: the sweep enters */
+        double x = plane[0] >= 0 ? hi[0] : lo[0], y = plane[1] >= 0 ? hi[1] : lo[1], z = plane[2] >= 0 ? hi[2] : lo[2];
+        if (plane[0] * x + plane[1] * y + plane[2] * z + plane[3] < 0) return false;
     }
     return true;
 }
@@ -244,7 +269,11 @@ void terrain__shadows_render(terrain__shadows *s, const terrain_view *view, cons
     glEnable(GL_DEPTH_CLAMP);
     glEnable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(1.5f, 2.0f);
-    glDisable(GL_CULL_FACE);                 /* a mesh chunk is an open sheet: both sides cast */
+    /* Only faces turned away from the sun cast: the ground is a closed solid seen from above,
+     * so its shadows' edges are those faces' edges, and a sunlit face never meets its own depth
+     * in the map (no acne where the light reaches; the faces that do cast get no sun to shade).
+     * It also halves what the map rasterises. */
+    glCullFace(GL_FRONT);
     gfx_program_use(s->gfx, s->program);
     GLint offset_location = glGetUniformLocation(gfx_program_gl(s->gfx, s->program), "u_offset");
     for (int c = 0; c < set->cascades; c++) {
@@ -264,7 +293,7 @@ void terrain__shadows_render(terrain__shadows *s, const terrain_view *view, cons
                                        .index_type = GFX_INDEX_U32 });
         }
     }
-    glEnable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
     glDisable(GL_POLYGON_OFFSET_FILL);
     glDisable(GL_DEPTH_CLAMP);
     gfx_pass_end(s->gfx);
@@ -285,6 +314,8 @@ void terrain__shadows_bind(const terrain__shadows *s, gfx_context *gfx, uint32_t
     }
     glProgramUniformMatrix4fv(gl, glGetUniformLocation(gl, "u_shadow_matrix"), cascades, GL_FALSE, matrices);
     glProgramUniform1fv(gl, glGetUniformLocation(gl, "u_shadow_normal_offset"), cascades, offsets);
+    glProgramUniform1fv(gl, glGetUniformLocation(gl, "u_shadow_splits"), cascades, s->settings.splits);
+    gfx_uniform_vec3(gfx, program, "u_shadow_forward", s->forward);
     gfx_uniform_float(gfx, program, "u_shadow_texel", 1.0f / (float)s->settings.size);
     gfx_uniform_int(gfx, program, "u_shadow_taps", s->settings.taps);
     glBindTextureUnit((GLuint)unit, s->texture);

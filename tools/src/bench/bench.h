@@ -48,5 +48,6 @@ void bench_group_terrain_edit(bench_context *ctx);
 void bench_group_terrain_edit_log(bench_context *ctx);
 void bench_group_play(bench_context *ctx);
 void bench_group_grass(bench_context *ctx);
+void bench_group_shadows(bench_context *ctx);
 
 #endif

@@ -127,7 +127,8 @@ int main(int argc, char **argv) {
                                    bench_group_terrain_clipmap, bench_group_terrain_stabilize,
                                    bench_group_terrain_sculpt, bench_group_terrain_edit,
                                    bench_group_terrain_edit_log,
-                                   bench_group_world, bench_group_grass, bench_group_play };
+                                   bench_group_world, bench_group_grass, bench_group_shadows,
+                                   bench_group_play };
     for (size_t i = 0; i < CORE_COUNTOF(groups); i++) groups[i](&ctx);
 
     if (common.trace_path) trace_stop();
