@@ -659,4 +659,5 @@ const double *game_app_frame_times(const game_app *app, int *count) {
 terrain_world *game_app_world(game_app *app) { return app->world; }
 terrain_ecs *game_app_terrain(game_app *app) { return app->terrain; }
 grass_system *game_app_grass(game_app *app) { return app->grass; }
+terrain_renderer *game_app_renderer(game_app *app) { return app->renderer; }
 bool game_app_loaded(const game_app *app) { return !app->loading; }

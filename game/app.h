@@ -127,6 +127,7 @@ game_app_stats game_app_stats_get(const game_app *app);
 terrain_world *game_app_world(game_app *app);
 terrain_ecs *game_app_terrain(game_app *app);
 grass_system *game_app_grass(game_app *app);     /* NULL with grass off */
+terrain_renderer *game_app_renderer(game_app *app);
 /* Whether the start area has loaded (the player moves from then on). */
 bool game_app_loaded(const game_app *app);
 /* The frame's CPU times (ms) past loading, in order; count in *count. */

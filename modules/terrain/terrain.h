@@ -356,8 +356,8 @@ typedef struct terrain_renderer terrain_renderer;
 typedef enum terrain_shadow_quality {
     TERRAIN_SHADOWS_DEFAULT = 0,      /* low */
     TERRAIN_SHADOWS_OFF,              /* no shadow pass, nothing sampled */
-    TERRAIN_SHADOWS_LOW,              /* 2 cascades of 1024² out to 100 m, 2 × 2 bilinear taps */
-    TERRAIN_SHADOWS_HIGH,             /* 3 cascades of 2048² out to 300 m, 4 × 4 bilinear taps */
+    TERRAIN_SHADOWS_LOW,              /* 2 cascades of 1024² out to 100 m, one bilinear tap */
+    TERRAIN_SHADOWS_HIGH,             /* 3 cascades of 2048² out to 300 m, 3 × 3 bilinear taps */
 } terrain_shadow_quality;
 
 /* Parses "off", "low" or "high" (--shadows); false for anything else. */
@@ -416,6 +416,10 @@ terrain_frustum terrain_frustum_from_view(const terrain_view *view);
  * boxes near a corner of the frustum may pass; a box that is seen never fails). */
 bool terrain_frustum_sees(const terrain_frustum *frustum, const double origin[3], const float bounds_min[3],
                           const float bounds_max[3]);
+
+/* Changes the shadows' quality (the map is made or freed now); false, shadows unchanged, when
+ * the shadow map cannot be made (logged). */
+bool terrain_renderer_set_shadows(terrain_renderer *renderer, terrain_shadow_quality quality);
 
 /* Draws the meshes, then the sky behind them, inside one pass named "terrain". With shadows on,
  * a pass named "shadows" comes first: the sun's shadow map, cast by the meshes given to

@@ -129,9 +129,7 @@ terrain_renderer *terrain_renderer_create(gfx_context *gfx, const terrain_render
     if (r->desc.cloud_cover == 0) r->desc.cloud_cover = 0.45f;
     if (r->desc.cloud_cover < 0) r->desc.cloud_cover = 0;
     r->materials = terrain_material_textures(r->material_means);
-    if (r->desc.shadows == TERRAIN_SHADOWS_DEFAULT) r->desc.shadows = TERRAIN_SHADOWS_LOW;
-    r->shadows = terrain__shadows_create(gfx, r->desc.shadows);
-    if (!r->shadows && r->desc.shadows != TERRAIN_SHADOWS_OFF) {
+    if (!terrain_renderer_set_shadows(r, r->desc.shadows)) {
         terrain_renderer_destroy(r);
         return NULL;
     }
@@ -140,6 +138,17 @@ terrain_renderer *terrain_renderer_create(gfx_context *gfx, const terrain_render
 }
 
 void terrain_renderer_set_clipmap(terrain_renderer *r, terrain_clipmap *clipmap) { r->far_terrain = clipmap; }
+
+bool terrain_renderer_set_shadows(terrain_renderer *r, terrain_shadow_quality quality) {
+    if (quality == TERRAIN_SHADOWS_DEFAULT) quality = TERRAIN_SHADOWS_LOW;
+    terrain__shadows *shadows = terrain__shadows_create(r->gfx, quality);
+    if (!shadows && quality != TERRAIN_SHADOWS_OFF) return false;
+    terrain__shadows_destroy(r->shadows);
+    r->shadows = shadows;
+    r->desc.shadows = quality;
+    r->shadows_drawn = false;
+    return true;
+}
 
 void terrain_renderer_destroy(terrain_renderer *r) {
     if (!r) return;
