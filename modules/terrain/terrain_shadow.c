@@ -47,11 +47,17 @@ static const shadow_settings shadow_high = { 3, 2048, 3, { 16.0f, 64.0f, 300.0f 
 
 typedef struct shadow_cascade {
     GLuint framebuffer;
+    /* Where the box is in the world: its centre on the light's axes, snapped to texels. The map
+     * holds what was drawn there; the matrices below follow the camera every frame. */
+    double light[3];
+    double radius, depth_bottom;             /* half the box's side; its far side along the sun */
+    float normal_offset;                     /* metres */
+    uint64_t key;                            /* the box and the serials of what cast into it */
+    bool drawn;                              /* the map layer holds this box's casters */
+    /* This frame's, from the camera: */
     float texture_matrix[16];                /* camera-relative → (u, v, depth) in [0, 1] */
     float clip_matrix[16];                   /* camera-relative → the cascade's clip space */
-    float normal_offset;                     /* metres */
     double centre[3];                        /* the box's centre, camera-relative (culling) */
-    double radius, depth_bottom;             /* half the box's side; its far side along the sun */
     double planes[6][4];                     /* the view's slice, camera-relative, inside ≥ 0 */
 } shadow_cascade;
 
@@ -63,7 +69,8 @@ struct terrain__shadows {
     shadow_settings settings;
     shadow_cascade cascades[SHADOW_MAX_CASCADES];
     double right[3], up[3], sun[3];          /* the light's axes (world = camera-relative) */
-    int cascades_ready;                      /* rendered this frame: the receivers may read them */
+    int cascades_ready;                      /* every layer drawn: the receivers may read them */
+    int next;                                /* the cascade whose turn it is to be redrawn */
 };
 
 bool terrain_parse_shadow_quality(const char *text, terrain_shadow_quality *out) {
@@ -140,6 +147,8 @@ static void shadow_axes(terrain__shadows *s, const float sun[3]) {
     /* up = sun × right, so that right × up = sun: the light's view is not mirrored and the
      * meshes' winding tells faces towards the sun from faces away from it. */
     double u[3] = { d[1] * r[2] - d[2] * r[1], d[2] * r[0] - d[0] * r[2], d[0] * r[1] - d[1] * r[0] };
+    if (memcmp(s->sun, d, sizeof d) != 0)
+        for (int c = 0; c < SHADOW_MAX_CASCADES; c++) s->cascades[c].drawn = false;
     memcpy(s->right, r, sizeof r);
     memcpy(s->up, u, sizeof u);
     memcpy(s->sun, d, sizeof d);
@@ -168,7 +177,35 @@ static void shadow_matrix(const double rows[3][4], float out[16]) {
     out[15] = 1.0f;
 }
 
-static void shadow_fit(terrain__shadows *s, const terrain_view *view) {
+/* This frame's matrices of a cascade placed at cascade->light, from the camera. */
+static void shadow_place(const terrain__shadows *s, shadow_cascade *cascade, const double camera[3]) {
+    double radius = cascade->radius;
+    /* Offsets of the camera from the box's centre along each axis, in double. */
+    double ox = dot3(camera, s->right) - cascade->light[0], oy = dot3(camera, s->up) - cascade->light[1],
+           oz = dot3(camera, s->sun) - cascade->light[2];
+    double top = radius * (1.0 + SHADOW_REACH_ABOVE), bottom = cascade->depth_bottom, range = top - bottom;
+    const double *axes[3] = { s->right, s->up, s->sun };
+    double rows[3][4];
+    for (int a = 0; a < 3; a++) {
+        rows[0][a] = axes[0][a] * 0.5 / radius;
+        rows[1][a] = axes[1][a] * 0.5 / radius;
+        rows[2][a] = -axes[2][a] / range;
+    }
+    rows[0][3] = 0.5 + 0.5 * ox / radius;
+    rows[1][3] = 0.5 + 0.5 * oy / radius;
+    rows[2][3] = (top - oz) / range;
+    shadow_matrix(rows, cascade->texture_matrix);
+    for (int r = 0; r < 3; r++) {                /* [0, 1] → [−1, 1]: clip = 2·t − 1 */
+        for (int a = 0; a < 3; a++) rows[r][a] *= 2.0;
+        rows[r][3] = 2.0 * rows[r][3] - 1.0;
+    }
+    shadow_matrix(rows, cascade->clip_matrix);
+    for (int a = 0; a < 3; a++) cascade->centre[a] = -(ox * s->right[a] + oy * s->up[a] + oz * s->sun[a]);
+}
+
+/* Where each cascade's box should be for this view (into `wanted`, placed for the camera), and
+ * the slice planes its casters are culled by. */
+static void shadow_fit(terrain__shadows *s, const terrain_view *view, shadow_cascade wanted[]) {
     const shadow_settings *set = &s->settings;
     float fov_y = view->fov_y > 0 ? view->fov_y : 1.04719755f;
     float aspect = view->aspect > 0 ? view->aspect : 16.0f / 9.0f;
@@ -180,52 +217,32 @@ static void shadow_fit(terrain__shadows *s, const terrain_view *view) {
     for (int a = 0; a < 3; a++) s->forward[a] = (float)forward[a];
     double near = 0.1;
     for (int c = 0; c < set->cascades; c++) {
+        shadow_cascade *cascade = &wanted[c];
+        *cascade = s->cascades[c];
         /* The view's side planes, and its depth cut to this slice. */
         for (int p = 0; p < 4; p++)
-            for (int k = 0; k < 4; k++) s->cascades[c].planes[p][k] = frustum.planes[p][k];
+            for (int k = 0; k < 4; k++) cascade->planes[p][k] = frustum.planes[p][k];
         for (int a = 0; a < 3; a++) {
-            s->cascades[c].planes[4][a] = forward[a];
-            s->cascades[c].planes[5][a] = -forward[a];
+            cascade->planes[4][a] = forward[a];
+            cascade->planes[5][a] = -forward[a];
         }
-        s->cascades[c].planes[4][3] = -near;
-        s->cascades[c].planes[5][3] = set->splits[c];
-        shadow_cascade *cascade = &s->cascades[c];
+        cascade->planes[4][3] = -near;
+        cascade->planes[5][3] = set->splits[c];
         double along, radius;
         shadow_slice_sphere(near, set->splits[c], k2, &along, &radius);
         near = set->splits[c];
         double texel = 2.0 * radius / set->size;
-        /* The centre in world coordinates on the light's axes, snapped to whole texels across
-         * the light; along it no snapping is needed (depth is not quantised to texels). */
-        double world[3], light[3];
+        /* The centre in world coordinates on the light's axes, snapped to whole texels (along
+         * the light too, so that a box that has not moved is the same box, bit for bit). */
+        double world[3];
         for (int a = 0; a < 3; a++) world[a] = view->camera[a] + forward[a] * along;
-        light[0] = floor(dot3(world, s->right) / texel) * texel;
-        light[1] = floor(dot3(world, s->up) / texel) * texel;
-        light[2] = dot3(world, s->sun);
-        /* Offsets of the camera from the box's centre along each axis, in double. */
-        double ox = dot3(view->camera, s->right) - light[0], oy = dot3(view->camera, s->up) - light[1],
-               oz = dot3(view->camera, s->sun) - light[2];
-        double top = radius * (1.0 + SHADOW_REACH_ABOVE), bottom = -radius, range = top - bottom;
-        const double *axes[3] = { s->right, s->up, s->sun };
-        double rows[3][4];
-        for (int a = 0; a < 3; a++) {
-            rows[0][a] = axes[0][a] * 0.5 / radius;
-            rows[1][a] = axes[1][a] * 0.5 / radius;
-            rows[2][a] = -axes[2][a] / range;
-        }
-        rows[0][3] = 0.5 + 0.5 * ox / radius;
-        rows[1][3] = 0.5 + 0.5 * oy / radius;
-        rows[2][3] = (top - oz) / range;
-        shadow_matrix(rows, cascade->texture_matrix);
-        for (int r = 0; r < 3; r++) {            /* [0, 1] → [−1, 1]: clip = 2·t − 1 */
-            for (int a = 0; a < 3; a++) rows[r][a] *= 2.0;
-            rows[r][3] = 2.0 * rows[r][3] - 1.0;
-        }
-        shadow_matrix(rows, cascade->clip_matrix);
-        cascade->normal_offset = (float)(SHADOW_NORMAL_OFFSET_TEXELS * texel);
-        for (int a = 0; a < 3; a++)
-            cascade->centre[a] = -(ox * s->right[a] + oy * s->up[a] + oz * s->sun[a]);
+        cascade->light[0] = floor(dot3(world, s->right) / texel) * texel;
+        cascade->light[1] = floor(dot3(world, s->up) / texel) * texel;
+        cascade->light[2] = floor(dot3(world, s->sun) / texel) * texel;
         cascade->radius = radius;
-        cascade->depth_bottom = bottom;
+        cascade->depth_bottom = -radius - texel;  /* the snap along the light moved it ≤ a texel */
+        cascade->normal_offset = (float)(SHADOW_NORMAL_OFFSET_TEXELS * texel);
+        shadow_place(s, cascade, view->camera);
     }
 }
 
@@ -260,46 +277,101 @@ static bool shadow_cascade_sees(const terrain__shadows *s, const shadow_cascade 
     return true;
 }
 
+static uint64_t shadow_key_double(uint64_t key, double value) {
+    uint64_t bits;
+    memcpy(&bits, &value, sizeof bits);
+    return core_hash_combine(key, core_hash_u64(bits));
+}
+
+/* The box and the serials of the meshes that cast into it: the same key, the same map. */
+static uint64_t shadow_cascade_key(const terrain__shadows *s, const shadow_cascade *cascade, const double camera[3],
+                                   const terrain_gpu_mesh *casters, int caster_count) {
+    uint64_t key = core_hash_u64((uint64_t)caster_count);
+    for (int a = 0; a < 3; a++) key = shadow_key_double(key, cascade->light[a]);
+    key = shadow_key_double(key, cascade->radius);
+    for (int i = 0; i < caster_count; i++)
+        if (casters[i].index_count && shadow_cascade_sees(s, cascade, camera, &casters[i]))
+            key = core_hash_combine(key, core_hash_u64(casters[i].serial));
+    return key;
+}
+
+static void shadow_draw_cascade(terrain__shadows *s, shadow_cascade *cascade, const double camera[3],
+                                const terrain_gpu_mesh *casters, int caster_count) {
+    glBindFramebuffer(GL_FRAMEBUFFER, cascade->framebuffer);
+    glDepthMask(GL_TRUE);
+    glClear(GL_DEPTH_BUFFER_BIT);
+    gfx_uniform_mat4(s->gfx, s->program, "u_light_projection", cascade->clip_matrix);
+    GLuint gl = gfx_program_gl(s->gfx, s->program);
+    GLint offset_location = glGetUniformLocation(gl, "u_offset");
+    for (int i = 0; i < caster_count; i++) {
+        const terrain_gpu_mesh *m = &casters[i];
+        if (m->index_count == 0 || !shadow_cascade_sees(s, cascade, camera, m)) continue;
+        float offset[3];
+        for (int a = 0; a < 3; a++) offset[a] = (float)(m->origin[a] - camera[a]);
+        glProgramUniform3fv(gl, offset_location, 1, offset);
+        gfx_draw(&(gfx_draw_desc){ .vertex_array = { m->vertex_array }, .count = m->index_count,
+                                   .index_type = GFX_INDEX_U32 });
+    }
+    cascade->drawn = true;
+}
+
+/* A cascade is redrawn only when its box moved (a texel's worth: the camera moved or turned) or
+ * what casts into it changed, and, once every layer holds something, at most one cascade a
+ * frame, in turns: on llvmpipe the casters' triangles are most of the pass, and a layer a frame
+ * late (the receivers still read it where it was drawn) is not to be seen. */
 void terrain__shadows_render(terrain__shadows *s, const terrain_view *view, const float sun[3],
                              const terrain_gpu_mesh *casters, int caster_count) {
     TRACE_ZONE("terrain_shadows");
-    shadow_axes(s, sun);
-    shadow_fit(s, view);
     const shadow_settings *set = &s->settings;
-    gfx_framebuffer target = { .id = s->cascades[0].framebuffer, .width = set->size, .height = set->size };
-    gfx_pass_begin(s->gfx, &(gfx_pass_desc){ .name = "shadows", .target = &target, .clear_depth = true });
-    glEnable(GL_DEPTH_CLAMP);
-    glEnable(GL_POLYGON_OFFSET_FILL);
-    glPolygonOffset(1.5f, 2.0f);
-    /* Only faces turned away from the sun cast: the ground is a closed solid seen from above,
-     * so its shadows' edges are those faces' edges, and a sunlit face never meets its own depth
-     * in the map (no acne where the light reaches; the faces that do cast get no sun to shade).
-     * It also halves what the map rasterises. */
-    glCullFace(GL_FRONT);
-    gfx_program_use(s->gfx, s->program);
-    GLint offset_location = glGetUniformLocation(gfx_program_gl(s->gfx, s->program), "u_offset");
+    shadow_axes(s, sun);
+    shadow_cascade wanted[SHADOW_MAX_CASCADES];
+    shadow_fit(s, view, wanted);
+    bool all_drawn = true, redraw[SHADOW_MAX_CASCADES] = { false };
     for (int c = 0; c < set->cascades; c++) {
-        shadow_cascade *cascade = &s->cascades[c];
-        if (c > 0) {
-            glBindFramebuffer(GL_FRAMEBUFFER, cascade->framebuffer);
-            glClear(GL_DEPTH_BUFFER_BIT);
-        }
-        gfx_uniform_mat4(s->gfx, s->program, "u_light_projection", cascade->clip_matrix);
-        for (int i = 0; i < caster_count; i++) {
-            const terrain_gpu_mesh *m = &casters[i];
-            if (m->index_count == 0 || !shadow_cascade_sees(s, cascade, view->camera, m)) continue;
-            float offset[3];
-            for (int a = 0; a < 3; a++) offset[a] = (float)(m->origin[a] - view->camera[a]);
-            glProgramUniform3fv(gfx_program_gl(s->gfx, s->program), offset_location, 1, offset);
-            gfx_draw(&(gfx_draw_desc){ .vertex_array = { m->vertex_array }, .count = m->index_count,
-                                       .index_type = GFX_INDEX_U32 });
+        wanted[c].key = shadow_cascade_key(s, &wanted[c], view->camera, casters, caster_count);
+        redraw[c] = !s->cascades[c].drawn || wanted[c].key != s->cascades[c].key;
+        all_drawn = all_drawn && s->cascades[c].drawn;
+    }
+    if (all_drawn) {                          /* one a frame: the next in turn that changed */
+        int chosen = -1;
+        for (int k = 0; k < set->cascades && chosen < 0; k++)
+            if (redraw[(s->next + k) % set->cascades]) chosen = (s->next + k) % set->cascades;
+        for (int c = 0; c < set->cascades; c++) redraw[c] = c == chosen;
+        if (chosen >= 0) s->next = (chosen + 1) % set->cascades;
+    }
+    int first = -1;
+    for (int c = 0; c < set->cascades; c++) {
+        if (redraw[c]) {
+            s->cascades[c] = wanted[c];
+            if (first < 0) first = c;
+        } else {
+            /* Kept where it was drawn; this frame's matrices, this frame's slice for culling. */
+            memcpy(s->cascades[c].planes, wanted[c].planes, sizeof wanted[c].planes);
+            shadow_place(s, &s->cascades[c], view->camera);
         }
     }
-    glCullFace(GL_BACK);
-    glDisable(GL_POLYGON_OFFSET_FILL);
-    glDisable(GL_DEPTH_CLAMP);
-    gfx_pass_end(s->gfx);
-    s->cascades_ready = set->cascades;
+    if (first >= 0) {
+        gfx_framebuffer target = { .id = s->cascades[first].framebuffer, .width = set->size, .height = set->size };
+        gfx_pass_begin(s->gfx, &(gfx_pass_desc){ .name = "shadows", .target = &target });
+        glEnable(GL_DEPTH_CLAMP);
+        glEnable(GL_POLYGON_OFFSET_FILL);
+        glPolygonOffset(1.5f, 2.0f);
+        /* Only faces turned away from the sun cast: the ground is a closed solid seen from
+         * above, so its shadows' edges are those faces' edges, and a sunlit face never meets its
+         * own depth in the map (no acne where the light reaches; the faces that do cast get no
+         * sun to shade). It also halves what the map rasterises. */
+        glCullFace(GL_FRONT);
+        gfx_program_use(s->gfx, s->program);
+        for (int c = 0; c < set->cascades; c++)
+            if (redraw[c]) shadow_draw_cascade(s, &s->cascades[c], view->camera, casters, caster_count);
+        glCullFace(GL_BACK);
+        glDisable(GL_POLYGON_OFFSET_FILL);
+        glDisable(GL_DEPTH_CLAMP);
+        gfx_pass_end(s->gfx);
+    }
+    s->cascades_ready = 0;
+    for (int c = 0; c < set->cascades; c++) s->cascades_ready += s->cascades[c].drawn;
+    if (s->cascades_ready < set->cascades) s->cascades_ready = 0;
 }
 
 void terrain__shadows_bind(const terrain__shadows *s, gfx_context *gfx, uint32_t program_handle, int unit) {

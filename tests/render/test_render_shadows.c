@@ -180,3 +180,32 @@ Test(render_shadows, lit_ground_is_as_bright_with_shadows_as_without) {
     render_image_free(&high);
     wall_close(&s);
 }
+
+/* The maps follow the camera: a cascade is redrawn only when its box moved or its casters
+ * changed, at most one a frame, and the receivers read each where it was drawn. With the camera
+ * sliding 3 m a frame (every box moves), the shadow stays under the wall in every frame. */
+Test(render_shadows, the_shadow_stays_put_while_the_camera_moves) {
+    wall_scene s = wall_open();
+    terrain_renderer *renderer = terrain_renderer_create(s.gfx, &(terrain_renderer_desc){
+        .sea_level = -50, .fog_density = 1e-6f, .shadows = TERRAIN_SHADOWS_LOW });
+    cr_assert(renderer);
+    render_image image = { W, H, malloc(W * H * 4) };
+    for (int frame = 0; frame < 5; frame++) {
+        s.view.camera[0] = 10.0 + 3.0 * frame;
+        s.view.camera[2] = 18.0 - 1.0 * frame;
+        terrain_ecs_set_view(s.te, &s.view);
+        ecs_progress(s.ecs, 1.0f / 60.0f);
+        gfx_frame_begin(s.gfx);
+        terrain_ecs_draw(s.te, renderer, &s.view);
+        gfx_read_pixels(s.gfx, image.rgba);
+        gfx_frame_end(s.gfx);
+        double shadow = ground_mean(&s, &image, SHADOW_REGION), beside = ground_mean(&s, &image, BESIDE_REGION);
+        double past = ground_mean(&s, &image, 0, 4, 6, 26);
+        cr_expect_lt(shadow, 0.5 * beside, "frame %d: %.1f behind the wall, %.1f beside", frame, shadow, beside);
+        cr_expect_lt(fabs(past - beside), 0.05 * beside, "frame %d: past the shadow %.1f, beside %.1f", frame, past,
+                     beside);
+    }
+    render_image_free(&image);
+    terrain_renderer_destroy(renderer);
+    wall_close(&s);
+}
