@@ -356,7 +356,7 @@ typedef struct terrain_renderer terrain_renderer;
 typedef enum terrain_shadow_quality {
     TERRAIN_SHADOWS_DEFAULT = 0,      /* low */
     TERRAIN_SHADOWS_OFF,              /* no shadow pass, nothing sampled */
-    TERRAIN_SHADOWS_LOW,              /* 2 cascades of 1024² out to 100 m, one bilinear tap */
+    TERRAIN_SHADOWS_LOW,              /* 2 cascades of 1024² out to 50 m, one bilinear tap */
     TERRAIN_SHADOWS_HIGH,             /* 3 cascades of 2048² out to 300 m, 3 × 3 bilinear taps */
 } terrain_shadow_quality;
 

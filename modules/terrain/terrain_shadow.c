@@ -37,7 +37,7 @@ typedef struct shadow_settings {
  * compares for every lit pixel), then clearing the maps: low keeps to one bilinear tap (2 × 2
  * texels) on two small maps; high has a third, wider cascade, four times the texels and 3 × 3
  * taps (a 4 × 4 texel footprint, softer edges). */
-static const shadow_settings shadow_low = { 2, 1024, 1, { 20.0f, 100.0f } };
+static const shadow_settings shadow_low = { 2, 1024, 1, { 12.0f, 50.0f } };
 static const shadow_settings shadow_high = { 3, 2048, 3, { 16.0f, 64.0f, 300.0f } };
 
 /* The receiver's lookup moves this many texels of its cascade along its normal. */
