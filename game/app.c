@@ -355,7 +355,8 @@ game_app *game_app_create(const game_app_desc *desc) {
     float fog_density = d->no_clipmap ? 0 : 0.0005f;
     app->renderer = terrain_renderer_create(app->gfx, &(terrain_renderer_desc){
         .sea_level = terrain_world_generation(app->world)->sea_level, .fog_density = fog_density,
-        .no_occlusion = d->no_occlusion, .detail_distance = d->no_terrain_detail ? -1.0f : 0.0f });
+        .no_occlusion = d->no_occlusion, .detail_distance = d->no_terrain_detail ? -1.0f : 0.0f,
+        .shadows = d->shadows });
     if (!app->renderer || !app_open_input(app) || !(app->hud = gfx_text_create(app->gfx))) goto fail;
     if (!d->no_clipmap) {
         app->clipmap = terrain_clipmap_create(&(terrain_clipmap_desc){

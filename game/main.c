@@ -2,8 +2,8 @@
  *
  *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT | --tour] [--record FILE]
  *         [--replay FILE] [--bindings FILE] [--screenshot FILE] [--radius R] [--levels N]
- *         [--memory MB] [--grass off|low|high] [--detail on|off] [--threads N] [--trace FILE] [--world DIR]
- *         [--at X,Y,Z] [--look YAW,PITCH]
+ *         [--memory MB] [--grass off|low|high] [--shadows off|low|high] [--detail on|off] [--threads N]
+ *         [--trace FILE] [--world DIR] [--at X,Y,Z] [--look YAW,PITCH]
  *
  * In a window: WASD or the left stick to walk, the mouse (click to capture, Escape to let go) or
  * the right stick to look, Space to jump, Shift to sprint, Ctrl or C to crouch, F to fly, F11
@@ -32,7 +32,8 @@
 
 typedef struct options {
     core_common_args common;
-    const char *size, *screenshot, *walk, *record, *replay, *bindings, *world, *grass, *detail, *at, *look;
+    const char *size, *screenshot, *walk, *record, *replay, *bindings, *world, *grass, *shadows, *detail, *at,
+        *look;
     int seed, frames, radius, levels, memory_mb;
     bool headless, tour, no_head_bob, no_ao;
 } options;
@@ -91,6 +92,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
         { "grass", CORE_OPTION_STRING, &o->grass, "off|low|high", "grass patches (default low)" },
         { "detail", CORE_OPTION_STRING, &o->detail, "on|off", "the ground's 1 m detail layer and scale blend (default on)" },
+        { "shadows", CORE_OPTION_STRING, &o->shadows, "off|low|high", "sun shadows (default low)" },
         { "memory", CORE_OPTION_INT, &o->memory_mb, "MB", "memory budget for terrain (default 384)", 16, 65536 },
         { "at", CORE_OPTION_STRING, &o->at, "X,Y,Z", "start with the eye here, metres (flying if it must)" },
         { "look", CORE_OPTION_STRING, &o->look, "YAW,PITCH", "start looking this way, degrees (yaw 0 = +z, "
@@ -120,6 +122,10 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         return bad_value(&cli, "detail", error);
     }
     desc->no_terrain_detail = o->detail && strcmp(o->detail, "off") == 0;
+    if (o->shadows && !terrain_parse_shadow_quality(o->shadows, &desc->shadows)) {
+        snprintf(error, sizeof error, "'%s' is not off, low or high", o->shadows);
+        return bad_value(&cli, "shadows", error);
+    }
     /* The world's limits: ±1e9 m along the ground (walk.h's), ±1e5 m up and down. */
     static const char *const at_names[] = { "X", "Y", "Z" }, *const look_names[] = { "YAW", "PITCH" };
     static const double at_limits[] = { 1e9, 1e5, 1e9 }, look_limits[] = { INFINITY, 89 };

@@ -7,6 +7,7 @@
 
 #include "common.glsl"
 #include "materials.glsl"
+#include "shadow.glsl"
 
 in vec3 v_relative_position;
 in vec3 v_normal;
@@ -97,7 +98,8 @@ void main() {
         albedo = mix(albedo, mix(WATER_SHALLOW, WATER_DEEP, 1.0 - exp(-depth / 25.0)), cover);
         n = normalize(mix(n, vec3(0.0, 1.0, 0.0), cover));
     }
-    vec3 color = apply_fog(light_surface(albedo, n), v_relative_position);
+    vec3 color = apply_fog(light_surface_shadowed(albedo, n, shadow_visibility(v_relative_position, n)),
+                           v_relative_position);
     // 002 §4.4: the end of the world melts into the sky seen in the same direction.
     float edge = max(smoothstep(u_edge_fade.x, u_edge_fade.y, max(abs(p.x), abs(p.y))),
                      smoothstep(u_far_fade.x, u_far_fade.y, distance));

@@ -17,12 +17,15 @@ vec3 sky_color(vec3 direction) {
     return sky;
 }
 
-// Lambert sun plus a hemisphere ambient (sky above, warm bounce below).
-vec3 light_surface(vec3 albedo, vec3 normal) {
-    float diffuse = max(dot(normal, u_sun_direction), 0.0);
+// Lambert sun, of which the share `sun_visibility` arrives (shadow.glsl: 0 in shadow), plus a
+// hemisphere ambient (sky above, warm bounce below) that shadows leave alone.
+vec3 light_surface_shadowed(vec3 albedo, vec3 normal, float sun_visibility) {
+    float diffuse = max(dot(normal, u_sun_direction), 0.0) * sun_visibility;
     vec3 ambient = mix(GROUND_BOUNCE, SKY_ZENITH, normal.y * 0.5 + 0.5) * 0.35;
     return albedo * (SUN_COLOR * diffuse + ambient);
 }
+
+vec3 light_surface(vec3 albedo, vec3 normal) { return light_surface_shadowed(albedo, normal, 1.0); }
 
 vec3 apply_fog(vec3 color, vec3 world_position) {
     vec3 to_point = world_position - u_camera_position;

@@ -15,6 +15,7 @@
 
 #include "common.glsl"
 #include "materials.glsl"
+#include "shadow.glsl"
 
 in vec3 v_relative_position;
 in vec3 v_texture_position;
@@ -109,11 +110,12 @@ vec3 bedrock_tint(vec3 rock, float height, float slope_degrees) {
     return mix(c, snow, snow_amount);
 }
 
-// common.glsl's light_surface with the mesher's openness (terrain_mesh.c): the sky ambient
-// comes only through the open part of the hemisphere, and the sun a little less in hollows (no
-// shadows to keep it out of a cave yet). Openness 1 gives light_surface exactly.
-vec3 light_surface_open(vec3 albedo, vec3 normal, float openness) {
-    float diffuse = max(dot(normal, u_sun_direction), 0.0) * mix(0.4, 1.0, openness);
+// common.glsl's light_surface_shadowed with the mesher's openness (terrain_mesh.c): the sky
+// ambient comes only through the open part of the hemisphere, and the sun a little less in
+// hollows (beyond the shadow map's reach nothing else keeps it out of a cave). Openness 1 gives
+// light_surface_shadowed exactly.
+vec3 light_surface_open(vec3 albedo, vec3 normal, float openness, float sun_visibility) {
+    float diffuse = max(dot(normal, u_sun_direction), 0.0) * mix(0.4, 1.0, openness) * sun_visibility;
     vec3 ambient = mix(GROUND_BOUNCE, SKY_ZENITH, normal.y * 0.5 + 0.5) * 0.35 * openness;
     return albedo * (SUN_COLOR * diffuse + ambient);
 }
@@ -144,7 +146,7 @@ void main() {
                                 slope_x, slope_y, slope_z);
     albedo *= macro_tint(v_macro);
     vec3 color = light_surface_open(albedo, triplanar_normal(n, blend, slope_x, slope_y, slope_z),
-                                    mix(1.0, v_openness, u_occlusion));
+                                    mix(1.0, v_openness, u_occlusion), shadow_visibility(v_relative_position, n));
     // common.glsl's fog works in world space around u_camera_position; here the camera is the
     // origin, so pass relative positions with u_camera_position = 0.
     frag_color = vec4(apply_fog(color, v_relative_position), 1.0);

@@ -189,6 +189,10 @@ expect "hello_grass: bad --grass" 2 "bad value for '--grass'" -- "$bin/hello_gra
 expect "world: bad --grass" 2 "bad value for '--grass': 'lush' is not off, low or high" -- "$bin/world" --grass lush
 expect "world: --grass without value" 2 "option '--grass' needs a value" -- "$bin/world" --grass
 expect "world: bad --detail" 2 "bad value for '--detail': 'high' is not on or off" -- "$bin/world" --detail high
+expect "world: bad --shadows" 2 "bad value for '--shadows': 'soft' is not off, low or high" -- "$bin/world" --shadows soft
+expect "world: bad --shadows gets the usage" 2 "usage: world" -- "$bin/world" --shadows soft
+expect "world: --shadows without value" 2 "option '--shadows' needs a value" -- "$bin/world" --shadows
+expect "world: --help lists --shadows" 0 "--shadows off\|low\|high +sun shadows \(default low\)" -- "$bin/world" --help
 
 # The walkable world: bad values get usage; a short scripted walk over generated terrain gets
 # there, the eye never enters the ground, the trace has every phase of the pipeline and the
@@ -229,6 +233,7 @@ for phase in input game stream generate stabilize mesh lod cull draw; do
   expect "world: the walk's trace has phase $phase" 0 "(^| )$phase( |$)" -- "$bin/trace_report" "$tmp/walk.json"
 done
 expect "world: the walk's trace has streaming jobs" 0 "terrain stream mesh" -- "$bin/trace_report" "$tmp/walk.json"
+expect "world: the walk's trace has the shadow pass" 0 "gpu shadows" -- "$bin/trace_report" "$tmp/walk.json"
 # The editing example: carve, sweep, deposit, stabilize, save, reload the same bytes; a world
 # folder that cannot be made is reported.
 expect "hello_edit: edits saved and reloaded" 0 "reloaded: the same bytes" -- \

@@ -356,12 +356,26 @@ double terrain_mesh_area(const terrain_mesh *mesh);
 /* ---- rendering (main thread; needs a gfx context) ---------------------------------------- */
 
 /* Triplanar texturing with blend exponent 8 (000 §6), materials mixed by the vertices' weights,
- * bedrock tinted by height band and slope (002 §4.1), sun, sky ambient and fog. Material
+ * bedrock tinted by height band and slope (002 §4.1), sun, sky ambient and fog, and shadows of
+ * the sun from a cascaded shadow map (desc.shadows: off, low by default, high). Material
  * textures are generated procedurally when the renderer is made. Meshes are drawn
  * camera-relative (origins subtracted in double precision), so a view 100 km from the world's
  * origin renders exactly as one near it. */
 typedef struct gfx_context gfx_context;
 typedef struct terrain_renderer terrain_renderer;
+
+/* Sun shadows: a cascaded shadow map over the near terrain (terrain_shadow.c; the README's
+ * "Sun shadows" says what each costs). The meshes cast; the meshes and the far terrain receive. */
+typedef enum terrain_shadow_quality {
+    TERRAIN_SHADOWS_DEFAULT = 0,      /* low */
+    TERRAIN_SHADOWS_OFF,              /* no shadow pass, nothing sampled */
+    TERRAIN_SHADOWS_LOW,              /* 2 cascades of 1024² out to 50 m, one bilinear tap */
+    TERRAIN_SHADOWS_HIGH,             /* 3 cascades of 2048² out to 300 m, 3 × 3 bilinear taps */
+} terrain_shadow_quality;
+
+/* Parses "off", "low" or "high" (--shadows); false for anything else. */
+bool terrain_parse_shadow_quality(const char *text, terrain_shadow_quality *out);
+const char *terrain_shadow_quality_name(terrain_shadow_quality quality);
 
 typedef struct terrain_renderer_desc {
     float sea_level;                  /* for the shore band; 0 = 0 m */
@@ -374,6 +388,7 @@ typedef struct terrain_renderer_desc {
                                          0 = 16 m; negative = the low quality: no detail layer
                                          and no 25 m scale blend (their fetches skipped; normal
                                          maps and the macro variation stay) */
+    terrain_shadow_quality shadows;   /* 0 = low */
 } terrain_renderer_desc;
 
 /* NULL when the shaders do not build (their errors printed at file:line). */
@@ -423,9 +438,20 @@ terrain_frustum terrain_frustum_from_view(const terrain_view *view);
 bool terrain_frustum_sees(const terrain_frustum *frustum, const double origin[3], const float bounds_min[3],
                           const float bounds_max[3]);
 
-/* Draws the meshes, then the sky behind them, inside one pass named "terrain". */
+/* Changes the shadows' quality (the map is made or freed now); false, shadows unchanged, when
+ * the shadow map cannot be made (logged). */
+bool terrain_renderer_set_shadows(terrain_renderer *renderer, terrain_shadow_quality quality);
+
+/* Draws the meshes, then the sky behind them, inside one pass named "terrain". With shadows on,
+ * a pass named "shadows" comes first: the sun's shadow map, cast by the meshes given to
+ * terrain_renderer_draw_shadows since the last draw or else by these. */
 void terrain_renderer_draw(terrain_renderer *renderer, const terrain_view *view,
                            const terrain_gpu_mesh *meshes, int mesh_count);
+/* The shadow pass for the next terrain_renderer_draw, cast by `casters`: every mesh on the GPU
+ * near the view, not only those in it (a hill behind the camera shades the ground in front). Each
+ * cascade draws those whose bounds reach its footprint. Nothing happens with shadows off. */
+void terrain_renderer_draw_shadows(terrain_renderer *renderer, const terrain_view *view,
+                                   const terrain_gpu_mesh *casters, int caster_count);
 
 /* ---- far terrain: geometry clipmaps (002 §3.2, §3.5) ---- */
 

@@ -145,6 +145,7 @@ void terrain_ecs_destroy(terrain_ecs *te) {
             if (chunks[i].stacks) terrain_world_release(te->terrain, chunks[i].coord);
     }
     if (te->draw_list) core_free(te->draw_list, te->draw_capacity * sizeof *te->draw_list);
+    if (te->caster_list) core_free(te->caster_list, te->caster_capacity * sizeof *te->caster_list);
     core_free(te, sizeof *te);
 }
 
@@ -228,14 +229,18 @@ static int terrain_compare_nearer(const void *a, const void *b, void *camera) {
 }
 
 void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view) {
-    size_t count = 0;
+    size_t count = 0, casters = 0;
     uint64_t triangles = 0;
     ecs_iter it = ecs_query_iter(te->ecs, te->mesh_chunks);
     while (ecs_query_next(&it)) {
         TerrainMeshChunk *chunks = ecs_field(&it, 0);
         for (int i = 0; i < it.count; i++) {
-            /* The newest mesh on the GPU, or the one it replaces until it is up. */
-            if (chunks[i].gpu.index_count == 0 || !chunks[i].visible) continue;
+            /* The newest mesh on the GPU, or the one it replaces until it is up. Out of view it
+             * may still shade what is in view: the shadow pass culls those by its own boxes. */
+            if (chunks[i].gpu.index_count == 0) continue;
+            te->caster_list = core_grow(te->caster_list, &te->caster_capacity, casters + 1, sizeof *te->caster_list);
+            te->caster_list[casters++] = chunks[i].gpu;
+            if (!chunks[i].visible) continue;
             te->draw_list = core_grow(te->draw_list, &te->draw_capacity, count + 1, sizeof *te->draw_list);
             te->draw_list[count++] = chunks[i].gpu;
             triangles += chunks[i].gpu.index_count / 3;
@@ -246,6 +251,7 @@ void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain
      * the chunks in (a component added to some chunks, as grass does, reorders them). */
     double camera[3] = { view->camera[0], view->camera[1], view->camera[2] };
     if (count > 1) qsort_r(te->draw_list, count, sizeof *te->draw_list, terrain_compare_nearer, camera);
+    terrain_renderer_draw_shadows(renderer, view, te->caster_list, (int)casters);
     terrain_renderer_draw(renderer, view, te->draw_list, (int)count);
     trace_counter("terrain.mesh_chunks_drawn", (double)count);
     trace_counter("terrain.triangles_drawn", (double)triangles);

@@ -192,6 +192,8 @@ struct terrain_ecs {
     bool culling;
     terrain_gpu_mesh *draw_list;         /* gathered each draw */
     size_t draw_capacity;
+    terrain_gpu_mesh *caster_list;       /* every mesh on the GPU: the shadows' casters */
+    size_t caster_capacity;
     terrain__streamer *stream;           /* NULL unless terrain_ecs_stream was called */
     terrain__editor *editor;             /* created by the first edit call */
     terrain_world_change *changed;       /* column chunks committed before this frame's mesh phase */
@@ -292,6 +294,23 @@ terrain__clipmap_block_info terrain__clipmap_block(const terrain_clipmap *clipma
 void terrain__clipmap_draw(terrain_clipmap *clipmap, gfx_context *gfx, uint32_t program, const terrain_view *view);
 
 /* ==== end of the clipmap section ========================================================== */
+
+/* ==== sun shadows (terrain_shadow.c) ====================================================== */
+
+typedef struct terrain__shadows terrain__shadows;
+
+/* NULL with quality off, or when the shaders or the depth target cannot be made (logged). */
+terrain__shadows *terrain__shadows_create(gfx_context *gfx, terrain_shadow_quality quality);
+void terrain__shadows_destroy(terrain__shadows *shadows);
+/* Fits the cascades to `view` and renders `casters` into them: one pass named "shadows". */
+void terrain__shadows_render(terrain__shadows *shadows, const terrain_view *view, const float sun[3],
+                             const terrain_gpu_mesh *casters, int caster_count);
+/* Sets shadow.glsl's uniforms on `program` (in use) and binds the map to texture `unit`;
+ * shadows NULL sets u_shadow_cascades = 0 (the sampler still gets a unit of its own: GL refuses
+ * a draw whose samplers of two types share one). */
+void terrain__shadows_bind(const terrain__shadows *shadows, gfx_context *gfx, uint32_t program, int unit);
+
+/* ==== end of the shadows section ========================================================== */
 
 /* ==== editing: columns, stabilization, brushes (terrain_columns.c, terrain_stabilize.c,
  * terrain_brush.c) ============================================================================ */

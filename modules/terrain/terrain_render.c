@@ -16,6 +16,7 @@
 /* Texture coordinates take mesh origins modulo the longest texture period (the macro layer's),
  * a multiple of all the others, so every layer lines up across meshes. */
 #define TERRAIN_TEXTURE_PERIOD ((double)TERRAIN__MACRO_METRES)
+#define TERRAIN_SHADOW_UNIT 3             /* the shadow map's texture unit (materials 0, clipmap 1, detail 2) */
 
 struct terrain_renderer {
     gfx_context *gfx;
@@ -27,6 +28,8 @@ struct terrain_renderer {
     float material_means[TERRAIN__MATERIAL_LAYERS][3];
     float material_tints[TERRAIN__MATERIAL_LAYERS][3];
     double texture_ms;                    /* how long the textures took to make */
+    terrain__shadows *shadows;            /* NULL with shadows off */
+    bool shadows_drawn;                   /* terrain_renderer_draw_shadows ran for the next draw */
 };
 
 /* ---- procedural material textures ---- */
@@ -93,6 +96,10 @@ terrain_renderer *terrain_renderer_create(gfx_context *gfx, const terrain_render
     if (r->desc.detail_distance == 0) r->desc.detail_distance = 16.0f;
     if (r->desc.detail_distance < 0) r->desc.detail_distance = 0;
     terrain_material_textures(r);
+    if (!terrain_renderer_set_shadows(r, r->desc.shadows)) {
+        terrain_renderer_destroy(r);
+        return NULL;
+    }
     glCreateVertexArrays(1, &r->empty.id);
     return r;
 }
@@ -101,8 +108,20 @@ void terrain_renderer_set_clipmap(terrain_renderer *r, terrain_clipmap *clipmap)
 
 void terrain_renderer_set_occlusion(terrain_renderer *r, bool on) { r->desc.no_occlusion = !on; }
 
+bool terrain_renderer_set_shadows(terrain_renderer *r, terrain_shadow_quality quality) {
+    if (quality == TERRAIN_SHADOWS_DEFAULT) quality = TERRAIN_SHADOWS_LOW;
+    terrain__shadows *shadows = terrain__shadows_create(r->gfx, quality);
+    if (!shadows && quality != TERRAIN_SHADOWS_OFF) return false;
+    terrain__shadows_destroy(r->shadows);
+    r->shadows = shadows;
+    r->desc.shadows = quality;
+    r->shadows_drawn = false;
+    return true;
+}
+
 void terrain_renderer_destroy(terrain_renderer *r) {
     if (!r) return;
+    terrain__shadows_destroy(r->shadows);
     gfx_texture_destroy(&r->materials);
     gfx_texture_destroy(&r->detail);
     gfx_vertex_array_destroy(&r->empty);
@@ -220,13 +239,25 @@ static void terrain_draw_clipmap(terrain_renderer *r, const terrain_view *view, 
     gfx_uniform_float(gfx, r->clipmap, "u_snow_height", r->desc.snow_height);
     gfx_uniform_vec3(gfx, r->clipmap, "u_bedrock_mean", r->material_means[0]);
     gfx_uniform_vec3(gfx, r->clipmap, "u_sand_mean", r->material_means[1]);
+    terrain__shadows_bind(r->shadows, gfx, r->clipmap.id, TERRAIN_SHADOW_UNIT);
     terrain__clipmap_draw(r->far_terrain, gfx, r->clipmap.id, view);
+}
+
+void terrain_renderer_draw_shadows(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *casters,
+                                   int caster_count) {
+    if (!r->shadows) return;
+    vec3 sun;
+    terrain_view_sun(view, sun);
+    terrain__shadows_render(r->shadows, view, sun, casters, caster_count);
+    r->shadows_drawn = true;
 }
 
 void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,
                            int mesh_count) {
     TRACE_ZONE("terrain_renderer_draw");
     gfx_context *gfx = r->gfx;
+    if (!r->shadows_drawn) terrain_renderer_draw_shadows(r, view, meshes, mesh_count);
+    r->shadows_drawn = false;
     mat4 view_projection, inverse;
     terrain_view_projection(view, view_projection);
     glm_mat4_inv(view_projection, inverse);
@@ -249,6 +280,7 @@ void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const 
     gfx_uniform_float(gfx, r->terrain, "u_detail_distance", r->desc.detail_distance);
     terrain_material_uniforms(r, r->terrain);
     gfx_uniform_float(gfx, r->terrain, "u_occlusion", r->desc.no_occlusion ? 0.0f : 1.0f);
+    terrain__shadows_bind(r->shadows, gfx, r->terrain.id, TERRAIN_SHADOW_UNIT);
     for (int i = 0; i < mesh_count; i++) {
         const terrain_gpu_mesh *m = &meshes[i];
         if (m->index_count == 0) continue;

@@ -50,8 +50,10 @@ static double mean_luminance(const render_image *image) {
 
 Test(render_ao, a_cave_floor_darkens_and_open_ground_does_not_change) {
     gfx_context *gfx = render_offscreen(W, H);
-    terrain_renderer *lit = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = -50 });
-    terrain_renderer *flat = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = -50, .no_occlusion = true });
+    /* occlusion alone: the sun shines into the cave without a shadow map */
+    terrain_renderer *lit = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = -50, .shadows = TERRAIN_SHADOWS_OFF });
+    terrain_renderer *flat = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = -50, .no_occlusion = true,
+                                                                                   .shadows = TERRAIN_SHADOWS_OFF });
     cr_assert(lit && flat);
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = cave_chunk });
     /* The four chunks around the cave, and one of open plain from 32 to 64 m in x and z. */

@@ -4,7 +4,8 @@
  * Rows:
  *   grass.frame_ms.640x360.low / .high   frame ms the grass adds on the world walk's start view
  *                                        (seed 1, the spawn, facing +z; world.walk's first
- *                                        view), 640×360: frame wall time with the grass at that
+ *                                        view; shadows low, the game's default), 640×360: frame
+ *                                        wall time with the grass at that
  *                                        quality less the same frame without it (peers in one run)
  *   grass.frame_ms.640x360.off           that frame without grass (the base of the two above)
  *   grass.cpu_ms                         ms a frame in the grass code (placing, culling and
@@ -16,6 +17,7 @@
  *   grass.place.patch_ms                 ms to place one 32 m patch of the meadow (9 tufts a m²)
  */
 #include "bench.h"
+#include "bench_start_view.h"
 
 #include "core/core.h"
 #include "ecs/ecs.h"
@@ -27,51 +29,23 @@
 
 #include <math.h>
 
-#define GRASS_BENCH_FRAMES 20
-
 /* ---- the world walk's start view --------------------------------------------------------- */
 
-typedef struct world_view { game_app *app; double grass_ms; } world_view;
-
-static double sample_world_frames(void *user) {
-    world_view *w = user;
-    uint64_t start = core_time_ns();
-    double grass_ms = 0;
-    for (int i = 0; i < GRASS_BENCH_FRAMES; i++) {
-        game_app_frame(w->app);
-        grass_system *grass = game_app_grass(w->app);
-        if (grass) grass_ms += grass_stats_get(grass).cpu_ms;
-    }
-    w->grass_ms = grass_ms / GRASS_BENCH_FRAMES;
-    return (double)(core_time_ns() - start) * 1e-6 / GRASS_BENCH_FRAMES;
+static void add_grass_ms(game_app *app, void *user) {
+    grass_system *grass = game_app_grass(app);
+    if (grass) *(double *)user += grass_stats_get(grass).cpu_ms;
 }
 
-static void median_of(const double *samples, int count, double *out) {
-    double sorted[16];
-    for (int i = 0; i < count; i++) sorted[i] = samples[i];
-    for (int i = 1; i < count; i++)
-        for (int j = i; j > 0 && sorted[j] < sorted[j - 1]; j--) {
-            double t = sorted[j];
-            sorted[j] = sorted[j - 1], sorted[j - 1] = t;
-        }
-    *out = sorted[count / 2];
-}
-
-/* `runs` samples of GRASS_BENCH_FRAMES frames each, once loaded and the grass placed. */
+/* `runs` samples of the start view's frames at a grass quality (shadows at the game's default). */
 static bool world_frames(bench_context *ctx, grass_quality quality, int runs, double *frame_ms, double *grass_ms) {
-    game_app *app = game_app_create(&(game_app_desc){ .seed = 1, .width = 640, .height = 360, .headless = true,
-                                                      .threads = bench_threads(ctx), .frames = 1000000,
-                                                      .grass = quality, .no_hud = true,
-                                                      /* world.walk's first view: along +z, the
-                                                         walker's pitch (−0.1 rad) */
-                                                      .look_set = true, .look = { 0, -0.1 * 180 / M_PI } });
+    game_app_desc desc = bench_start_view_desc(ctx);
+    desc.grass = quality;
+    game_app *app = bench_start_view_open(&desc);
     if (!app) return false;
-    while (!game_app_loaded(app)) game_app_frame(app);
-    for (int i = 0; i < 60; i++) game_app_frame(app);      /* patches placed, a few a frame */
-    world_view w = { .app = app };
     for (int r = 0; r < runs; r++) {
-        frame_ms[r] = sample_world_frames(&w);
-        grass_ms[r] = w.grass_ms;
+        double sum = 0;
+        frame_ms[r] = bench_start_view_frames(app, add_grass_ms, &sum);
+        grass_ms[r] = sum / BENCH_START_VIEW_FRAMES;
     }
     game_app_destroy(app);
     return true;
@@ -87,7 +61,7 @@ static void bench_world_view(bench_context *ctx) {
             core_error("bench", "grass: the world did not start; rows skipped");
             return;
         }
-        median_of(frames[q], RUNS, &median[q]);
+        median[q] = bench_median(frames[q], RUNS);
     }
     bench_record(ctx, "grass.frame_ms.640x360.off", "ms", frames[0], RUNS);
     for (int q = 1; q < 3; q++) {
