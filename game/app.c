@@ -342,6 +342,7 @@ game_app *game_app_create(const game_app_desc *desc) {
     }
     if (!d->width || !d->height) d->width = 1280, d->height = 720;
     if (!(d->max_loading_seconds > 0)) d->max_loading_seconds = 300.0;
+    if (!(d->step_seconds > 0)) d->step_seconds = 1.0f / 60.0f;
     app->gfx = gfx_create(&(gfx_desc){ .width = d->width, .height = d->height, .title = "world (loading)",
                                        .headless = d->headless });
     if (!app->gfx) goto fail;
@@ -537,7 +538,7 @@ static void app_update_view(game_app *app) {
     app->view.pitch = app->player.pitch;
     app->view.aspect = (float)width / (float)height;
     app->view.time = app->windowed ? (float)((double)(app->last_ns - app->start_ns) * 1e-9)
-                                   : (float)(app->frames + app->loading_frames) / 60.0f;
+                                   : (float)(app->frames + app->loading_frames) * app->desc.step_seconds;
     terrain_ecs_set_viewers(app->terrain, &app->view.camera, 1);
     terrain_ecs_set_view(app->terrain, &app->view);   /* what the cull phase tests against */
 }
@@ -572,7 +573,7 @@ bool game_app_frame(game_app *app) {
     uint64_t now = core_time_ns();
     app->frame_seconds = (double)(now - app->last_ns) * 1e-9;
     app->last_ns = now;
-    float dt = app->windowed ? (float)app->frame_seconds : 1.0f / 60.0f;
+    float dt = app->windowed ? (float)app->frame_seconds : app->desc.step_seconds;
     bool running = app_update_player(app, dt);
     app_update_view(app);
     if (!app->loading && !app->holding)       /* a held eye is where the user put it */

@@ -72,6 +72,8 @@ typedef struct game_app_desc {
     bool no_occlusion;                /* terrain lit without its ambient occlusion
                                          (terrain_renderer_desc.no_occlusion) */
     double max_loading_seconds;       /* give up waiting for the start area; 0 = 300 s */
+    float step_seconds;               /* offscreen, the game time each frame steps; 0 = 1/60 s
+                                         (a window steps the time the frame took) */
     /* A folder that keeps the world (terrain.h, "the world folder"): DIR/world.db holds the
      * seed, the edits and the player's pose. Loaded at the start (a damaged database is
      * reported and set aside; an old DIR/edits folder is imported once), saved every

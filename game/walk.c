@@ -336,9 +336,8 @@ const char game_walk_tour[] =
     "fly-over\n"
     "0 0 shot\n"                 /* where the player stands */
     "0 50 shot\n"                /* 50 m on */
-    "-30 100 shot\n"             /* on, bearing left */
     "cave 150 shot\n"            /* into the nearest cave or under the nearest arch */
-    "-30 110 fly y=120 shot\n";  /* up 120 m */
+    "0 60 fly y=120 shot\n";     /* back over the walk and up 120 m */
 
 /* ---- cave stops -------------------------------------------------------------------------------- */
 
