@@ -112,19 +112,25 @@ typedef struct mesh_material_probe {
     const terrain_stacks *stacks;
 } mesh_material_probe;
 
+/* A cursor at the bottom of global column (gx, gz), the probe keeping the last chunk's stacks
+ * (neighbouring vertices and columns mostly share one). */
+static terrain__column_cursor mesh_probe_cursor(mesh_material_probe *probe, int64_t gx, int64_t gz) {
+    terrain_chunk_coord chunk = { mesh_floor_div(gx, TERRAIN_CHUNK_COLUMNS), mesh_floor_div(gz, TERRAIN_CHUNK_COLUMNS) };
+    if (!probe->stacks || chunk.x != probe->chunk.x || chunk.z != probe->chunk.z) {
+        probe->stacks = terrain_world_stacks(probe->world, chunk);
+        probe->chunk = chunk;
+    }
+    return terrain__stacks_cursor(probe->stacks, (int)(gx - chunk.x * TERRAIN_CHUNK_COLUMNS),
+                                  (int)(gz - chunk.z * TERRAIN_CHUNK_COLUMNS));
+}
+
 /* Adds w × the length (in quanta) of each visible material's layers inside [y0, y1] metres in
  * global column (gx, gz) to sums[bedrock … water], in one walk up the column (below the floor is
  * bedrock, above the last layer air, as terrain_stacks_material_at reads a column). The stacks
  * are run-length layers, so the overlap of the segment with each layer is exact. */
 static void mesh_column_overlaps(mesh_material_probe *probe, int64_t gx, int64_t gz, double y0, double y1, double w,
                                  double sums[4]) {
-    terrain_chunk_coord chunk = { mesh_floor_div(gx, TERRAIN_CHUNK_COLUMNS), mesh_floor_div(gz, TERRAIN_CHUNK_COLUMNS) };
-    if (!probe->stacks || chunk.x != probe->chunk.x || chunk.z != probe->chunk.z) {
-        probe->stacks = terrain_world_stacks(probe->world, chunk);
-        probe->chunk = chunk;
-    }
-    terrain__column_cursor cursor = terrain__stacks_cursor(probe->stacks, (int)(gx - chunk.x * TERRAIN_CHUNK_COLUMNS),
-                                                           (int)(gz - chunk.z * TERRAIN_CHUNK_COLUMNS));
+    terrain__column_cursor cursor = mesh_probe_cursor(probe, gx, gz);
     const double q0 = (y0 - TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE, q1 = (y1 - TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE;
     if (q0 < 0.0) sums[0] += w * ((q1 < 0.0 ? q1 : 0.0) - q0);
     terrain__qlayer layer;
@@ -229,13 +235,7 @@ typedef struct mesh_ao {
  * floor is bedrock. Returns the slab above its highest solid quantum. */
 static int32_t mesh_ao_fill_column(mesh_ao *ao, int64_t gx, int64_t gz, uint8_t *slabs) {
     mesh_material_probe *probe = &ao->stacks;
-    terrain_chunk_coord chunk = { mesh_floor_div(gx, TERRAIN_CHUNK_COLUMNS), mesh_floor_div(gz, TERRAIN_CHUNK_COLUMNS) };
-    if (!probe->stacks || chunk.x != probe->chunk.x || chunk.z != probe->chunk.z) {
-        probe->stacks = terrain_world_stacks(probe->world, chunk);
-        probe->chunk = chunk;
-    }
-    terrain__column_cursor cursor = terrain__stacks_cursor(probe->stacks, (int)(gx - chunk.x * TERRAIN_CHUNK_COLUMNS),
-                                                           (int)(gz - chunk.z * TERRAIN_CHUNK_COLUMNS));
+    terrain__column_cursor cursor = mesh_probe_cursor(probe, gx, gz);
     memset(slabs, 0, (size_t)ao->height);
     /* Heights in quanta above the window's first slab; a solid run [bottom, top) fills the slabs
      * it covers and adds its ends' parts to the slabs they fall in. */
