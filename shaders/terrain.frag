@@ -125,8 +125,6 @@ void main() {
     vec3 blend = triplanar_weights(n);
     vec4 w = v_weights / max(dot(v_weights, vec4(1.0)), 1e-4);
     float slope = (1.0 - clamp(n.y, 0.0, 1.0)) * 90.0;
-    // The detail fades out over the second half of its reach: further away its 1 m repeat is a
-    // few pixels, averaged by the mipmaps to 1 anyway, and its fetches are saved.
     float distance = length(v_relative_position);
     vec2 slope_x = vec2(0.0), slope_y = vec2(0.0), slope_z = vec2(0.0);
     vec3 albedo = vec3(0.0);

@@ -104,46 +104,40 @@ Test(terrain_occlusion, without_a_world_everything_is_open) {
     terrain_field_free(&field);
 }
 
-/* The lowest openness among upward-facing vertices within the box (world metres). */
-static double lowest_openness_in(const terrain_mesh *m, double x0, double x1, double y0, double y1, double z0,
-                                 double z1, int *found) {
-    double lowest = 2.0;
-    for (uint32_t i = 0; i < m->vertex_count; i++) {
-        double p[3];
-        world_position(m, i, p);
-        if (p[0] < x0 || p[0] > x1 || p[1] < y0 || p[1] > y1 || p[2] < z0 || p[2] > z1) continue;
-        if (m->vertices[i].normal[1] < 0.9f) continue;
-        (*found)++;
-        lowest = fmin(lowest, openness(&m->vertices[i]));
-    }
-    return lowest;
-}
+/* The lowest and highest openness among upward-facing vertices within the box (world metres). */
+typedef struct openness_range { double lowest, highest; int found; } openness_range;
 
-static double highest_openness_in(const terrain_mesh *m, double x0, double x1, double y0, double y1, double z0,
-                                  double z1, int *found) {
-    double highest = -1.0;
+static openness_range openness_in(const terrain_mesh *m, double x0, double x1, double y0, double y1, double z0,
+                                  double z1) {
+    openness_range r = { 2.0, -1.0, 0 };
     for (uint32_t i = 0; i < m->vertex_count; i++) {
         double p[3];
         world_position(m, i, p);
         if (p[0] < x0 || p[0] > x1 || p[1] < y0 || p[1] > y1 || p[2] < z0 || p[2] > z1) continue;
         if (m->vertices[i].normal[1] < 0.9f) continue;
-        (*found)++;
-        highest = fmax(highest, openness(&m->vertices[i]));
+        r.found++;
+        r.lowest = fmin(r.lowest, openness(&m->vertices[i]));
+        r.highest = fmax(r.highest, openness(&m->vertices[i]));
     }
-    return highest;
+    return r;
 }
 
 Test(terrain_occlusion, a_trench_floor_is_darker_than_the_plain_and_a_cave_darker_still) {
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = trench_chunk });
     terrain_mesh west = mesh_chunk(world, 0, 0, 0), east = mesh_chunk(world, 1, 0, 0);
     /* The plain, far (> 8 m + the lift) from the trench and the cave: open. */
-    int plain_count = 0, trench_count = 0, cave_count = 0;
-    double plain = lowest_openness_in(&west, 4, 18, 9, 11, 4, 28, &plain_count);
+    openness_range plain_range = openness_in(&west, 4, 18, 9, 11, 4, 28);
+    double plain = plain_range.lowest;
+    int plain_count = plain_range.found;
     /* The trench floor's middle line (x = 32, where both trench columns meet): the field's
      * surface lies at 4.25 m there. */
-    double trench = highest_openness_in(&east, 31.9, 32.1, 3, 5, 4, 28, &trench_count);
+    openness_range trench_range = openness_in(&east, 31.9, 32.1, 3, 5, 4, 28);
+    double trench = trench_range.highest;
+    int trench_count = trench_range.found;
     /* The cave floor (at 1.5 m), away from its walls. */
-    double cave = highest_openness_in(&east, 47, 52, 1, 2, 13, 18, &cave_count);
+    openness_range cave_range = openness_in(&east, 47, 52, 1, 2, 13, 18);
+    double cave = cave_range.highest;
+    int cave_count = cave_range.found;
     cr_assert_gt(plain_count, 0);
     cr_assert_gt(trench_count, 0);
     cr_assert_gt(cave_count, 0);
