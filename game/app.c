@@ -334,10 +334,7 @@ game_app *game_app_create(const game_app_desc *desc) {
     app->desc = *desc;
     game_app_desc *d = &app->desc;
     if (d->walk) {                         /* a copy: resolving `cave` lines rewrites points */
-        app->walk = *d->walk;
-        size_t size = (size_t)app->walk.count * sizeof *app->walk.points;
-        app->walk.points = core_alloc(size ? size : 1);
-        if (size) memcpy(app->walk.points, d->walk->points, size);
+        game_walk_copy(d->walk, &app->walk);
         d->walk = &app->walk;
     }
     if (!d->width || !d->height) d->width = 1280, d->height = 720;
@@ -396,7 +393,7 @@ void game_app_destroy(game_app *app) {
     terrain_edit_log_destroy(app->edits);
     job_system_destroy(app->jobs);
     app_free_shots(app);
-    if (app->walk.points) core_free(app->walk.points, app->walk.count ? (size_t)app->walk.count * sizeof *app->walk.points : 1);
+    game_walk_free(&app->walk);
     gfx_destroy(app->gfx);
     core_free(app->cpu_ms, app->cpu_capacity * sizeof *app->cpu_ms);
     core_free(app->engine_ms, app->engine_capacity * sizeof *app->engine_ms);

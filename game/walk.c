@@ -260,6 +260,13 @@ bool game_walk_parse_text(const char *text, size_t size, const char *name, game_
     return true;
 }
 
+void game_walk_copy(const game_walk *from, game_walk *to) {
+    *to = *from;
+    size_t size = (size_t)from->count * sizeof *from->points;
+    to->points = size ? core_alloc(size) : NULL;
+    if (size) memcpy(to->points, from->points, size);
+}
+
 void game_walk_free(game_walk *walk) {
     if (walk) walk_release(walk, (size_t)walk->count);
 }

@@ -146,6 +146,8 @@ bool game_walk_parse(const char *spec, game_walk *out, char *error, size_t error
  * ("walk.txt:3: …"). Same outcome as game_walk_parse. */
 bool game_walk_parse_text(const char *text, size_t size, const char *name, game_walk *out, char *error,
                           size_t error_size);
+/* A copy whose points are its own (free it with game_walk_free too). */
+void game_walk_copy(const game_walk *from, game_walk *to);
 void game_walk_free(game_walk *walk);
 
 /* A look into a cave mouth or under an arch: where to stand and which way to face. */
