@@ -200,6 +200,11 @@ const terrain_generation_params *terrain_world_generation(const terrain_world *w
 terrain_material terrain_world_material_at(terrain_world *world, double x, double y, double z);
 /* The top of the highest solid layer (terrain_stacks_top) of the column under world (x, z). */
 float terrain_world_top(terrain_world *world, double x, double z);
+/* Whether water lies on top of the column under world (x, z): its highest non-air layer is water
+ * (the sea, a lake, a flooded pit). Then *surface is the water's top and *ground the top of the
+ * highest solid layer under it (terrain_stacks_surface and terrain_stacks_top); either pointer
+ * may be NULL. False (nothing written) for a dry column. Generates the chunk if needed. */
+bool terrain_world_water_at(terrain_world *world, double x, double z, float *surface, float *ground);
 
 /* ---- the implicit field (000 §3.3) -------------------------------------------------------- */
 
@@ -1235,5 +1240,30 @@ typedef struct terrain_edit_stats {
 bool terrain_ecs_edit(terrain_ecs *te, const terrain_edit *edit);
 void terrain_ecs_set_edit_settings(terrain_ecs *te, const terrain_edit_settings *settings);
 terrain_edit_stats terrain_ecs_edit_stats(terrain_ecs *te);
+
+/* ---- water planes (002 §3.4, 004 §4.3) ---------------------------------------------------
+ * Water is a material layer of the stacks; where it lies on top of a column its flat top is a
+ * water surface. The mesh phase finds, for each mesh chunk, the water surfaces whose height lies
+ * in the chunk's y range, grouped by height, and the streaming/upload step gives the chunk's
+ * entity a WaterPlane component with them (removed again when the chunk holds none). The sea at
+ * generation's sea_level reaches beyond the rings (the renderer draws it out to the horizon);
+ * lakes above it come from the WaterPlane components. */
+
+#define TERRAIN_WATER_PLANES_MAX 4
+
+typedef struct terrain_water_plane {
+    float height;                         /* world y of the surface */
+    float deepest;                        /* world y of the lowest ground under it in this chunk */
+    uint32_t rows[TERRAIN_MESH_CELLS];    /* bit i of rows[k]: cell column (i, k) of the mesh chunk
+                                             (cells of 2^level metres) has this water on top */
+} terrain_water_plane;
+
+/* On TerrainMeshChunk entities whose cells hold water on top (see above). */
+typedef struct WaterPlane {
+    double origin[3];                     /* the mesh chunk's corner, world metres */
+    float cell;                           /* metres per cell: 2^level */
+    int count;                            /* planes used, highest share of cells first */
+    terrain_water_plane planes[TERRAIN_WATER_PLANES_MAX];
+} WaterPlane;
 
 #endif

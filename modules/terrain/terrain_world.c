@@ -343,6 +343,16 @@ float terrain_world_top(terrain_world *world, double x, double z) {
     return terrain_stacks_top(stacks, i, k);
 }
 
+bool terrain_world_water_at(terrain_world *world, double x, double z, float *surface, float *ground) {
+    int i, k;
+    const terrain_stacks *stacks = column_at(world, x, z, &i, &k);
+    float top = terrain_stacks_top(stacks, i, k), wet = terrain_stacks_surface(stacks, i, k);
+    if (!(wet > top)) return false;   /* the highest non-air layer is solid: dry */
+    if (surface) *surface = wet;
+    if (ground) *ground = top;
+    return true;
+}
+
 /* ---- edits -------------------------------------------------------------------------------- */
 
 /* Lock held. One entry per chunk: a second commit widens the first's box. */
