@@ -165,6 +165,10 @@ typedef struct terrain_world_desc {
     terrain_edit_log *edits;          /* not owned; NULL = edits live only in the cache (an
                                          edited chunk is then never evicted). See "edits in
                                          the world" below */
+    bool sea;                         /* with `generate`: edits let the sea at
+                                         generation.sea_level in, as in a generated world (see
+                                         "edits in the world"); false = a hand-made world has
+                                         no sea. A generated world always has it */
 } terrain_world_desc;
 
 typedef struct terrain_world terrain_world;
@@ -591,6 +595,8 @@ typedef enum terrain_mesh_state {
     TERRAIN_MESH_UPLOADED,              /* on the GPU (the CPU copy is freed) */
 } terrain_mesh_state;
 
+typedef struct WaterPlane WaterPlane;   /* "water planes", at the end */
+
 typedef struct TerrainMeshChunk {
     int64_t x, y, z;                    /* in chunks of its level */
     terrain_lod_desc lod;               /* level and finer neighbours (terrain_mesh_chunk) */
@@ -602,6 +608,9 @@ typedef struct TerrainMeshChunk {
     size_t gpu_bytes;
     bool edited;                        /* meshed again after an edit: uploaded this frame,
                                            whatever the upload budget */
+    WaterPlane *water;                  /* the water surfaces found with the newest mesh (NULL =
+                                           none; owned): the upload copies them into the
+                                           entity's WaterPlane component */
 } TerrainMeshChunk;
 
 typedef struct terrain_ecs terrain_ecs;
@@ -1181,6 +1190,23 @@ typedef struct terrain_edit {
     terrain_erode_desc erode;
 } terrain_edit;
 
+/* The sea after edits (000 §4: "carving below sea level next to the sea lets the sea in: no dry
+ * hole below the water line"). Generation fills the air above each column's highest solid layer
+ * up to sea_level with water; edits keep that rule, as a water table at sea level: every column
+ * an edit or stabilization changed whose highest solid (sand, rocks, bedrock) lies below
+ * sea_level gets water from there exactly up to sea_level — air in that span becomes water, and
+ * water of that run above sea_level goes (added material displaced it: it flows off into the
+ * sea). Columns whose highest solid is at or above sea_level keep their water as it is (lakes).
+ * Added material displaces water everywhere (lakes too): a deposit lowers the water standing on
+ * the pile by as much as the pile rises, and a stabilization commit caps the water on a changed
+ * column at the surface the column had before (sand that slid under water pushes it out).
+ * The rule is applied where the change is committed (terrain_world_edit, and the stabilize
+ * phase's commits), column by column from the column alone, so it keeps every determinism
+ * invariant (same bytes whatever the thread count or region split; the edit log records the
+ * flooded columns, so a replay gives the same bytes). Water is not conserved — it comes from and
+ * goes to the sea — while sand and rocks still are, exactly. Worlds with `generate` set have the
+ * sea only with terrain_world_desc.sea. */
+
 /* Applies the edit; returns how many chunks changed (their coordinates in `changed`, at most
  * `capacity` written), or −1 (message logged, nothing changed) for a bad edit. Main thread,
  * between frames' jobs (it replaces cached stacks; see terrain_world_commit). */
@@ -1258,7 +1284,24 @@ typedef struct terrain_water_plane {
                                              (cells of 2^level metres) has this water on top */
 } terrain_water_plane;
 
-/* On TerrainMeshChunk entities whose cells hold water on top (see above). */
+/* The water surfaces of mesh chunk (x, y, z) of level `level` (cells of 2^level metres, as
+ * terrain_mesh_chunk's): for each of its 32 × 32 cell columns, whether the stacks have water on
+ * top there (the column at the cell's centre while a cell is at most a column chunk wide, else
+ * the cell's first column: columns the mesher's samples read anyway), grouped by surface height
+ * (equal within one height quantum) when the height lies in the chunk's y range
+ * [y·32·2^level, (y + 1)·32·2^level), most cells first (ties: the higher first), at most
+ * min(capacity, TERRAIN_WATER_PLANES_MAX). Returns how many were written; 0 for a chunk without
+ * water at its height; −1 (message logged) for a NULL world, a level outside 0 … 16, a chunk
+ * index beyond ±2^30 or a negative capacity. Generates the column chunks it reads; thread-safe
+ * as terrain_world_stacks. The mesh phase calls it for every mesh chunk it meshes. */
+int terrain_water_planes_find(terrain_world *world, int64_t x, int64_t y, int64_t z, int level,
+                              terrain_water_plane *out, int capacity);
+
+/* On TerrainMeshChunk entities whose cells hold water on top (see above): set when the chunk's
+ * mesh is uploaded (terrain_upload, main thread), replaced when an edit remeshes it, removed when
+ * it holds water no more; an entity that streaming evicts takes it along. Registered by
+ * terrain_ecs_create as ECS_COMPONENT(ecs, WaterPlane): another module finds its id with
+ * ecs_component_lookup(ecs, "WaterPlane"). */
 typedef struct WaterPlane {
     double origin[3];                     /* the mesh chunk's corner, world metres */
     float cell;                           /* metres per cell: 2^level */

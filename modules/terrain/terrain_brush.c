@@ -6,7 +6,9 @@
  * for is dropped exactly: each column gets ⌊Q·w/Σw⌋ quanta and the Q − Σ⌊…⌋ left over go one
  * each to the columns with the largest remainders (ties to the lower index), Q the volume in
  * quanta·column. The material lands on the pile (sand under rocks, both under water: §3.4's
- * order) and stays where it lands until stabilization moves it.
+ * order) and stays where it lands until stabilization moves it. Water on the pile is displaced
+ * (it flows off, as the sculpt brush's added material displaces it): as much of it goes as the
+ * pile rises, so a water surface never rises with a deposit into it.
  *
  * Erosion (§4.4): bedrock turns into rocks and sand, a share ρ of rocks ("the relative volume of
  * rocks and sand produced by erosion"), per column rocks = round(ρ·e) and sand = e − rocks of the
@@ -159,6 +161,9 @@ bool terrain_deposit(terrain_columns *c, const terrain_deposit_desc *desc, int64
             int32_t q = (int32_t)shares[n].quanta;
             if (material == TERRAIN_SAND) c->sand_top[cell] += q;
             c->ground[cell] += q;
+            /* The water standing on the pile is displaced, not lifted: its surface stays. */
+            int32_t *water = &c->water[(size_t)shares[n].k * (size_t)c->width + (size_t)shares[n].i];
+            *water = CORE_MAX(*water - q, 0);
             terrain__columns_touch(c, shares[n].i, shares[n].k);
         }
         if (quanta) *quanta = total;

@@ -454,6 +454,74 @@ int64_t terrain_columns_mass(const terrain_columns *c, terrain_material material
     return total;
 }
 
+/* ---- the sea after edits (terrain.h, "the sea after edits") ------------------------------- */
+
+/* `in` (bottom-up, merged, no air on top) with the sea rule applied into `out` (room for
+ * count + 2): water from the highest solid exactly up to `sea`, the water run that reached above
+ * it cut off there; the count, or −1 when the highest solid is at or above the sea (unchanged). */
+static int flood_layers(const terrain__clayer *in, int count, int32_t sea, terrain__clayer *out) {
+    int top = count - 1;
+    while (top >= 0 && (in[top].material == TERRAIN_AIR || in[top].material == TERRAIN_WATER)) top--;
+    int64_t solid = 0;
+    for (int l = 0; l <= top; l++) solid += in[l].quanta;
+    if (solid >= sea) return -1;
+    int n = 0;
+    for (int l = 0; l <= top; l++) n = push_layer(out, n, in[l].material, in[l].quanta);
+    n = push_layer(out, n, TERRAIN_WATER, (int32_t)(sea - solid));
+    /* Above the sea: the same layers, less the water that stood on the run below (displaced). */
+    bool displaced = true;
+    int64_t bottom = solid;
+    for (int l = top + 1; l < count; l++) {
+        int64_t lo = CORE_MAX(bottom, (int64_t)sea), hi = bottom + in[l].quanta;
+        bottom = hi;
+        if (hi <= sea) continue;
+        displaced = displaced && in[l].material == TERRAIN_WATER;
+        n = push_layer(out, n, displaced ? TERRAIN_AIR : in[l].material, (int32_t)(hi - lo));
+    }
+    while (n > 0 && out[n - 1].material == TERRAIN_AIR) n--;
+    return n;
+}
+
+int terrain__columns_flood(terrain_columns *c, int32_t sea) {
+    terrain__clayer *scratch = NULL;
+    size_t capacity = 0;
+    int flooded = 0;
+    for (int k = 0; k < c->depth; k++)
+        for (int i = 0; i < c->width; i++) {
+            if (!(c->flags[flat(c, i, k)] & TERRAIN__COLUMN_EDITED)) continue;
+            int count = terrain__columns_layers(c, i, k, &scratch, &capacity);
+            scratch = core_grow(scratch, &capacity, 2 * (size_t)count + 2, sizeof *scratch);
+            terrain__clayer *in = scratch, *out = scratch + count;
+            int n = flood_layers(in, count, sea, out);
+            if (n < 0 || (n == count && memcmp(in, out, (size_t)n * sizeof *in) == 0)) continue;
+            /* Water only: stabilization moves sand and rocks, so nothing is marked for it. */
+            terrain__columns_store(c, i, k, out, n);
+            flooded++;
+        }
+    core_free(scratch, capacity * sizeof *scratch);
+    return flooded;
+}
+
+int terrain__columns_cap_water(terrain_columns *c, terrain_chunk_coord coord, const terrain_stacks *before) {
+    int64_t ci = coord.x * TERRAIN_CHUNK_COLUMNS - c->x0, ck = coord.z * TERRAIN_CHUNK_COLUMNS - c->z0;
+    if (ci < 0 || ck < 0 || ci + TERRAIN_CHUNK_COLUMNS > c->width || ck + TERRAIN_CHUNK_COLUMNS > c->depth) return 0;
+    int capped = 0;
+    for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
+        for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
+            int ri = (int)ci + i, rk = (int)ck + k;
+            size_t n = flat(c, ri, rk), cell = terrain__cell(c, ri, rk);
+            int64_t surface, ground;
+            if (!(c->flags[n] & TERRAIN__COLUMN_EDITED) || c->water[n] == 0 ||
+                !terrain__stacks_water(before, i, k, &surface, &ground))
+                continue;
+            int64_t allowed = CORE_MAX(surface - (int64_t)c->ground[cell], (int64_t)0);
+            if (c->water[n] <= allowed) continue;
+            c->water[n] = (int32_t)allowed;
+            capped++;
+        }
+    return capped;
+}
+
 void terrain_columns_touch(terrain_columns *c, int i0, int k0, int i1, int k1) {
     i0 = CORE_MAX(i0, 0);
     k0 = CORE_MAX(k0, 0);

@@ -33,6 +33,9 @@ static void terrain_mesh_chunk_build(terrain_ecs *te, TerrainMeshChunk *chunk) {
     TRACE_ZONE("terrain_mesh_chunk");
     if (!terrain_mesh_chunk(te->terrain, chunk->x, chunk->y, chunk->z, &chunk->lod, &chunk->mesh))
         chunk->mesh = (terrain_mesh){ 0 };      /* nothing to show; the reason is logged */
+    /* Its water surfaces, read from the same stacks (002 §3.4): handed to WaterPlane at upload. */
+    terrain__water_free(&chunk->water);
+    chunk->water = terrain__water_find(te->terrain, chunk->x, chunk->y, chunk->z, chunk->lod.level);
     chunk->state = TERRAIN_MESH_MESHED;
 }
 
@@ -67,6 +70,14 @@ size_t terrain__mesh_bytes(uint32_t vertex_count, uint32_t index_count) {
     return (size_t)vertex_count * sizeof(terrain_vertex) + (size_t)index_count * sizeof(uint32_t);
 }
 
+/* The chunk's water surfaces go onto its entity with its mesh, replacing what an older mesh
+ * had; a chunk that holds water no more loses the component. */
+static void terrain_upload_water(terrain_ecs *te, ecs_commands *commands, ecs_entity entity, TerrainMeshChunk *c) {
+    if (c->water) ecs_defer_set(commands, entity, te->water_plane, c->water);
+    else if (ecs_has(te->ecs, entity, te->water_plane)) ecs_defer_remove(commands, entity, te->water_plane);
+    terrain__water_free(&c->water);
+}
+
 /* Uploads meshed chunks (the CPU copy is freed), replacing what the chunk drew before; when
  * streaming, only as many as the frame's budget allows, then queued frees. */
 static void terrain_upload_system(ecs_iter *it) {
@@ -85,6 +96,7 @@ static void terrain_upload_system(ecs_iter *it) {
             c->gpu = terrain_gpu_mesh_upload(&c->mesh);
             c->gpu_bytes = c->gpu.vertex_array ? cpu_bytes : 0;
             terrain_mesh_free(&c->mesh);
+            terrain_upload_water(te, it->commands, it->entities[i], c);
             c->state = TERRAIN_MESH_UPLOADED;
             c->edited = false;
             if (te->stream) terrain__stream_uploaded(te, cpu_bytes, c->gpu_bytes, old_bytes);
@@ -104,6 +116,7 @@ terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
     te->mesh_ready = ECS_TAG(ecs, TerrainMeshReady);
     te->mesh_uploaded = ECS_TAG(ecs, TerrainMeshUploaded);
     te->streamed = ECS_TAG(ecs, TerrainMeshStreamed);
+    te->water_plane = ECS_COMPONENT(ecs, WaterPlane);
     te->chunks = ecs_query_create(ecs, &(ecs_query_desc){ .with = { te->chunk } });
     te->mesh_chunks = ecs_query_create(ecs, &(ecs_query_desc){ .with = { te->mesh_chunk } });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_generate", .phase = "generate",
@@ -120,7 +133,7 @@ terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
         .fn = terrain_cull_system, .user = te, .parallel = true, .batch_size = 256 });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_upload", .phase = "draw",
         .query = { .with = { te->mesh_chunk, te->mesh_ready }, .without = { te->mesh_uploaded } },
-        .writes = { te->mesh_chunk }, .fn = terrain_upload_system,
+        .writes = { te->mesh_chunk, te->water_plane }, .fn = terrain_upload_system,
         .user = te, .main_thread = true });
     terrain__editor_register(te);
     return te;
@@ -135,6 +148,7 @@ void terrain_ecs_destroy(terrain_ecs *te) {
         TerrainMeshChunk *chunks = ecs_field(&it, 0);
         for (int i = 0; i < it.count; i++) {
             terrain_mesh_free(&chunks[i].mesh);
+            terrain__water_free(&chunks[i].water);
             terrain_gpu_mesh_destroy(&chunks[i].gpu);
         }
     }

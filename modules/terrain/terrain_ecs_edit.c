@@ -149,6 +149,11 @@ static void regions_commit(terrain_ecs *te) {
     terrain__editor *ed = te->editor;
     for (size_t i = 0; i < ed->region_count; i++) {
         edit_region *r = &ed->regions[i];
+        int32_t sea;
+        /* What slid under water displaced it (its surface does not rise); what slid away from
+         * under the sea's line lets the sea in (terrain.h, "the sea after edits"). */
+        terrain__columns_cap_water(r->columns, r->coord, terrain_world_stacks(te->terrain, r->coord));
+        if (terrain__world_sea(te->terrain, &sea)) terrain__columns_flood(r->columns, sea);
         if (terrain_columns_changed_chunks(r->columns, NULL, 0, true) == 0) continue;
         terrain_stacks *stacks = terrain_columns_to_stacks(r->columns, r->coord);
         if (!stacks) continue;

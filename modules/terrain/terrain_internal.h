@@ -187,6 +187,7 @@ struct terrain_ecs {
      * generate or mesh schedules no jobs at all; `streamed` marks the streamer's mesh chunks,
      * which the synchronous systems leave alone. */
     ecs_component chunk_ready, mesh_ready, mesh_uploaded, streamed;
+    ecs_component water_plane;           /* WaterPlane (terrain.h, "water planes") */
     ecs_query *chunks, *mesh_chunks;
     terrain_frustum frustum;             /* of the view set for the cull phase */
     bool culling;
@@ -219,6 +220,18 @@ void terrain__editor_destroy(terrain_ecs *te);
 bool terrain__mesh_reads_change(int level, int64_t x, int64_t y, int64_t z, const terrain_world_change *change);
 
 /* ==== end of the ECS and streaming section ================================================ */
+
+/* ==== water planes (terrain_water.c) ====================================================== */
+
+/* Whether column (i, k) has water on top (its highest non-air layer is water): then *surface is
+ * that layer's top and *ground the top of the highest solid layer, in quanta above the floor. */
+bool terrain__stacks_water(const terrain_stacks *stacks, int i, int k, int64_t *surface, int64_t *ground);
+/* terrain_water_planes_find for a mesh chunk, as a WaterPlane (core_alloc'd; free with
+ * terrain__water_free), or NULL when it has none. */
+WaterPlane *terrain__water_find(terrain_world *world, int64_t x, int64_t y, int64_t z, int level);
+void terrain__water_free(WaterPlane **water);   /* sets *water to NULL; NULL is fine */
+
+/* ==== end of the water planes section ===================================================== */
 
 /* ==== far terrain: geometry clipmaps (terrain_clipmap.c) =================================== */
 
@@ -514,6 +527,17 @@ void terrain__edit_log_take(terrain_edit_log *to, terrain_edit_log *from);
 /* Where two chunks' stacks hold different materials: the columns and heights of the box around
  * every difference (change->coord is left alone); false when they are equal (terrain_stacks.c). */
 bool terrain__stacks_diff(const terrain_stacks *a, const terrain_stacks *b, terrain_world_change *box);
+
+/* The sea after edits (terrain.h, "the sea after edits"): whether the world's edits let the sea
+ * in, and its level in quanta above the floor. */
+bool terrain__world_sea(const terrain_world *world, int32_t *sea_quanta);
+/* Applies that rule to every column of the region changed since terrain_columns_changed_chunks
+ * last cleared (TERRAIN__COLUMN_EDITED); returns how many it changed (terrain_columns.c). */
+int terrain__columns_flood(terrain_columns *columns, int32_t sea_quanta);
+/* Displacement by stabilization: in the chunk's changed columns, the water on the pile reaches no
+ * higher than the water surface the column had in `before` (the chunk as last committed): sand
+ * and rocks that slid under water push it out rather than lift it. Returns the columns capped. */
+int terrain__columns_cap_water(terrain_columns *columns, terrain_chunk_coord coord, const terrain_stacks *before);
 
 /* ==== end of the edits-in-the-world section =============================================== */
 

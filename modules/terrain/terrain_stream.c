@@ -61,6 +61,7 @@ struct stream_task {
     _Atomic bool cancelled;
     bool empty;                            /* skipped: no interface within reach */
     terrain_mesh mesh;
+    WaterPlane *water;                     /* its water surfaces, or NULL (terrain_water.c) */
     job_handle job;
     stream_record *record;                 /* main thread only; NULL when orphaned */
 };
@@ -181,10 +182,12 @@ static void stream_task_run(void *user) {
     uint64_t token = terrain_world_read_begin(t->world);
     if (t->key.level == STREAM_COLUMN_LEVEL) {
         terrain_world_stacks(t->world, (terrain_chunk_coord){ t->key.x, t->key.z });
-    } else if (stream_chunk_surely_empty(t->world, t->key)) {
-        t->empty = true;
-    } else if (!terrain_mesh_chunk(t->world, t->key.x, t->key.y, t->key.z, &t->lod, &t->mesh)) {
-        t->mesh = (terrain_mesh){ 0 };      /* nothing to show; the reason is logged */
+    } else {
+        if (stream_chunk_surely_empty(t->world, t->key)) t->empty = true;
+        else if (!terrain_mesh_chunk(t->world, t->key.x, t->key.y, t->key.z, &t->lod, &t->mesh))
+            t->mesh = (terrain_mesh){ 0 };      /* nothing to show; the reason is logged */
+        /* A chunk without ground may still hold a water surface (the sea over a deep floor). */
+        t->water = terrain__water_find(t->world, t->key.x, t->key.y, t->key.z, t->lod.level);
     }
     terrain_world_read_end(t->world, token);
 }
@@ -222,6 +225,7 @@ static void stream_task_cancel(terrain__streamer *s, stream_record *record) {
 
 static void stream_task_free(stream_task *t) {
     terrain_mesh_free(&t->mesh);
+    terrain__water_free(&t->water);
     core_free(t, sizeof *t);
 }
 
@@ -369,6 +373,7 @@ static void stream_record_destroy(terrain_ecs *te, ecs_commands *commands, strea
     if (c) {
         s->mesh_bytes -= terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count) + c->gpu_bytes;
         terrain_mesh_free(&c->mesh);
+        terrain__water_free(&c->water);
         if (c->gpu.vertex_array) {
             s->frees = core_grow(s->frees, &s->free_capacity, s->free_count + 1, sizeof *s->frees);
             s->frees[s->free_count++] = c->gpu;
@@ -501,6 +506,9 @@ static void stream_deliver(terrain_ecs *te, ecs_commands *commands, stream_task 
     terrain_mesh_free(&c->mesh);                   /* an older mesh never uploaded */
     c->mesh = t->mesh;
     t->mesh = (terrain_mesh){ 0 };
+    terrain__water_free(&c->water);                /* an older mesh's, never uploaded */
+    c->water = t->water;
+    t->water = NULL;
     s->mesh_bytes += terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count);
     c->lod = t->lod;
     c->state = TERRAIN_MESH_MESHED;

@@ -37,6 +37,7 @@ struct terrain_world {
     terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);
     void *generate_user;
     terrain_edit_log *edits;              /* replayed over generated chunks, or NULL */
+    bool sea;                             /* edits let the sea in (terrain_world_desc.sea) */
     terrain_world_change *changes;        /* committed since the last terrain_world_take_changes */
     size_t change_count, change_capacity;
     size_t max_chunks;
@@ -68,6 +69,7 @@ terrain_world *terrain_world_create(const terrain_world_desc *desc) {
     w->generate = desc->generate;
     w->generate_user = desc->generate_user;
     w->edits = desc->edits;
+    w->sea = desc->generate == NULL || desc->sea;
     w->max_chunks = desc->max_chunks ? desc->max_chunks : 4096;
     w->bucket_count = 64;
     w->buckets = core_calloc(w->bucket_count, sizeof *w->buckets);
@@ -315,6 +317,13 @@ bool terrain_world_has(terrain_world *world, terrain_chunk_coord coord) {
 }
 
 const terrain_generation_params *terrain_world_generation(const terrain_world *world) { return &world->generation; }
+
+bool terrain__world_sea(const terrain_world *world, int32_t *sea_quanta) {
+    double quanta = ((double)world->generation.sea_level - TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE;
+    if (!world->sea || !(quanta > 0.0)) return false;      /* a sea at or below the floor is none */
+    *sea_quanta = quanta >= TERRAIN__COLUMN_MAX_QUANTA ? TERRAIN__COLUMN_MAX_QUANTA : (int32_t)llround(quanta);
+    return true;
+}
 
 void terrain_world_set_max_chunks(terrain_world *world, size_t max_chunks) {
     pthread_mutex_lock(&world->lock);

@@ -106,6 +106,8 @@ int terrain_world_edit(terrain_world *world, const terrain_edit *edit, terrain_c
     terrain_columns_changed_chunks(region, NULL, 0, true);    /* loading is not an edit */
     int count = -1;
     if (edit_apply(region, edit)) {
+        int32_t sea;
+        if (terrain__world_sea(world, &sea)) terrain__columns_flood(region, sea);   /* the sea comes in */
         terrain_chunk_coord touched[EDIT_MAX_CHUNKS_PER_SIDE * EDIT_MAX_CHUNKS_PER_SIDE];
         count = terrain_columns_changed_chunks(region, touched, (int)(sizeof touched / sizeof *touched), true);
         for (int c = 0; c < count; c++) {

@@ -342,6 +342,12 @@ Test(terrain_stabilize, random_deposits_and_erosions_conserve_every_material) {
             cr_expect_eq(q, llround(volume * QPM));
             if (material == TERRAIN_SAND) m.sand += q;
             else m.rocks += q;
+            /* The deposit displaces the water standing on the pile (terrain.h, "the sea after
+             * edits"): some goes, at most as much as was dropped, none comes. */
+            int64_t water = terrain_columns_mass(c, TERRAIN_WATER);
+            cr_expect(water <= m.water && water >= m.water - q, "water %lld from %lld after %lld dropped",
+                      (long long)water, (long long)m.water, (long long)q);
+            m.water = water;
         } else {
             /* ρ = 0 or 1 makes each material's share exact; in between only the sum is. */
             float rho = n % 3 == 1 ? 0.0f : 1.0f;

@@ -19,6 +19,10 @@
  *                                neighbours finer, the worst case for transition cells: coarse
  *                                and fine face samples, meshing, weights. Mean over 8 chunks at
  *                                the surface; every column the kernel reaches generated first.
+ *   terrain.water_planes.chunk32 ms for terrain_water_planes_find on one level-0 mesh chunk at
+ *                                sea level (y layer 0) whose centre column is sea: the water
+ *                                surfaces the mesh phase finds beside each mesh (32² columns read,
+ *                                grouped by height). Mean over 8 such chunks, generated first.
  *
  * Peer: scikit-image's marching_cubes or VTK's vtkFlyingEdges3D would be the natural peer on the
  * same field, but neither is in Debian 12's default install here (`python3 -c "import skimage"`
@@ -196,7 +200,52 @@ static void bench_terrain_mesh_lod(bench_context *ctx) {
     }
 }
 
+/* ---- water planes ---------------------------------------------------------------------- */
+
+typedef struct water_bench {
+    terrain_world *world;
+    int64_t chunks[CHUNK_COUNT][2];
+    int planes;
+} water_bench;
+
+/* Eight chunks along z = 0 whose centre column is sea (the full cost: every column wet). */
+static void water_pick_chunks(water_bench *b) {
+    int found = 0;
+    for (int64_t cx = 0; cx < 4096 && found < CHUNK_COUNT; cx++) {
+        double x = (double)cx * TERRAIN_CHUNK_COLUMNS + 16.5, z = 16.5;
+        if (!terrain_world_water_at(b->world, x, z, NULL, NULL) && cx < 4096 - CHUNK_COUNT + found) continue;
+        b->chunks[found][0] = cx;
+        b->chunks[found][1] = 0;
+        found++;
+    }
+}
+
+static double sample_water_planes(void *user) {
+    water_bench *b = user;
+    terrain_water_plane planes[TERRAIN_WATER_PLANES_MAX];
+    int total = 0;
+    uint64_t t0 = core_time_ns();
+    for (int c = 0; c < CHUNK_COUNT; c++)
+        total += terrain_water_planes_find(b->world, b->chunks[c][0], 0, b->chunks[c][1], 0, planes,
+                                           TERRAIN_WATER_PLANES_MAX);
+    double ms = core_ns_to_ms(core_time_ns() - t0) / CHUNK_COUNT;
+    b->planes = total;
+    bench_consume((double)total);
+    return ms;
+}
+
+static void bench_terrain_water_planes(bench_context *ctx) {
+    if (!bench_wants(ctx, "terrain.water_planes.chunk32")) return;
+    water_bench b = { 0 };
+    b.world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(42) });
+    water_pick_chunks(&b);
+    bench_run(ctx, "terrain.water_planes.chunk32", "ms", 15, sample_water_planes, &b);
+    printf("  (water planes: %d over %d chunks at sea level)\n", b.planes, CHUNK_COUNT);
+    terrain_world_destroy(b.world);
+}
+
 void bench_group_terrain_mesh(bench_context *ctx) {
+    bench_terrain_water_planes(ctx);
     bool want_big = bench_wants(ctx, "terrain.mesh.256");
     /* The 256 row's per-cell ratio needs the chunk's meshing time. */
     bool want_chunk = want_big || bench_wants(ctx, "terrain.field_mesh.chunk32") ||

@@ -1,0 +1,381 @@
+/* Water planes (terrain.h, "water planes"; 002 §3.4): the water surfaces a mesh chunk holds,
+ * found from the stacks, and the WaterPlane component the ECS gives mesh chunks. The worlds are
+ * made by hand, so every plane, mask and depth below is worked out from the column functions. */
+#include "../engine/test.h"
+#include "terrain/terrain.h"
+
+#include "core/core.h"
+#include "ecs/ecs.h"
+#include "jobs/jobs.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#define N TERRAIN_CHUNK_COLUMNS
+
+/* Bedrock from the floor up to `top`, then water up to `water` (none when water ≤ top). */
+static void push_column(terrain_stacks_builder *builder, float top, float water) {
+    terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, top - TERRAIN_FLOOR_Y);
+    if (water > top) terrain_stacks_builder_push(builder, TERRAIN_WATER, water - top);
+}
+
+/* In chunk (0, 0): a sea (x < 16) over a floor at −4 with its surface at 0, a lake (20 ≤ x < 28,
+ * 8 ≤ z < 16) on a bed at 6 with its surface at 10, dry land at 12 elsewhere. In chunk (2, 0):
+ * eight strips 4 columns wide, strip s holding water from s to s + 1 m (surfaces 1 … 8). Dry
+ * land at 12 everywhere else. */
+static void sea_and_lake_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
+    (void)user;
+    bool in_first = x >= 0 && x < N && z >= 0 && z < N;
+    if (in_first && x < 16) push_column(builder, -4.0f, 0.0f);
+    else if (in_first && x >= 20 && x < 28 && z >= 8 && z < 16) push_column(builder, 6.0f, 10.0f);
+    else if (x >= 2 * N && x < 3 * N && z >= 0 && z < N) {
+        float s = (float)((x - 2 * N) / 4);
+        push_column(builder, s, s + 1.0f);
+    } else push_column(builder, 12.0f, 0.0f);
+}
+
+static terrain_stacks *sea_and_lake_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, sea_and_lake_column, user);
+}
+
+static terrain_world *sea_and_lake_world(void) {
+    return terrain_world_create(&(terrain_world_desc){ .generate = sea_and_lake_chunk });
+}
+
+static uint32_t bits(int first, int last) {
+    uint32_t mask = 0;
+    for (int i = first; i <= last; i++) mask |= 1u << i;
+    return mask;
+}
+
+Test(water_planes, a_sea_and_a_lake_give_exactly_their_planes_and_masks) {
+    terrain_world *world = sea_and_lake_world();
+    terrain_water_plane planes[TERRAIN_WATER_PLANES_MAX];
+    int n = terrain_water_planes_find(world, 0, 0, 0, 0, planes, TERRAIN_WATER_PLANES_MAX);
+    cr_assert_eq(n, 2, "the sea and the lake: %d planes", n);
+    /* The sea has 16 × 32 cells, the lake 8 × 8: the sea first. */
+    cr_expect_eq(planes[0].height, 0.0f);
+    cr_expect_eq(planes[0].deepest, -4.0f);
+    cr_expect_eq(planes[1].height, 10.0f);
+    cr_expect_eq(planes[1].deepest, 6.0f);
+    for (int k = 0; k < N; k++) {
+        cr_expect_eq(planes[0].rows[k], bits(0, 15), "sea row %d: %08x", k, planes[0].rows[k]);
+        uint32_t lake = k >= 8 && k < 16 ? bits(20, 27) : 0u;
+        cr_expect_eq(planes[1].rows[k], lake, "lake row %d: %08x", k, planes[1].rows[k]);
+    }
+    terrain_world_destroy(world);
+}
+
+Test(water_planes, coarser_cells_read_the_column_at_their_centre) {
+    terrain_world *world = sea_and_lake_world();
+    terrain_water_plane planes[TERRAIN_WATER_PLANES_MAX];
+    /* Level 1: cells of 2 m, cell i reads column 2i + 1. Sea columns x < 16, z < 32: cells
+     * i ≤ 7, k ≤ 15 (128). Lake columns 20 … 27 × 8 … 15: cells i = 10 … 13, k = 4 … 7 (16). */
+    int n = terrain_water_planes_find(world, 0, 0, 0, 1, planes, TERRAIN_WATER_PLANES_MAX);
+    cr_assert_eq(n, 2);
+    cr_expect_eq(planes[0].height, 0.0f);
+    cr_expect_eq(planes[1].height, 10.0f);
+    for (int k = 0; k < N; k++) {
+        cr_expect_eq(planes[0].rows[k], k < 16 ? bits(0, 7) : 0u, "row %d: %08x", k, planes[0].rows[k]);
+        cr_expect_eq(planes[1].rows[k], k >= 4 && k < 8 ? bits(10, 13) : 0u, "row %d: %08x", k, planes[1].rows[k]);
+    }
+    terrain_world_destroy(world);
+}
+
+Test(water_planes, no_water_or_water_outside_the_y_range_gives_none) {
+    terrain_world *world = sea_and_lake_world();
+    terrain_water_plane planes[TERRAIN_WATER_PLANES_MAX];
+    cr_expect_eq(terrain_water_planes_find(world, 1, 0, 0, 0, planes, TERRAIN_WATER_PLANES_MAX), 0, "dry land");
+    /* The layer below holds [−32, 0): the sea's surface at 0 belongs to the layer above. */
+    cr_expect_eq(terrain_water_planes_find(world, 0, -1, 0, 0, planes, TERRAIN_WATER_PLANES_MAX), 0);
+    cr_expect_eq(terrain_water_planes_find(world, 0, 1, 0, 0, planes, TERRAIN_WATER_PLANES_MAX), 0);
+    cr_expect_eq(terrain_water_planes_find(world, 0, 0, 0, 0, planes, 0), 0, "no room asked for");
+    terrain_world_destroy(world);
+}
+
+Test(water_planes, more_surfaces_than_fit_keep_the_largest_then_the_highest) {
+    terrain_world *world = sea_and_lake_world();
+    terrain_water_plane planes[TERRAIN_WATER_PLANES_MAX + 2];
+    /* Eight strips of 4 × 32 cells each: a tie, so the highest four, highest first. */
+    int n = terrain_water_planes_find(world, 2, 0, 0, 0, planes, TERRAIN_WATER_PLANES_MAX + 2);
+    cr_assert_eq(n, TERRAIN_WATER_PLANES_MAX);
+    for (int p = 0; p < n; p++) {
+        float s = (float)(7 - p);
+        cr_expect_eq(planes[p].height, s + 1.0f, "plane %d at %g", p, (double)planes[p].height);
+        cr_expect_eq(planes[p].deepest, s);
+        for (int k = 0; k < N; k++) cr_expect_eq(planes[p].rows[k], bits(4 * (7 - p), 4 * (7 - p) + 3));
+    }
+    terrain_world_destroy(world);
+}
+
+Test(water_planes, a_bad_request_is_an_error_not_a_crash) {
+    terrain_world *world = sea_and_lake_world();
+    terrain_water_plane planes[TERRAIN_WATER_PLANES_MAX];
+    core_log_level level = core_log_get_level();
+    core_log_set_level(CORE_LOG_OFF);
+    cr_expect_eq(terrain_water_planes_find(NULL, 0, 0, 0, 0, planes, 4), -1);
+    cr_expect_eq(terrain_water_planes_find(world, 0, 0, 0, 17, planes, 4), -1);
+    cr_expect_eq(terrain_water_planes_find(world, 0, 0, 0, -1, planes, 4), -1);
+    cr_expect_eq(terrain_water_planes_find(world, 0, 0, 0, 0, planes, -1), -1);
+    cr_expect_eq(terrain_water_planes_find(world, (int64_t)1 << 40, 0, 0, 0, planes, 4), -1);
+    core_log_set_level(level);
+    terrain_world_destroy(world);
+}
+
+/* ---- the component ------------------------------------------------------------------------ */
+
+/* All sea: a floor at −100 and the surface at 8, or (drained) the floor alone. The mesh layers
+ * used below lie above −100 − the field's reach: their meshes are empty, so the upload needs no
+ * GL context, and layer 0 ([0, 32)) holds the surface. */
+static void deep_sea_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
+    (void)x, (void)z;
+    bool drained = user != NULL;
+    push_column(builder, -100.0f, drained ? -100.0f : 8.0f);
+}
+
+static terrain_stacks *deep_sea_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, deep_sea_column, user);
+}
+
+typedef struct water_ecs {
+    job_system *jobs;
+    ecs_world *ecs;
+    terrain_world *world;
+    terrain_ecs *te;
+    ecs_component water;
+    ecs_query *with_water;
+} water_ecs;
+
+static water_ecs water_ecs_open(void) {
+    water_ecs w = { 0 };
+    w.jobs = job_system_create(&(job_system_desc){ .threads = 2 });
+    w.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = w.jobs });
+    w.world = terrain_world_create(&(terrain_world_desc){ .generate = deep_sea_chunk });
+    w.te = terrain_ecs_create(w.ecs, w.world);
+    w.water = ecs_component_lookup(w.ecs, "WaterPlane");
+    w.with_water = ecs_query_create(w.ecs, &(ecs_query_desc){ .with = { w.water } });
+    return w;
+}
+
+static void water_ecs_close(water_ecs *w) {
+    terrain_ecs_destroy(w->te);
+    ecs_world_destroy(w->ecs);
+    terrain_world_destroy(w->world);
+    job_system_destroy(w->jobs);
+}
+
+/* Entities with a WaterPlane; the first one's value in *first. */
+static int count_water(water_ecs *w, WaterPlane *first) {
+    int count = 0;
+    ecs_iter it = ecs_query_iter(w->ecs, w->with_water);
+    while (ecs_query_next(&it)) {
+        WaterPlane *planes = ecs_field(&it, 0);
+        if (count == 0 && it.count > 0 && first) *first = planes[0];
+        count += it.count;
+    }
+    return count;
+}
+
+Test(water_planes, the_component_comes_with_the_upload_and_goes_when_an_edit_drains_the_water) {
+    water_ecs w = water_ecs_open();
+    cr_assert_neq(w.water, 0, "terrain_ecs_create registers WaterPlane");
+    terrain_ecs_spawn_area(w.te, 0, 0, 0, 0, 0);   /* one column chunk, mesh layer 0 */
+    cr_expect_eq(count_water(&w, NULL), 0, "nothing before the first frame");
+    for (int f = 0; f < 3; f++) ecs_progress(w.ecs, 1.0f / 60.0f);
+    WaterPlane plane;
+    cr_assert_eq(count_water(&w, &plane), 1, "the meshed and uploaded chunk has its sea");
+    cr_expect_eq(plane.count, 1);
+    cr_expect_eq(plane.cell, 1.0f);
+    cr_expect_eq(plane.origin[0], 0.0);
+    cr_expect_eq(plane.origin[1], 0.0);
+    cr_expect_eq(plane.planes[0].height, 8.0f);
+    cr_expect_eq(plane.planes[0].deepest, -100.0f);
+    for (int k = 0; k < N; k++) cr_expect_eq(plane.planes[0].rows[k], 0xffffffffu);
+
+    /* An edit (a commit by other code) drains the chunk: remeshed, the component goes. */
+    terrain_world_commit(w.world, (terrain_chunk_coord){ 0, 0 },
+                         terrain_stacks_from_columns((terrain_chunk_coord){ 0, 0 }, deep_sea_column, &w),
+                         TERRAIN_EDIT_SET);
+    for (int f = 0; f < 3; f++) ecs_progress(w.ecs, 1.0f / 60.0f);
+    cr_expect_eq(count_water(&w, NULL), 0, "drained: no WaterPlane left");
+    water_ecs_close(&w);
+}
+
+Test(water_planes, streamed_chunks_get_the_component_and_lose_it_when_evicted) {
+    water_ecs w = water_ecs_open();
+    terrain_ecs_stream(w.te, &(terrain_stream_desc){ .half_width = 2, .levels = 2, .y_min = -20, .y_max = 20,
+                                                     .memory_budget = 1 });   /* evict whatever is hidden */
+    const double eye[1][3] = { { 10, 5, 10 } };
+    /* Rings: level 0 is 4 × 4 chunks, level 1 4 × 4 less the 2 × 2 inside; the surface at 8 lies
+     * in one layer of each level. */
+    int expected = 16 + 12, seen = 0;
+    for (int f = 0; f < 2000 && seen != expected; f++) {
+        terrain_ecs_set_viewers(w.te, eye, 1);
+        ecs_progress(w.ecs, 1.0f / 60.0f);
+        terrain_world_trim(w.world);
+        seen = count_water(&w, NULL);
+    }
+    cr_expect_eq(seen, expected, "%d chunks with water, expected %d", seen, expected);
+    /* Far away: what was around the origin is evicted, with its components. */
+    const double far[1][3] = { { 100000, 5, 100000 } };
+    for (int f = 0; f < 4000; f++) {
+        terrain_ecs_set_viewers(w.te, far, 1);
+        ecs_progress(w.ecs, 1.0f / 60.0f);
+        terrain_world_trim(w.world);
+        if (terrain_ecs_stream_stats(w.te).chunks_evicted >= (uint64_t)expected && count_water(&w, NULL) == expected)
+            break;
+    }
+    int near_origin = 0;
+    ecs_iter it = ecs_query_iter(w.ecs, w.with_water);
+    while (ecs_query_next(&it)) {
+        WaterPlane *planes = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++) near_origin += fabs(planes[i].origin[0]) < 1000.0;
+    }
+    cr_expect_gt(terrain_ecs_stream_stats(w.te).chunks_evicted, 0);
+    cr_expect_eq(near_origin, 0, "evicted chunks took their WaterPlane along");
+    water_ecs_close(&w);
+}
+
+/* ---- the sea after edits (terrain.h, "the sea after edits"; 000 §4) ------------------------ */
+
+/* Sea level 0 (the zeroed generation parameters). A sea (x < 16) on a floor at −4; a beach 1 m
+ * above the sea for 16 ≤ x < 32; a hill at 10 m from x = 32 on. The same for every z. */
+static void beach_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
+    (void)user, (void)z;
+    if (x < 16) push_column(builder, -4.0f, 0.0f);
+    else push_column(builder, x < 32 ? 1.0f : 10.0f, 0.0f);
+}
+
+static terrain_stacks *beach_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, beach_column, user);
+}
+
+static terrain_world *beach_world(terrain_edit_log *log) {
+    return terrain_world_create(&(terrain_world_desc){ .generate = beach_chunk, .sea = true, .edits = log });
+}
+
+/* A ball of radius 3.2 m carved at (x + ½, y, z + ½) by a sweep (exact: what lies within the
+ * radius of the point becomes air, along each column's axis). */
+static int carve_ball(terrain_world *world, double x, double y, double z) {
+    const double point[1][3] = { { x + 0.5, y, z + 0.5 } };
+    terrain_chunk_coord changed[16];
+    return terrain_world_edit(world, &(terrain_edit){ .tool = TERRAIN_EDIT_SWEEP,
+                                                      .sweep = { .points = point, .point_count = 1, .radius = 3.2f } },
+                              changed, 16);
+}
+
+Test(water_sea, a_pit_carved_below_sea_level_on_a_beach_fills_exactly_to_sea_level) {
+    terrain_world *world = beach_world(NULL);
+    cr_assert_gt(carve_ball(world, 24, 1, 16), 0);
+    /* Column (24 + a, 16 + b) loses sqrt(3.2² − a² − b²) m under the beach at 1 m: below the sea
+     * (0 m) where that exceeds 1, i.e. a² + b² ≤ 9 (the next, 10, leaves 0.49 m). */
+    int expected = 0, flooded = 0;
+    for (int b = -5; b <= 5; b++)
+        for (int a = -5; a <= 5; a++) {
+            bool below = a * a + b * b <= 9;
+            expected += below;
+            float surface = NAN, ground = NAN;
+            bool wet = terrain_world_water_at(world, 24.5 + a, 16.5 + b, &surface, &ground);
+            float top = terrain_world_top(world, 24.5 + a, 16.5 + b);
+            cr_expect_eq(top < 0.0f, below, "column (%d, %d): ground at %g", 24 + a, 16 + b, (double)top);
+            cr_expect_eq(wet, below, "column (%d, %d) %s", 24 + a, 16 + b, below ? "dry below the sea" : "wet");
+            if (!wet) continue;
+            flooded++;
+            cr_expect_eq(surface, 0.0f, "column (%d, %d): water up to %g", 24 + a, 16 + b, (double)surface);
+            cr_expect_eq(ground, top);
+            cr_expect_eq(terrain_world_material_at(world, 24.5 + a, top + 0.01, 16.5 + b), TERRAIN_WATER);
+            cr_expect_eq(terrain_world_material_at(world, 24.5 + a, 0.01, 16.5 + b), TERRAIN_AIR);
+        }
+    cr_expect_eq(flooded, expected, "%d columns flooded, %d below the sea", flooded, expected);
+    cr_expect_eq(expected, 29);
+    terrain_world_destroy(world);
+}
+
+Test(water_sea, a_pit_carved_above_sea_level_stays_dry) {
+    terrain_world *world = beach_world(NULL);
+    cr_assert_gt(carve_ball(world, 48, 10, 16), 0);
+    cr_expect_lt(terrain_world_top(world, 48.5, 16.5), 7.0f, "the pit is there");
+    for (int z = 0; z < N; z++)
+        for (int x = 32; x < 3 * N; x++)
+            cr_expect(!terrain_world_water_at(world, x + 0.5, z + 0.5, NULL, NULL), "column (%d, %d) is wet", x, z);
+    terrain_world_destroy(world);
+}
+
+Test(water_sea, a_world_without_a_sea_keeps_its_pits_dry) {
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = beach_chunk });
+    cr_assert_gt(carve_ball(world, 24, 1, 16), 0);
+    cr_expect_lt(terrain_world_top(world, 24.5, 16.5), -1.0f);
+    cr_expect(!terrain_world_water_at(world, 24.5, 16.5, NULL, NULL), "no sea asked for: dry");
+    terrain_world_destroy(world);
+}
+
+Test(water_sea, replaying_the_edit_log_gives_the_flooded_bytes) {
+    terrain_edit_log *log = terrain_edit_log_create(1234);
+    terrain_world *world = beach_world(log);
+    cr_assert_gt(carve_ball(world, 30, 1, 16), 0);          /* across the chunk border at x = 32 */
+    uint64_t hashes[2] = { terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 })),
+                           terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 1, 0 })) };
+    cr_expect(terrain_world_water_at(world, 30.5, 16.5, NULL, NULL), "flooded");
+    terrain_world_destroy(world);
+    terrain_world *again = beach_world(log);               /* generated afresh, the log replayed */
+    cr_expect_eq(terrain_stacks_hash(terrain_world_stacks(again, (terrain_chunk_coord){ 0, 0 })), hashes[0]);
+    cr_expect_eq(terrain_stacks_hash(terrain_world_stacks(again, (terrain_chunk_coord){ 1, 0 })), hashes[1]);
+    terrain_world_destroy(again);
+    terrain_edit_log_destroy(log);
+}
+
+/* No column of the beach world holds water above the sea. */
+static void expect_sea_level_kept(terrain_world *world) {
+    int wet = 0;
+    for (int z = 0; z < N; z++)
+        for (int x = 0; x < 2 * N; x++) {
+            float surface, ground;
+            if (!terrain_world_water_at(world, x + 0.5, z + 0.5, &surface, &ground)) continue;
+            wet++;
+            cr_expect_eq(surface, 0.0f, "column (%d, %d): water up to %g over ground at %g", x, z, (double)surface,
+                         (double)ground);
+        }
+    cr_expect_gt(wet, 0);
+}
+
+Test(water_sea, a_deposit_into_the_sea_keeps_the_surface_at_sea_level) {
+    terrain_world *world = beach_world(NULL);
+    terrain_chunk_coord changed[16];
+    /* 60 m³ on a radius of 2.5 m: the pile rises well above the sea at its centre. */
+    cr_assert_gt(terrain_world_edit(world, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                            .deposit = { .x = 8.5, .z = 16.5, .radius = 2.5f,
+                                                                         .volume = 60 } },
+                                    changed, 16), 0);
+    cr_expect_gt(terrain_world_top(world, 8.5, 16.5), 0.0f, "the pile stands out of the sea");
+    expect_sea_level_kept(world);
+    terrain_world_destroy(world);
+}
+
+Test(water_sea, sand_that_slides_into_the_sea_keeps_the_surface_at_sea_level) {
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
+    ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
+    terrain_world *world = beach_world(NULL);
+    terrain_ecs *te = terrain_ecs_create(ecs, world);
+    /* On the beach's edge: the pile slides down into the sea over the next frames. */
+    cr_assert(terrain_ecs_edit(te, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                    .deposit = { .x = 16.5, .z = 16.5, .radius = 2.5f, .volume = 80 } }));
+    int frames = 0;
+    do {
+        ecs_progress(ecs, 1.0f / 60.0f);
+        terrain_world_trim(world);
+    } while (++frames < 2000 && (terrain_ecs_edit_stats(te).stabilizing_chunks > 0 || frames < 2));
+    cr_expect_eq(terrain_ecs_edit_stats(te).stabilizing_chunks, 0, "stabilized");
+    cr_expect_gt(terrain_ecs_edit_stats(te).iterations, 0);
+    expect_sea_level_kept(world);
+    /* Some sand came to rest under the sea: a column of the sea now stands higher than its floor. */
+    bool raised = false;
+    for (int z = 0; z < N && !raised; z++)
+        for (int x = 0; x < 16 && !raised; x++) raised = terrain_world_top(world, x + 0.5, z + 0.5) > -4.0f;
+    cr_expect(raised, "sand slid into the sea");
+    terrain_ecs_destroy(te);
+    terrain_world_destroy(world);
+    ecs_world_destroy(ecs);
+    job_system_destroy(jobs);
+}
+
