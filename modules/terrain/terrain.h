@@ -131,6 +131,14 @@ typedef struct terrain_generation_params {
     /* Sand over bedrock on low slopes. */
     float sand_max_slope;             /* tan of the steepest slope sand stays on */
     float sand_depth;
+    /* Lakes above the sea in basins (terrain_generate.c, "Lakes"): one candidate site per
+     * lake_spacing² cell, kept with lake_probability; a bowl of radius lake_radius_min …
+     * lake_radius_max, up to lake_depth deep, its water level below the lowest ground on the
+     * site's rim, so that the rim holds it. lake_spacing 0 = no lakes. */
+    float lake_spacing;               /* metres between candidate sites */
+    float lake_probability;           /* share of candidates kept, 0 … 1 */
+    float lake_radius_min, lake_radius_max;   /* metres, the bowl's */
+    float lake_depth;                 /* metres of water at the deepest */
 } terrain_generation_params;
 
 /* Parameters that make a varied, good-looking world for this seed. */

@@ -93,13 +93,13 @@ static bool tool_valid(unsigned tool) {
 }
 
 /* A field added to terrain_generation_params must be added to the key too: this fails to
- * compile until someone looks (8 bytes of seed + 17 four-byte fields, padded to 8). */
-_Static_assert(sizeof(terrain_generation_params) == 80,
+ * compile until someone looks (8 bytes of seed + 22 four-byte fields). */
+_Static_assert(sizeof(terrain_generation_params) == 96,
                "terrain_generation_params changed: hash the new field in terrain_generation_key");
 
 /* Bumped whenever terrain_generate_chunk's output changes for the same parameters, so that edit
  * logs of the old generator are refused instead of replayed over different ground. */
-#define EDIT_GENERATOR_REVISION 1u
+#define EDIT_GENERATOR_REVISION 2u          /* 2: lakes (terrain_generate.c) */
 
 static uint64_t key_float(uint64_t h, float value) {
     uint32_t bits;
@@ -129,6 +129,11 @@ uint64_t terrain_generation_key(const terrain_generation_params *p) {
     h = key_float(h, p->cave_fade_height);
     h = key_float(h, p->sand_max_slope);
     h = key_float(h, p->sand_depth);
+    h = key_float(h, p->lake_spacing);
+    h = key_float(h, p->lake_probability);
+    h = key_float(h, p->lake_radius_min);
+    h = key_float(h, p->lake_radius_max);
+    h = key_float(h, p->lake_depth);
     return h;
 }
 

@@ -53,7 +53,30 @@
  *     threshold: most samples cost a comparison.
  *  5. Sand replaces the top of the highest solid run where the macro ground's slope is below
  *     sand_max_slope (thinning to nothing at that slope), and water fills the air above the
- *     highest solid run up to sea_level.
+ *     highest solid run up to sea_level, or up to a lake's level inside its water circle.
+ *
+ * Lakes (ours; issue 15: "generation should make some lakes in basins"). A lattice of cells
+ * lake_spacing metres wide holds at most one candidate site each, kept when a hash of (seed,
+ * cell) says so (lake_probability): a bowl of radius r_b (hashed in the radius range), centred
+ * where the hash puts it so that its whole circle of influence, radius R, stays inside the cell
+ * — so a point is touched by its own cell's site alone, and a site is a pure function of (params,
+ * cell): any chunk, any thread, finds the same one. The lake level is
+ *     L = min over LAKE_RIM_SAMPLES points on the circle of radius R of G − LAKE_RIM_MARGIN,
+ * G the natural macro ground; the site is dropped unless L ≥ sea_level + LAKE_MIN_ABOVE_SEA
+ * and the centre's G ≤ L + LAKE_MAX_CENTRE (no craters on hilltops). Inside R the macro ground
+ * is replaced by a designed basin, radius r from the centre, P = L + 1:
+ *     r < r_b             P − (D + 1)·(1 − r²/r_b²)²      the bowl, L − D at the centre
+ *     r_b ≤ r < r_p       P + 0.15·(r − r_b)             a shore, r_p = r_b + 2A + 6
+ *     r_p ≤ r < R         S + s·(G − S)                  back to the land, s = smoothstep
+ * (A the overhang shear, D = min(lake_depth, L − sea_level − 1), R = r_p + max(32 m, r_b), S the
+ * shore's height at r_p). Water fills the top air run of
+ * every column within r_w = r_b + A + 2 of the centre whose highest solid lies below L, up to L.
+ * Why the water is held: a column's top is G' at a point at most A (the shear) plus a bilinear
+ * cell from it, so every column with r in [r_w, r_w + 1.5] — the neighbours of the water circle
+ * — reads only the shore (r_b − ½ … r_p) and stands at P or above, P > L; caves are kept under the surface within R (their
+ * openings are off there, as under the sea). The clipmap's G (terrain__ground_row_spaced) has
+ * the basins too, down to 8 m spacing (coarser levels draw the natural ground: a lake is a few
+ * texels there, and the sites' rims would cost more than the row).
  *
  * Determinism: everything is a function of (params, coord), computed in the same order on any
  * thread; no shared state, no RNG. The G grid and the coarse lattice sit on world-aligned
@@ -83,6 +106,15 @@
 #define CAVE_Y_SQUEEZE 1.5f                        /* caves run flatter than they are tall */
 #define CAVE_OPENING 0.3f                          /* caves reach 0.3·fade above the ground */
 #define MAX_TRANSITIONS 256
+#define LAKE_RIM_SAMPLES 32                        /* points on a site's rim for its level */
+#define LAKE_RIM_MARGIN 2.0f                       /* metres the level stays under the rim */
+#define LAKE_MIN_ABOVE_SEA 3.0f                    /* lakes lie at least this far above the sea */
+#define LAKE_MAX_CENTRE 30.0f                      /* a centre higher above L is a hill: no lake */
+#define LAKE_SHELF_EXTRA 6.0f                      /* r_p = r_b + 2A + this */
+#define LAKE_SHORE_SLOPE 0.15f                     /* the shore's rise from P over the shelf */
+#define LAKE_BLEND_MIN 32.0f                       /* metres from the shelf back to the land */
+#define LAKE_CACHE 8                               /* sites remembered while a grid is made */
+#define LAKE_SPACED_MAX 8.0f                       /* coarser clipmap grids skip the basins */
 
 terrain_generation_params terrain_generation_defaults(uint64_t seed) {
     return (terrain_generation_params){
@@ -105,10 +137,29 @@ terrain_generation_params terrain_generation_defaults(uint64_t seed) {
         .cave_fade_height = 12.0f,
         .sand_max_slope = 0.3f,                    /* about 17° */
         .sand_depth = 1.5f,
+        .lake_spacing = 400.0f,
+        .lake_probability = 0.8f,
+        .lake_radius_min = 24.0f,
+        .lake_radius_max = 56.0f,
+        .lake_depth = 6.0f,
     };
 }
 
 /* ---- the macro ground G ---------------------------------------------------------------- */
+
+/* A lake site (header comment, "Lakes"); valid false for a cell without a lake. */
+typedef struct lake_site {
+    int64_t cell_x, cell_z;
+    bool valid;
+    double x, z;                          /* centre, world metres */
+    float bowl, water, shelf, outer;      /* radii r_b, r_w, r_p, R */
+    float level, depth;                   /* L, D */
+} lake_site;
+
+typedef struct lake_cache {
+    lake_site sites[LAKE_CACHE];
+    int count, next;
+} lake_cache;
 
 typedef struct ground_model {
     terrain__multifractal multifractal;
@@ -122,6 +173,11 @@ typedef struct ground_model {
     float relief_scale;                                    /* Σ kept octave weights / Σ all */
     float perturbation_weight[MAX_PERTURBATION_OCTAVES];
     float cliff_weight;
+    float full_octaves;                                    /* the generator's ν */
+    /* Lakes: off when lake_spacing is 0 (or the grid is too coarse for them). */
+    uint64_t lake_seed;
+    float lake_spacing, lake_probability, lake_radius_min, lake_radius_max, lake_depth, lake_shear;
+    lake_cache *lakes;                                     /* sites found so far, or NULL */
 } ground_model;
 
 static uint32_t field_seed(const terrain_generation_params *p, uint64_t field) {
@@ -159,13 +215,22 @@ static ground_model ground_model_make(const terrain_generation_params *p) {
     g.relief_scale = 1.0f;
     for (int k = 0; k < MAX_PERTURBATION_OCTAVES; k++) g.perturbation_weight[k] = 1.0f;
     g.cliff_weight = 1.0f;
+    g.full_octaves = octaves;
+    g.lake_seed = core_hash_combine(p->seed, 0x6c616b6573ull /* "lakes" */);
+    g.lake_spacing = p->lake_spacing > 0.0f && isfinite(p->lake_spacing) ? p->lake_spacing : 0.0f;
+    g.lake_probability = clampf(p->lake_probability, 0.0f, 1.0f);
+    g.lake_radius_min = clampf(p->lake_radius_min, 1.0f, 1000.0f);
+    g.lake_radius_max = clampf(p->lake_radius_max, g.lake_radius_min, 1000.0f);
+    g.lake_depth = clampf(p->lake_depth, 0.0f, 200.0f);
+    g.lake_shear = clampf(p->horizontal_perturbation, 0.0f, 64.0f);
+    g.lakes = NULL;
     return g;
 }
 
 #define GROUND_ROW_MAX 256
 
-/* G at (xs[j], z) for j < count (count ≤ GROUND_ROW_MAX): one row of the chunk's grid. */
-static void ground_row(const ground_model *g, const double *xs, double z, int count, float *out) {
+/* G without lakes at (xs[j], z) for j < count (count ≤ GROUND_ROW_MAX). */
+static void ground_row_natural(const ground_model *g, const double *xs, double z, int count, float *out) {
     float relief_x[GROUND_ROW_MAX] = { 0 }, relief[GROUND_ROW_MAX];
     float perturbation_x[GROUND_ROW_MAX] = { 0 }, perturbation[GROUND_ROW_MAX], octave[GROUND_ROW_MAX];
     for (int j = 0; j < count; j++) {
@@ -219,6 +284,102 @@ static void ground_row(const ground_model *g, const double *xs, double z, int co
     }
 }
 
+/* ---- lakes (header comment, "Lakes") ------------------------------------------------------ */
+
+static float hash_unit(uint64_t h, int which) {
+    return (float)((h >> (which * 21)) & 0x1fffff) * (1.0f / 2097152.0f);
+}
+
+/* The site of lattice cell (cx, cz), its level from the natural ground at full detail. */
+static lake_site lake_site_make(const ground_model *g, int64_t cx, int64_t cz) {
+    lake_site s = { .cell_x = cx, .cell_z = cz };
+    uint64_t h = core_hash_combine(core_hash_combine(g->lake_seed, (uint64_t)cx), (uint64_t)cz);
+    uint64_t h2 = core_hash_u64(h);
+    if (hash_unit(h, 0) >= g->lake_probability) return s;
+    float spacing = g->lake_spacing;
+    s.bowl = g->lake_radius_min + (g->lake_radius_max - g->lake_radius_min) * hash_unit(h, 1);
+    s.water = s.bowl + g->lake_shear + 2.0f;
+    s.shelf = s.bowl + 2.0f * g->lake_shear + LAKE_SHELF_EXTRA;
+    s.outer = s.shelf + CORE_MAX(LAKE_BLEND_MIN, s.bowl);
+    if (2.0f * s.outer >= spacing) return s;                /* it would not fit in its cell */
+    s.x = (double)cx * spacing + s.outer + (double)(hash_unit(h, 2) * (spacing - 2.0f * s.outer));
+    s.z = (double)cz * spacing + s.outer + (double)(hash_unit(h2, 0) * (spacing - 2.0f * s.outer));
+    ground_model full = *g;                                 /* the generator's own G */
+    full.multifractal.octaves = g->full_octaves;
+    full.relief_scale = full.cliff_weight = 1.0f;
+    for (int k = 0; k < MAX_PERTURBATION_OCTAVES; k++) full.perturbation_weight[k] = 1.0f;
+    float lowest = INFINITY, centre;
+    for (int n = 0; n < LAKE_RIM_SAMPLES; n++) {
+        double angle = 2.0 * 3.14159265358979323846 * n / LAKE_RIM_SAMPLES, x = s.x + s.outer * cos(angle), rim;
+        float height;
+        rim = s.z + s.outer * sin(angle);
+        ground_row_natural(&full, &x, rim, 1, &height);
+        lowest = CORE_MIN(lowest, height);
+    }
+    ground_row_natural(&full, &s.x, s.z, 1, &centre);
+    s.level = lowest - LAKE_RIM_MARGIN;
+    s.depth = CORE_MIN(g->lake_depth, s.level - g->sea_level - 1.0f);
+    s.valid = s.level >= g->sea_level + LAKE_MIN_ABOVE_SEA && centre <= s.level + LAKE_MAX_CENTRE && s.depth >= 1.0f;
+    return s;
+}
+
+static int64_t floor_to_cell(double v, float spacing) {
+    return (int64_t)floor(v / (double)spacing);
+}
+
+/* The valid site whose circle of influence holds (x, z), or NULL. */
+static const lake_site *lake_site_at(const ground_model *g, lake_cache *cache, double x, double z) {
+    int64_t cx = floor_to_cell(x, g->lake_spacing), cz = floor_to_cell(z, g->lake_spacing);
+    const lake_site *s = NULL;
+    for (int n = 0; n < cache->count && !s; n++)
+        if (cache->sites[n].cell_x == cx && cache->sites[n].cell_z == cz) s = &cache->sites[n];
+    if (!s) {
+        lake_site *slot = &cache->sites[cache->next];
+        *slot = lake_site_make(g, cx, cz);
+        cache->next = (cache->next + 1) % LAKE_CACHE;
+        cache->count = CORE_MIN(cache->count + 1, LAKE_CACHE);
+        s = slot;
+    }
+    if (!s->valid) return NULL;
+    double dx = x - s->x, dz = z - s->z;
+    return dx * dx + dz * dz < (double)s->outer * (double)s->outer ? s : NULL;
+}
+
+/* The basin's ground at distance r from the centre, over natural ground `natural`. */
+static float lake_shape(const lake_site *s, float r, float natural) {
+    float plateau = s->level + 1.0f;
+    if (r < s->bowl) {
+        float t = 1.0f - (r * r) / (s->bowl * s->bowl);
+        return plateau - (s->depth + 1.0f) * t * t;
+    }
+    if (r < s->shelf) return plateau + LAKE_SHORE_SLOPE * (r - s->bowl);
+    float shore = plateau + LAKE_SHORE_SLOPE * (s->shelf - s->bowl);
+    float t = clampf((r - s->shelf) / (s->outer - s->shelf), 0.0f, 1.0f);
+    return shore + t * t * (3.0f - 2.0f * t) * (natural - shore);
+}
+
+/* G: the natural ground with the lakes' basins. */
+static void ground_row(const ground_model *g, const double *xs, double z, int count, float *out) {
+    ground_row_natural(g, xs, z, count, out);
+    if (!(g->lake_spacing > 0.0f)) return;
+    lake_cache local = { .count = 0 }, *cache = g->lakes ? g->lakes : &local;
+    for (int j = 0; j < count; j++) {
+        const lake_site *s = lake_site_at(g, cache, xs[j], z);
+        if (s) out[j] = lake_shape(s, (float)hypot(xs[j] - s->x, z - s->z), out[j]);
+    }
+}
+
+/* The lake level over column centre (x, z) when it lies in a lake's water circle, else NAN. */
+static float lake_level_at(const ground_model *g, double x, double z, bool *in_basin) {
+    *in_basin = false;
+    if (!(g->lake_spacing > 0.0f)) return NAN;
+    lake_cache local = { .count = 0 };
+    const lake_site *s = lake_site_at(g, g->lakes ? g->lakes : &local, x, z);
+    if (!s) return NAN;
+    *in_basin = true;
+    return hypot(x - s->x, z - s->z) < (double)s->water ? s->level : NAN;
+}
+
 float terrain__ground_height(const terrain_generation_params *params, double x, double z) {
     ground_model g = ground_model_make(params);
     float h;
@@ -265,6 +426,7 @@ static ground_model ground_model_spaced(const terrain_generation_params *p, floa
     for (int k = 0; k < g.perturbation_octaves; k++)
         g.perturbation_weight[k] = clampf(ldexpf(wavelength, -k) / (2.0f * spacing) - 1.0f, 0.0f, 1.0f);
     g.cliff_weight = clampf((CLIFF_GONE_SPACING - spacing) / (CLIFF_GONE_SPACING - CLIFF_FULL_SPACING), 0.0f, 1.0f);
+    if (spacing > LAKE_SPACED_MAX) g.lake_spacing = 0.0f;   /* header comment, "Lakes" */
     return g;
 }
 
@@ -303,6 +465,9 @@ typedef struct chunk_gen {
     float field_frequency[MAX_FIELDS];    /* horizontal, cycles per metre */
     float field_y_squeeze[MAX_FIELDS];
     float field_weight[MAX_FIELDS];       /* displacement octaves' normalised amplitudes */
+    lake_cache lakes;                     /* the sites the chunk's grid met */
+    float *lake_levels;                   /* per column: the lake level over it, or NAN */
+    bool *in_basin;                       /* per column: inside a lake's circle of influence */
 } chunk_gen;
 
 static void ground_grid(chunk_gen *g) {
@@ -537,7 +702,9 @@ static void column_generate(const chunk_gen *g, int i, int k, const float *field
     c.w = fields + (size_t)c.octaves * c.levels;
     c.cave1 = fields + (size_t)2 * c.octaves * c.levels;
     c.cave2 = c.cave1 + (size_t)CAVE_OCTAVES * c.levels;
-    c.cave_top = ground_here + (ground_here > p->sea_level + 2.0f ? CAVE_OPENING * c.fade : -0.5f * c.fade);
+    /* Caves open at the surface on land, never under the sea or in a lake's basin. */
+    bool opening = ground_here > p->sea_level + 2.0f && !g->in_basin[k * TERRAIN_CHUNK_COLUMNS + i];
+    c.cave_top = ground_here + (opening ? CAVE_OPENING * c.fade : -0.5f * c.fade);
     c.cave_bottom = ground_here - cave_depth(p);
 
     /* Segments of the coarse lattice where this column can have a cave at all. */
@@ -612,13 +779,16 @@ static void column_push(const chunk_gen *g, int i, int k, const column_layers *l
         }
         y = next;
     }
+    float lake = g->lake_levels[k * TERRAIN_CHUNK_COLUMNS + i];
     if (top < p->sea_level) terrain_stacks_builder_push(builder, TERRAIN_WATER, p->sea_level - top);
+    else if (top < lake) terrain_stacks_builder_push(builder, TERRAIN_WATER, lake - top);   /* NAN: never */
     terrain_stacks_builder_end_column(builder);
 }
 
 terrain_stacks *terrain_generate_chunk(const terrain_generation_params *params, terrain_chunk_coord coord) {
     chunk_gen g = { .params = params };
     g.model = ground_model_make(params);
+    g.model.lakes = &g.lakes;                      /* the chunk's grid rows share the sites */
     g.x0 = (double)coord.x * TERRAIN_CHUNK_COLUMNS * TERRAIN_COLUMN_SIZE;
     g.z0 = (double)coord.z * TERRAIN_CHUNK_COLUMNS * TERRAIN_COLUMN_SIZE;
     /* |u|, |w| ≤ 1 (normalised fBm of clamped noise), so a displaced point stays within A. */
@@ -633,6 +803,12 @@ terrain_stacks *terrain_generate_chunk(const terrain_generation_params *params, 
     g.reach_max = core_alloc(column_bytes);
     ground_grid(&g);
     ground_reach(&g, reach);
+    g.lake_levels = core_alloc(column_bytes);
+    g.in_basin = core_alloc((size_t)TERRAIN__COLUMNS * sizeof(bool));
+    for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
+        for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++)
+            g.lake_levels[k * TERRAIN_CHUNK_COLUMNS + i] = lake_level_at(&g.model, g.x0 + i + 0.5, g.z0 + k + 0.5,
+                                                                           &g.in_basin[k * TERRAIN_CHUNK_COLUMNS + i]);
 
     /* The chunk's y range, then the coarse lattice over it. */
     float y_lo = INFINITY, y_hi = -INFINITY;
@@ -668,5 +844,7 @@ terrain_stacks *terrain_generate_chunk(const terrain_generation_params *params, 
     core_free(g.heights, grid_bytes);
     core_free(g.reach_min, column_bytes);
     core_free(g.reach_max, column_bytes);
+    core_free(g.lake_levels, column_bytes);
+    core_free(g.in_basin, (size_t)TERRAIN__COLUMNS * sizeof(bool));
     return stacks;
 }

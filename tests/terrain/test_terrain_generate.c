@@ -24,6 +24,7 @@ static terrain_generation_params flat_params(float base, float sea) {
     p.cave_threshold = 0.0f;
     p.sand_depth = 2.0f;
     p.sand_max_slope = 0.5f;
+    p.lake_spacing = 0.0f;                 /* no lakes either: a flat plain would get basins */
     return p;
 }
 

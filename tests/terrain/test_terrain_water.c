@@ -379,3 +379,141 @@ Test(water_sea, sand_that_slides_into_the_sea_keeps_the_surface_at_sea_level) {
     job_system_destroy(jobs);
 }
 
+/* ---- lakes (terrain_generate.c, "Lakes") -------------------------------------------------- */
+
+/* Seed 1's lakes within a rectangle of chunks, found from the water in the stacks alone: every
+ * other chunk of it is read (a lake's water circle is at least 2·(24 + 12) m across, so it
+ * covers a 50 m square, which overlaps one of them whatever its place). The rectangles are a
+ * quarter of a square kilometre or less, where a scan of 6.5 km² found lakes (so a debug run
+ * stays short). */
+#define LAKES_MAX 16
+
+typedef struct chunk_rect { int64_t x0, z0, x1, z1; } chunk_rect;   /* [x0, x1) × [z0, z1) */
+
+static const chunk_rect lake_square = { 16, -8, 24, 20 };           /* 256 × 896 m */
+static const chunk_rect lake_corner = { 18, -8, 24, -2 };           /* 192 × 192 m */
+
+typedef struct lake_found {
+    float level;
+    int columns;                          /* sampled columns with this water on top */
+    int64_t x, z;                         /* one of them */
+} lake_found;
+
+/* Water on top above the sea: a lake's (the sea's surface is at sea_level exactly). */
+static bool lake_at(terrain_world *world, int64_t x, int64_t z, float sea, float *level) {
+    float surface;
+    if (!terrain_world_water_at(world, (double)x + 0.5, (double)z + 0.5, &surface, NULL) || !(surface > sea))
+        return false;
+    *level = surface;
+    return true;
+}
+
+static int find_lakes(terrain_world *world, float sea, chunk_rect rect, lake_found *lakes) {
+    int count = 0;
+    for (int64_t cz = rect.z0; cz < rect.z1; cz += 2)
+        for (int64_t cx = rect.x0; cx < rect.x1; cx += 2) {
+            for (int k = 0; k < N; k++)
+                for (int i = 0; i < N; i++) {
+                    float level;
+                    if (!lake_at(world, cx * N + i, cz * N + k, sea, &level)) continue;
+                    int n = 0;
+                    while (n < count && lakes[n].level != level) n++;
+                    if (n == count && count < LAKES_MAX) lakes[count++] = (lake_found){ level, 0, cx * N + i, cz * N + k };
+                    if (n < count) lakes[n].columns++;
+                }
+            terrain_world_trim(world);
+        }
+    return count;
+}
+
+static terrain_world *seed_1_world(void) {
+    return terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(1), .max_chunks = 512 });
+}
+
+Test(water_lakes, seed_1_has_lakes_within_a_quarter_square_kilometre) {
+    terrain_world *world = seed_1_world();
+    lake_found lakes[LAKES_MAX];
+    int count = find_lakes(world, terrain_world_generation(world)->sea_level, lake_square, lakes);
+    int sizeable = 0;
+    for (int n = 0; n < count; n++) sizeable += lakes[n].columns >= 100;
+    cr_expect_geq(sizeable, 2, "%d lakes of 100 columns or more (%d levels above the sea)", sizeable, count);
+    terrain_world_destroy(world);
+}
+
+/* Every lake column's 8 neighbours hold water at its level or ground at or above it: the water
+ * is held, with no step in its surface. Checked over every column within 140 m of a column of
+ * the lake (its water circle is at most 2·(56 + 12) m across). */
+Test(water_lakes, every_lake_column_is_held_by_its_neighbours) {
+    terrain_world *world = seed_1_world();
+    float sea = terrain_world_generation(world)->sea_level;
+    lake_found lakes[LAKES_MAX];
+    int count = find_lakes(world, sea, lake_corner, lakes), checked = 0;
+    cr_assert_gt(count, 0);
+    for (int n = 0; n < 1; n++) {   /* the first lake the corner holds */
+        for (int64_t z = lakes[n].z - 140; z <= lakes[n].z + 140; z++)
+            for (int64_t x = lakes[n].x - 140; x <= lakes[n].x + 140; x++) {
+                float level;
+                if (!lake_at(world, x, z, sea, &level) || level != lakes[n].level) continue;
+                checked++;
+                for (int dz = -1; dz <= 1; dz++)
+                    for (int dx = -1; dx <= 1; dx++) {
+                        float other;
+                        bool same_water = lake_at(world, x + dx, z + dz, sea, &other) && other == level;
+                        float ground = terrain_world_top(world, (double)(x + dx) + 0.5, (double)(z + dz) + 0.5);
+                        cr_expect(same_water || ground >= level,
+                                  "lake at %g: column (%lld, %lld) beside (%lld, %lld) has ground at %g",
+                                  (double)level, (long long)(x + dx), (long long)(z + dz), (long long)x, (long long)z,
+                                  (double)ground);
+                    }
+            }
+        terrain_world_trim(world);
+    }
+    cr_expect_gt(checked, 100, "%d lake columns checked", checked);
+    terrain_world_destroy(world);
+}
+
+/* ---- the same bytes on any thread count and order ---- */
+
+#define LAKE_DET_SIDE 3
+
+typedef struct lake_job {
+    terrain_generation_params params;
+    terrain_chunk_coord first;
+    bool reverse;
+    uint64_t hashes[LAKE_DET_SIDE * LAKE_DET_SIDE];
+} lake_job;
+
+static void lake_generate_range(void *user, size_t begin, size_t end) {
+    lake_job *job = user;
+    for (size_t n = begin; n < end; n++) {
+        size_t index = job->reverse ? LAKE_DET_SIDE * LAKE_DET_SIDE - 1 - n : n;
+        terrain_chunk_coord c = { job->first.x + (int64_t)(index % LAKE_DET_SIDE),
+                                  job->first.z + (int64_t)(index / LAKE_DET_SIDE) };
+        terrain_stacks *s = terrain_generate_chunk(&job->params, c);
+        job->hashes[index] = terrain_stacks_hash(s);
+        terrain_stacks_destroy(s);
+    }
+}
+
+Test(water_lakes, lake_chunks_are_the_same_on_any_thread_count_and_order) {
+    terrain_world *world = seed_1_world();
+    lake_found lakes[LAKES_MAX];
+    cr_assert_gt(find_lakes(world, terrain_world_generation(world)->sea_level, lake_corner, lakes), 0);
+    static lake_job one, two;
+    one.params = two.params = terrain_generation_defaults(1);
+    /* The 3 × 3 chunks around a lake column. */
+    int64_t lake_cx = (lakes[0].x - ((lakes[0].x % N + N) % N)) / N, lake_cz = (lakes[0].z - ((lakes[0].z % N + N) % N)) / N;
+    one.first = two.first = (terrain_chunk_coord){ lake_cx - 1, lake_cz - 1 };
+    two.reverse = true;
+    job_system *serial = job_system_create(&(job_system_desc){ .threads = 1 });
+    job_parallel_for(serial, LAKE_DET_SIDE * LAKE_DET_SIDE, 1, lake_generate_range, &one, "generate");
+    job_system_destroy(serial);
+    job_system *parallel = job_system_create(&(job_system_desc){ .threads = 2 });
+    job_parallel_for(parallel, LAKE_DET_SIDE * LAKE_DET_SIDE, 1, lake_generate_range, &two, "generate");
+    job_system_destroy(parallel);
+    for (int n = 0; n < LAKE_DET_SIDE * LAKE_DET_SIDE; n++) cr_expect_eq(one.hashes[n], two.hashes[n], "chunk %d", n);
+    /* The world's copy (generated in the scan's order, with other chunks before) is the same. */
+    terrain_chunk_coord centre = { one.first.x + 1, one.first.z + 1 };
+    cr_expect_eq(terrain_stacks_hash(terrain_world_stacks(world, centre)), one.hashes[4]);
+    terrain_world_destroy(world);
+}
