@@ -76,7 +76,10 @@
  * — reads only the shore (r_b − ½ … r_p) and stands at P or above, P > L; caves are kept under the surface within R (their
  * openings are off there, as under the sea). The clipmap's G (terrain__ground_row_spaced) has
  * the basins too, down to 8 m spacing (coarser levels draw the natural ground: a lake is a few
- * texels there, and the sites' rims would cost more than the row).
+ * texels there, and the sites' rims would cost more than the row). A site costs 33 samples of
+ * G; a chunk keeps the sites its grid met, and the clipmap's rows share a per-thread cache
+ * (128² texels at 4 or 8 m: about +25 % over the natural ground; a generated chunk: no
+ * difference measurable under load).
  *
  * Determinism: everything is a function of (params, coord), computed in the same order on any
  * thread; no shared state, no RNG. The G grid and the coarse lattice sit on world-aligned
@@ -178,6 +181,7 @@ typedef struct ground_model {
     uint64_t lake_seed;
     float lake_spacing, lake_probability, lake_radius_min, lake_radius_max, lake_depth, lake_shear;
     lake_cache *lakes;                                     /* sites found so far, or NULL */
+    uint64_t key;                                          /* terrain_generation_key: whose sites */
 } ground_model;
 
 static uint32_t field_seed(const terrain_generation_params *p, uint64_t field) {
@@ -224,6 +228,7 @@ static ground_model ground_model_make(const terrain_generation_params *p) {
     g.lake_depth = clampf(p->lake_depth, 0.0f, 200.0f);
     g.lake_shear = clampf(p->horizontal_perturbation, 0.0f, 64.0f);
     g.lakes = NULL;
+    g.key = terrain_generation_key(p);
     return g;
 }
 
@@ -358,11 +363,21 @@ static float lake_shape(const lake_site *s, float r, float natural) {
     return shore + t * t * (3.0f - 2.0f * t) * (natural - shore);
 }
 
+/* Sites are a pure function of (params, cell), so callers without a cache of their own (the
+ * clipmap's rows, one call each) share one per thread, tagged with the parameters' key: the next
+ * row meets the same few cells, whose rims need not be sampled again. */
+static lake_cache *lake_thread_cache(uint64_t key) {
+    static _Thread_local lake_cache cache;
+    static _Thread_local uint64_t cache_key;
+    if (cache_key != key || cache.count == 0) cache = (lake_cache){ .count = 0 }, cache_key = key;
+    return &cache;
+}
+
 /* G: the natural ground with the lakes' basins. */
 static void ground_row(const ground_model *g, const double *xs, double z, int count, float *out) {
     ground_row_natural(g, xs, z, count, out);
     if (!(g->lake_spacing > 0.0f)) return;
-    lake_cache local = { .count = 0 }, *cache = g->lakes ? g->lakes : &local;
+    lake_cache *cache = g->lakes ? g->lakes : lake_thread_cache(g->key);
     for (int j = 0; j < count; j++) {
         const lake_site *s = lake_site_at(g, cache, xs[j], z);
         if (s) out[j] = lake_shape(s, (float)hypot(xs[j] - s->x, z - s->z), out[j]);
@@ -373,8 +388,7 @@ static void ground_row(const ground_model *g, const double *xs, double z, int co
 static float lake_level_at(const ground_model *g, double x, double z, bool *in_basin) {
     *in_basin = false;
     if (!(g->lake_spacing > 0.0f)) return NAN;
-    lake_cache local = { .count = 0 };
-    const lake_site *s = lake_site_at(g, g->lakes ? g->lakes : &local, x, z);
+    const lake_site *s = lake_site_at(g, g->lakes ? g->lakes : lake_thread_cache(g->key), x, z);
     if (!s) return NAN;
     *in_basin = true;
     return hypot(x - s->x, z - s->z) < (double)s->water ? s->level : NAN;
