@@ -152,6 +152,7 @@ static terrain_generation_params flat_world(float height) {
     p.vertical_perturbation = 0.0f;
     p.horizontal_perturbation = 0.0f;
     p.cave_threshold = 0.0f;
+    p.lake_spacing = 0.0f;                 /* no lakes: their basins would break the flatness */
     return p;
 }
 
