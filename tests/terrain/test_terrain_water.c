@@ -130,8 +130,8 @@ Test(water_planes, a_bad_request_is_an_error_not_a_crash) {
  * GL context, and layer 0 ([0, 32)) holds the surface. */
 static void deep_sea_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
     (void)x, (void)z;
-    bool drained = user != NULL;
-    push_column(builder, -100.0f, drained ? -100.0f : 8.0f);
+    const float *surface = user;          /* NULL: the sea at 8 */
+    push_column(builder, -100.0f, surface ? *surface : 8.0f);
 }
 
 static terrain_stacks *deep_sea_chunk(void *user, terrain_chunk_coord coord) {
@@ -177,7 +177,7 @@ static int count_water(water_ecs *w, WaterPlane *first) {
     return count;
 }
 
-Test(water_planes, the_component_comes_with_the_upload_and_goes_when_an_edit_drains_the_water) {
+Test(water_planes, the_component_comes_with_the_upload_follows_an_edit_and_goes_when_drained) {
     water_ecs w = water_ecs_open();
     cr_assert_neq(w.water, 0, "terrain_ecs_create registers WaterPlane");
     terrain_ecs_spawn_area(w.te, 0, 0, 0, 0, 0);   /* one column chunk, mesh layer 0 */
@@ -193,9 +193,17 @@ Test(water_planes, the_component_comes_with_the_upload_and_goes_when_an_edit_dra
     cr_expect_eq(plane.planes[0].deepest, -100.0f);
     for (int k = 0; k < N; k++) cr_expect_eq(plane.planes[0].rows[k], 0xffffffffu);
 
-    /* An edit (a commit by other code) drains the chunk: remeshed, the component goes. */
+    /* An edit (a commit by other code) raises the water to 20: remeshed, the component follows. */
+    float raised = 20.0f, drained = -100.0f;
     terrain_world_commit(w.world, (terrain_chunk_coord){ 0, 0 },
-                         terrain_stacks_from_columns((terrain_chunk_coord){ 0, 0 }, deep_sea_column, &w),
+                         terrain_stacks_from_columns((terrain_chunk_coord){ 0, 0 }, deep_sea_column, &raised),
+                         TERRAIN_EDIT_SET);
+    for (int f = 0; f < 3; f++) ecs_progress(w.ecs, 1.0f / 60.0f);
+    cr_assert_eq(count_water(&w, &plane), 1);
+    cr_expect_eq(plane.planes[0].height, 20.0f, "the new surface: %g", (double)plane.planes[0].height);
+    /* Another drains it: the component goes. */
+    terrain_world_commit(w.world, (terrain_chunk_coord){ 0, 0 },
+                         terrain_stacks_from_columns((terrain_chunk_coord){ 0, 0 }, deep_sea_column, &drained),
                          TERRAIN_EDIT_SET);
     for (int f = 0; f < 3; f++) ecs_progress(w.ecs, 1.0f / 60.0f);
     cr_expect_eq(count_water(&w, NULL), 0, "drained: no WaterPlane left");
