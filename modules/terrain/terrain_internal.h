@@ -221,7 +221,7 @@ bool terrain__mesh_reads_change(int level, int64_t x, int64_t y, int64_t z, cons
 
 /* ==== end of the ECS and streaming section ================================================ */
 
-/* ==== water planes (terrain_water.c) ====================================================== */
+/* ==== water planes (terrain_water_planes.c) ====================================================== */
 
 /* Whether column (i, k) has water on top (its highest non-air layer is water): then *surface is
  * that layer's top and *ground the top of the highest solid layer, in quanta above the floor. */

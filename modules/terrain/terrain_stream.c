@@ -61,7 +61,7 @@ struct stream_task {
     _Atomic bool cancelled;
     bool empty;                            /* skipped: no interface within reach */
     terrain_mesh mesh;
-    WaterPlane *water;                     /* its water surfaces, or NULL (terrain_water.c) */
+    WaterPlane *water;                     /* its water surfaces, or NULL (terrain_water_planes.c) */
     job_handle job;
     stream_record *record;                 /* main thread only; NULL when orphaned */
 };

@@ -1,4 +1,4 @@
-/* terrain_water.c — water surfaces of a mesh chunk (terrain.h, "water planes"; 002 §3.4, 004 §4.3).
+/* terrain_water_planes.c — water surfaces of a mesh chunk (terrain.h, "water planes"; 002 §3.4, 004 §4.3).
  *
  * Water is a material layer of the stacks (002 §3.1.1); a column has water on top when its
  * highest non-air layer is water, and that layer's top is a flat water surface. A mesh chunk of
