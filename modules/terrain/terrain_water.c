@@ -122,12 +122,14 @@ static void water_maps(terrain_water *w) {
 
 /* ---- life ---------------------------------------------------------------------------------- */
 
+static bool water_quality_valid(terrain_water_quality quality) { return (unsigned)quality <= TERRAIN_WATER_HIGH; }
+
 terrain_water *terrain_water_create(const terrain_water_desc *desc) {
     if (!desc || !desc->gfx || !desc->world) {
         core_error("terrain", "terrain_water_create: gfx and world are required");
         return NULL;
     }
-    if (desc->quality < TERRAIN_WATER_DEFAULT || desc->quality > TERRAIN_WATER_HIGH) {
+    if (!water_quality_valid(desc->quality)) {
         core_error("terrain", "terrain_water_create: unknown quality %d", (int)desc->quality);
         return NULL;
     }
@@ -173,7 +175,7 @@ void terrain_water_destroy(terrain_water *w) {
 }
 
 bool terrain_water_set_quality(terrain_water *w, terrain_water_quality quality) {
-    if (quality < TERRAIN_WATER_DEFAULT || quality > TERRAIN_WATER_HIGH) {
+    if (!water_quality_valid(quality)) {
         core_error("terrain", "terrain_water_set_quality: unknown quality %d", (int)quality);
         return false;
     }
