@@ -7,8 +7,9 @@
 // pass of its own (u_reflection, the view mirrored about the plane, its image upside down), and
 // the sun's highlight on a scrolling normal map. A Schlick Fresnel term blends the two. The
 // water's thickness along the view ray sets the colour (Beer–Lambert: shallow clear, thick dark
-// and green), and, as 004 §4.3 asks, the bumps' strength and the reflectivity; it fades the
-// surface out towards the shore, where it goes to zero (no hard line; Crest #10, #262).
+// and green); its depth under the surface sets, as 004 §4.3 asks, the bumps' strength and the
+// reflectivity, and fades the surface out towards the shore, where it goes to zero (no hard
+// line; Crest #10, #262).
 
 #include "common.glsl"
 #include "sky.glsl"
@@ -38,9 +39,12 @@ out vec4 frag_color;
 // dudv 12 and 10 m.
 const float WAVE_METRES = 8.0, WAVE2_METRES = 20.0;
 const float DUDV_METRES = 12.0, DUDV2_METRES = 10.0;
-const float DISTORTION = 0.015;    // screen share the refraction moves at most, close up
-const float SHORE_METRES = 0.8;    // water along the ray over which the surface fades in
-const float SHALLOW_METRES = 1.5;  // scale of "shallow" for bumps and reflectivity
+const float DISTORTION = 0.025;    // screen share the refraction moves at most, close up
+// Depths are vertical (the bottom seen through this pixel under the surface), so the shore's
+// width on the ground does not shrink at grazing angles, where the water along the ray grows
+// fastest.
+const float SHORE_METRES = 0.5;    // depth over which the surface fades in from the waterline
+const float SHALLOW_METRES = 0.6;  // scale of "shallow" for bumps and reflectivity
 
 // Two layers of the normal map scrolling in different directions; `strength` scales the slopes.
 vec3 wave_normal(vec2 world, float strength) {
@@ -89,8 +93,10 @@ void main() {
     // The water straight behind the surface; this fragment passed the depth test, so the scene
     // there lies behind it (to the depth buffer's precision).
     float straight = max(scene_distance(uv) - surface_distance, 0.0);
-    float deep = 1.0 - exp(-straight / SHALLOW_METRES);           // 0 at the shore, → 1 deep
-    vec3 normal = wave_normal(world, mix(0.15, 1.0, deep));
+    float depth = straight * max(-view_dir.y, 0.0);
+    float deep = 1.0 - exp(-depth / SHALLOW_METRES);              // 0 at the shore, → 1 deep
+    // Far away the waves are smaller than a pixel and the surface reads as smooth.
+    vec3 normal = wave_normal(world, mix(0.15, 1.0, deep) / (1.0 + surface_distance / 60.0));
     // Distortion shrinks with distance (the waves' size on screen) and towards the shore.
     vec2 offset = wave_dudv(world) * DISTORTION * deep / (1.0 + surface_distance * 0.05);
     vec2 bent_uv = clamp_uv(uv + offset);
@@ -112,5 +118,5 @@ void main() {
     float highlight = pow(max(dot(reflected_dir, u_sun_direction), 0.0), 400.0) * 4.0;
     color += SUN_COLOR * highlight * deep;
     color = apply_fog(color, v_relative_position);
-    frag_color = vec4(color, smoothstep(0.0, SHORE_METRES, straight));
+    frag_color = vec4(color, smoothstep(0.0, SHORE_METRES, depth));
 }

@@ -93,11 +93,11 @@ static uint8_t water_unorm(float value) {        /* [−1, 1] → 0.5 + 0.5·val
 static void water_maps(terrain_water *w) {
     size_t bytes = (size_t)WATER_MAP_SIZE * WATER_MAP_SIZE * 4;
     uint8_t *normals = core_alloc(bytes), *dudv = core_alloc(bytes);
-    /* Σ 1/f over the waves bounds each field; the slope scale makes the steepest normals lean
-     * about 35°, which the shader scales down again by its strength. */
+    /* Σ 1/f over the waves bounds each field. The slopes: a gentle chop, typically a tenth (6°)
+     * and at the steepest about a quarter; the shader scales them again by depth and distance. */
     float bound = 0;
     for (int j = 0; j < WATER_WAVES; j++) bound += 1.0f / (float)(2 + j / 2);
-    float slope_scale = 0.7f / (bound * 2.0f * (float)M_PI * 2.0f);
+    float slope_scale = 0.25f / (bound * 2.0f * (float)M_PI * 2.0f);
     for (int y = 0; y < WATER_MAP_SIZE; y++)
         for (int x = 0; x < WATER_MAP_SIZE; x++) {
             double u = (double)x / WATER_MAP_SIZE, v = (double)y / WATER_MAP_SIZE;
