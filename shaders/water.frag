@@ -60,6 +60,19 @@ vec2 wave_dudv(vec2 world) {
     return (a + b) * 0.5;
 }
 
+// Whether the cell or one of its eight neighbours holds this water. The mask is cells' tops; the
+// ground's mesh, smoothed by the field's kernel, may dip under the surface a little past them,
+// and a coarse level's cells straddle the waterline: one cell more lets the depth test and the
+// shore's fade draw the waterline there instead of the mask's square edge.
+bool near_plane_cells(ivec2 cell) {
+    for (int k = max(cell.y - 1, 0); k <= min(cell.y + 1, 31); k++) {
+        uint row = u_rows[k];
+        for (int i = max(cell.x - 1, 0); i <= min(cell.x + 1, 31); i++)
+            if (((row >> uint(i)) & 1u) != 0u) return true;
+    }
+    return false;
+}
+
 vec2 clamp_uv(vec2 uv) { return clamp(uv, 0.5 / u_screen_size, 1.0 - 0.5 / u_screen_size); }
 
 // The surface from below: through it, the frame above the water (bent a little); past the
@@ -77,11 +90,7 @@ vec4 seen_from_below(vec3 view_dir, vec2 uv, vec2 world) {
 }
 
 void main() {
-    if (u_use_rows != 0) {
-        ivec2 cell = ivec2(floor(v_cell));
-        if (any(lessThan(cell, ivec2(0))) || any(greaterThan(cell, ivec2(31))) ||
-            ((u_rows[cell.y] >> uint(cell.x)) & 1u) == 0u) discard;
-    }
+    if (u_use_rows != 0 && !near_plane_cells(ivec2(floor(v_cell)))) discard;
     float surface_distance = length(v_relative_position);
     vec3 view_dir = v_relative_position / max(surface_distance, 1e-4);
     vec2 uv = gl_FragCoord.xy / u_screen_size;

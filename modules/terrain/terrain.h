@@ -1294,7 +1294,9 @@ typedef struct WaterPlane {
  * less reflective, and fades the surface out towards the shore (no hard line). Below the
  * surface (terrain_world_water_at at the camera) the surface is seen from underneath (total
  * internal reflection past the critical angle) and a water fog tints the frame. The surfaces
- * are drawn in a pass named "water". Off: nothing drawn, no cost. */
+ * are drawn in a pass named "water". Off: nothing drawn, no cost. A lake's plane covers the
+ * cells of its row mask and one cell around them (the ground and the shore's fade draw the
+ * waterline there, not the cells' square edges). */
 typedef enum terrain_water_quality {
     TERRAIN_WATER_DEFAULT = 0,        /* low */
     TERRAIN_WATER_OFF,                /* nothing drawn */
@@ -1334,7 +1336,8 @@ void terrain_water_draw(terrain_water *water, terrain_ecs *te, terrain_renderer 
 typedef struct terrain_water_stats {
     int planes_drawn;                 /* surfaces the last draw drew (the sea counts one) */
     bool under_water;                 /* the last draw's camera was below a surface */
-    double cpu_ms;                    /* CPU ms of the last draw (llvmpipe: its GPU work too) */
+    double cpu_ms;                    /* CPU ms of the last draw; on llvmpipe its GPU work too,
+                                         and the frame's before it (the copy waits for it) */
 } terrain_water_stats;
 terrain_water_stats terrain_water_stats_get(const terrain_water *water);
 

@@ -331,9 +331,11 @@ Test(render_water, under_water_the_frame_is_tinted) {
     sea_close(&s);
 }
 
-/* Lakes: a WaterPlane component (as the mesh phase attaches them) draws its plane over exactly
- * the cells its row mask names: a lake over half a chunk changes that half of the view from
- * above, and the other half stays as it was. Bad qualities are refused. */
+/* Lakes: a WaterPlane component (as the mesh phase attaches them) draws its plane over the cells
+ * its row mask names, and at most one cell beyond (the mask is widened by a cell so that the
+ * depth test and the shore draw the waterline, not the cells' square edges): a lake over the
+ * west half of a chunk (x < 16) changes that half of the view from above, and beyond x = 17
+ * the view stays as it was. */
 Test(render_water, a_lake_plane_covers_its_cells_only) {
     sea s;
     /* The shallow world's sea is at 0 m; the lake plane floats at 0.5 m over the west half of
