@@ -198,6 +198,7 @@ expect "hello_water: off draws no plane" 0 "hello_water: water off, 0 planes dra
 expect "hello_water: bad --water" 2 "bad value for '--water'" -- "$bin/hello_water" --water deep
 expect "world: bad --grass" 2 "bad value for '--grass': 'lush' is not off, low or high" -- "$bin/world" --grass lush
 expect "world: --grass without value" 2 "option '--grass' needs a value" -- "$bin/world" --grass
+expect "world: bad --water" 2 "bad value for '--water': 'deep' is not off, low or high" -- "$bin/world" --water deep
 expect "world: bad --detail" 2 "bad value for '--detail': 'high' is not on or off" -- "$bin/world" --detail high
 expect "world: bad --shadows" 2 "bad value for '--shadows': 'soft' is not off, low or high" -- "$bin/world" --shadows soft
 expect "world: bad --shadows gets the usage" 2 "usage: world" -- "$bin/world" --shadows soft
