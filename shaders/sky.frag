@@ -12,5 +12,5 @@ out vec4 frag_color;
 void main() {
     vec4 far = u_inverse_view_projection * vec4(v_ndc, 1.0, 1.0);
     vec3 direction = normalize(far.xyz / far.w - u_camera_position);
-    frag_color = vec4(sky_with_clouds(direction), 1.0);
+    frag_color = vec4(sky_with_clouds(direction, 5), 1.0);
 }

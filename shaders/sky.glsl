@@ -20,9 +20,9 @@ float cloud_noise(vec2 p) {
     return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
 }
 
-float cloud_fbm(vec2 p) {
+float cloud_fbm(vec2 p, int octaves) {
     float sum = 0.0, amplitude = 0.5;
-    for (int octave = 0; octave < 5; octave++) {
+    for (int octave = 0; octave < octaves; octave++) {
         sum += amplitude * cloud_noise(p);
         p = p * 2.03 + vec2(17.1, 9.2);
         amplitude *= 0.5;
@@ -30,11 +30,13 @@ float cloud_fbm(vec2 p) {
     return sum;
 }
 
-vec3 add_clouds(vec3 sky, vec3 direction) {
+// `octaves` of the clouds' noise: 5 in the sky; fewer where they are seen through moving
+// water, whose waves hide the finest ones.
+vec3 add_clouds(vec3 sky, vec3 direction, int octaves) {
     if (u_cloud_cover <= 0.0 || direction.y <= 0.01) return sky;
     // Where the ray meets a cloud plane 1 km up, in kilometres, moved by a steady wind.
     vec2 plane = direction.xz / direction.y + vec2(0.012, 0.004) * u_time;
-    float density = cloud_fbm(plane * 1.5);
+    float density = cloud_fbm(plane * 1.5, octaves);
     float cover = smoothstep(1.0 - u_cloud_cover, 1.05 - u_cloud_cover * 0.6, density);
     // Thin out towards the horizon, where the plane's far cells would alias.
     cover *= smoothstep(0.02, 0.25, direction.y);
@@ -43,5 +45,5 @@ vec3 add_clouds(vec3 sky, vec3 direction) {
     return mix(sky, cloud, cover * 0.9);
 }
 
-// The sky along a unit direction, clouds included.
-vec3 sky_with_clouds(vec3 direction) { return add_clouds(sky_color(direction), direction); }
+// The sky along a unit direction, clouds included (`octaves` of their noise, 5 for the sky).
+vec3 sky_with_clouds(vec3 direction, int octaves) { return add_clouds(sky_color(direction), direction, octaves); }

@@ -121,7 +121,7 @@ void main() {
     vec3 reflected_dir = reflect(view_dir, normal);
     reflected_dir.y = abs(reflected_dir.y);                        // a wave never mirrors the ground
     vec3 reflected = u_use_reflection != 0 ? texture(u_reflection, clamp_uv(vec2(uv.x, 1.0 - uv.y) + offset)).rgb
-                                           : sky_with_clouds(reflected_dir);
+                                           : sky_with_clouds(reflected_dir, 3);
     float fresnel = water_fresnel(dot(-view_dir, normal)) * mix(0.4, 1.0, deep);
     vec3 color = mix(refracted, reflected, fresnel);
     float highlight = pow(max(dot(reflected_dir, u_sun_direction), 0.0), 400.0) * 4.0;

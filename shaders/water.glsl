@@ -10,7 +10,7 @@ const float WATER_F0 = 0.02;               // ((n − 1)/(n + 1))² at normal in
 // water turns dark blue-green and a metre of it leaves at least three quarters of each channel.
 const vec3 WATER_EXTINCTION = vec3(0.28, 0.055, 0.075);
 const vec3 WATER_BODY = vec3(0.025, 0.15, 0.13);   // what thick water scatters back, lit by the sun
-const vec3 WATER_FOG = vec3(0.04, 0.20, 0.20);     // the colour of distance seen under water
+const vec3 WATER_FOG = vec3(0.05, 0.26, 0.28);     // the colour of distance seen under water
 
 // The light the water body scatters: the sun from above and the sky's ambient.
 vec3 water_body_color() { return WATER_BODY * (0.35 + 0.65 * max(u_sun_direction.y, 0.0)); }

@@ -7,7 +7,8 @@
  *                                deep), the camera 6 m over the water looking out to sea with
  *                                the beach in view; frame wall time with the water at that
  *                                quality less the median of the same frames with it off (the
- *                                same process, context and chunks: peers in one run)
+ *                                same process, context and chunks: peers in one run, their
+ *                                samples interleaved)
  *   water.frame_ms.off           those frames with the water off (the base of the two above)
  */
 #include "bench.h"
@@ -104,11 +105,14 @@ void bench_group_water(bench_context *ctx) {
     for (int frame = 0; frame < 5; frame++) coast_frame(&c);     /* meshed and uploaded */
     const terrain_water_quality qualities[3] = { TERRAIN_WATER_OFF, TERRAIN_WATER_LOW, TERRAIN_WATER_HIGH };
     double frames[3][RUNS];
-    for (int q = 0; q < 3; q++) {
-        terrain_water_set_quality(c.water, qualities[q]);
-        coast_frame(&c);                                          /* targets made */
-        for (int r = 0; r < RUNS; r++) frames[q][r] = sample_coast_frames(&c);
-    }
+    /* Interleaved (off, low, high, off, …) so that a change in the machine's load during the
+     * run weighs on the three alike. */
+    for (int r = 0; r < RUNS; r++)
+        for (int q = 0; q < 3; q++) {
+            terrain_water_set_quality(c.water, qualities[q]);
+            coast_frame(&c);                                      /* targets made, caches warm */
+            frames[q][r] = sample_coast_frames(&c);
+        }
     double base = bench_median(frames[0], RUNS);
     bench_record(ctx, "water.frame_ms.off", "ms", frames[0], RUNS);
     for (int q = 1; q < 3; q++) {
