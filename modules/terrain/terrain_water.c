@@ -106,7 +106,8 @@ static void water_maps(terrain_water *w) {
             float nx = -g[0] * slope_scale, nz = -g[1] * slope_scale, ny = 1.0f;
             float length = sqrtf(nx * nx + ny * ny + nz * nz);
             uint8_t *n = normals + ((size_t)y * WATER_MAP_SIZE + (size_t)x) * 4;
-            n[0] = water_unorm(nx / length), n[1] = water_unorm(nz / length), n[2] = water_unorm(ny / length), n[3] = 255;
+            n[0] = water_unorm(nx / length), n[1] = water_unorm(nz / length);
+            n[2] = water_unorm(ny / length), n[3] = 255;
             uint8_t *d = dudv + ((size_t)y * WATER_MAP_SIZE + (size_t)x) * 4;
             d[0] = water_unorm(water_waves(2, u, v, unused) / bound);
             d[1] = water_unorm(water_waves(3, u, v, unused) / bound);
@@ -286,6 +287,9 @@ typedef struct water_frame {
 
 static void water_bind(GLuint texture, int unit) { glBindTextureUnit((GLuint)unit, texture); }
 
+/* A camera coordinate modulo the maps' common period, in double: small floats for the shader. */
+static float water_wrap(double value) { return (float)(value - floor(value / WATER_MAP_PERIOD) * WATER_MAP_PERIOD); }
+
 static void water_surface_uniforms(terrain_water *w, const water_frame *f, terrain_renderer *renderer) {
     gfx_context *gfx = w->desc.gfx;
     gfx_program p = w->surface;
@@ -294,8 +298,7 @@ static void water_surface_uniforms(terrain_water *w, const water_frame *f, terra
     gfx_size(gfx, &width, &height);
     float fog = w->desc.fog_density > 0 ? w->desc.fog_density : terrain__renderer_fog_density(renderer);
     float clouds = w->desc.cloud_cover != 0 ? fmaxf(w->desc.cloud_cover, 0.0f) : terrain__renderer_cloud_cover(renderer);
-    float texture_offset[2] = { (float)(f->view->camera[0] - floor(f->view->camera[0] / WATER_MAP_PERIOD) * WATER_MAP_PERIOD),
-                                (float)(f->view->camera[2] - floor(f->view->camera[2] / WATER_MAP_PERIOD) * WATER_MAP_PERIOD) };
+    float texture_offset[2] = { water_wrap(f->view->camera[0]), water_wrap(f->view->camera[2]) };
     gfx_program_use(gfx, p);
     gfx_uniform_mat4(gfx, p, "u_view_projection", (const float *)f->view_projection);
     gfx_uniform_mat4(gfx, p, "u_inverse_view_projection", (const float *)f->inverse);

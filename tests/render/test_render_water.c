@@ -331,6 +331,32 @@ Test(render_water, under_water_the_frame_is_tinted) {
     sea_close(&s);
 }
 
+/* The surface seen from below: looking up from 2 m under it (86° up), every ray meets it within
+ * 34° of the vertical, inside the critical angle (asin(1/1.33) ≈ 48.8°), so the sky shows
+ * through, bright and blue; looking 11° up, the rays above the middle meet it 49° to 79° from
+ * the vertical, past the critical angle: total internal reflection, the water's own dark colour.
+ * The first is more than twice as bright as the second. */
+Test(render_water, from_below_the_sky_shows_through_the_window_and_not_past_it) {
+    float window[3], beyond[3];
+    float pitches[2] = { 1.5f, 0.2f };
+    for (int p = 0; p < 2; p++) {
+        sea s;
+        sea_open(&s, SEA_DEEP, (terrain_view){ .camera = { 16, -2, 16 }, .pitch = pitches[p] });
+        terrain_water *water = sea_water(&s, TERRAIN_WATER_LOW);
+        render_image wet = sea_frame(&s, water);
+        if (p == 0) mean_color(&wet, 40, 20, WIDTH - 40, HEIGHT - 20, window);
+        else mean_color(&wet, 20, 0, WIDTH - 20, HEIGHT / 2 - 5, beyond);
+        terrain_water_destroy(water);
+        render_image_free(&wet);
+        sea_close(&s);
+    }
+    float window_sum = window[0] + window[1] + window[2], beyond_sum = beyond[0] + beyond[1] + beyond[2];
+    cr_expect_gt(window_sum, 2 * beyond_sum, "through the window %.3f, past the critical angle %.3f", window_sum,
+                 beyond_sum);
+    cr_expect_gt(window[2], window[0], "the sky through the window is blue: %.3f %.3f %.3f", window[0], window[1],
+                 window[2]);
+}
+
 /* Lakes: a WaterPlane component (as the mesh phase attaches them) draws its plane over the cells
  * its row mask names, and at most one cell beyond (the mask is widened by a cell so that the
  * depth test and the shore draw the waterline, not the cells' square edges): a lake over the
