@@ -14,7 +14,6 @@
 
 #include <criterion/criterion.h>
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -114,10 +113,6 @@ static render_image sea_frame(sea *s, terrain_water *water) {
             image.rgba = malloc((size_t)s->width * (size_t)s->height * 4);
             glFinish();
             gfx_read_pixels(s->gfx, image.rgba);
-            static int dumped;   /* DEBUG */
-            char path[64];
-            snprintf(path, sizeof path, "/tmp/water_test_%02d.png", dumped++);
-            if (getenv("WATER_TEST_PNG")) gfx_write_png(path, s->width, s->height, image.rgba);
         }
         gfx_frame_end(s->gfx);
         if (image.rgba) return image;
