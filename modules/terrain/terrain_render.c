@@ -30,6 +30,8 @@ struct terrain_renderer {
     double texture_ms;                    /* how long the textures took to make */
     terrain__shadows *shadows;            /* NULL with shadows off */
     bool shadows_drawn;                   /* terrain_renderer_draw_shadows ran for the next draw */
+    bool water_drawn;                     /* terrain_water draws the sea: the far terrain leaves
+                                             its own tint of the sea out */
 };
 
 /* ---- procedural material textures ---- */
@@ -240,6 +242,7 @@ static void terrain_draw_clipmap(terrain_renderer *r, const terrain_view *view, 
     gfx_uniform_float(gfx, r->clipmap, "u_snow_height", r->desc.snow_height);
     gfx_uniform_vec3(gfx, r->clipmap, "u_bedrock_mean", r->material_means[0]);
     gfx_uniform_vec3(gfx, r->clipmap, "u_sand_mean", r->material_means[1]);
+    gfx_uniform_float(gfx, r->clipmap, "u_water_drawn", r->water_drawn ? 1.0f : 0.0f);
     terrain__shadows_bind(shadows, gfx, r->clipmap.id, TERRAIN_SHADOW_UNIT);
     terrain__clipmap_draw(r->far_terrain, gfx, r->clipmap.id, view);
 }
@@ -322,6 +325,8 @@ void terrain__renderer_draw_clipped(terrain_renderer *r, const terrain_view *vie
     TRACE_ZONE("terrain_renderer_draw_clipped");
     terrain_draw_scene(r, view, meshes, mesh_count, clip_plane, NULL);
 }
+
+void terrain__renderer_set_water_drawn(terrain_renderer *r, bool drawn) { r->water_drawn = drawn; }
 
 float terrain__renderer_fog_density(const terrain_renderer *r) { return r->desc.fog_density; }
 float terrain__renderer_cloud_cover(const terrain_renderer *r) { return r->desc.cloud_cover; }

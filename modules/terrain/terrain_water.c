@@ -405,6 +405,7 @@ static float water_surface_over_camera(terrain_water *w, const terrain_view *vie
 
 void terrain_water_draw(terrain_water *w, terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view) {
     w->stats = (terrain_water_stats){ 0 };
+    terrain__renderer_set_water_drawn(renderer, w->desc.quality != TERRAIN_WATER_OFF && !w->desc.no_sea);
     if (w->desc.quality == TERRAIN_WATER_OFF) return;
     TRACE_ZONE("terrain_water_draw");
     uint64_t start = core_time_ns();
