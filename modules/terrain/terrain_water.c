@@ -27,7 +27,7 @@ enum { UNIT_SCENE_COLOR, UNIT_SCENE_DEPTH, UNIT_REFLECTION, UNIT_DUDV, UNIT_NORM
 
 struct terrain_water {
     terrain_water_desc desc;
-    gfx_program surface, under;
+    gfx_program surface, under, probe;
     gfx_texture dudv, normals;
     gfx_vertex_array empty;
     GLuint color_copy, depth_copy;        /* the opaque frame, copied each draw */
@@ -37,6 +37,13 @@ struct terrain_water {
     ecs_query *planes;                    /* entities with a WaterPlane */
     terrain_gpu_mesh *meshes;             /* gathered for the high quality's passes */
     size_t mesh_capacity;
+    /* Whether any water was seen: an occlusion query a frame, two in turn, read a frame later.
+     * A frame after one whose water was all hidden (behind hills) only probes again, with a
+     * depth-tested quad and no shading, and skips the copy of the frame, whose wait for the
+     * frame's drawing (llvmpipe draws the frame when it is read) would cost the most. */
+    GLuint queries[2];
+    bool query_issued[2];
+    int query_next;
     terrain_water_stats stats;
 };
 
@@ -136,9 +143,11 @@ terrain_water *terrain_water_create(const terrain_water_desc *desc) {
     }
     gfx_program surface = gfx_program_load(desc->gfx, "water.vert", "water.frag");
     gfx_program under = gfx_program_load(desc->gfx, "sky.vert", "water_under.frag");
-    if (!surface.id || !under.id) return NULL;
+    gfx_program probe = gfx_program_load(desc->gfx, "water.vert", "water_probe.frag");
+    if (!surface.id || !under.id || !probe.id) return NULL;
     terrain_water *w = core_calloc(1, sizeof *w);
-    *w = (terrain_water){ .desc = *desc, .surface = surface, .under = under };
+    *w = (terrain_water){ .desc = *desc, .surface = surface, .under = under, .probe = probe };
+    glCreateQueries(GL_ANY_SAMPLES_PASSED, 2, w->queries);
     if (w->desc.quality == TERRAIN_WATER_DEFAULT) w->desc.quality = TERRAIN_WATER_LOW;
     water_maps(w);
     glCreateVertexArrays(1, &w->empty.id);
@@ -170,6 +179,7 @@ void terrain_water_destroy(terrain_water *w) {
     gfx_texture_destroy(&w->dudv);
     gfx_texture_destroy(&w->normals);
     gfx_vertex_array_destroy(&w->empty);
+    glDeleteQueries(2, w->queries);
     if (w->planes) ecs_query_destroy(w->desc.ecs, w->planes);
     core_free(w->meshes, w->mesh_capacity * sizeof *w->meshes);
     core_free(w, sizeof *w);
@@ -328,10 +338,9 @@ static void water_sources(terrain_water *w, bool passes) {
 }
 
 /* One quad at world height `height` from world (x0, z0) over extent metres; `rows` NULL = all. */
-static void water_draw_quad(terrain_water *w, const water_frame *f, double x0, double z0, double height,
-                            const float extent[2], float cell, const uint32_t *rows) {
+static void water_draw_quad(terrain_water *w, gfx_program p, const water_frame *f, double x0, double z0,
+                            double height, const float extent[2], float cell, const uint32_t *rows) {
     gfx_context *gfx = w->desc.gfx;
-    gfx_program p = w->surface;
     const double *camera = f->view->camera;
     float corner[3] = { (float)(x0 - camera[0]), (float)(height - camera[1]), (float)(z0 - camera[2]) };
     gfx_uniform_vec3(gfx, p, "u_corner", corner);
@@ -349,16 +358,17 @@ static void water_draw_quad(terrain_water *w, const water_frame *f, double x0, d
     w->stats.planes_drawn++;
 }
 
-static void water_draw_sea(terrain_water *w, const water_frame *f, float sea_level) {
+/* The surfaces with program `p`: the surface program (shaded), or the probe's. */
+static void water_draw_sea(terrain_water *w, gfx_program p, const water_frame *f, float sea_level) {
     double reach = f->view->far_distance > 0 ? f->view->far_distance : 4000.0;
-    water_sources(w, f->high);
+    if (p.id == w->surface.id) water_sources(w, f->high);
     float extent[2] = { (float)(2 * reach), (float)(2 * reach) };
-    water_draw_quad(w, f, f->view->camera[0] - reach, f->view->camera[2] - reach, sea_level, extent, 1, NULL);
+    water_draw_quad(w, p, f, f->view->camera[0] - reach, f->view->camera[2] - reach, sea_level, extent, 1, NULL);
 }
 
-static void water_draw_lakes(terrain_water *w, const water_frame *f, float sea_level) {
+static void water_draw_lakes(terrain_water *w, gfx_program p, const water_frame *f, float sea_level) {
     if (!w->planes) return;
-    water_sources(w, false);
+    if (p.id == w->surface.id) water_sources(w, false);
     terrain_frustum frustum = terrain_frustum_from_view(f->view);
     ecs_iter it = ecs_query_iter(w->desc.ecs, w->planes);
     while (ecs_query_next(&it)) {
@@ -373,7 +383,7 @@ static void water_draw_lakes(terrain_water *w, const water_frame *f, float sea_l
                 if (!terrain_frustum_sees(&frustum, wp->origin, (const float[3]){ 0, y - 0.01f, 0 },
                                           (const float[3]){ side, y + 0.01f, side }))
                     continue;
-                water_draw_quad(w, f, wp->origin[0], wp->origin[2], plane->height, (const float[2]){ side, side },
+                water_draw_quad(w, p, f, wp->origin[0], wp->origin[2], plane->height, (const float[2]){ side, side },
                                 wp->cell, plane->rows);
             }
         }
@@ -403,6 +413,42 @@ static float water_surface_over_camera(terrain_water *w, const terrain_view *vie
     return view->camera[1] < surface && view->camera[1] >= ground ? surface : NAN;
 }
 
+/* Whether the last frame's query saw water; true when it cannot tell yet (no query, or its
+ * result not in: never a wait). */
+static bool water_seen_last_frame(terrain_water *w) {
+    int last = w->query_next ^ 1;
+    if (!w->query_issued[last]) return true;
+    GLuint available = 0, seen = 1;
+    glGetQueryObjectuiv(w->queries[last], GL_QUERY_RESULT_AVAILABLE, &available);
+    if (!available) return true;
+    glGetQueryObjectuiv(w->queries[last], GL_QUERY_RESULT, &seen);
+    return seen != 0;
+}
+
+/* The surfaces, counted by this frame's query: shaded, or only probed (no colour written). */
+static void water_draw_surfaces(terrain_water *w, const water_frame *f, terrain_renderer *renderer, float sea_level,
+                                bool shade) {
+    gfx_context *gfx = w->desc.gfx;
+    gfx_program p = shade ? w->surface : w->probe;
+    if (shade) water_surface_uniforms(w, f, renderer);
+    else {
+        gfx_program_use(gfx, p);
+        gfx_uniform_mat4(gfx, p, "u_view_projection", (const float *)f->view_projection);
+        glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    }
+    GLuint query = w->queries[w->query_next];
+    glBeginQuery(GL_ANY_SAMPLES_PASSED, query);
+    if (!w->desc.no_sea) water_draw_sea(w, p, f, sea_level);
+    water_draw_lakes(w, p, f, sea_level);
+    glEndQuery(GL_ANY_SAMPLES_PASSED);
+    w->query_issued[w->query_next] = true;
+    w->query_next ^= 1;
+    if (!shade) {
+        glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        w->stats.planes_drawn = 0;              /* probed, not drawn */
+    }
+}
+
 void terrain_water_draw(terrain_water *w, terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view) {
     w->stats = (terrain_water_stats){ 0 };
     terrain__renderer_set_water_drawn(renderer, w->desc.quality != TERRAIN_WATER_OFF && !w->desc.no_sea);
@@ -418,22 +464,20 @@ void terrain_water_draw(terrain_water *w, terrain_ecs *te, terrain_renderer *ren
     w->stats.under_water = !isnan(f.under_surface);
     int width, height;
     gfx_size(gfx, &width, &height);
-    bool sea = !w->desc.no_sea;
-    f.high = sea && w->desc.quality == TERRAIN_WATER_HIGH && !w->stats.under_water &&
+    bool shade = w->stats.under_water || water_seen_last_frame(w);
+    f.high = shade && !w->desc.no_sea && w->desc.quality == TERRAIN_WATER_HIGH && !w->stats.under_water &&
              view->camera[1] > sea_level && water_pass_targets(w, width, height);
     if (f.high) water_sea_passes(w, te, renderer, view, sea_level);
 
     gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "water" });
-    water_copy_frame(w, width, height);
+    if (shade) water_copy_frame(w, width, height);
     /* Blended over the frame; no depth written (nothing drawn later needs it, and the shader's
      * early depth test then skips the hidden sea at no cost); both faces (seen from below). */
     glEnable(GL_BLEND);
     glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
     glDepthMask(GL_FALSE);
     glDisable(GL_CULL_FACE);
-    water_surface_uniforms(w, &f, renderer);
-    if (sea) water_draw_sea(w, &f, sea_level);
-    water_draw_lakes(w, &f, sea_level);
+    water_draw_surfaces(w, &f, renderer, sea_level, shade);
     if (w->stats.under_water) water_draw_fog(w, &f);
     glEnable(GL_CULL_FACE);
     glDepthMask(GL_TRUE);

@@ -262,6 +262,24 @@ Test(render_water, off_draws_nothing) {
     sea_close(&s);
 }
 
+/* Water out of sight: looking up into the sky from above the sea (every ray at least 39° up),
+ * no water pixel passes the depth test, so from the frame after the first the water only probes
+ * (an occlusion query, no colour written, no copy of the frame): nothing is counted as drawn and
+ * the frame is the frame without water, bit for bit. */
+Test(render_water, water_out_of_sight_is_only_probed) {
+    sea s;
+    sea_open(&s, SEA_DEEP, (terrain_view){ .camera = { 16, 4, 16 }, .pitch = 1.2f });
+    render_image dry = sea_frame(&s, NULL);
+    terrain_water *water = sea_water(&s, TERRAIN_WATER_HIGH);
+    render_image wet = sea_frame(&s, water);
+    cr_expect_eq(memcmp(dry.rgba, wet.rgba, WIDTH * HEIGHT * 4), 0, "hidden water changed the frame");
+    cr_expect_eq(terrain_water_stats_get(water).planes_drawn, 0);
+    terrain_water_destroy(water);
+    render_image_free(&dry);
+    render_image_free(&wet);
+    sea_close(&s);
+}
+
 /* Along a 5 % beach seen from 3 m up, 18 m before the waterline, the water adds to the frame a
  * change (water frame − dry frame) that grows from nothing at the waterline. A hard edge would
  * add, in one pixel step, the reflection at that angle (Schlick at 9.5° down: F ≈ 0.42 of the
