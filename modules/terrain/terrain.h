@@ -1294,7 +1294,10 @@ typedef struct WaterPlane {
  * less reflective, and fades the surface out towards the shore (no hard line). Below the
  * surface (terrain_world_water_at at the camera) the surface is seen from underneath (total
  * internal reflection past the critical angle) and a water fog tints the frame. The surfaces
- * are drawn in a pass named "water". Off: nothing drawn, no cost. A lake's plane covers the
+ * are drawn in a pass named "water". While no water shows (an occlusion query of the previous
+ * frame: all of it behind hills or out of view), the surfaces are only probed, depth-tested
+ * with no colour, and nothing is copied or shaded; water that comes into view appears a frame
+ * later. Off: nothing drawn, no cost. A lake's plane covers the
  * cells of its row mask and one cell around them (the ground and the shore's fade draw the
  * waterline there, not the cells' square edges). */
 typedef enum terrain_water_quality {
