@@ -29,6 +29,7 @@ struct game_app {
     terrain_clipmap *clipmap;              /* the far terrain, or NULL */
     terrain_ecs *terrain;
     grass_system *grass;                   /* NULL with --grass off */
+    terrain_water *water;                  /* NULL with --water off */
     input_bindings *bindings;
     input_system *input;
     gfx_text *hud;
@@ -367,6 +368,12 @@ game_app *game_app_create(const game_app_desc *desc) {
         !(app->grass = grass_create(&(grass_desc){ .gfx = app->gfx, .ecs = app->ecs, .world = app->world,
                                                    .quality = d->grass, .fog_density = fog_density })))
         goto fail;
+    if (d->water != TERRAIN_WATER_OFF &&
+        !(app->water = terrain_water_create(&(terrain_water_desc){ .gfx = app->gfx, .ecs = app->ecs, .world = app->world,
+                                                                   .quality = d->water, .fog_density = fog_density,
+                                                                   /* a world made by hand has no generated sea */
+                                                                   .no_sea = d->generate != NULL })))
+        goto fail;
     app_spawn_player(app);
     game_tools_init(&app->tools);
     app->loading = true;
@@ -385,6 +392,7 @@ void game_app_destroy(game_app *app) {
     if (app->store) app_save(app, true);
     terrain_store_destroy(app->store);
     grass_destroy(app->grass);               /* its patches live on the terrain's entities */
+    terrain_water_destroy(app->water);
     if (app->terrain) terrain_ecs_destroy(app->terrain);
     terrain_clipmap_destroy(app->clipmap);
     terrain_renderer_destroy(app->renderer);
@@ -582,6 +590,7 @@ bool game_app_frame(game_app *app) {
     uint64_t drawing = core_time_ns();
     terrain_ecs_draw(app->terrain, app->renderer, &app->view);
     if (app->grass) grass_draw(app->grass, &app->view);
+    if (app->water) terrain_water_draw(app->water, app->terrain, app->renderer, &app->view);
     app_draw_hud(app);
     uint64_t drawn = core_time_ns();
     double cpu_ms = (double)(drawn - now) * 1e-6, engine_ms = (double)(drawing - now) * 1e-6;

@@ -68,6 +68,7 @@ typedef struct game_app_desc {
     bool no_terrain_detail;           /* the ground without its 1 m detail layer
                                          (terrain_renderer_desc.detail_distance < 0) */
     terrain_shadow_quality shadows;   /* the sun's shadow map (terrain.h); 0 = low */
+    terrain_water_quality water;      /* the sea and lakes (terrain.h, terrain_water); 0 = low */
     bool no_head_bob;                 /* the view without the walking dip (game_player_bob) */
     bool no_occlusion;                /* terrain lit without its ambient occlusion
                                          (terrain_renderer_desc.no_occlusion) */

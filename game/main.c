@@ -2,7 +2,8 @@
  *
  *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT | --tour] [--record FILE]
  *         [--replay FILE] [--bindings FILE] [--screenshot FILE] [--radius R] [--levels N]
- *         [--memory MB] [--grass off|low|high] [--shadows off|low|high] [--detail on|off] [--threads N]
+ *         [--memory MB] [--grass off|low|high] [--water off|low|high] [--shadows off|low|high]
+ *         [--detail on|off] [--threads N]
  *         [--trace FILE] [--world DIR] [--at X,Y,Z] [--look YAW,PITCH]
  *
  * In a window: WASD or the left stick to walk, the mouse (click to capture, Escape to let go) or
@@ -32,7 +33,7 @@
 
 typedef struct options {
     core_common_args common;
-    const char *size, *screenshot, *walk, *record, *replay, *bindings, *world, *grass, *shadows, *detail, *at,
+    const char *size, *screenshot, *walk, *record, *replay, *bindings, *world, *grass, *water, *shadows, *detail, *at,
         *look;
     int seed, frames, radius, levels, memory_mb;
     bool headless, tour, no_head_bob, no_ao;
@@ -91,6 +92,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "radius", CORE_OPTION_INT, &o->radius, "R", "full-detail chunks of 32 m each way (default 2)", 1, 32 },
         { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
         { "grass", CORE_OPTION_STRING, &o->grass, "off|low|high", "grass patches (default low)" },
+        { "water", CORE_OPTION_STRING, &o->water, "off|low|high", "the sea and lakes (default low)" },
         { "detail", CORE_OPTION_STRING, &o->detail, "on|off", "the ground's 1 m detail layer and scale blend (default on)" },
         { "shadows", CORE_OPTION_STRING, &o->shadows, "off|low|high", "sun shadows (default low)" },
         { "memory", CORE_OPTION_INT, &o->memory_mb, "MB", "memory budget for terrain (default 384)", 16, 65536 },
@@ -116,6 +118,10 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
     if (o->grass && !grass_parse_quality(o->grass, &desc->grass)) {
         snprintf(error, sizeof error, "'%s' is not off, low or high", o->grass);
         return bad_value(&cli, "grass", error);
+    }
+    if (o->water && !terrain_water_parse_quality(o->water, &desc->water)) {
+        snprintf(error, sizeof error, "'%s' is not off, low or high", o->water);
+        return bad_value(&cli, "water", error);
     }
     if (o->detail && strcmp(o->detail, "on") != 0 && strcmp(o->detail, "off") != 0) {
         snprintf(error, sizeof error, "'%s' is not on or off", o->detail);

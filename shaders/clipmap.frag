@@ -18,6 +18,7 @@ uniform vec3 u_texture_offset;        // camera position modulo the textures' pe
 uniform float u_sea_level;            // the shore band of the renderer
 uniform float u_snow_height;
 uniform float u_water_level;          // the generator's sea level: water fills below it
+uniform float u_water_drawn;          // 1: terrain_water draws the sea over this; no tint here
 uniform float u_sand_max_slope, u_sand_depth;
 uniform vec2 u_edge_fade;             // Chebyshev distance where the fade to the sky starts, ends
 uniform vec2 u_far_fade;              // the same in distance, before the far plane
@@ -93,7 +94,7 @@ void main() {
     // The sea: the surface stays on the ground (the meshes' sea bed meets it at the hole), and
     // ground under water takes the water's colour, deeper blue with depth, lit as a flat surface.
     float depth = u_water_level - v_height;
-    if (depth > 0.0) {
+    if (depth > 0.0 && u_water_drawn == 0.0) {
         float cover = 1.0 - exp(-depth / 3.0);
         albedo = mix(albedo, mix(WATER_SHALLOW, WATER_DEEP, 1.0 - exp(-depth / 25.0)), cover);
         n = normalize(mix(n, vec3(0.0, 1.0, 0.0), cover));

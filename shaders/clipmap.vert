@@ -24,6 +24,7 @@ const int MAX_HOLES = 8;           // TERRAIN_CLIPMAP_MAX_HOLES: one per viewer'
 uniform vec4 u_holes[MAX_HOLES];   // the holes, camera-relative: min x, min z, max x, max z
 uniform int u_hole_count;          // how many of them are set
 uniform float u_hole_band, u_hole_depth;
+uniform vec4 u_clip_plane;         // camera-relative: keeps dot((p, 1), plane) ≥ 0; zero = off
 
 out vec3 v_relative_position;      // to the camera
 out vec3 v_normal;
@@ -81,5 +82,6 @@ void main() {
     v_relative_position = vec3(position.x, height - sink - u_camera_y, position.y);
     v_normal = normal;
     v_height = height;
+    gl_ClipDistance[0] = dot(vec4(v_relative_position, 1.0), u_clip_plane);
     gl_Position = u_view_projection * vec4(v_relative_position, 1.0);
 }

@@ -1,56 +1,16 @@
 #version 450 core
 // sky.frag — the sky seen along each pixel's view ray: gradient and sun (common.glsl), and a
-// layer of procedural clouds that drifts with time (002 §4.2's sky dome: noise clouds over the
-// scene; here the noise is evaluated per pixel on a plane above the world instead of a texture,
-// so there is no seam or pole to hide).
+// layer of procedural clouds that drifts with time (sky.glsl).
 
 #include "common.glsl"
+#include "sky.glsl"
 
 in vec2 v_ndc;
 uniform mat4 u_inverse_view_projection;
-uniform float u_cloud_cover;       // 0 = clear sky (no clouds at all), 1 = overcast
-uniform float u_time;              // seconds: the clouds drift with it
 out vec4 frag_color;
-
-float cloud_hash(vec2 p) {
-    p = fract(p * vec2(0.1031, 0.1030));
-    p += dot(p, p.yx + 33.33);
-    return fract((p.x + p.y) * p.x);
-}
-
-float cloud_noise(vec2 p) {
-    vec2 i = floor(p), f = fract(p);
-    f = f * f * (3.0 - 2.0 * f);
-    float a = cloud_hash(i), b = cloud_hash(i + vec2(1, 0));
-    float c = cloud_hash(i + vec2(0, 1)), d = cloud_hash(i + vec2(1, 1));
-    return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
-}
-
-float cloud_fbm(vec2 p) {
-    float sum = 0.0, amplitude = 0.5;
-    for (int octave = 0; octave < 5; octave++) {
-        sum += amplitude * cloud_noise(p);
-        p = p * 2.03 + vec2(17.1, 9.2);
-        amplitude *= 0.5;
-    }
-    return sum;
-}
-
-vec3 add_clouds(vec3 sky, vec3 direction) {
-    if (u_cloud_cover <= 0.0 || direction.y <= 0.01) return sky;
-    // Where the ray meets a cloud plane 1 km up, in kilometres, moved by a steady wind.
-    vec2 plane = direction.xz / direction.y + vec2(0.012, 0.004) * u_time;
-    float density = cloud_fbm(plane * 1.5);
-    float cover = smoothstep(1.0 - u_cloud_cover, 1.05 - u_cloud_cover * 0.6, density);
-    // Thin out towards the horizon, where the plane's far cells would alias.
-    cover *= smoothstep(0.02, 0.25, direction.y);
-    float lit = 0.75 + 0.25 * max(dot(u_sun_direction, vec3(0, 1, 0)), 0.0);
-    vec3 cloud = mix(vec3(0.78, 0.80, 0.85), vec3(1.0), density) * lit;
-    return mix(sky, cloud, cover * 0.9);
-}
 
 void main() {
     vec4 far = u_inverse_view_projection * vec4(v_ndc, 1.0, 1.0);
     vec3 direction = normalize(far.xyz / far.w - u_camera_position);
-    frag_color = vec4(add_clouds(sky_color(direction), direction), 1.0);
+    frag_color = vec4(sky_with_clouds(direction, 5), 1.0);
 }

@@ -14,6 +14,8 @@ uniform mat4 u_view_projection;              // camera at the origin
 uniform vec3 u_offset;                       // mesh origin − camera position
 uniform vec3 u_texture_offset;               // mesh origin modulo the texture period
 uniform float u_mesh_y;                      // mesh origin's world height (bands are absolute)
+uniform vec4 u_clip_plane;                   // camera-relative: keeps dot((p, 1), plane) ≥ 0;
+                                             // all zero = nothing clipped (water's passes)
 
 out vec3 v_relative_position;                // to the camera
 out vec3 v_texture_position;                 // for the triplanar projections
@@ -32,5 +34,6 @@ void main() {
     v_openness = 1.0 - a_occlusion;
     v_height = a_position.y + u_mesh_y;
     v_macro = macro_sample(v_texture_position);
+    gl_ClipDistance[0] = dot(vec4(relative, 1.0), u_clip_plane);
     gl_Position = u_view_projection * vec4(relative, 1.0);
 }

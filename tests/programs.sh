@@ -28,7 +28,7 @@ expect() {
   fi
 }
 
-for program in bench trace_report hello_systems hello_scene hello_terrain hello_edit hello_grass world; do
+for program in bench trace_report hello_systems hello_scene hello_terrain hello_edit hello_grass hello_water world; do
   p=$bin/$program
   expect "$program: unknown flag" 2 "unknown option '--no-such-flag'.*" -- "$p" --no-such-flag
   expect "$program: usage on error" 2 "usage: $program" -- "$p" --no-such-flag
@@ -186,8 +186,19 @@ expect "hello_grass: headless run" 0 "hello_grass: [1-9][0-9]* patches, [1-9][0-
   "$bin/hello_grass" --headless --size 96x64 --frames 4 --grass low --screenshot "$tmp/grass.png"
 expect "hello_grass: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 -N4 "$tmp/grass.png"
 expect "hello_grass: bad --grass" 2 "bad value for '--grass'" -- "$bin/hello_grass" --grass lush
+
+# The water example: a lake drawn headless at each quality; bad qualities refused.
+for quality in low high; do
+  expect "hello_water: headless run ($quality)" 0 "hello_water: water $quality, [1-9][0-9]* planes drawn" -- \
+    "$bin/hello_water" --headless --size 96x64 --frames 4 --water $quality --screenshot "$tmp/water.png"
+done
+expect "hello_water: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 -N4 "$tmp/water.png"
+expect "hello_water: off draws no plane" 0 "hello_water: water off, 0 planes drawn" -- \
+  "$bin/hello_water" --headless --size 96x64 --frames 2 --water off
+expect "hello_water: bad --water" 2 "bad value for '--water'" -- "$bin/hello_water" --water deep
 expect "world: bad --grass" 2 "bad value for '--grass': 'lush' is not off, low or high" -- "$bin/world" --grass lush
 expect "world: --grass without value" 2 "option '--grass' needs a value" -- "$bin/world" --grass
+expect "world: bad --water" 2 "bad value for '--water': 'deep' is not off, low or high" -- "$bin/world" --water deep
 expect "world: bad --detail" 2 "bad value for '--detail': 'high' is not on or off" -- "$bin/world" --detail high
 expect "world: bad --shadows" 2 "bad value for '--shadows': 'soft' is not off, low or high" -- "$bin/world" --shadows soft
 expect "world: bad --shadows gets the usage" 2 "usage: world" -- "$bin/world" --shadows soft

@@ -1317,4 +1317,82 @@ typedef struct WaterPlane {
     terrain_water_plane planes[TERRAIN_WATER_PLANES_MAX];
 } WaterPlane;
 
+/* ---- drawing water (terrain_water.c; 002 §3.4, 004 §4.3) ----------------------------------
+ *
+ * The sea (one plane at the generation's sea_level, out to the view's far distance, so it
+ * reaches the horizon beyond the far terrain) and the lakes (the WaterPlane components whose
+ * height is above the sea's), drawn over the opaque frame:
+ *
+ *     terrain_water *water = terrain_water_create(&(terrain_water_desc){
+ *         .gfx = gfx, .ecs = ecs, .world = world, .quality = TERRAIN_WATER_LOW });
+ *     each frame:
+ *         terrain_ecs_draw(te, renderer, &view);       // ground, far terrain, sky
+ *         grass_draw(grass, &view);                    // everything opaque first
+ *         terrain_water_draw(water, te, renderer, &view);
+ *     terrain_water_destroy(water);                    // main thread, before gfx_destroy
+ *
+ * Low (the default: no extra scene pass, for llvmpipe): the opaque frame's colour and depth are
+ * copied to textures, and each surface samples them. Refraction is the copy at a position
+ * distorted by a dudv map, masked by depth: where the scene at the distorted position lies in
+ * front of the surface (something above the water), the undistorted position is used, so
+ * nothing above the water leaks into it and the shore has no halo. Reflection is the sky along
+ * the reflected ray (as sky.frag draws it) plus the sun's highlight on a scrolling normal map.
+ * High: the sea's reflection comes from a pass of its own (the camera mirrored about the sea,
+ * what lies under it clipped, half resolution; pass "water.reflection"), and its refraction
+ * from another (what lies above it clipped, half resolution; "water.refraction"); lakes keep
+ * the low path. A Schlick Fresnel term blends the two; the thickness of water along the view
+ * ray (from the scene's depth) darkens and greens deep water, keeps shallow water clear and
+ * less reflective, and fades the surface out towards the shore (no hard line). Below the
+ * surface (terrain_world_water_at at the camera) the surface is seen from underneath (total
+ * internal reflection past the critical angle) and a water fog tints the frame. The surfaces
+ * are drawn in a pass named "water". While no water shows (an occlusion query of the previous
+ * frame: all of it behind hills or out of view), the surfaces are only probed, depth-tested
+ * with no colour, and nothing is copied or shaded; water that comes into view appears a frame
+ * later. Off: nothing drawn, no cost. A lake's plane covers the
+ * cells of its row mask and one cell around them (the ground and the shore's fade draw the
+ * waterline there, not the cells' square edges). */
+typedef enum terrain_water_quality {
+    TERRAIN_WATER_DEFAULT = 0,        /* low */
+    TERRAIN_WATER_OFF,                /* nothing drawn */
+    TERRAIN_WATER_LOW,                /* the frame's copy refracted; the sky reflected */
+    TERRAIN_WATER_HIGH,               /* the sea's reflection and refraction passes */
+} terrain_water_quality;
+
+/* Parses "off", "low" or "high" (--water); false for anything else. */
+bool terrain_water_parse_quality(const char *text, terrain_water_quality *out);
+const char *terrain_water_quality_name(terrain_water_quality quality);
+
+/* Zero means the default for every field. */
+typedef struct terrain_water_desc {
+    gfx_context *gfx;                 /* required */
+    terrain_world *world;             /* required: the sea level, and whether the camera is under
+                                         water */
+    ecs_world *ecs;                   /* the world terrain_ecs_create registered on; NULL = the
+                                         sea alone, no lakes */
+    terrain_water_quality quality;
+    float fog_density;                /* as terrain_renderer_desc's; 0 = the renderer's */
+    float cloud_cover;                /* as terrain_renderer_desc's; 0 = the renderer's */
+    bool no_sea;                      /* lakes only (hand-made worlds with no sea) */
+} terrain_water_desc;
+
+typedef struct terrain_water terrain_water;
+
+/* NULL (the reason logged) when a required field is missing or the shaders do not build. */
+terrain_water *terrain_water_create(const terrain_water_desc *desc);
+void terrain_water_destroy(terrain_water *water);
+/* Changes the quality (passes' targets made or freed now); false, unchanged, when they cannot be. */
+bool terrain_water_set_quality(terrain_water *water, terrain_water_quality quality);
+/* Draws the water over the frame drawn so far into the default framebuffer (after
+ * terrain_ecs_draw and the grass), with the same view. `te` gives the lakes and the high
+ * quality's meshes; NULL = the sea alone, its passes with the far terrain and sky only. */
+void terrain_water_draw(terrain_water *water, terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view);
+
+typedef struct terrain_water_stats {
+    int planes_drawn;                 /* surfaces the last draw drew (the sea counts one) */
+    bool under_water;                 /* the last draw's camera was below a surface */
+    double cpu_ms;                    /* CPU ms of the last draw; on llvmpipe its GPU work too,
+                                         and the frame's before it (the copy waits for it) */
+} terrain_water_stats;
+terrain_water_stats terrain_water_stats_get(const terrain_water *water);
+
 #endif

@@ -325,6 +325,24 @@ void terrain__shadows_bind(const terrain__shadows *shadows, gfx_context *gfx, ui
 
 /* ==== end of the shadows section ========================================================== */
 
+/* ==== the renderer's scene for water's passes (terrain_render.c, terrain_water.c) ========== */
+
+/* Draws the meshes, the far terrain and the sky as terrain_renderer_draw does, but into the
+ * framebuffer and pass the caller opened, without shadows, and keeping only what lies where
+ * dot((p − camera, 1), clip_plane) ≥ 0 (camera-relative; all zero keeps everything; the sky is
+ * never clipped): water's reflection and refraction passes. Main thread. */
+void terrain__renderer_draw_clipped(terrain_renderer *renderer, const terrain_view *view,
+                                    const terrain_gpu_mesh *meshes, int mesh_count, const float clip_plane[4]);
+/* Whether terrain_water draws the sea over the frame: the far terrain then leaves out its own
+ * tint of the ground under the sea (clipmap.frag), which would show through the shore's fade.
+ * Takes effect from the next frame drawn; terrain_water_draw sets it every call (off clears
+ * it), and it outlives the water object. */
+void terrain__renderer_set_water_drawn(terrain_renderer *renderer, bool drawn);
+float terrain__renderer_fog_density(const terrain_renderer *renderer);
+float terrain__renderer_cloud_cover(const terrain_renderer *renderer);   /* 0 = a clear sky */
+
+/* ==== end of the water section ============================================================ */
+
 /* ==== editing: columns, stabilization, brushes (terrain_columns.c, terrain_stabilize.c,
  * terrain_brush.c) ============================================================================ */
 

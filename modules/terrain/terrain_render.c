@@ -30,6 +30,8 @@ struct terrain_renderer {
     double texture_ms;                    /* how long the textures took to make */
     terrain__shadows *shadows;            /* NULL with shadows off */
     bool shadows_drawn;                   /* terrain_renderer_draw_shadows ran for the next draw */
+    bool water_drawn;                     /* terrain_water draws the sea: the far terrain leaves
+                                             its own tint of the sea out */
 };
 
 /* ---- procedural material textures ---- */
@@ -227,7 +229,8 @@ static double terrain_wrap(double value, double period) { return value - floor(v
 
 /* The far terrain after the meshes, so that the depth test drops its pit under them early, and
  * before the sky, which fills only what nothing covered. */
-static void terrain_draw_clipmap(terrain_renderer *r, const terrain_view *view, mat4 view_projection) {
+static void terrain_draw_clipmap(terrain_renderer *r, const terrain_view *view, mat4 view_projection,
+                                 const terrain__shadows *shadows) {
     gfx_context *gfx = r->gfx;
     float texture_offset[3];
     for (int a = 0; a < 3; a++) texture_offset[a] = (float)terrain_wrap(view->camera[a], TERRAIN_TEXTURE_PERIOD);
@@ -239,7 +242,8 @@ static void terrain_draw_clipmap(terrain_renderer *r, const terrain_view *view, 
     gfx_uniform_float(gfx, r->clipmap, "u_snow_height", r->desc.snow_height);
     gfx_uniform_vec3(gfx, r->clipmap, "u_bedrock_mean", r->material_means[0]);
     gfx_uniform_vec3(gfx, r->clipmap, "u_sand_mean", r->material_means[1]);
-    terrain__shadows_bind(r->shadows, gfx, r->clipmap.id, TERRAIN_SHADOW_UNIT);
+    gfx_uniform_float(gfx, r->clipmap, "u_water_drawn", r->water_drawn ? 1.0f : 0.0f);
+    terrain__shadows_bind(shadows, gfx, r->clipmap.id, TERRAIN_SHADOW_UNIT);
     terrain__clipmap_draw(r->far_terrain, gfx, r->clipmap.id, view);
 }
 
@@ -252,25 +256,26 @@ void terrain_renderer_draw_shadows(terrain_renderer *r, const terrain_view *view
     r->shadows_drawn = true;
 }
 
-void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,
-                           int mesh_count) {
-    TRACE_ZONE("terrain_renderer_draw");
+/* The meshes, the far terrain and the sky into the bound framebuffer with `view`, shadows from
+ * `shadows` (NULL: none), keeping only what lies on the positive side of the camera-relative
+ * `clip_plane` (all zero: everything; the sky is never clipped). */
+static void terrain_draw_scene(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,
+                               int mesh_count, const float clip_plane[4], const terrain__shadows *shadows) {
     gfx_context *gfx = r->gfx;
-    if (!r->shadows_drawn) terrain_renderer_draw_shadows(r, view, meshes, mesh_count);
-    r->shadows_drawn = false;
     mat4 view_projection, inverse;
     terrain_view_projection(view, view_projection);
     glm_mat4_inv(view_projection, inverse);
     vec3 sun;
     terrain_view_sun(view, sun);
     const float zero[3] = { 0, 0, 0 };
-
-    gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "terrain", .clear_depth = true });
+    bool clipped = clip_plane[0] != 0 || clip_plane[1] != 0 || clip_plane[2] != 0 || clip_plane[3] != 0;
+    if (clipped) glEnable(GL_CLIP_DISTANCE0);
     gfx_program programs[3] = { r->terrain, r->sky, r->clipmap };
     for (int p = 0; p < 3; p++) {
         gfx_uniform_vec3(gfx, programs[p], "u_sun_direction", sun);
         gfx_uniform_vec3(gfx, programs[p], "u_camera_position", zero);
         gfx_uniform_float(gfx, programs[p], "u_fog_density", r->desc.fog_density);
+        gfx_uniform_vec4(gfx, programs[p], "u_clip_plane", clip_plane);
     }
     gfx_program_use(gfx, r->terrain);
     gfx_uniform_mat4(gfx, r->terrain, "u_view_projection", (const float *)view_projection);
@@ -280,7 +285,7 @@ void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const 
     gfx_uniform_float(gfx, r->terrain, "u_detail_distance", r->desc.detail_distance);
     terrain_material_uniforms(r, r->terrain);
     gfx_uniform_float(gfx, r->terrain, "u_occlusion", r->desc.no_occlusion ? 0.0f : 1.0f);
-    terrain__shadows_bind(r->shadows, gfx, r->terrain.id, TERRAIN_SHADOW_UNIT);
+    terrain__shadows_bind(shadows, gfx, r->terrain.id, TERRAIN_SHADOW_UNIT);
     for (int i = 0; i < mesh_count; i++) {
         const terrain_gpu_mesh *m = &meshes[i];
         if (m->index_count == 0) continue;
@@ -296,11 +301,32 @@ void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const 
         gfx_draw(&(gfx_draw_desc){ .vertex_array = { m->vertex_array }, .count = m->index_count,
                                    .index_type = GFX_INDEX_U32 });
     }
-    if (r->far_terrain) terrain_draw_clipmap(r, view, view_projection);
+    if (r->far_terrain) terrain_draw_clipmap(r, view, view_projection, shadows);
+    if (clipped) glDisable(GL_CLIP_DISTANCE0);     /* sky.vert writes no clip distance */
     gfx_program_use(gfx, r->sky);
     gfx_uniform_mat4(gfx, r->sky, "u_inverse_view_projection", (const float *)inverse);
     gfx_uniform_float(gfx, r->sky, "u_cloud_cover", r->desc.cloud_cover);
     gfx_uniform_float(gfx, r->sky, "u_time", view->time);
     gfx_draw(&(gfx_draw_desc){ .vertex_array = r->empty, .count = 3 });
-    gfx_pass_end(gfx);
 }
+
+void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,
+                           int mesh_count) {
+    TRACE_ZONE("terrain_renderer_draw");
+    if (!r->shadows_drawn) terrain_renderer_draw_shadows(r, view, meshes, mesh_count);
+    r->shadows_drawn = false;
+    gfx_pass_begin(r->gfx, &(gfx_pass_desc){ .name = "terrain", .clear_depth = true });
+    terrain_draw_scene(r, view, meshes, mesh_count, (const float[4]){ 0, 0, 0, 0 }, r->shadows);
+    gfx_pass_end(r->gfx);
+}
+
+void terrain__renderer_draw_clipped(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,
+                                    int mesh_count, const float clip_plane[4]) {
+    TRACE_ZONE("terrain_renderer_draw_clipped");
+    terrain_draw_scene(r, view, meshes, mesh_count, clip_plane, NULL);
+}
+
+void terrain__renderer_set_water_drawn(terrain_renderer *r, bool drawn) { r->water_drawn = drawn; }
+
+float terrain__renderer_fog_density(const terrain_renderer *r) { return r->desc.fog_density; }
+float terrain__renderer_cloud_cover(const terrain_renderer *r) { return r->desc.cloud_cover; }
