@@ -370,9 +370,7 @@ game_app *game_app_create(const game_app_desc *desc) {
         goto fail;
     if (d->water != TERRAIN_WATER_OFF &&
         !(app->water = terrain_water_create(&(terrain_water_desc){ .gfx = app->gfx, .ecs = app->ecs, .world = app->world,
-                                                                   .quality = d->water, .fog_density = fog_density,
-                                                                   /* a world made by hand has no generated sea */
-                                                                   .no_sea = d->generate != NULL })))
+                                                                   .quality = d->water, .fog_density = fog_density })))
         goto fail;
     app_spawn_player(app);
     game_tools_init(&app->tools);

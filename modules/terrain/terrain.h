@@ -208,6 +208,9 @@ bool terrain_world_has(terrain_world *world, terrain_chunk_coord coord);
 /* Changes terrain_world_desc.max_chunks (0 = 4096); the next trim applies it. */
 void terrain_world_set_max_chunks(terrain_world *world, size_t max_chunks);
 const terrain_generation_params *terrain_world_generation(const terrain_world *world);
+/* Whether the world has a sea at generation.sea_level (terrain_world_desc.sea): generated worlds
+ * always, hand-made ones when asked. The water renderer draws it; edits let it in. */
+bool terrain_world_has_sea(const terrain_world *world);
 /* Material at a world point (generating its chunk if needed). */
 terrain_material terrain_world_material_at(terrain_world *world, double x, double y, double z);
 /* The top of the highest solid layer (terrain_stacks_top) of the column under world (x, z). */
@@ -1372,7 +1375,6 @@ typedef struct terrain_water_desc {
     terrain_water_quality quality;
     float fog_density;                /* as terrain_renderer_desc's; 0 = the renderer's */
     float cloud_cover;                /* as terrain_renderer_desc's; 0 = the renderer's */
-    bool no_sea;                      /* lakes only (hand-made worlds with no sea) */
 } terrain_water_desc;
 
 typedef struct terrain_water terrain_water;

@@ -378,7 +378,7 @@ static void water_draw_lakes(terrain_water *w, gfx_program p, const water_frame 
             float side = wp->cell * TERRAIN_MESH_CELLS;
             for (int k = 0; k < wp->count && k < TERRAIN_WATER_PLANES_MAX; k++) {
                 const terrain_water_plane *plane = &wp->planes[k];
-                if (!w->desc.no_sea && plane->height <= sea_level + WATER_LAKE_ABOVE_SEA) continue;
+                if (terrain_world_has_sea(w->desc.world) && plane->height <= sea_level + WATER_LAKE_ABOVE_SEA) continue;
                 float y = (float)(plane->height - wp->origin[1]);
                 if (!terrain_frustum_sees(&frustum, wp->origin, (const float[3]){ 0, y - 0.01f, 0 },
                                           (const float[3]){ side, y + 0.01f, side }))
@@ -438,7 +438,7 @@ static void water_draw_surfaces(terrain_water *w, const water_frame *f, terrain_
     }
     GLuint query = w->queries[w->query_next];
     glBeginQuery(GL_ANY_SAMPLES_PASSED, query);
-    if (!w->desc.no_sea) water_draw_sea(w, p, f, sea_level);
+    if (terrain_world_has_sea(w->desc.world)) water_draw_sea(w, p, f, sea_level);
     water_draw_lakes(w, p, f, sea_level);
     glEndQuery(GL_ANY_SAMPLES_PASSED);
     w->query_issued[w->query_next] = true;
@@ -451,7 +451,7 @@ static void water_draw_surfaces(terrain_water *w, const water_frame *f, terrain_
 
 void terrain_water_draw(terrain_water *w, terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view) {
     w->stats = (terrain_water_stats){ 0 };
-    terrain__renderer_set_water_drawn(renderer, w->desc.quality != TERRAIN_WATER_OFF && !w->desc.no_sea);
+    terrain__renderer_set_water_drawn(renderer, w->desc.quality != TERRAIN_WATER_OFF && terrain_world_has_sea(w->desc.world));
     if (w->desc.quality == TERRAIN_WATER_OFF) return;
     TRACE_ZONE("terrain_water_draw");
     uint64_t start = core_time_ns();
@@ -465,7 +465,7 @@ void terrain_water_draw(terrain_water *w, terrain_ecs *te, terrain_renderer *ren
     int width, height;
     gfx_size(gfx, &width, &height);
     bool shade = w->stats.under_water || water_seen_last_frame(w);
-    f.high = shade && !w->desc.no_sea && w->desc.quality == TERRAIN_WATER_HIGH && !w->stats.under_water &&
+    f.high = shade && terrain_world_has_sea(w->desc.world) && w->desc.quality == TERRAIN_WATER_HIGH && !w->stats.under_water &&
              view->camera[1] > sea_level && water_pass_targets(w, width, height);
     if (f.high) water_sea_passes(w, te, renderer, view, sea_level);
 

@@ -352,6 +352,8 @@ float terrain_world_top(terrain_world *world, double x, double z) {
     return terrain_stacks_top(stacks, i, k);
 }
 
+bool terrain_world_has_sea(const terrain_world *world) { return world->sea; }
+
 bool terrain_world_water_at(terrain_world *world, double x, double z, float *surface, float *ground) {
     int i, k;
     const terrain_stacks *stacks = column_at(world, x, z, &i, &k);

@@ -58,9 +58,9 @@ typedef struct sea {
     terrain_view view;
 } sea;
 
-/* 3 × 3 chunks around chunk (0, 0), mesh layers from −32 m to +32 m, the sea at 0 m; a frame of
- * `scale` times WIDTH × HEIGHT. */
-static void sea_open_scaled(sea *s, sea_kind kind, terrain_view view, int scale) {
+/* 3 × 3 chunks around chunk (0, 0), mesh layers from −32 m to +32 m, the sea at 0 m (drawn when
+ * has_sea: terrain_world_desc.sea); a frame of `scale` times WIDTH × HEIGHT. */
+static void sea_open_scaled(sea *s, sea_kind kind, terrain_view view, int scale, bool has_sea) {
     memset(s, 0, sizeof *s);
     s->kind = kind;
     s->width = WIDTH * scale, s->height = HEIGHT * scale;
@@ -71,7 +71,7 @@ static void sea_open_scaled(sea *s, sea_kind kind, terrain_view view, int scale)
     terrain_generation_params generation = terrain_generation_defaults(5);
     generation.sea_level = 0;
     s->world = terrain_world_create(&(terrain_world_desc){ .generation = generation, .generate = sea_chunk,
-                                                           .generate_user = &s->kind });
+                                                           .generate_user = &s->kind, .sea = has_sea });
     s->te = terrain_ecs_create(s->ecs, s->world);
     s->renderer = terrain_renderer_create(s->gfx, &(terrain_renderer_desc){
         .sea_level = 0, .cloud_cover = -1, .shadows = TERRAIN_SHADOWS_OFF, .no_occlusion = true });
@@ -81,7 +81,7 @@ static void sea_open_scaled(sea *s, sea_kind kind, terrain_view view, int scale)
     s->view = view;
 }
 
-static void sea_open(sea *s, sea_kind kind, terrain_view view) { sea_open_scaled(s, kind, view, 1); }
+static void sea_open(sea *s, sea_kind kind, terrain_view view) { sea_open_scaled(s, kind, view, 1, true); }
 
 static void sea_close(sea *s) {
     terrain_ecs_destroy(s->te);
@@ -217,7 +217,7 @@ Test(render_water, nothing_above_the_water_leaks_into_the_refraction) {
     sea_kind kinds[2] = { SEA_DEEP, SEA_BLOCK };
     for (int k = 0; k < 2; k++) {
         sea s;
-        sea_open_scaled(&s, kinds[k], view, 4);
+        sea_open_scaled(&s, kinds[k], view, 4, true);
         dry[k] = sea_frame(&s, NULL);
         terrain_water *water = sea_water(&s, TERRAIN_WATER_LOW);
         wet[k] = sea_frame(&s, water);
@@ -379,10 +379,10 @@ Test(render_water, a_lake_plane_covers_its_cells_only) {
     sea s;
     /* The shallow world's sea is at 0 m; the lake plane floats at 0.5 m over the west half of
      * chunk (0, 0), which is "above the sea" and so drawn as a lake, with no sea. */
-    sea_open(&s, SEA_SHALLOW, (terrain_view){ .camera = { 16, 30, 16 }, .pitch = -1.5f });
+    sea_open_scaled(&s, SEA_SHALLOW, (terrain_view){ .camera = { 16, 30, 16 }, .pitch = -1.5f }, 1, false);
     render_image dry = sea_frame(&s, NULL);
     terrain_water *water = terrain_water_create(&(terrain_water_desc){
-        .gfx = s.gfx, .ecs = s.ecs, .world = s.world, .no_sea = true });
+        .gfx = s.gfx, .ecs = s.ecs, .world = s.world });
     cr_assert_not_null(water);
     ecs_component plane_c = ecs_component_lookup(s.ecs, "WaterPlane");
     cr_assert_neq(plane_c, 0);

@@ -16,7 +16,6 @@
 #include <stdio.h>
 
 #define LAKE_LEVEL 8.0f
-#define LAKE_CELL 4.0f                   /* metres per cell of the lake's WaterPlane */
 static const double lake_centre[2] = { 16, 16 };
 
 /* A bowl 6 m deep at the centre rising to a flat rim at 14 m, gently rolling. */
@@ -35,20 +34,6 @@ static void basin_column(void *user, int64_t x, int64_t z, terrain_stacks_builde
 
 static terrain_stacks *basin_chunk(void *user, terrain_chunk_coord coord) {
     return terrain_stacks_from_columns(coord, basin_column, user);
-}
-
-/* The lake's surface as a WaterPlane entity: 32 × 32 cells of 4 m around the basin, each marked
- * where the world has water on top. (The mesh phase attaches such components to the chunks
- * itself once it finds water planes; this example makes its own so it shows a lake today.) */
-static void lake_plane(ecs_world *ecs, terrain_world *world) {
-    WaterPlane plane = { .origin = { lake_centre[0] - 64, 0, lake_centre[1] - 64 }, .cell = LAKE_CELL, .count = 1 };
-    plane.planes[0] = (terrain_water_plane){ .height = LAKE_LEVEL, .deepest = 2 };
-    for (int k = 0; k < TERRAIN_MESH_CELLS; k++)
-        for (int i = 0; i < TERRAIN_MESH_CELLS; i++) {
-            double x = plane.origin[0] + (i + 0.5) * LAKE_CELL, z = plane.origin[2] + (k + 0.5) * LAKE_CELL;
-            if (terrain_world_water_at(world, x, z, NULL, NULL)) plane.planes[0].rows[k] |= 1u << i;
-        }
-    ecs_set(ecs, ecs_entity_create(ecs), ecs_component_lookup(ecs, "WaterPlane"), &plane);
 }
 
 int main(int argc, char **argv) {
@@ -88,11 +73,11 @@ int main(int argc, char **argv) {
     terrain_ecs *terrain = terrain_ecs_create(ecs, world);
     terrain_ecs_spawn_area(terrain, 0, 0, 2, 0, 0);
     terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = LAKE_LEVEL });
-    /* The water: one call; the lake is its WaterPlane, and there is no sea in this world. */
+    /* The water: one call. The mesh phase gives the chunks that hold the lake's surface a
+     * WaterPlane; a world made by hand has no sea (terrain_world_desc.sea). */
     terrain_water *water = terrain_water_create(&(terrain_water_desc){ .gfx = gfx, .ecs = ecs, .world = world,
-                                                                       .quality = water_level, .no_sea = true });
+                                                                       .quality = water_level });
     if (!renderer || !water) return 1;
-    lake_plane(ecs, world);
 
     int status = 0;
     if (!frames && gfx_backend_get(gfx) == GFX_BACKEND_OFFSCREEN) frames = 60;
