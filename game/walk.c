@@ -348,6 +348,7 @@ const char game_walk_tour[] =
     "0 0 shot\n"                 /* where the player stands */
     "0 50 shot\n"                /* 50 m on */
     "cave 150 shot\n"            /* into the nearest cave or under the nearest arch */
+    "shore 150 shot\n"           /* out over the nearest water from its shore */
     "0 60 fly y=120 shot\n";     /* back over the walk and up 120 m */
 
 /* ---- cave stops -------------------------------------------------------------------------------- */

@@ -131,8 +131,9 @@ typedef struct game_walk {
 
 /* The tour `world --tour` takes (and tools/play with no display): from the spawn into the most
  * open view on foot, flying over what it cannot walk round, a look into the nearest cave or under
- * the nearest arch, then up 120 m for the view to the horizon; a picture at each of its four
- * stops (three where no cave is found). A waypoint file's text. */
+ * the nearest arch, a look out over the nearest water from its shore (within 150 m of the cave's
+ * view), then up 120 m for the view to the horizon; a picture at each of its five stops (fewer
+ * where no cave or no shore is found). A waypoint file's text. */
 extern const char game_walk_tour[];
 
 /* Turns each `cave R` waypoint into a flight to a view into the nearest cave or arch within R
