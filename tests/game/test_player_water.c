@@ -245,6 +245,29 @@ Test(player_water, diving_goes_down_and_letting_go_comes_back_up) {
     terrain_world_destroy(world);
 }
 
+/* Let go 3 m under the float height: back up, settled, and never above it, at any frame rate
+ * (the spring is solved exactly over each step, not integrated). */
+Test(player_water, the_float_settles_without_overshoot_at_20_60_and_144_hz) {
+    water_world w = { .kind = DEEP };
+    terrain_world *world = water_world_create(&w);
+    const float rates[] = { 20.0f, 60.0f, 144.0f };
+    for (int r = 0; r < 3; r++) {
+        game_player pl;
+        game_player_init(&pl, NULL);
+        game_player_spawn(&pl, world, 0.5, 0.5);
+        pl.position[1] -= 3.0;
+        double highest = -1e9;
+        float dt = 1.0f / rates[r];
+        for (int i = 0; i < (int)lroundf(5.0f * rates[r]); i++) {
+            game_player_update(&pl, world, &IDLE, dt);
+            highest = fmax(highest, eye_y(&pl));
+        }
+        cr_expect_float_eq(eye_y(&pl), EYE_AFLOAT, 0.005, "%.0f Hz: eye at %.4f after 5 s", rates[r], eye_y(&pl));
+        cr_expect_leq(highest, EYE_AFLOAT + 0.002, "%.0f Hz: overshot to %.4f", rates[r], highest);
+    }
+    terrain_world_destroy(world);
+}
+
 Test(player_water, flying_ignores_the_water) {
     water_world w = { .kind = DEEP };
     terrain_world *world = water_world_create(&w);
