@@ -49,10 +49,11 @@
  * dive_speed; jump (Space) rises at dive_speed; letting go floats back up. So it touches the sea
  * bed only where the water is shallower than its floating depth (eye_height − swim_eye_above) or
  * when it dives on purpose. It stops swimming where its feet stand on the bed less than
- * swim_depth under the surface (a beach: wading), or once its feet are out of the water. At a
- * shore steeper than a walkable slope whose top is at most climb_out_height above the surface, a
- * swimmer heading into it climbs out (`climbing`: rises at dive_speed while pressing on, to a
- * little over the top, moves over it and lands; letting go of the move input ends the climb).
+ * swim_depth under the surface (a beach: wading), or once its feet are out of the water. Heading
+ * into a shore whose ground, within 1.6 m ahead, rises more than step_height above its feet but
+ * at most climb_out_height above the surface, a swimmer climbs out (`climbing`: rises at
+ * dive_speed while pressing on, to a little over the top, moves over it and lands; letting go of
+ * the move input ends the climb); a higher shore is a cliff it stays under.
  * Flying ignores water. The state says in_water, swimming and eye_under_water (for the renderer's
  * tint) after each update.
  *
