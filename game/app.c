@@ -471,9 +471,10 @@ static void app_draw_hud(game_app *app) {
              (double)s.resident_bytes / (1024.0 * 1024.0));
     double look[2];
     app_look_degrees(app->view.yaw, app->view.pitch, look);   /* as --at and --look take them */
-    snprintf(lines[count++], sizeof lines[0], "x %.1f y %.1f z %.1f  yaw %.0f pitch %.0f  seed %llu",
+    const game_player *pl = &app->player;
+    snprintf(lines[count++], sizeof lines[0], "x %.1f y %.1f z %.1f  yaw %.0f pitch %.0f  seed %llu%s",
              app->view.camera[0], app->view.camera[1], app->view.camera[2], look[0], look[1],
-             (unsigned long long)app->desc.seed);
+             (unsigned long long)app->desc.seed, pl->swimming ? "  swimming" : pl->in_water && !pl->flying ? "  wading" : "");
     if (app->interactive) snprintf(lines[count++], sizeof lines[0], "%s", game_tools_hint(&app->tools));
     /* Shrink to the corner: a smaller scale, then fewer lines. */
     for (; count > 0; count--) {
@@ -563,8 +564,11 @@ static void app_finish_loading(game_app *app) {
     app->loading = false;
     app->play_start_ns = core_time_ns();
     if (app->desc.walk) {
-        int caves = game_walk_resolve_caves(&app->walk, app->world, &app->player);
-        if (caves) printf("world: %d look%s into a cave or under an arch on the walk\n", caves, caves == 1 ? "" : "s");
+        game_walk_found found = game_walk_resolve_stops(&app->walk, app->world, &app->player);
+        if (found.caves)
+            printf("world: %d look%s into a cave or under an arch on the walk\n", found.caves, found.caves == 1 ? "" : "s");
+        if (found.shores)
+            printf("world: %d look%s over water from a shore on the walk\n", found.shores, found.shores == 1 ? "" : "s");
         game_walker_start(&app->walker, app->desc.walk, &app->player);
     }
     gfx_window_set_title(app->gfx, "world");

@@ -234,6 +234,65 @@ static void walk_substep(const mover *m, float p[3], float v[3], bool *on_ground
     if (*on_ground) v[1] = 0.0f;
 }
 
+/* Moves v[0 … n) towards target by at most step (a negative step: all the way). */
+static void approach(float *v, const float *target, int n, float step) {
+    float d2 = 0.0f;
+    for (int i = 0; i < n; i++) d2 += (target[i] - v[i]) * (target[i] - v[i]);
+    float scale = step < 0.0f || d2 <= step * step ? 1.0f : step / sqrtf(d2);
+    for (int i = 0; i < n; i++) v[i] += (target[i] - v[i]) * scale;
+}
+
+/* ---- water (player.h: the model; issue 15) ---------------------------------------------------- */
+
+/* What a frame in water asks of its substeps, in the frame's local coordinates. */
+typedef struct swim_plan {
+    float float_eye;             /* the height the eye floats at: the surface + swim_eye_above */
+    float eye_height;            /* the eye over the feet */
+    int vertical;                /* −1 dive (crouch held), +1 rise (jump held), 0 float */
+    float climb_to;              /* the feet's height over a shore being climbed; NaN: none */
+    float wish[2];               /* the horizontal velocity asked for (x, z) */
+} swim_plan;
+
+/* The vertical motion of a floating player over h seconds, from its eye's offset x0 above the
+ * float height and velocity v[1]. Within speed/ω of the height it is the critically damped spring
+ * x'' = −2ωx' − ω²x, solved exactly: x(h) = (x0 + (v0 + ωx0)h)·e^(−ωh), so it settles without
+ * overshoot or jitter however long the step (a player arriving at the zone's edge at `speed` has
+ * v0 + ωx0 = 0 and decays as a pure exponential). Farther away the velocity eases towards `speed`
+ * in the height's direction. Returns the rise of the feet. */
+static float swim_float(const game_player_params *pr, float x0, float speed, float v[3], float h) {
+    float w = pr->buoyancy_rate;
+    if (fabsf(x0) * w <= speed) {
+        float decay = expf(-w * h), c = v[1] + w * x0;
+        v[1] = (v[1] - w * c * h) * decay;
+        return (x0 + c * h) * decay - x0;
+    }
+    float target = x0 < 0.0f ? speed : -speed;
+    approach(&v[1], &target, 1, pr->swim_accel * h);
+    return v[1] * h;
+}
+
+/* One substep in water (at most r/2 long, as walking's). Returns whether the feet stand on the bed
+ * (a walkable contact under them). Collision is walking's: the bed lifts, walls push sideways. */
+static bool swim_substep(const mover *m, const swim_plan *s, float p[3], float v[3], float h) {
+    const game_player_params *pr = m->params;
+    float rise;
+    if (!isnan(s->climb_to)) {
+        /* climbing out: up the shore while pressing on, then level until over its top */
+        v[0] = s->wish[0], v[2] = s->wish[1];
+        v[1] = p[1] < s->climb_to ? pr->dive_speed : 0.0f;
+        rise = v[1] * h;
+    } else if (s->vertical < 0) {
+        float target = -pr->dive_speed;
+        approach(&v[1], &target, 1, pr->swim_accel * h);
+        rise = v[1] * h;
+    } else {
+        float speed = s->vertical > 0 ? pr->dive_speed : pr->float_speed;
+        rise = swim_float(pr, p[1] + s->eye_height - s->float_eye, speed, v, h);
+    }
+    p[0] += v[0] * h, p[1] += rise, p[2] += v[2] * h;
+    return resolve(m, p, v, true).ground;
+}
+
 /* ---- the frame ------------------------------------------------------------------------------ */
 
 static float or_default(float value, float fallback) { return value > 0.0f ? value : fallback; }
@@ -262,6 +321,19 @@ void game_player_init(game_player *player, const game_player_params *params) {
     p.fly_accel = or_default(p.fly_accel, 120.0f);
     p.bob_amplitude = or_default(p.bob_amplitude, 0.05f);
     p.max_dt = or_default(p.max_dt, 0.1f);
+    p.swim_depth = or_default(p.swim_depth, 1.2f);
+    p.wade_slowdown = or_default(p.wade_slowdown, 0.5f);
+    p.swim_eye_above = or_default(p.swim_eye_above, 0.1f);
+    p.swim_speed = or_default(p.swim_speed, 3.0f);
+    p.swim_sprint_speed = or_default(p.swim_sprint_speed, 5.0f);
+    p.dive_speed = or_default(p.dive_speed, 2.5f);
+    p.float_speed = or_default(p.float_speed, 1.5f);
+    p.buoyancy_rate = or_default(p.buoyancy_rate, 4.0f);
+    p.swim_accel = or_default(p.swim_accel, 10.0f);
+    p.climb_out_height = or_default(p.climb_out_height, 1.0f);
+    if (p.wade_slowdown > 1.0f) p.wade_slowdown = 1.0f;
+    /* a floating player must stay deeper than swim_depth, or it would stop swimming at once */
+    p.swim_depth = fminf(p.swim_depth, fmaxf(p.eye_height - p.swim_eye_above - 0.1f, 0.1f));
     if (p.crouch_height > p.height) p.crouch_height = p.height;
     if (p.crouch_height < 2.0f * p.radius) p.crouch_height = 2.0f * p.radius;
     player->params = p;
@@ -278,19 +350,16 @@ void game_player_eye(const game_player *player, double eye[3]) {
     eye[2] = player->position[2];
 }
 
-/* Moves v[0 … n) towards target by at most step (a negative step: all the way). */
-static void approach(float *v, const float *target, int n, float step) {
-    float d2 = 0.0f;
-    for (int i = 0; i < n; i++) d2 += (target[i] - v[i]) * (target[i] - v[i]);
-    float scale = step < 0.0f || d2 <= step * step ? 1.0f : step / sqrtf(d2);
-    for (int i = 0; i < n; i++) v[i] += (target[i] - v[i]) * scale;
+float game_player_wade_share(const game_player_params *params, float depth) {
+    if (!(depth > 0.0f)) return 1.0f;
+    return 1.0f - params->wade_slowdown * fminf(depth / params->swim_depth, 1.0f);
 }
 
 #define BOB_STRIDE 1.2f                /* metres a half cycle: a dip per step */
 
 float game_player_bob(const game_player *player) {
     const game_player_params *p = &player->params;
-    if (player->flying || !player->on_ground || p->bob_amplitude <= 0.0f) return 0.0f;
+    if (player->flying || player->swimming || !player->on_ground || p->bob_amplitude <= 0.0f) return 0.0f;
     float speed = hypotf(player->velocity[0], player->velocity[2]);
     float share = fminf(speed / p->sprint_speed, 1.0f);
     return p->bob_amplitude * share * fabsf(sinf(player->bob_phase * 3.14159265f));
@@ -316,10 +385,87 @@ static void wish_velocity(const game_player *pl, const input_actions *a, float o
         out[2] = (-cy * cp * my + sy * mx) * speed;
         return;
     }
-    float speed = pl->crouching ? p->crouch_speed : down(a, INPUT_ACTION_SPRINT) ? p->sprint_speed : p->walk_speed;
+    bool sprint = down(a, INPUT_ACTION_SPRINT);
+    float speed = pl->crouching ? p->crouch_speed : sprint ? p->sprint_speed : p->walk_speed;
+    if (pl->swimming) speed = sprint ? p->swim_sprint_speed : p->swim_speed;   /* the view's yaw only */
+    else if (pl->in_water)             /* wading: no sprint, slower the deeper */
+        speed = (pl->crouching ? p->crouch_speed : p->walk_speed) * game_player_wade_share(p, pl->water_depth);
     out[0] = (sy * my + cy * mx) * speed;
     out[1] = 0.0f;
     out[2] = (-cy * my + sy * mx) * speed;
+}
+
+/* Feet this far under the ground top of a column with water on it are in a cave below the water,
+ * not in it (the field's rounding puts feet on a sloping bed up to ~0.5 m under its column's top). */
+#define WATER_CAVE_MARGIN 1.0
+
+/* The water state at the player's position now: in_water, water_surface, water_depth and
+ * eye_under_water, then whether the next frame swims. A swimmer goes on swimming until its feet
+ * stand on the bed less than swim_depth under the surface or leave the water; a walker starts
+ * once deeper than swim_depth. Both rules at swim_depth, but a floating swimmer's feet are
+ * eye_height − swim_eye_above deep, deeper than swim_depth, so only the bed ends a swim. */
+static void water_refresh(game_player *pl, terrain_world *world) {
+    const game_player_params *p = &pl->params;
+    float surface = 0.0f, ground = 0.0f;
+    double feet = pl->position[1];
+    bool wet = terrain_world_water_at(world, pl->position[0], pl->position[2], &surface, &ground) &&
+               feet < (double)surface && feet >= (double)ground - WATER_CAVE_MARGIN;
+    double eye[3];
+    game_player_eye(pl, eye);
+    pl->in_water = wet;
+    pl->water_surface = wet ? surface : 0.0f;
+    pl->water_depth = wet ? (float)((double)surface - feet) : 0.0f;
+    pl->eye_under_water = wet && eye[1] < (double)surface;
+    if (pl->flying || !wet) pl->swimming = false;
+    else if (pl->swimming) pl->swimming = !(pl->on_ground && pl->water_depth < p->swim_depth);
+    else pl->swimming = pl->water_depth > p->swim_depth;
+}
+
+/* A shore a swimmer climbs out onto: along the horizontal wish, the first of the columns at
+ * r + 0.25, r + 0.75 and r + 1.25 m from the axis whose ground rises more than a step above the
+ * feet. Its top, when at most climb_out_height above the surface, in world metres; NaN otherwise
+ * (open water, or a cliff: the swimmer stays in the water below it). */
+static float swim_climb_top(const game_player *pl, terrain_world *world, const float wish[3]) {
+    const game_player_params *p = &pl->params;
+    float speed = hypotf(wish[0], wish[2]);
+    if (!(speed > 0.0f)) return NAN;
+    for (int k = 0; k < 3; k++) {
+        double d = (double)p->radius + 0.25 + 0.5 * k;
+        float top = terrain_world_top(world, pl->position[0] + (double)(wish[0] / speed) * d,
+                                      pl->position[2] + (double)(wish[2] / speed) * d);
+        if ((double)top <= pl->position[1] + (double)p->step_height) continue;
+        return top <= pl->water_surface + p->climb_out_height ? top : NAN;
+    }
+    return NAN;
+}
+
+/* Margin a climbing swimmer rises above the shore's column top before moving over it, so that it
+ * lands on the top rather than on its rounded edge. */
+#define CLIMB_CLEARANCE 0.25f
+#define CLIMB_SPARE_SECONDS 1.5f   /* a climb may take this longer than its rise at dive_speed */
+
+/* Whether this frame climbs: a swimmer heading into a shore it can climb starts (player.h); a
+ * climb goes on while the move input holds, within its time, until the feet are over the shore's
+ * top (checked after the move, climb_done). */
+static bool climb_begin(game_player *pl, terrain_world *world, const input_actions *a, const float wish[3]) {
+    const game_player_params *p = &pl->params;
+    bool moving = wish[0] != 0.0f || wish[2] != 0.0f;
+    if (pl->climbing && (!moving || pl->climb_time <= 0.0f)) pl->climbing = false;
+    if (pl->climbing || !pl->swimming || down(a, INPUT_ACTION_CROUCH)) return pl->climbing;
+    float top = swim_climb_top(pl, world, wish);
+    if (isnan(top)) return false;
+    pl->climbing = true;
+    pl->climb_top = top;
+    pl->climb_time = (float)((double)top + CLIMB_CLEARANCE - pl->position[1]) / p->dive_speed + CLIMB_SPARE_SECONDS;
+    return true;
+}
+
+/* After a climbing frame: over the shore (the column under the feet reaches its top, and the feet
+ * are above it), the climb is done and the player lands (walking, or wading on a shelf). */
+static void climb_done(game_player *pl, terrain_world *world, float dt) {
+    pl->climb_time -= dt;
+    float under = terrain_world_top(world, pl->position[0], pl->position[2]);
+    if (under >= pl->climb_top - 0.5f && pl->position[1] >= (double)under) pl->climbing = false;
 }
 
 static void update(game_player *pl, terrain_world *world, const input_actions *a, float dt, bool ask_region) {
@@ -333,28 +479,33 @@ static void update(game_player *pl, terrain_world *world, const input_actions *a
         pl->flying = !pl->flying;
         pl->velocity[0] = pl->velocity[1] = pl->velocity[2] = 0.0f;
         pl->on_ground = false;
+        if (pl->flying) pl->swimming = pl->climbing = false;
     }
     if (dt == 0.0f) return;
 
     float wish[3];
-    bool want_crouch = !pl->flying && down(a, INPUT_ACTION_CROUCH);
+    bool swimming = pl->swimming;      /* as the last update left the water state */
+    bool want_crouch = !pl->flying && !swimming && down(a, INPUT_ACTION_CROUCH);   /* swimming: dive */
     if (want_crouch) pl->crouching = true;   /* shrinking always fits */
     wish_velocity(pl, a, wish);
     float v[3] = { pl->velocity[0], pl->velocity[1], pl->velocity[2] };
     if (pl->flying) approach(v, wish, 3, p->fly_accel < 0.0f ? -1.0f : p->fly_accel * dt);
     else {
         float horizontal[2] = { v[0], v[2] }, target[2] = { wish[0], wish[2] };
-        float accel = pl->on_ground ? p->ground_accel : p->air_accel;
+        float accel = swimming ? p->swim_accel : pl->on_ground ? p->ground_accel : p->air_accel;
         approach(horizontal, target, 2, accel < 0.0f ? -1.0f : accel * dt);
         v[0] = horizontal[0], v[2] = horizontal[1];
     }
-    if (!pl->flying && pl->on_ground && pressed(a, INPUT_ACTION_JUMP)) {
+    if (!pl->flying && !swimming && pl->on_ground && pressed(a, INPUT_ACTION_JUMP)) {
         v[1] = p->jump_speed;
         pl->on_ground = false;
     }
+    /* water takes most of a fall's speed at once: a dive from a cliff goes a metre or so under */
+    if (swimming) v[1] = fmaxf(v[1], -2.0f * p->dive_speed);
 
     /* the box this frame can reach: the capsule, the move, a step, pushes, and the cell around */
-    float speed_bound = sqrtf(v[0] * v[0] + v[2] * v[2]) + fabsf(v[1]) + (pl->flying ? 0.0f : p->gravity * dt);
+    float speed_bound = sqrtf(v[0] * v[0] + v[2] * v[2]) + fabsf(v[1]) + (pl->flying ? 0.0f : p->gravity * dt) +
+                        (swimming || pl->climbing ? p->dive_speed + p->swim_sprint_speed : 0.0f);
     float reach = speed_bound * dt + p->step_height + p->radius + 1.0f;
     int64_t origin[3];
     float feet[3];
@@ -391,6 +542,17 @@ static void update(game_player *pl, terrain_world *world, const input_actions *a
         pl->crouching = false;
         m.height = p->height;
     }
+    bool climbing = !pl->flying && climb_begin(pl, world, a, wish);
+    swim_plan plan = { .climb_to = NAN };
+    if (swimming || climbing) {
+        double eye[3];
+        game_player_eye(pl, eye);
+        plan.eye_height = (float)(eye[1] - pl->position[1]);
+        plan.float_eye = (float)((double)pl->water_surface + (double)p->swim_eye_above - (double)origin[1]);
+        plan.vertical = down(a, INPUT_ACTION_CROUCH) ? -1 : down(a, INPUT_ACTION_JUMP) ? 1 : 0;
+        plan.wish[0] = wish[0], plan.wish[1] = wish[2];
+        if (climbing) plan.climb_to = (float)((double)pl->climb_top - (double)origin[1]) + CLIMB_CLEARANCE;
+    }
 
     int substeps = (int)ceilf(speed_bound * dt / (0.5f * p->radius));
     if (substeps < 1) substeps = 1;
@@ -401,6 +563,8 @@ static void update(game_player *pl, terrain_world *world, const input_actions *a
         if (pl->flying) {
             for (int i = 0; i < 3; i++) feet[i] += v[i] * h;
             resolve(&m, feet, v, false);
+        } else if (swimming || climbing) {
+            on_ground = swim_substep(&m, &plan, feet, v, h);
         } else {
             walk_substep(&m, feet, v, &on_ground, h);
         }
@@ -409,8 +573,10 @@ static void update(game_player *pl, terrain_world *world, const input_actions *a
 
     pl->on_ground = !pl->flying && on_ground;
     memcpy(pl->velocity, v, sizeof v);
-    if (pl->on_ground) pl->bob_phase = fmodf(pl->bob_phase + hypotf(v[0], v[2]) * dt / BOB_STRIDE, 2.0f);
+    if (pl->on_ground && !swimming) pl->bob_phase = fmodf(pl->bob_phase + hypotf(v[0], v[2]) * dt / BOB_STRIDE, 2.0f);
     for (int i = 0; i < 3; i++) pl->position[i] = (double)origin[i] + (double)feet[i];
+    if (climbing) climb_done(pl, world, dt);
+    water_refresh(pl, world);
 }
 
 void game_player_update(game_player *player, terrain_world *world, const input_actions *actions, float dt) {
@@ -434,6 +600,14 @@ static bool column_dry(terrain_world *world, int64_t gx, int64_t gz) {
     float top, surface;
     column_heights(world, gx, gz, &top, &surface);
     return surface <= top;
+}
+
+/* Swimming at rest at the float height (within a millimetre). */
+static bool spawn_afloat(const game_player *pl) {
+    double eye[3];
+    game_player_eye(pl, eye);
+    double rest = (double)pl->water_surface + (double)pl->params.swim_eye_above;
+    return pl->swimming && fabs(eye[1] - rest) < 1e-3 && fabsf(pl->velocity[1]) < 1e-2f;
 }
 
 void game_player_spawn(game_player *player, terrain_world *world, double x, double z) {
@@ -467,9 +641,16 @@ void game_player_spawn(game_player *player, terrain_world *world, double x, doub
     player->position[0] = cx;
     player->position[1] = (double)highest + 1.0;
     player->position[2] = cz;
-    /* fall onto it with the controller itself (the same collision as walking) */
+    /* no dry land near: afloat where the water is deep enough, else on its bed as on land */
+    float surface;
+    if (terrain_world_water_at(world, cx, cz, &surface, NULL)) {
+        double afloat = (double)surface + (double)params.swim_eye_above - (double)params.eye_height;
+        player->position[1] = fmax(player->position[1], afloat);
+    }
+    water_refresh(player, world);
+    /* fall onto it (or settle afloat) with the controller itself (the same collision as walking) */
     input_actions idle = { 0 };
-    for (int frame = 0; frame < SPAWN_FRAMES && !player->on_ground; frame++)
+    for (int frame = 0; frame < SPAWN_FRAMES && !player->on_ground && !spawn_afloat(player); frame++)
         update(player, world, &idle, 1.0f / 60.0f, false);
     player->velocity[0] = player->velocity[1] = player->velocity[2] = 0.0f;
 }

@@ -1,6 +1,6 @@
 /* player.h — the first-person player controller of the walkable world: walking with gravity,
- * jump, sprint and crouch, a capsule colliding with the terrain's implicit field, and a fly mode
- * for inspection.
+ * jump, sprint and crouch, a capsule colliding with the terrain's implicit field, wading and
+ * swimming in water, and a fly mode for inspection.
  *
  *     terrain_world *world = terrain_world_create(&(terrain_world_desc){
  *         .generation = terrain_generation_defaults(42) });
@@ -34,6 +34,28 @@
  * Motion eases: the horizontal velocity moves towards what the input asks by at most
  * ground_accel·dt a frame on the ground (air_accel in the air, so a jump keeps most of its
  * momentum and can be steered a little), the whole velocity by fly_accel·dt when flying.
+ *
+ * Water (issue 15). Water is a material layer of the stacks (000 §3.1) that the field, and so the
+ * collision, does not see; terrain_world_water_at says where a surface lies over the column under
+ * the feet. With the feet under it by d (the immersion), and d below swim_depth (the water under
+ * the chest), the player wades: it walks, jumps and crouches as on land, but its gait is the walk
+ * speed (the sprint does not apply in water) times game_player_wade_share(d) = 1 −
+ * wade_slowdown·min(d / swim_depth, 1): 1 on dry land, 0.79 at 0.5 m, 0.5 at the chest. Deeper
+ * it swims: no gravity; it moves in the horizontal plane of the look direction at swim_speed
+ * (sprint: swim_sprint_speed), easing at swim_accel; it floats with its eye swim_eye_above the
+ * surface. The float is a critically damped spring within speed/ω of that height (ω =
+ * buoyancy_rate; solved exactly each substep, so it settles without overshoot or jitter at any
+ * frame rate), and farther away a steady rise at float_speed. Crouch (C, Ctrl) dives at
+ * dive_speed; jump (Space) rises at dive_speed; letting go floats back up. So it touches the sea
+ * bed only where the water is shallower than its floating depth (eye_height − swim_eye_above) or
+ * when it dives on purpose. It stops swimming where its feet stand on the bed less than
+ * swim_depth under the surface (a beach: wading), or once its feet are out of the water. Heading
+ * into a shore whose ground, within 1.6 m ahead, rises more than step_height above its feet but
+ * at most climb_out_height above the surface, a swimmer climbs out (`climbing`: rises at
+ * dive_speed while pressing on, to a little over the top, moves over it and lands; letting go of
+ * the move input ends the climb); a higher shore is a cliff it stays under.
+ * Flying ignores water. The state says in_water, swimming and eye_under_water (for the renderer's
+ * tint) after each update.
  *
  * Streaming: before a frame's motion, params.region_ready (when set) is asked whether the box the
  * frame will read is available; if not, the player does not move at all that frame (no walking,
@@ -79,6 +101,19 @@ typedef struct game_player_params {
     float bob_amplitude;              /* head bob on the ground at a sprint, metres; 0 = 0.05,
                                          negative = none (game_player_bob) */
     float max_dt;                     /* longer frames are clamped to this; 0 = 0.1 s */
+    /* Water (see the model above). */
+    float swim_depth;                 /* immersion from which the player swims; 0 = 1.2 m (the
+                                         chest); at most eye_height − swim_eye_above − 0.1 */
+    float wade_slowdown;              /* share of the walk speed lost at swim_depth; 0 = 0.5 */
+    float swim_eye_above;             /* the floating eye over the surface; 0 = 0.1 m */
+    float swim_speed;                 /* 0 = 3 m/s */
+    float swim_sprint_speed;          /* 0 = 5 m/s */
+    float dive_speed;                 /* down with crouch, up with jump, climbing out; 0 = 2.5 m/s */
+    float float_speed;                /* rising with nothing held; 0 = 1.5 m/s */
+    float buoyancy_rate;              /* ω of the float at the surface; 0 = 4 /s (settles in ~1.5 s) */
+    float swim_accel;                 /* easing in water; 0 = 10 m/s² */
+    float climb_out_height;           /* a shore this far above the surface is climbed onto;
+                                         0 = 1 m */
     /* Whether the terrain inside [min, max] (world metres) may be read now. NULL = always
      * (terrain_world generates what it lacks synchronously). */
     bool (*region_ready)(void *user, const double min[3], const double max[3]);
@@ -93,6 +128,15 @@ typedef struct game_player {
     bool on_ground, crouching, flying;
     bool waiting;                     /* the last update did not move: region not ready */
     float bob_phase;                  /* strides walked on the ground, for the head bob */
+    /* Water, as the last update left it (flying included). */
+    bool in_water;                    /* the feet under a water surface (wading or swimming) */
+    bool swimming;                    /* floating, diving or climbing out (never while flying) */
+    bool eye_under_water;             /* game_player_eye lies under the surface */
+    float water_surface;              /* that surface's height when in_water, world metres */
+    float water_depth;                /* the feet's immersion under it; 0 out of water */
+    bool climbing;                    /* climbing out of the water onto a shore */
+    float climb_top;                  /* while climbing: that shore's ground top, world metres */
+    float climb_time;                 /* while climbing: seconds it may still take */
 } game_player;
 
 /* Fills in the defaults; the player stands at the origin, not spawned. */
@@ -100,9 +144,9 @@ void game_player_init(game_player *player, const game_player_params *params);
 /* Puts the player on solid ground at or near column (x, z): on top of the highest solid layer of
  * the column (never in a cave), settled so that the capsule touches the surface f = 0 without
  * intersecting it. Columns under water are avoided: the nearest dry column within 64 m is taken
- * instead; with none, the player stands on the sea floor of (x, z) (water is air to the
- * collision; there is no swimming yet). Velocity zeroed, walking mode. Reads the world directly
- * (region_ready is not asked). */
+ * instead; with none, the player floats at the surface of (x, z) (or stands on its bed where the
+ * water is shallow). Velocity zeroed, not flying. Reads the world directly (region_ready is not
+ * asked). */
 void game_player_spawn(game_player *player, terrain_world *world, double x, double z);
 /* The most open view from where the player stands: of GAME_PLAYER_VIEW_DIRECTIONS yaws, the one
  * whose skyline (the steepest angle up to the ground top along the view, sampled every 8 m out
@@ -122,5 +166,8 @@ void game_player_eye(const game_player *player, double eye[3]);
 float game_player_bob(const game_player *player);
 /* The capsule's current height (crouched or standing). */
 float game_player_height(const game_player *player);
+/* The share of its gait a wading player keeps with its feet `depth` metres under the surface:
+ * 1 − wade_slowdown·min(depth / swim_depth, 1); 1 for depth ≤ 0. */
+float game_player_wade_share(const game_player_params *params, float depth);
 
 #endif

@@ -174,21 +174,24 @@ static bool point_words(parser *p, const char *rest, const char *end, game_walk_
     return true;
 }
 
-/* `cave R [words]`: resolved later (game_walk_resolve_caves), so only shot may follow. */
-static bool cave_line(parser *p, const char *rest, const char *end) {
+/* `cave R [words]` or `shore R [words]` (`kind`): resolved later (game_walk_resolve_stops), so
+ * only shot may follow. */
+static bool found_line(parser *p, const char *kind, const char *rest, const char *end) {
     game_walk_point point = { 0 };
     token value, word;
     double radius;
-    if (!next_token(&rest, end, &value)) return FAIL(p, "cave needs a radius (metres)");
-    if (!decimal(value, &radius)) return FAIL(p, "cave: '%.*s' is not a number", QUOTED(value));
-    if (!(radius >= 1.0 && radius <= 1000.0)) return FAIL(p, "cave: '%.*s' is out of range (1 ... 1000 m)", QUOTED(value));
+    if (!next_token(&rest, end, &value)) return FAIL(p, "%s needs a radius (metres)", kind);
+    if (!decimal(value, &radius)) return FAIL(p, "%s: '%.*s' is not a number", kind, QUOTED(value));
+    if (!(radius >= 1.0 && radius <= 1000.0))
+        return FAIL(p, "%s: '%.*s' is out of range (1 ... 1000 m)", kind, QUOTED(value));
     while (next_token(&rest, end, &word)) {
-        if (!is(word, "shot")) return FAIL(p, "cave: unknown word '%.*s' (only shot; the flight and the view are found)",
-                                           QUOTED(word));
+        if (!is(word, "shot"))
+            return FAIL(p, "%s: unknown word '%.*s' (only shot; the flight and the view are found)", kind, QUOTED(word));
         if (point.shot) return FAIL(p, "'shot' given twice");
         point.shot = true;
     }
-    point.cave_radius = (float)radius;
+    if (strcmp(kind, "cave") == 0) point.cave_radius = (float)radius;
+    else point.shore_radius = (float)radius;
     if (p->walk.count >= GAME_WALK_MAX_POINTS) return FAIL(p, "more than %d waypoints", GAME_WALK_MAX_POINTS);
     p->walk.points = core_grow(p->walk.points, &p->capacity, (size_t)p->walk.count + 1, sizeof point);
     p->walk.points[p->walk.count++] = point;
@@ -221,7 +224,8 @@ static bool line(parser *p, const char *begin, const char *end) {
     if (!next_token(&at, end, &first)) return true;     /* blank or a comment */
     char c = first.text[0];
     if ((c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.') return waypoint(p, first, at, end);
-    if (is(first, "cave")) return cave_line(p, at, end);
+    if (is(first, "cave")) return found_line(p, "cave", at, end);
+    if (is(first, "shore")) return found_line(p, "shore", at, end);
     return directive(p, first, at, end);
 }
 
@@ -344,6 +348,7 @@ const char game_walk_tour[] =
     "0 0 shot\n"                 /* where the player stands */
     "0 50 shot\n"                /* 50 m on */
     "cave 150 shot\n"            /* into the nearest cave or under the nearest arch */
+    "shore 150 shot\n"           /* out over the nearest water from its shore */
     "0 60 fly y=120 shot\n";     /* back over the walk and up 120 m */
 
 /* ---- cave stops -------------------------------------------------------------------------------- */
@@ -369,26 +374,53 @@ static void to_walk_frame(const game_walk *walk, const double origin[3], float y
     }
 }
 
-int game_walk_resolve_caves(game_walk *walk, terrain_world *world, const game_player *player) {
+/* The flight a found view asks for: its eye as a `fly y=H` waypoint in the walk's frame (the feet
+ * an eye height under it), facing the view for the picture. */
+static void view_point(const game_walk *walk, const game_walker *frame, const game_player *player, const double eye[3],
+                       float yaw, float pitch, game_walk_point *point) {
+    double feet[3] = { eye[0], eye[1] - (double)player->params.eye_height, eye[2] };
+    to_walk_frame(walk, frame->origin, frame->origin_yaw, feet, point);
+    point->fly = point->has_y = point->has_look = true;
+    point->look_yaw = yaw, point->look_pitch = pitch;
+    point->cave_radius = point->shore_radius = 0.0f;
+}
+
+/* A `cave R` or `shore R` point resolved against the world from `centre`; false (with a notice)
+ * when there is nothing to see within R. */
+static bool resolve_found(game_walk *walk, const game_walker *frame, terrain_world *world, const game_player *player,
+                          const double centre[3], int index, game_walk_point *point) {
+    if (point->cave_radius > 0.0f) {
+        game_cave_view view;
+        if (!game_find_cave_view(world, centre[0], centre[2], point->cave_radius, &view)) {
+            core_info("walk", "no cave or arch within %.0f m of waypoint %d: that stop is skipped",
+                      (double)point->cave_radius, index);
+            return false;
+        }
+        view_point(walk, frame, player, view.eye, view.yaw, view.pitch, point);
+        return true;
+    }
+    game_shore_view view;
+    if (!game_find_shore_view(world, centre[0], centre[2], point->shore_radius, &view)) {
+        core_info("walk", "no shore within %.0f m of waypoint %d: that stop is skipped", (double)point->shore_radius,
+                  index);
+        return false;
+    }
+    view_point(walk, frame, player, view.eye, view.yaw, view.pitch, point);
+    return true;
+}
+
+game_walk_found game_walk_resolve_stops(game_walk *walk, terrain_world *world, const game_player *player) {
     game_walker frame = { .walk = walk, .origin_yaw = player->yaw };   /* target()'s frame */
     memcpy(frame.origin, player->position, sizeof frame.origin);
-    int found = 0, kept = 0;
+    game_walk_found found = { 0 };
+    int kept = 0;
     double centre[3] = { player->position[0], player->position[1], player->position[2] };
     for (int i = 0; i < walk->count; i++) {
         game_walk_point point = walk->points[i];
-        if (point.cave_radius > 0.0f) {
-            game_cave_view view;
-            if (!game_find_cave_view(world, centre[0], centre[2], point.cave_radius, &view)) {
-                core_info("walk", "no cave or arch within %.0f m of waypoint %d: that stop is skipped",
-                         (double)point.cave_radius, i);
-                continue;
-            }
-            double feet[3] = { view.eye[0], view.eye[1] - (double)player->params.eye_height, view.eye[2] };
-            to_walk_frame(walk, frame.origin, frame.origin_yaw, feet, &point);
-            point.fly = point.has_y = point.has_look = true;
-            point.look_yaw = view.yaw, point.look_pitch = view.pitch;
-            point.cave_radius = 0.0f;
-            found++;
+        bool cave = point.cave_radius > 0.0f, shore = point.shore_radius > 0.0f;
+        if (cave || shore) {
+            if (!resolve_found(walk, &frame, world, player, centre, i, &point)) continue;
+            found.caves += cave, found.shores += shore;
         }
         walk->points[kept++] = point;
         frame.walk = walk;
@@ -401,6 +433,10 @@ int game_walk_resolve_caves(game_walk *walk, terrain_world *world, const game_pl
         walk->count = kept;
     }
     return found;
+}
+
+int game_walk_resolve_caves(game_walk *walk, terrain_world *world, const game_player *player) {
+    return game_walk_resolve_stops(walk, world, player).caves;
 }
 
 /* ---- the walker -------------------------------------------------------------------------------- */
@@ -439,17 +475,29 @@ static void target(const game_walker *w, int i, double out[3]) {
     }
 }
 
-/* What the player's speed is on this leg (player.c: sprint is a held button, fly has its own). */
-static float gait_speed(const game_player *pl, const game_walk_point *p) {
+/* What the player's speed is on this leg on dry land (player.c: sprint is a held button, fly has
+ * its own). */
+static float dry_gait_speed(const game_player *pl, const game_walk_point *p) {
     const game_player_params *pr = &pl->params;
     if (p->fly) return p->walk ? pr->fly_speed : pr->fly_sprint_speed;
     return p->walk ? pr->walk_speed : pr->sprint_speed;
 }
 
-/* Horizontally within the radius; also vertically for `fly y=H`. An unresolved `cave` line
- * (game_walk_resolve_caves never ran) is passed over at once. */
+/* ... and where the player is now (player.h: wading walks slower and never sprints; swimming has
+ * its own speeds; flying ignores water). */
+static float gait_speed(const game_player *pl, const game_walk_point *p) {
+    const game_player_params *pr = &pl->params;
+    if (p->fly || pl->flying || !pl->in_water) return dry_gait_speed(pl, p);
+    if (pl->swimming) return p->walk ? pr->swim_speed : pr->swim_sprint_speed;
+    return pr->walk_speed * game_player_wade_share(pr, pl->water_depth);
+}
+
+static bool unresolved(const game_walk_point *p) { return p->cave_radius > 0.0f || p->shore_radius > 0.0f; }
+
+/* Horizontally within the radius; also vertically for `fly y=H`. An unresolved `cave` or `shore` line
+ * (game_walk_resolve_stops never ran) is passed over at once. */
 static bool reached(const game_walker *w, const game_player *pl, int i) {
-    if (w->walk->points[i].cave_radius > 0.0f) return true;
+    if (unresolved(&w->walk->points[i])) return true;
     double t[3];
     target(w, i, t);
     double dx = t[0] - pl->position[0], dz = t[2] - pl->position[2], d2 = dx * dx + dz * dz;
@@ -472,7 +520,7 @@ static void start_leg(game_walker *w, const game_player *pl) {
     target(w, w->index, t);
     double length = hypot(t[0] - pl->position[0], t[2] - pl->position[2]);
     if (p->has_y) length = hypot(length, t[1] - pl->position[1]);
-    w->leg_limit = 2.0 * length / gait_speed(pl, p) + LEG_SLACK;
+    w->leg_limit = 2.0 * length / dry_gait_speed(pl, p) + LEG_SLACK;
 }
 
 void game_walker_start(game_walker *walker, const game_walk *walk, const game_player *player) {
@@ -501,6 +549,17 @@ static void progress(game_walker *w, const game_player *pl) {
     w->last[0] = pl->position[0], w->last[1] = pl->position[2];
     w->from_start = hypot(pl->position[0] - w->origin[0], pl->position[2] - w->origin[2]);
     w->frames++;
+}
+
+/* Water slows the gait (wading, swimming): the time the last step lost to it, against the leg's
+ * dry gait, is added to the leg's limit, so a leg across a lake is given the time its water
+ * costs. A step in water at speed u instead of the dry U covers u·dt, which on land takes u·dt/U:
+ * dt·(1 − u/U) was lost. */
+static void water_allowance(game_walker *w, const game_player *pl) {
+    if (w->index >= w->walk->count || pl->waiting) return;
+    const game_walk_point *p = &w->walk->points[w->index];
+    float dry = dry_gait_speed(pl, p), wet = gait_speed(pl, p);
+    if (wet < dry) w->leg_limit += (double)w->last_dt * (1.0 - (double)wet / (double)dry);
 }
 
 /* Keeps the position every HISTORY_SPACING seconds at most, so the ring spans a stall window at
@@ -578,7 +637,7 @@ static input_actions steer(game_walker *w, const game_player *pl, float dt) {
     remember(w, pl);
 
     bool detour = w->time < w->detour_until;
-    if (!detour && fabsf(diff) <= STEER_ALIGNED && (pl->on_ground || flying) &&
+    if (!detour && fabsf(diff) <= STEER_ALIGNED && (pl->on_ground || flying || pl->swimming) &&
         stalled(w, pl, gait_speed(pl, p), flying)) {
         w->stalls++, w->leg_stalls++;
         w->detour_until = w->time + DETOUR_SECONDS;
@@ -607,9 +666,10 @@ input_actions game_walker_step(game_walker *walker, const game_player *player, f
     if (dt > player->params.max_dt) dt = player->params.max_dt;   /* as the player clamps it */
     if (walker->shot_due) return idle;   /* holding still for the picture */
     progress(walker, player);
+    water_allowance(walker, player);
     while (walker->index < walker->walk->count && reached(walker, player, walker->index)) {
         const game_walk_point *point = &walker->walk->points[walker->index];
-        bool shot = point->shot && !(point->cave_radius > 0.0f);
+        bool shot = point->shot && !unresolved(point);
         walker->index++;
         start_leg(walker, player);
         if (shot) {

@@ -40,6 +40,9 @@
  *   within R metres (1 ≤ R ≤ 1000) of the previous waypoint. The program resolves it when the walk
  *   starts (game_walk_resolve_caves: the world program does) into a flight to a view of it that
  *   faces the mouth; a walker given an unresolved one skips it.
+ * - `shore R [shot]` instead of X Z: a look out over water from the nearest shore within R metres
+ *   (1 ≤ R ≤ 1000) of the previous waypoint, resolved as `cave` lines are (game_walk_resolve_stops,
+ *   game_find_shore_view) into a flight to dry ground at the water's edge, facing the water.
  * - Directives, each at most once and before the first waypoint: `relative` (X Z and y= are
  *   offsets from the walker's start), `ahead` (offsets in the start's own frame: X metres to the
  *   right, Z metres ahead, as straight:M is `ahead` + `0 M`), `radius R` (0.1 ≤ R ≤ 1000 m),
@@ -115,6 +118,7 @@ typedef struct game_walk_point {
                                          most open view */
     float look_yaw, look_pitch;       /* degrees as --look: yaw 0 = +z, 90 = −x; pitch up */
     float cave_radius;                /* > 0: a `cave R` line not yet resolved (the walker skips it) */
+    float shore_radius;               /* > 0: a `shore R` line not yet resolved (skipped likewise) */
 } game_walk_point;
 
 typedef struct game_walk {
@@ -127,15 +131,21 @@ typedef struct game_walk {
 
 /* The tour `world --tour` takes (and tools/play with no display): from the spawn into the most
  * open view on foot, flying over what it cannot walk round, a look into the nearest cave or under
- * the nearest arch, then up 120 m for the view to the horizon; a picture at each of its four
- * stops (three where no cave is found). A waypoint file's text. */
+ * the nearest arch, a look out over the nearest water from its shore (within 150 m of the cave's
+ * view), then up 120 m for the view to the horizon; a picture at each of its five stops (fewer
+ * where no cave or no shore is found). A waypoint file's text. */
 extern const char game_walk_tour[];
 
 /* Turns each `cave R` waypoint into a flight to a view into the nearest cave or arch within R
  * metres of the waypoint before it (of the player, for the first): game_find_cave_view, the view's
- * eye as a `fly y=H` point in the walk's own frame, facing the mouth (has_look). A cave line with
- * nothing to find is dropped, with a notice. Call it with the player where the walker will start
- * (game_walker_start measures relative and ahead walks from there). Returns the caves found. */
+ * eye as a `fly y=H` point in the walk's own frame, facing the mouth (has_look); and each `shore R`
+ * waypoint likewise into a flight to a view over water from the nearest shore
+ * (game_find_shore_view). A line with nothing to find is dropped, with a notice. Call it with the
+ * player where the walker will start (game_walker_start measures relative and ahead walks from
+ * there). Returns how many of each were found. */
+typedef struct game_walk_found { int caves, shores; } game_walk_found;
+game_walk_found game_walk_resolve_stops(game_walk *walk, terrain_world *world, const game_player *player);
+/* game_walk_resolve_stops (shore lines too), returning the caves found. */
 int game_walk_resolve_caves(game_walk *walk, terrain_world *world, const game_player *player);
 
 /* `spec` is straight:METRES or the path of a waypoint file. On success *out holds the walk (free it
@@ -164,6 +174,26 @@ typedef struct game_cave_view {
  * sight and the roof low enough in the picture to leave sky at its top. The deepest shelter wins,
  * then the nearest. False when there is none. Generates the chunks it reads (walk_cave.c). */
 bool game_find_cave_view(terrain_world *world, double x, double z, double radius, game_cave_view *out);
+
+/* A look out over water from its shore: where to stand and which way to face. */
+typedef struct game_shore_view {
+    double eye[3];                    /* world metres, over dry ground at the water's edge */
+    double water[3];                  /* the water's surface next to it, where the shore is */
+    float yaw, pitch;                 /* degrees as --look: yaw 0 = +z, 90 = −x; pitch up */
+    float open;                       /* metres of water along the view (out to GAME_SHORE_VIEW_DISTANCE) */
+} game_shore_view;
+
+#define GAME_SHORE_VIEW_DISTANCE 64.0
+
+/* Searches the columns within `radius` metres of (x, z) (every 2 m) for a shore: a dry column
+ * (terrain_world_water_at false) beside one with water on it, its ground at most 12 m above that
+ * water. From there it looks along the one of 16 directions with the most water (sampled every
+ * 4 m out to GAME_SHORE_VIEW_DISTANCE, up to the first ground higher than the eye), which must be
+ * at least 40 m of it (a sea or a lake, not a puddle); ties go to the direction nearest the water
+ * beside it. It stands on the dry column, the eye 1.62 m up, looking down over the water by
+ * atan(eye over the surface / 25 m), between 8° and 25°. The nearest shore wins. False when there
+ * is none. Generates the chunks it reads (walk_shore.c). */
+bool game_find_shore_view(terrain_world *world, double x, double z, double radius, game_shore_view *out);
 
 #define GAME_WALKER_HISTORY 64
 

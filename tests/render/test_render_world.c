@@ -321,9 +321,10 @@ Test(render_world, the_tour_ends_where_its_script_says_and_every_picture_shows_s
     cr_expect(s.walk_done && !s.walk_stuck, "the tour %s after %.1f m", s.walk_stuck ? "got stuck" : "did not end",
               s.walked);
     cr_expect_eq(s.eye_in_solid_frames, 0);
-    /* Seed 1 has a cave mouth within 150 m of the tour's second stop (walk_cave.c finds it): four
-     * pictures, the third looking into it. */
-    for (int n = 1; n <= 4; n++) {
+    /* Seed 1 has a cave mouth within 150 m of the tour's second stop (walk_cave.c finds it) and a
+     * shore within 150 m of the cave's view (walk_shore.c): five pictures, the third looking into
+     * the cave, the fourth out over the water. */
+    for (int n = 1; n <= 5; n++) {
         snprintf(path, sizeof path, "%s/tour-%d.png", dir, n);
         picture_facts f = picture_facts_of(path);
         cr_expect_geq(f.sky_top, 0.5, "picture %d: sky over %.0f %% of the top eighth", n, 100 * f.sky_top);
@@ -335,13 +336,13 @@ Test(render_world, the_tour_ends_where_its_script_says_and_every_picture_shows_s
         cr_log_info("picture %d: spread %.1f %.1f %.1f %.1f, sky %.2f, ground %.2f", n, f.spread[0], f.spread[1],
                     f.spread[2], f.spread[3], f.sky_top, f.ground_bottom);
     }
-    snprintf(path, sizeof path, "%s/tour-5.png", dir);
-    cr_expect(access(path, F_OK) != 0, "a fifth picture");
-    /* The contact sheet: the four at half size, two by two. */
+    snprintf(path, sizeof path, "%s/tour-6.png", dir);
+    cr_expect(access(path, F_OK) != 0, "a sixth picture");
+    /* The contact sheet: the five at half size (80 × 48), three columns, two rows. */
     int w, h, c;
     uint8_t *rgb = stbi_load(sheet, &w, &h, &c, 3);
     cr_assert(rgb, "no contact sheet");
-    cr_expect(w == 160 && h == 96, "%d x %d", w, h);
+    cr_expect(w == 240 && h == 96, "%d x %d", w, h);
     stbi_image_free(rgb);
     game_walk_free(&walk);
     char command[64];
