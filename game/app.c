@@ -262,13 +262,16 @@ static bool app_write_contact_sheet(game_app *app, const char *path) {
     int rows = (app->shot_count + columns - 1) / columns;
     int sheet_w = columns * hw, sheet_h = rows * hh;
     size_t size = (size_t)sheet_w * (size_t)sheet_h * 4;
-    uint8_t *sheet = core_calloc(size, 1);
-    for (size_t i = 3; i < size; i += 4) sheet[i] = 255;
+    uint8_t *sheet = core_alloc(size);
+    for (size_t i = 0; i < size; i += 4) memcpy(sheet + i, (const uint8_t[4]){ 24, 26, 30, 255 }, 4);
+    /* A last row that is not full is centred, so the sheet reads as laid out, not as a gap. */
+    int last_row = (app->shot_count - 1) / columns, in_last_row = app->shot_count - last_row * columns;
     for (int n = 0; n < app->shot_count; n++) {
         const struct app_shot *shot = &app->shots[n];
         int w = shot->width < hw ? shot->width : hw, h = shot->height < hh ? shot->height : hh;
+        int row = n / columns, x0 = n % columns * hw + (row == last_row ? (columns - in_last_row) * hw / 2 : 0);
         for (int y = 0; y < h; y++)
-            memcpy(sheet + (((size_t)(n / columns * hh + y)) * (size_t)sheet_w + (size_t)(n % columns * hw)) * 4,
+            memcpy(sheet + (((size_t)(row * hh + y)) * (size_t)sheet_w + (size_t)x0) * 4,
                    shot->rgba + (size_t)y * (size_t)shot->width * 4, (size_t)w * 4);
     }
     bool ok = gfx_write_png(path, sheet_w, sheet_h, sheet);

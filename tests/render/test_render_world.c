@@ -343,6 +343,14 @@ Test(render_world, the_tour_ends_where_its_script_says_and_every_picture_shows_s
     uint8_t *rgb = stbi_load(sheet, &w, &h, &c, 3);
     cr_assert(rgb, "no contact sheet");
     cr_expect(w == 240 && h == 96, "%d x %d", w, h);
+    if (w == 240 && h == 96) {
+        /* The second row's two pictures are centred: half a picture (40 px) of background each
+         * side of them, the sheet's own colour (app_write_contact_sheet: 24, 26, 30). */
+        const uint8_t *left = rgb + ((size_t)72 * 240 + 20) * 3, *right = rgb + ((size_t)72 * 240 + 220) * 3;
+        cr_expect(left[0] == 24 && left[1] == 26 && left[2] == 30, "left margin %d %d %d", left[0], left[1], left[2]);
+        cr_expect(right[0] == 24 && right[1] == 26 && right[2] == 30, "right margin %d %d %d", right[0], right[1],
+                  right[2]);
+    }
     stbi_image_free(rgb);
     game_walk_free(&walk);
     char command[64];
