@@ -27,15 +27,16 @@ typedef enum sea_kind {
     SEA_BLOCK,       /* deep, and a tall block of bedrock over x, z ∈ [14, 18) from 1 m to 19 m
                         above the water (nothing of it under the surface) */
     SEA_BEACH,       /* a 5 % beach rising along +x through the waterline at x = 40 */
+    SEA_DRY,         /* the shallow sea's bed with no water on it: no WaterPlane of its own */
 } sea_kind;
 
 static float quantized(float metres) { return roundf(metres / TERRAIN_HEIGHT_QUANTUM) * TERRAIN_HEIGHT_QUANTUM; }
 
 static void sea_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
     sea_kind kind = *(const sea_kind *)user;
-    float ground = kind == SEA_SHALLOW ? -1.0f : kind == SEA_BEACH ? quantized(-2.0f + 0.05f * (float)x) : -30.0f;
+    float ground = kind == SEA_SHALLOW || kind == SEA_DRY ? -1.0f : kind == SEA_BEACH ? quantized(-2.0f + 0.05f * (float)x) : -30.0f;
     terrain_stacks_builder_push(b, TERRAIN_SAND, ground - TERRAIN_FLOOR_Y);
-    if (ground < 0) terrain_stacks_builder_push(b, TERRAIN_WATER, -ground);
+    if (ground < 0 && kind != SEA_DRY) terrain_stacks_builder_push(b, TERRAIN_WATER, -ground);
     if (kind == SEA_BLOCK && x >= 14 && x < 18 && z >= 14 && z < 18) {
         terrain_stacks_builder_push(b, TERRAIN_AIR, 1);
         terrain_stacks_builder_push(b, TERRAIN_BEDROCK, 18);
@@ -377,9 +378,9 @@ Test(render_water, from_below_the_sky_shows_through_the_window_and_not_past_it) 
  * the view stays as it was. */
 Test(render_water, a_lake_plane_covers_its_cells_only) {
     sea s;
-    /* The shallow world's sea is at 0 m; the lake plane floats at 0.5 m over the west half of
-     * chunk (0, 0), which is "above the sea" and so drawn as a lake, with no sea. */
-    sea_open_scaled(&s, SEA_SHALLOW, (terrain_view){ .camera = { 16, 30, 16 }, .pitch = -1.5f }, 1, false);
+    /* A dry bed at −1 m, no sea (so the mesh phase attaches no WaterPlane): the only plane is
+     * this test's, at 0.5 m over the west half of chunk (0, 0). */
+    sea_open_scaled(&s, SEA_DRY, (terrain_view){ .camera = { 16, 30, 16 }, .pitch = -1.5f }, 1, false);
     render_image dry = sea_frame(&s, NULL);
     terrain_water *water = terrain_water_create(&(terrain_water_desc){
         .gfx = s.gfx, .ecs = s.ecs, .world = s.world });
