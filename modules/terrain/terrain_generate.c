@@ -91,6 +91,7 @@
 
 #include "core/core.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -384,14 +385,18 @@ static void ground_row(const ground_model *g, const double *xs, double z, int co
     }
 }
 
-/* The lake level over column centre (x, z) when it lies in a lake's water circle, else NAN. */
-static float lake_level_at(const ground_model *g, double x, double z, bool *in_basin) {
-    *in_basin = false;
+/* The lake level over column centre (x, z) when it lies in a lake's water circle, else NAN;
+ * *basin is how much of the designed basin the ground there is: 1 out to the shore's end, falling
+ * as the ground returns to the land (lake_shape's smoothstep), 0 outside the site's circle. */
+static float lake_level_at(const ground_model *g, double x, double z, float *basin) {
+    *basin = 0.0f;
     if (!(g->lake_spacing > 0.0f)) return NAN;
     const lake_site *s = lake_site_at(g, g->lakes ? g->lakes : lake_thread_cache(g->key), x, z);
     if (!s) return NAN;
-    *in_basin = true;
-    return hypot(x - s->x, z - s->z) < (double)s->water ? s->level : NAN;
+    float r = (float)hypot(x - s->x, z - s->z);
+    float t = clampf((r - s->shelf) / (s->outer - s->shelf), 0.0f, 1.0f);
+    *basin = fmaxf(1.0f - t * t * (3.0f - 2.0f * t), FLT_MIN);   /* > 0 anywhere inside the circle */
+    return r < s->water ? s->level : NAN;
 }
 
 float terrain__ground_height(const terrain_generation_params *params, double x, double z) {
@@ -481,7 +486,8 @@ typedef struct chunk_gen {
     float field_weight[MAX_FIELDS];       /* displacement octaves' normalised amplitudes */
     lake_cache lakes;                     /* the sites the chunk's grid met */
     float *lake_levels;                   /* per column: the lake level over it, or NAN */
-    bool *in_basin;                       /* per column: inside a lake's circle of influence */
+    float *basin;                         /* per column: lake_level_at's basin share, > 0 inside a
+                                             lake's circle of influence */
 } chunk_gen;
 
 static void ground_grid(chunk_gen *g) {
@@ -717,7 +723,7 @@ static void column_generate(const chunk_gen *g, int i, int k, const float *field
     c.cave1 = fields + (size_t)2 * c.octaves * c.levels;
     c.cave2 = c.cave1 + (size_t)CAVE_OCTAVES * c.levels;
     /* Caves open at the surface on land, never under the sea or in a lake's basin. */
-    bool opening = ground_here > p->sea_level + 2.0f && !g->in_basin[k * TERRAIN_CHUNK_COLUMNS + i];
+    bool opening = ground_here > p->sea_level + 2.0f && !(g->basin[k * TERRAIN_CHUNK_COLUMNS + i] > 0.0f);
     c.cave_top = ground_here + (opening ? CAVE_OPENING * c.fade : -0.5f * c.fade);
     c.cave_bottom = ground_here - cave_depth(p);
 
@@ -778,6 +784,10 @@ static void column_push(const chunk_gen *g, int i, int k, const column_layers *l
     float sand = 0.0f;
     if (p->sand_max_slope > 0.0f && p->sand_depth > 0.0f)
         sand = p->sand_depth * clampf(1.0f - slope / p->sand_max_slope, 0.0f, 1.0f);
+    /* A lake's basin is a beach: its full sand depth whatever the shore's slope. Thinner sand over
+     * the basin's regular rings of slope let the bedrock under it into the visible-share weights
+     * (000 §6) by amounts that beat with the mesh's cell size: concentric bands on every shore. */
+    sand = fmaxf(sand, g->basin[k * TERRAIN_CHUNK_COLUMNS + i] * p->sand_depth);
     sand = CORE_MIN(sand, top - top_run_bottom);
 
     float y = TERRAIN_FLOOR_Y;
@@ -818,11 +828,11 @@ terrain_stacks *terrain_generate_chunk(const terrain_generation_params *params, 
     ground_grid(&g);
     ground_reach(&g, reach);
     g.lake_levels = core_alloc(column_bytes);
-    g.in_basin = core_alloc((size_t)TERRAIN__COLUMNS * sizeof(bool));
+    g.basin = core_alloc(column_bytes);
     for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
         for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++)
             g.lake_levels[k * TERRAIN_CHUNK_COLUMNS + i] = lake_level_at(&g.model, g.x0 + i + 0.5, g.z0 + k + 0.5,
-                                                                           &g.in_basin[k * TERRAIN_CHUNK_COLUMNS + i]);
+                                                                           &g.basin[k * TERRAIN_CHUNK_COLUMNS + i]);
 
     /* The chunk's y range, then the coarse lattice over it. */
     float y_lo = INFINITY, y_hi = -INFINITY;
@@ -859,6 +869,6 @@ terrain_stacks *terrain_generate_chunk(const terrain_generation_params *params, 
     core_free(g.reach_min, column_bytes);
     core_free(g.reach_max, column_bytes);
     core_free(g.lake_levels, column_bytes);
-    core_free(g.in_basin, (size_t)TERRAIN__COLUMNS * sizeof(bool));
+    core_free(g.basin, column_bytes);
     return stacks;
 }

@@ -13,6 +13,10 @@
  *
  * Rows (one run each; the frame rows are percentiles over the run's frames):
  *   world.walk.cpu_frame.p50 / .p99   ms from a frame's start to the hand-over to the driver
+ *                                     (on llvmpipe it includes the driver's waits: water's copy
+ *                                     of the frame for refraction, the default "low" water, waits
+ *                                     there for the whole terrain to be rasterised whenever water
+ *                                     is in view; the trace's terrain_water_draw zone shows it)
  *   world.walk.engine_frame.p50 / .p99  the same less the draw calls (llvmpipe shades vertices
  *                                     inside them on this thread; a GPU would not)
  *   world.walk.hitches                frames over 33 ms
