@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <sys/resource.h>
 
 #define APP_HITCH_MS 33.0
@@ -49,8 +50,8 @@ struct game_app {
     int frames, loading_frames;
     uint64_t start_ns, last_ns;
     double frame_seconds;
-    double *cpu_ms, *engine_ms;             /* per frame past loading */
-    size_t cpu_count, cpu_capacity, engine_capacity;
+    double *cpu_ms, *engine_ms, *thread_ms; /* per frame past loading */
+    size_t cpu_count, cpu_capacity, engine_capacity, thread_capacity;
     int eye_in_solid, waiting;
     double grass_ms_sum, grass_ms_max;     /* past loading */
     /* pictures at the walk's `shot` waypoints (walk.h): held frames, and each picture at half
@@ -406,6 +407,7 @@ void game_app_destroy(game_app *app) {
     gfx_destroy(app->gfx);
     core_free(app->cpu_ms, app->cpu_capacity * sizeof *app->cpu_ms);
     core_free(app->engine_ms, app->engine_capacity * sizeof *app->engine_ms);
+    core_free(app->thread_ms, app->thread_capacity * sizeof *app->thread_ms);
     core_free(app, sizeof *app);
 }
 
@@ -550,10 +552,20 @@ static void app_update_view(game_app *app) {
     terrain_ecs_set_view(app->terrain, &app->view);   /* what the cull phase tests against */
 }
 
-static void app_record_cpu(game_app *app, double cpu_ms, double engine_ms) {
+/* CPU time the calling thread has used: a frame's work on the main thread, without the time it
+ * spent blocked (a driver waiting for its rasteriser, a lock). */
+static uint64_t app_thread_cpu_ns(void) {
+    struct timespec t;
+    if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t) != 0) return 0;
+    return (uint64_t)t.tv_sec * 1000000000ull + (uint64_t)t.tv_nsec;
+}
+
+static void app_record_cpu(game_app *app, double cpu_ms, double engine_ms, double thread_ms) {
     app->cpu_ms = core_grow(app->cpu_ms, &app->cpu_capacity, app->cpu_count + 1, sizeof *app->cpu_ms);
     app->engine_ms = core_grow(app->engine_ms, &app->engine_capacity, app->cpu_count + 1, sizeof *app->engine_ms);
+    app->thread_ms = core_grow(app->thread_ms, &app->thread_capacity, app->cpu_count + 1, sizeof *app->thread_ms);
     app->engine_ms[app->cpu_count] = engine_ms;
+    app->thread_ms[app->cpu_count] = thread_ms;
     app->cpu_ms[app->cpu_count++] = cpu_ms;
 }
 
@@ -580,7 +592,7 @@ static void app_finish_loading(game_app *app) {
 bool game_app_frame(game_app *app) {
     if (app->over) return false;
     trace_frame_begin();
-    uint64_t now = core_time_ns();
+    uint64_t now = core_time_ns(), thread_start = app_thread_cpu_ns();
     app->frame_seconds = (double)(now - app->last_ns) * 1e-9;
     app->last_ns = now;
     float dt = app->windowed ? (float)app->frame_seconds : app->desc.step_seconds;
@@ -599,6 +611,7 @@ bool game_app_frame(game_app *app) {
     app_draw_hud(app);
     uint64_t drawn = core_time_ns();
     double cpu_ms = (double)(drawn - now) * 1e-6, engine_ms = (double)(drawing - now) * 1e-6;
+    double thread_ms = (double)(app_thread_cpu_ns() - thread_start) * 1e-6;
     if (app->walker.shot_due && app_shot_ready(app)) {
         app_take_shot(app);
         app->shot_hold = 0;
@@ -617,7 +630,7 @@ bool game_app_frame(game_app *app) {
         if (app_loaded(app)) app_finish_loading(app);
     } else {
         app->frames++;
-        app_record_cpu(app, cpu_ms, engine_ms);
+        app_record_cpu(app, cpu_ms, engine_ms, thread_ms);
         double grass_ms = app->grass ? grass_stats_get(app->grass).cpu_ms : 0.0;
         app->grass_ms_sum += grass_ms;
         app->grass_ms_max = fmax(app->grass_ms_max, grass_ms);
@@ -666,6 +679,10 @@ game_app_stats game_app_stats_get(const game_app *app) {
     qsort(sorted, app->cpu_count, sizeof *sorted, compare_doubles);
     s.engine_ms_p50 = percentile(sorted, app->cpu_count, 0.50);
     s.engine_ms_p99 = percentile(sorted, app->cpu_count, 0.99);
+    if (app->cpu_count) memcpy(sorted, app->thread_ms, app->cpu_count * sizeof *sorted);
+    qsort(sorted, app->cpu_count, sizeof *sorted, compare_doubles);
+    s.thread_ms_p50 = percentile(sorted, app->cpu_count, 0.50);
+    s.thread_ms_p99 = percentile(sorted, app->cpu_count, 0.99);
     core_free(sorted, (app->cpu_count ? app->cpu_count : 1) * sizeof *sorted);
     s.stream = terrain_ecs_stream_stats(app->terrain);
     s.edits = terrain_ecs_edit_stats(app->terrain);

@@ -166,6 +166,8 @@ static void print_results(const game_app_stats *s, bool walked) {
                s->walked, s->from_start, s->walk_stuck ? ", stuck" : "", s->eye_in_solid_frames, s->waiting_frames);
     printf("world: cpu frame p50 %.2f ms, p99 %.2f ms, max %.2f ms, %d over 33 ms; without draw calls p50 %.2f ms, "
            "p99 %.2f ms\n", s->cpu_ms_p50, s->cpu_ms_p99, s->cpu_ms_max, s->hitches, s->engine_ms_p50, s->engine_ms_p99);
+    printf("world: main thread's own CPU p50 %.2f ms, p99 %.2f ms (the driver's waits left out)\n", s->thread_ms_p50,
+           s->thread_ms_p99);
     printf("world: chunks %d wanted, %d ready, %d kept; %llu meshed, %llu empty, %llu cancelled, %llu evicted\n",
            s->stream.mesh_chunks_wanted, s->stream.mesh_chunks_ready, s->stream.mesh_chunks_kept,
            (unsigned long long)s->stream.chunks_meshed, (unsigned long long)s->stream.chunks_skipped_empty,
