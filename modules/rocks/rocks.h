@@ -1,0 +1,173 @@
+/* rocks.h — piles of rocks from aperiodic corner-cube tiles (paper 001), placed in the terrain's
+ * rock layers (000 §5).
+ *
+ * Two parts. The tile set is built once (or read from its cache file): 256 corner cubes, each
+ * with the rocks whose seed point lies in it, every rock a closed mesh with levels of detail.
+ *
+ *     rocks_tileset *set = rocks_tiles_create(&(rocks_tiles_desc){ .shape = ROCKS_SHAPE_MIXED,
+ *                                                                  .cache_path = "out/rocks.bin" });
+ *     for (uint32_t e = set->tiles[t].first; e < set->tiles[t].first + set->tiles[t].count; e++)
+ *         ... set->entries[e].rock, set->entries[e].offset ...
+ *     rocks_tiles_destroy(set);
+ *
+ * Rocks in the world (the second part, below) tile space with those cubes, colouring the
+ * integer lattice by a hash, and keep the rocks whose anchor points fall in a support: the rock
+ * layers of the terrain's stacks, or any point-membership function.
+ *
+ * ---- tile space (001 §2–§3) ----
+ * A tile is the unit cube [0, 1)³ with corners on the integer lattice. Each lattice point has one
+ * of 2 colours; tile t (0 … 255) is the cube whose corner (x, y, z) ∈ {0, 1}³ has colour
+ * (t >> (x + 2y + 4z)) & 1. A tile is cut into n³ cells (n = desc.cells). Cells are sorted into
+ * regions, shared between the tiles that meet there:
+ *   vertex  the 2×2×2 cells around a lattice point (one cell in each of the 8 tiles around it)
+ *   edge    the 2×2×(n−2) cells along a lattice edge (4 tiles), less the vertex cells
+ *   face    the 2×(n−2)² cells across a face (2 tiles), less the edge and vertex cells
+ *   centre  the (n−2)³ cells inside a tile.
+ * A region's seed points depend only on the colours of its lattice feature's corners (1 vertex,
+ * 2 for an edge, 4 for a face, 8 for the centre), and so do the seeds of its neighbouring cells,
+ * which the lower-dimensional regions fix first and the others copy (001 §3). So there are
+ * 2 vertex, 12 edge, 48 face and 256 centre regions, and a rock (the Voronoi cell of one seed,
+ * eroded) has one shape whatever tiles are placed around its own: tiles placed by matching
+ * corner colours join without seams, gaps or doubled rocks.
+ *
+ * A rock's geometry is stored once, in tile units relative to its region's origin (the lattice
+ * point of a vertex region, the first end of an edge, the lowest corner of a face, the tile's
+ * origin for a centre); a tile lists each of its rocks with the integer offset from the tile's
+ * origin to that region origin. Rock r of entry e of tile t at lattice point L is at
+ *     L + entries[e].offset + (rock-local coordinates)        (tile units)
+ * Every rock is listed by exactly one tile of any tiling: the tile holding the cell of its seed.
+ *
+ * Threads: building uses the job system given (or runs on the calling thread); a built set is
+ * read-only and may be read from any thread.
+ */
+#ifndef ROCKS_H
+#define ROCKS_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "terrain/terrain.h"
+
+typedef struct job_system job_system;
+
+/* ---- the tile set (001 §2–§5) -------------------------------------------------------------- */
+
+typedef enum rocks_shape {
+    ROCKS_SHAPE_DEFAULT = 0,          /* mixed */
+    ROCKS_SHAPE_ROUND,                /* pebbles: α = β = γ = 1, g ∈ [1, 2], one seed a cell (Fig. 11) */
+    ROCKS_SHAPE_SLAB,                 /* flat slabs: α, β ∈ [4, 5], γ = 1, g ∈ [1, 3] (Fig. 13) */
+    ROCKS_SHAPE_MIXED,                /* rocks and gravel: α, β, γ ∈ [1, 2], g ∈ [1, 4],
+                                         1 … 3 seeds a cell (Fig. 12) */
+} rocks_shape;
+
+#define ROCKS_LODS 3                  /* levels of detail per rock mesh: full, ~1/3, ~1/10 */
+#define ROCKS_HULL_AXES 13            /* a rock's collision hull: a 26-DOP (below) */
+
+/* Zero means the default (the shape preset's) for every field. */
+typedef struct rocks_tiles_desc {
+    uint64_t seed;                    /* 0 = 1 */
+    int cells;                        /* n, cells along a tile's side; 0 = 5; 4 … 8 */
+    int voxels_per_cell;              /* n_G / n (001 §7: 10); 0 = 10; 4 … 16 */
+    rocks_shape shape;
+    int max_seeds_per_cell;           /* s: each cell gets n_k ∈ [1, s] seeds; 0 = the preset's */
+    float scale_min[3], scale_max[3]; /* α, β, γ ranges (001 §4); 0 = the preset's */
+    float g_max;                      /* g_k ∈ [1, g_max]; 0 = the preset's (4 at most) */
+    float contact_radius;             /* a (001 §5), in cells; 0 = 0.12 */
+    float blend_radius;               /* b, in cells; 0 = 0.35 */
+    int erosion_steps;                /* spheroidal erosion iterations; 0 = 6 */
+    float erosion_rate;               /* ε a step at a fully exposed voxel; 0 = 0.25 */
+    job_system *jobs;                 /* build on these workers; NULL = the calling thread */
+    const char *cache_path;           /* read from / written to this file; NULL = no cache */
+} rocks_tiles_desc;
+
+/* A rock's vertex: position in tile units relative to its region origin, unit normal. */
+typedef struct rocks_vertex {
+    float position[3];
+    int8_t normal[3];                 /* ×127, pointing out of the rock */
+    int8_t reserved;                  /* 0 */
+} rocks_vertex;
+
+/* One rock, all in tile units relative to its region origin. */
+typedef struct rocks_rock {
+    float seed[3];                    /* p_k */
+    float bounds_min[3], bounds_max[3];   /* of its full-detail mesh */
+    float radius;                     /* of its embedding sphere: farthest mesh point from seed */
+    uint32_t vertex_first, vertex_count;  /* in rocks_tileset.vertices */
+    uint32_t index_first[ROCKS_LODS], index_count[ROCKS_LODS];
+                                      /* triangles in rocks_tileset.indices, local to the rock's
+                                         vertices (add vertex_first); LOD 0 is the full mesh */
+    uint32_t anchor_first, anchor_count;  /* in rocks_tileset.anchors: the seed first, then
+                                         voxel centres spread over the rock (001 §6) */
+    uint32_t contact_first, contact_count;  /* in rocks_tileset.contacts */
+    float hull[2 * ROCKS_HULL_AXES];  /* collision hull: hull[2a] = min and hull[2a+1] = max of
+                                         dot(v, rocks_hull_axes[a]) over its vertices */
+    uint8_t region;                   /* 0 vertex, 1 edge, 2 face, 3 centre */
+} rocks_rock;
+
+/* A contact point c_ij kept by erosion (001 §5), relative to the rock's region origin. */
+typedef struct rocks_contact {
+    float point[3];
+    uint32_t other;                   /* the rock on the other side, in the same region-origin
+                                         frame shifted by other_offset */
+    int8_t other_offset[3];           /* the other rock's region origin minus this one's */
+    int8_t reserved;
+} rocks_contact;
+
+typedef struct rocks_tile_entry {
+    uint32_t rock;
+    int8_t offset[3];                 /* tile origin → the rock's region origin (−1 … 1 each) */
+    int8_t reserved;
+} rocks_tile_entry;
+
+typedef struct rocks_tile {
+    uint32_t first, count;            /* in rocks_tileset.entries */
+} rocks_tile;
+
+/* Read-only once built. */
+typedef struct rocks_tileset {
+    rocks_tiles_desc desc;            /* with the defaults filled in (jobs and cache_path NULL) */
+    rocks_tile tiles[256];
+    rocks_tile_entry *entries;
+    rocks_rock *rocks;
+    rocks_vertex *vertices;
+    uint32_t *indices;
+    float (*anchors)[3];
+    rocks_contact *contacts;
+    uint32_t entry_count, rock_count, vertex_count, index_count, anchor_count, contact_count;
+    float max_radius;                 /* largest rock radius (tile units) */
+    double build_seconds;             /* 0 when read from the cache */
+    bool from_cache;
+    size_t bytes;                     /* memory held */
+} rocks_tileset;
+
+/* The 13 directions of the collision hulls: the 3 axes, 6 face diagonals, 4 body diagonals
+ * (unnormalised: (1,0,0), (1,1,0), (1,1,1), …). */
+extern const float rocks_hull_axes[ROCKS_HULL_AXES][3];
+
+/* Builds the set, or reads it from desc->cache_path when that file holds the same parameters.
+ * A missing, old or damaged cache is rebuilt and rewritten, with a one-line notice; never fatal.
+ * NULL (message logged) for parameters out of range. */
+rocks_tileset *rocks_tiles_create(const rocks_tiles_desc *desc);
+void rocks_tiles_destroy(rocks_tileset *set);
+
+/* Tile index for corner colours: bit (x + 2y + 4z) is corner (x, y, z)'s colour. */
+static inline int rocks_tile_index(const uint8_t colour[8]) {
+    int t = 0;
+    for (int i = 0; i < 8; i++) t |= (colour[i] & 1) << i;
+    return t;
+}
+
+/* Signed distance estimate from a point (rock-local tile units) to a rock's hull: the largest
+ * of the 26 plane distances; < 0 inside. Exact inside, never more than the true distance
+ * outside. */
+float rocks_hull_distance(const rocks_rock *rock, const float p[3], float normal[3]);
+
+/* Writes tile t's rocks as one binary PLY (tile units, tile origin at 0). False (message in
+ * error) when the file cannot be written. */
+bool rocks_tile_write_ply(const rocks_tileset *set, int t, const char *path, char *error, size_t error_size);
+
+/* ---- rocks in the world (001 §6, 000 §5) ---------------------------------------------------- */
+/* (placement, the ECS component RockTiles, drawing and collision: below, in rocks_world.c) */
+
+#endif
