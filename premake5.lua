@@ -78,6 +78,10 @@ project "vegetation"
   kind "StaticLib"
   files { "modules/vegetation/**.c", "modules/vegetation/**.h" }
 
+project "rocks"
+  kind "StaticLib"
+  files { "modules/rocks/**.c", "modules/rocks/**.h" }
+
 -- Generated code: built with its own warnings off, so ours can stay strict.
 project "glad"
   kind "StaticLib"
@@ -95,7 +99,7 @@ local function program(name, extra)
     files(extra.files)
     if extra.excludes then excludes(extra.excludes) end
     if extra.defines then defines(extra.defines) end
-    links { "game", "vegetation", "terrain", "engine", "glad" }
+    links { "game", "vegetation", "rocks", "terrain", "engine", "glad" }
     if extra.links then links(extra.links) end
     links(platform_libs)
     links { "m" }
@@ -130,5 +134,6 @@ program("hello_terrain", { files = { "tools/examples/hello_terrain.c" } })
 program("hello_edit", { files = { "tools/examples/hello_edit.c" } })
 program("hello_grass", { files = { "tools/examples/hello_grass.c" } })
 program("hello_water", { files = { "tools/examples/hello_water.c" } })
+program("hello_rocks", { files = { "tools/examples/hello_rocks.c" } })
 program("world", { files = { "game/main.c" } })
 program("test_game", { files = { "tests/game/**.c", "tests/game/**.h" }, links = { "criterion" } })

@@ -30,6 +30,8 @@ struct game_app {
     terrain_clipmap *clipmap;              /* the far terrain, or NULL */
     terrain_ecs *terrain;
     grass_system *grass;                   /* NULL with --grass off */
+    rocks_tileset *rock_tiles;             /* NULL with --rocks off */
+    rocks_system *rocks;
     terrain_water *water;                  /* NULL with --water off */
     input_bindings *bindings;
     input_system *input;
@@ -66,6 +68,42 @@ struct game_app {
 static bool app_region_ready(void *user, const double min[3], const double max[3]) {
     game_app *app = user;
     return terrain_ecs_region_ready(app->terrain, min, max);
+}
+
+/* The rocks as obstacles for the player's capsule and the tools' aim (player.h, tools.h). */
+static void app_rocks_near(void *user, const double min[3], const double max[3]) {
+    rocks_focus(user, min, max);
+}
+
+static float app_rock_distance(void *user, const double point[3], float max_distance, float normal[3]) {
+    return rocks_distance(user, point, max_distance, normal);
+}
+
+static bool app_rock_raycast(void *user, const double origin[3], const float direction[3], float max_distance,
+                             terrain_ray_hit *hit) {
+    rocks_ray_hit r;
+    if (!rocks_raycast(user, origin, direction, max_distance, &r)) return false;
+    *hit = (terrain_ray_hit){ .position = { r.position[0], r.position[1], r.position[2] },
+                              .normal = { r.normal[0], r.normal[1], r.normal[2] }, .distance = r.distance,
+                              .material = TERRAIN_ROCKS };
+    return true;
+}
+
+static bool app_open_rocks(game_app *app, float fog_density) {
+    const game_app_desc *d = &app->desc;
+    if (d->rocks == ROCKS_OFF) return true;
+    app->rock_tiles = rocks_tiles_create(&(rocks_tiles_desc){ .jobs = app->jobs, .cache_path = d->rocks_cache_path });
+    if (!app->rock_tiles) return false;
+    app->rocks = rocks_create(&(rocks_desc){ .gfx = app->gfx, .ecs = app->ecs, .world = app->world,
+                                             .tiles = app->rock_tiles, .quality = d->rocks,
+                                             .fog_density = fog_density });
+    if (!app->rocks) return false;
+    app->player.params.obstacles_near = app_rocks_near;
+    app->player.params.obstacle_distance = app_rock_distance;
+    app->player.params.obstacle_user = app->rocks;
+    app->tools.obstacle_raycast = app_rock_raycast;
+    app->tools.obstacle_user = app->rocks;
+    return true;
 }
 
 static bool app_open_input(game_app *app) {
@@ -378,6 +416,7 @@ game_app *game_app_create(const game_app_desc *desc) {
         goto fail;
     app_spawn_player(app);
     game_tools_init(&app->tools);
+    if (!app_open_rocks(app, fog_density)) goto fail;
     app->loading = true;
     app->start_ns = app->last_ns = app->last_save_ns = core_time_ns();
     return app;
@@ -394,6 +433,7 @@ void game_app_destroy(game_app *app) {
     if (app->store) app_save(app, true);
     terrain_store_destroy(app->store);
     grass_destroy(app->grass);               /* its patches live on the terrain's entities */
+    rocks_destroy(app->rocks);               /* so do its RockTiles */
     terrain_water_destroy(app->water);
     if (app->terrain) terrain_ecs_destroy(app->terrain);
     terrain_clipmap_destroy(app->clipmap);
@@ -401,6 +441,7 @@ void game_app_destroy(game_app *app) {
     ecs_world_destroy(app->ecs);
     terrain_world_destroy(app->world);
     terrain_edit_log_destroy(app->edits);
+    rocks_tiles_destroy(app->rock_tiles);
     job_system_destroy(app->jobs);
     app_free_shots(app);
     game_walk_free(&app->walk);
@@ -603,9 +644,11 @@ bool game_app_frame(game_app *app) {
                                               app->view.camera[2], 0) >= 0;
     gfx_frame_begin(app->gfx);
     if (app->grass) grass_set_view(app->grass, &app->view, app->player.position);
+    if (app->rocks) rocks_set_view(app->rocks, &app->view);
     ecs_progress(app->ecs, dt);                /* stream, generate, mesh, lod, cull, upload, grass */
     uint64_t drawing = core_time_ns();
     terrain_ecs_draw(app->terrain, app->renderer, &app->view);
+    if (app->rocks) rocks_draw(app->rocks, &app->view);
     if (app->grass) grass_draw(app->grass, &app->view);
     if (app->water) terrain_water_draw(app->water, app->terrain, app->renderer, &app->view);
     app_draw_hud(app);
@@ -693,6 +736,13 @@ game_app_stats game_app_stats_get(const game_app *app) {
         s.grass_tufts = g.tufts;
         s.grass_tufts_drawn = g.tufts_drawn;
     }
+    if (app->rocks) {
+        rocks_stats r = rocks_stats_get(app->rocks);
+        s.rocks_placed = r.instances;
+        s.rocks_drawn = r.instances_drawn;
+        s.rock_shapes = app->rock_tiles->rock_count;
+        s.rocks_build_seconds = app->rock_tiles->build_seconds;
+    }
     s.grass_ms_mean = app->frames ? app->grass_ms_sum / app->frames : 0.0;
     s.grass_ms_max = app->grass_ms_max;
     struct rusage usage;
@@ -708,5 +758,6 @@ const double *game_app_frame_times(const game_app *app, int *count) {
 terrain_world *game_app_world(game_app *app) { return app->world; }
 terrain_ecs *game_app_terrain(game_app *app) { return app->terrain; }
 grass_system *game_app_grass(game_app *app) { return app->grass; }
+rocks_system *game_app_rocks(game_app *app) { return app->rocks; }
 terrain_renderer *game_app_renderer(game_app *app) { return app->renderer; }
 bool game_app_loaded(const game_app *app) { return !app->loading; }

@@ -28,6 +28,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "rocks/rocks.h"
 #include "terrain/terrain.h"
 #include "vegetation/vegetation.h"
 #include "walk.h"
@@ -69,6 +70,8 @@ typedef struct game_app_desc {
                                          (terrain_renderer_desc.detail_distance < 0) */
     terrain_shadow_quality shadows;   /* the sun's shadow map (terrain.h); 0 = low */
     terrain_water_quality water;      /* the sea and lakes (terrain.h, terrain_water); 0 = low */
+    rocks_quality rocks;              /* rock piles (rocks.h); 0 = on */
+    const char *rocks_cache_path;     /* the rock tile set's cache file; NULL = built each run */
     bool no_head_bob;                 /* the view without the walking dip (game_player_bob) */
     bool no_occlusion;                /* terrain lit without its ambient occlusion
                                          (terrain_renderer_desc.no_occlusion) */
@@ -132,6 +135,11 @@ typedef struct game_app_stats {
      * placed and drawn in the last frame. */
     double grass_ms_mean, grass_ms_max;
     uint64_t grass_tufts, grass_tufts_drawn;
+    /* Rocks (rocks.h): placed now, drawn in the last frame, and the tile set's build seconds
+     * (0 when read from its cache). */
+    uint64_t rocks_placed, rocks_drawn;
+    uint32_t rock_shapes;
+    double rocks_build_seconds;
 } game_app_stats;
 
 game_app_stats game_app_stats_get(const game_app *app);
@@ -139,6 +147,7 @@ game_app_stats game_app_stats_get(const game_app *app);
 terrain_world *game_app_world(game_app *app);
 terrain_ecs *game_app_terrain(game_app *app);
 grass_system *game_app_grass(game_app *app);     /* NULL with grass off */
+rocks_system *game_app_rocks(game_app *app);     /* NULL with rocks off */
 terrain_renderer *game_app_renderer(game_app *app);
 /* Whether the start area has loaded (the player moves from then on). */
 bool game_app_loaded(const game_app *app);

@@ -3,7 +3,7 @@
  *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT | --tour] [--record FILE]
  *         [--replay FILE] [--bindings FILE] [--screenshot FILE] [--radius R] [--levels N]
  *         [--memory MB] [--grass off|low|high] [--water off|low|high] [--shadows off|low|high]
- *         [--detail on|off] [--threads N]
+ *         [--detail on|off] [--rocks on|off] [--threads N]
  *         [--trace FILE] [--world DIR] [--at X,Y,Z] [--look YAW,PITCH]
  *
  * In a window: WASD or the left stick to walk, the mouse (click to capture, Escape to let go) or
@@ -30,11 +30,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 typedef struct options {
     core_common_args common;
     const char *size, *screenshot, *walk, *record, *replay, *bindings, *world, *grass, *water, *shadows, *detail, *at,
-        *look;
+        *look, *rocks;
     int seed, frames, radius, levels, memory_mb;
     bool headless, tour, no_head_bob, no_ao;
 } options;
@@ -93,6 +94,8 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
         { "grass", CORE_OPTION_STRING, &o->grass, "off|low|high", "grass patches (default low)" },
         { "water", CORE_OPTION_STRING, &o->water, "off|low|high", "the sea and lakes (default low)" },
+        { "rocks", CORE_OPTION_STRING, &o->rocks, "on|off", "rock piles (default on; the tile set is cached "
+          "in out/rocks_tiles.bin when out/ exists)" },
         { "detail", CORE_OPTION_STRING, &o->detail, "on|off", "the ground's 1 m detail layer and scale blend (default on)" },
         { "shadows", CORE_OPTION_STRING, &o->shadows, "off|low|high", "sun shadows (default low)" },
         { "memory", CORE_OPTION_INT, &o->memory_mb, "MB", "memory budget for terrain (default 384)", 16, 65536 },
@@ -123,6 +126,12 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         snprintf(error, sizeof error, "'%s' is not off, low or high", o->water);
         return bad_value(&cli, "water", error);
     }
+    if (o->rocks && !rocks_parse_quality(o->rocks, &desc->rocks)) {
+        snprintf(error, sizeof error, "'%s' is not on or off", o->rocks);
+        return bad_value(&cli, "rocks", error);
+    }
+    struct stat out_dir;
+    if (stat("out", &out_dir) == 0 && S_ISDIR(out_dir.st_mode)) desc->rocks_cache_path = "out/rocks_tiles.bin";
     if (o->detail && strcmp(o->detail, "on") != 0 && strcmp(o->detail, "off") != 0) {
         snprintf(error, sizeof error, "'%s' is not on or off", o->detail);
         return bad_value(&cli, "detail", error);
@@ -183,6 +192,10 @@ static void print_results(const game_app_stats *s, bool walked) {
         printf("world: grass %llu tufts placed, %llu in the last frame's patches, %.3f ms a frame (max %.2f ms)\n",
                (unsigned long long)s->grass_tufts, (unsigned long long)s->grass_tufts_drawn, s->grass_ms_mean,
                s->grass_ms_max);
+    if (s->rock_shapes)
+        printf("world: rocks %llu placed, %llu drawn in the last frame; %u rock shapes in the tile set (%s)\n",
+               (unsigned long long)s->rocks_placed, (unsigned long long)s->rocks_drawn, s->rock_shapes,
+               s->rocks_build_seconds > 0 ? "built this run" : "from its cache");
     printf("world: player at (%.4f, %.4f, %.4f), looking %.1f,%.1f\n", s->feet[0], s->feet[1], s->feet[2],
            s->look[0], s->look[1]);
 }

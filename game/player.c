@@ -23,6 +23,8 @@
 typedef struct local_field {
     terrain_field field;
     float lo[3];
+    double origin[3];                /* world position of local (0, 0, 0) */
+    const game_player_params *params;   /* its obstacle hooks */
 } local_field;
 
 /* f and its gradient at local point p by trilinear interpolation of the cell around p (outside
@@ -65,6 +67,18 @@ typedef struct contact {
     float normal[3];             /* unit, pointing into the air */
 } contact;
 
+/* The nearer of the terrain's contact and the obstacles' (rocks), when there are obstacles. */
+static contact obstacle_contact(const local_field *lf, const float c[3], contact terrain) {
+    const game_player_params *p = lf->params;
+    if (!p || !p->obstacle_distance) return terrain;
+    double point[3] = { lf->origin[0] + c[0], lf->origin[1] + c[1], lf->origin[2] + c[2] };
+    float normal[3];
+    float d = p->obstacle_distance(p->obstacle_user, point, fminf(terrain.distance, 2.0f), normal);
+    if (!(d < terrain.distance)) return terrain;
+    contact out = { .distance = d, .normal = { normal[0], normal[1], normal[2] } };
+    return out;
+}
+
 /* −f/|∇f|: exact where f is a clamped distance (flat ground, planar walls within 1 m of them).
  * |∇f| is bounded below so that f's saturated plateaus (f = ±1 more than σ from any surface)
  * read as far away rather than as a division by zero. */
@@ -76,11 +90,11 @@ static contact probe(const local_field *lf, const float c[3]) {
     if (len < 1e-6f) {
         out.distance = f < 0.0f ? 2.0f : -2.0f;
         out.normal[0] = 0.0f, out.normal[1] = 1.0f, out.normal[2] = 0.0f;
-        return out;
+        return obstacle_contact(lf, c, out);
     }
     out.distance = -f / fmaxf(len, 0.5f);
     for (int a = 0; a < 3; a++) out.normal[a] = -g[a] / len;
-    return out;
+    return obstacle_contact(lf, c, out);
 }
 
 /* ---- the capsule ---------------------------------------------------------------------------- */
@@ -530,7 +544,9 @@ static void update(game_player *pl, terrain_world *world, const input_actions *a
     }
     pl->waiting = false;
 
-    local_field lf = { .lo = { (float)lo[0], (float)lo[1], (float)lo[2] } };
+    local_field lf = { .lo = { (float)lo[0], (float)lo[1], (float)lo[2] },
+                       .origin = { (double)origin[0], (double)origin[1], (double)origin[2] }, .params = p };
+    if (p->obstacles_near) p->obstacles_near(p->obstacle_user, region_min, region_max);
     if (!terrain_field_sample(world, &(terrain_field_desc){
             .first = { origin[0] + lo[0], origin[1] + lo[1], origin[2] + lo[2] },
             .size = { size[0], size[1], size[2] } }, &lf.field))

@@ -118,6 +118,14 @@ typedef struct game_player_params {
      * (terrain_world generates what it lacks synchronously). */
     bool (*region_ready)(void *user, const double min[3], const double max[3]);
     void *region_user;
+    /* Solid things besides the terrain (the rocks of rocks.h). obstacles_near is told, once an
+     * update, the box the capsule can reach; obstacle_distance then gives the signed distance
+     * from a world point to the nearest obstacle (< 0 inside; max_distance when none is nearer)
+     * and its unit normal, and the capsule collides with whichever is nearer, the terrain or
+     * it. NULL = none. */
+    void (*obstacles_near)(void *user, const double min[3], const double max[3]);
+    float (*obstacle_distance)(void *user, const double point[3], float max_distance, float normal[3]);
+    void *obstacle_user;
 } game_player_params;
 
 typedef struct game_player {

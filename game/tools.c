@@ -60,6 +60,14 @@ bool game_tools_update(game_tools *tools, terrain_ecs *terrain, terrain_world *w
     /* The renderer's view direction (terrain_render.c): yaw about +y from −z, pitch up. */
     float forward[3] = { sinf(yaw) * cosf(pitch), sinf(pitch), -cosf(yaw) * cosf(pitch) };
     tools->aimed = terrain_raycast(world, eye, forward, GAME_TOOLS_REACH, &tools->aim);
+    terrain_ray_hit obstacle;
+    if (tools->obstacle_raycast &&
+        tools->obstacle_raycast(tools->obstacle_user, eye, forward,
+                                tools->aimed ? tools->aim.distance : GAME_TOOLS_REACH, &obstacle) &&
+        (!tools->aimed || obstacle.distance < tools->aim.distance)) {
+        tools->aim = obstacle;
+        tools->aimed = true;
+    }
     tools->cooldown = tools->cooldown > dt ? tools->cooldown - dt : 0.0f;
     uint32_t use = INPUT_ACTION_BIT(INPUT_ACTION_TOOL), alt_use = INPUT_ACTION_BIT(INPUT_ACTION_TOOL_ALT);
     bool pressed = actions->pressed & (use | alt_use);

@@ -7,7 +7,7 @@
  *         gfx_text_print(hud, …, "%s", game_tools_hint(&tools));
  *
  * The tool in hand aims where the view ray meets the surface (terrain_raycast, up to
- * GAME_TOOLS_REACH metres) and queues its edit with terrain_ecs_edit; the next frame's stabilize
+ * GAME_TOOLS_REACH metres, or a rock first: obstacle_raycast) and queues its edit with terrain_ecs_edit; the next frame's stabilize
  * phase applies it and the stroke is drawn that frame. A held button strokes again every
  * GAME_TOOLS_REPEAT seconds. next_tool (Tab, right shoulder) cycles the tools.
  *
@@ -44,6 +44,12 @@ typedef struct game_tools {
     bool aimed;                      /* the view ray met a surface this frame */
     terrain_ray_hit aim;
     uint64_t strokes;                /* edits queued so far */
+    /* Solid things besides the terrain that the view ray stops at (the rocks: rocks_raycast).
+     * True with the hit's position, unit normal and distance when one is met within
+     * max_distance. NULL = the terrain alone. */
+    bool (*obstacle_raycast)(void *user, const double origin[3], const float direction[3], float max_distance,
+                             terrain_ray_hit *hit);
+    void *obstacle_user;
 } game_tools;
 
 void game_tools_init(game_tools *tools);

@@ -167,7 +167,152 @@ float rocks_hull_distance(const rocks_rock *rock, const float p[3], float normal
  * error) when the file cannot be written. */
 bool rocks_tile_write_ply(const rocks_tileset *set, int t, const char *path, char *error, size_t error_size);
 
-/* ---- rocks in the world (001 §6, 000 §5) ---------------------------------------------------- */
-/* (placement, the ECS component RockTiles, drawing and collision: below, in rocks_world.c) */
+/* ---- placing rocks (001 §6, 000 §5) --------------------------------------------------------- */
+/*
+ * Space is tiled with tiles of tile_size metres, the corner at lattice point L = (i, j, k) at
+ * world (i, j, k)·tile_size. The lattice is coloured by a hash of (seed, i, j, k): deterministic,
+ * and aperiodic in practice (a stochastic tiling, 001 §6). A rock is instanced when at least
+ * `threshold` of its anchor points (its seed point and voxel centres spread over it) lie in the
+ * support, and skipped when its seed lies deeper than twice the set's largest rock radius under
+ * the top of its column (buried: nobody sees it). The support is the rock layers of the world's
+ * stacks (material TERRAIN_ROCKS), or a developer's point-membership function.
+ *
+ *     rocks_placement p = { 0 };
+ *     rocks_place_box(&(rocks_place_desc){ .tiles = set, .world = world }, min, max, &p);
+ *     ... p.instances[i].position (relative to p.origin), p.instances[i].rock ...
+ *     rocks_placement_free(&p);
+ */
+typedef bool (*rocks_support_fn)(void *user, const double point[3]);
+
+typedef struct rocks_place_desc {
+    const rocks_tileset *tiles;       /* required */
+    terrain_world *world;             /* the support's stacks (when support is NULL) */
+    rocks_support_fn support;         /* NULL = rock layers of `world` */
+    void *support_user;
+    float tile_size;                  /* metres a tile; 0 = 3 */
+    uint64_t seed;                    /* of the colouring; 0 = the world's generation seed, or 1 */
+    float threshold;                  /* share of anchors in the support; 0 = 0.6 */
+} rocks_place_desc;
+
+typedef struct rocks_instance {
+    float position[3];                /* metres: the rock's region origin, relative to the
+                                         placement's origin (the rock's vertices scale by
+                                         tile_size from there) */
+    uint32_t rock;                    /* in tiles->rocks */
+    uint32_t key;                     /* a hash of (lattice point, entry): per-rock variation */
+} rocks_instance;
+
+typedef struct rocks_placement {
+    double origin[3];                 /* world metres */
+    rocks_instance *instances;        /* in lattice order (a pure function of the box), owned */
+    uint32_t count, capacity;
+    float bounds_min[3], bounds_max[3];   /* of the instances' rocks, relative to origin */
+} rocks_placement;
+
+/* Places the rocks whose seed point lies in the world box [min, max) (x, y, z metres), reusing
+ * `out`'s memory; origin = min. The result is a pure function of (desc, box, support): each
+ * rock belongs to exactly one box of any partition of space, so boxes can be placed
+ * independently (per chunk, per thread). False (message logged) for a bad desc. */
+bool rocks_place_box(const rocks_place_desc *desc, const double min[3], const double max[3],
+                     rocks_placement *out);
+void rocks_placement_free(rocks_placement *placement);
+/* The colour (0 or 1) of lattice point (i, j, k) under a desc's seed. */
+int rocks_lattice_colour(uint64_t seed, int64_t i, int64_t j, int64_t k);
+
+/* ---- rocks in the running world: the RockTiles component, drawing, collision ---------------- */
+/*
+ *     rocks_system *rocks = rocks_create(&(rocks_desc){ .gfx = gfx, .ecs = ecs, .world = world,
+ *                                                        .tiles = set });
+ *     each frame:
+ *         rocks_set_view(rocks, &view);                 // before ecs_progress
+ *         ecs_progress(ecs, dt);                        // "rocks_place" runs in the draw phase
+ *         terrain_ecs_draw(terrain, renderer, &view);   // the ground first
+ *         rocks_draw(rocks, &view);
+ *     rocks_destroy(rocks);                             // before ecs_world_destroy and gfx_destroy
+ *
+ * Every level-0 TerrainMeshChunk within range of the view gets a RockTiles component: the rocks
+ * whose seeds lie in its 32 m box (rocks_place_box over the world's rock layers), placed by jobs
+ * on the ECS world's job system. A chunk is placed again in the frame any of the column chunks
+ * its rocks can reach changes (an edit: digging removes exactly the rocks whose anchors left the
+ * support; a rock dropped with the sand tool shows in the frame it lands).
+ *
+ * Drawing: one multi-draw-indirect, one command per rock mesh and level of detail in view, its
+ * instances from one buffer. Each rock's switch distances are spread by its key, so no ring of
+ * popping moves with the player; past range the rocks shrink into the ground.
+ *
+ * Collision: rocks_distance and rocks_raycast answer against each rock's hull (a 26-DOP of its
+ * vertices), for the player's capsule and the tools' aim.
+ *
+ * Threads: main thread (OpenGL). The GPU pass is "rocks".
+ */
+
+typedef enum rocks_quality {
+    ROCKS_DEFAULT = 0,                /* on */
+    ROCKS_OFF,                        /* nothing placed, drawn or collided with */
+    ROCKS_ON,
+} rocks_quality;
+
+/* Parses "off" or "on" (--rocks); false for anything else. */
+bool rocks_parse_quality(const char *text, rocks_quality *out);
+
+/* Zero means the default for every field. */
+typedef struct rocks_desc {
+    gfx_context *gfx;                 /* required */
+    ecs_world *ecs;                   /* required: the world terrain_ecs_create registered on */
+    terrain_world *world;             /* required */
+    const rocks_tileset *tiles;       /* required; not owned, outlives the system */
+    rocks_quality quality;
+    float tile_size;                  /* as rocks_place_desc's; 0 = 3 m */
+    float range;                      /* metres to the last rock drawn; 0 = 90 */
+    float lod_distance[ROCKS_LODS - 1];   /* metres where LOD 1 and 2 start; 0 = 14, 35 */
+    float fog_density;                /* as terrain_renderer_desc's; 0 = 0.0025 */
+} rocks_desc;
+
+typedef struct rocks_system rocks_system;
+/* NULL (the reason logged) when a required field is missing or the shaders do not build. */
+rocks_system *rocks_create(const rocks_desc *desc);
+/* Removes every RockTiles component, disables the systems, frees the GPU data. */
+void rocks_destroy(rocks_system *rocks);
+void rocks_set_view(rocks_system *rocks, const terrain_view *view);
+/* Draws the rocks of the chunks in view, in one pass named "rocks" (after the terrain). */
+void rocks_draw(rocks_system *rocks, const terrain_view *view);
+
+/* The RockTiles component of a level-0 mesh chunk entity. */
+typedef struct RockTiles {
+    rocks_placement placement;        /* owned; freed when the component leaves the entity */
+    uint64_t source;                  /* what it was placed from (the chunk versions it reads) */
+} RockTiles;
+
+/* Gathers the placed rocks that reach into [min, max] (world metres), so that the queries below
+ * inside that box read a short list instead of every chunk's rocks: call it once before many
+ * queries in one place (the player's update). A placement made since drops the gathering. */
+void rocks_focus(rocks_system *rocks, const double min[3], const double max[3]);
+/* Signed distance from a world point to the nearest rock (its hull), looking no further than
+ * max_distance (returns max_distance when none is nearer); the unit normal out of that rock in
+ * `normal` (may be NULL). */
+float rocks_distance(rocks_system *rocks, const double point[3], float max_distance, float normal[3]);
+
+typedef struct rocks_ray_hit {
+    double position[3];
+    float normal[3];
+    float distance;
+    uint32_t rock;                    /* in the tile set */
+} rocks_ray_hit;
+/* The first rock hull along the ray within max_distance; false for a miss. */
+bool rocks_raycast(rocks_system *rocks, const double origin[3], const float direction[3], float max_distance,
+                   rocks_ray_hit *hit);
+
+typedef struct rocks_stats {
+    int chunks;                       /* RockTiles components now */
+    uint64_t instances;               /* rocks placed over them */
+    uint64_t instances_drawn;         /* by the last rocks_draw */
+    int commands_drawn;               /* its draw commands (rock mesh × LOD) */
+    uint64_t placements;              /* chunks placed since creation */
+    double place_ms;                  /* CPU ms placing, last frame */
+    double draw_ms;                   /* CPU ms of the last rocks_draw */
+} rocks_stats;
+rocks_stats rocks_stats_get(const rocks_system *rocks);
+/* A hash of every placed rock (chunk coordinates, rock, key, position): tests and tools. */
+uint64_t rocks_digest(rocks_system *rocks);
 
 #endif

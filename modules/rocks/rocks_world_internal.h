@@ -1,0 +1,29 @@
+/* rocks_world_internal.h — private to modules/rocks: what the placement, the ECS system and the
+ * renderer share. (rocks_internal.h holds the tile set's internals.) */
+#ifndef ROCKS_WORLD_INTERNAL_H
+#define ROCKS_WORLD_INTERNAL_H
+
+#include "rocks/rocks.h"
+
+/* The colouring seed a desc means (its own, else the world's generation seed, else 1). */
+uint64_t rocks__place_seed(const rocks_place_desc *desc);
+
+typedef struct rocks_renderer rocks_renderer;
+typedef struct rocks_draw_item {
+    const rocks_placement *placement;
+    uint32_t first, count;            /* instances of the placement to consider */
+} rocks_draw_item;
+
+/* The tile set's meshes on the GPU, and the per-frame instance and command buffers. */
+rocks_renderer *rocks__renderer_create(gfx_context *gfx, const rocks_tileset *set);
+void rocks__renderer_destroy(rocks_renderer *r);
+typedef struct rocks_draw_params {
+    float tile_size, range, fog_density;
+    float lod_distance[ROCKS_LODS - 1];
+} rocks_draw_params;
+/* Draws the placements' rocks in view (one pass "rocks"); returns the instances drawn and the
+ * commands in *commands. */
+uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const rocks_draw_params *params,
+                              const rocks_placement *const *placements, int count, int *commands);
+
+#endif
