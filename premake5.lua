@@ -78,6 +78,10 @@ project "vegetation"
   kind "StaticLib"
   files { "modules/vegetation/**.c", "modules/vegetation/**.h" }
 
+project "rocks"
+  kind "StaticLib"
+  files { "modules/rocks/**.c", "modules/rocks/**.h" }
+
 -- Generated code: built with its own warnings off, so ours can stay strict.
 project "glad"
   kind "StaticLib"
@@ -95,7 +99,7 @@ local function program(name, extra)
     files(extra.files)
     if extra.excludes then excludes(extra.excludes) end
     if extra.defines then defines(extra.defines) end
-    links { "game", "vegetation", "terrain", "engine", "glad" }
+    links { "game", "vegetation", "rocks", "terrain", "engine", "glad" }
     if extra.links then links(extra.links) end
     links(platform_libs)
     links { "m" }
@@ -122,6 +126,8 @@ program("hidreplay", { files = { "tools/src/hidreplay.c" } })
 program("test_terrain", { files = { "tests/terrain/**.c", "tests/terrain/**.h" }, links = { "criterion" } })
 program("terrain_export", { files = { "tools/src/terrain_export.c" } })
 program("terrain_mesh", { files = { "tools/src/terrain_mesh.c" } })
+program("test_rocks", { files = { "tests/rocks/**.c", "tests/rocks/**.h" }, links = { "criterion" } })
+program("rocks_export", { files = { "tools/src/rocks_export.c" } })
 -- Render tests: OSMesa scenes checked by image properties and a golden PNG; a window test when
 -- there is a display (tools/test starts Xvfb for it).
 program("test_render", { files = { "tests/render/**.c", "tests/render/**.h" }, links = { "criterion" } })

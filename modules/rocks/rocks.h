@@ -103,14 +103,20 @@ typedef struct rocks_rock {
     float hull[2 * ROCKS_HULL_AXES];  /* collision hull: hull[2a] = min and hull[2a+1] = max of
                                          dot(v, rocks_hull_axes[a]) over its vertices */
     uint8_t region;                   /* 0 vertex, 1 edge, 2 face, 3 centre */
+    uint8_t reserved[3];              /* 0 (no padding: the cache file is the struct's bytes) */
 } rocks_rock;
 
 /* A contact point c_ij kept by erosion (001 §5), relative to the rock's region origin. */
+#define ROCKS_CONTACT_VARIES UINT32_MAX
 typedef struct rocks_contact {
     float point[3];
     uint32_t other;                   /* the rock on the other side, in the same region-origin
-                                         frame shifted by other_offset */
-    int8_t other_offset[3];           /* the other rock's region origin minus this one's */
+                                         frame shifted by other_offset, when this rock's region
+                                         fixes it (the same region or a vertex, edge or face of
+                                         it); ROCKS_CONTACT_VARIES when it lies in a region of
+                                         higher dimension, which the tiles around decide */
+    int8_t other_offset[3];           /* the other rock's region origin minus this one's, in
+                                         tiles (when other is a rock) */
     int8_t reserved;
 } rocks_contact;
 

@@ -1,0 +1,2 @@
+#include "../engine/test.h"
+Test(rocks, placeholder) {}
