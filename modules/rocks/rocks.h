@@ -96,7 +96,10 @@ typedef struct rocks_rock {
     uint32_t vertex_first, vertex_count;  /* in rocks_tileset.vertices */
     uint32_t index_first[ROCKS_LODS], index_count[ROCKS_LODS];
                                       /* triangles in rocks_tileset.indices, local to the rock's
-                                         vertices (add vertex_first); LOD 0 is the full mesh */
+                                         vertices (add vertex_first; 16 bits: a rock has fewer
+                                         than 65 536 vertices); LOD 0 is the full mesh, lightly
+                                         simplified (≤ 0.25 voxel), LOD 1 and 2 about 1/3 and
+                                         1/10 of its triangles; every level closed */
     uint32_t anchor_first, anchor_count;  /* in rocks_tileset.anchors: the seed first, then
                                          voxel centres spread over the rock (001 §6) */
     uint32_t contact_first, contact_count;  /* in rocks_tileset.contacts */
@@ -137,7 +140,7 @@ typedef struct rocks_tileset {
     rocks_tile_entry *entries;
     rocks_rock *rocks;
     rocks_vertex *vertices;
-    uint32_t *indices;
+    uint16_t *indices;                /* rock-local (see rocks_rock.index_first) */
     float (*anchors)[3];
     rocks_contact *contacts;
     uint32_t entry_count, rock_count, vertex_count, index_count, anchor_count, contact_count;

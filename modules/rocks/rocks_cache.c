@@ -179,6 +179,13 @@ bool rocks__cache_read(const char *path, const rocks__params *params, rocks__set
         if (data) core_free(data, size ? size : 1);
         return false;
     }
+    bool parsed = rocks__cache_parse(data, size, params, full, why);
+    core_free(data, size ? size : 1);
+    return parsed;
+}
+
+bool rocks__cache_parse(const unsigned char *data, size_t size, const rocks__params *params, rocks__set *full,
+                        const char **why) {
     cache_header want = header_of(params), h;
     *why = NULL;
     if (size < sizeof h + sizeof(uint64_t)) *why = "cut short";
@@ -207,7 +214,6 @@ bool rocks__cache_read(const char *path, const rocks__params *params, rocks__set
         if (sum != stored) *why = "damaged (checksum)";
     }
     if (*why) {
-        core_free(data, size ? size : 1);
         memset(s, 0, sizeof *s);
         s->desc = params->desc;
         return false;
@@ -222,7 +228,6 @@ bool rocks__cache_read(const char *path, const rocks__params *params, rocks__set
         at += bytes;
     }
     s->max_radius = h.max_radius;
-    core_free(data, size ? size : 1);
     if (!consistent(full)) {
         rocks__set_free_arrays(full);
         memset(s, 0, sizeof *s);

@@ -107,7 +107,7 @@ typedef struct rocks__region_result {
     uint32_t rock_count;
     rocks_vertex *vertices;
     uint32_t vertex_count;
-    uint32_t *indices;
+    uint16_t *indices;
     uint32_t index_count;
     float (*anchors)[3];
     uint32_t anchor_count;
@@ -162,6 +162,9 @@ rocks_tileset *rocks__tiles_create(const rocks_tiles_desc *desc, const rocks__bu
  * whole; otherwise false with *why set ("missing", "old version", …) and nothing kept. */
 bool rocks__cache_read(const char *path, const rocks__params *params, rocks__set *out, const char **why);
 bool rocks__cache_write(const char *path, const rocks__set *set);
+/* The reader's checks on a file's bytes in memory (the tests cut and damage them). */
+bool rocks__cache_parse(const unsigned char *data, size_t size, const rocks__params *params, rocks__set *out,
+                        const char **why);
 /* Bytes of the arrays, as set->bytes counts them. */
 size_t rocks__set_bytes(const rocks_tileset *set);
 void rocks__set_free_arrays(rocks__set *set);

@@ -101,6 +101,7 @@ bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int b
     uint32_t used = 0;
     for (size_t i = 0; i < lod_count[0]; i++)
         if (remap[lod[0][i]] == UINT32_MAX) remap[lod[0][i]] = used++;
+    if (used > UINT16_MAX) core_fatal("rocks", "a rock with %u vertices (16-bit indices)", used);   /* ~10³ at most */
 
     rock->vertex_first = res->vertex_count;
     rock->vertex_count = used;
@@ -140,7 +141,7 @@ bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int b
     for (int l = 0; l < ROCKS_LODS; l++) {
         rock->index_first[l] = res->index_count;
         rock->index_count[l] = (uint32_t)lod_count[l];
-        for (size_t i = 0; i < lod_count[l]; i++) res->indices[res->index_count++] = remap[lod[l][i]];
+        for (size_t i = 0; i < lod_count[l]; i++) res->indices[res->index_count++] = (uint16_t)remap[lod[l][i]];
         core_free(lod[l], ic * sizeof *lod[l]);
     }
     core_free(remap, vc * sizeof *remap);

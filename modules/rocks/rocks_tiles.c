@@ -505,7 +505,7 @@ bool rocks_tile_write_ply(const rocks_tileset *set, int t, const char *path, cha
     uint32_t base = 0;
     for (uint32_t e = tile->first; e < tile->first + tile->count; e++) {
         const rocks_rock *rock = &set->rocks[set->entries[e].rock];
-        const uint32_t *idx = set->indices + rock->index_first[0];
+        const uint16_t *idx = set->indices + rock->index_first[0];
         for (uint32_t i = 0; i < rock->index_count[0]; i += 3) {
             unsigned char three = 3;
             uint32_t tri[3] = { base + idx[i], base + idx[i + 1], base + idx[i + 2] };

@@ -79,8 +79,9 @@ static int export_tiles(const rocks_tileset *set, int tiles, const char *dir) {
         remove(temp);
         return 1;
     }
-    printf("rocks_export: %d tiles, %u rocks in the set (%.1f s%s) → %s\n", tiles, set->rock_count, set->build_seconds,
-           set->from_cache ? ", from the cache" : "", dir);
+    printf("rocks_export: %d tiles, %u rocks in the set (%.1f s%s, %.1f MB: %u vertices, %u indices) → %s\n", tiles,
+           set->rock_count, set->build_seconds, set->from_cache ? ", from the cache" : "", (double)set->bytes / 1e6,
+           set->vertex_count, set->index_count, dir);
     return 0;
 }
 
