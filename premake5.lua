@@ -126,6 +126,8 @@ program("hidreplay", { files = { "tools/src/hidreplay.c" } })
 program("test_terrain", { files = { "tests/terrain/**.c", "tests/terrain/**.h" }, links = { "criterion" } })
 program("terrain_export", { files = { "tools/src/terrain_export.c" } })
 program("terrain_mesh", { files = { "tools/src/terrain_mesh.c" } })
+program("test_rocks", { files = { "tests/rocks/**.c", "tests/rocks/**.h" }, links = { "criterion" } })
+program("rocks_export", { files = { "tools/src/rocks_export.c" } })
 -- Render tests: OSMesa scenes checked by image properties and a golden PNG; a window test when
 -- there is a display (tools/test starts Xvfb for it).
 program("test_render", { files = { "tests/render/**.c", "tests/render/**.h" }, links = { "criterion" } })

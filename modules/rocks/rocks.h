@@ -96,21 +96,30 @@ typedef struct rocks_rock {
     uint32_t vertex_first, vertex_count;  /* in rocks_tileset.vertices */
     uint32_t index_first[ROCKS_LODS], index_count[ROCKS_LODS];
                                       /* triangles in rocks_tileset.indices, local to the rock's
-                                         vertices (add vertex_first); LOD 0 is the full mesh */
+                                         vertices (add vertex_first; 16 bits: a rock has fewer
+                                         than 65 536 vertices); LOD 0 is the full mesh, lightly
+                                         simplified (≤ 0.25 voxel), LOD 1 and 2 about 1/3 and
+                                         1/10 of its triangles; every level closed */
     uint32_t anchor_first, anchor_count;  /* in rocks_tileset.anchors: the seed first, then
                                          voxel centres spread over the rock (001 §6) */
     uint32_t contact_first, contact_count;  /* in rocks_tileset.contacts */
     float hull[2 * ROCKS_HULL_AXES];  /* collision hull: hull[2a] = min and hull[2a+1] = max of
                                          dot(v, rocks_hull_axes[a]) over its vertices */
     uint8_t region;                   /* 0 vertex, 1 edge, 2 face, 3 centre */
+    uint8_t reserved[3];              /* 0 (no padding: the cache file is the struct's bytes) */
 } rocks_rock;
 
 /* A contact point c_ij kept by erosion (001 §5), relative to the rock's region origin. */
+#define ROCKS_CONTACT_VARIES UINT32_MAX
 typedef struct rocks_contact {
     float point[3];
     uint32_t other;                   /* the rock on the other side, in the same region-origin
-                                         frame shifted by other_offset */
-    int8_t other_offset[3];           /* the other rock's region origin minus this one's */
+                                         frame shifted by other_offset, when this rock's region
+                                         fixes it (the same region or a vertex, edge or face of
+                                         it); ROCKS_CONTACT_VARIES when it lies in a region of
+                                         higher dimension, which the tiles around decide */
+    int8_t other_offset[3];           /* the other rock's region origin minus this one's, in
+                                         tiles (when other is a rock) */
     int8_t reserved;
 } rocks_contact;
 
@@ -131,7 +140,7 @@ typedef struct rocks_tileset {
     rocks_tile_entry *entries;
     rocks_rock *rocks;
     rocks_vertex *vertices;
-    uint32_t *indices;
+    uint16_t *indices;                /* rock-local (see rocks_rock.index_first) */
     float (*anchors)[3];
     rocks_contact *contacts;
     uint32_t entry_count, rock_count, vertex_count, index_count, anchor_count, contact_count;

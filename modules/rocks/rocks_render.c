@@ -92,7 +92,7 @@ rocks_renderer *rocks__renderer_create(gfx_context *gfx, const rocks_tileset *se
     r->vertices = gfx_buffer_create(&(gfx_buffer_desc){ .size = (size_t)set->vertex_count * sizeof *vertices,
                                                         .data = vertices });
     core_free(vertices, (set->vertex_count ? set->vertex_count : 1) * sizeof *vertices);
-    r->indices = gfx_buffer_create(&(gfx_buffer_desc){ .size = (size_t)set->index_count * sizeof(uint32_t),
+    r->indices = gfx_buffer_create(&(gfx_buffer_desc){ .size = (size_t)set->index_count * sizeof(uint16_t),
                                                        .data = set->indices });
     r->instance_capacity = 4096;
     r->instances = gfx_buffer_create(&(gfx_buffer_desc){ .size = r->instance_capacity * sizeof(rock_gpu_instance),
@@ -231,7 +231,7 @@ uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const
     glEnable(GL_CULL_FACE);
     glBindVertexArray(r->vertex_array.id);
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, r->commands.id);
-    glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT, NULL, (GLsizei)touched, 0);
+    glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_SHORT, NULL, (GLsizei)touched, 0);
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
     glBindVertexArray(0);
     glDisable(GL_CULL_FACE);

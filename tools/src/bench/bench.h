@@ -52,6 +52,7 @@ void bench_group_terrain_ao(bench_context *ctx);
 void bench_group_terrain_detail(bench_context *ctx);
 void bench_group_shadows(bench_context *ctx);
 void bench_group_water(bench_context *ctx);
+void bench_group_rocks(bench_context *ctx);
 void bench_group_rocks_world(bench_context *ctx);
 
 #endif

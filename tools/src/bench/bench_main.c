@@ -129,7 +129,8 @@ int main(int argc, char **argv) {
                                    bench_group_terrain_edit_log,
                                    bench_group_world, bench_group_grass, bench_group_terrain_ao,
                                    bench_group_terrain_detail,
-                                   bench_group_shadows, bench_group_water, bench_group_rocks_world,
+                                   bench_group_shadows, bench_group_water, bench_group_rocks,
+                                   bench_group_rocks_world,
                                    bench_group_play };
     for (size_t i = 0; i < CORE_COUNTOF(groups); i++) groups[i](&ctx);
 

@@ -1,0 +1,175 @@
+/* rocks_internal.h — the tile set's private parts (paper 001), shared by rocks_tiles.c,
+ * rocks_voronoi.c, rocks_mesh.c, rocks_cache.c and the tests (which may include it).
+ *
+ * Frames. Everything inside the builder is in integer cells and voxels relative to one origin
+ * (a region's origin, or the test's block origin): cell C covers voxels C·m … C·m + m − 1 on each
+ * axis (m = voxels_per_cell). A seed is (its cell, its position inside the cell in voxel units,
+ * its quadratic form), and the offset from a seed to a voxel centre V + ½ is computed as
+ *     (float)(V − P·m) + 0.5 − u
+ * which depends on integers that do not change when both are moved by whole cells. So a voxel's
+ * distances, and its owner, are the same bits whatever frame computes them: the per-region
+ * builder and the test's global brute force agree exactly, not just up to rounding.
+ */
+#ifndef ROCKS_INTERNAL_H
+#define ROCKS_INTERNAL_H
+
+#include "rocks/rocks.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#define ROCKS__MAX_SEEDS_PER_CELL 8
+#define ROCKS__REGION_COUNT (2 + 12 + 48 + 256)   /* 318 region instances (001 §3) */
+#define ROCKS__ANCHORS 16                         /* the seed and up to 15 voxel centres */
+#define ROCKS__CACHE_VERSION 1u
+
+enum { ROCKS__VERTEX = 0, ROCKS__EDGE = 1, ROCKS__FACE = 2, ROCKS__CENTRE = 3 };
+
+/* One seed point p_k with its anisotropic distance d_k (001 §4). */
+typedef struct rocks__seed {
+    uint64_t id;        /* hash of its feature, colours, offset and index: orders ties */
+    int cell[3];        /* in the frame's cells */
+    float u[3];         /* position inside the cell, in voxels (0 … m) */
+    float q[6];         /* d(δ) = δᵀ·Q·δ with Q = (α x xᵀ + β y yᵀ + γ z zᵀ)/g:
+                           q00, q11, q22, 2q01, 2q02, 2q12 */
+    int k;              /* index within its cell */
+} rocks__seed;
+
+/* d_k(δ) for an offset δ from the seed in voxels. The one formula both the builder's loops and
+ * the tests use (the same operations in the same order give the same bits; no FMA contraction
+ * on the portable x86-64 target). */
+static inline float rocks__distance(const float q[6], float dx, float dy, float dz) {
+    float b = q[3] * dy + q[4] * dz;
+    float a = (q[1] * dy + q[5] * dz) * dy + q[2] * dz * dz;
+    return (q[0] * dx + b) * dx + a;
+}
+
+static inline int rocks__floor_div(int a, int b) {
+    int q = a / b;
+    return (a % b != 0 && (a < 0) != (b < 0)) ? q - 1 : q;
+}
+
+/* The desc with its defaults filled in, and what follows from it. */
+typedef struct rocks__params {
+    rocks_tiles_desc desc;            /* jobs and cache_path NULL */
+    int n, m;                         /* cells a tile side, voxels a cell side */
+    int seeds_max;                    /* s */
+    bool seeds_fixed;                 /* n_k = s in every cell (round and slab presets) */
+    float contact_voxels, blend_voxels;   /* a and b in voxels, after the floor below */
+} rocks__params;
+
+/* Fills `out` from desc (defaults, ranges). False with a message for bad values. */
+bool rocks__params_make(const rocks_tiles_desc *desc, rocks__params *out);
+
+/* Colour of lattice point (x, y, z) of the caller's frame; only the points of the feature being
+ * generated are asked for. */
+typedef int (*rocks__colour_fn)(const void *user, int x, int y, int z);
+
+/* The seeds of one cell (in the caller's frame): a pure function of the lowest-dimensional
+ * feature whose closure holds the cell, that feature's corner colours, the cell's offset from the
+ * feature's origin and desc.seed (001 §3). Writes up to ROCKS__MAX_SEEDS_PER_CELL; returns the
+ * count. */
+int rocks__cell_seeds(const rocks__params *params, const int cell[3], rocks__colour_fn colour,
+                      const void *user, rocks__seed *out);
+
+/* The dual block of voxel V on one axis: its cell and the neighbour on its side of the cell's
+ * centre. */
+static inline void rocks__dual_axis(int voxel, int m, int *first_cell) {
+    int c = rocks__floor_div(voxel, m);
+    int s = voxel - c * m;
+    *first_cell = (2 * s + 1 < m) ? c - 1 : c;   /* the block is first_cell, first_cell + 1 */
+}
+
+/* A region instance (001 §3): its kind, the axis of an edge (along) or a face (normal), and the
+ * colours of its feature's lattice points, which lie in {0, 1}³ of the region's frame. */
+typedef struct rocks__region {
+    int kind, axis;
+    uint8_t colour[2][2][2];          /* [z][y][x]; only the feature's points are meaningful */
+    bool known[2][2][2];
+    int lo[3], hi[3];                 /* its cells, inclusive, in its own frame */
+} rocks__region;
+
+void rocks__region_make(const rocks__params *params, int index, rocks__region *out);
+/* Instance index of the region that holds `cell` (a frame where `colour` knows the cell's
+ * feature's corners), and that region's origin in the frame. -1 when the colours needed are not
+ * known. */
+int rocks__region_of_cell(const rocks__params *params, const int cell[3],
+                          const bool known[2][2][2], const uint8_t colour[2][2][2], int origin[3]);
+
+/* A contact whose other rock is not fixed by this rock's region (the tile around decides it). */
+#define ROCKS__OTHER_UNRESOLVED UINT32_MAX
+
+/* One region instance built: its rocks with geometry in the instance's own arrays. */
+typedef struct rocks__region_result {
+    rocks_rock *rocks;
+    int (*rock_cell)[3];              /* seed cell of each rock, in the region's frame */
+    int *rock_k;
+    uint32_t rock_count;
+    rocks_vertex *vertices;
+    uint32_t vertex_count;
+    uint16_t *indices;
+    uint32_t index_count;
+    float (*anchors)[3];
+    uint32_t anchor_count;
+    rocks_contact *contacts;          /* other = the other region's instance until resolved */
+    int (*contact_other)[5];          /* other's instance (or -1), cell (3), k */
+    uint32_t contact_count;
+    /* kept for tests only (rocks__build_options.keep_voxels): each rock's Voronoi voxels before
+     * erosion, in the region's voxel frame, and ρ after it */
+    int16_t (*voxels)[3];
+    float *voxel_rho;
+    uint32_t *voxel_first, *voxel_count;
+    uint32_t voxel_total;
+    /* capacities of the arrays above (core_grow), for freeing */
+    size_t rock_cap, vertex_cap, index_cap, anchor_cap, contact_cap, voxel_cap;
+} rocks__region_result;
+
+typedef struct rocks__build_options {
+    bool keep_voxels;                 /* keep every rock's voxel set (tests) */
+    bool keep_empty;                  /* keep rocks that eroded away (tests of ownership) */
+} rocks__build_options;
+
+/* Builds one region instance: seeds, ownership, contacts, erosion, meshes (rocks_voronoi.c and
+ * rocks_mesh.c). Frees with rocks__region_result_free. */
+void rocks__region_build(const rocks__params *params, const rocks__build_options *options, int index,
+                         rocks__region_result *out);
+void rocks__region_result_free(rocks__region_result *result);
+
+/* Meshes, LODs, anchors and hull of one eroded rock (rocks_mesh.c). `rho` covers the box
+ * [box_lo, box_lo + size) in region voxels with a border of ρ = 0 at least one voxel wide.
+ * Appends to the result's arrays; false when nothing of the rock is left (no ρ ≥ 0.5). */
+bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int box_lo[3],
+                      const int size[3], const rocks__seed *seed, rocks__region_result *result,
+                      rocks_rock *rock);
+
+/* The full set with the tests' extras. */
+typedef struct rocks__set {
+    rocks_tileset set;
+    rocks__params params;
+    /* per rock: its region instance and seed cell/k (region frame); voxels when kept */
+    uint16_t *rock_region;
+    int16_t (*rock_cell)[3];
+    uint8_t *rock_k;
+    int16_t (*voxels)[3];
+    float *voxel_rho;
+    uint32_t *voxel_first, *voxel_count;
+    uint32_t voxel_total;
+} rocks__set;
+
+rocks_tileset *rocks__tiles_create(const rocks_tiles_desc *desc, const rocks__build_options *options);
+
+/* The cache (rocks_cache.c). Read: true when `path` holds exactly this set's parameters and is
+ * whole; otherwise false with *why set ("missing", "old version", …) and nothing kept. */
+bool rocks__cache_read(const char *path, const rocks__params *params, rocks__set *out, const char **why);
+bool rocks__cache_write(const char *path, const rocks__set *set);
+/* The reader's checks on a file's bytes in memory (the tests cut and damage them). */
+bool rocks__cache_parse(const unsigned char *data, size_t size, const rocks__params *params, rocks__set *out,
+                        const char **why);
+/* Bytes of the arrays, as set->bytes counts them. */
+size_t rocks__set_bytes(const rocks_tileset *set);
+void rocks__set_free_arrays(rocks__set *set);
+
+/* Each edge of triangles[0, index_count) in exactly two triangles (once in each direction). */
+bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t vertex_count);
+
+#endif

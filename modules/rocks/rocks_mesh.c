@@ -1,0 +1,193 @@
+/* rocks_mesh.c — an eroded rock's meshes, levels of detail, anchors and hull (001 §5–§6).
+ *
+ * The field r = 2ρ − 1 at voxel centres (001 §5), −1 outside the rock; the box carries a border
+ * of empty voxels, so marching cubes (terrain_mesh_build, f > 0 solid) closes every mesh. LOD 0
+ * is simplified lightly (meshoptimizer, error ≤ 0.25 voxel: a voxel-grid surface has far more
+ * triangles than its shape needs, and the set must stay small), LOD 1 and 2 aim at 1/3 and 1/10
+ * of LOD 0's triangles. A level that comes out not closed (every edge in exactly two triangles)
+ * falls back to the level above it, so every level is watertight.
+ */
+#include "rocks_internal.h"
+
+#include "core/core.h"
+
+#include <math.h>
+#include <meshoptimizer.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int compare_u64(const void *a, const void *b) {
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t vertex_count) {
+    if (index_count == 0 || index_count % 3) return false;
+    uint64_t *edges = core_alloc(index_count * sizeof *edges);
+    bool ok = true;
+    for (uint32_t t = 0; t < index_count && ok; t += 3)
+        for (int e = 0; e < 3; e++) {
+            uint32_t a = indices[t + e], b = indices[t + (e + 1) % 3];
+            if (a == b || a >= vertex_count || b >= vertex_count) ok = false;
+            edges[t + e] = (uint64_t)a << 32 | b;
+        }
+    if (ok) {
+        qsort(edges, index_count, sizeof *edges, compare_u64);
+        for (uint32_t i = 0; i < index_count && ok; i++) {
+            if (i + 1 < index_count && edges[i] == edges[i + 1]) ok = false;   /* a directed edge twice */
+            uint64_t reverse = (edges[i] << 32) | (edges[i] >> 32);
+            if (!bsearch(&reverse, edges, index_count, sizeof *edges, compare_u64)) ok = false;
+        }
+    }
+    core_free(edges, index_count * sizeof *edges);
+    return ok;
+}
+
+/* Simplifies `in` towards `target` indices within `error` voxels; the input when the result is not
+ * closed. Returns the count written to `out`. */
+static size_t simplify(uint32_t *out, const uint32_t *in, size_t count, const float *positions, size_t vertex_count,
+                       size_t target, float error, float scale) {
+    size_t written = meshopt_simplify(out, in, count, positions, vertex_count, 3 * sizeof(float), target, error / scale, 0, NULL);
+    if (written == 0 || !rocks__watertight(out, (uint32_t)written, (uint32_t)vertex_count)) {
+        memcpy(out, in, count * sizeof *out);
+        return count;
+    }
+    return written;
+}
+
+#define GROW(res, field, cap, needed) ((res)->field = core_grow((res)->field, &(res)->cap, (needed), sizeof *(res)->field))
+
+bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int box_lo[3], const int size[3],
+                      const rocks__seed *seed, rocks__region_result *res, rocks_rock *rock) {
+    const size_t total = (size_t)size[0] * size[1] * size[2];
+    const int m = params->m;
+    const float tile_scale = 1.0f / (float)(params->n * m);
+    memset(rock, 0, sizeof *rock);
+    bool any = false;
+    for (size_t i = 0; i < total && !any; i++) any = rho[i] >= 0.5f;
+    if (!any) return false;   /* eroded away: 001 §7's counts are below the seed counts */
+
+    terrain_field field = { .nx = size[0], .ny = size[1], .nz = size[2], .spacing = 1.0f };
+    field.values = core_alloc(total * sizeof *field.values);
+    for (size_t i = 0; i < total; i++) {
+        float r = 2.0f * rho[i] - 1.0f;
+        field.values[i] = r == 0.0f ? 1e-6f : r;   /* ρ = ½ counts as solid, like the anchors */
+    }
+    terrain_mesh mesh;
+    bool built = terrain_mesh_build(&field, &(terrain_mesh_desc){ .no_occlusion = true, .no_optimize = true }, &mesh);
+    core_free(field.values, total * sizeof *field.values);
+    if (!built || mesh.index_count == 0) {
+        if (built) terrain_mesh_free(&mesh);
+        return false;
+    }
+
+    /* Positions in voxels for the simplifier (its errors are then in voxels). */
+    size_t vc = mesh.vertex_count, ic = mesh.index_count;
+    float *positions = core_alloc(vc * 3 * sizeof *positions);
+    for (size_t v = 0; v < vc; v++)
+        for (int a = 0; a < 3; a++) positions[3 * v + a] = mesh.vertices[v].position[a];
+    float scale = meshopt_simplifyScale(positions, vc, 3 * sizeof(float));
+    if (!(scale > 0.0f)) scale = 1.0f;
+    uint32_t *lod[ROCKS_LODS];
+    size_t lod_count[ROCKS_LODS];
+    for (int l = 0; l < ROCKS_LODS; l++) lod[l] = core_alloc(ic * sizeof *lod[l]);
+    lod_count[0] = simplify(lod[0], mesh.indices, ic, positions, vc, 0, 0.25f, scale);
+    lod_count[1] = simplify(lod[1], lod[0], lod_count[0], positions, vc, (lod_count[0] / 9) * 3, 1.5f, scale);
+    lod_count[2] = simplify(lod[2], lod[1], lod_count[1], positions, vc, (lod_count[0] / 30) * 3, 4.0f, scale);
+
+    /* Keep LOD 0's vertices only, in order of first use (the others use a subset of them). */
+    uint32_t *remap = core_alloc(vc * sizeof *remap);
+    for (size_t v = 0; v < vc; v++) remap[v] = UINT32_MAX;
+    uint32_t used = 0;
+    for (size_t i = 0; i < lod_count[0]; i++)
+        if (remap[lod[0][i]] == UINT32_MAX) remap[lod[0][i]] = used++;
+    if (used > UINT16_MAX) core_fatal("rocks", "a rock with %u vertices (16-bit indices)", used);   /* ~10³ at most */
+
+    rock->vertex_first = res->vertex_count;
+    rock->vertex_count = used;
+    GROW(res, vertices, vertex_cap, res->vertex_count + used);
+    rocks_vertex *out = res->vertices + res->vertex_count;
+    float seed_pos[3];
+    for (int a = 0; a < 3; a++) seed_pos[a] = ((float)(seed->cell[a] * m) + seed->u[a]) * tile_scale;
+    for (int a = 0; a < 3; a++) rock->bounds_min[a] = INFINITY, rock->bounds_max[a] = -INFINITY;
+    for (int a = 0; a < ROCKS_HULL_AXES; a++) rock->hull[2 * a] = INFINITY, rock->hull[2 * a + 1] = -INFINITY;
+    float radius2 = 0.0f;
+    for (size_t v = 0; v < vc; v++) {
+        if (remap[v] == UINT32_MAX) continue;
+        rocks_vertex *o = &out[remap[v]];
+        memset(o, 0, sizeof *o);
+        float d2 = 0.0f;
+        for (int a = 0; a < 3; a++) {
+            float p = ((float)box_lo[a] + 0.5f + mesh.vertices[v].position[a]) * tile_scale;
+            o->position[a] = p;
+            o->normal[a] = (int8_t)lrintf(fmaxf(-1.0f, fminf(1.0f, mesh.vertices[v].normal[a])) * 127.0f);
+            if (p < rock->bounds_min[a]) rock->bounds_min[a] = p;
+            if (p > rock->bounds_max[a]) rock->bounds_max[a] = p;
+            d2 += (p - seed_pos[a]) * (p - seed_pos[a]);
+        }
+        if (d2 > radius2) radius2 = d2;
+        for (int h = 0; h < ROCKS_HULL_AXES; h++) {
+            const float *axis = rocks_hull_axes[h];
+            float d = axis[0] * o->position[0] + axis[1] * o->position[1] + axis[2] * o->position[2];
+            if (d < rock->hull[2 * h]) rock->hull[2 * h] = d;
+            if (d > rock->hull[2 * h + 1]) rock->hull[2 * h + 1] = d;
+        }
+    }
+    rock->radius = sqrtf(radius2);
+    res->vertex_count += used;
+
+    size_t all = lod_count[0] + lod_count[1] + lod_count[2];
+    GROW(res, indices, index_cap, res->index_count + all);
+    for (int l = 0; l < ROCKS_LODS; l++) {
+        rock->index_first[l] = res->index_count;
+        rock->index_count[l] = (uint32_t)lod_count[l];
+        for (size_t i = 0; i < lod_count[l]; i++) res->indices[res->index_count++] = (uint16_t)remap[lod[l][i]];
+        core_free(lod[l], ic * sizeof *lod[l]);
+    }
+    core_free(remap, vc * sizeof *remap);
+    core_free(positions, vc * 3 * sizeof *positions);
+    terrain_mesh_free(&mesh);
+
+    /* Anchors (001 §6): the seed, then voxel centres with ρ ≥ ½ spread by farthest-point
+     * sampling. 001 uses every voxel centre; 15 spread ones bound the cost of testing a rock
+     * against the support (placement stays under 0.5 ms a chunk) and still see where it lies. */
+    rock->anchor_first = res->anchor_count;
+    GROW(res, anchors, anchor_cap, res->anchor_count + ROCKS__ANCHORS);
+    float (*anchors)[3] = res->anchors + res->anchor_count;
+    memcpy(anchors[0], seed_pos, sizeof seed_pos);
+    uint32_t anchor_count = 1;
+    size_t solid = 0;
+    for (size_t i = 0; i < total; i++) solid += rho[i] >= 0.5f;
+    float (*centres)[3] = core_alloc(solid * sizeof *centres);
+    float *nearest = core_alloc(solid * sizeof *nearest);
+    size_t c = 0;
+    for (int z = 0; z < size[2]; z++)
+        for (int y = 0; y < size[1]; y++)
+            for (int x = 0; x < size[0]; x++) {
+                if (rho[((size_t)z * size[1] + y) * size[0] + x] < 0.5f) continue;
+                int v[3] = { box_lo[0] + x, box_lo[1] + y, box_lo[2] + z };
+                float d2 = 0.0f;
+                for (int a = 0; a < 3; a++) {
+                    centres[c][a] = ((float)v[a] + 0.5f) * tile_scale;
+                    d2 += (centres[c][a] - seed_pos[a]) * (centres[c][a] - seed_pos[a]);
+                }
+                nearest[c++] = d2;
+            }
+    while (anchor_count < ROCKS__ANCHORS) {
+        size_t best = 0;
+        for (size_t i = 1; i < solid; i++)
+            if (nearest[i] > nearest[best]) best = i;
+        if (solid == 0 || nearest[best] <= 0.0f) break;
+        memcpy(anchors[anchor_count++], centres[best], sizeof centres[best]);
+        for (size_t i = 0; i < solid; i++) {
+            float d2 = 0.0f;
+            for (int a = 0; a < 3; a++) d2 += (centres[i][a] - centres[best][a]) * (centres[i][a] - centres[best][a]);
+            if (d2 < nearest[i]) nearest[i] = d2;
+        }
+    }
+    core_free(centres, solid * sizeof *centres);
+    core_free(nearest, solid * sizeof *nearest);
+    rock->anchor_count = anchor_count;
+    res->anchor_count += anchor_count;
+    return true;
+}

@@ -1,0 +1,428 @@
+/* rocks_voronoi.c — one region instance: the discrete anisotropic Voronoi cells of its seeds,
+ * their contacts and their erosion (001 §4–§5).
+ *
+ * Why a rock depends on its region alone. 001 §4 gives each voxel to the seed with the smallest
+ * d_k = f_k/g_k, but "among which seeds" is left open, and with all seeds of a tiling a rock's
+ * shape would depend on tiles far away (001 §2's straddling problem). We take the owner of voxel
+ * v among the seeds of its dual block only: per axis, v's cell and the neighbour cell on v's side
+ * of the cell's centre (2×2×2 cells). Then
+ *   - a seed in cell c can own v only when c is in v's dual block, i.e. v lies within half a
+ *     cell of c: every rock lies inside its cell grown by half a cell;
+ *   - the owner of such a v is decided by seeds in cells c ± 1;
+ *   - so a rock's voxel set depends only on the seeds of c ± 1, which (001 §3) lie in the closure
+ *     of c's region and are fixed by that region's colours alone.
+ * Contacts (001 §5) are decided the same way (below), and erosion reads only the rock's own
+ * voxels and contacts, so the eroded rock and its mesh are one function of the region instance:
+ * computed once, shared by every tile that holds a piece of the region. Ties in d go to the
+ * smaller seed id, so the rule is total and the same in every frame.
+ */
+#include "rocks_internal.h"
+
+#include "core/core.h"
+
+#include <math.h>
+#include <string.h>
+
+#define BLOCK_MAX 512   /* voxels of one cell octant: ⌈m/2⌉³ ≤ 8³ */
+
+typedef struct region_build {
+    const rocks__params *params;
+    rocks__region region;
+    int m, n;
+    /* closure cells lo − 1 … hi + 1 */
+    int clo[3], cdim[3];
+    uint32_t *cell_first, *cell_count;
+    rocks__seed *seeds;
+    uint32_t seed_count;
+    /* the voxels whose dual block holds a region cell */
+    int vlo[3], vdim[3];
+    int32_t *owner;
+} region_build;
+
+static int region_colour(const void *user, int x, int y, int z) {
+    const rocks__region *r = user;
+    if (x < 0 || x > 1 || y < 0 || y > 1 || z < 0 || z > 1 || !r->known[z][y][x]) return 0;   /* never asked */
+    return r->colour[z][y][x];
+}
+
+static size_t cell_slot(const region_build *b, const int c[3]) {
+    return ((size_t)(c[2] - b->clo[2]) * b->cdim[1] + (c[1] - b->clo[1])) * b->cdim[0] + (c[0] - b->clo[0]);
+}
+
+static void make_seeds(region_build *b) {
+    size_t cells = (size_t)b->cdim[0] * b->cdim[1] * b->cdim[2];
+    b->cell_first = core_alloc(cells * sizeof *b->cell_first);
+    b->cell_count = core_alloc(cells * sizeof *b->cell_count);
+    b->seeds = core_alloc(cells * ROCKS__MAX_SEEDS_PER_CELL * sizeof *b->seeds);
+    b->seed_count = 0;
+    int c[3];
+    for (c[2] = b->clo[2]; c[2] < b->clo[2] + b->cdim[2]; c[2]++)
+        for (c[1] = b->clo[1]; c[1] < b->clo[1] + b->cdim[1]; c[1]++)
+            for (c[0] = b->clo[0]; c[0] < b->clo[0] + b->cdim[0]; c[0]++) {
+                size_t slot = cell_slot(b, c);
+                b->cell_first[slot] = b->seed_count;
+                int count = rocks__cell_seeds(b->params, c, region_colour, &b->region, b->seeds + b->seed_count);
+                b->cell_count[slot] = (uint32_t)count;
+                b->seed_count += (uint32_t)count;
+            }
+}
+
+/* ---- ownership (001 §4, the dual-block rule above) --------------------------------------------- */
+
+/* One octant of one cell: all its voxels share a dual block, so the candidates are fixed and the
+ * loop runs candidate by candidate over rows of voxels (structure of arrays: the x offsets of a
+ * row precomputed, then two multiplies and two adds a voxel, vectorisable). */
+static void own_block(region_build *b, const int v0[3], const int size[3], const int first_cell[3]) {
+    uint32_t cand[8 * ROCKS__MAX_SEEDS_PER_CELL];
+    int count = 0;
+    for (int dz = 0; dz < 2; dz++)
+        for (int dy = 0; dy < 2; dy++)
+            for (int dx = 0; dx < 2; dx++) {
+                int c[3] = { first_cell[0] + dx, first_cell[1] + dy, first_cell[2] + dz };
+                size_t slot = cell_slot(b, c);
+                for (uint32_t i = 0; i < b->cell_count[slot]; i++) cand[count++] = b->cell_first[slot] + i;
+            }
+    for (int i = 1; i < count; i++) {   /* by id: with strict < below, ties go to the smaller id */
+        uint32_t x = cand[i];
+        int j = i - 1;
+        while (j >= 0 && b->seeds[cand[j]].id > b->seeds[x].id) cand[j + 1] = cand[j], j--;
+        cand[j + 1] = x;
+    }
+    float best[BLOCK_MAX];
+    int32_t who[BLOCK_MAX];
+    const int nx = size[0], ny = size[1], nz = size[2], m = b->m;
+    for (int i = 0; i < nx * ny * nz; i++) best[i] = INFINITY, who[i] = -1;
+    for (int k = 0; k < count; k++) {
+        const rocks__seed *s = &b->seeds[cand[k]];
+        const float *q = s->q;
+        float dxs[16];
+        for (int x = 0; x < nx; x++) dxs[x] = (float)(v0[0] + x - s->cell[0] * m) + 0.5f - s->u[0];
+        int32_t id = (int32_t)cand[k];
+        for (int z = 0; z < nz; z++) {
+            float dz = (float)(v0[2] + z - s->cell[2] * m) + 0.5f - s->u[2];
+            for (int y = 0; y < ny; y++) {
+                float dy = (float)(v0[1] + y - s->cell[1] * m) + 0.5f - s->u[1];
+                float bq = q[3] * dy + q[4] * dz;                     /* rocks__distance, split */
+                float aq = (q[1] * dy + q[5] * dz) * dy + q[2] * dz * dz;
+                float *row = best + (z * ny + y) * nx;
+                int32_t *row_who = who + (z * ny + y) * nx;
+                for (int x = 0; x < nx; x++) {
+                    float d = (q[0] * dxs[x] + bq) * dxs[x] + aq;
+                    bool better = d < row[x];
+                    row[x] = better ? d : row[x];
+                    row_who[x] = better ? id : row_who[x];
+                }
+            }
+        }
+    }
+    for (int z = 0; z < nz; z++)
+        for (int y = 0; y < ny; y++) {
+            int32_t *dst = b->owner + ((size_t)(v0[2] + z - b->vlo[2]) * b->vdim[1] + (v0[1] + y - b->vlo[1])) * b->vdim[0] +
+                           (v0[0] - b->vlo[0]);
+            memcpy(dst, who + (z * ny + y) * nx, (size_t)nx * sizeof *dst);
+        }
+}
+
+static void own_voxels(region_build *b) {
+    const int m = b->m, half = m / 2;   /* voxels s < half are on the lower side (2s + 1 < m) */
+    size_t total = (size_t)b->vdim[0] * b->vdim[1] * b->vdim[2];
+    b->owner = core_alloc(total * sizeof *b->owner);
+    int c[3];
+    for (c[2] = b->clo[2]; c[2] < b->clo[2] + b->cdim[2]; c[2]++)
+        for (c[1] = b->clo[1]; c[1] < b->clo[1] + b->cdim[1]; c[1]++)
+            for (c[0] = b->clo[0]; c[0] < b->clo[0] + b->cdim[0]; c[0]++)
+                for (int octant = 0; octant < 8; octant++) {
+                    int v0[3], size[3], first_cell[3];
+                    bool empty = false;
+                    for (int a = 0; a < 3; a++) {
+                        int upper = (octant >> a) & 1;
+                        int lo = c[a] * m + (upper ? half : 0), hi = c[a] * m + (upper ? m : half);
+                        if (lo < b->vlo[a]) lo = b->vlo[a];
+                        if (hi > b->vlo[a] + b->vdim[a]) hi = b->vlo[a] + b->vdim[a];
+                        v0[a] = lo, size[a] = hi - lo;
+                        first_cell[a] = upper ? c[a] : c[a] - 1;
+                        empty |= size[a] <= 0;
+                    }
+                    if (!empty) own_block(b, v0, size, first_cell);
+                }
+}
+
+static int32_t owner_at(const region_build *b, const int v[3]) {
+    for (int a = 0; a < 3; a++)
+        if (v[a] < b->vlo[a] || v[a] >= b->vlo[a] + b->vdim[a]) return -2;
+    return b->owner[((size_t)(v[2] - b->vlo[2]) * b->vdim[1] + (v[1] - b->vlo[1])) * b->vdim[0] + (v[0] - b->vlo[0])];
+}
+
+/* Whether voxel v's dual block holds both cells. */
+static bool dual_holds(int m, const int v[3], const int a[3], const int c[3]) {
+    for (int axis = 0; axis < 3; axis++) {
+        int first;
+        rocks__dual_axis(v[axis], m, &first);
+        if (a[axis] != first && a[axis] != first + 1) return false;
+        if (c[axis] != first && c[axis] != first + 1) return false;
+    }
+    return true;
+}
+
+/* ---- contacts (001 §5) --------------------------------------------------------------------------
+ * c_pq is the point of [p_p, p_q] with d_p = d_q, found by bisection, always from the seed with
+ * the smaller id (the same bits from either rock's region). The contact is kept when the voxel
+ * holding c_pq has both seeds' cells in its dual block and belongs to p or q, and a face
+ * neighbour of it, with both cells in its dual block too, belongs to the other: then both rocks
+ * touch there, and the decision reads only owners computable from either region's closure, so
+ * the two rocks agree on it. */
+static bool contact_point(const region_build *b, const rocks__seed *p, const rocks__seed *q, double c[3]) {
+    const rocks__seed *sa = p->id < q->id ? p : q, *sb = p->id < q->id ? q : p;
+    const int m = b->m;
+    float dvec[3];
+    for (int a = 0; a < 3; a++) dvec[a] = (float)((sb->cell[a] - sa->cell[a]) * m) + (sb->u[a] - sa->u[a]);
+    double lo = 0.0, hi = 1.0;
+    for (int i = 0; i < 40; i++) {
+        double t = 0.5 * (lo + hi);
+        float x = (float)(t * dvec[0]), y = (float)(t * dvec[1]), z = (float)(t * dvec[2]);
+        float da = rocks__distance(sa->q, x, y, z);
+        float db = rocks__distance(sb->q, x - dvec[0], y - dvec[1], z - dvec[2]);
+        if (da < db) lo = t;
+        else hi = t;
+    }
+    double t = 0.5 * (lo + hi);
+    int v[3];
+    for (int a = 0; a < 3; a++) {
+        double w = sa->u[a] + t * dvec[a];   /* voxels from sa's cell origin */
+        int fl = (int)floor(w);
+        v[a] = sa->cell[a] * m + fl;
+        c[a] = (double)(sa->cell[a] * m) + w;
+    }
+    if (!dual_holds(m, v, p->cell, q->cell)) return false;
+    int32_t pi = (int32_t)(p - b->seeds), qi = (int32_t)(q - b->seeds);
+    int32_t o = owner_at(b, v);
+    if (o != pi && o != qi) return false;
+    int32_t other = o == pi ? qi : pi;
+    for (int f = 0; f < 6; f++) {
+        int w[3] = { v[0], v[1], v[2] };
+        w[f >> 1] += (f & 1) ? 1 : -1;
+        if (dual_holds(m, w, p->cell, q->cell) && owner_at(b, w) == other) return true;
+    }
+    return false;
+}
+
+/* ---- erosion (001 §5) ------------------------------------------------------------------------- */
+
+/* ρ over the rock's box grown by one voxel (the border stays 0), after the erosion steps:
+ * surface voxels (a face neighbour outside the rock or emptied) lose ε·k·ω a step, with k the
+ * share of the 26 neighbours outside (spheroidal weathering, [BFO*07]: corners first) and ω the
+ * damping of 001 §5 (0 within a of a contact, linear to 1 at b). Updates read the previous step's
+ * ρ, so the order of the voxels does not matter. */
+static void erode(const region_build *b, int32_t self, const int lo[3], const int size[3], const double (*contacts)[3],
+                  int contact_count, float *rho, float *scratch, float *omega) {
+    const rocks__params *params = b->params;
+    const int sx = size[0], sy = size[1], sz = size[2];
+    const size_t total = (size_t)sx * sy * sz;
+    const float a = params->contact_voxels, bb = params->blend_voxels;
+    for (int z = 0; z < sz; z++)
+        for (int y = 0; y < sy; y++)
+            for (int x = 0; x < sx; x++) {
+                size_t i = ((size_t)z * sy + y) * sx + x;
+                int v[3] = { lo[0] + x, lo[1] + y, lo[2] + z };
+                bool mine = x > 0 && y > 0 && z > 0 && x < sx - 1 && y < sy - 1 && z < sz - 1 && owner_at(b, v) == self;
+                rho[i] = mine ? 1.0f : 0.0f;
+                float w = 1.0f;
+                if (mine)
+                    for (int c = 0; c < contact_count; c++) {
+                        double dx = v[0] + 0.5 - contacts[c][0], dy = v[1] + 0.5 - contacts[c][1], dz = v[2] + 0.5 - contacts[c][2];
+                        float r = (float)sqrt(dx * dx + dy * dy + dz * dz);
+                        float wc = r < a ? 0.0f : r < bb ? (r - a) / (bb - a) : 1.0f;
+                        if (wc < w) w = wc;
+                    }
+                omega[i] = w;
+            }
+    const float rate = params->desc.erosion_rate;
+    const size_t plane = (size_t)sx * sy;
+    for (int step = 0; step < params->desc.erosion_steps; step++) {
+        memcpy(scratch, rho, total * sizeof *rho);
+        for (int z = 1; z < sz - 1; z++)
+            for (int y = 1; y < sy - 1; y++)
+                for (int x = 1; x < sx - 1; x++) {
+                    size_t i = ((size_t)z * sy + y) * sx + x;
+                    if (scratch[i] <= 0.0f || omega[i] <= 0.0f) continue;
+                    if (scratch[i - 1] > 0.0f && scratch[i + 1] > 0.0f && scratch[i - sx] > 0.0f && scratch[i + sx] > 0.0f &&
+                        scratch[i - plane] > 0.0f && scratch[i + plane] > 0.0f)
+                        continue;   /* not at the surface */
+                    int outside = 0;
+                    for (int dz = -1; dz <= 1; dz++)
+                        for (int dy = -1; dy <= 1; dy++)
+                            for (int dx = -1; dx <= 1; dx++)
+                                outside += scratch[i + (ptrdiff_t)dz * (ptrdiff_t)plane + dy * sx + dx] <= 0.0f;
+                    float value = scratch[i] - rate * ((float)outside / 26.0f) * omega[i];
+                    rho[i] = value > 0.0f ? value : 0.0f;
+                }
+    }
+}
+
+/* ---- the region ------------------------------------------------------------------------------- */
+
+#define GROW(res, field, cap, needed) ((res)->field = core_grow((res)->field, &(res)->cap, (needed), sizeof *(res)->field))
+
+void rocks__region_build(const rocks__params *params, const rocks__build_options *options, int index,
+                         rocks__region_result *out) {
+    memset(out, 0, sizeof *out);
+    region_build b = { .params = params, .m = params->m, .n = params->n };
+    rocks__region_make(params, index, &b.region);
+    const int m = b.m;
+    for (int a = 0; a < 3; a++) {
+        b.clo[a] = b.region.lo[a] - 1;
+        b.cdim[a] = b.region.hi[a] - b.region.lo[a] + 3;
+        b.vlo[a] = (b.region.lo[a] - 1) * m + m / 2;
+        b.vdim[a] = (b.region.hi[a] - b.region.lo[a] + 2) * m;
+    }
+    make_seeds(&b);
+    own_voxels(&b);
+
+    /* The region's own seeds, each a rock: its voxel count and box. */
+    int32_t *slot = core_alloc(b.seed_count * sizeof *slot);
+    uint32_t rocks = 0;
+    for (uint32_t s = 0; s < b.seed_count; s++) {
+        const int *c = b.seeds[s].cell;
+        bool inside = true;
+        for (int a = 0; a < 3; a++) inside &= c[a] >= b.region.lo[a] && c[a] <= b.region.hi[a];
+        slot[s] = inside ? (int32_t)rocks++ : -1;
+    }
+    int (*box)[6] = core_alloc((rocks ? rocks : 1) * sizeof *box);
+    uint32_t *count = core_calloc(rocks ? rocks : 1, sizeof *count);
+    for (uint32_t r = 0; r < rocks; r++) box[r][0] = box[r][1] = box[r][2] = 1 << 30, box[r][3] = box[r][4] = box[r][5] = -(1 << 30);
+    for (int z = 0; z < b.vdim[2]; z++)
+        for (int y = 0; y < b.vdim[1]; y++)
+            for (int x = 0; x < b.vdim[0]; x++) {
+                int32_t o = b.owner[((size_t)z * b.vdim[1] + y) * b.vdim[0] + x];
+                if (o < 0 || slot[o] < 0) continue;
+                int r = slot[o], v[3] = { b.vlo[0] + x, b.vlo[1] + y, b.vlo[2] + z };
+                count[r]++;
+                for (int a = 0; a < 3; a++) {
+                    if (v[a] < box[r][a]) box[r][a] = v[a];
+                    if (v[a] > box[r][3 + a]) box[r][3 + a] = v[a];
+                }
+            }
+
+    const size_t box_max = (size_t)(2 * m + 3) * (2 * m + 3) * (2 * m + 3);
+    float *rho = core_alloc(box_max * sizeof *rho), *scratch = core_alloc(box_max * sizeof *scratch);
+    float *omega = core_alloc(box_max * sizeof *omega);
+    double (*points)[3] = core_alloc(27 * ROCKS__MAX_SEEDS_PER_CELL * sizeof *points);
+    const float tile_scale = 1.0f / (float)(b.n * m);
+    for (uint32_t s = 0; s < b.seed_count; s++) {
+        if (slot[s] < 0) continue;
+        int r = slot[s];
+        const rocks__seed *p = &b.seeds[s];
+        if (count[r] == 0 && !options->keep_empty) continue;   /* owns no voxel centre */
+
+        /* contacts with the seeds of the 26 cells around and its own cell */
+        uint32_t contact_first = out->contact_count;
+        int points_count = 0;
+        for (int dz = -1; dz <= 1; dz++)
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++) {
+                    int c[3] = { p->cell[0] + dx, p->cell[1] + dy, p->cell[2] + dz };
+                    size_t cs = cell_slot(&b, c);
+                    for (uint32_t i = 0; i < b.cell_count[cs]; i++) {
+                        const rocks__seed *q = &b.seeds[b.cell_first[cs] + i];
+                        if (q == p) continue;
+                        double point[3];
+                        if (!contact_point(&b, p, q, point)) continue;
+                        memcpy(points[points_count++], point, sizeof point);
+                        size_t old_cap = out->contact_cap;
+                        GROW(out, contacts, contact_cap, out->contact_count + 1);
+                        if (out->contact_cap != old_cap)
+                            out->contact_other = core_realloc(out->contact_other, old_cap * sizeof *out->contact_other,
+                                                              out->contact_cap * sizeof *out->contact_other);
+                        rocks_contact *ct = &out->contacts[out->contact_count];
+                        memset(ct, 0, sizeof *ct);
+                        int origin[3];
+                        int other = rocks__region_of_cell(params, q->cell, b.region.known, b.region.colour, origin);
+                        for (int a = 0; a < 3; a++) {
+                            ct->point[a] = (float)point[a] * tile_scale;
+                            ct->other_offset[a] = (int8_t)(other >= 0 ? origin[a] : 0);
+                        }
+                        int *o = out->contact_other[out->contact_count];
+                        o[0] = other;
+                        for (int a = 0; a < 3; a++) o[1 + a] = q->cell[a] - (other >= 0 ? origin[a] : 0) * b.n;
+                        o[4] = q->k;
+                        out->contact_count++;
+                    }
+                }
+
+        rocks_rock rock = { 0 };
+        int lo[3], size[3];
+        for (int a = 0; a < 3; a++) {
+            if (count[r] == 0) box[r][a] = box[r][3 + a] = p->cell[a] * m + m / 2;
+            lo[a] = box[r][a] - 1;
+            size[a] = box[r][3 + a] - box[r][a] + 3;
+        }
+        erode(&b, (int32_t)s, lo, size, (const double (*)[3])points, points_count, rho, scratch, omega);
+        bool kept = rocks__rock_mesh(params, rho, lo, size, p, out, &rock);
+        if (!kept && !options->keep_empty) {
+            out->contact_count = contact_first;   /* a rock without contacts; drop it */
+            continue;
+        }
+        rock.contact_first = contact_first;
+        rock.contact_count = out->contact_count - contact_first;
+        for (int a = 0; a < 3; a++) rock.seed[a] = ((float)(p->cell[a] * m) + p->u[a]) * tile_scale;
+        rock.region = (uint8_t)b.region.kind;
+        size_t old_cap = out->rock_cap;
+        GROW(out, rocks, rock_cap, out->rock_count + 1);
+        if (out->rock_cap != old_cap) {
+            out->rock_cell = core_realloc(out->rock_cell, old_cap * sizeof *out->rock_cell, out->rock_cap * sizeof *out->rock_cell);
+            out->rock_k = core_realloc(out->rock_k, old_cap * sizeof *out->rock_k, out->rock_cap * sizeof *out->rock_k);
+            out->voxel_first = core_realloc(out->voxel_first, old_cap * sizeof *out->voxel_first, out->rock_cap * sizeof *out->voxel_first);
+            out->voxel_count = core_realloc(out->voxel_count, old_cap * sizeof *out->voxel_count, out->rock_cap * sizeof *out->voxel_count);
+        }
+        uint32_t ri = out->rock_count++;
+        out->rocks[ri] = rock;
+        memcpy(out->rock_cell[ri], p->cell, sizeof p->cell);
+        out->rock_k[ri] = p->k;
+        out->voxel_first[ri] = out->voxel_total;
+        out->voxel_count[ri] = 0;
+        if (options->keep_voxels) {
+            for (int z = 1; z < size[2] - 1; z++)
+                for (int y = 1; y < size[1] - 1; y++)
+                    for (int x = 1; x < size[0] - 1; x++) {
+                        int v[3] = { lo[0] + x, lo[1] + y, lo[2] + z };
+                        if (owner_at(&b, v) != (int32_t)s) continue;
+                        size_t old = out->voxel_cap;
+                        GROW(out, voxels, voxel_cap, out->voxel_total + 1);
+                        if (out->voxel_cap != old)
+                            out->voxel_rho = core_realloc(out->voxel_rho, old * sizeof *out->voxel_rho, out->voxel_cap * sizeof *out->voxel_rho);
+                        for (int a = 0; a < 3; a++) out->voxels[out->voxel_total][a] = (int16_t)v[a];
+                        out->voxel_rho[out->voxel_total] = rho[((size_t)z * size[1] + y) * size[0] + x];
+                        out->voxel_total++;
+                        out->voxel_count[ri]++;
+                    }
+        }
+    }
+    core_free(points, 27 * ROCKS__MAX_SEEDS_PER_CELL * sizeof *points);
+    core_free(rho, box_max * sizeof *rho);
+    core_free(scratch, box_max * sizeof *scratch);
+    core_free(omega, box_max * sizeof *omega);
+    core_free(box, (rocks ? rocks : 1) * sizeof *box);
+    core_free(count, (rocks ? rocks : 1) * sizeof *count);
+    core_free(slot, b.seed_count * sizeof *slot);
+    size_t cells = (size_t)b.cdim[0] * b.cdim[1] * b.cdim[2];
+    core_free(b.cell_first, cells * sizeof *b.cell_first);
+    core_free(b.cell_count, cells * sizeof *b.cell_count);
+    core_free(b.seeds, cells * ROCKS__MAX_SEEDS_PER_CELL * sizeof *b.seeds);
+    core_free(b.owner, (size_t)b.vdim[0] * b.vdim[1] * b.vdim[2] * sizeof *b.owner);
+}
+
+void rocks__region_result_free(rocks__region_result *r) {
+    core_free(r->rocks, r->rock_cap * sizeof *r->rocks);
+    core_free(r->rock_cell, r->rock_cap * sizeof *r->rock_cell);
+    core_free(r->rock_k, r->rock_cap * sizeof *r->rock_k);
+    core_free(r->voxel_first, r->rock_cap * sizeof *r->voxel_first);
+    core_free(r->voxel_count, r->rock_cap * sizeof *r->voxel_count);
+    core_free(r->vertices, r->vertex_cap * sizeof *r->vertices);
+    core_free(r->indices, r->index_cap * sizeof *r->indices);
+    core_free(r->anchors, r->anchor_cap * sizeof *r->anchors);
+    core_free(r->contacts, r->contact_cap * sizeof *r->contacts);
+    core_free(r->contact_other, r->contact_cap * sizeof *r->contact_other);
+    core_free(r->voxels, r->voxel_cap * sizeof *r->voxels);
+    core_free(r->voxel_rho, r->voxel_cap * sizeof *r->voxel_rho);
+    memset(r, 0, sizeof *r);
+}

@@ -1,0 +1,53 @@
+/* bench_rocks.c — building the rock tile set (paper 001), all cores.
+ *
+ *   rocks.tiles.n5, rocks.tiles.n6, rocks.tiles.n7
+ *       seconds to build the 256-tile set with n = 5, 6, 7 cells a side, the round preset (one
+ *       seed a cell, as 001 Table 1 counts), voxels_per_cell 10 (001 §7: n_G = 10·n), on all
+ *       cores (--threads), no cache. One build a sample (a build takes seconds).
+ *   rocks.tiles.n5.stones, .n6.stones, .n7.stones
+ *       rocks in those sets (after dropping rocks that eroded away).
+ *   rocks.tiles.n5.mb   memory the n = 5 set holds (set->bytes), MB.
+ *
+ * Peer: the paper's own figures, printed beside (no code of theirs to run): 7 355 / 17 166 /
+ * 33 217 stones in 23 / 73 / 176 s (001 Table 1, a 2010 machine). Targets on this project's
+ * 2-core machine: ≤ 1 / 3 / 8 s.
+ */
+#include "bench.h"
+
+#include "core/core.h"
+#include "jobs/jobs.h"
+#include "rocks/rocks.h"
+
+#include <stdio.h>
+
+#define ROCKS_BENCH_RUNS 1
+
+void bench_group_rocks(bench_context *ctx) {
+    static const int cells[3] = { 5, 6, 7 };
+    static const int paper_stones[3] = { 7355, 17166, 33217 };
+    static const int paper_seconds[3] = { 23, 73, 176 };
+    static const double target_seconds[3] = { 1, 3, 8 };
+    job_system *jobs = NULL;
+    for (int i = 0; i < 3; i++) {
+        char name[64], stones_name[64];
+        snprintf(name, sizeof name, "rocks.tiles.n%d", cells[i]);
+        snprintf(stones_name, sizeof stones_name, "rocks.tiles.n%d.stones", cells[i]);
+        if (!bench_wants(ctx, name) && !bench_wants(ctx, stones_name)) continue;
+        if (!jobs) jobs = job_system_create(&(job_system_desc){ .threads = bench_threads(ctx) });
+        double seconds[ROCKS_BENCH_RUNS], stones[ROCKS_BENCH_RUNS], mb[ROCKS_BENCH_RUNS];
+        for (int r = 0; r < ROCKS_BENCH_RUNS; r++) {
+            rocks_tileset *set = rocks_tiles_create(&(rocks_tiles_desc){
+                .cells = cells[i], .shape = ROCKS_SHAPE_ROUND, .voxels_per_cell = 10, .jobs = jobs });
+            seconds[r] = set->build_seconds;
+            stones[r] = set->rock_count;
+            mb[r] = (double)set->bytes / 1e6;
+            rocks_tiles_destroy(set);
+        }
+        bench_record(ctx, name, "s", seconds, ROCKS_BENCH_RUNS);
+        bench_record(ctx, stones_name, "stones", stones, ROCKS_BENCH_RUNS);
+        if (i == 0) bench_record(ctx, "rocks.tiles.n5.mb", "MB", mb, ROCKS_BENCH_RUNS);
+        printf("  paper (001 Table 1): n = %d: %d stones in %d s; target here ≤ %.0f s\n", cells[i], paper_stones[i],
+               paper_seconds[i], target_seconds[i]);
+    }
+    if (jobs) job_system_destroy(jobs);
+}
