@@ -75,7 +75,7 @@ int main(int argc, char **argv) {
     if (!frames && gfx_backend_get(gfx) == GFX_BACKEND_OFFSCREEN) frames = 30;
     terrain_view view = { .pitch = -0.3f, .aspect = (float)width / (float)height };
     for (int frame = 0; (!frames || frame < frames) && !gfx_window_should_close(gfx); frame++) {
-        double angle = 0.6 + frame * 0.01;
+        double angle = 3.6 + frame * 0.01;             /* from the sun's side */
         view.camera[0] = PILE_X + 9 * sin(angle), view.camera[2] = PILE_Z + 9 * cos(angle);
         view.camera[1] = slope_height(view.camera[0], view.camera[2]) + 4.0;
         view.yaw = (float)-angle;                        /* towards the pile */
