@@ -134,6 +134,7 @@
 #define LAKE_ROCKS_DEPTH 0.8f
 #define ROCK_MIN 0.1f                              /* thinner rock layers are dropped */
 #define ROCK_CLIP_PASSES 16
+#define RING_LEVELS_AROUND 8.0f                    /* metres around the ring's G its lattice covers */
 
 terrain_generation_params terrain_generation_defaults(uint64_t seed) {
     return (terrain_generation_params){
@@ -827,9 +828,16 @@ static void ring_scan(const chunk_gen *g, int i, int k, float *y_lo, int *j_lo, 
     *j_hi = (int)ceilf((hi - lo) / SAMPLE_STEP);
 }
 
-/* The top of a ring column (outside the chunk): the ground's highest crossing, sampled as
- * column_generate samples it but from the top down and without caves, from the lattice's ring
- * nodes. An estimate of what the neighbouring chunk makes there, close enough to see cliffs. */
+static float ring_density(const column_context *c, int l0, int l1, float y) {
+    float level = clampf((y - c->g->y_base) * (1.0f / COARSE_Y), (float)l0, (float)l1 - 1e-3f);
+    int l = (int)level;
+    return ground_density(c, l, level - (float)l, y);
+}
+
+/* The top of a ring column (outside the chunk): the ground's crossing, at column_generate's
+ * sample positions but without caves, from the lattice's ring nodes, looked for from the
+ * column's own G: up while solid, else down. An estimate of what the neighbouring chunk makes
+ * there (it misses an overhang's lip above open air), close enough to see walls by. */
 static float ring_top(const chunk_gen *g, int i, int k, float *fields) {
     float y_lo;
     int j_lo, j_hi;
@@ -844,16 +852,23 @@ static float ring_top(const chunk_gen *g, int i, int k, float *fields) {
                          .levels = g->levels };
     c.u = fields;
     c.w = fields + (size_t)octaves * g->levels;
-    float above = 0.0f;
-    for (int j = j_hi; j >= j_lo; j--) {
-        float y = y_lo + (float)j * SAMPLE_STEP;
-        float level = clampf((y - g->y_base) * (1.0f / COARSE_Y), (float)l0, (float)l1 - 1e-3f);
-        int l = (int)level;
-        float d = ground_density(&c, l, level - (float)l, y);
-        if (d > 0.0f) return j == j_hi ? y : y + d / (d - above) * SAMPLE_STEP;
-        above = d;
+    float ground = g->heights[(k + g->margin) * g->ground_size + i + g->margin];
+    int j = clamp_int((int)lroundf((ground - y_lo) / SAMPLE_STEP), j_lo, j_hi);
+    float y = y_lo + (float)j * SAMPLE_STEP, d = ring_density(&c, l0, l1, y);
+    if (d > 0.0f) {
+        for (j++; j <= j_hi; j++) {
+            float y1 = y_lo + (float)j * SAMPLE_STEP, d1 = ring_density(&c, l0, l1, y1);
+            if (d1 <= 0.0f) return y + d / (d - d1) * SAMPLE_STEP;
+            y = y1, d = d1;
+        }
+        return y;
     }
-    return y_lo + (float)j_lo * SAMPLE_STEP;
+    for (j--; j >= j_lo; j--) {
+        float y0 = y_lo + (float)j * SAMPLE_STEP, d0 = ring_density(&c, l0, l1, y0);
+        if (d0 > 0.0f) return y0 + d0 / (d0 - d) * SAMPLE_STEP;
+        y = y0, d = d0;
+    }
+    return y;
 }
 
 static float smoothstep(float lo, float hi, float v) {
@@ -880,6 +895,10 @@ static void rock_layers(const chunk_gen *g, const float *top, const float *lake,
     float *surface = rock + (size_t)n * n;            /* talus surface, then patch noise */
     for (int c = 0; c < n * n; c++) rock[c] = 0.0f, surface[c] = -INFINITY;
     if (!(talus > 0.0f || scree > 0.0f || lake_rocks > 0.0f)) return;
+    float cone_drop[2 * TALUS_REACH + 1][2 * TALUS_REACH + 1];
+    for (int dz = -TALUS_REACH; dz <= TALUS_REACH; dz++)
+        for (int dx = -TALUS_REACH; dx <= TALUS_REACH; dx++)
+            cone_drop[dz + TALUS_REACH][dx + TALUS_REACH] = TALUS_SLOPE * sqrtf((float)(dx * dx + dz * dz));
     /* Feet of walls: a neighbour rises faster than FOOT_RISE, none falls faster than rocks hold
      * (the riser's own columns fall steeply on their other side). A cone of rocks leans on each,
      * its surface talus·(how steep the wall is) above the foot, falling at TALUS_SLOPE. */
@@ -888,9 +907,9 @@ static void rock_layers(const chunk_gen *g, const float *top, const float *lake,
             int at = k * n + i;
             float rise = 0.0f, fall = 0.0f;
             for (int d = 0; d < 8; d++) {
-                float step = (top[at + rock_dir[d][1] * n + rock_dir[d][0]] - top[at]) / rock_dist[d];
-                rise = fmaxf(rise, step);
-                fall = fmaxf(fall, -step);
+                float step = (top[at + rock_dir[d][1] * n + rock_dir[d][0]] - top[at]) * (d < 4 ? 1.0f : 0.70710678f);
+                rise = CORE_MAX(rise, step);
+                fall = CORE_MAX(fall, -step);
             }
             float foot = talus * smoothstep(FOOT_RISE, 2.0f * FOOT_RISE, rise);
             if (fall <= ROCK_HOLD_SLOPE && foot > ROCK_MIN && top[at] > p->sea_level) {
@@ -898,8 +917,8 @@ static void rock_layers(const chunk_gen *g, const float *top, const float *lake,
                     for (int dx = -TALUS_REACH; dx <= TALUS_REACH; dx++) {
                         int x = i + dx, z = k + dz;
                         if (x < 0 || z < 0 || x >= n || z >= n) continue;
-                        float cone = top[at] + foot - TALUS_SLOPE * sqrtf((float)(dx * dx + dz * dz));
-                        surface[z * n + x] = fmaxf(surface[z * n + x], cone);
+                        float cone = top[at] + foot - cone_drop[dz + TALUS_REACH][dx + TALUS_REACH];
+                        surface[z * n + x] = CORE_MAX(surface[z * n + x], cone);
                     }
                 }
             }
@@ -915,39 +934,47 @@ static void rock_layers(const chunk_gen *g, const float *top, const float *lake,
     for (int i = 0; i < n; i++) xs[i] = (float)((g->x0 + (double)(i - ROCK_RING) + 0.5) * (1.0 / SCREE_WAVELENGTH));
     for (int k = 0; k < n; k++) {
         float z = (float)((g->z0 + (double)(k - ROCK_RING) + 0.5) * (1.0 / SCREE_WAVELENGTH));
+        bool stony = false, lakeside = false;            /* the noise only where it is read */
+        for (int i = 0; i < n; i++) {
+            stony |= rock[k * n + i] > 0.0f || surface[k * n + i] > 0.0f;
+            lakeside |= !isnan(lake[k * n + i]);
+        }
+        if (!stony && !(lakeside && lake_rocks > 0.0f)) continue;
         terrain__noise2_row(scree_seed, xs, 1.0f, z, n, scree_noise);
-        terrain__noise2_row(lake_seed, xs, 2.0f, 2.0f * z, n, lake_noise);
+        if (lakeside) terrain__noise2_row(lake_seed, xs, 2.0f, 2.0f * z, n, lake_noise);
         for (int i = 0; i < n; i++) {
             int at = k * n + i;
             float r = rock[at] * smoothstep(0.0f, 0.3f, scree_noise[i]);
-            r = fmaxf(r, surface[at] * (0.8f + 0.2f * scree_noise[i]));
+            r = CORE_MAX(r, surface[at] * (0.8f + 0.2f * scree_noise[i]));
             if (lake_rocks > 0.0f && !isnan(lake[at])) {
                 float h = top[at] - lake[at];
                 float band = smoothstep(-2.0f, -1.2f, h) * (1.0f - smoothstep(0.8f, 1.6f, h));
-                r = fmaxf(r, lake_rocks * band * smoothstep(-0.1f, 0.25f, lake_noise[i]));
+                r = CORE_MAX(r, lake_rocks * band * smoothstep(-0.1f, 0.25f, lake_noise[i]));
             }
             rock[at] = r >= ROCK_MIN ? floorf(r / TERRAIN_HEIGHT_QUANTUM) * TERRAIN_HEIGHT_QUANTUM : 0.0f;
         }
     }
     /* Never steeper than rocks hold: a column's rock surface stays within d·ROCK_HOLD_SLOPE of
      * every neighbour's ground, thinned (never thickened) until that holds, in a fixed order. */
-    for (int pass = 0; pass < ROCK_CLIP_PASSES; pass++) {
+    int stony[(ROCK_SIDE - 2) * (ROCK_SIDE - 2)], count = 0;
+    for (int k = 1; k + 1 < n; k++)
+        for (int i = 1; i + 1 < n; i++)
+            if (rock[k * n + i] > 0.0f) stony[count++] = k * n + i;
+    for (int pass = 0; pass < ROCK_CLIP_PASSES && count; pass++) {
         bool changed = false;
-        for (int k = 1; k + 1 < n; k++) {
-            for (int i = 1; i + 1 < n; i++) {
-                int at = k * n + i;
-                if (rock[at] <= 0.0f) continue;
-                float limit = INFINITY;
-                for (int d = 0; d < 8; d++) {
-                    int nb = at + rock_dir[d][1] * n + rock_dir[d][0];
-                    limit = fminf(limit, top[nb] + rock[nb] + ROCK_HOLD_SLOPE * rock_dist[d]);
-                }
-                float allowed = limit - top[at];
-                if (rock[at] <= allowed) continue;
-                float r = floorf(allowed / TERRAIN_HEIGHT_QUANTUM) * TERRAIN_HEIGHT_QUANTUM;
-                rock[at] = r >= ROCK_MIN ? r : 0.0f;
-                changed = true;
+        for (int c = 0; c < count; c++) {
+            int at = stony[c];
+            if (rock[at] <= 0.0f) continue;
+            float limit = INFINITY;
+            for (int d = 0; d < 8; d++) {
+                int nb = at + rock_dir[d][1] * n + rock_dir[d][0];
+                limit = CORE_MIN(limit, top[nb] + rock[nb] + ROCK_HOLD_SLOPE * rock_dist[d]);
             }
+            float allowed = limit - top[at];
+            if (rock[at] <= allowed) continue;
+            float r = floorf(allowed / TERRAIN_HEIGHT_QUANTUM) * TERRAIN_HEIGHT_QUANTUM;
+            rock[at] = r >= ROCK_MIN ? r : 0.0f;
+            changed = true;
         }
         if (!changed) break;
     }
@@ -1003,7 +1030,8 @@ terrain_stacks *terrain_generate_chunk(const terrain_generation_params *params, 
     /* |u|, |w| ≤ 1 (normalised fBm of clamped noise), so a displaced point stays within A. */
     g.displacement = clampf(params->horizontal_perturbation, 0.0f, 64.0f);
     int reach = (int)ceilf(g.displacement) + 1;    /* + 1: bilinear reads the next column */
-    g.margin = reach + 1;                          /* + 1: slopes by central differences */
+    g.margin = CORE_MAX(reach + 1, ROCK_RING);     /* + 1: slopes by central differences; the rock
+                                                      ring reads G at its own columns */
     g.ground_size = TERRAIN_CHUNK_COLUMNS + 2 * g.margin;
     size_t grid_bytes = (size_t)g.ground_size * g.ground_size * sizeof(float);
     size_t column_bytes = (size_t)TERRAIN__COLUMNS * sizeof(float);
@@ -1030,21 +1058,19 @@ terrain_stacks *terrain_generate_chunk(const terrain_generation_params *params, 
             y_hi = CORE_MAX(y_hi, hi);
         }
     }
-    /* And where the rock ring's tops can be. */
+    /* And where the rock ring's tops mostly are: around its own G (ring_top reads the nearest
+     * level beyond these, and nothing above the chunk's own range: an estimate). */
     float ring_lo = INFINITY, ring_hi = -INFINITY;
     for (int k = -ROCK_RING; k < TERRAIN_CHUNK_COLUMNS + ROCK_RING; k++) {
         for (int i = -ROCK_RING; i < TERRAIN_CHUNK_COLUMNS + ROCK_RING; i++) {
-            if (i >= 0 && k >= 0 && i < TERRAIN_CHUNK_COLUMNS && k < TERRAIN_CHUNK_COLUMNS) continue;
-            float lo;
-            int j_lo, j_hi;
-            ring_scan(&g, i, k, &lo, &j_lo, &j_hi);
-            ring_lo = CORE_MIN(ring_lo, lo + (float)j_lo * SAMPLE_STEP);
-            ring_hi = CORE_MAX(ring_hi, lo + (float)j_hi * SAMPLE_STEP);
+            float ground = g.heights[(k + g.margin) * g.ground_size + i + g.margin];
+            ring_lo = CORE_MIN(ring_lo, ground - RING_LEVELS_AROUND);
+            ring_hi = CORE_MAX(ring_hi, ground + RING_LEVELS_AROUND);
         }
     }
     coarse_setup(&g);
     /* + 2 steps: the last sample may pass y_hi. */
-    coarse_lattice(&g, CORE_MIN(y_lo, ring_lo), CORE_MAX(y_hi, ring_hi) + 2.0f * SAMPLE_STEP, ring_lo, ring_hi);
+    coarse_lattice(&g, y_lo, y_hi + 2.0f * SAMPLE_STEP, ring_lo, ring_hi);
 
     size_t fields_bytes = (size_t)g.fields * g.levels * sizeof(float);
     float *fields = core_alloc(fields_bytes ? fields_bytes : sizeof(float));
