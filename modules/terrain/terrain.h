@@ -139,6 +139,13 @@ typedef struct terrain_generation_params {
     float lake_probability;           /* share of candidates kept, 0 … 1 */
     float lake_radius_min, lake_radius_max;   /* metres, the bowl's */
     float lake_depth;                 /* metres of water at the deepest */
+    /* Rock layers over the top run's sand or bedrock (terrain_generate.c, "Rocks"), where the
+     * rocks module draws piles; each 0 = its default, < 0 = none. Never steeper than rocks hold
+     * (the stabilizer leaves them alone). */
+    float talus_depth;                /* metres of rocks leaning on a cliff's foot; 0 = 2.5 */
+    float scree_depth;                /* metres of scree on slopes too steep for sand; 0 = 1 */
+    float scree_min_slope;            /* tan of the gentlest slope with scree; 0 = 0.58 (30°) */
+    float lake_rocks_depth;           /* metres of stones near a lake's waterline; 0 = 0.8 */
 } terrain_generation_params;
 
 /* Parameters that make a varied, good-looking world for this seed. */

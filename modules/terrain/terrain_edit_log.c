@@ -93,13 +93,13 @@ static bool tool_valid(unsigned tool) {
 }
 
 /* A field added to terrain_generation_params must be added to the key too: this fails to
- * compile until someone looks (8 bytes of seed + 22 four-byte fields). */
-_Static_assert(sizeof(terrain_generation_params) == 96,
+ * compile until someone looks (8 bytes of seed + 26 four-byte fields). */
+_Static_assert(sizeof(terrain_generation_params) == 112,
                "terrain_generation_params changed: hash the new field in terrain_generation_key");
 
 /* Bumped whenever terrain_generate_chunk's output changes for the same parameters, so that edit
  * logs of the old generator are refused instead of replayed over different ground. */
-#define EDIT_GENERATOR_REVISION 2u          /* 2: lakes (terrain_generate.c) */
+#define EDIT_GENERATOR_REVISION 3u          /* 2: lakes; 3: rock layers (terrain_generate.c) */
 
 static uint64_t key_float(uint64_t h, float value) {
     uint32_t bits;
@@ -134,6 +134,10 @@ uint64_t terrain_generation_key(const terrain_generation_params *p) {
     h = key_float(h, p->lake_radius_min);
     h = key_float(h, p->lake_radius_max);
     h = key_float(h, p->lake_depth);
+    h = key_float(h, p->talus_depth);
+    h = key_float(h, p->scree_depth);
+    h = key_float(h, p->scree_min_slope);
+    h = key_float(h, p->lake_rocks_depth);
     return h;
 }
 

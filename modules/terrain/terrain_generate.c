@@ -52,8 +52,35 @@
  *     bound on R₁R₂ there (the smallest |n| of each octave on the segment) passes the
  *     threshold: most samples cost a comparison.
  *  5. Sand replaces the top of the highest solid run where the macro ground's slope is below
- *     sand_max_slope (thinning to nothing at that slope), and water fills the air above the
- *     highest solid run up to sea_level, or up to a lake's level inside its water circle.
+ *     sand_max_slope (thinning to nothing at that slope), rocks lie on it (below, "Rocks"), and
+ *     water fills the air above the highest solid run up to sea_level, or up to a lake's level
+ *     inside its water circle.
+ *
+ * Rocks (ours; the issue: "talus at the foot of cliffs, scree on slopes steeper than sand's
+ * repose angle, stony river and lake beds"; there are no rivers). A layer of TERRAIN_ROCKS on
+ * the top run's sand or bedrock, under any water: the pile order sand, rocks, water, air of
+ * 000 §3.4. Where it goes depends on the real tops (the highest crossing of each column, after
+ * the shear), not on G: the shear moves cliffs by up to A sideways. Every column of the chunk
+ * is generated first; a ring of ROCK_RING columns around it gets an estimated top (ring_top:
+ * the ground part only, no caves, from extra lattice nodes around the ring's G), so that piles
+ * near a border see the walls and slopes just beyond it and continue across. Over the chunk
+ * and ring, from the tops:
+ *   - talus: a foot is a column with a neighbour rising faster than FOOT_RISE (1.5 m a metre:
+ *     a wall) and none falling faster than ROCK_HOLD_SLOPE (so not a riser's own column). Each
+ *     foot holds a cone of rocks talus_depth·smoothstep(rise) high (80–100 % by a noise), its
+ *     surface falling at TALUS_SLOPE (35°) out to TALUS_REACH columns; a column's talus is the
+ *     highest cone over it less its top: a wedge leaning on the wall, thickest at its foot.
+ *   - scree: scree_depth where the ground falls faster than scree_min_slope (sand's 30°) and
+ *     slower than 1 m a metre, faded in over 0.08 of slope and cut into patches by a noise of
+ *     SCREE_WAVELENGTH.
+ *   - lake stones: lake_rocks_depth in a band of the ground from 2 m under to 1.6 m over a
+ *     lake's level (its waterline), in patches of a finer noise; the rest of the basin is sand.
+ *   The thickest of the three, in whole quanta (ROCK_MIN and thinner dropped). Then no rock
+ *   surface may stand higher over a neighbour's ground (rocks included) than d·ROCK_HOLD_SLOPE
+ *   (40°, d = 1 or √2 m): passes in a fixed order thin the columns that do until none does.
+ *   The stabilizer lets rocks rest at 42°, so it leaves them where they are, save where a
+ *   ring estimate was off (tested: about 1 % of the rocks move). Cost: the ring's tops, extra
+ *   lattice nodes and these passes, about +8 % of a chunk's generation.
  *
  * Lakes (ours; issue 15: "generation should make some lakes in basins"). A lattice of cells
  * lake_spacing metres wide holds at most one candidate site each, kept when a hash of (seed,
@@ -119,6 +146,22 @@
 #define LAKE_BLEND_MIN 32.0f                       /* metres from the shelf back to the land */
 #define LAKE_CACHE 8                               /* sites remembered while a grid is made */
 #define LAKE_SPACED_MAX 8.0f                       /* coarser clipmap grids skip the basins */
+#define LATTICE_NODES (COARSE_NODES + 2)           /* one more node each side: the rock ring's */
+#define ROCK_RING 4                                /* columns around the chunk whose tops rocks see */
+#define ROCK_SIDE (TERRAIN_CHUNK_COLUMNS + 2 * ROCK_RING)
+#define ROCK_HOLD_SLOPE 0.84f                      /* tan 40°: generated rock surfaces are never
+                                                      steeper (the stabilizer's rocks hold 42°) */
+#define TALUS_DEPTH 2.5f
+#define TALUS_SLOPE 0.7f                           /* tan 35°: the wedge's surface from the foot */
+#define TALUS_REACH 3                              /* columns from a foot: ROCK_RING − 1 */
+#define FOOT_RISE 1.5f                             /* a neighbour this much higher a metre: a wall */
+#define SCREE_DEPTH 1.0f
+#define SCREE_MIN_SLOPE 0.58f                      /* tan 30°: sand holds 30–35° (000 §3.4) */
+#define SCREE_WAVELENGTH 24.0f                     /* of the noise that makes scree patches */
+#define LAKE_ROCKS_DEPTH 0.8f
+#define ROCK_MIN 0.1f                              /* thinner rock layers are dropped */
+#define ROCK_CLIP_PASSES 16
+#define RING_LEVELS_AROUND 8.0f                    /* metres around the ring's G its lattice covers */
 
 terrain_generation_params terrain_generation_defaults(uint64_t seed) {
     return (terrain_generation_params){
@@ -146,6 +189,10 @@ terrain_generation_params terrain_generation_defaults(uint64_t seed) {
         .lake_radius_min = 24.0f,
         .lake_radius_max = 56.0f,
         .lake_depth = 6.0f,
+        .talus_depth = TALUS_DEPTH,
+        .scree_depth = SCREE_DEPTH,
+        .scree_min_slope = SCREE_MIN_SLOPE,
+        .lake_rocks_depth = LAKE_ROCKS_DEPTH,
     };
 }
 
@@ -474,12 +521,16 @@ typedef struct chunk_gen {
     int margin;                           /* G grid columns beyond the chunk on each side */
     int ground_size;                      /* G grid side: N + 2·margin */
     float *heights;                       /* G at column centres, [(k + margin)·size + i + margin] */
-    float *reach_min, *reach_max;         /* min/max of G within reach of each chunk column */
-    /* Coarse lattice: node (a, c, level) at world (x0 + 4a, y_base + 4·level, z0 + 4c). */
+    float *reach_min, *reach_max;         /* min/max of G within reach of each column of the chunk
+                                             and its rock ring, [reach_index(i, k)] */
+    /* Coarse lattice: node (a, c, level) at world (x0 + 4a, y_base + 2·level, z0 + 4c), a and c
+     * from −1 (the rock ring's nodes: u and w only, at ring_levels) to COARSE_NODES. */
     int fields;                           /* u octaves, w octaves, cave 1 octaves, cave 2 octaves */
     int levels;
     float y_base;
-    float *coarse;                        /* [((field·NODES + c)·NODES + a)·levels + level] */
+    float *coarse;                        /* [((field·L + c + 1)·L + a + 1)·levels + level], L
+                                             LATTICE_NODES */
+    int ring_level_lo, ring_level_hi;     /* the ring's nodes hold these levels */
     uint32_t field_seeds[MAX_FIELDS];
     float field_frequency[MAX_FIELDS];    /* horizontal, cycles per metre */
     float field_y_squeeze[MAX_FIELDS];
@@ -490,6 +541,11 @@ typedef struct chunk_gen {
                                              lake's circle of influence */
 } chunk_gen;
 
+/* Columns of the chunk and its rock ring: i, k from −ROCK_RING to N + ROCK_RING − 1. */
+static inline int reach_index(int i, int k) {
+    return (k + ROCK_RING) * ROCK_SIDE + i + ROCK_RING;
+}
+
 static void ground_grid(chunk_gen *g) {
     int size = g->ground_size;
     double xs[GROUND_ROW_MAX];
@@ -498,16 +554,18 @@ static void ground_grid(chunk_gen *g) {
         ground_row(&g->model, xs, g->z0 + (double)(k - g->margin) + 0.5, size, g->heights + (size_t)k * size);
 }
 
-/* Min and max of G over the square of radius `radius` around each chunk column: separable. */
+/* Min and max of G over the square of radius `radius` around each column of the chunk and its
+ * rock ring: separable. The ring's squares are cut to the grid (their tops are estimates). */
 static void ground_reach(chunk_gen *g, int radius) {
-    int size = g->ground_size, n = TERRAIN_CHUNK_COLUMNS, m = g->margin;
+    int size = g->ground_size, n = ROCK_SIDE, m = g->margin - ROCK_RING;
     float *row_min = core_alloc((size_t)size * n * sizeof(float));
     float *row_max = core_alloc((size_t)size * n * sizeof(float));
     for (int k = 0; k < size; k++) {
         for (int i = 0; i < n; i++) {
             float lo = INFINITY, hi = -INFINITY;
-            for (int d = -radius; d <= radius; d++) {
-                float v = g->heights[k * size + i + m + d];
+            int from = CORE_MAX(i + m - radius, 0), to = CORE_MIN(i + m + radius, size - 1);
+            for (int x = from; x <= to; x++) {
+                float v = g->heights[k * size + x];
                 lo = v < lo ? v : lo;
                 hi = v > hi ? v : hi;
             }
@@ -516,11 +574,12 @@ static void ground_reach(chunk_gen *g, int radius) {
         }
     }
     for (int k = 0; k < n; k++) {
+        int from = CORE_MAX(k + m - radius, 0), to = CORE_MIN(k + m + radius, size - 1);
         for (int i = 0; i < n; i++) {
             float lo = INFINITY, hi = -INFINITY;
-            for (int d = -radius; d <= radius; d++) {
-                lo = CORE_MIN(lo, row_min[(k + m + d) * n + i]);
-                hi = CORE_MAX(hi, row_max[(k + m + d) * n + i]);
+            for (int z = from; z <= to; z++) {
+                lo = CORE_MIN(lo, row_min[z * n + i]);
+                hi = CORE_MAX(hi, row_max[z * n + i]);
             }
             g->reach_min[k * n + i] = lo;
             g->reach_max[k * n + i] = hi;
@@ -543,12 +602,11 @@ static bool caves_enabled(const terrain_generation_params *p) {
 /* The y range a column samples: from the lowest point where a cave or the ground's surface can
  * be to the highest point where the ground can be. */
 static void column_range(const chunk_gen *g, int i, int k, float *lo, float *hi) {
-    int n = TERRAIN_CHUNK_COLUMNS;
     float ground = g->heights[(k + g->margin) * g->ground_size + i + g->margin];
-    float bottom = g->reach_min[k * n + i] - SAMPLE_STEP;
+    float bottom = g->reach_min[reach_index(i, k)] - SAMPLE_STEP;
     if (caves_enabled(g->params)) bottom = CORE_MIN(bottom, ground - cave_depth(g->params));
     *lo = CORE_MAX(bottom, TERRAIN_FLOOR_Y + 2.0f);
-    *hi = g->reach_max[k * n + i] + SAMPLE_STEP;
+    *hi = g->reach_max[reach_index(i, k)] + SAMPLE_STEP;
 }
 
 static void coarse_setup(chunk_gen *g) {
@@ -578,21 +636,37 @@ static void coarse_setup(chunk_gen *g) {
     g->fields = f;
 }
 
-static void coarse_lattice(chunk_gen *g, float y_lo, float y_hi) {
+static size_t lattice_floats(const chunk_gen *g) {
+    return (size_t)g->fields * LATTICE_NODES * LATTICE_NODES * (size_t)g->levels;
+}
+
+static const float *lattice_node(const chunk_gen *g, int f, int a, int c) {
+    return g->coarse + (((size_t)f * LATTICE_NODES + (size_t)(c + 1)) * LATTICE_NODES + (size_t)(a + 1)) * g->levels;
+}
+
+/* The chunk's nodes over every level; the ring's (a or c = −1 or COARSE_NODES) only for the
+ * displacement fields and over [ring_lo, ring_hi]: the ring's tops need nothing else. */
+static void coarse_lattice(chunk_gen *g, float y_lo, float y_hi, float ring_lo, float ring_hi) {
     g->y_base = floorf(y_lo / COARSE_Y) * COARSE_Y;
     g->levels = (int)ceilf((y_hi - g->y_base) / COARSE_Y) + 2;
-    size_t count = (size_t)g->fields * COARSE_NODES * COARSE_NODES * (size_t)g->levels;
-    g->coarse = core_alloc(count * sizeof(float));
+    g->ring_level_lo = clamp_int((int)floorf((ring_lo - g->y_base) / COARSE_Y), 0, g->levels - 1);
+    g->ring_level_hi = clamp_int((int)ceilf((ring_hi - g->y_base) / COARSE_Y) + 1, 0, g->levels - 1);
+    g->coarse = core_calloc(lattice_floats(g), sizeof(float));
+    int ring_fields = 2 * g->model.perturbation_octaves, ring_count = g->ring_level_hi - g->ring_level_lo + 1;
     for (int f = 0; f < g->fields; f++) {
         float frequency = g->field_frequency[f];
         float dy = COARSE_Y * frequency * g->field_y_squeeze[f];
         float y0 = g->y_base * frequency * g->field_y_squeeze[f];
-        for (int c = 0; c < COARSE_NODES; c++) {
+        for (int c = -1; c <= COARSE_NODES; c++) {
             float z = (float)((g->z0 + (double)(c * COARSE)) * frequency);
-            for (int a = 0; a < COARSE_NODES; a++) {
+            for (int a = -1; a <= COARSE_NODES; a++) {
                 float x = (float)((g->x0 + (double)(a * COARSE)) * frequency);
-                float *out = g->coarse + (((size_t)f * COARSE_NODES + c) * COARSE_NODES + a) * g->levels;
-                terrain__noise3_column(g->field_seeds[f], x, y0, dy, z, g->levels, out);
+                float *out = (float *)lattice_node(g, f, a, c);
+                if (a >= 0 && c >= 0 && a < COARSE_NODES && c < COARSE_NODES)
+                    terrain__noise3_column(g->field_seeds[f], x, y0, dy, z, g->levels, out);
+                else if (f < ring_fields)
+                    terrain__noise3_column(g->field_seeds[f], x, y0 + (float)g->ring_level_lo * dy, dy, z, ring_count,
+                                           out + g->ring_level_lo);
             }
         }
     }
@@ -600,19 +674,19 @@ static void coarse_lattice(chunk_gen *g, float y_lo, float y_hi) {
 
 /* ---- one column ------------------------------------------------------------------------ */
 
-/* Bilinear interpolation of every field's coarse columns to the centre of column (i, k). */
-static void column_fields(const chunk_gen *g, int i, int k, float *out) {
+/* Bilinear interpolation of the first `fields` fields' coarse columns to the centre of column
+ * (i, k) (a ring column too), over levels [l0, l1]. */
+static void column_fields(const chunk_gen *g, int i, int k, int fields, int l0, int l1, float *out) {
     float ax = ((float)i + 0.5f) / COARSE, cz = ((float)k + 0.5f) / COARSE;
-    int a = (int)ax, c = (int)cz;
+    int a = (int)floorf(ax), c = (int)floorf(cz);
     float tx = ax - (float)a, tz = cz - (float)c;
     float w00 = (1 - tx) * (1 - tz), w10 = tx * (1 - tz), w01 = (1 - tx) * tz, w11 = tx * tz;
     int levels = g->levels;
-    for (int f = 0; f < g->fields; f++) {
-        const float *base = g->coarse + (((size_t)f * COARSE_NODES + c) * COARSE_NODES + a) * levels;
-        const float *p00 = base, *p10 = base + levels;
-        const float *p01 = base + (size_t)COARSE_NODES * levels, *p11 = p01 + levels;
+    for (int f = 0; f < fields; f++) {
+        const float *p00 = lattice_node(g, f, a, c), *p10 = p00 + levels;
+        const float *p01 = p00 + (size_t)LATTICE_NODES * levels, *p11 = p01 + levels;
         float *o = out + (size_t)f * levels;
-        for (int l = 0; l < levels; l++) o[l] = w00 * p00[l] + w10 * p10[l] + w01 * p01[l] + w11 * p11[l];
+        for (int l = l0; l <= l1; l++) o[l] = w00 * p00[l] + w10 * p10[l] + w01 * p01[l] + w11 * p11[l];
     }
 }
 
@@ -710,7 +784,7 @@ static void column_generate(const chunk_gen *g, int i, int k, const float *field
     float ground_here = g->heights[(k + g->margin) * g->ground_size + i + g->margin];
     column_context c = {
         .g = g, .gx = (float)(i + g->margin), .gz = (float)(k + g->margin),
-        .reach_min = g->reach_min[k * TERRAIN_CHUNK_COLUMNS + i],
+        .reach_min = g->reach_min[reach_index(i, k)],
         .octaves = g->model.perturbation_octaves, .levels = g->levels, .caves = caves_enabled(p),
         .fade = p->cave_fade_height > 0.5f ? p->cave_fade_height : 0.5f,
         .threshold = p->cave_threshold,
@@ -769,13 +843,176 @@ static void column_generate(const chunk_gen *g, int i, int k, const float *field
     if (out->count % 2 == 0) out->transitions[out->count++] = y_hi;
 }
 
-/* Pushes a column: bedrock/air runs, then sand on the top run and water above it. */
-static void column_push(const chunk_gen *g, int i, int k, const column_layers *layers,
+/* ---- rock layers (header comment, "Rocks") ---------------------------------------------- */
+
+/* Where a ring column's top is looked for: the column's own sample positions (column_range's)
+ * from just below its ground's reach to just above it. */
+static void ring_scan(const chunk_gen *g, int i, int k, float *y_lo, int *j_lo, int *j_hi) {
+    float lo, hi;
+    column_range(g, i, k, &lo, &hi);
+    *y_lo = lo;
+    *j_lo = CORE_MAX((int)floorf((g->reach_min[reach_index(i, k)] - SAMPLE_STEP - lo) / SAMPLE_STEP), 0);
+    *j_hi = (int)ceilf((hi - lo) / SAMPLE_STEP);
+}
+
+static float ring_density(const column_context *c, int l0, int l1, float y) {
+    float level = clampf((y - c->g->y_base) * (1.0f / COARSE_Y), (float)l0, (float)l1 - 1e-3f);
+    int l = (int)level;
+    return ground_density(c, l, level - (float)l, y);
+}
+
+/* The top of a ring column (outside the chunk): the ground's crossing, at column_generate's
+ * sample positions but without caves, from the lattice's ring nodes, looked for from the
+ * column's own G: up while solid, else down. An estimate of what the neighbouring chunk makes
+ * there (it misses an overhang's lip above open air), close enough to see walls by. */
+static float ring_top(const chunk_gen *g, int i, int k, float *fields) {
+    float y_lo;
+    int j_lo, j_hi;
+    ring_scan(g, i, k, &y_lo, &j_lo, &j_hi);
+    int octaves = g->model.perturbation_octaves;
+    int l0 = clamp_int((int)((y_lo + (float)j_lo * SAMPLE_STEP - g->y_base) / COARSE_Y), g->ring_level_lo,
+                       g->ring_level_hi);
+    int l1 = clamp_int((int)((y_lo + (float)j_hi * SAMPLE_STEP - g->y_base) / COARSE_Y) + 1, g->ring_level_lo,
+                       g->ring_level_hi);
+    column_fields(g, i, k, 2 * octaves, l0, l1, fields);
+    column_context c = { .g = g, .gx = (float)(i + g->margin), .gz = (float)(k + g->margin), .octaves = octaves,
+                         .levels = g->levels };
+    c.u = fields;
+    c.w = fields + (size_t)octaves * g->levels;
+    float ground = g->heights[(k + g->margin) * g->ground_size + i + g->margin];
+    int j = clamp_int((int)lroundf((ground - y_lo) / SAMPLE_STEP), j_lo, j_hi);
+    float y = y_lo + (float)j * SAMPLE_STEP, d = ring_density(&c, l0, l1, y);
+    if (d > 0.0f) {
+        for (j++; j <= j_hi; j++) {
+            float y1 = y_lo + (float)j * SAMPLE_STEP, d1 = ring_density(&c, l0, l1, y1);
+            if (d1 <= 0.0f) return y + d / (d - d1) * SAMPLE_STEP;
+            y = y1, d = d1;
+        }
+        return y;
+    }
+    for (j--; j >= j_lo; j--) {
+        float y0 = y_lo + (float)j * SAMPLE_STEP, d0 = ring_density(&c, l0, l1, y0);
+        if (d0 > 0.0f) return y0 + d0 / (d0 - d) * SAMPLE_STEP;
+        y = y0, d = d0;
+    }
+    return y;
+}
+
+static float smoothstep(float lo, float hi, float v) {
+    float t = clampf((v - lo) / (hi - lo), 0.0f, 1.0f);
+    return t * t * (3.0f - 2.0f * t);
+}
+
+/* A rock depth parameter: 0 its default, < 0 none. */
+static float rock_depth(float value, float fallback) {
+    return value == 0.0f ? fallback : value > 0.0f && isfinite(value) ? CORE_MIN(value, 32.0f) : 0.0f;
+}
+
+static const int8_t rock_dir[8][2] = { { 1, 0 }, { -1, 0 }, { 0, 1 }, { 0, -1 }, { 1, 1 }, { -1, 1 }, { 1, -1 }, { -1, -1 } };
+static const float rock_dist[8] = { 1, 1, 1, 1, 1.41421356f, 1.41421356f, 1.41421356f, 1.41421356f };
+
+/* Rock thickness over the chunk and its ring ([reach_index]) from the tops there (top of the
+ * highest solid run) and the lake levels (NAN outside a lake's water circle). */
+static void rock_layers(const chunk_gen *g, const float *top, const float *lake, float *rock) {
+    const terrain_generation_params *p = g->params;
+    float talus = rock_depth(p->talus_depth, TALUS_DEPTH), scree = rock_depth(p->scree_depth, SCREE_DEPTH);
+    float lake_rocks = rock_depth(p->lake_rocks_depth, LAKE_ROCKS_DEPTH);
+    float scree_slope = p->scree_min_slope > 0.0f ? p->scree_min_slope : SCREE_MIN_SLOPE;
+    int n = ROCK_SIDE;
+    float *surface = rock + (size_t)n * n;            /* talus surface, then patch noise */
+    for (int c = 0; c < n * n; c++) rock[c] = 0.0f, surface[c] = -INFINITY;
+    if (!(talus > 0.0f || scree > 0.0f || lake_rocks > 0.0f)) return;
+    float cone_drop[2 * TALUS_REACH + 1][2 * TALUS_REACH + 1];
+    for (int dz = -TALUS_REACH; dz <= TALUS_REACH; dz++)
+        for (int dx = -TALUS_REACH; dx <= TALUS_REACH; dx++)
+            cone_drop[dz + TALUS_REACH][dx + TALUS_REACH] = TALUS_SLOPE * sqrtf((float)(dx * dx + dz * dz));
+    /* Feet of walls: a neighbour rises faster than FOOT_RISE, none falls faster than rocks hold
+     * (the riser's own columns fall steeply on their other side). A cone of rocks leans on each,
+     * its surface talus·(how steep the wall is) above the foot, falling at TALUS_SLOPE. */
+    for (int k = 1; k + 1 < n; k++) {
+        for (int i = 1; i + 1 < n; i++) {
+            int at = k * n + i;
+            float rise = 0.0f, fall = 0.0f;
+            for (int d = 0; d < 8; d++) {
+                float step = (top[at + rock_dir[d][1] * n + rock_dir[d][0]] - top[at]) * (d < 4 ? 1.0f : 0.70710678f);
+                rise = CORE_MAX(rise, step);
+                fall = CORE_MAX(fall, -step);
+            }
+            float foot = talus * smoothstep(FOOT_RISE, 2.0f * FOOT_RISE, rise);
+            if (fall <= ROCK_HOLD_SLOPE && foot > ROCK_MIN && top[at] > p->sea_level) {
+                for (int dz = -TALUS_REACH; dz <= TALUS_REACH; dz++) {
+                    for (int dx = -TALUS_REACH; dx <= TALUS_REACH; dx++) {
+                        int x = i + dx, z = k + dz;
+                        if (x < 0 || z < 0 || x >= n || z >= n) continue;
+                        float cone = top[at] + foot - cone_drop[dz + TALUS_REACH][dx + TALUS_REACH];
+                        surface[z * n + x] = CORE_MAX(surface[z * n + x], cone);
+                    }
+                }
+            }
+            /* Scree: where the ground falls faster than sand holds. */
+            rock[at] = fall > scree_slope && fall < 1.0f && top[at] > p->sea_level
+                           ? scree * smoothstep(scree_slope, scree_slope + 0.08f, fall) : 0.0f;
+        }
+    }
+    for (int c = 0; c < n * n; c++) surface[c] = clampf(surface[c] - top[c], 0.0f, 1.2f * talus);
+    /* Scree in patches, stones in a noisy ring at a lake's waterline. */
+    uint32_t scree_seed = field_seed(p, 5), lake_seed = field_seed(p, 6);
+    float xs[ROCK_SIDE], scree_noise[ROCK_SIDE], lake_noise[ROCK_SIDE];
+    for (int i = 0; i < n; i++) xs[i] = (float)((g->x0 + (double)(i - ROCK_RING) + 0.5) * (1.0 / SCREE_WAVELENGTH));
+    for (int k = 0; k < n; k++) {
+        float z = (float)((g->z0 + (double)(k - ROCK_RING) + 0.5) * (1.0 / SCREE_WAVELENGTH));
+        bool stony = false, lakeside = false;            /* the noise only where it is read */
+        for (int i = 0; i < n; i++) {
+            stony |= rock[k * n + i] > 0.0f || surface[k * n + i] > 0.0f;
+            lakeside |= !isnan(lake[k * n + i]);
+        }
+        if (!stony && !(lakeside && lake_rocks > 0.0f)) continue;
+        terrain__noise2_row(scree_seed, xs, 1.0f, z, n, scree_noise);
+        if (lakeside) terrain__noise2_row(lake_seed, xs, 2.0f, 2.0f * z, n, lake_noise);
+        for (int i = 0; i < n; i++) {
+            int at = k * n + i;
+            float r = rock[at] * smoothstep(0.0f, 0.3f, scree_noise[i]);
+            r = CORE_MAX(r, surface[at] * (0.8f + 0.2f * scree_noise[i]));
+            if (lake_rocks > 0.0f && !isnan(lake[at])) {
+                float h = top[at] - lake[at];
+                float band = smoothstep(-2.0f, -1.2f, h) * (1.0f - smoothstep(0.8f, 1.6f, h));
+                r = CORE_MAX(r, lake_rocks * band * smoothstep(-0.1f, 0.25f, lake_noise[i]));
+            }
+            rock[at] = r >= ROCK_MIN ? floorf(r / TERRAIN_HEIGHT_QUANTUM) * TERRAIN_HEIGHT_QUANTUM : 0.0f;
+        }
+    }
+    /* Never steeper than rocks hold: a column's rock surface stays within d·ROCK_HOLD_SLOPE of
+     * every neighbour's ground, thinned (never thickened) until that holds, in a fixed order. */
+    int stony[(ROCK_SIDE - 2) * (ROCK_SIDE - 2)], count = 0;
+    for (int k = 1; k + 1 < n; k++)
+        for (int i = 1; i + 1 < n; i++)
+            if (rock[k * n + i] > 0.0f) stony[count++] = k * n + i;
+    for (int pass = 0; pass < ROCK_CLIP_PASSES && count; pass++) {
+        bool changed = false;
+        for (int c = 0; c < count; c++) {
+            int at = stony[c];
+            if (rock[at] <= 0.0f) continue;
+            float limit = INFINITY;
+            for (int d = 0; d < 8; d++) {
+                int nb = at + rock_dir[d][1] * n + rock_dir[d][0];
+                limit = CORE_MIN(limit, top[nb] + rock[nb] + ROCK_HOLD_SLOPE * rock_dist[d]);
+            }
+            float allowed = limit - top[at];
+            if (rock[at] <= allowed) continue;
+            float r = floorf(allowed / TERRAIN_HEIGHT_QUANTUM) * TERRAIN_HEIGHT_QUANTUM;
+            rock[at] = r >= ROCK_MIN ? r : 0.0f;
+            changed = true;
+        }
+        if (!changed) break;
+    }
+}
+
+/* Pushes a column: bedrock/air runs, then sand and rocks on the top run and water above it. */
+static void column_push(const chunk_gen *g, int i, int k, const float *transitions, int count, float rocks,
                         terrain_stacks_builder *builder) {
     const terrain_generation_params *p = g->params;
-    int count = layers->count;
-    float top = layers->transitions[count - 1];
-    float top_run_bottom = count >= 3 ? layers->transitions[count - 2] : TERRAIN_FLOOR_Y;
+    float top = transitions[count - 1];
+    float top_run_bottom = count >= 3 ? transitions[count - 2] : TERRAIN_FLOOR_Y;
     /* Sand on low slopes: the macro ground's gradient at the column, central differences. */
     int size = g->ground_size, at = (k + g->margin) * size + i + g->margin;
     float slope_x = 0.5f * (g->heights[at + 1] - g->heights[at - 1]);
@@ -792,18 +1029,20 @@ static void column_push(const chunk_gen *g, int i, int k, const column_layers *l
 
     float y = TERRAIN_FLOOR_Y;
     for (int t = 0; t < count; t++) {
-        float next = layers->transitions[t];
+        float next = transitions[t];
         if (t % 2) {
             terrain_stacks_builder_push(builder, TERRAIN_AIR, next - y);
-        } else if (t == count - 1) {      /* the highest solid run */
+        } else if (t == count - 1) {      /* the highest solid run: sand, then rocks (000 §3.4) */
             terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, next - sand - y);
             terrain_stacks_builder_push(builder, TERRAIN_SAND, sand);
+            terrain_stacks_builder_push(builder, TERRAIN_ROCKS, rocks);
         } else {
             terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, next - y);
         }
         y = next;
     }
     float lake = g->lake_levels[k * TERRAIN_CHUNK_COLUMNS + i];
+    top += rocks;
     if (top < p->sea_level) terrain_stacks_builder_push(builder, TERRAIN_WATER, p->sea_level - top);
     else if (top < lake) terrain_stacks_builder_push(builder, TERRAIN_WATER, lake - top);   /* NAN: never */
     terrain_stacks_builder_end_column(builder);
@@ -818,13 +1057,15 @@ terrain_stacks *terrain_generate_chunk(const terrain_generation_params *params, 
     /* |u|, |w| ≤ 1 (normalised fBm of clamped noise), so a displaced point stays within A. */
     g.displacement = clampf(params->horizontal_perturbation, 0.0f, 64.0f);
     int reach = (int)ceilf(g.displacement) + 1;    /* + 1: bilinear reads the next column */
-    g.margin = reach + 1;                          /* + 1: slopes by central differences */
+    g.margin = CORE_MAX(reach + 1, ROCK_RING);     /* + 1: slopes by central differences; the rock
+                                                      ring reads G at its own columns */
     g.ground_size = TERRAIN_CHUNK_COLUMNS + 2 * g.margin;
     size_t grid_bytes = (size_t)g.ground_size * g.ground_size * sizeof(float);
     size_t column_bytes = (size_t)TERRAIN__COLUMNS * sizeof(float);
+    size_t ring_bytes = (size_t)ROCK_SIDE * ROCK_SIDE * sizeof(float);
     g.heights = core_alloc(grid_bytes);
-    g.reach_min = core_alloc(column_bytes);
-    g.reach_max = core_alloc(column_bytes);
+    g.reach_min = core_alloc(ring_bytes);
+    g.reach_max = core_alloc(ring_bytes);
     ground_grid(&g);
     ground_reach(&g, reach);
     g.lake_levels = core_alloc(column_bytes);
@@ -844,30 +1085,75 @@ terrain_stacks *terrain_generate_chunk(const terrain_generation_params *params, 
             y_hi = CORE_MAX(y_hi, hi);
         }
     }
+    /* And where the rock ring's tops mostly are: around its own G (ring_top reads the nearest
+     * level beyond these, and nothing above the chunk's own range: an estimate). */
+    float ring_lo = INFINITY, ring_hi = -INFINITY;
+    for (int k = -ROCK_RING; k < TERRAIN_CHUNK_COLUMNS + ROCK_RING; k++) {
+        for (int i = -ROCK_RING; i < TERRAIN_CHUNK_COLUMNS + ROCK_RING; i++) {
+            float ground = g.heights[(k + g.margin) * g.ground_size + i + g.margin];
+            ring_lo = CORE_MIN(ring_lo, ground - RING_LEVELS_AROUND);
+            ring_hi = CORE_MAX(ring_hi, ground + RING_LEVELS_AROUND);
+        }
+    }
     coarse_setup(&g);
-    coarse_lattice(&g, y_lo, y_hi + 2.0f * SAMPLE_STEP);   /* the last sample may pass y_hi */
+    /* + 2 steps: the last sample may pass y_hi. */
+    coarse_lattice(&g, y_lo, y_hi + 2.0f * SAMPLE_STEP, ring_lo, ring_hi);
 
     size_t fields_bytes = (size_t)g.fields * g.levels * sizeof(float);
     float *fields = core_alloc(fields_bytes ? fields_bytes : sizeof(float));
     column_layers *layers = core_alloc(sizeof *layers);
     bool *cave_possible = core_calloc((size_t)g.levels, sizeof(bool));
-    terrain_stacks_builder *builder = terrain_stacks_builder_create();
+    /* Every column's transitions first: the rocks need the tops around each column. */
+    size_t pool_capacity = (size_t)TERRAIN__COLUMNS * 8, pool_used = 0;
+    float *pool = core_alloc(pool_capacity * sizeof(float));
+    int *pool_start = core_alloc((TERRAIN__COLUMNS + 1) * sizeof(int));
+    float *tops = core_alloc(2 * ring_bytes), *lakes = tops + ROCK_SIDE * ROCK_SIDE;
+    float *rocks = core_alloc(2 * ring_bytes);
     for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++) {
         for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
-            column_fields(&g, i, k, fields);
+            column_fields(&g, i, k, g.fields, 0, g.levels - 1, fields);
             column_generate(&g, i, k, fields, cave_possible, layers);
-            column_push(&g, i, k, layers, builder);
+            if (pool_used + (size_t)layers->count > pool_capacity) {
+                size_t grown = CORE_MAX(2 * pool_capacity, pool_used + (size_t)layers->count);
+                pool = core_realloc(pool, pool_capacity * sizeof(float), grown * sizeof(float));
+                pool_capacity = grown;
+            }
+            memcpy(pool + pool_used, layers->transitions, (size_t)layers->count * sizeof(float));
+            pool_start[k * TERRAIN_CHUNK_COLUMNS + i] = (int)pool_used;
+            pool_used += (size_t)layers->count;
+            tops[reach_index(i, k)] = layers->transitions[layers->count - 1];
+            lakes[reach_index(i, k)] = g.lake_levels[k * TERRAIN_CHUNK_COLUMNS + i];
         }
+    }
+    pool_start[TERRAIN__COLUMNS] = (int)pool_used;
+    for (int k = -ROCK_RING; k < TERRAIN_CHUNK_COLUMNS + ROCK_RING; k++) {
+        for (int i = -ROCK_RING; i < TERRAIN_CHUNK_COLUMNS + ROCK_RING; i++) {
+            if (i >= 0 && k >= 0 && i < TERRAIN_CHUNK_COLUMNS && k < TERRAIN_CHUNK_COLUMNS) continue;
+            float basin;
+            tops[reach_index(i, k)] = ring_top(&g, i, k, fields);
+            lakes[reach_index(i, k)] = lake_level_at(&g.model, g.x0 + i + 0.5, g.z0 + k + 0.5, &basin);
+        }
+    }
+    rock_layers(&g, tops, lakes, rocks);
+    terrain_stacks_builder *builder = terrain_stacks_builder_create();
+    for (int c = 0; c < TERRAIN__COLUMNS; c++) {
+        int i = c % TERRAIN_CHUNK_COLUMNS, k = c / TERRAIN_CHUNK_COLUMNS;
+        column_push(&g, i, k, pool + pool_start[c], pool_start[c + 1] - pool_start[c], rocks[reach_index(i, k)],
+                    builder);
     }
     terrain_stacks *stacks = terrain_stacks_builder_finish(builder);
     terrain_stacks_builder_destroy(builder);
+    core_free(pool, pool_capacity * sizeof(float));
+    core_free(pool_start, (TERRAIN__COLUMNS + 1) * sizeof(int));
+    core_free(tops, 2 * ring_bytes);
+    core_free(rocks, 2 * ring_bytes);
     core_free(layers, sizeof *layers);
     core_free(cave_possible, (size_t)g.levels * sizeof(bool));
     core_free(fields, fields_bytes ? fields_bytes : sizeof(float));
-    core_free(g.coarse, (size_t)g.fields * COARSE_NODES * COARSE_NODES * (size_t)g.levels * sizeof(float));
+    core_free(g.coarse, lattice_floats(&g) * sizeof(float));
     core_free(g.heights, grid_bytes);
-    core_free(g.reach_min, column_bytes);
-    core_free(g.reach_max, column_bytes);
+    core_free(g.reach_min, ring_bytes);
+    core_free(g.reach_max, ring_bytes);
     core_free(g.lake_levels, column_bytes);
     core_free(g.basin, column_bytes);
     return stacks;

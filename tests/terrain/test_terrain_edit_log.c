@@ -152,7 +152,9 @@ Test(edit_log, generation_key_covers_every_parameter) {
         offsetof(terrain_generation_params, cave_fade_height), offsetof(terrain_generation_params, sand_max_slope),
         offsetof(terrain_generation_params, sand_depth), offsetof(terrain_generation_params, lake_spacing),
         offsetof(terrain_generation_params, lake_probability), offsetof(terrain_generation_params, lake_radius_min),
-        offsetof(terrain_generation_params, lake_radius_max), offsetof(terrain_generation_params, lake_depth) };
+        offsetof(terrain_generation_params, lake_radius_max), offsetof(terrain_generation_params, lake_depth),
+        offsetof(terrain_generation_params, talus_depth), offsetof(terrain_generation_params, scree_depth),
+        offsetof(terrain_generation_params, scree_min_slope), offsetof(terrain_generation_params, lake_rocks_depth) };
     const size_t ints[] = { offsetof(terrain_generation_params, relief_octaves),
                             offsetof(terrain_generation_params, perturbation_octaves) };
     enum { FIELDS = CORE_COUNTOF(floats) + CORE_COUNTOF(ints) };
