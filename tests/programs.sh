@@ -149,6 +149,20 @@ expect "terrain_export: a region" 0 "40 x 64 x 40 samples.*[1-9][0-9]* triangles
 expect "terrain_export: the header" 0 '^\{"dims":\[40,64,40\],"origin":\[-20,-24,-20\],"spacing":1\}$' -- cat "$tmp/region.json"
 expect "terrain_export: raw is 40·64·40 floats" 0 "^409600$" -- stat -c %s "$tmp/region.raw"
 expect "terrain_export: a binary PLY" 0 "format binary_little_endian 1.0" -- head -c 200 "$tmp/region.ply"
+
+# rocks_export: flags, and two small tiles written as PLY with their JSON index.
+p=$bin/rocks_export
+expect "rocks_export: unknown flag" 2 "unknown option '--no-such-flag'" -- "$p" --no-such-flag
+expect "rocks_export: --help" 0 "usage: rocks_export" -- "$p" --help
+expect "rocks_export: no --out" 2 "--out DIR is required" -- "$p" --tiles 2
+expect "rocks_export: bad --tiles" 2 "bad value for '--tiles'" -- "$p" --tiles 300 --out "$tmp/rocks"
+expect "rocks_export: bad --cells" 2 "bad value for '--cells'" -- "$p" --cells 3 --out "$tmp/rocks"
+expect "rocks_export: bad --shape" 2 "--shape must be round, slab or mixed" -- "$p" --shape cubes --out "$tmp/rocks"
+expect "rocks_export: unwritable --out" 2 "cannot write into /proc/rocks" -- "$p" --out /proc/rocks
+expect "rocks_export: two tiles" 0 "2 tiles, [1-9][0-9]* rocks" -- \
+  "$p" --tiles 2 --cells 4 --voxels 4 --shape round --out "$tmp/rocks"
+expect "rocks_export: a binary PLY" 0 "format binary_little_endian 1.0" -- head -c 200 "$tmp/rocks/tile_001.ply"
+expect "rocks_export: the index" 0 '"tile":1,"ply":"tile_001.ply","colours":\[1,0,0,0,0,0,0,0\]' -- cat "$tmp/rocks/tiles.json"
 p=$bin/terrain_mesh
 expect "terrain_mesh: no file" 2 "missing" -- "$p"
 expect "terrain_mesh: the exported field" 0 \

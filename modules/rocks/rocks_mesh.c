@@ -13,33 +13,41 @@
 
 #include <math.h>
 #include <meshoptimizer.h>
-#include <stdlib.h>
 #include <string.h>
 
-static int compare_u64(const void *a, const void *b) {
-    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-    return x < y ? -1 : x > y;
-}
-
+/* Directed edges bucketed by their first vertex (a counting sort, O(n)): closed means each
+ * directed edge once and its reverse once. */
 bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t vertex_count) {
     if (index_count == 0 || index_count % 3) return false;
-    uint64_t *edges = core_alloc(index_count * sizeof *edges);
+    uint32_t *first = core_calloc((size_t)vertex_count + 1, sizeof *first);
+    uint32_t *to = core_alloc(index_count * sizeof *to);
     bool ok = true;
-    for (uint32_t t = 0; t < index_count && ok; t += 3)
-        for (int e = 0; e < 3; e++) {
-            uint32_t a = indices[t + e], b = indices[t + (e + 1) % 3];
-            if (a == b || a >= vertex_count || b >= vertex_count) ok = false;
-            edges[t + e] = (uint64_t)a << 32 | b;
-        }
-    if (ok) {
-        qsort(edges, index_count, sizeof *edges, compare_u64);
-        for (uint32_t i = 0; i < index_count && ok; i++) {
-            if (i + 1 < index_count && edges[i] == edges[i + 1]) ok = false;   /* a directed edge twice */
-            uint64_t reverse = (edges[i] << 32) | (edges[i] >> 32);
-            if (!bsearch(&reverse, edges, index_count, sizeof *edges, compare_u64)) ok = false;
-        }
+    for (uint32_t i = 0; i < index_count && ok; i++) {
+        uint32_t a = indices[i], b = indices[i - i % 3 + (i % 3 + 1) % 3];
+        if (a == b || a >= vertex_count || b >= vertex_count) ok = false;
+        else first[a + 1]++;
     }
-    core_free(edges, index_count * sizeof *edges);
+    if (ok) {
+        for (uint32_t v = 0; v < vertex_count; v++) first[v + 1] += first[v];
+        uint32_t *fill = core_alloc(((size_t)vertex_count + 1) * sizeof *fill);
+        memcpy(fill, first, ((size_t)vertex_count + 1) * sizeof *fill);
+        for (uint32_t i = 0; i < index_count; i++) {
+            uint32_t a = indices[i], b = indices[i - i % 3 + (i % 3 + 1) % 3];
+            to[fill[a]++] = b;
+        }
+        core_free(fill, ((size_t)vertex_count + 1) * sizeof *fill);
+        for (uint32_t a = 0; a < vertex_count && ok; a++)
+            for (uint32_t e = first[a]; e < first[a + 1] && ok; e++) {
+                uint32_t b = to[e];
+                for (uint32_t f = e + 1; f < first[a + 1]; f++)
+                    if (to[f] == b) ok = false;   /* a directed edge twice */
+                bool back = false;
+                for (uint32_t f = first[b]; f < first[b + 1] && !back; f++) back = to[f] == a;
+                ok &= back;
+            }
+    }
+    core_free(first, ((size_t)vertex_count + 1) * sizeof *first);
+    core_free(to, index_count * sizeof *to);
     return ok;
 }
 

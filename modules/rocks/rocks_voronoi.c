@@ -167,10 +167,12 @@ static bool dual_holds(int m, const int v[3], const int a[3], const int c[3]) {
 /* ---- contacts (001 §5) --------------------------------------------------------------------------
  * c_pq is the point of [p_p, p_q] with d_p = d_q, found by bisection, always from the seed with
  * the smaller id (the same bits from either rock's region). The contact is kept when the voxel
- * holding c_pq has both seeds' cells in its dual block and belongs to p or q, and a face
- * neighbour of it, with both cells in its dual block too, belongs to the other: then both rocks
- * touch there, and the decision reads only owners computable from either region's closure, so
- * the two rocks agree on it. */
+ * v holding c_pq has both seeds' cells in its dual block and belongs to p or q, and its neighbour
+ * across the face of v nearest to c_pq, with both cells in its dual block too, belongs to the
+ * other: then the two rocks share that face, within half a voxel of c_pq, and both meshes pass
+ * through its centre. The decision reads only owners computable from either region's closure,
+ * so the two rocks agree on it. (001 §5 keeps every pair "into contact"; a pair whose bisector
+ * point falls elsewhere touches, if at all, away from c_pq.) */
 static bool contact_point(const region_build *b, const rocks__seed *p, const rocks__seed *q, double c[3]) {
     const rocks__seed *sa = p->id < q->id ? p : q, *sb = p->id < q->id ? q : p;
     const int m = b->m;
@@ -198,12 +200,18 @@ static bool contact_point(const region_build *b, const rocks__seed *p, const roc
     int32_t o = owner_at(b, v);
     if (o != pi && o != qi) return false;
     int32_t other = o == pi ? qi : pi;
-    for (int f = 0; f < 6; f++) {
-        int w[3] = { v[0], v[1], v[2] };
-        w[f >> 1] += (f & 1) ? 1 : -1;
-        if (dual_holds(m, w, p->cell, q->cell) && owner_at(b, w) == other) return true;
+    /* the face of v nearest to c_pq: across it the other rock must own the neighbour */
+    int axis = 0;
+    double nearest = 1.0;
+    int step = 1;
+    for (int a = 0; a < 3; a++) {
+        double f = c[a] - v[a];   /* 0 … 1 inside v */
+        if (f < nearest) nearest = f, axis = a, step = -1;
+        if (1.0 - f < nearest) nearest = 1.0 - f, axis = a, step = 1;
     }
-    return false;
+    int w[3] = { v[0], v[1], v[2] };
+    w[axis] += step;
+    return dual_holds(m, w, p->cell, q->cell) && owner_at(b, w) == other;
 }
 
 /* ---- erosion (001 §5) ------------------------------------------------------------------------- */
