@@ -131,6 +131,7 @@ typedef struct resolve_result {
 static resolve_result resolve(const mover *m, float p[3], float v[3], bool walking) {
     resolve_result result = { 0 };
     float r = m->params->radius, max_push = 0.5f * r;
+    float last_wall[2] = { 0.0f, 0.0f };       /* horizontal direction of the last steep push */
     for (int iteration = 0; iteration < RESOLVE_ITERATIONS; iteration++) {
         bool pushed = false;
         for (int i = 0; i < PROBE_COUNT; i++) {
@@ -140,13 +141,18 @@ static resolve_result resolve(const mover *m, float p[3], float v[3], bool walki
             if (depth <= SKIN) continue;
             pushed = true;
             const float *n = ct.normal;
-            if (walking && n[1] >= m->cos_max_slope) {
+            float h = sqrtf(n[0] * n[0] + n[2] * n[2]);
+            float hx = h > 0.0f ? n[0] / h : 0.0f, hz = h > 0.0f ? n[2] / h : 0.0f;
+            /* Wedged: two steep faces pushing against each other (a crevice between rocks)
+             * hold the capsule up as ground does; pushed only sideways it would sink between
+             * them until the pushes cancel. */
+            bool wedged = walking && n[1] > 0.0f && hx * last_wall[0] + hz * last_wall[1] < -0.3f;
+            if (walking && (n[1] >= m->cos_max_slope || wedged)) {
                 p[1] += fminf(depth / n[1], max_push);
                 if (v[1] < 0.0f) v[1] = 0.0f;
                 result.ground = true;
             } else if (walking && n[1] >= 0.0f) {
-                float h = sqrtf(n[0] * n[0] + n[2] * n[2]);
-                float hx = n[0] / h, hz = n[2] / h;
+                last_wall[0] = hx, last_wall[1] = hz;
                 float push = fminf(depth / h, max_push);
                 p[0] += hx * push, p[2] += hz * push;
                 float into = v[0] * hx + v[2] * hz;
@@ -206,6 +212,15 @@ static bool lift_clear(const mover *m, float p[3], float amount) {
     return true;
 }
 
+/* Whether something holds the capsule up where it stands though no walkable ground lies under
+ * it: lowered by GROUND_EPSILON it is pushed back up (wedged between two steep faces, resolve's
+ * `wedged`). */
+static bool held_below(const mover *m, const float p[3]) {
+    float q[3] = { p[0], p[1] - GROUND_EPSILON, p[2] }, v[3] = { 0.0f, 0.0f, 0.0f };
+    resolve_result hit = resolve(m, q, v, true);
+    return hit.ground && q[1] >= p[1] - SNAP_EPSILON;
+}
+
 /* One walking substep of `h` seconds (the move is at most r/2 long). */
 static void walk_substep(const mover *m, float p[3], float v[3], bool *on_ground, float h) {
     const game_player_params *pr = m->params;
@@ -234,7 +249,7 @@ static void walk_substep(const mover *m, float p[3], float v[3], bool *on_ground
         }
         memcpy(p, moved, sizeof moved);
         memcpy(v, vm, sizeof vm);
-        *on_ground = snap_down(m, p, pr->step_height);
+        *on_ground = snap_down(m, p, pr->step_height) || held_below(m, p);
         if (*on_ground) {
             v[1] = 0.0f;
             resolve(m, p, v, true);

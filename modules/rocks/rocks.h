@@ -61,7 +61,7 @@ typedef enum rocks_shape {
                                          1 … 3 seeds a cell (Fig. 12) */
 } rocks_shape;
 
-#define ROCKS_LODS 3                  /* levels of detail per rock mesh: full, ~1/3, ~1/10 */
+#define ROCKS_LODS 3                  /* levels of detail per rock mesh: full, ~1/4, ~1/12 */
 #define ROCKS_HULL_AXES 13            /* a rock's collision hull: a 26-DOP (below) */
 
 /* Zero means the default (the shape preset's) for every field. */
@@ -97,9 +97,9 @@ typedef struct rocks_rock {
     uint32_t index_first[ROCKS_LODS], index_count[ROCKS_LODS];
                                       /* triangles in rocks_tileset.indices, local to the rock's
                                          vertices (add vertex_first; 16 bits: a rock has fewer
-                                         than 65 536 vertices); LOD 0 is the full mesh, lightly
-                                         simplified (≤ 0.25 voxel), LOD 1 and 2 about 1/3 and
-                                         1/10 of its triangles; every level closed */
+                                         than 65 536 vertices); LOD 0 is the full mesh,
+                                         simplified (≤ 0.6 voxel), LOD 1 and 2 about 1/4 and
+                                         1/12 of its triangles; every level closed */
     uint32_t anchor_first, anchor_count;  /* in rocks_tileset.anchors: the seed first, then
                                          voxel centres spread over the rock (001 §6) */
     uint32_t contact_first, contact_count;  /* in rocks_tileset.contacts */

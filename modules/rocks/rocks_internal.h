@@ -20,8 +20,11 @@
 
 #define ROCKS__MAX_SEEDS_PER_CELL 8
 #define ROCKS__REGION_COUNT (2 + 12 + 48 + 256)   /* 318 region instances (001 §3) */
+#define ROCKS__LOD0_ERROR 0.6f                    /* voxels LOD 0 may stray from the marching cubes */
 #define ROCKS__ANCHORS 16                         /* the seed and up to 15 voxel centres */
-#define ROCKS__CACHE_VERSION 1u
+/* Bump it with ANY change to what a build makes (seeds, ownership, contacts, erosion, meshes,
+ * anchors): a cache holds a build's output under its desc, so an old one would read as valid. */
+#define ROCKS__CACHE_VERSION 2u   /* 2: LOD 0 at 0.6 voxel; contacts across the nearest face */
 
 enum { ROCKS__VERTEX = 0, ROCKS__EDGE = 1, ROCKS__FACE = 2, ROCKS__CENTRE = 3 };
 

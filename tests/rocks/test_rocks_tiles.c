@@ -331,11 +331,14 @@ static float mesh_distance(const rocks_tileset *set, uint32_t r, const float p[3
     return best;
 }
 
-Test(rocks_tiles, both_meshes_pass_within_a_voxel_of_every_contact) {
+/* The marching-cubes surfaces of two touching rocks meet within a voxel of c_ij (the kept
+ * contact has the other rock across the voxel face nearest to it); LOD 0 may then stray by the
+ * simplifier's error bound, ROCKS__LOD0_ERROR voxels. */
+Test(rocks_tiles, both_meshes_pass_within_a_voxel_and_the_simplifier_s_error_of_every_contact) {
     rocks_tiles_desc desc = quick_desc();
     rocks_tileset *set = rocks_tiles_create(&desc);
     cr_assert_not_null(set);
-    const float voxel = 1.0f / (float)(desc.cells * desc.voxels_per_cell);
+    const float voxel = (1.0f + ROCKS__LOD0_ERROR) / (float)(desc.cells * desc.voxels_per_cell);
     uint32_t checked = 0, far = 0, far_other = 0;
     float worst = 0;
     for (uint32_t r = 0; r < set->rock_count; r++) {
@@ -356,9 +359,9 @@ Test(rocks_tiles, both_meshes_pass_within_a_voxel_of_every_contact) {
         }
     }
     cr_expect_gt(checked, 1000u, "%u contacts", checked);
-    cr_expect_eq(far, 0u, "%u of %u contacts are more than a voxel from their rock (worst %.2f voxels)", far, checked,
+    cr_expect_eq(far, 0u, "%u of %u contacts are further than the bound from their rock (worst %.2f of it)", far, checked,
                  (double)(worst / voxel));
-    cr_expect_eq(far_other, 0u, "%u contacts are more than a voxel from the other rock (worst %.2f voxels)", far_other,
+    cr_expect_eq(far_other, 0u, "%u contacts are further than the bound from the other rock (worst %.2f of it)", far_other,
                  (double)(worst / voxel));
     rocks_tiles_destroy(set);
 }

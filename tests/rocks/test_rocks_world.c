@@ -297,9 +297,22 @@ Test(rocks_place, the_player_stands_on_a_rock_pile) {
                  player.position[1], (double)GROUND);
     cr_assert_lt(player.position[1], GROUND + PILE_HEIGHT + 0.6, "feet at %.2f m: no higher than the pile's top",
                  player.position[1]);
+    /* The capsule's bottom sphere (radius 0.35) rests on the rocks' hulls, not in them. */
     double feet[3] = { player.position[0], player.position[1] + 0.35, player.position[2] };
     float n[3];
-    cr_assert_gt(pile_distance(&obstacles, feet, 2.0f, n), 0.2f, "the capsule's bottom sphere is out of every rock");
+    float clear = pile_distance(&obstacles, feet, 2.0f, n);
+    cr_assert_gt(clear, 0.34f, "the bottom sphere is %.3f m from the nearest rock (radius 0.35)", clear);
+    /* Walking across the pile: never into a rock, and over it rather than stopped by it. */
+    double start_z = player.position[2];
+    input_actions forward = { .move_y = 1.0f };
+    for (int f = 0; f < 150; f++) {
+        game_player_update(&player, world, &forward, 1.0f / 60.0f);
+        double probe[3] = { player.position[0], player.position[1] + 0.35, player.position[2] };
+        clear = pile_distance(&obstacles, probe, 2.0f, n);
+        cr_assert_gt(clear, 0.3f, "frame %d: the bottom sphere %.3f m from a rock", f, clear);
+    }
+    cr_assert_gt(fabs(player.position[2] - start_z), 4.0, "walked %.2f m in 2.5 s across the pile",
+                 fabs(player.position[2] - start_z));
     rocks_placement_free(&p);
     terrain_world_destroy(world);
     rocks_tiles_destroy(set);
