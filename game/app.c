@@ -30,7 +30,8 @@ struct game_app {
     terrain_clipmap *clipmap;              /* the far terrain, or NULL */
     terrain_ecs *terrain;
     grass_system *grass;                   /* NULL with --grass off */
-    rocks_tileset *rock_tiles;             /* NULL with --rocks off */
+    rocks_tileset *own_rock_tiles;         /* the default set, when desc.rock_tiles is NULL */
+    const rocks_tileset *rock_tiles;       /* NULL with --rocks off */
     rocks_system *rocks;
     terrain_water *water;                  /* NULL with --water off */
     input_bindings *bindings;
@@ -92,8 +93,12 @@ static bool app_rock_raycast(void *user, const double origin[3], const float dir
 static bool app_open_rocks(game_app *app, float fog_density) {
     const game_app_desc *d = &app->desc;
     if (d->rocks == ROCKS_OFF) return true;
-    app->rock_tiles = rocks_tiles_create(&(rocks_tiles_desc){ .jobs = app->jobs, .cache_path = d->rocks_cache_path });
-    if (!app->rock_tiles) return false;
+    app->rock_tiles = d->rock_tiles;
+    if (!app->rock_tiles) {
+        app->own_rock_tiles = rocks_tiles_create(&(rocks_tiles_desc){ .jobs = app->jobs,
+                                                                      .cache_path = d->rocks_cache_path });
+        if (!(app->rock_tiles = app->own_rock_tiles)) return false;
+    }
     app->rocks = rocks_create(&(rocks_desc){ .gfx = app->gfx, .ecs = app->ecs, .world = app->world,
                                              .tiles = app->rock_tiles, .quality = d->rocks,
                                              .fog_density = fog_density });
@@ -441,7 +446,7 @@ void game_app_destroy(game_app *app) {
     ecs_world_destroy(app->ecs);
     terrain_world_destroy(app->world);
     terrain_edit_log_destroy(app->edits);
-    rocks_tiles_destroy(app->rock_tiles);
+    rocks_tiles_destroy(app->own_rock_tiles);
     job_system_destroy(app->jobs);
     app_free_shots(app);
     game_walk_free(&app->walk);

@@ -71,7 +71,9 @@ typedef struct game_app_desc {
     terrain_shadow_quality shadows;   /* the sun's shadow map (terrain.h); 0 = low */
     terrain_water_quality water;      /* the sea and lakes (terrain.h, terrain_water); 0 = low */
     rocks_quality rocks;              /* rock piles (rocks.h); 0 = on */
-    const char *rocks_cache_path;     /* the rock tile set's cache file; NULL = built each run */
+    const rocks_tileset *rock_tiles;  /* the rocks' tile set (not owned; tests pass small ones);
+                                         NULL = the default set, from rocks_cache_path */
+    const char *rocks_cache_path;     /* the default set's cache file; NULL = built each run */
     bool no_head_bob;                 /* the view without the walking dip (game_player_bob) */
     bool no_occlusion;                /* terrain lit without its ambient occlusion
                                          (terrain_renderer_desc.no_occlusion) */

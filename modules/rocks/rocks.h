@@ -272,8 +272,8 @@ typedef struct rocks_desc {
     const rocks_tileset *tiles;       /* required; not owned, outlives the system */
     rocks_quality quality;
     float tile_size;                  /* as rocks_place_desc's; 0 = 3 m */
-    float range;                      /* metres to the last rock drawn; 0 = 90 */
-    float lod_distance[ROCKS_LODS - 1];   /* metres where LOD 1 and 2 start; 0 = 14, 35 */
+    float range;                      /* metres to the last rock drawn; 0 = 70 */
+    float lod_distance[ROCKS_LODS - 1];   /* metres where LOD 1 and 2 start; 0 = 10, 25 */
     float fog_density;                /* as terrain_renderer_desc's; 0 = 0.0025 */
 } rocks_desc;
 

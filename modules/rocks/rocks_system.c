@@ -174,9 +174,9 @@ static void rocks_place_system(ecs_iter *it) {
 static void rocks_defaults(rocks_desc *d) {
     if (d->quality == ROCKS_DEFAULT) d->quality = ROCKS_ON;
     if (!(d->tile_size > 0)) d->tile_size = 3.0f;
-    if (!(d->range > 0)) d->range = 90.0f;
-    if (!(d->lod_distance[0] > 0)) d->lod_distance[0] = 14.0f;
-    if (!(d->lod_distance[1] > 0)) d->lod_distance[1] = 35.0f;
+    if (!(d->range > 0)) d->range = 70.0f;
+    if (!(d->lod_distance[0] > 0)) d->lod_distance[0] = 10.0f;
+    if (!(d->lod_distance[1] > 0)) d->lod_distance[1] = 25.0f;
     if (d->fog_density == 0) d->fog_density = 0.0025f;
 }
 

@@ -18,7 +18,10 @@
 
 static const terrain_stream_desc small_view = { .half_width = 2, .levels = 2, .memory_budget = 64u << 20 };
 
+/* Worlds here run without rocks unless a test gives a tile set: the default set takes the debug
+ * build 40 s to make (test_render_rocks and test_rocks cover the rocks with small sets). */
 static game_app_stats run_world(game_app_desc desc) {
+    if (!desc.rock_tiles) desc.rocks = ROCKS_OFF;
     game_app *app = game_app_create(&desc);
     cr_assert(app, "the world did not start");
     int guard = 0;
@@ -146,7 +149,7 @@ typedef struct edited_run {
 static edited_run carve_and_close(const char *dir) {
     game_app *app = game_app_create(&(game_app_desc){ .seed = 3, .width = 96, .height = 64, .headless = true,
                                                       .threads = 2, .frames = 100000, .stream = small_view,
-                                                      .no_clipmap = true, .world_dir = dir });
+                                                      .no_clipmap = true, .world_dir = dir, .rocks = ROCKS_OFF });
     cr_assert(app);
     for (int guard = 0; !game_app_loaded(app) && guard < 20000; guard++) game_app_frame(app);
     game_app_stats s = game_app_stats_get(app);
@@ -172,7 +175,7 @@ static uint64_t chunk_hash_in(const char *dir, uint64_t seed, terrain_chunk_coor
                               double *feet) {
     game_app *app = game_app_create(&(game_app_desc){ .seed = seed, .width = 96, .height = 64, .headless = true,
                                                       .threads = 2, .frames = 1, .stream = small_view,
-                                                      .no_clipmap = true, .world_dir = dir });
+                                                      .no_clipmap = true, .world_dir = dir, .rocks = ROCKS_OFF });
     *started = app != NULL;
     if (!app) return 0;
     uint64_t hash = terrain_stacks_hash(terrain_world_stacks(game_app_world(app), chunk));
@@ -412,4 +415,21 @@ Test(render_world, a_walk_starts_from_the_view_asked_for, .timeout = 600) {
     cr_expect(hypot(s.feet[0] - 10.5, s.feet[2] + 20.5) <= 2.0 + 1e-6, "ended at (%.2f, %.2f)", s.feet[0], s.feet[2]);
     cr_expect(fabs(s.feet[1]) < 0.05, "feet at %.3f over flat ground at 0", s.feet[1]);
     game_walk_free(&walk);
+}
+
+/* Rocks in the game: seed 1 has talus at the foot of a wall near (49.5, 17.5) (its generator's
+ * rock layers); a world started looking at it places rocks there and draws them, and the player
+ * standing on the pile is never inside a rock. */
+Test(render_world, the_game_places_and_draws_the_generated_talus) {
+    rocks_tileset *tiles = rocks_tiles_create(&(rocks_tiles_desc){ .cells = 4, .voxels_per_cell = 5,
+                                                                   .shape = ROCKS_SHAPE_ROUND });
+    cr_assert_not_null(tiles);
+    game_app_stats s = run_world((game_app_desc){ .seed = 1, .width = 96, .height = 64, .headless = true,
+                                                  .threads = 2, .frames = 30, .stream = small_view,
+                                                  .no_clipmap = true, .rock_tiles = tiles, .at_set = true,
+                                                  .at = { 49.5, 27, 6 }, .look_set = true, .look = { 0, -25 } });
+    cr_expect_gt(s.rocks_placed, 100, "%llu rocks placed around the talus", (unsigned long long)s.rocks_placed);
+    cr_expect_gt(s.rocks_drawn, 20, "%llu rocks drawn looking at it", (unsigned long long)s.rocks_drawn);
+    cr_expect_eq(s.rock_shapes, tiles->rock_count);
+    rocks_tiles_destroy(tiles);
 }
