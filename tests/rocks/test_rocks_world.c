@@ -86,6 +86,11 @@ Test(rocks_place, lattice_colouring_has_no_period) {
 
 /* ---- placement -------------------------------------------------------------------------------- */
 
+/* World metres of placed rock i's region origin (its vertices scale by 3 m from there). */
+static void instance_origin(const rocks_placement *p, uint32_t i, double out[3]) {
+    for (int a = 0; a < 3; a++) out[a] = p->origin[a] + p->instances[i].position[a];
+}
+
 static int anchors_in_rocks(terrain_world *world, const rocks_tileset *set, const rocks_rock *rock,
                             const double origin[3], double tile) {
     int inside = 0;
@@ -105,8 +110,8 @@ Test(rocks_place, every_rock_placed_has_most_anchors_in_the_rock_layer) {
     cr_assert_gt(p.count, 20, "a 3 m pile of 4 m radius holds rocks: %u", p.count);
     for (uint32_t i = 0; i < p.count; i++) {
         const rocks_rock *rock = &set->rocks[p.instances[i].rock];
-        double origin[3] = { p.origin[0] + p.instances[i].position[0], p.origin[1] + p.instances[i].position[1],
-                             p.origin[2] + p.instances[i].position[2] };
+        double origin[3];
+        instance_origin(&p, i, origin);
         int inside = anchors_in_rocks(world, set, rock, origin, 3.0);
         cr_assert_geq(inside * 10, (int)rock->anchor_count * 6, "rock %u: %d of %u anchors in the layer", i, inside,
                       rock->anchor_count);
@@ -204,9 +209,8 @@ Test(rocks_place, after_a_carve_no_rock_floats_and_the_dug_rocks_are_gone) {
     cr_assert_lt(after.count, before.count, "the shaft took rocks: %u → %u", before.count, after.count);
     for (uint32_t i = 0; i < after.count; i++) {
         const rocks_rock *rock = &set->rocks[after.instances[i].rock];
-        double origin[3] = { after.origin[0] + after.instances[i].position[0],
-                             after.origin[1] + after.instances[i].position[1],
-                             after.origin[2] + after.instances[i].position[2] };
+        double origin[3];
+        instance_origin(&after, i, origin);
         int inside = anchors_in_rocks(world, set, rock, origin, 3.0);
         cr_assert_geq(inside * 10, (int)rock->anchor_count * 6, "a rock left with %d of %u anchors", inside,
                       rock->anchor_count);
@@ -221,9 +225,8 @@ Test(rocks_place, after_a_carve_no_rock_floats_and_the_dug_rocks_are_gone) {
                    memcmp(after.instances[j].position, before.instances[i].position, sizeof(float[3])) == 0;
         if (kept) continue;
         const rocks_rock *rock = &set->rocks[before.instances[i].rock];
-        double origin[3] = { before.origin[0] + before.instances[i].position[0],
-                             before.origin[1] + before.instances[i].position[1],
-                             before.origin[2] + before.instances[i].position[2] };
+        double origin[3];
+        instance_origin(&before, i, origin);
         int inside = anchors_in_rocks(world, set, rock, origin, 3.0);
         cr_assert_lt(inside * 10, (int)rock->anchor_count * 6, "a rock went with %d of %u anchors still in", inside,
                      rock->anchor_count);

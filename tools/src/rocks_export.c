@@ -37,6 +37,26 @@ typedef struct export_args {
 
 #define EXPORT_TILE_SIZE 3.0          /* metres: the game's (rocks_desc.tile_size's default) */
 
+/* Files are written to PATH.tmp and renamed over PATH once complete (CONVENTIONS: nothing half
+ * written is left under the real name). */
+static FILE *temp_open(const char *path, char *temp, size_t size, const char *mode) {
+    snprintf(temp, size, "%s.tmp", path);
+    FILE *f = fopen(temp, mode);
+    if (!f) fprintf(stderr, "rocks_export: cannot write %s: %s\n", temp, strerror(errno));
+    return f;
+}
+
+static bool temp_close(FILE *f, const char *temp, const char *path) {
+    bool ok = !ferror(f);
+    ok &= fclose(f) == 0;
+    if (!ok || rename(temp, path) != 0) {
+        fprintf(stderr, "rocks_export: cannot write %s\n", path);
+        remove(temp);
+        return false;
+    }
+    return true;
+}
+
 /* The faces of the tile [0, 1)³ the rock crosses: "-x" when it reaches below x = 0, "+x" above 1. */
 static void write_straddles(FILE *f, const rocks_rock *rock, const int8_t offset[3]) {
     static const char axes[3] = { 'x', 'y', 'z' };
@@ -61,12 +81,8 @@ static int export_tiles(const rocks_tileset *set, int tiles, const char *dir) {
     }
     snprintf(path, sizeof path, "%s/tiles.json", dir);
     char temp[4200];
-    snprintf(temp, sizeof temp, "%s.tmp", path);
-    FILE *f = fopen(temp, "w");
-    if (!f) {
-        fprintf(stderr, "rocks_export: cannot write %s: %s\n", temp, strerror(errno));
-        return 1;
-    }
+    FILE *f = temp_open(path, temp, sizeof temp, "w");
+    if (!f) return 1;
     fprintf(f, "{\"cells\":%d,\"voxels_per_cell\":%d,\"tiles\":[\n", set->desc.cells, set->desc.voxels_per_cell);
     for (int t = 0; t < tiles; t++) {
         const rocks_tile *tile = &set->tiles[t];
@@ -84,13 +100,7 @@ static int export_tiles(const rocks_tileset *set, int tiles, const char *dir) {
         fprintf(f, "]}%s\n", t + 1 < tiles ? "," : "");
     }
     fprintf(f, "]}\n");
-    bool ok = !ferror(f);
-    ok &= fclose(f) == 0;
-    if (!ok || rename(temp, path) != 0) {
-        fprintf(stderr, "rocks_export: cannot write %s\n", path);
-        remove(temp);
-        return 1;
-    }
+    if (!temp_close(f, temp, path)) return 1;
     printf("rocks_export: %d tiles, %u rocks in the set (%.1f s%s, %.1f MB: %u vertices, %u indices) → %s\n", tiles,
            set->rock_count, set->build_seconds, set->from_cache ? ", from the cache" : "", (double)set->bytes / 1e6,
            set->vertex_count, set->index_count, dir);
@@ -122,12 +132,8 @@ static bool write_region_ply(const rocks_tileset *set, const rocks_placement *p,
         vertices += rock->vertex_count, faces += rock->index_count[0] / 3;
     }
     char temp[4200];
-    snprintf(temp, sizeof temp, "%s.tmp", path);
-    FILE *f = fopen(temp, "wb");
-    if (!f) {
-        fprintf(stderr, "rocks_export: cannot write %s: %s\n", temp, strerror(errno));
-        return false;
-    }
+    FILE *f = temp_open(path, temp, sizeof temp, "wb");
+    if (!f) return false;
     fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment rocks placed by rocks_export (world metres)\n"
                "element vertex %llu\nproperty float x\nproperty float y\nproperty float z\n"
                "property float nx\nproperty float ny\nproperty float nz\n"
@@ -155,25 +161,14 @@ static bool write_region_ply(const rocks_tileset *set, const rocks_placement *p,
         }
         base += (int32_t)rock->vertex_count;
     }
-    bool ok = !ferror(f);
-    ok &= fclose(f) == 0;
-    if (!ok || rename(temp, path) != 0) {
-        fprintf(stderr, "rocks_export: cannot write %s\n", path);
-        remove(temp);
-        return false;
-    }
-    return true;
+    return temp_close(f, temp, path);
 }
 
 static bool write_region_json(const rocks_tileset *set, const rocks_placement *p, int seed, const double min[3],
                               const double max[3], const char *path) {
     char temp[4200];
-    snprintf(temp, sizeof temp, "%s.tmp", path);
-    FILE *f = fopen(temp, "w");
-    if (!f) {
-        fprintf(stderr, "rocks_export: cannot write %s: %s\n", temp, strerror(errno));
-        return false;
-    }
+    FILE *f = temp_open(path, temp, sizeof temp, "w");
+    if (!f) return false;
     fprintf(f, "{\"seed\":%d,\"tile_size\":%g,\"region\":{\"min\":[%.3f,%.3f,%.3f],\"max\":[%.3f,%.3f,%.3f]},"
                "\"count\":%u,\"rocks\":[", seed, EXPORT_TILE_SIZE, min[0], min[1], min[2], max[0], max[1], max[2], p->count);
     for (uint32_t i = 0; i < p->count; i++) {
@@ -186,14 +181,7 @@ static bool write_region_json(const rocks_tileset *set, const rocks_placement *p
                 i ? "," : "", p->instances[i].rock, s[0], s[1], s[2], lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
     }
     fprintf(f, "]}\n");
-    bool ok = !ferror(f);
-    ok &= fclose(f) == 0;
-    if (!ok || rename(temp, path) != 0) {
-        fprintf(stderr, "rocks_export: cannot write %s\n", path);
-        remove(temp);
-        return false;
-    }
-    return true;
+    return temp_close(f, temp, path);
 }
 
 static int export_region(const export_args *args, rocks_shape shape, const double min[3], const double max[3],
