@@ -43,6 +43,10 @@
  * - `shore R [shot]` instead of X Z: a look out over water from the nearest shore within R metres
  *   (1 ≤ R ≤ 1000) of the previous waypoint, resolved as `cave` lines are (game_walk_resolve_stops,
  *   game_find_shore_view) into a flight to dry ground at the water's edge, facing the water.
+ * - `rocks R [shot]` instead of X Z: a look down at the nearest pile of rocks within R metres
+ *   (1 ≤ R ≤ 1000) of the previous waypoint, resolved likewise (game_find_rocks_view) into a flight
+ *   to a point in the air on the pile's sunlit side; the picture is turned to the pile from
+ *   wherever the eye got to (look_at), so it stays in the middle.
  * - Directives, each at most once and before the first waypoint: `relative` (X Z and y= are
  *   offsets from the walker's start), `ahead` (offsets in the start's own frame: X metres to the
  *   right, Z metres ahead, as straight:M is `ahead` + `0 M`), `radius R` (0.1 ≤ R ≤ 1000 m),
@@ -137,17 +141,19 @@ typedef struct game_walk {
 /* The tour `world --tour` takes (and tools/play with no display): from the spawn into the most
  * open view on foot, flying over what it cannot walk round, a look into the nearest cave or under
  * the nearest arch, a look out over the nearest water from its shore (within 150 m of the cave's
- * view), then up 120 m for the view to the horizon; a picture at each of its five stops (fewer
- * where no cave or no shore is found). A waypoint file's text. */
+ * view), a look down at the nearest pile of rocks (within 150 m of the shore's view), then up
+ * 120 m for the view to the horizon; a picture at each of its six stops (fewer where no cave, no
+ * shore or no pile is found). A waypoint file's text. */
 extern const char game_walk_tour[];
 
 /* Turns each `cave R` waypoint into a flight to a view into the nearest cave or arch within R
  * metres of the waypoint before it (of the player, for the first): game_find_cave_view, the view's
  * eye as a `fly y=H` point in the walk's own frame, facing the mouth (has_look); and each `shore R`
  * waypoint likewise into a flight to a view over water from the nearest shore
- * (game_find_shore_view). A line with nothing to find is dropped, with a notice. Call it with the
- * player where the walker will start (game_walker_start measures relative and ahead walks from
- * there). Returns how many of each were found. */
+ * (game_find_shore_view), and each `rocks R` waypoint into a flight to a view of the nearest pile
+ * of rocks (game_find_rocks_view; look_at set to the pile). A line with nothing to find is
+ * dropped, with a notice. Call it with the player where the walker will start (game_walker_start
+ * measures relative and ahead walks from there). Returns how many of each were found. */
 typedef struct game_walk_found { int caves, shores, rocks; } game_walk_found;
 game_walk_found game_walk_resolve_stops(game_walk *walk, terrain_world *world, const game_player *player);
 /* game_walk_resolve_stops (shore and rocks lines too), returning the caves found. */
