@@ -240,6 +240,16 @@ static bool app_open_terrain(game_app *app) {
 static void app_frame_shot(game_app *app) {
     game_player *pl = &app->player;
     const game_walk_point *point = &app->walk.points[app->walker.index - 1];   /* the one reached */
+    if (point->has_look_at) {              /* a point to keep in the middle (a pile of rocks) */
+        double eye[3];
+        game_player_eye(pl, eye);
+        double dx = point->look_at[0] - eye[0], dy = point->look_at[1] - eye[1], dz = point->look_at[2] - eye[2];
+        if (hypot(dx, dz) > 0.5) {         /* forward is (sin yaw, −cos yaw) (player.h) */
+            pl->yaw = (float)atan2(dx, -dz);
+            pl->pitch = (float)atan2(dy, hypot(dx, dz));
+            return;
+        }
+    }
     if (point->has_look) {                 /* the walk says where to look (a cave's mouth) */
         pl->yaw = (float)remainder(APP_PI + point->look_yaw * (APP_PI / 180.0), 2.0 * APP_PI);
         pl->pitch = (float)(point->look_pitch * (APP_PI / 180.0));
@@ -630,6 +640,8 @@ static void app_finish_loading(game_app *app) {
             printf("world: %d look%s into a cave or under an arch on the walk\n", found.caves, found.caves == 1 ? "" : "s");
         if (found.shores)
             printf("world: %d look%s over water from a shore on the walk\n", found.shores, found.shores == 1 ? "" : "s");
+        if (found.rocks)
+            printf("world: %d look%s at a pile of rocks on the walk\n", found.rocks, found.rocks == 1 ? "" : "s");
         game_walker_start(&app->walker, app->desc.walk, &app->player);
     }
     gfx_window_set_title(app->gfx, "world");

@@ -174,8 +174,8 @@ static bool point_words(parser *p, const char *rest, const char *end, game_walk_
     return true;
 }
 
-/* `cave R [words]` or `shore R [words]` (`kind`): resolved later (game_walk_resolve_stops), so
- * only shot may follow. */
+/* `cave R [words]`, `shore R [words]` or `rocks R [words]` (`kind`): resolved later
+ * (game_walk_resolve_stops), so only shot may follow. */
 static bool found_line(parser *p, const char *kind, const char *rest, const char *end) {
     game_walk_point point = { 0 };
     token value, word;
@@ -191,7 +191,8 @@ static bool found_line(parser *p, const char *kind, const char *rest, const char
         point.shot = true;
     }
     if (strcmp(kind, "cave") == 0) point.cave_radius = (float)radius;
-    else point.shore_radius = (float)radius;
+    else if (strcmp(kind, "shore") == 0) point.shore_radius = (float)radius;
+    else point.rocks_radius = (float)radius;
     if (p->walk.count >= GAME_WALK_MAX_POINTS) return FAIL(p, "more than %d waypoints", GAME_WALK_MAX_POINTS);
     p->walk.points = core_grow(p->walk.points, &p->capacity, (size_t)p->walk.count + 1, sizeof point);
     p->walk.points[p->walk.count++] = point;
@@ -226,6 +227,7 @@ static bool line(parser *p, const char *begin, const char *end) {
     if ((c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.') return waypoint(p, first, at, end);
     if (is(first, "cave")) return found_line(p, "cave", at, end);
     if (is(first, "shore")) return found_line(p, "shore", at, end);
+    if (is(first, "rocks")) return found_line(p, "rocks", at, end);
     return directive(p, first, at, end);
 }
 
@@ -349,6 +351,7 @@ const char game_walk_tour[] =
     "0 50 shot\n"                /* 50 m on */
     "cave 150 shot\n"            /* into the nearest cave or under the nearest arch */
     "shore 150 shot\n"           /* out over the nearest water from its shore */
+    "rocks 150 shot\n"           /* down at the nearest pile of rocks, from its lit side */
     "0 60 fly y=120 shot\n";     /* back over the walk and up 120 m */
 
 /* ---- cave stops -------------------------------------------------------------------------------- */
@@ -382,10 +385,10 @@ static void view_point(const game_walk *walk, const game_walker *frame, const ga
     to_walk_frame(walk, frame->origin, frame->origin_yaw, feet, point);
     point->fly = point->has_y = point->has_look = true;
     point->look_yaw = yaw, point->look_pitch = pitch;
-    point->cave_radius = point->shore_radius = 0.0f;
+    point->cave_radius = point->shore_radius = point->rocks_radius = 0.0f;
 }
 
-/* A `cave R` or `shore R` point resolved against the world from `centre`; false (with a notice)
+/* A `cave R`, `shore R` or `rocks R` point resolved against the world from `centre`; false (with a notice)
  * when there is nothing to see within R. */
 static bool resolve_found(game_walk *walk, const game_walker *frame, terrain_world *world, const game_player *player,
                           const double centre[3], int index, game_walk_point *point) {
@@ -397,6 +400,18 @@ static bool resolve_found(game_walk *walk, const game_walker *frame, terrain_wor
             return false;
         }
         view_point(walk, frame, player, view.eye, view.yaw, view.pitch, point);
+        return true;
+    }
+    if (point->rocks_radius > 0.0f) {
+        game_rocks_view view;
+        if (!game_find_rocks_view(world, centre[0], centre[2], point->rocks_radius, &view)) {
+            core_info("walk", "no pile of rocks within %.0f m of waypoint %d: that stop is skipped",
+                      (double)point->rocks_radius, index);
+            return false;
+        }
+        view_point(walk, frame, player, view.eye, view.yaw, view.pitch, point);
+        point->has_look_at = true;
+        for (int a = 0; a < 3; a++) point->look_at[a] = view.pile[a];
         return true;
     }
     game_shore_view view;
@@ -417,10 +432,10 @@ game_walk_found game_walk_resolve_stops(game_walk *walk, terrain_world *world, c
     double centre[3] = { player->position[0], player->position[1], player->position[2] };
     for (int i = 0; i < walk->count; i++) {
         game_walk_point point = walk->points[i];
-        bool cave = point.cave_radius > 0.0f, shore = point.shore_radius > 0.0f;
-        if (cave || shore) {
+        bool cave = point.cave_radius > 0.0f, shore = point.shore_radius > 0.0f, rocks = point.rocks_radius > 0.0f;
+        if (cave || shore || rocks) {
             if (!resolve_found(walk, &frame, world, player, centre, i, &point)) continue;
-            found.caves += cave, found.shores += shore;
+            found.caves += cave, found.shores += shore, found.rocks += rocks;
         }
         walk->points[kept++] = point;
         frame.walk = walk;
@@ -492,9 +507,11 @@ static float gait_speed(const game_player *pl, const game_walk_point *p) {
     return pr->walk_speed * game_player_wade_share(pr, pl->water_depth);
 }
 
-static bool unresolved(const game_walk_point *p) { return p->cave_radius > 0.0f || p->shore_radius > 0.0f; }
+static bool unresolved(const game_walk_point *p) {
+    return p->cave_radius > 0.0f || p->shore_radius > 0.0f || p->rocks_radius > 0.0f;
+}
 
-/* Horizontally within the radius; also vertically for `fly y=H`. An unresolved `cave` or `shore` line
+/* Horizontally within the radius; also vertically for `fly y=H`. An unresolved `cave`, `shore` or `rocks` line
  * (game_walk_resolve_stops never ran) is passed over at once. */
 static bool reached(const game_walker *w, const game_player *pl, int i) {
     if (unresolved(&w->walk->points[i])) return true;

@@ -43,6 +43,10 @@
  * - `shore R [shot]` instead of X Z: a look out over water from the nearest shore within R metres
  *   (1 ≤ R ≤ 1000) of the previous waypoint, resolved as `cave` lines are (game_walk_resolve_stops,
  *   game_find_shore_view) into a flight to dry ground at the water's edge, facing the water.
+ * - `rocks R [shot]` instead of X Z: a look down at the nearest pile of rocks within R metres
+ *   (1 ≤ R ≤ 1000) of the previous waypoint, resolved likewise (game_find_rocks_view) into a flight
+ *   to a point in the air on the pile's sunlit side; the picture is turned to the pile from
+ *   wherever the eye got to (look_at), so it stays in the middle.
  * - Directives, each at most once and before the first waypoint: `relative` (X Z and y= are
  *   offsets from the walker's start), `ahead` (offsets in the start's own frame: X metres to the
  *   right, Z metres ahead, as straight:M is `ahead` + `0 M`), `radius R` (0.1 ≤ R ≤ 1000 m),
@@ -119,6 +123,11 @@ typedef struct game_walk_point {
     float look_yaw, look_pitch;       /* degrees as --look: yaw 0 = +z, 90 = −x; pitch up */
     float cave_radius;                /* > 0: a `cave R` line not yet resolved (the walker skips it) */
     float shore_radius;               /* > 0: a `shore R` line not yet resolved (skipped likewise) */
+    float rocks_radius;               /* > 0: a `rocks R` line not yet resolved (skipped likewise) */
+    bool has_look_at;                 /* at the shot, face look_at from wherever the eye got to (within
+                                         the walk's radius of the waypoint): set by resolving a `rocks`
+                                         line, never by a file, so the pile stays in the middle */
+    double look_at[3];                /* world metres (whatever the walk's frame) */
 } game_walk_point;
 
 typedef struct game_walk {
@@ -132,20 +141,22 @@ typedef struct game_walk {
 /* The tour `world --tour` takes (and tools/play with no display): from the spawn into the most
  * open view on foot, flying over what it cannot walk round, a look into the nearest cave or under
  * the nearest arch, a look out over the nearest water from its shore (within 150 m of the cave's
- * view), then up 120 m for the view to the horizon; a picture at each of its five stops (fewer
- * where no cave or no shore is found). A waypoint file's text. */
+ * view), a look down at the nearest pile of rocks (within 150 m of the shore's view), then up
+ * 120 m for the view to the horizon; a picture at each of its six stops (fewer where no cave, no
+ * shore or no pile is found). A waypoint file's text. */
 extern const char game_walk_tour[];
 
 /* Turns each `cave R` waypoint into a flight to a view into the nearest cave or arch within R
  * metres of the waypoint before it (of the player, for the first): game_find_cave_view, the view's
  * eye as a `fly y=H` point in the walk's own frame, facing the mouth (has_look); and each `shore R`
  * waypoint likewise into a flight to a view over water from the nearest shore
- * (game_find_shore_view). A line with nothing to find is dropped, with a notice. Call it with the
- * player where the walker will start (game_walker_start measures relative and ahead walks from
- * there). Returns how many of each were found. */
-typedef struct game_walk_found { int caves, shores; } game_walk_found;
+ * (game_find_shore_view), and each `rocks R` waypoint into a flight to a view of the nearest pile
+ * of rocks (game_find_rocks_view; look_at set to the pile). A line with nothing to find is
+ * dropped, with a notice. Call it with the player where the walker will start (game_walker_start
+ * measures relative and ahead walks from there). Returns how many of each were found. */
+typedef struct game_walk_found { int caves, shores, rocks; } game_walk_found;
 game_walk_found game_walk_resolve_stops(game_walk *walk, terrain_world *world, const game_player *player);
-/* game_walk_resolve_stops (shore lines too), returning the caves found. */
+/* game_walk_resolve_stops (shore and rocks lines too), returning the caves found. */
 int game_walk_resolve_caves(game_walk *walk, terrain_world *world, const game_player *player);
 
 /* `spec` is straight:METRES or the path of a waypoint file. On success *out holds the walk (free it
@@ -194,6 +205,31 @@ typedef struct game_shore_view {
  * atan(eye over the surface / 25 m), between 8° and 25°. The nearest shore wins. False when there
  * is none. Generates the chunks it reads (walk_shore.c). */
 bool game_find_shore_view(terrain_world *world, double x, double z, double radius, game_shore_view *out);
+
+/* A look at a pile of rocks: where to stand and which way to face. */
+typedef struct game_rocks_view {
+    double eye[3];                    /* world metres, in the air on the pile's lit side */
+    double pile[3];                   /* the point looked at: the pile's centre at its mean height */
+    float top;                        /* the pile's highest ground (the top of its rock layers) */
+    float yaw, pitch;                 /* degrees as --look: yaw 0 = +z, 90 = −x; pitch up */
+    bool open;                        /* no wall behind the pile (see game_find_rocks_view) */
+} game_rocks_view;
+
+/* Searches the columns within `radius` metres of (x, z) (every 1 m, square rings outwards) for a
+ * pile of rocks: a column whose top solid layer is rocks (TERRAIN_ROCKS, no water over it) at least
+ * 1 m thick, with at least 12 of the 5 × 5 columns around it (itself included) such columns. The
+ * pile's centre is their centroid at their mean top, its top their highest. The view looks at it
+ * from the side the default sun lights: of 8 directions, those whose view has a positive dot with
+ * (0.55, 0, 0.35) (the light's way: the sun is towards (−0.55, 0.55, −0.35)), the most lit first;
+ * the eye 6.5 to 9 m from the centre and 3 to 5 m over the top, the first of those places whose
+ * feet (1.62 m under the eye) clear the ground by 0.5 m, with the ground under the line of sight
+ * to the pile (to 1.5 m short of its centre, by 0.25 m). Pitch down at the centre. A view is
+ * `open` when the ground behind the pile, out to 48 m, stays 2° under the picture's top edge (a
+ * 60° field) along at least 3 of 5 rays 18° apart across the view: the pile is seen against the
+ * land, not against a cliff. The first open view of a pile is its view, else its first view; the
+ * nearest pile with an open view wins, else the nearest pile with a view. False when there is
+ * none. Generates the chunks it reads (walk_rocks.c). */
+bool game_find_rocks_view(terrain_world *world, double x, double z, double radius, game_rocks_view *out);
 
 #define GAME_WALKER_HISTORY 64
 
