@@ -226,15 +226,13 @@ uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const
     gfx_uniform_vec3(r->gfx, r->program, "u_sun_direction", sun);
     gfx_uniform_vec3(r->gfx, r->program, "u_camera_position", zero);
     gfx_uniform_float(r->gfx, r->program, "u_fog_density", params->fog_density);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glEnable(GL_CULL_FACE);
+    /* the context's defaults (gfx_context.c): depth test LEQUAL, back faces culled; closed,
+     * outward-wound rocks need nothing else, and nothing here is left changed */
     glBindVertexArray(r->vertex_array.id);
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, r->commands.id);
     glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_SHORT, NULL, (GLsizei)touched, 0);
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
     glBindVertexArray(0);
-    glDisable(GL_CULL_FACE);
     gfx_pass_end(r->gfx);
     trace_counter("rocks.drawn", (double)staged);
     return staged;
