@@ -173,7 +173,7 @@ uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const
             float shade = 0.85f + 0.3f * key_unit(in->key, 1), warm = key_unit(in->key, 2);
             r->staged[staged] = (rock_gpu_instance){
                 .seed = { seed[0], seed[1], seed[2], tile * scale },
-                .tint = { shade * (0.56f + 0.06f * warm), shade * (0.53f + 0.03f * warm), shade * (0.49f - 0.03f * warm), 0 },
+                .tint = { shade * (0.50f + 0.07f * warm), shade * (0.48f + 0.03f * warm), shade * (0.45f - 0.03f * warm), 0 },
             };
             r->staged[staged].tint[3] = (float)bucket;      /* its bucket (exact below 2^24) */
             staged++;
