@@ -163,11 +163,11 @@ expect "rocks_export: two tiles" 0 "2 tiles, [1-9][0-9]* rocks" -- \
   "$p" --tiles 2 --cells 4 --voxels 4 --shape round --out "$tmp/rocks"
 expect "rocks_export: a binary PLY" 0 "format binary_little_endian 1.0" -- head -c 200 "$tmp/rocks/tile_001.ply"
 expect "rocks_export: the index" 0 '"tile":1,"ply":"tile_001.ply","colours":\[1,0,0,0,0,0,0,0\]' -- cat "$tmp/rocks/tiles.json"
-expect "rocks_export: bad --region" 2 "is not X,Y,Z:NX,NY,NZ" -- "$p" --region 1,2 --out "$tmp/region"
+expect "rocks_export: bad --region" 2 "is not X,Y,Z:NX,NY,NZ" -- "$p" --region 1,2 --out "$tmp/rocks-region"
 expect "rocks_export: a region of seed 1" 0 "[1-9][0-9]* rocks in \\[40.0, 0.0, 0.0\\]" -- \
-  "$p" --seed 1 --region 40,0,0:32,64,32 --cells 4 --voxels 4 --out "$tmp/region"
-expect "rocks_export: the region's PLY" 0 "comment rocks placed by rocks_export" -- head -c 200 "$tmp/region.ply"
-expect "rocks_export: the region's JSON" 0 '"count":[1-9][0-9]*,"rocks":' -- cat "$tmp/region.json"
+  "$p" --seed 1 --region 40,0,0:32,64,32 --cells 4 --voxels 4 --out "$tmp/rocks-region"
+expect "rocks_export: the region's PLY" 0 "comment rocks placed by rocks_export" -- head -c 200 "$tmp/rocks-region.ply"
+expect "rocks_export: the region's JSON" 0 '"count":[1-9][0-9]*,"rocks":' -- cat "$tmp/rocks-region.json"
 p=$bin/terrain_mesh
 expect "terrain_mesh: no file" 2 "missing" -- "$p"
 expect "terrain_mesh: the exported field" 0 \
