@@ -8,6 +8,7 @@
 #include "ecs/ecs.h"
 #include "jobs/jobs.h"
 #include "rocks/rocks.h"
+#include "../rocks/rocks_test_cache.h"
 #include "terrain/terrain.h"
 
 #include <criterion/criterion.h>
@@ -54,7 +55,9 @@ static void yard_open(yard *y, int threads) {
     y->te = terrain_ecs_create(y->ecs, y->world);
     y->renderer = terrain_renderer_create(y->gfx, &(terrain_renderer_desc){ .sea_level = -50 });
     cr_assert_not_null(y->renderer);
-    y->tiles = rocks_tiles_create(&(rocks_tiles_desc){ .cells = 4, .voxels_per_cell = 6, .jobs = y->jobs });
+    rocks_tiles_desc tiles = { .cells = 4, .voxels_per_cell = 6, .jobs = y->jobs };
+    tiles.cache_path = rocks_test_cache(&tiles);
+    y->tiles = rocks_tiles_create(&tiles);
     cr_assert_not_null(y->tiles);
     y->rocks = rocks_create(&(rocks_desc){ .gfx = y->gfx, .ecs = y->ecs, .world = y->world, .tiles = y->tiles });
     cr_assert_not_null(y->rocks);

@@ -6,6 +6,7 @@
 
 #include "core/core.h"
 #include "game/app.h"
+#include "../rocks/rocks_test_cache.h"
 
 #include <criterion/criterion.h>
 #include <math.h>
@@ -17,6 +18,13 @@
 #include <stb/stb_image.h>
 
 static const terrain_stream_desc small_view = { .half_width = 2, .levels = 2, .memory_budget = 64u << 20 };
+
+/* A small rock tile set (one build a test run: rocks_test_cache.h). */
+static rocks_tileset *small_rock_tiles(void) {
+    rocks_tiles_desc desc = { .cells = 4, .voxels_per_cell = 5 };
+    desc.cache_path = rocks_test_cache(&desc);
+    return rocks_tiles_create(&desc);
+}
 
 /* Worlds here run without rocks unless a test gives a tile set: the default set takes the debug
  * build 40 s to make (test_render_rocks and test_rocks cover the rocks with small sets). */
@@ -319,7 +327,7 @@ Test(render_world, the_tour_ends_where_its_script_says_and_every_picture_shows_s
     snprintf(sheet, sizeof sheet, "%s/tour.png", dir);
     game_walk walk = parse_walk(game_walk_tour);
     /* a small tile set: the rocks stop shows rocks, as tools/play's does, at a debug build's cost */
-    rocks_tileset *tiles = rocks_tiles_create(&(rocks_tiles_desc){ .cells = 4, .voxels_per_cell = 5 });
+    rocks_tileset *tiles = small_rock_tiles();
     cr_assert_not_null(tiles);
     game_app_stats s = run_world((game_app_desc){ .seed = 1, .width = 160, .height = 96, .headless = true,
                                                   .threads = 2, .walk = &walk, .face_open_view = true,
@@ -432,8 +440,7 @@ Test(render_world, a_walk_starts_from_the_view_asked_for, .timeout = 600) {
  * rock layers); a world started looking at it places rocks there and draws them, and the player
  * standing on the pile is never inside a rock. */
 Test(render_world, the_game_places_and_draws_the_generated_talus) {
-    rocks_tileset *tiles = rocks_tiles_create(&(rocks_tiles_desc){ .cells = 4, .voxels_per_cell = 5,
-                                                                   .shape = ROCKS_SHAPE_ROUND });
+    rocks_tileset *tiles = small_rock_tiles();
     cr_assert_not_null(tiles);
     game_app_stats s = run_world((game_app_desc){ .seed = 1, .width = 96, .height = 64, .headless = true,
                                                   .threads = 2, .frames = 30, .stream = small_view,

@@ -8,6 +8,7 @@
 
 #include "core/core.h"
 #include "game/player.h"
+#include "rocks_test_cache.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -41,8 +42,9 @@ static terrain_world *pile_world(bool bare, terrain_edit_log *log) {
 
 /* A small set, quick to build: what matters here is placement, not the rocks' finish. */
 static rocks_tileset *small_set(void) {
-    rocks_tileset *set = rocks_tiles_create(&(rocks_tiles_desc){ .cells = 4, .voxels_per_cell = 6,
-                                                                 .shape = ROCKS_SHAPE_ROUND });
+    rocks_tiles_desc desc = { .cells = 4, .voxels_per_cell = 6, .shape = ROCKS_SHAPE_ROUND };
+    desc.cache_path = rocks_test_cache(&desc);
+    rocks_tileset *set = rocks_tiles_create(&desc);
     cr_assert_not_null(set);
     return set;
 }
