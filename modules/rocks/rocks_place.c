@@ -121,9 +121,16 @@ static void table_build(column_table *t, terrain_world *world, double x_min, dou
     }
 }
 
+/* floor() without the libm call that baseline x86-64 makes of it (no SSE4.1 rounding): the
+ * anchor tests, ten a rock, are most of a placement's time. */
+static inline int64_t floor_int(double v) {
+    int64_t i = (int64_t)v;
+    return i - (v < (double)i);
+}
+
 static const rock_interval *table_column(const column_table *t, double x, double z, int *count) {
-    int64_t tx = (int64_t)floor(x / TERRAIN_COLUMN_SIZE) - t->x0;
-    int64_t tz = (int64_t)floor(z / TERRAIN_COLUMN_SIZE) - t->z0;
+    int64_t tx = floor_int(x * (1.0 / TERRAIN_COLUMN_SIZE)) - t->x0;
+    int64_t tz = floor_int(z * (1.0 / TERRAIN_COLUMN_SIZE)) - t->z0;
     if (tx < 0 || tz < 0 || tx >= t->w || tz >= t->d) {
         *count = 0;
         return NULL;
@@ -152,6 +159,19 @@ static bool table_meets(const column_table *t, const double lo[3], const double 
                 if (iv[i].hi >= lo[1] && iv[i].lo <= hi[1]) return true;
         }
     return false;
+}
+
+/* The lowest and highest rock of the columns under the footprint [lo, hi] (x, z); false when
+ * none holds any. */
+static bool table_span(const column_table *t, const double lo[3], const double hi[3], float *y_lo, float *y_hi) {
+    *y_lo = INFINITY, *y_hi = -INFINITY;
+    for (double z = floor(lo[2]); z <= hi[2]; z += 1.0)
+        for (double x = floor(lo[0]); x <= hi[0]; x += 1.0) {
+            int n;
+            const rock_interval *iv = table_column(t, x, z, &n);
+            for (int i = 0; i < n; i++) *y_lo = fminf(*y_lo, iv[i].lo), *y_hi = fmaxf(*y_hi, iv[i].hi);
+        }
+    return *y_lo <= *y_hi;
 }
 
 /* Buried: the solid run over the seed's rock layer rises more than `depth` above the seed. */
@@ -225,29 +245,34 @@ static void place_tile(placer *p, int64_t i, int64_t j, int64_t k) {
         colour[c] = (uint8_t)rocks_lattice_colour(p->seed, i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
     int t = rocks_tile_index(colour);
     const int n = set->desc.cells;
-    /* Per cell of the tile: does any rock layer come within reach of it? */
+    /* Per cell of the tile: can a rock seeded in it reach a rock layer? Per column of cells the
+     * span of rock under its footprint grown by the reach, then per cell its height range
+     * against that span: conservative (a cave between two layers counts as near), never
+     * skipping a rock the anchors would keep. */
     uint8_t near[8 * 8 * 8];
-    for (int c = 0; c < n * n * n; c++) {
-        int cx = c % n, cy = (c / n) % n, cz = c / (n * n);
-        double clo[3] = { ((double)i + (double)cx / n) * tile - p->reach, ((double)j + (double)cy / n) * tile - p->reach,
-                          ((double)k + (double)cz / n) * tile - p->reach };
-        double chi[3] = { clo[0] + tile / n + 2 * p->reach, clo[1] + tile / n + 2 * p->reach,
-                          clo[2] + tile / n + 2 * p->reach };
-        near[c] = p->table ? (uint8_t)table_meets(p->table, clo, chi) : 1;
-    }
+    for (int cz = 0; cz < n; cz++)
+        for (int cx = 0; cx < n; cx++) {
+            double flo[3] = { ((double)i + (double)cx / n) * tile - p->reach, 0, ((double)k + (double)cz / n) * tile - p->reach };
+            double fhi[3] = { flo[0] + tile / n + 2 * p->reach, 0, flo[2] + tile / n + 2 * p->reach };
+            float span_lo = 0, span_hi = -1;
+            bool any = p->table ? table_span(p->table, flo, fhi, &span_lo, &span_hi) : true;
+            for (int cy = 0; cy < n; cy++) {
+                double ylo = ((double)j + (double)cy / n) * tile - p->reach, yhi = ylo + tile / n + 2 * p->reach;
+                near[(cz * n + cy) * n + cx] = !p->table || (any && yhi >= span_lo && ylo <= span_hi);
+            }
+        }
     const float bury = 2.0f * set->max_radius * (float)tile;
     const rocks_tile *entries = &set->tiles[t];
     for (uint32_t e = entries->first; e < entries->first + entries->count; e++) {
         const rocks_tile_entry *entry = &set->entries[e];
         const rocks_rock *rock = &set->rocks[entry->rock];
-        float local[3];
         int cell[3];
-        for (int a = 0; a < 3; a++) {
-            local[a] = (float)entry->offset[a] + rock->seed[a];
-            cell[a] = (int)floorf(local[a] * (float)n);
+        for (int a = 0; a < 3; a++) {   /* the seed lies in this tile: offset + seed ∈ [0, 1) */
+            cell[a] = (int)(((float)entry->offset[a] + rock->seed[a]) * (float)n);
             cell[a] = cell[a] < 0 ? 0 : cell[a] >= n ? n - 1 : cell[a];
         }
-        if (!near[(cell[2] * n + cell[1]) * n + cell[0]]) continue;
+        int c = (cell[2] * n + cell[1]) * n + cell[0];
+        if (!near[c]) continue;
         double origin[3] = { ((double)i + entry->offset[0]) * tile, ((double)j + entry->offset[1]) * tile,
                              ((double)k + entry->offset[2]) * tile };
         double seed[3] = { origin[0] + rock->seed[0] * tile, origin[1] + rock->seed[1] * tile,
@@ -261,8 +286,9 @@ static void place_tile(placer *p, int64_t i, int64_t j, int64_t k) {
             .position = { (float)(origin[0] - p->out->origin[0]), (float)(origin[1] - p->out->origin[1]),
                           (float)(origin[2] - p->out->origin[2]) },
             .rock = entry->rock,
-            .key = (uint32_t)core_hash_combine(core_hash_combine(core_hash_combine(p->seed, (uint64_t)i),
-                                                                 (uint64_t)j * 31 + (uint64_t)k), e),
+            .key = (uint32_t)core_hash_u64(p->seed ^ ((uint64_t)i * 0x9e3779b97f4a7c15ull) ^
+                                           ((uint64_t)j * 0xc2b2ae3d27d4eb4full) ^ ((uint64_t)k * 0x165667b19e3779f9ull) ^
+                                           ((uint64_t)e << 40)),
         };
         placement_push(p->out, &instance, rock, tile);
     }

@@ -30,7 +30,7 @@ static double process_cpu_seconds(void) {
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-#define ROCKS_BENCH_RUNS 1
+#define ROCKS_BENCH_RUNS 3
 
 void bench_group_rocks(bench_context *ctx) {
     static const int cells[3] = { 5, 6, 7 };

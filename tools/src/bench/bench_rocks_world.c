@@ -6,6 +6,10 @@
  *                                 a 1.5 m rock layer over flat bedrock (a full chunk: the worst
  *                                 case a chunk of the world meets); target ≤ 0.5 ms
  *   rocks.instance.chunk.rocks    rocks that chunk holds
+ *   rocks.instance.chunk.world    ms a chunk over the 64 level-0 chunk boxes (32 m cubes) of seed 1
+ *                                 around the spawn that hold any rock layer (the generator's talus,
+ *                                 scree and lake stones): what the game pays a chunk
+ *   rocks.instance.chunk.world.rocks   rocks a chunk over those
  *   rocks.draw.640x360            frame ms the rocks add on the world walk's start view (seed 1,
  *                                 the spawn, facing +z; world.walk's first view), 640×360: the
  *                                 frame with rocks less the same frame without (peers in one run)
@@ -20,6 +24,7 @@
 #include "rocks/rocks.h"
 #include "terrain/terrain.h"
 
+#include <math.h>
 #include <sys/stat.h>
 
 static const char *cache_path(void) {
@@ -70,6 +75,64 @@ static void bench_place(bench_context *ctx, const rocks_tileset *set) {
     terrain_world_destroy(world);
 }
 
+/* The world's own chunks: seed 1's 8 × 8 columns of chunks around the spawn, each column's
+ * 32 m boxes that meet its rock layers. */
+typedef struct world_bench {
+    rocks_place_desc desc;
+    rocks_placement placement;
+    double boxes[256][3];
+    int box_count;
+    double rocks;
+} world_bench;
+
+static double sample_world(void *user) {
+    world_bench *b = user;
+    uint64_t start = core_time_ns();
+    double rocks = 0;
+    for (int i = 0; i < b->box_count; i++) {
+        double max[3] = { b->boxes[i][0] + 32, b->boxes[i][1] + 32, b->boxes[i][2] + 32 };
+        rocks_place_box(&b->desc, b->boxes[i], max, &b->placement);
+        rocks += b->placement.count;
+    }
+    b->rocks = rocks / b->box_count;
+    return (double)(core_time_ns() - start) * 1e-6 / b->box_count;
+}
+
+static void bench_place_world(bench_context *ctx, const rocks_tileset *set) {
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(1) });
+    world_bench *b = core_calloc(1, sizeof *b);
+    b->desc = (rocks_place_desc){ .tiles = set, .world = world };
+    terrain_layer layers[64];
+    for (int cz = -4; cz < 4; cz++)
+        for (int cx = -4; cx < 4; cx++) {
+            const terrain_stacks *stacks = terrain_world_stacks(world, (terrain_chunk_coord){ cx, cz });
+            float lo = INFINITY, hi = -INFINITY;
+            for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
+                for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
+                    int n = terrain_stacks_column(stacks, i, k, layers, 64);
+                    float y = TERRAIN_FLOOR_Y;
+                    for (int l = 0; l < n && l < 64; l++) {
+                        if (layers[l].material == TERRAIN_ROCKS) lo = fminf(lo, y), hi = fmaxf(hi, y + layers[l].thickness);
+                        y += layers[l].thickness;
+                    }
+                }
+            if (!(lo <= hi)) continue;
+            for (double y = floor(lo / 32) * 32; y < hi && b->box_count < 256; y += 32) {
+                b->boxes[b->box_count][0] = cx * 32.0, b->boxes[b->box_count][1] = y, b->boxes[b->box_count][2] = cz * 32.0;
+                b->box_count++;
+            }
+        }
+    for (int cz = -5; cz <= 4; cz++)                 /* the neighbours' stacks too, before timing */
+        for (int cx = -5; cx <= 4; cx++) terrain_world_stacks(world, (terrain_chunk_coord){ cx, cz });
+    if (b->box_count) {
+        bench_run(ctx, "rocks.instance.chunk.world", "ms", 7, sample_world, b);
+        bench_record(ctx, "rocks.instance.chunk.world.rocks", "rocks", &b->rocks, 1);
+    }
+    rocks_placement_free(&b->placement);
+    core_free(b, sizeof *b);
+    terrain_world_destroy(world);
+}
+
 /* ---- drawing the start view ------------------------------------------------------------------- */
 
 static void bench_draw(bench_context *ctx) {
@@ -105,6 +168,7 @@ void bench_group_rocks_world(bench_context *ctx) {
             return;
         }
         bench_place(ctx, set);
+        bench_place_world(ctx, set);
         rocks_tiles_destroy(set);
     }
     bench_draw(ctx);
