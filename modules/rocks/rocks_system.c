@@ -124,8 +124,10 @@ static void rocks_place_system(ecs_iter *it) {
             double lo[3], hi[3];
             chunk_box(c, lo, hi);
             double distance = r->has_view ? box_distance(r->view.camera, lo, hi) : INFINITY;
+            /* A chunk waiting to be meshed again (an edit) keeps its rocks meanwhile; a new one is
+             * placed once its terrain is meshed, so rocks never show before their ground. */
             bool wanted = r->desc.quality != ROCKS_OFF && r->has_view && c->lod.level == 0 && !c->hidden &&
-                          c->state != TERRAIN_MESH_WAITING &&
+                          (have || c->state != TERRAIN_MESH_WAITING) &&
                           distance <= r->desc.range + (have ? ROCKS_REACH_KEEP : ROCKS_REACH_AHEAD);
             if (have && !wanted) {
                 ecs_defer_remove(it->commands, it->entities[i], r->tiles);
