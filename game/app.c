@@ -103,6 +103,7 @@ static bool app_open_rocks(game_app *app, float fog_density) {
                                              .tiles = app->rock_tiles, .quality = d->rocks,
                                              .fog_density = fog_density });
     if (!app->rocks) return false;
+    rocks_tiles_release_meshes(app->own_rock_tiles);   /* on the GPU now; placing reads anchors */
     app->player.params.obstacles_near = app_rocks_near;
     app->player.params.obstacle_distance = app_rock_distance;
     app->player.params.obstacle_user = app->rocks;

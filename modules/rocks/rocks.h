@@ -159,6 +159,12 @@ extern const float rocks_hull_axes[ROCKS_HULL_AXES][3];
  * NULL (message logged) for parameters out of range. */
 rocks_tileset *rocks_tiles_create(const rocks_tiles_desc *desc);
 void rocks_tiles_destroy(rocks_tileset *set);
+/* Frees the CPU copies of the meshes (vertices and indices: about 80 % of the set) once something
+ * else holds them — the renderer uploads them in rocks_create — and sets those pointers to NULL
+ * (the counts and each rock's ranges stay: they describe the GPU copy). Placement and collision
+ * read anchors and hulls only; rocks_tile_write_ply fails after it, and a later rocks_create on
+ * the set would have nothing to upload. */
+void rocks_tiles_release_meshes(rocks_tileset *set);
 
 /* Tile index for corner colours: bit (x + 2y + 4z) is corner (x, y, z)'s colour. */
 static inline int rocks_tile_index(const uint8_t colour[8]) {

@@ -445,6 +445,14 @@ rocks_tileset *rocks__tiles_create(const rocks_tiles_desc *desc, const rocks__bu
 
 rocks_tileset *rocks_tiles_create(const rocks_tiles_desc *desc) { return rocks__tiles_create(desc, NULL); }
 
+void rocks_tiles_release_meshes(rocks_tileset *set) {
+    if (!set || !set->vertices) return;
+    size_t bytes = (size_t)set->vertex_count * sizeof *set->vertices + (size_t)set->index_count * sizeof *set->indices;
+    FREE_ARRAY(set->vertices, set->vertex_count);
+    FREE_ARRAY(set->indices, set->index_count);
+    set->bytes = set->bytes > bytes ? set->bytes - bytes : 0;
+}
+
 void rocks_tiles_destroy(rocks_tileset *set) {
     if (!set) return;
     rocks__set *full = (rocks__set *)set;
@@ -476,6 +484,7 @@ float rocks_hull_distance(const rocks_rock *rock, const float p[3], float normal
 
 bool rocks_tile_write_ply(const rocks_tileset *set, int t, const char *path, char *error, size_t error_size) {
     if (t < 0 || t > 255) return core_error_format(error, error_size, "tile %d is not 0 … 255", t);
+    if (!set->vertices) return core_error_format(error, error_size, "the set's meshes were released");
     const rocks_tile *tile = &set->tiles[t];
     size_t vertices = 0, triangles = 0;
     for (uint32_t e = tile->first; e < tile->first + tile->count; e++) {

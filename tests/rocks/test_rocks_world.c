@@ -322,3 +322,26 @@ Test(rocks_place, the_player_stands_on_a_rock_pile) {
     terrain_world_destroy(world);
     rocks_tiles_destroy(set);
 }
+
+/* Releasing the CPU meshes (what the game does once they are on the GPU) leaves placement as it
+ * was, and the PLY writer says why it cannot write. */
+Test(rocks_place, placement_needs_no_meshes) {
+    rocks_tileset *set = small_set();
+    terrain_world *world = pile_world(false, NULL);
+    rocks_placement with = { 0 }, without = { 0 };
+    place(set, world, PILE_MIN, PILE_MAX, &with);
+    size_t bytes = set->bytes;
+    rocks_tiles_release_meshes(set);
+    cr_expect_null(set->vertices);
+    cr_expect_lt(set->bytes, bytes / 2, "%zu of %zu bytes left", set->bytes, bytes);
+    place(set, world, PILE_MIN, PILE_MAX, &without);
+    cr_assert_eq(with.count, without.count);
+    cr_expect(memcmp(with.instances, without.instances, with.count * sizeof *with.instances) == 0);
+    char error[256] = "";
+    cr_expect_not(rocks_tile_write_ply(set, 0, "/tmp/never.ply", error, sizeof error));
+    cr_expect(strstr(error, "released") != NULL, "%s", error);
+    rocks_placement_free(&with);
+    rocks_placement_free(&without);
+    terrain_world_destroy(world);
+    rocks_tiles_destroy(set);
+}
