@@ -311,7 +311,8 @@ static bool place_desc_check(const rocks_place_desc *desc) {
     return true;
 }
 
-uint64_t rocks__place_seed(const rocks_place_desc *desc) {
+/* The colouring seed a desc means (its own, else the world's generation seed, else 1). */
+static uint64_t place_seed(const rocks_place_desc *desc) {
     if (desc->seed) return desc->seed;
     if (desc->world) return terrain_world_generation(desc->world)->seed ^ 0x726f636b73ull;
     return 1;
@@ -322,7 +323,7 @@ bool rocks_place_box(const rocks_place_desc *desc, const double min[3], const do
     placer p = {
         .desc = desc, .set = desc->tiles,
         .tile = desc->tile_size > 0 ? desc->tile_size : PLACE_DEFAULT_TILE,
-        .seed = rocks__place_seed(desc),
+        .seed = place_seed(desc),
         .threshold = desc->threshold > 0 ? desc->threshold : PLACE_DEFAULT_THRESHOLD,
         .out = out,
     };

@@ -265,7 +265,6 @@ void rocks_draw(rocks_system *r, const terrain_view *view) {
 
 /* ---- collision ------------------------------------------------------------------------------ */
 
-/* Calls fn for every placed rock whose box, grown by `margin`, holds `point`. */
 typedef bool (*rock_visit_fn)(void *user, const rocks_rock *rock, const double origin[3], uint32_t rock_index);
 
 static bool rock_meets(const rocks_rock *rock, const double origin[3], double tile, const double lo[3],
@@ -283,6 +282,8 @@ static bool focus_holds(const rocks_system *r, const double lo[3], const double 
     return true;
 }
 
+/* Calls fn for every placed rock whose box meets [lo, hi] (world metres) until fn returns false:
+ * the focus list when it covers the box, else every placement that meets it. */
 static void visit_near(rocks_system *r, const double lo[3], const double hi[3], rock_visit_fn fn, void *user) {
     if (r->desc.quality == ROCKS_OFF) return;
     const rocks_tileset *set = r->desc.tiles;

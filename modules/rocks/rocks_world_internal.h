@@ -1,18 +1,11 @@
 /* rocks_world_internal.h — private to modules/rocks: what the placement, the ECS system and the
- * renderer share. (rocks_internal.h holds the tile set's internals.) */
+ * renderer share: the renderer's calls. (rocks_internal.h holds the tile set's internals.) */
 #ifndef ROCKS_WORLD_INTERNAL_H
 #define ROCKS_WORLD_INTERNAL_H
 
 #include "rocks/rocks.h"
 
-/* The colouring seed a desc means (its own, else the world's generation seed, else 1). */
-uint64_t rocks__place_seed(const rocks_place_desc *desc);
-
 typedef struct rocks_renderer rocks_renderer;
-typedef struct rocks_draw_item {
-    const rocks_placement *placement;
-    uint32_t first, count;            /* instances of the placement to consider */
-} rocks_draw_item;
 
 /* The tile set's meshes on the GPU, and the per-frame instance and command buffers. */
 rocks_renderer *rocks__renderer_create(gfx_context *gfx, const rocks_tileset *set);
