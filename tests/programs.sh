@@ -28,7 +28,7 @@ expect() {
   fi
 }
 
-for program in bench trace_report hello_systems hello_scene hello_terrain hello_edit hello_grass hello_water world; do
+for program in bench trace_report hello_systems hello_scene hello_terrain hello_edit hello_grass hello_water hello_rocks hello_blocks world; do
   p=$bin/$program
   expect "$program: unknown flag" 2 "unknown option '--no-such-flag'.*" -- "$p" --no-such-flag
   expect "$program: usage on error" 2 "usage: $program" -- "$p" --no-such-flag
@@ -205,6 +205,12 @@ expect "hello_grass: headless run" 0 "hello_grass: [1-9][0-9]* patches, [1-9][0-
   "$bin/hello_grass" --headless --size 96x64 --frames 4 --grass low --screenshot "$tmp/grass.png"
 expect "hello_grass: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 -N4 "$tmp/grass.png"
 expect "hello_grass: bad --grass" 2 "bad value for '--grass'" -- "$bin/hello_grass" --grass lush
+
+# The cliff-blocks example: a block tile replicated over a wall, meshed and drawn headless.
+expect "hello_blocks: headless run" 0 "hello_blocks: columnar tile: [1-9][0-9]* blocks from [1-9][0-9]* points.*, [1-9][0-9]* triangles" -- \
+  "$bin/hello_blocks" --headless --size 96x64 --frames 2 --type columnar --screenshot "$tmp/blocks.png"
+expect "hello_blocks: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 -N4 "$tmp/blocks.png"
+expect "hello_blocks: bad --type" 2 "bad value for '--type'" -- "$bin/hello_blocks" --type granite
 
 # The water example: a lake drawn headless at each quality; bad qualities refused.
 for quality in low high; do

@@ -330,4 +330,7 @@ rocks_stats rocks_stats_get(const rocks_system *rocks);
 /* A hash of every placed rock (chunk coordinates, rock, key, position): tests and tools. */
 uint64_t rocks_digest(rocks_system *rocks);
 
+/* ---- cliff blocks (003 §3–§5): rocks_blocks.h ------------------------------------------- */
+#include "rocks/rocks_blocks.h"
+
 #endif

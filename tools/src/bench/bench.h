@@ -30,6 +30,11 @@ void bench_record(bench_context *ctx, const char *name, const char *unit, const 
                   int count);
 /* Threads the benchmarks may use (--threads, 0 = one per core). */
 int bench_threads(const bench_context *ctx);
+/* Whether --rocks off asked for the world rows without rock piles. */
+bool bench_rocks_off(const bench_context *ctx);
+/* The game's cache of the default rock tile set, out/rocks_tiles.bin, when out/ exists (as
+ * game/main.c does); NULL otherwise. */
+const char *bench_rocks_cache_path(void);
 /* Keeps the optimiser from deleting a computation whose result is otherwise unused. */
 void bench_consume(double value);
 

@@ -1,15 +1,17 @@
 /* bench_main.c — the benchmark program behind tools/bench (see bench.h).
- *   bench [--json FILE] [--filter TEXT] [--threads N] [--runs N]
+ *   bench [--json FILE] [--filter TEXT] [--threads N] [--runs N] [--rocks on|off]
  * Rows whose name contains TEXT run; the rest are skipped. */
 #include "bench.h"
 
 #include "core/core.h"
+#include "rocks/rocks.h"
 #include "trace/trace.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 typedef struct bench_row {
     char name[96];
@@ -22,6 +24,7 @@ struct bench_context {
     const char *filter;
     int threads;
     int runs_override;
+    bool rocks_off;
     bench_row *rows;
     size_t row_count, row_capacity;
 };
@@ -41,6 +44,12 @@ bool bench_wants(const bench_context *ctx, const char *name) {
 }
 
 int bench_threads(const bench_context *ctx) { return ctx->threads > 0 ? ctx->threads : core_cpu_count(); }
+bool bench_rocks_off(const bench_context *ctx) { return ctx->rocks_off; }
+
+const char *bench_rocks_cache_path(void) {
+    struct stat st;
+    return stat("out", &st) == 0 && S_ISDIR(st.st_mode) ? "out/rocks_tiles.bin" : NULL;
+}
 
 static int compare_doubles(const void *a, const void *b) {
     double x = *(const double *)a, y = *(const double *)b;
@@ -98,6 +107,7 @@ int main(int argc, char **argv) {
     core_common_args common = { 0 };
     const char *json_path = NULL, *filter = NULL;
     int runs = 0;
+    const char *rocks = NULL;
     core_option options[] = {
         CORE_COMMON_OPTIONS(common),
         { .name = "json", .kind = CORE_OPTION_STRING, .value = &json_path, .metavar = "FILE",
@@ -106,11 +116,18 @@ int main(int argc, char **argv) {
           .help = "run only rows whose name contains TEXT" },
         { .name = "runs", .kind = CORE_OPTION_INT, .value = &runs, .metavar = "N", .min = 1, .max = 1000,
           .help = "runs per row (default: each row's own)" },
+        { .name = "rocks", .kind = CORE_OPTION_STRING, .value = &rocks, .metavar = "on|off",
+          .help = "rock piles in the world rows (default on; off for a same-session comparison)" },
     };
     core_cli cli = { .program = "bench", .summary = "Runs the engine's benchmarks: median, min and max over runs.",
                      .options = options, .option_count = (int)CORE_COUNTOF(options) };
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
+    rocks_quality rocks_on = ROCKS_ON;
+    if (rocks && !rocks_parse_quality(rocks, &rocks_on)) {
+        core_error("bench", "--rocks %s: expected on or off", rocks);
+        return 2;
+    }
 
     if (json_path) { /* find an unwritable path now, not after minutes of measuring */
         FILE *probe = fopen(json_path, "a");
@@ -119,7 +136,8 @@ int main(int argc, char **argv) {
     }
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
 
-    bench_context ctx = { .filter = filter, .threads = common.threads, .runs_override = runs };
+    bench_context ctx = { .filter = filter, .threads = common.threads, .runs_override = runs,
+                          .rocks_off = rocks_on == ROCKS_OFF };
     printf("%-36s %12s %12s %12s  %-6s %5s\n", "name", "median", "min", "max", "unit", "runs");
     const bench_group groups[] = { bench_group_ecs, bench_group_jobs, bench_group_trace,
                                    bench_group_input, bench_group_gfx,

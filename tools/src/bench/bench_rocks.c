@@ -10,6 +10,7 @@
  *       CPU seconds of all threads for the same builds: on a loaded machine the wall time above
  *       holds other programs' share of the cores, this does not (wall ≈ cpu / cores when idle).
  *   rocks.tiles.n5.mb   memory the n = 5 set holds (set->bytes), MB.
+ *   rocks.blocks.tile.* block tiles for cliffs (paper 003), below.
  *
  * Peer: the paper's own figures, printed beside (no code of theirs to run): 7 355 / 17 166 /
  * 33 217 stones in 23 / 73 / 176 s (001 Table 1, a 2010 machine). Targets on this project's
@@ -31,6 +32,35 @@ static double process_cpu_seconds(void) {
 }
 
 #define ROCKS_BENCH_RUNS 3
+
+/* Block tiles for cliffs (paper 003 §4), one per type at the defaults (16 m, ~8 000 points):
+ *   rocks.blocks.tile.<type>          seconds to build the tile, one thread
+ *   rocks.blocks.tile.<type>.blocks   its blocks (003 Table 1's #B)
+ * Paper 003 Table 1: 6.9 (equidimensional), 12.0 (rhombohedral), 25.4 (polyhedral) and
+ * 16.3 s (tabular) for ~14 500 points in a 20 m tile; target here ≤ 1 s. */
+static void bench_rocks_blocks(bench_context *ctx) {
+    static const double paper_seconds[ROCKS_BLOCK_TYPE_COUNT] = { 6.9, 12.0, 25.4, 16.3, 0 };
+    for (int type = 0; type < ROCKS_BLOCK_TYPE_COUNT; type++) {
+        char name[64], blocks_name[80];
+        snprintf(name, sizeof name, "rocks.blocks.tile.%s", rocks_block_type_name((rocks_block_type)type));
+        snprintf(blocks_name, sizeof blocks_name, "%s.blocks", name);
+        if (!bench_wants(ctx, name)) continue;
+        double seconds[ROCKS_BENCH_RUNS], blocks[ROCKS_BENCH_RUNS];
+        for (int r = 0; r < ROCKS_BENCH_RUNS; r++) {
+            rocks_block_tile *tile = rocks_block_tile_create(&(rocks_block_tile_desc){
+                .type = (rocks_block_type)type, .seed = (uint64_t)r + 1 });
+            seconds[r] = tile->build_seconds;
+            blocks[r] = tile->block_count;
+            rocks_block_tile_destroy(tile);
+        }
+        bench_record(ctx, name, "s", seconds, ROCKS_BENCH_RUNS);
+        bench_record(ctx, blocks_name, "blocks", blocks, ROCKS_BENCH_RUNS);
+        if (paper_seconds[type] > 0)
+            printf("  paper (003 Table 1): %.1f s; target here ≤ 1 s\n", paper_seconds[type]);
+        else
+            printf("  paper (003 Table 1): no columnar row; target here ≤ 1 s\n");
+    }
+}
 
 void bench_group_rocks(bench_context *ctx) {
     static const int cells[3] = { 5, 6, 7 };
@@ -65,4 +95,5 @@ void bench_group_rocks(bench_context *ctx) {
                paper_seconds[i], target_seconds[i]);
     }
     if (jobs) job_system_destroy(jobs);
+    bench_rocks_blocks(ctx);
 }

@@ -25,12 +25,6 @@
 #include "terrain/terrain.h"
 
 #include <math.h>
-#include <sys/stat.h>
-
-static const char *cache_path(void) {
-    struct stat st;
-    return stat("out", &st) == 0 && S_ISDIR(st.st_mode) ? "out/rocks_tiles.bin" : NULL;
-}
 
 /* ---- placing one chunk ------------------------------------------------------------------------ */
 
@@ -142,7 +136,7 @@ static void bench_draw(bench_context *ctx) {
     for (int on = 0; on < 2; on++) {
         game_app_desc desc = bench_start_view_desc(ctx);
         desc.rocks = on ? ROCKS_ON : ROCKS_OFF;
-        desc.rocks_cache_path = cache_path();
+        desc.rocks_cache_path = bench_rocks_cache_path();
         game_app *app = bench_start_view_open(&desc);
         if (!app) {
             core_error("bench", "rocks: the world did not start; rows skipped");
@@ -162,7 +156,7 @@ static void bench_draw(bench_context *ctx) {
 void bench_group_rocks_world(bench_context *ctx) {
     if (!bench_wants(ctx, "rocks.instance") && !bench_wants(ctx, "rocks.draw")) return;
     if (bench_wants(ctx, "rocks.instance")) {
-        rocks_tileset *set = rocks_tiles_create(&(rocks_tiles_desc){ .cache_path = cache_path() });
+        rocks_tileset *set = rocks_tiles_create(&(rocks_tiles_desc){ .cache_path = bench_rocks_cache_path() });
         if (!set) {
             core_error("bench", "rocks: no tile set; rows skipped");
             return;

@@ -1,0 +1,120 @@
+/* rocks_blocks.h — fractured rock blocks for cliffs (paper 003 §3–§4). Part of the rocks module:
+ * include "rocks/rocks.h", which includes this.
+ *
+ * A block tile is a cube of side s that repeats over all of space. Sample points fill it (a
+ * periodic Poisson-disc set); fracture discs, laid out by the block type, cut the edges of the
+ * points' neighbour graph; the clusters of points that still see each other become blocks. Each
+ * block is the convex hull of its cluster, as the smooth intersection of the hull's planes
+ * (R = 25 cm, 003 §4.2), warped by a relief along its gradient so its faces are not flat.
+ *
+ *     rocks_block_tile *tile = rocks_block_tile_create(&(rocks_block_tile_desc){
+ *         .type = ROCKS_BLOCK_TABULAR, .seed = 7 });
+ *     double p[3] = { 12.5, -3.0, 40.25 };                  // metres, anywhere: the tile repeats
+ *     uint32_t block;
+ *     float t = rocks_block_tile_field(tile, p, NULL, NULL, &block);   // > 0 inside a block
+ *     rocks_block_tile_destroy(tile);
+ *
+ * Fields follow the terrain's sign: positive inside, negative outside, about a signed distance
+ * in metres near the surface (planes are exact distances; the smooth intersection and the
+ * warping bend that by at most R/6 and the relief's amplitude).
+ *
+ * Frames. A block's planes are in tile metres, with its anchor (its points' centroid) inside
+ * [0, s)³; a block that straddles the tile's border reaches past it, and the tile field evaluates
+ * the blocks of the neighbouring tiles' copies as well (003 §5), so a field is continuous across
+ * tile borders and no block is cut there. The fracture discs and the neighbour graph are periodic
+ * too, so blocks meet across the border as they do inside.
+ *
+ * Sign note. 003 §4.2 writes the smooth intersection as max(f_A, f_B) − R·k³/6 for half-spaces
+ * positive outside. Read with that sign the term adds material at a convex edge; it rounds the
+ * edge off (Fig. 8) only when the field is positive inside, where the intersection is the min.
+ * So here: f_A∩̃B = min(f_A, f_B) − R·k(f_A, f_B)³/6, k = max(1 − |f_A − f_B|/R, 0), the paper's
+ * k and term in the terrain's sign. rocks_smooth_intersection is that formula.
+ *
+ * Threads: creation runs on the calling thread (tiles are independent: build several at once on
+ * jobs); a built tile is read-only and may be evaluated from any thread.
+ */
+#ifndef ROCKS_BLOCKS_H
+#define ROCKS_BLOCKS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+/* 003 §4.1, Fig. 2 and Fig. 5: how the fracture discs are laid out. */
+typedef enum rocks_block_type {
+    ROCKS_BLOCK_EQUIDIMENSIONAL = 0,  /* three orthogonal sets (axis-aligned normals): near-cubes */
+    ROCKS_BLOCK_RHOMBOHEDRAL,         /* three oblique sets (a sheared frame): rhombic blocks */
+    ROCKS_BLOCK_POLYHEDRAL,           /* random normals, denser discs: irregular smaller blocks */
+    ROCKS_BLOCK_TABULAR,              /* bedding planes across the tile, short cross joints: slabs */
+    ROCKS_BLOCK_COLUMNAR,             /* continuous vertical sets, rare cross joints: tall prisms */
+    ROCKS_BLOCK_TYPE_COUNT
+} rocks_block_type;
+
+const char *rocks_block_type_name(rocks_block_type type);   /* "equidimensional", …; NULL if bad */
+bool rocks_parse_block_type(const char *text, rocks_block_type *out);
+
+/* Zero means the default for every field. */
+typedef struct rocks_block_tile_desc {
+    rocks_block_type type;            /* 0 = equidimensional */
+    uint64_t seed;                    /* 0 = 1 */
+    float size;                       /* s, the tile's side in metres; 0 = 16; 4 … 64 */
+    float point_spacing;              /* Poisson radius of the sample points; 0 = s / 24 */
+    float fracture_spacing;           /* Poisson radius of the disc centres; 0 = the type's */
+    float fracture_radius;            /* radius of the type's main discs; 0 = the type's */
+    float rounding;                   /* R (003 §4.2), metres; 0 = 0.25 */
+    float joint;                      /* open gap between neighbouring blocks, metres; 0 = 0.15 */
+    float relief;                     /* warping amplitude (003 §4.2), metres; 0 = 0.08; < 0 = none */
+    float relief_scale;               /* the relief's wavelength, metres; 0 = 0.8 */
+} rocks_block_tile_desc;
+
+typedef struct rocks_block {
+    uint32_t plane_first, plane_count;   /* in tile->planes: (n, d), inside where d − n·p > 0 */
+    uint32_t point_first, point_count;   /* its cluster, in tile->points (unwrapped: contiguous) */
+    float anchor[3];                  /* centroid of its points, in [0, s)³: presence is asked here */
+    float bounds_min[3], bounds_max[3];  /* where the field can be > −1 m (tile metres) */
+} rocks_block;
+
+typedef struct rocks_block_disc {
+    float centre[3], normal[3], radius;
+} rocks_block_disc;
+
+typedef struct rocks_block_tile {
+    rocks_block_tile_desc desc;       /* with the defaults filled in */
+    rocks_block *blocks;
+    uint32_t block_count;
+    float (*planes)[4];               /* n.x, n.y, n.z, d */
+    uint32_t plane_count;
+    float (*points)[3];               /* every block's cluster points, block by block */
+    uint32_t point_count;             /* points in blocks (clusters too small for a hull are dropped) */
+    uint32_t sample_count;            /* sample points made (003 Table 1's #P) */
+    rocks_block_disc *discs;          /* the fractures (#D), centres in [0, s)³ */
+    uint32_t disc_count;
+    double build_seconds;
+    /* internal: the lookup grid of blocks (and their images) per cell of the tile */
+    int grid;
+    uint32_t *grid_first;             /* grid³ + 1 */
+    uint32_t *grid_entries;           /* block << 5 | image (0 … 26: offset ∈ {−1, 0, 1}³) */
+    uint32_t grid_entry_count;
+} rocks_block_tile;
+
+/* NULL with a message naming the field for a bad desc. */
+rocks_block_tile *rocks_block_tile_create(const rocks_block_tile_desc *desc);
+void rocks_block_tile_destroy(rocks_block_tile *tile);
+
+/* f_A ∩̃ f_B (above; 003 §4.2), R > 0. */
+float rocks_smooth_intersection(float a, float b, float rounding);
+
+/* Block `block` at p in its own tile metres (unbounded: no repetition), with the warping; the
+ * gradient too when `gradient` is not NULL (of the unwarped base, normalised). */
+float rocks_block_field(const rocks_block_tile *tile, uint32_t block, const float p[3], float gradient[3]);
+
+/* Presence of a block copy (003 §5's e_i): `anchor` is the copy's anchor in world metres. */
+typedef bool (*rocks_block_presence_fn)(void *user, uint32_t block, const double anchor[3]);
+
+/* The replication t(p) = max_i b_i(p mod s)·e_i(a_i + s⌊p/s⌋) of 003 §5 at world point p
+ * (metres), over the copies of the blocks around p (this tile's and its neighbours') that
+ * `present` accepts (NULL = all). −INFINITY where no accepted block comes within a metre.
+ * `block_out` (may be NULL) gets the block that gave the value, or UINT32_MAX. */
+float rocks_block_tile_field(const rocks_block_tile *tile, const double p[3], rocks_block_presence_fn present,
+                             void *user, uint32_t *block_out);
+
+#endif

@@ -1,0 +1,316 @@
+/* Block tiles for cliffs (paper 003 §4–§5): the smooth intersection against hand-worked values,
+ * a block made by hand (a cube corner), the replication's continuity across tile borders (value
+ * and gradient), the clusters' defining property (no fracture between two points of a block),
+ * every point inside its block's planes, block shapes by type, presence, determinism, bad input.
+ * Tiles are small (12 m, or 8 m) so the suite runs in seconds under the sanitizers. */
+#include "../engine/test.h"
+#include "core/core.h"
+#include "rocks/rocks.h"
+
+#include <math.h>
+#include <string.h>
+
+static rocks_block_tile *small_tile(rocks_block_type type, uint64_t seed, float relief) {
+    rocks_block_tile *t = rocks_block_tile_create(&(rocks_block_tile_desc){
+        .type = type, .seed = seed, .size = 8.0f, .point_spacing = 0.45f, .fracture_spacing = 2.5f,
+        .fracture_radius = 3.0f, .relief = relief });
+    cr_assert_not_null(t);
+    return t;
+}
+
+/* ---- 003 §4.2 by hand ----------------------------------------------------------------------- */
+
+Test(rocks_blocks, smooth_intersection_hand_cases) {
+    const float R = 0.25f;
+    /* k = 1 − 0.1/0.25 = 0.6; 0.1 − 0.25 · 0.216 / 6 = 0.091 */
+    cr_assert_float_eq(rocks_smooth_intersection(0.1f, 0.2f, R), 0.091f, 1e-6f);
+    cr_assert_float_eq(rocks_smooth_intersection(0.2f, 0.1f, R), 0.091f, 1e-6f);   /* symmetric */
+    /* equal arguments: k = 1, the edge cut back by R/6 */
+    cr_assert_float_eq(rocks_smooth_intersection(0.3f, 0.3f, R), 0.3f - 0.25f / 6.0f, 1e-6f);
+    /* |a − b| ≥ R: k = 0, the plain min */
+    cr_assert_float_eq(rocks_smooth_intersection(0.1f, 0.5f, R), 0.1f, 1e-7f);
+    cr_assert_float_eq(rocks_smooth_intersection(-2.0f, 0.3f, R), -2.0f, 1e-7f);
+    /* two planes x < 1 and y < 1 (inside positive): on the bisector of the edge, 0.1 m in from
+     * each plane, 0.1 − R/6; the surface crosses the bisector at h = R/6 from each plane */
+    cr_assert_float_eq(rocks_smooth_intersection(1.0f - 0.9f, 1.0f - 0.9f, R), 0.1f - R / 6.0f, 1e-6f);
+    cr_assert_float_eq(rocks_smooth_intersection(R / 6.0f, R / 6.0f, R), 0.0f, 1e-6f);
+}
+
+/* A block prescribed by hand (003 §4: user control): the cube [0, 1]³'s corner at (1, 1, 1)
+ * as three planes, no relief. On the diagonal 0.1 m in from each face: fold
+ *   smin(0.1, 0.1) = 0.1 − R/6 = 0.0583333;
+ *   then with 0.1: |Δ| = R/6, k = 5/6, 0.0583333 − R (5/6)³ / 6 = 0.0583333 − 0.0241127.
+ * The gradient by the chain rule (the operator is not symmetric in three arguments: 003 §4.2
+ * notes the order matters): the first fold weighs −x̂ and −ŷ by ½ each; the second weighs that
+ * by 1 − k²/2 = 47/72 and −ẑ by k²/2 = 25/72: (−47/144, −47/144, −25/72), normalised
+ * (−0.565078, −0.565078, −0.601146). Central differences agree. */
+Test(rocks_blocks, hand_made_cube_corner) {
+    float planes[3][4] = { { 1, 0, 0, 1 }, { 0, 1, 0, 1 }, { 0, 0, 1, 1 } };
+    rocks_block block = { .plane_first = 0, .plane_count = 3 };
+    rocks_block_tile tile = { .desc = { .rounding = 0.25f, .relief = -1.0f }, .blocks = &block, .block_count = 1,
+                              .planes = planes, .plane_count = 3 };
+    float g[3];
+    float v = rocks_block_field(&tile, 0, (const float[3]){ 0.9f, 0.9f, 0.9f }, g);
+    cr_assert_float_eq(v, 0.0342207f, 2e-6f);
+    const float expected[3] = { -0.565078f, -0.565078f, -0.601146f };
+    for (int a = 0; a < 3; a++) {
+        cr_assert_float_eq(g[a], expected[a], 1e-5f);
+        float lo[3] = { 0.9f, 0.9f, 0.9f }, hi[3] = { 0.9f, 0.9f, 0.9f };
+        lo[a] -= 1e-3f, hi[a] += 1e-3f;
+        float slope = (rocks_block_field(&tile, 0, hi, NULL) - rocks_block_field(&tile, 0, lo, NULL)) / 2e-3f;
+        cr_assert_float_eq(slope / 0.577600f, expected[a], 2e-3f);   /* |∇| = 0.5776 before normalising */
+    }
+    /* deep inside, far from the edges (all |Δ| ≥ R): the nearest face's distance */
+    cr_assert_float_eq(rocks_block_field(&tile, 0, (const float[3]){ 0.5f, 0.2f, 0.1f }, NULL), 0.5f, 1e-6f);
+    /* outside past a face: minus the distance to it */
+    cr_assert_float_eq(rocks_block_field(&tile, 0, (const float[3]){ 1.5f, 0.2f, 0.1f }, NULL), -0.5f, 1e-6f);
+}
+
+/* ---- replication (003 §5) ------------------------------------------------------------------ */
+
+static double unit(uint64_t *state) {
+    *state = core_hash_u64(*state + 0x9e3779b97f4a7c15ull);
+    return (double)(*state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* Across a border the same block copies are evaluated at the same point: the value is
+ * continuous. A point ε either side of x = k·s differs by at most 2ε times the field's slope
+ * (1 for planes; the smooth intersection's weights sum to 1), plus float rounding. */
+Test(rocks_blocks, continuous_across_tile_borders) {
+    rocks_block_tile *t = small_tile(ROCKS_BLOCK_TABULAR, 3, -1.0f);
+    const double s = t->desc.size, eps = 1e-4;
+    uint64_t state = 11;
+    int finite = 0;
+    for (int i = 0; i < 3000; i++) {
+        int axis = i % 3;
+        double p[3], lo[3], hi[3];
+        for (int a = 0; a < 3; a++) p[a] = (unit(&state) - 0.5) * 6.0 * s;
+        p[axis] = s * floor(p[axis] / s);   /* on a border */
+        memcpy(lo, p, sizeof p), memcpy(hi, p, sizeof p);
+        lo[axis] -= eps, hi[axis] += eps;
+        float a = rocks_block_tile_field(t, lo, NULL, NULL, NULL), b = rocks_block_tile_field(t, hi, NULL, NULL, NULL);
+        if (isinf(a) || isinf(b)) {
+            cr_assert(isinf(a) && isinf(b), "border at %g %g %g: one side −∞ (%g), the other %g", p[0], p[1], p[2], a, b);
+            continue;
+        }
+        finite++;
+        cr_assert_leq(fabsf(a - b), 2 * eps + 1e-4, "border at %g %g %g: %g vs %g", p[0], p[1], p[2], a, b);
+    }
+    cr_assert_gt(finite, 1000, "most border points are near some block");
+    rocks_block_tile_destroy(t);
+}
+
+/* The gradient too: central differences (h) either side of a border, δ away. The smooth
+ * intersection's second derivative is at most 1/R per fold along a direction, and two normals
+ * differ by at most 2, so the gradient moves by at most 4·(2δ)/R across; the differences' own
+ * error is O(h/R). */
+Test(rocks_blocks, gradient_continuous_across_tile_borders) {
+    rocks_block_tile *t = small_tile(ROCKS_BLOCK_EQUIDIMENSIONAL, 5, -1.0f);
+    const double s = t->desc.size, delta = 1e-3, h = 1e-3;
+    const float R = t->desc.rounding;
+    const float tolerance = 4.0f * (float)(2 * delta) / R + 8.0f * (float)h / R + 0.02f;
+    uint64_t state = 12;
+    int checked = 0;
+    for (int i = 0; i < 1500; i++) {
+        int axis = i % 3;
+        double p[3];
+        for (int a = 0; a < 3; a++) p[a] = (unit(&state) - 0.5) * 4.0 * s;
+        p[axis] = s * floor(p[axis] / s);
+        float g[2][3];
+        bool ok = true;
+        uint32_t first = UINT32_MAX;
+        for (int side = 0; side < 2; side++) {
+            double c[3];
+            memcpy(c, p, sizeof c);
+            c[axis] += side ? delta : -delta;
+            for (int a = 0; a < 3; a++) {
+                double q0[3], q1[3];
+                memcpy(q0, c, sizeof c), memcpy(q1, c, sizeof c);
+                q0[a] -= h, q1[a] += h;
+                uint32_t b0, b1;
+                float f0 = rocks_block_tile_field(t, q0, NULL, NULL, &b0), f1 = rocks_block_tile_field(t, q1, NULL, NULL, &b1);
+                if (first == UINT32_MAX) first = b0;
+                /* t = maxᵢ bᵢ has a kink where two blocks tie, border or not: keep to one block */
+                if (isinf(f0) || isinf(f1) || b0 != first || b1 != first) ok = false;
+                g[side][a] = (f1 - f0) / (float)(2 * h);
+            }
+        }
+        if (!ok) continue;
+        checked++;
+        for (int a = 0; a < 3; a++)
+            cr_assert_leq(fabsf(g[0][a] - g[1][a]), tolerance, "at %g %g %g axis %d: %g vs %g", p[0], p[1], p[2], a,
+                          g[0][a], g[1][a]);
+    }
+    cr_assert_gt(checked, 500);
+    rocks_block_tile_destroy(t);
+}
+
+static bool refuse_all(void *user, uint32_t block, const double anchor[3]) {
+    (void)user, (void)block, (void)anchor;
+    return false;
+}
+
+typedef struct anchor_check { double p[3]; float reach; bool far; } anchor_check;
+
+/* Presence is asked at the copy's anchor in world metres: within a block's size of the point. */
+static bool near_anchor(void *user, uint32_t block, const double anchor[3]) {
+    (void)block;
+    anchor_check *c = user;
+    double d2 = 0;
+    for (int a = 0; a < 3; a++) d2 += (anchor[a] - c->p[a]) * (anchor[a] - c->p[a]);
+    if (sqrt(d2) > c->reach) c->far = true;
+    return true;
+}
+
+Test(rocks_blocks, presence_decides_which_copies_count) {
+    rocks_block_tile *t = small_tile(ROCKS_BLOCK_COLUMNAR, 2, 0.0f);
+    uint64_t state = 13;
+    for (int i = 0; i < 500; i++) {
+        double p[3] = { (unit(&state) - 0.5) * 100, (unit(&state) - 0.5) * 100, (unit(&state) - 0.5) * 100 };
+        cr_assert(isinf(rocks_block_tile_field(t, p, refuse_all, NULL, NULL)), "no block accepted: −∞");
+        anchor_check c = { .p = { p[0], p[1], p[2] }, .reach = t->desc.size };
+        uint32_t block;
+        float all = rocks_block_tile_field(t, p, NULL, NULL, &block);
+        float asked = rocks_block_tile_field(t, p, near_anchor, &c, NULL);
+        cr_assert_eq(all, asked);
+        cr_assert_not(c.far, "an anchor passed to presence is more than a tile from the point");
+        if (!isinf(all)) cr_assert_lt(block, t->block_count);
+    }
+    rocks_block_tile_destroy(t);
+}
+
+/* ---- the blocks themselves (003 §4.1–§4.2) ------------------------------------------------- */
+
+/* Does disc d (or one of its copies a tile away) cut the segment a–b? Brute force over the 125
+ * copies within two tiles, independently of the builder's near-disc lists. */
+static bool any_copy_cuts(const rocks_block_tile *t, const rocks_block_disc *d, const float a[3], const float b[3]) {
+    const float s = t->desc.size;
+    for (int o = 0; o < 125; o++) {
+        float c[3] = { d->centre[0] + s * (float)(o % 5 - 2), d->centre[1] + s * (float)(o / 5 % 5 - 2),
+                       d->centre[2] + s * (float)(o / 25 - 2) };
+        float da = 0, db = 0;
+        for (int k = 0; k < 3; k++) da += (a[k] - c[k]) * d->normal[k], db += (b[k] - c[k]) * d->normal[k];
+        if ((da > 0) == (db > 0) || da == db) continue;
+        float u = da / (da - db), r2 = 0;
+        for (int k = 0; k < 3; k++) {
+            float x = a[k] + u * (b[k] - a[k]) - c[k];
+            r2 += x * x;
+        }
+        if (r2 <= d->radius * d->radius) return true;
+    }
+    return false;
+}
+
+/* 003 §4.1: "all the points in a given cluster are visible to each other". */
+Test(rocks_blocks, no_fracture_inside_a_block) {
+    for (int type = 0; type < ROCKS_BLOCK_TYPE_COUNT; type++) {
+        rocks_block_tile *t = small_tile((rocks_block_type)type, 9, 0.0f);
+        uint64_t state = 14;
+        for (int pair = 0; pair < 400; pair++) {
+            const rocks_block *b = &t->blocks[(uint32_t)(unit(&state) * t->block_count)];
+            if (b->point_count < 2) continue;
+            const float *p = t->points[b->point_first + (uint32_t)(unit(&state) * b->point_count)];
+            const float *q = t->points[b->point_first + (uint32_t)(unit(&state) * b->point_count)];
+            for (uint32_t d = 0; d < t->disc_count; d++)
+                cr_assert_not(any_copy_cuts(t, &t->discs[d], p, q), "%s: disc %u cuts a block", rocks_block_type_name(type), d);
+        }
+        rocks_block_tile_destroy(t);
+    }
+}
+
+/* Every plane of a block supports its cluster (a hull face pushed out, or a fracture past the
+ * cluster's last point): each point is inside every plane. And the anchor is in the tile. */
+Test(rocks_blocks, every_point_inside_its_block) {
+    for (int type = 0; type < ROCKS_BLOCK_TYPE_COUNT; type++) {
+        rocks_block_tile *t = small_tile((rocks_block_type)type, 4, 0.0f);
+        cr_assert_gt(t->block_count, 5);
+        for (uint32_t i = 0; i < t->block_count; i++) {
+            const rocks_block *b = &t->blocks[i];
+            cr_assert_geq(b->plane_count, 4, "a closed convex block needs 4 planes");
+            for (int a = 0; a < 3; a++) cr_assert(b->anchor[a] >= 0 && b->anchor[a] < t->desc.size);
+            for (uint32_t j = 0; j < b->point_count; j++) {
+                const float *p = t->points[b->point_first + j];
+                for (uint32_t k = 0; k < b->plane_count; k++) {
+                    const float *pl = t->planes[b->plane_first + k];
+                    cr_assert_geq(pl[3] - (pl[0] * p[0] + pl[1] * p[1] + pl[2] * p[2]), -1e-4f);
+                }
+                for (int a = 0; a < 3; a++) cr_assert(p[a] >= b->bounds_min[a] && p[a] <= b->bounds_max[a]);
+            }
+        }
+        rocks_block_tile_destroy(t);
+    }
+}
+
+/* Mean extent of the blocks' points along each axis. */
+static void mean_extent(const rocks_block_tile *t, double out[3]) {
+    out[0] = out[1] = out[2] = 0;
+    for (uint32_t i = 0; i < t->block_count; i++) {
+        const rocks_block *b = &t->blocks[i];
+        for (int a = 0; a < 3; a++) {
+            float lo = INFINITY, hi = -INFINITY;
+            for (uint32_t j = 0; j < b->point_count; j++) {
+                lo = fminf(lo, t->points[b->point_first + j][a]);
+                hi = fmaxf(hi, t->points[b->point_first + j][a]);
+            }
+            out[a] += (hi - lo) / t->block_count;
+        }
+    }
+}
+
+/* 003 §4.1's types by shape (y is up): tabular blocks are flat (beds across the tile), columnar
+ * ones tall (continuous vertical sets, rare cross joints), equidimensional ones about as deep
+ * as wide and tall (three orthogonal sets). The types' own defaults, on a 12 m tile. */
+Test(rocks_blocks, shapes_follow_the_type) {
+    double e[ROCKS_BLOCK_TYPE_COUNT][3] = { { 0 } };
+    for (int type = 0; type < ROCKS_BLOCK_TYPE_COUNT; type++) {
+        /* a 12 m tile holds a dozen of the equidimensional type's discs: average a few tiles,
+         * so one tile's chance layout does not decide */
+        int seeds = type == ROCKS_BLOCK_EQUIDIMENSIONAL ? 4 : 1;
+        for (int seed = 1; seed <= seeds; seed++) {
+            rocks_block_tile *t = rocks_block_tile_create(&(rocks_block_tile_desc){
+                .type = (rocks_block_type)type, .seed = (uint64_t)seed, .size = 12, .point_spacing = 0.7f });
+            cr_assert_not_null(t);
+            double one[3];
+            mean_extent(t, one);
+            for (int a = 0; a < 3; a++) e[type][a] += one[a] / seeds;
+            rocks_block_tile_destroy(t);
+        }
+    }
+    const double *tab = e[ROCKS_BLOCK_TABULAR], *col = e[ROCKS_BLOCK_COLUMNAR], *eq = e[ROCKS_BLOCK_EQUIDIMENSIONAL];
+    cr_assert_lt(tab[1], 0.6 * fmin(tab[0], tab[2]), "tabular: %g %g %g", tab[0], tab[1], tab[2]);
+    cr_assert_gt(col[1], 1.5 * fmax(col[0], col[2]), "columnar: %g %g %g", col[0], col[1], col[2]);
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++) cr_assert_lt(eq[a], 1.6 * eq[b], "equidimensional: %g %g %g", eq[0], eq[1], eq[2]);
+}
+
+Test(rocks_blocks, deterministic_and_seeded) {
+    rocks_block_tile *a = small_tile(ROCKS_BLOCK_POLYHEDRAL, 21, 0.0f), *b = small_tile(ROCKS_BLOCK_POLYHEDRAL, 21, 0.0f);
+    cr_assert_eq(a->block_count, b->block_count);
+    cr_assert_eq(a->plane_count, b->plane_count);
+    cr_assert_eq(memcmp(a->planes, b->planes, a->plane_count * sizeof *a->planes), 0);
+    cr_assert_eq(memcmp(a->blocks, b->blocks, a->block_count * sizeof *a->blocks), 0);
+    rocks_block_tile *c = small_tile(ROCKS_BLOCK_POLYHEDRAL, 22, 0.0f);
+    cr_assert(c->plane_count != a->plane_count || memcmp(a->planes, c->planes, a->plane_count * sizeof *a->planes) != 0);
+    rocks_block_tile_destroy(a);
+    rocks_block_tile_destroy(b);
+    rocks_block_tile_destroy(c);
+}
+
+Test(rocks_blocks, bad_input_is_refused) {
+    cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .type = ROCKS_BLOCK_TYPE_COUNT }));
+    cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .size = 2 }));
+    cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .size = 1e6f }));
+    cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .size = NAN }));
+    cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .point_spacing = 0.01f }));
+    cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .joint = 5 }));
+    cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .rounding = -1 }));
+    cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .relief_scale = -1 }));
+    rocks_block_type type;
+    for (int t = 0; t < ROCKS_BLOCK_TYPE_COUNT; t++) {
+        cr_assert(rocks_parse_block_type(rocks_block_type_name((rocks_block_type)t), &type));
+        cr_assert_eq((int)type, t);
+    }
+    cr_assert_not(rocks_parse_block_type("granite", &type));
+    cr_assert_not(rocks_parse_block_type(NULL, &type));
+    cr_assert_null(rocks_block_type_name(ROCKS_BLOCK_TYPE_COUNT));
+}
