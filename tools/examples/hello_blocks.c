@@ -22,11 +22,14 @@
 /* The smooth base terrain: a wall (solid for x < 0) standing on a floor (solid for y < 0). */
 static float wall(double x, double y) { return (float)fmax(-x, -y); }
 
-/* 003 §5's presence: a block is kept where its anchor lies within 2.5 m behind the face or
- * 0.5 m in front of it, above the floor: blocks straddle the face of the wall. */
-static bool on_the_face(void *user, uint32_t block, const double a[3]) {
-    (void)user, (void)block;
-    return a[0] > -2.5 && a[0] < 0.5 && a[1] > 0.5;
+/* 003 §5's presence: a block copy is kept where it straddles the wall's face (its box reaches
+ * 0.3 m into the wall and 0.3 to 3 m out of it, inside the sampled box), above the floor. `anchor` is the copy's anchor in
+ * the world; the block's own anchor gives the copy's offset, hence its box. */
+static bool on_the_face(void *user, uint32_t block, const double anchor[3]) {
+    const rocks_block *b = &((const rocks_block_tile *)user)->blocks[block];
+    double offset = anchor[0] - b->anchor[0], margin = 1.0;   /* bounds hold a metre of margin */
+    double back = offset + b->bounds_min[0] + margin, front = offset + b->bounds_max[0] - margin;
+    return back < -0.3 && front > 0.3 && front < 3.0 && anchor[1] > 0.5;
 }
 
 int main(int argc, char **argv) {
@@ -65,7 +68,7 @@ int main(int argc, char **argv) {
         for (int y = 0; y < NY; y++)
             for (int x = 0; x < NX; x++) {
                 double p[3] = { field.origin[0] + x * STEP, field.origin[1] + y * STEP, field.origin[2] + z * STEP };
-                float t = rocks_block_tile_field(tile, p, on_the_face, NULL, NULL);
+                float t = rocks_block_tile_field(tile, p, on_the_face, tile, NULL);
                 field.values[((size_t)z * NY + y) * NX + x] = fmaxf(wall(p[0], p[1]), t);
             }
     double field_ms = (double)(core_time_ns() - start) * 1e-6;
