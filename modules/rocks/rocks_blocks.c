@@ -650,8 +650,24 @@ static float base_field(const float (*planes)[4], uint32_t count, float rounding
     return value;
 }
 
+/* A block placed by hand: its own field; the gradient by central differences. */
+static float custom_field(const rocks_block_custom *c, const float p[3], float gradient[3]) {
+    float v = c->field(c->user, p);
+    if (gradient) {
+        const float h = 1e-3f;
+        for (int a = 0; a < 3; a++) {
+            float lo[3] = { p[0], p[1], p[2] }, hi[3] = { p[0], p[1], p[2] };
+            lo[a] -= h, hi[a] += h;
+            gradient[a] = (c->field(c->user, hi) - c->field(c->user, lo)) / (2 * h);
+        }
+        normalize3(gradient);
+    }
+    return v;
+}
+
 float rocks_block_field(const rocks_block_tile *tile, uint32_t block, const float p[3], float gradient[3]) {
     const rocks_block *b = &tile->blocks[block];
+    if (b->custom) return custom_field(&tile->desc.custom[b->custom - 1], p, gradient);
     const float (*planes)[4] = (const float(*)[4])tile->planes + b->plane_first;
     float g[3];
     float c = base_field(planes, b->plane_count, tile->desc.rounding, p, g);
@@ -698,6 +714,18 @@ static bool desc_make(const rocks_block_tile_desc *in, rocks_block_tile_desc *d)
     else if (!(d->joint >= 0.0f && d->joint <= d->point_spacing)) bad = "joint (0 … point_spacing)";
     else if (!(d->relief <= 1.0f)) bad = "relief (≤ 1 m)";
     else if (!(d->relief_scale > 0.05f && d->relief_scale <= d->size)) bad = "relief_scale (0.05 m … s)";
+    else if (d->custom_count < 0 || d->custom_count > ROCKS_BLOCK_MAX_CUSTOM || (d->custom_count && !d->custom))
+        bad = "custom blocks (0 … 64, with their array)";
+    for (int k = 0; !bad && k < d->custom_count; k++) {
+        const rocks_block_custom *c = &d->custom[k];
+        bool box = c->field != NULL;
+        for (int a = 0; a < 3; a++) {
+            float centre = 0.5f * (c->bounds_min[a] + c->bounds_max[a]);
+            box &= c->bounds_min[a] <= c->bounds_max[a] && c->bounds_max[a] - c->bounds_min[a] < d->size &&
+                   centre >= 0.0f && centre < d->size;
+        }
+        if (!box) bad = "custom block (a field, and bounds smaller than the tile centred inside it)";
+    }
     if (bad) {
         core_error("rocks", "block tile: bad %s", bad);
         return false;
@@ -802,12 +830,47 @@ static bool add_block(rocks_block_tile *t, const float (*members)[3], size_t n, 
     return true;
 }
 
+/* Block number t->block_count is the developer's block k: the sample points it holds (any of
+ * their 27 copies, within a joint) are taken from the clusters and become its points. */
+static void add_custom_block(rocks_block_tile *t, int k, const float (*points)[3], int32_t *owner, size_t *point_cap) {
+    const rocks_block_custom *c = &t->desc.custom[k];
+    const float s = t->desc.size, reach = t->desc.joint;
+    rocks_block *b = &t->blocks[t->block_count];
+    *b = (rocks_block){ .point_first = t->point_count, .custom = (uint32_t)k + 1 };
+    for (int a = 0; a < 3; a++) {
+        b->anchor[a] = 0.5f * (c->bounds_min[a] + c->bounds_max[a]);
+        b->bounds_min[a] = c->bounds_min[a] - BOUNDS_MARGIN;
+        b->bounds_max[a] = c->bounds_max[a] + BOUNDS_MARGIN;
+    }
+    for (uint32_t i = 0; i < t->sample_count; i++) {
+        if (owner[i] >= 0) continue;
+        for (int o = 0; o < 27; o++) {
+            float q[3] = { points[i][0] + s * (float)(o % 3 - 1), points[i][1] + s * (float)(o / 3 % 3 - 1),
+                           points[i][2] + s * (float)(o / 9 - 1) };
+            bool near = true;
+            for (int a = 0; a < 3; a++) near &= q[a] >= c->bounds_min[a] - reach && q[a] <= c->bounds_max[a] + reach;
+            if (!near || c->field(c->user, q) <= -reach) continue;
+            owner[i] = INT32_MAX;   /* taken: no cluster grows into the developer's block */
+            t->points = core_grow(t->points, point_cap, t->point_count + 1, sizeof *t->points);
+            memcpy(t->points[t->point_count++], q, sizeof q);
+            b->point_count++;
+            break;
+        }
+    }
+    t->block_count++;
+}
+
 rocks_block_tile *rocks_block_tile_create(const rocks_block_tile_desc *desc) {
     rocks_block_tile_desc d;
     if (!desc_make(desc, &d)) return NULL;
     uint64_t start = core_time_ns();
     rocks_block_tile *t = core_calloc(1, sizeof *t);
     t->desc = d;
+    if (d.custom_count) {   /* the tile keeps its own copy */
+        rocks_block_custom *copy = core_alloc((size_t)d.custom_count * sizeof *copy);
+        memcpy(copy, d.custom, (size_t)d.custom_count * sizeof *copy);
+        t->desc.custom = copy;
+    }
     rng r = { core_hash_combine(d.seed, (uint64_t)d.type) };
 
     disc_list discs = { 0 };
@@ -834,6 +897,10 @@ rocks_block_tile *rocks_block_tile_create(const rocks_block_tile_desc *desc) {
     }
     size_t block_cap = 0, plane_cap = 0, point_cap = 0, face_cap = 0;
     hull_face *faces = NULL;
+    for (int k = 0; k < d.custom_count; k++) {
+        t->blocks = core_grow(t->blocks, &block_cap, t->block_count + 1, sizeof *t->blocks);
+        add_custom_block(t, k, (const float(*)[3])points, c.owner, &point_cap);
+    }
     int32_t clusters = 0;
     for (uint32_t o = 0; o < t->sample_count; o++) {
         if (c.owner[order[o]] >= 0) continue;
@@ -873,6 +940,7 @@ void rocks_block_tile_destroy(rocks_block_tile *t) {
     core_free(t->discs, (t->disc_count + 1) * sizeof *t->discs);
     core_free(t->grid_first, (cells + 1) * sizeof *t->grid_first);
     core_free(t->grid_entries, (t->grid_entry_count + 1) * sizeof *t->grid_entries);
+    if (t->desc.custom_count) core_free((void *)t->desc.custom, (size_t)t->desc.custom_count * sizeof *t->desc.custom);
     core_free(t, sizeof *t);
 }
 

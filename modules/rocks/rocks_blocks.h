@@ -52,6 +52,19 @@ typedef enum rocks_block_type {
 const char *rocks_block_type_name(rocks_block_type type);   /* "equidimensional", …; NULL if bad */
 bool rocks_parse_block_type(const char *text, rocks_block_type *out);
 
+/* A block given by the developer (003 §4, user control: "directly placing several authored
+ * blocks in the tile, and the system will adapt"): any implicit primitive or construction tree,
+ * as a field in tile metres, > 0 inside, about a signed distance near its surface. The sample
+ * points it holds (or comes within a joint of) are kept out of the generated clusters, so the
+ * fractured blocks form around it. It may reach past the tile's border: it repeats with the tile. */
+typedef struct rocks_block_custom {
+    float (*field)(void *user, const float p[3]);   /* pure, safe from any thread */
+    void *user;
+    float bounds_min[3], bounds_max[3];   /* a box holding every point where field > 0 */
+} rocks_block_custom;
+
+#define ROCKS_BLOCK_MAX_CUSTOM 64
+
 /* Zero means the default for every field. */
 typedef struct rocks_block_tile_desc {
     rocks_block_type type;            /* 0 = equidimensional */
@@ -64,11 +77,14 @@ typedef struct rocks_block_tile_desc {
     float joint;                      /* open gap between neighbouring blocks, metres; 0 = 0.15 */
     float relief;                     /* warping amplitude (003 §4.2), metres; 0 = 0.08; < 0 = none */
     float relief_scale;               /* the relief's wavelength, metres; 0 = 0.8 */
+    const rocks_block_custom *custom; /* blocks placed by hand (copied); up to ROCKS_BLOCK_MAX_CUSTOM */
+    int custom_count;
 } rocks_block_tile_desc;
 
 typedef struct rocks_block {
     uint32_t plane_first, plane_count;   /* in tile->planes: (n, d), inside where d − n·p > 0 */
     uint32_t point_first, point_count;   /* its cluster, in tile->points (unwrapped: contiguous) */
+    uint32_t custom;                  /* a block placed by hand: 1 + its index in desc.custom; 0 = generated */
     float anchor[3];                  /* centroid of its points, in [0, s)³: presence is asked here */
     float bounds_min[3], bounds_max[3];  /* where the field can be > −1 m (tile metres) */
 } rocks_block;
@@ -104,7 +120,8 @@ void rocks_block_tile_destroy(rocks_block_tile *tile);
 float rocks_smooth_intersection(float a, float b, float rounding);
 
 /* Block `block` at p in its own tile metres (unbounded: no repetition), with the warping; the
- * gradient too when `gradient` is not NULL (of the unwarped base, normalised). */
+ * gradient too when `gradient` is not NULL (of the unwarped base, normalised). A custom block is
+ * its own field, unwarped (its gradient by central differences). */
 float rocks_block_field(const rocks_block_tile *tile, uint32_t block, const float p[3], float gradient[3]);
 
 /* Presence of a block copy (003 §5's e_i): `anchor` is the copy's anchor in world metres. */

@@ -314,3 +314,61 @@ Test(rocks_blocks, bad_input_is_refused) {
     cr_assert_not(rocks_parse_block_type(NULL, &type));
     cr_assert_null(rocks_block_type_name(ROCKS_BLOCK_TYPE_COUNT));
 }
+
+/* ---- a block placed by hand (003 §4, user control) ------------------------------------------- */
+
+typedef struct sphere { float centre[3], radius; } sphere;
+
+static float sphere_field(void *user, const float p[3]) {
+    const sphere *s = user;
+    float d2 = 0;
+    for (int a = 0; a < 3; a++) d2 += (p[a] - s->centre[a]) * (p[a] - s->centre[a]);
+    return s->radius - sqrtf(d2);
+}
+
+/* A sphere placed across the tile's x border: it is block 0, its field is its own (the radius
+ * at its centre, in every copy of the tile), it owns the sample points within a joint of it on
+ * both sides of the border, and no generated block holds a point there. */
+Test(rocks_blocks, custom_block_takes_its_place) {
+    sphere ball = { .centre = { 0.4f, 4.0f, 4.0f }, .radius = 1.5f };
+    rocks_block_custom custom = { .field = sphere_field, .user = &ball, .bounds_min = { -1.1f, 2.5f, 2.5f },
+                                  .bounds_max = { 1.9f, 5.5f, 5.5f } };
+    rocks_block_tile *t = rocks_block_tile_create(&(rocks_block_tile_desc){
+        .type = ROCKS_BLOCK_POLYHEDRAL, .seed = 3, .size = 8.0f, .point_spacing = 0.45f, .fracture_spacing = 2.5f,
+        .fracture_radius = 3.0f, .custom = &custom, .custom_count = 1 });
+    cr_assert_not_null(t);
+    cr_assert_eq(t->blocks[0].custom, 1u);   /* desc.custom[0] */
+    cr_assert_gt(t->blocks[0].point_count, 10);
+    const float joint = t->desc.joint, s = t->desc.size;
+    for (int k = -2; k <= 2; k++) {
+        double p[3] = { 0.4 + k * s, 4.0 + 3 * k * s, 4.0 - k * s };
+        uint32_t block;
+        cr_assert_float_eq(rocks_block_tile_field(t, p, NULL, NULL, &block), 1.5f, 1e-5f);
+        cr_assert_eq(block, 0u);
+    }
+    for (uint32_t i = 0; i < t->block_count; i++)
+        for (uint32_t j = 0; j < t->blocks[i].point_count; j++) {
+            const float *p = t->points[t->blocks[i].point_first + j];
+            float d2 = 0;   /* to the nearest copy of the centre */
+            for (int a = 0; a < 3; a++) {
+                float d = p[a] - ball.centre[a];
+                d -= s * roundf(d / s);
+                d2 += d * d;
+            }
+            if (i == 0) cr_assert_lt(sqrtf(d2), ball.radius + joint + 1e-4f);
+            else cr_assert_geq(sqrtf(d2), ball.radius + joint - 1e-4f, "block %u holds a point inside the sphere", i);
+        }
+    /* points on the far side of the border were taken too */
+    bool far_side = false;
+    for (uint32_t j = 0; j < t->blocks[0].point_count; j++) far_side |= t->points[t->blocks[0].point_first + j][0] < 0;
+    cr_assert(far_side);
+    rocks_block_tile_destroy(t);
+    /* bad hand-made blocks */
+    rocks_block_custom outside = custom;
+    outside.bounds_min[0] += 9, outside.bounds_max[0] += 9;   /* centred outside the tile */
+    cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .size = 8, .custom = &outside, .custom_count = 1 }));
+    rocks_block_custom no_field = custom;
+    no_field.field = NULL;
+    cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .size = 8, .custom = &no_field, .custom_count = 1 }));
+    cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .size = 8, .custom = NULL, .custom_count = 2 }));
+}
