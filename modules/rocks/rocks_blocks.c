@@ -984,3 +984,85 @@ float rocks_block_tile_field(const rocks_block_tile *tile, const double p[3], ro
     if (block_out) *block_out = best_block;
     return best;
 }
+
+/* ---- blocks in a terrain field (003 §5) ----------------------------------------------------- */
+
+/* Samples of `field` inside [lo, hi] (world metres) along one axis: first and last index. */
+static bool sample_range(const terrain_field *field, int axis, double lo, double hi, int *first, int *last) {
+    int n = axis == 0 ? field->nx : axis == 1 ? field->ny : field->nz;
+    double f = ceil((lo - field->origin[axis]) / field->spacing), l = floor((hi - field->origin[axis]) / field->spacing);
+    if (f < 0) f = 0;
+    if (l > n - 1) l = n - 1;
+    *first = (int)f, *last = (int)l;
+    return f <= l;
+}
+
+/* One present copy (block `b` moved by `cell` tiles) raised into the samples its bounds cover. */
+static void amplify_copy(const rocks_block_tile *tile, uint32_t b, const double cell[3], terrain_field *field) {
+    const rocks_block *block = &tile->blocks[b];
+    const double s = tile->desc.size;
+    int first[3], last[3];
+    for (int a = 0; a < 3; a++)
+        if (!sample_range(field, a, cell[a] * s + block->bounds_min[a], cell[a] * s + block->bounds_max[a], &first[a],
+                          &last[a]))
+            return;
+    for (int z = first[2]; z <= last[2]; z++)
+        for (int y = first[1]; y <= last[1]; y++)
+            for (int x = first[0]; x <= last[0]; x++) {
+                float *v = &field->values[((size_t)z * field->ny + y) * field->nx + x];
+                if (*v >= 1.0f) continue;   /* already solid through: nothing to raise */
+                int index[3] = { x, y, z };
+                float local[3];
+                for (int a = 0; a < 3; a++)
+                    local[a] = (float)(field->origin[a] + index[a] * (double)field->spacing - cell[a] * s);
+                float t = fminf(1.0f, rocks_block_field(tile, b, local, NULL));
+                if (t > *v) *v = t;
+            }
+}
+
+void rocks_block_tile_amplify(const rocks_block_tile *tile, terrain_field *field, rocks_block_presence_fn present,
+                              void *user) {
+    const double s = tile->desc.size;
+    double lo[3], hi[3];
+    int n[3] = { field->nx, field->ny, field->nz };
+    for (int a = 0; a < 3; a++) lo[a] = field->origin[a], hi[a] = field->origin[a] + (n[a] - 1) * (double)field->spacing;
+    /* the tile copies whose blocks can reach the box: a block lies within a tile of its own */
+    int64_t c0[3], c1[3];
+    for (int a = 0; a < 3; a++) c0[a] = (int64_t)floor(lo[a] / s) - 1, c1[a] = (int64_t)floor(hi[a] / s) + 1;
+    for (int64_t cz = c0[2]; cz <= c1[2]; cz++)
+        for (int64_t cy = c0[1]; cy <= c1[1]; cy++)
+            for (int64_t cx = c0[0]; cx <= c1[0]; cx++) {
+                double cell[3] = { (double)cx, (double)cy, (double)cz };
+                for (uint32_t b = 0; b < tile->block_count; b++) {
+                    const rocks_block *block = &tile->blocks[b];
+                    bool meets = true;
+                    for (int a = 0; a < 3; a++)
+                        meets &= cell[a] * s + block->bounds_max[a] >= lo[a] && cell[a] * s + block->bounds_min[a] <= hi[a];
+                    if (!meets) continue;
+                    double anchor[3];
+                    for (int a = 0; a < 3; a++) anchor[a] = cell[a] * s + block->anchor[a];
+                    if (present && !present(user, b, anchor)) continue;
+                    amplify_copy(tile, b, cell, field);
+                }
+            }
+}
+
+bool rocks_block_on_walls(void *wall_presence, uint32_t block, const double anchor[3]) {
+    (void)block;
+    const rocks_wall_presence *w = wall_presence;
+    float depth_min = w->depth_min, depth_max = w->depth_max;
+    if (depth_min == 0 && depth_max == 0) depth_min = -0.6f, depth_max = 0.9f;
+    float steep = w->steepness > 0 ? w->steepness : 0.5f;
+    float f = terrain_field_base_at(w->world, anchor[0], anchor[1], anchor[2], 0);
+    if (!(f >= depth_min && f <= depth_max)) return false;
+    /* the gradient by central differences half a metre apart (the field is linear over the
+     * kernel's metre near a plane, so this is exact on a flat wall) */
+    float g[3];
+    for (int a = 0; a < 3; a++) {
+        double p[3] = { anchor[0], anchor[1], anchor[2] }, q[3] = { anchor[0], anchor[1], anchor[2] };
+        p[a] -= 0.25, q[a] += 0.25;
+        g[a] = terrain_field_base_at(w->world, q[0], q[1], q[2], 0) - terrain_field_base_at(w->world, p[0], p[1], p[2], 0);
+    }
+    float length = sqrtf(dot3(g, g));
+    return length > 0 && fabsf(g[1]) < steep * length;
+}

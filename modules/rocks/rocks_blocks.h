@@ -39,6 +39,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "terrain/terrain.h"
+
 /* 003 §4.1, Fig. 2 and Fig. 5: how the fracture discs are laid out. */
 typedef enum rocks_block_type {
     ROCKS_BLOCK_EQUIDIMENSIONAL = 0,  /* three orthogonal sets (axis-aligned normals): near-cubes */
@@ -133,5 +135,24 @@ typedef bool (*rocks_block_presence_fn)(void *user, uint32_t block, const double
  * `block_out` (may be NULL) gets the block that gave the value, or UINT32_MAX. */
 float rocks_block_tile_field(const rocks_block_tile *tile, const double p[3], rocks_block_presence_fn present,
                              void *user, uint32_t *block_out);
+
+/* ---- blocks in a terrain field (003 §5) --------------------------------------------------- */
+
+/* Raises a terrain field's samples to the tile's replication: f̃ = max(f, t) with t clamped to
+ * [−1, 1] as the terrain's field is. Each block copy that reaches the field's box is asked for
+ * presence once, then evaluated at the samples inside its bounds. Meant for a world's amplify
+ * hook (terrain_world_desc.amplify): see hello_blocks. */
+void rocks_block_tile_amplify(const rocks_block_tile *tile, terrain_field *field, rocks_block_presence_fn present,
+                              void *user);
+
+/* 003 §5's presence on steep walls: a copy is kept where the world's own field (before any
+ * amplification: terrain_field_base_at) at its anchor lies in [depth_min, depth_max] (near the
+ * surface; f ≈ signed distance in metres there) and its gradient is steep, |∇f·ŷ| < steepness. */
+typedef struct rocks_wall_presence {
+    terrain_world *world;
+    float steepness;                  /* ε; 0 = 0.5 (walls steeper than 60°) */
+    float depth_min, depth_max;       /* both 0 = [−0.6, 0.9] */
+} rocks_wall_presence;
+bool rocks_block_on_walls(void *wall_presence, uint32_t block, const double anchor[3]);
 
 #endif

@@ -171,6 +171,8 @@ float terrain_fbm3(uint64_t seed, float x, float y, float z, int octaves);
  * terrain_stacks_destroy) as it does generated ones. It must be a pure function of the
  * coordinate and safe to call from any thread. */
 typedef struct terrain_edit_log terrain_edit_log;   /* persistent edits, below */
+typedef struct terrain_world terrain_world;
+typedef struct terrain_field terrain_field;         /* the field's samples, below */
 
 typedef struct terrain_world_desc {
     terrain_generation_params generation;
@@ -184,9 +186,16 @@ typedef struct terrain_world_desc {
                                          generation.sea_level in, as in a generated world (see
                                          "edits in the world"); false = a hand-made world has
                                          no sea. A generated world always has it */
+    /* amplify (003 §5): if set, every field the world samples (terrain_field_sample, and
+     * terrain_field_at as a one-sample field) passes through it after f is computed. It may
+     * raise values, f̃ = max(f, t), and meshes, collision and picking then all see what it
+     * adds (cliff blocks: rocks_blocks.h). It must be a pure function of the samples' world
+     * positions and the world's stacks, read the field only through terrain_field_base_at (so
+     * it never calls itself), keep values in [−1, 1], and be safe from any thread. */
+    void (*amplify)(void *user, terrain_world *world, terrain_field *field);
+    void *amplify_user;               /* passed to amplify */
 } terrain_world_desc;
 
-typedef struct terrain_world terrain_world;
 terrain_world *terrain_world_create(const terrain_world_desc *desc);
 void terrain_world_destroy(terrain_world *world);
 /* The chunk's stacks, generated on first use (thread-safe: any thread, any number at once).
@@ -269,8 +278,11 @@ typedef struct terrain_field_desc {
  * Free with terrain_field_free. */
 bool terrain_field_sample(terrain_world *world, const terrain_field_desc *desc, terrain_field *out);
 void terrain_field_free(terrain_field *field);
-/* The field at one point, by direct summation (slow; for tests and single queries). */
+/* The field at one point, by direct summation (slow; for tests and single queries), amplified
+ * as terrain_field_sample's samples are (terrain_world_desc.amplify). */
 float terrain_field_at(terrain_world *world, double x, double y, double z, float sigma);
+/* The same without the amplification: f of the stacks alone (what an amplifier reads). */
+float terrain_field_base_at(terrain_world *world, double x, double y, double z, float sigma);
 
 /* ---- meshes ------------------------------------------------------------------------------- */
 

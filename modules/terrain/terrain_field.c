@@ -325,6 +325,7 @@ bool terrain_field_sample(terrain_world *world, const terrain_field_desc *desc, 
         out->spacing = (float)(step * TERRAIN_COLUMN_SIZE);
         out->values = core_alloc((size_t)out->nx * out->ny * out->nz * sizeof *out->values);
         field_sample_strided(world, desc, sigma, step, out);
+        terrain__world_amplify(world, out);
         return true;
     }
     const int nx = desc->size[0], ny = desc->size[1], nz = desc->size[2];
@@ -410,6 +411,7 @@ bool terrain_field_sample(terrain_world *world, const terrain_field_desc *desc, 
     core_free(ring_edge, (size_t)window * row_samples * sizeof *ring_edge);
     core_free(z_inner, row_samples * sizeof *z_inner);
     core_free(z_edge, row_samples * sizeof *z_edge);
+    terrain__world_amplify(world, out);
     return true;
 }
 
@@ -427,7 +429,15 @@ static double field_overlap(double a0, double a1, double b0, double b1) {
 
 /* The sum of the volumes of the in-field layer boxes inside the kernel's cube (000 §3.3: "the
  * sum of the volume of the boxes of material layers intersecting the kernel support box"). */
-float terrain_field_at(terrain_world *world, double x, double y, double z, float sigma_in) {
+float terrain_field_at(terrain_world *world, double x, double y, double z, float sigma) {
+    float value = terrain_field_base_at(world, x, y, z, sigma);
+    terrain_field one = { .nx = 1, .ny = 1, .nz = 1, .origin = { x, y, z }, .spacing = TERRAIN_COLUMN_SIZE,
+                          .values = &value };
+    terrain__world_amplify(world, &one);
+    return value;
+}
+
+float terrain_field_base_at(terrain_world *world, double x, double y, double z, float sigma_in) {
     const double sigma = field_sigma(sigma_in), c = TERRAIN_COLUMN_SIZE;
     int64_t gx0 = (int64_t)floor((x - sigma) / c), gx1 = (int64_t)ceil((x + sigma) / c);
     int64_t gz0 = (int64_t)floor((z - sigma) / c), gz1 = (int64_t)ceil((z + sigma) / c);

@@ -588,4 +588,7 @@ typedef struct terrain__material_texels {
 void terrain__material_texels_make(terrain__material_texels *out);
 void terrain__material_texels_free(terrain__material_texels *texels);
 
+/* Passes a sampled field through terrain_world_desc.amplify, if the world has one. */
+void terrain__world_amplify(terrain_world *world, terrain_field *field);
+
 #endif

@@ -38,6 +38,8 @@ struct terrain_world {
     void *generate_user;
     terrain_edit_log *edits;              /* replayed over generated chunks, or NULL */
     bool sea;                             /* edits let the sea in (terrain_world_desc.sea) */
+    void (*amplify)(void *user, terrain_world *world, terrain_field *field);
+    void *amplify_user;
     terrain_world_change *changes;        /* committed since the last terrain_world_take_changes */
     size_t change_count, change_capacity;
     size_t max_chunks;
@@ -68,6 +70,8 @@ terrain_world *terrain_world_create(const terrain_world_desc *desc) {
     w->generation = desc->generation;
     w->generate = desc->generate;
     w->generate_user = desc->generate_user;
+    w->amplify = desc->amplify;
+    w->amplify_user = desc->amplify_user;
     w->edits = desc->edits;
     w->sea = desc->generate == NULL || desc->sea;
     w->max_chunks = desc->max_chunks ? desc->max_chunks : 4096;
@@ -424,4 +428,8 @@ uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord c
     uint32_t version = e ? e->version : 0;
     pthread_mutex_unlock(&world->lock);
     return version;
+}
+
+void terrain__world_amplify(terrain_world *world, terrain_field *field) {
+    if (world->amplify) world->amplify(world->amplify_user, world, field);
 }

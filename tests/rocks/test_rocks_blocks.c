@@ -372,3 +372,105 @@ Test(rocks_blocks, custom_block_takes_its_place) {
     cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .size = 8, .custom = &no_field, .custom_count = 1 }));
     cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .size = 8, .custom = NULL, .custom_count = 2 }));
 }
+
+/* ---- blocks in a terrain field --------------------------------------------------------------- */
+
+/* Presence by a hash of the copy (a block's copies in different tiles differ). */
+static bool every_other_copy(void *user, uint32_t block, const double anchor[3]) {
+    (void)user;
+    uint64_t h = core_hash_combine(block, (uint64_t)(int64_t)floor(anchor[0] * 4));
+    h = core_hash_combine(h, (uint64_t)(int64_t)floor(anchor[1] * 4));
+    h = core_hash_combine(h, (uint64_t)(int64_t)floor(anchor[2] * 4));
+    return h & 1;
+}
+
+/* rocks_block_tile_amplify raises each sample to the replication at that point, as
+ * rocks_block_tile_field gives it point by point with the same presence (clamped to [−1, 1]). */
+Test(rocks_blocks, amplify_equals_the_field_point_by_point) {
+    rocks_block_tile *t = small_tile(ROCKS_BLOCK_EQUIDIMENSIONAL, 8, 0.0f);
+    terrain_field field = { .nx = 21, .ny = 13, .nz = 17, .origin = { -6.5, 3.0, 11.0 }, .spacing = 0.5f };
+    size_t n = (size_t)field.nx * field.ny * field.nz;
+    field.values = core_alloc(n * sizeof *field.values);
+    for (size_t i = 0; i < n; i++) field.values[i] = i % 5 == 0 ? 0.3f : -1.0f;   /* some already raised */
+    rocks_block_tile_amplify(t, &field, every_other_copy, NULL);
+    int raised = 0;
+    for (int z = 0; z < field.nz; z++)
+        for (int y = 0; y < field.ny; y++)
+            for (int x = 0; x < field.nx; x++) {
+                size_t i = ((size_t)z * field.ny + y) * field.nx + x;
+                double p[3] = { field.origin[0] + x * 0.5, field.origin[1] + y * 0.5, field.origin[2] + z * 0.5 };
+                float before = i % 5 == 0 ? 0.3f : -1.0f;
+                float t_value = rocks_block_tile_field(t, p, every_other_copy, NULL, NULL);
+                float expected = fmaxf(before, fminf(1.0f, t_value));
+                cr_assert_float_eq(field.values[i], expected, 1e-4f, "at %g %g %g", p[0], p[1], p[2]);
+                raised += field.values[i] > before;
+            }
+    cr_assert_gt(raised, 100);
+    core_free(field.values, n * sizeof *field.values);
+    rocks_block_tile_destroy(t);
+}
+
+static void wall_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
+    (void)user, (void)z;
+    terrain_stacks_builder_push(b, TERRAIN_BEDROCK, (x < 0 ? 20.0f : 0.0f) - TERRAIN_FLOOR_Y);
+}
+
+static terrain_stacks *wall_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, wall_column, user);
+}
+
+/* 003 §5's presence on a wall x = 0 (bedrock behind, up to 20 m) over a floor y = 0: the field
+ * there is the signed distance in metres within a metre of a flat face (000 §3.3 with σ = 1). */
+Test(rocks_blocks, presence_on_steep_walls_only) {
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = wall_chunk });
+    rocks_wall_presence walls = { .world = world };
+    const double on_face[][3] = { { -0.3, 10, 5 }, { 0.4, 6, -3 }, { -0.8, 15, 40 } };
+    const double not_on_face[][3] = { { 5, 0.3, 5 },     /* the floor: flat */
+                                      { -3, 10, 5 },     /* deep in the wall: f = 1 */
+                                      { 3, 10, 5 },      /* in the air: f = −1 */
+                                      { -5, 19.8, 5 } }; /* the wall's flat top */
+    for (size_t i = 0; i < CORE_COUNTOF(on_face); i++)
+        cr_assert(rocks_block_on_walls(&walls, 0, on_face[i]), "on the face: %g %g %g", on_face[i][0], on_face[i][1], on_face[i][2]);
+    for (size_t i = 0; i < CORE_COUNTOF(not_on_face); i++)
+        cr_assert_not(rocks_block_on_walls(&walls, 0, not_on_face[i]), "not a wall: %g %g %g", not_on_face[i][0],
+                      not_on_face[i][1], not_on_face[i][2]);
+    terrain_world_destroy(world);
+}
+
+typedef struct wall_blocks { rocks_block_tile *tile; rocks_wall_presence walls; } wall_blocks;
+
+static void amplify_wall(void *user, terrain_world *world, terrain_field *field) {
+    wall_blocks *w = user;
+    w->walls.world = world;
+    rocks_block_tile_amplify(w->tile, field, rocks_block_on_walls, &w->walls);
+}
+
+/* Through the world's hook: the blocks rise out of the wall's face, and two neighbouring
+ * chunks' fields agree bit for bit on the samples they share (so their meshes meet), whichever
+ * is sampled first: the amplification is a function of the position alone. */
+Test(rocks_blocks, chunks_with_blocks_meet_exactly) {
+    wall_blocks w = { .tile = small_tile(ROCKS_BLOCK_COLUMNAR, 6, 0.08f) };
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = wall_chunk, .amplify = amplify_wall,
+                                                                     .amplify_user = &w });
+    terrain_field a, b, c;
+    /* a and b split x at 0 (the face), b and c split z at 16 */
+    cr_assert(terrain_field_sample(world, &(terrain_field_desc){ .first = { -16, 0, 0 }, .size = { 17, 20, 17 } }, &a));
+    cr_assert(terrain_field_sample(world, &(terrain_field_desc){ .first = { 0, 0, 0 }, .size = { 17, 20, 17 } }, &b));
+    cr_assert(terrain_field_sample(world, &(terrain_field_desc){ .first = { 0, 0, 16 }, .size = { 17, 20, 17 } }, &c));
+    int out_of_face = 0;
+    for (int z = 0; z < 17; z++)
+        for (int y = 0; y < 20; y++) {
+            cr_assert_eq(a.values[((size_t)z * 20 + y) * 17 + 16], b.values[((size_t)z * 20 + y) * 17 + 0]);
+            for (int x = 0; x < 17; x++) {
+                cr_assert_eq(b.values[((size_t)16 * 20 + y) * 17 + x], c.values[((size_t)0 * 20 + y) * 17 + x]);
+                /* in front of the face (x ≥ 1 m, above the floor) only blocks can be solid */
+                if (x >= 1 && y >= 2 && b.values[((size_t)z * 20 + y) * 17 + x] > 0) out_of_face++;
+            }
+        }
+    cr_assert_gt(out_of_face, 10, "blocks stand out of the wall");
+    terrain_field_free(&a);
+    terrain_field_free(&b);
+    terrain_field_free(&c);
+    terrain_world_destroy(world);
+    rocks_block_tile_destroy(w.tile);
+}

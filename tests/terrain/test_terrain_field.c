@@ -240,3 +240,62 @@ Test(terrain_field, absurd_requests_are_refused) {
     terrain_field_free(&field);   /* harmless on a refused request */
     terrain_world_destroy(world);
 }
+
+/* ---- amplification (terrain_world_desc.amplify, 003 §5) ------------------------------------- */
+
+/* A ball of radius 3 in the air at (10, 20, 10): f̃ = max(f, clamp(3 − |p − c|, −1, 1)). */
+static void add_ball(void *user, terrain_world *world, terrain_field *field) {
+    (void)world;
+    int *calls = user;
+    (*calls)++;
+    for (int z = 0; z < field->nz; z++)
+        for (int y = 0; y < field->ny; y++)
+            for (int x = 0; x < field->nx; x++) {
+                double p[3] = { field->origin[0] + x * field->spacing - 10, field->origin[1] + y * field->spacing - 20,
+                                field->origin[2] + z * field->spacing - 10 };
+                float ball = fmaxf(-1.0f, fminf(1.0f, (float)(3.0 - sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]))));
+                float *v = &field->values[((size_t)z * field->ny + y) * field->nx + x];
+                *v = fmaxf(*v, ball);
+            }
+}
+
+/* Every way the world samples its field sees what the amplifier adds, the base field does not,
+ * and samples the amplifier leaves alone are the stacks' own bits. */
+Test(terrain_field, amplify_reaches_every_sampler) {
+    hand_world hand = { .column = flat_column, .ground = 10.0 };
+    int calls = 0;
+    terrain_world *plain = hand_world_create(&hand);
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = hand_generate, .generate_user = &hand,
+                                                                     .amplify = add_ball, .amplify_user = &calls });
+    float centre = terrain_field_at(world, 10, 20, 10, 0), base = terrain_field_base_at(world, 10, 20, 10, 0);
+    float near_top = terrain_field_at(world, 10, 22.5, 10, 0);
+    cr_expect_float_eq(centre, 1.0f, 1e-6f);      /* the ball's centre */
+    cr_expect_float_eq(base, -1.0f, 1e-6f);       /* air without it */
+    cr_expect_float_eq(near_top, 0.5f, 1e-6f);    /* 0.5 m inside its top */
+    cr_assert_eq(calls, 2, "terrain_field_at amplifies, terrain_field_base_at does not: %d calls", calls);
+    for (int step = 1; step <= 2; step++) {
+        terrain_field a, b;
+        terrain_field_desc desc = { .first = { 0, 8, 0 }, .size = { 12, 10, 12 }, .step = step };
+        cr_assert(terrain_field_sample(world, &desc, &a));
+        cr_assert(terrain_field_sample(plain, &desc, &b));
+        int raised = 0;
+        for (size_t i = 0; i < (size_t)12 * 10 * 12; i++) {
+            if (a.values[i] != b.values[i]) {
+                cr_assert_gt(a.values[i], b.values[i]);
+                raised++;
+            }
+        }
+        cr_assert_gt(raised, 0, "step %d: the ball is in the samples", step);
+        terrain_field_free(&a);
+        terrain_field_free(&b);
+    }
+    /* and the mesh: the chunk holding the ball reaches up to its top, 23 m */
+    terrain_mesh mesh;
+    cr_assert(terrain_mesh_chunk(world, 0, 0, 0, &(terrain_lod_desc){ 0 }, &mesh));
+    float top = -INFINITY;
+    for (uint32_t v = 0; v < mesh.vertex_count; v++) top = fmaxf(top, (float)mesh.origin[1] + mesh.vertices[v].position[1]);
+    cr_assert_float_eq(top, 23.0f, 0.05f);
+    terrain_mesh_free(&mesh);
+    terrain_world_destroy(world);
+    terrain_world_destroy(plain);
+}
