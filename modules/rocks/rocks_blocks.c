@@ -8,7 +8,7 @@
  * reached it), so a block that straddles the border is one convex set; it is then moved by a
  * whole tile so that its anchor lies in [0, s)³.
  */
-#include "rocks/rocks.h"
+#include "rocks_world_internal.h"
 
 #include "core/core.h"
 
@@ -997,8 +997,20 @@ static bool sample_range(const terrain_field *field, int axis, double lo, double
     return f <= l;
 }
 
+/* Whether block b's field at p can exceed `value`. The smooth intersection is at most the plain
+ * min of the planes, and the warping moves p by at most √3 × the relief (δ = g Σ|gᵢ| d, |d| ≤ 1,
+ * Σ|gᵢ| ≤ √3; planes are 1-Lipschitz), so b(p) ≤ minₖ hₖ(p) + √3·relief: a plane whose distance
+ * is already below value − √3·relief decides. */
+static bool may_exceed(const rocks_block_tile *tile, const rocks_block *b, const float p[3], float value) {
+    float bound = value - 1.7321f * fmaxf(tile->desc.relief, 0.0f);
+    const float (*planes)[4] = (const float(*)[4])tile->planes + b->plane_first;
+    for (uint32_t k = 0; k < b->plane_count; k++)
+        if (planes[k][3] - dot3(planes[k], p) <= bound) return false;
+    return true;
+}
+
 /* One present copy (block `b` moved by `cell` tiles) raised into the samples its bounds cover. */
-static void amplify_copy(const rocks_block_tile *tile, uint32_t b, const double cell[3], terrain_field *field) {
+void rocks__amplify_copy(const rocks_block_tile *tile, uint32_t b, const double cell[3], terrain_field *field) {
     const rocks_block *block = &tile->blocks[b];
     const double s = tile->desc.size;
     int first[3], last[3];
@@ -1015,6 +1027,7 @@ static void amplify_copy(const rocks_block_tile *tile, uint32_t b, const double 
                 float local[3];
                 for (int a = 0; a < 3; a++)
                     local[a] = (float)(field->origin[a] + index[a] * (double)field->spacing - cell[a] * s);
+                if (!block->custom && !may_exceed(tile, block, local, *v)) continue;
                 float t = fminf(1.0f, rocks_block_field(tile, b, local, NULL));
                 if (t > *v) *v = t;
             }
@@ -1042,7 +1055,7 @@ void rocks_block_tile_amplify(const rocks_block_tile *tile, terrain_field *field
                     double anchor[3];
                     for (int a = 0; a < 3; a++) anchor[a] = cell[a] * s + block->anchor[a];
                     if (present && !present(user, b, anchor)) continue;
-                    amplify_copy(tile, b, cell, field);
+                    rocks__amplify_copy(tile, b, cell, field);
                 }
             }
 }

@@ -155,4 +155,42 @@ typedef struct rocks_wall_presence {
 } rocks_wall_presence;
 bool rocks_block_on_walls(void *wall_presence, uint32_t block, const double anchor[3]);
 
+/* ---- cliffs in a world (003 §5): a tile per stratum, presence cached ------------------------ */
+
+/* Blocks on every steep bedrock wall of a world, through its amplify hook:
+ *     rocks_cliffs *cliffs = rocks_cliffs_create(&(rocks_cliffs_desc){ 0 });
+ *     terrain_world_create(&(terrain_world_desc){ ..., .amplify = rocks_cliffs_amplify,
+ *                                                 .amplify_user = cliffs });
+ * Strata: a block copy belongs to the stratum of its anchor's height, floor(y / stratum_height),
+ * whose type is strata[stratum mod strata_count]: cliffs change block type with height (003
+ * Fig. 11). Presence is rocks_block_on_walls, and the wall must be bedrock (sand slopes get no
+ * blocks); it is worked out once per tile cell and kept, checked against the versions of the
+ * column chunks it read, so an edit brings it up to date. Fields sampled coarser than
+ * max_spacing get no blocks (a block is a few metres: below such a grid it is noise); every
+ * field at one spacing is treated alike, so chunks and their LOD seams agree. */
+typedef struct rocks_cliffs_desc {
+    uint64_t seed;                    /* 0 = 1 */
+    rocks_block_type strata[8];       /* bottom up, repeating; all zero with count 0 = tabular,
+                                         columnar, equidimensional */
+    int strata_count;                 /* 0 = 3 */
+    float stratum_height;             /* metres; 0 = 20 */
+    float tile_size;                  /* s; 0 = 16 */
+    float joint;                      /* 0 = 0.6 m (at most s / 24): fields sampled every metre
+                                         lose thinner ones */
+    float steepness, depth_min, depth_max;   /* rocks_wall_presence's; 0 = its defaults */
+    float max_spacing;                /* 0 = 2 m (levels of detail 0 and 1) */
+} rocks_cliffs_desc;
+
+/* One rocks_cliffs serves one world (its cache is keyed by the world's chunk versions). */
+typedef struct rocks_cliffs rocks_cliffs;
+rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc);   /* NULL with a message */
+void rocks_cliffs_destroy(rocks_cliffs *cliffs);
+/* terrain_world_desc.amplify, with amplify_user = the cliffs (thread-safe). */
+void rocks_cliffs_amplify(void *cliffs, terrain_world *world, terrain_field *field);
+typedef struct rocks_cliffs_stats {
+    uint64_t fields, cells_computed, cells_reused, copies_present;
+    double build_seconds;             /* the tiles */
+} rocks_cliffs_stats;
+rocks_cliffs_stats rocks_cliffs_stats_get(rocks_cliffs *cliffs);
+
 #endif

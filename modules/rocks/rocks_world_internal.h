@@ -19,4 +19,8 @@ typedef struct rocks_draw_params {
 uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const rocks_draw_params *params,
                               const rocks_placement *const *placements, int count, int *commands);
 
+/* Block copy `block` of the tile copy at tile coordinate `cell` raised into the field's samples
+ * inside its bounds (rocks_blocks.c; the cliffs' amplifier shares it). */
+void rocks__amplify_copy(const rocks_block_tile *tile, uint32_t block, const double cell[3], terrain_field *field);
+
 #endif

@@ -474,3 +474,100 @@ Test(rocks_blocks, chunks_with_blocks_meet_exactly) {
     terrain_world_destroy(world);
     rocks_block_tile_destroy(w.tile);
 }
+
+/* ---- cliffs in a world (rocks_cliffs) -------------------------------------------------------- */
+
+/* The same wall in sand, on sand: bedrock only 5 m under the floor. */
+static void sand_wall_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
+    (void)user, (void)z;
+    terrain_stacks_builder_push(b, TERRAIN_BEDROCK, -5.0f - TERRAIN_FLOOR_Y);
+    terrain_stacks_builder_push(b, TERRAIN_SAND, x < 0 ? 25.0f : 5.0f);
+}
+
+static terrain_stacks *sand_wall_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, sand_wall_column, user);
+}
+
+/* Samples a field of the world with and without the cliffs; returns how many the cliffs raised
+ * (none is ever lowered). A rocks_cliffs serves one world: its cache is keyed by chunk versions. */
+static int raised_samples(terrain_stacks *(*generate)(void *, terrain_chunk_coord), rocks_cliffs *cliffs,
+                          terrain_world *world, int step) {
+    terrain_world *plain = terrain_world_create(&(terrain_world_desc){ .generate = generate });
+    terrain_field_desc desc = { .first = { -8, 0, 0 }, .size = { 16, 24, 20 }, .step = step };
+    terrain_field a, b;
+    cr_assert(terrain_field_sample(world, &desc, &a));
+    cr_assert(terrain_field_sample(plain, &desc, &b));
+    int raised = 0;
+    for (size_t i = 0; i < (size_t)16 * 24 * 20; i++) {
+        cr_assert_geq(a.values[i], b.values[i]);
+        raised += a.values[i] > b.values[i];
+    }
+    (void)cliffs;
+    terrain_field_free(&a);
+    terrain_field_free(&b);
+    terrain_world_destroy(plain);
+    return raised;
+}
+
+static terrain_world *cliff_world(terrain_stacks *(*generate)(void *, terrain_chunk_coord), rocks_cliffs *cliffs) {
+    return terrain_world_create(&(terrain_world_desc){ .generate = generate, .amplify = rocks_cliffs_amplify,
+                                                       .amplify_user = cliffs });
+}
+
+/* Blocks stand on a bedrock wall, not on a sand one; not in fields coarser than max_spacing;
+ * and the presence worked out for a tile cell is reused by the next field that meets it. */
+Test(rocks_blocks, cliffs_on_bedrock_walls) {
+    const rocks_cliffs_desc desc = { .strata_count = 1, .strata = { ROCKS_BLOCK_COLUMNAR }, .tile_size = 12 };
+    rocks_cliffs *cliffs = rocks_cliffs_create(&desc);
+    cr_assert_not_null(cliffs);
+    terrain_world *world = cliff_world(wall_chunk, cliffs);
+    cr_assert_gt(raised_samples(wall_chunk, cliffs, world, 1), 20);
+    rocks_cliffs_stats first = rocks_cliffs_stats_get(cliffs);
+    cr_assert_gt(first.cells_computed, 0);
+    cr_assert_gt(raised_samples(wall_chunk, cliffs, world, 1), 20);
+    rocks_cliffs_stats second = rocks_cliffs_stats_get(cliffs);
+    cr_assert_eq(second.cells_computed, first.cells_computed, "the second field computes no cell again");
+    cr_assert_gt(second.cells_reused, first.cells_reused);
+    cr_assert_eq(raised_samples(wall_chunk, cliffs, world, 4), 0, "none below the coarse grid");
+    terrain_world_destroy(world);
+    rocks_cliffs_destroy(cliffs);
+
+    rocks_cliffs *sand = rocks_cliffs_create(&desc);
+    terrain_world *sand_world = cliff_world(sand_wall_chunk, sand);
+    cr_assert_eq(raised_samples(sand_wall_chunk, sand, sand_world, 1), 0, "no blocks on sand");
+    terrain_world_destroy(sand_world);
+    rocks_cliffs_destroy(sand);
+
+    cr_assert_null(rocks_cliffs_create(&(rocks_cliffs_desc){ .strata_count = 9 }));
+    cr_assert_null(rocks_cliffs_create(&(rocks_cliffs_desc){ .strata_count = 1, .strata = { (rocks_block_type)7 } }));
+    cr_assert_null(rocks_cliffs_create(&(rocks_cliffs_desc){ .stratum_height = -1 }));
+}
+
+/* Strata: with tabular blocks in the bands [0, 10) and [20, 30) and columnar ones between, the
+ * blocks raised in a band are that band's type's (tiles of one seed differ by type). */
+Test(rocks_blocks, strata_choose_the_type) {
+    rocks_cliffs *both = rocks_cliffs_create(&(rocks_cliffs_desc){
+        .strata_count = 2, .strata = { ROCKS_BLOCK_TABULAR, ROCKS_BLOCK_COLUMNAR }, .stratum_height = 10, .tile_size = 12 });
+    rocks_cliffs *tabular = rocks_cliffs_create(&(rocks_cliffs_desc){
+        .strata_count = 1, .strata = { ROCKS_BLOCK_TABULAR }, .stratum_height = 10, .tile_size = 12 });
+    terrain_world *a = terrain_world_create(&(terrain_world_desc){ .generate = wall_chunk, .amplify = rocks_cliffs_amplify,
+                                                                 .amplify_user = both });
+    terrain_world *b = terrain_world_create(&(terrain_world_desc){ .generate = wall_chunk, .amplify = rocks_cliffs_amplify,
+                                                                 .amplify_user = tabular });
+    /* a sample deep in a tabular band, away from the band's borders by more than a block */
+    int same = 0, differ = 0;
+    for (int z = 0; z < 24; z += 2)
+        for (int y = 1; y < 20; y++) {
+            float fa = terrain_field_at(a, 0.5, y, z, 0), fb = terrain_field_at(b, 0.5, y, z, 0);
+            bool tabular_band = y >= 3 && y <= 7;     /* tabular anchors in [0, 10) reach here */
+            bool columnar_band = y >= 13 && y <= 17;  /* only columnar ones here for `both` */
+            if (tabular_band) same += fa == fb;
+            if (columnar_band) differ += fa != fb;
+        }
+    cr_assert_gt(same, 0);
+    cr_assert_gt(differ, 0, "the middle band holds the other type's blocks");
+    terrain_world_destroy(a);
+    terrain_world_destroy(b);
+    rocks_cliffs_destroy(both);
+    rocks_cliffs_destroy(tabular);
+}

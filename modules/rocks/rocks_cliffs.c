@@ -1,0 +1,245 @@
+/* rocks_cliffs.c — block tiles replicated over a world's steep bedrock walls (paper 003 §5),
+ * through the world's amplify hook: a tile per block type the strata use, presence worked out
+ * once per tile cell and cached against the versions of the column chunks it read.
+ *
+ * Why per tile cell. A field of a 64 m chunk (level 1) meets some 40 000 block copies; asking
+ * the stacks about each one at every chunk that sees it would cost more than the chunk's own
+ * field. A copy's presence is a pure function of its anchor and the stacks around it, so it is
+ * asked once per (type, tile cell) and kept: the neighbouring chunks, the levels of detail and
+ * the player's collision queries then reuse it.
+ */
+#include "rocks_world_internal.h"
+
+#include "core/core.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <string.h>
+
+#define CACHE_CAPACITY 16384          /* entries (a power of two); emptied when 3/4 full */
+#define VERSION_MARGIN 2.0            /* metres past a cell that its presence reads */
+
+typedef struct cell_entry {
+    uint64_t key;                     /* 0 = empty */
+    int64_t cell[3];
+    int type;
+    uint64_t versions;                /* hash of the versions of the column chunks it read */
+    uint64_t *bits;                   /* present blocks, one bit each */
+} cell_entry;
+
+struct rocks_cliffs {
+    rocks_cliffs_desc desc;
+    rocks_block_tile *tiles[ROCKS_BLOCK_TYPE_COUNT];   /* NULL for types no stratum uses */
+    size_t words[ROCKS_BLOCK_TYPE_COUNT];              /* 64-bit words of a cell's bits */
+    pthread_mutex_t lock;
+    cell_entry *cache;
+    size_t used;
+    rocks_cliffs_stats stats;
+};
+
+static bool cliffs_desc_make(const rocks_cliffs_desc *in, rocks_cliffs_desc *d) {
+    *d = in ? *in : (rocks_cliffs_desc){ 0 };
+    if (!d->seed) d->seed = 1;
+    if (d->strata_count == 0) {
+        d->strata[0] = ROCKS_BLOCK_TABULAR, d->strata[1] = ROCKS_BLOCK_COLUMNAR;
+        d->strata[2] = ROCKS_BLOCK_EQUIDIMENSIONAL;
+        d->strata_count = 3;
+    }
+    if (d->stratum_height == 0) d->stratum_height = 20.0f;
+    if (d->tile_size == 0) d->tile_size = 16.0f;
+    if (d->joint == 0) d->joint = fminf(0.6f, d->tile_size / 24.0f);   /* at most the points' spacing */
+    if (d->max_spacing == 0) d->max_spacing = 2.0f;
+    const char *bad = NULL;
+    if (d->strata_count < 1 || d->strata_count > 8) bad = "strata_count (1 … 8)";
+    for (int i = 0; !bad && i < d->strata_count; i++)
+        if ((unsigned)d->strata[i] >= ROCKS_BLOCK_TYPE_COUNT) bad = "strata (a block type each)";
+    if (!bad && !(d->stratum_height >= 2.0f && d->stratum_height <= 1000.0f)) bad = "stratum_height (2 … 1000 m)";
+    if (!bad && !(d->max_spacing > 0.0f && d->max_spacing <= 64.0f)) bad = "max_spacing (0 … 64 m)";
+    if (bad) core_error("rocks", "cliffs: bad %s", bad);
+    return bad == NULL;
+}
+
+rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc) {
+    rocks_cliffs_desc d;
+    if (!cliffs_desc_make(desc, &d)) return NULL;
+    rocks_cliffs *c = core_calloc(1, sizeof *c);
+    c->desc = d;
+    pthread_mutex_init(&c->lock, NULL);
+    c->cache = core_calloc(CACHE_CAPACITY, sizeof *c->cache);
+    uint64_t start = core_time_ns();
+    for (int i = 0; i < d.strata_count; i++) {
+        rocks_block_type type = d.strata[i];
+        if (c->tiles[type]) continue;
+        /* no relief: its 8 cm are below the metre the world samples at (the renderer's detail
+         * layer shades the faces) and it would double the cost of every sample */
+        c->tiles[type] = rocks_block_tile_create(&(rocks_block_tile_desc){
+            .type = type, .seed = core_hash_combine(d.seed, (uint64_t)type), .size = d.tile_size, .joint = d.joint,
+            .relief = -1.0f });
+        if (!c->tiles[type]) {
+            rocks_cliffs_destroy(c);
+            return NULL;
+        }
+        c->words[type] = (c->tiles[type]->block_count + 63) / 64;
+    }
+    c->stats.build_seconds = (double)(core_time_ns() - start) * 1e-9;
+    return c;
+}
+
+static void cache_clear(rocks_cliffs *c) {
+    for (size_t i = 0; i < CACHE_CAPACITY; i++)
+        if (c->cache[i].key) core_free(c->cache[i].bits, c->words[c->cache[i].type] * sizeof(uint64_t));
+    memset(c->cache, 0, CACHE_CAPACITY * sizeof *c->cache);
+    c->used = 0;
+}
+
+void rocks_cliffs_destroy(rocks_cliffs *c) {
+    if (!c) return;
+    cache_clear(c);
+    core_free(c->cache, CACHE_CAPACITY * sizeof *c->cache);
+    for (int t = 0; t < ROCKS_BLOCK_TYPE_COUNT; t++) rocks_block_tile_destroy(c->tiles[t]);
+    pthread_mutex_destroy(&c->lock);
+    core_free(c, sizeof *c);
+}
+
+rocks_cliffs_stats rocks_cliffs_stats_get(rocks_cliffs *c) {
+    pthread_mutex_lock(&c->lock);
+    rocks_cliffs_stats s = c->stats;
+    pthread_mutex_unlock(&c->lock);
+    return s;
+}
+
+/* ---- presence (003 §5) -------------------------------------------------------------------------- */
+
+static int stratum_type(const rocks_cliffs_desc *d, double y) {
+    int64_t band = (int64_t)floor(y / d->stratum_height), n = d->strata_count;
+    return (int)d->strata[((band % n) + n) % n];
+}
+
+/* On a steep wall (rocks_block_on_walls) whose inside, three quarters of a metre along the
+ * field's gradient, is bedrock: no blocks on steep sand. */
+static bool on_bedrock_wall(const rocks_cliffs *c, terrain_world *world, const double a[3]) {
+    rocks_wall_presence walls = { .world = world, .steepness = c->desc.steepness, .depth_min = c->desc.depth_min,
+                                  .depth_max = c->desc.depth_max };
+    if (!rocks_block_on_walls(&walls, 0, a)) return false;
+    double g[3], length = 0;
+    for (int k = 0; k < 3; k++) {
+        double lo[3] = { a[0], a[1], a[2] }, hi[3] = { a[0], a[1], a[2] };
+        lo[k] -= 0.25, hi[k] += 0.25;
+        g[k] = terrain_field_base_at(world, hi[0], hi[1], hi[2], 0) - terrain_field_base_at(world, lo[0], lo[1], lo[2], 0);
+        length += g[k] * g[k];
+    }
+    length = sqrt(length);
+    return terrain_world_material_at(world, a[0] + 0.75 * g[0] / length, a[1] + 0.75 * g[1] / length,
+                                     a[2] + 0.75 * g[2] / length) == TERRAIN_BEDROCK;
+}
+
+/* The versions of the column chunks under the cell (and the margin its presence reads). */
+static uint64_t cell_versions(terrain_world *world, const int64_t cell[3], double s) {
+    const double size = TERRAIN_MESH_CELLS * TERRAIN_COLUMN_SIZE;
+    int64_t x0 = (int64_t)floor(((double)cell[0] * s - VERSION_MARGIN) / size);
+    int64_t x1 = (int64_t)floor(((double)cell[0] * s + s + VERSION_MARGIN) / size);
+    int64_t z0 = (int64_t)floor(((double)cell[2] * s - VERSION_MARGIN) / size);
+    int64_t z1 = (int64_t)floor(((double)cell[2] * s + s + VERSION_MARGIN) / size);
+    uint64_t h = 0x51ed27;
+    for (int64_t z = z0; z <= z1; z++)
+        for (int64_t x = x0; x <= x1; x++)
+            h = core_hash_combine(h, terrain_world_chunk_version(world, (terrain_chunk_coord){ x, z }));
+    return h;
+}
+
+static uint64_t cell_key(int type, const int64_t cell[3]) {
+    uint64_t h = core_hash_combine((uint64_t)type + 1, (uint64_t)cell[0]);
+    h = core_hash_combine(h, (uint64_t)cell[1]);
+    h = core_hash_combine(h, (uint64_t)cell[2]);
+    return h ? h : 1;
+}
+
+/* The present blocks of `type`'s tile copy at `cell`, into bits (c->words[type] words): from the
+ * cache when its versions still hold, else worked out and kept. */
+static void cell_presence(rocks_cliffs *c, terrain_world *world, int type, const int64_t cell[3], uint64_t *bits) {
+    const rocks_block_tile *tile = c->tiles[type];
+    const size_t words = c->words[type];
+    const uint64_t key = cell_key(type, cell), versions = cell_versions(world, cell, tile->desc.size);
+    pthread_mutex_lock(&c->lock);
+    for (size_t i = key & (CACHE_CAPACITY - 1);; i = (i + 1) & (CACHE_CAPACITY - 1)) {
+        cell_entry *e = &c->cache[i];
+        if (!e->key) break;
+        if (e->key == key && e->type == type && !memcmp(e->cell, cell, sizeof e->cell) && e->versions == versions) {
+            memcpy(bits, e->bits, words * sizeof *bits);
+            c->stats.cells_reused++;
+            pthread_mutex_unlock(&c->lock);
+            return;
+        }
+    }
+    pthread_mutex_unlock(&c->lock);
+
+    memset(bits, 0, words * sizeof *bits);
+    const double s = tile->desc.size;
+    for (uint32_t b = 0; b < tile->block_count; b++) {
+        double anchor[3];
+        for (int a = 0; a < 3; a++) anchor[a] = (double)cell[a] * s + tile->blocks[b].anchor[a];
+        if (stratum_type(&c->desc, anchor[1]) == type && on_bedrock_wall(c, world, anchor)) bits[b / 64] |= 1ull << (b % 64);
+    }
+
+    pthread_mutex_lock(&c->lock);
+    c->stats.cells_computed++;
+    if (c->used >= CACHE_CAPACITY * 3 / 4) cache_clear(c);
+    size_t i = key & (CACHE_CAPACITY - 1);
+    while (c->cache[i].key && !(c->cache[i].key == key && c->cache[i].type == type &&
+                                !memcmp(c->cache[i].cell, cell, sizeof c->cache[i].cell)))
+        i = (i + 1) & (CACHE_CAPACITY - 1);
+    cell_entry *e = &c->cache[i];
+    if (!e->key) {
+        *e = (cell_entry){ .key = key, .type = type, .bits = core_alloc(words * sizeof *bits) };
+        memcpy(e->cell, cell, sizeof e->cell);
+        c->used++;
+    }
+    e->versions = versions;   /* an older entry for the cell is brought up to date */
+    memcpy(e->bits, bits, words * sizeof *bits);
+    pthread_mutex_unlock(&c->lock);
+}
+
+/* ---- the hook ---------------------------------------------------------------------------------- */
+
+void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field) {
+    rocks_cliffs *c = user;
+    if (field->spacing > c->desc.max_spacing) return;   /* the same for every field at a spacing */
+    const int n[3] = { field->nx, field->ny, field->nz };
+    double lo[3], hi[3];
+    for (int a = 0; a < 3; a++) lo[a] = field->origin[a], hi[a] = field->origin[a] + (n[a] - 1) * (double)field->spacing;
+    uint64_t present = 0, bits[64];
+    for (int type = 0; type < ROCKS_BLOCK_TYPE_COUNT; type++) {
+        const rocks_block_tile *tile = c->tiles[type];
+        if (!tile || c->words[type] > CORE_COUNTOF(bits)) continue;
+        const double s = tile->desc.size;
+        /* a block lies within a tile of its own cell: the cells one past the box can reach it */
+        int64_t c0[3], c1[3];
+        for (int a = 0; a < 3; a++) c0[a] = (int64_t)floor(lo[a] / s) - 1, c1[a] = (int64_t)floor(hi[a] / s) + 1;
+        for (int64_t z = c0[2]; z <= c1[2]; z++)
+            for (int64_t y = c0[1]; y <= c1[1]; y++)
+                for (int64_t x = c0[0]; x <= c1[0]; x++) {
+                    const int64_t cell[3] = { x, y, z };
+                    const double origin[3] = { (double)x * s, (double)y * s, (double)z * s };
+                    bool any = false;   /* only cells one of whose blocks reaches the box */
+                    for (uint32_t b = 0; b < tile->block_count && !any; b++) {
+                        bool meets = true;
+                        for (int a = 0; a < 3; a++)
+                            meets &= origin[a] + tile->blocks[b].bounds_max[a] >= lo[a] &&
+                                     origin[a] + tile->blocks[b].bounds_min[a] <= hi[a];
+                        any = meets;
+                    }
+                    if (!any) continue;
+                    cell_presence(c, world, type, cell, bits);
+                    const double at[3] = { (double)x, (double)y, (double)z };
+                    for (uint32_t b = 0; b < tile->block_count; b++) {
+                        if (!(bits[b / 64] >> (b % 64) & 1)) continue;
+                        rocks__amplify_copy(tile, b, at, field);
+                        present++;
+                    }
+                }
+    }
+    pthread_mutex_lock(&c->lock);
+    c->stats.fields++;
+    c->stats.copies_present += present;
+    pthread_mutex_unlock(&c->lock);
+}
