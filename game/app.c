@@ -33,6 +33,7 @@ struct game_app {
     rocks_tileset *own_rock_tiles;         /* the default set, when desc.rock_tiles is NULL */
     const rocks_tileset *rock_tiles;       /* NULL with --rocks off */
     rocks_system *rocks;
+    rocks_cliffs *cliffs;                  /* NULL unless desc.cliffs */
     terrain_water *water;                  /* NULL with --water off */
     input_bindings *bindings;
     input_system *input;
@@ -221,9 +222,13 @@ static bool app_open_terrain(game_app *app) {
      * edited. With a world folder it is also loaded and saved. */
     app->edits = terrain_edit_log_create(terrain_generation_key(&params));
     if (app->desc.world_dir && !app_open_store(app)) return false;
+    if (app->desc.cliffs && !(app->cliffs = rocks_cliffs_create(&(rocks_cliffs_desc){ .seed = app->desc.seed })))
+        return false;
     app->world = terrain_world_create(&(terrain_world_desc){ .generation = params, .generate = app->desc.generate,
                                                              .generate_user = app->desc.generate_user,
-                                                             .edits = app->edits });
+                                                             .edits = app->edits,
+                                                             .amplify = app->cliffs ? rocks_cliffs_amplify : NULL,
+                                                             .amplify_user = app->cliffs });
     app->ecs = ecs_world_create(&(ecs_world_desc){ .jobs = app->jobs });
     app->terrain = terrain_ecs_create(app->ecs, app->world);
     terrain_ecs_stream(app->terrain, &app->desc.stream);
@@ -456,6 +461,7 @@ void game_app_destroy(game_app *app) {
     terrain_renderer_destroy(app->renderer);
     ecs_world_destroy(app->ecs);
     terrain_world_destroy(app->world);
+    rocks_cliffs_destroy(app->cliffs);       /* after the world: its hook reads them */
     terrain_edit_log_destroy(app->edits);
     rocks_tiles_destroy(app->own_rock_tiles);
     job_system_destroy(app->jobs);

@@ -74,6 +74,8 @@ typedef struct game_app_desc {
     const rocks_tileset *rock_tiles;  /* the rocks' tile set (not owned; tests pass small ones);
                                          NULL = the default set, from rocks_cache_path */
     const char *rocks_cache_path;     /* the default set's cache file; NULL = built each run */
+    bool cliffs;                      /* fractured blocks on steep bedrock walls (rocks_cliffs,
+                                         paper 003), through the world's amplify hook */
     bool no_head_bob;                 /* the view without the walking dip (game_player_bob) */
     bool no_occlusion;                /* terrain lit without its ambient occlusion
                                          (terrain_renderer_desc.no_occlusion) */

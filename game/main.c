@@ -35,7 +35,7 @@
 typedef struct options {
     core_common_args common;
     const char *size, *screenshot, *walk, *record, *replay, *bindings, *world, *grass, *water, *shadows, *detail, *at,
-        *look, *rocks;
+        *look, *rocks, *cliffs;
     int seed, frames, radius, levels, memory_mb;
     bool headless, tour, no_head_bob, no_ao;
 } options;
@@ -96,6 +96,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "water", CORE_OPTION_STRING, &o->water, "off|low|high", "the sea and lakes (default low)" },
         { "rocks", CORE_OPTION_STRING, &o->rocks, "on|off", "rock piles (default on; the tile set is cached "
           "in out/rocks_tiles.bin when out/ exists)" },
+        { "cliffs", CORE_OPTION_STRING, &o->cliffs, "on|off", "fractured blocks on steep bedrock walls (default off)" },
         { "detail", CORE_OPTION_STRING, &o->detail, "on|off", "the ground's 1 m detail layer and scale blend (default on)" },
         { "shadows", CORE_OPTION_STRING, &o->shadows, "off|low|high", "sun shadows (default low)" },
         { "memory", CORE_OPTION_INT, &o->memory_mb, "MB", "memory budget for terrain (default 384)", 16, 65536 },
@@ -130,6 +131,12 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         snprintf(error, sizeof error, "'%s' is not on or off", o->rocks);
         return bad_value(&cli, "rocks", error);
     }
+    rocks_quality cliffs = ROCKS_OFF;
+    if (o->cliffs && !rocks_parse_quality(o->cliffs, &cliffs)) {
+        snprintf(error, sizeof error, "'%s' is not on or off", o->cliffs);
+        return bad_value(&cli, "cliffs", error);
+    }
+    desc->cliffs = cliffs == ROCKS_ON;
     struct stat out_dir;
     if (stat("out", &out_dir) == 0 && S_ISDIR(out_dir.st_mode)) desc->rocks_cache_path = "out/rocks_tiles.bin";
     if (o->detail && strcmp(o->detail, "on") != 0 && strcmp(o->detail, "off") != 0) {
