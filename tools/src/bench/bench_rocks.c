@@ -46,17 +46,10 @@ static terrain_stacks *bench_wall_chunk(void *user, terrain_chunk_coord coord) {
 }
 
 typedef struct wall_bench {
-    rocks_block_tile *tile;
-    rocks_wall_presence walls;
+    rocks_cliffs *cliffs;
     terrain_world *world;
     uint64_t triangles;
 } wall_bench;
-
-static void bench_wall_amplify(void *user, terrain_world *world, terrain_field *field) {
-    wall_bench *w = user;
-    w->walls.world = world;
-    rocks_block_tile_amplify(w->tile, field, rocks_block_on_walls, &w->walls);
-}
 
 static double sample_wall_chunk(void *user) {
     wall_bench *w = user;
@@ -71,21 +64,21 @@ static double sample_wall_chunk(void *user) {
 
 /*   rocks.blocks.field_mesh.chunk32         ms for terrain_mesh_chunk (field, meshing, weights,
  *                                           occlusion) of a 32³ chunk crossed by a 22 m wall of
- *                                           bedrock at x = 16, with the columnar tile's blocks
- *                                           (presence on steep walls; joints 0.6 m, no relief, as
- *                                           a world at 1 m samples uses them) through the hook
+ *                                           bedrock at x = 16, with columnar blocks through the
+ *                                           world's hook as the game makes them (rocks_cliffs: the
+ *                                           presence of a tile cell is kept after the warm-up)
  *   rocks.blocks.field_mesh.chunk32.plain   the same chunk of the same wall without blocks (the
  *                                           peer, same run); .ratio is the first over it.
  * Target (issue): ≤ 2 × terrain.field_mesh.chunk32. */
 static void bench_blocks_chunk(bench_context *ctx) {
     if (!bench_wants(ctx, "rocks.blocks.field_mesh")) return;
-    /* as a world samples at 1 m: joints of 0.6 m (thinner ones fall between samples) and no
-     * relief (8 cm of warping is below the grid; the renderer's detail layer shades it) */
-    wall_bench with = { .tile = rocks_block_tile_create(&(rocks_block_tile_desc){ .type = ROCKS_BLOCK_COLUMNAR,
-                                                                                .joint = 0.6f, .relief = -1 }) };
+    /* the world's own cliffs (rocks_cliffs: joints of 0.6 m, no relief, presence kept per tile
+     * cell as every chunk after the first finds it), one stratum of columnar blocks */
+    wall_bench with = { .cliffs = rocks_cliffs_create(&(rocks_cliffs_desc){ .strata_count = 1,
+                                                                           .strata = { ROCKS_BLOCK_COLUMNAR } }) };
     wall_bench plain = { 0 };
-    with.world = terrain_world_create(&(terrain_world_desc){ .generate = bench_wall_chunk, .amplify = bench_wall_amplify,
-                                                            .amplify_user = &with });
+    with.world = terrain_world_create(&(terrain_world_desc){ .generate = bench_wall_chunk, .amplify = rocks_cliffs_amplify,
+                                                            .amplify_user = with.cliffs });
     plain.world = terrain_world_create(&(terrain_world_desc){ .generate = bench_wall_chunk });
     bench_run(ctx, "rocks.blocks.field_mesh.chunk32", "ms", 15, sample_wall_chunk, &with);
     bench_run(ctx, "rocks.blocks.field_mesh.chunk32.plain", "ms", 15, sample_wall_chunk, &plain);
@@ -98,7 +91,7 @@ static void bench_blocks_chunk(bench_context *ctx) {
            (unsigned long long)plain.triangles);
     terrain_world_destroy(with.world);
     terrain_world_destroy(plain.world);
-    rocks_block_tile_destroy(with.tile);
+    rocks_cliffs_destroy(with.cliffs);
 }
 
 /* Block tiles for cliffs (paper 003 §4), one per type at the defaults (16 m, ~8 000 points):
