@@ -48,7 +48,7 @@ static bool cliffs_desc_make(const rocks_cliffs_desc *in, rocks_cliffs_desc *d) 
     if (d->stratum_height == 0) d->stratum_height = 20.0f;
     if (d->tile_size == 0) d->tile_size = 16.0f;
     if (d->joint == 0) d->joint = fminf(0.6f, d->tile_size / 24.0f);   /* at most the points' spacing */
-    if (d->max_spacing == 0) d->max_spacing = 2.0f;
+    if (d->max_spacing == 0) d->max_spacing = 1.0f;
     const char *bad = NULL;
     if (d->strata_count < 1 || d->strata_count > 8) bad = "strata_count (1 … 8)";
     for (int i = 0; !bad && i < d->strata_count; i++)
@@ -115,12 +115,18 @@ static int stratum_type(const rocks_cliffs_desc *d, double y) {
     return (int)d->strata[((band % n) + n) % n];
 }
 
-/* On a steep wall (rocks_block_on_walls) whose inside, three quarters of a metre along the
- * field's gradient, is bedrock: no blocks on steep sand. */
+/* On a steep wall (rocks_block_on_walls) at least 2 m tall whose inside, three quarters of a
+ * metre along the field's gradient, is bedrock: no blocks on steep sand. */
 static bool on_bedrock_wall(const rocks_cliffs *c, terrain_world *world, const double a[3]) {
     rocks_wall_presence walls = { .world = world, .steepness = c->desc.steepness, .depth_min = c->desc.depth_min,
                                   .depth_max = c->desc.depth_max };
     if (!rocks_block_on_walls(&walls, 0, a)) return false;
+    /* a wall, not a step: the face goes on a metre above and below (a shard on a knee-high step
+     * reads as debris, not as a cliff) */
+    for (int side = -1; side <= 1; side += 2) {
+        const double b[3] = { a[0], a[1] + 1.0 * side, a[2] };
+        if (!rocks_block_on_walls(&walls, 0, b)) return false;
+    }
     double g[3], length = 0;
     for (int k = 0; k < 3; k++) {
         double lo[3] = { a[0], a[1], a[2] }, hi[3] = { a[0], a[1], a[2] };
@@ -131,6 +137,25 @@ static bool on_bedrock_wall(const rocks_cliffs *c, terrain_world *world, const d
     length = sqrt(length);
     return terrain_world_material_at(world, a[0] + 0.75 * g[0] / length, a[1] + 0.75 * g[1] / length,
                                      a[2] + 0.75 * g[2] / length) == TERRAIN_BEDROCK;
+}
+
+/* 003 §5 with a set of anchors ("more than half ... satisfy"): the block's extreme points along
+ * each axis must be mostly inside the wall or within half a metre of its face, so a long block
+ * whose centre sits at the face does not stand metres out of it. */
+static bool mostly_in_the_wall(terrain_world *world, const rocks_block *b, const float (*points)[3], double ox, double oy,
+                               double oz) {
+    if (b->point_count == 0) return true;
+    int inside = 0;
+    for (int a = 0; a < 3; a++)
+        for (int side = 0; side < 2; side++) {
+            const float *best = points[b->point_first];
+            for (uint32_t i = 1; i < b->point_count; i++) {
+                const float *p = points[b->point_first + i];
+                if (side ? p[a] > best[a] : p[a] < best[a]) best = p;
+            }
+            inside += terrain_field_base_at(world, ox + best[0], oy + best[1], oz + best[2], 0) >= -0.5f;
+        }
+    return inside >= 4;
 }
 
 /* The versions of the column chunks under the cell (and the margin its presence reads). */
@@ -178,7 +203,10 @@ static void cell_presence(rocks_cliffs *c, terrain_world *world, int type, const
     for (uint32_t b = 0; b < tile->block_count; b++) {
         double anchor[3];
         for (int a = 0; a < 3; a++) anchor[a] = (double)cell[a] * s + tile->blocks[b].anchor[a];
-        if (stratum_type(&c->desc, anchor[1]) == type && on_bedrock_wall(c, world, anchor)) bits[b / 64] |= 1ull << (b % 64);
+        if (stratum_type(&c->desc, anchor[1]) == type && on_bedrock_wall(c, world, anchor) &&
+            mostly_in_the_wall(world, &tile->blocks[b], tile->points, (double)cell[0] * s, (double)cell[1] * s,
+                               (double)cell[2] * s))
+            bits[b / 64] |= 1ull << (b % 64);
     }
 
     pthread_mutex_lock(&c->lock);
