@@ -216,54 +216,134 @@ static bool contact_point(const region_build *b, const rocks__seed *p, const roc
 
 /* ---- erosion (001 §5) ------------------------------------------------------------------------- */
 
+/* Per-region buffers for erode(), each sized for the largest rock box (no allocation per rock). */
+typedef struct erosion_buffers {
+    float *rho, *omega;
+    uint8_t *empty, *sum_x, *sum_xy;  /* the emptiness indicator and its partial box sums */
+    uint8_t *outside, *faces;         /* empty voxels among the 26 (6 face) neighbours */
+    uint32_t *active, *emptied;       /* voxels that may still erode; those emptied this step */
+    size_t capacity;
+} erosion_buffers;
+
+static void erosion_buffers_make(erosion_buffers *e, size_t capacity) {
+    e->capacity = capacity;
+    e->rho = core_alloc(capacity * sizeof *e->rho);
+    e->omega = core_alloc(capacity * sizeof *e->omega);
+    e->empty = core_alloc(5 * capacity);
+    e->sum_x = e->empty + capacity, e->sum_xy = e->sum_x + capacity;
+    e->outside = e->sum_xy + capacity, e->faces = e->outside + capacity;
+    e->active = core_alloc(2 * capacity * sizeof *e->active);
+    e->emptied = e->active + capacity;
+}
+
+static void erosion_buffers_free(erosion_buffers *e) {
+    core_free(e->rho, e->capacity * sizeof *e->rho);
+    core_free(e->omega, e->capacity * sizeof *e->omega);
+    core_free(e->empty, 5 * e->capacity);
+    core_free(e->active, 2 * e->capacity * sizeof *e->active);
+}
+
+/* ω at voxel v (001 §5): 0 within a of a contact, linear to 1 at b. A contact at r ≥ b gives 1
+ * and cannot lower the minimum, so its square root is skipped: d² ≥ b² (b² exact in double)
+ * already means (float)√d² ≥ b, the same bits as evaluating it. */
+static float damping(const int v[3], const double (*contacts)[3], int contact_count, float a, float b) {
+    const double b2 = (double)b * (double)b;
+    float w = 1.0f;
+    for (int c = 0; c < contact_count && w > 0.0f; c++) {
+        double dx = v[0] + 0.5 - contacts[c][0], dy = v[1] + 0.5 - contacts[c][1], dz = v[2] + 0.5 - contacts[c][2];
+        double d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 >= b2) continue;
+        float r = (float)sqrt(d2);
+        float wc = r < a ? 0.0f : r < b ? (r - a) / (b - a) : 1.0f;
+        if (wc < w) w = wc;
+    }
+    return w;
+}
+
+/* How many of each voxel's 26 neighbours are empty, by three separable 3-sums of the emptiness
+ * indicator (interior voxels only: rock voxels never lie on the box's border), and of its 6 face
+ * neighbours. */
+static void count_empty_neighbours(erosion_buffers *e, const int size[3]) {
+    const int sx = size[0], sy = size[1], sz = size[2];
+    const size_t plane = (size_t)sx * sy, total = plane * sz;
+    memset(e->outside, 0, total);
+    for (size_t row = 0; row < (size_t)sy * sz; row++) {
+        const uint8_t *in = e->empty + row * sx;
+        uint8_t *out = e->sum_x + row * sx;
+        for (int x = 1; x < sx - 1; x++) out[x] = (uint8_t)(in[x - 1] + in[x] + in[x + 1]);
+    }
+    for (int z = 0; z < sz; z++)
+        for (int y = 1; y < sy - 1; y++) {
+            size_t i = (size_t)z * plane + (size_t)y * sx;
+            for (int x = 1; x < sx - 1; x++)
+                e->sum_xy[i + x] = (uint8_t)(e->sum_x[i + x - sx] + e->sum_x[i + x] + e->sum_x[i + x + sx]);
+        }
+    for (int z = 1; z < sz - 1; z++)
+        for (int y = 1; y < sy - 1; y++) {
+            size_t i = (size_t)z * plane + (size_t)y * sx;
+            for (int x = 1; x < sx - 1; x++) {
+                size_t j = i + x;
+                e->outside[j] = (uint8_t)(e->sum_xy[j - plane] + e->sum_xy[j] + e->sum_xy[j + plane]);
+                e->faces[j] = (uint8_t)(e->empty[j - 1] + e->empty[j + 1] + e->empty[j - sx] + e->empty[j + sx] +
+                                        e->empty[j - plane] + e->empty[j + plane]);
+            }
+        }
+}
+
 /* ρ over the rock's box grown by one voxel (the border stays 0), after the erosion steps:
  * surface voxels (a face neighbour outside the rock or emptied) lose ε·k·ω a step, with k the
  * share of the 26 neighbours outside (spheroidal weathering, [BFO*07]: corners first) and ω the
  * damping of 001 §5 (0 within a of a contact, linear to 1 at b). Updates read the previous step's
- * ρ, so the order of the voxels does not matter. */
+ * state: a voxel's update reads only its own ρ and its neighbour counts, and the counts take the
+ * voxels emptied in a step only after it, so the order of the voxels does not matter. Keeping
+ * counts instead of reading 26 neighbours a surface voxel a step is what makes this cheap. */
 static void erode(const region_build *b, int32_t self, const int lo[3], const int size[3], const double (*contacts)[3],
-                  int contact_count, float *rho, float *scratch, float *omega) {
+                  int contact_count, erosion_buffers *e) {
     const rocks__params *params = b->params;
     const int sx = size[0], sy = size[1], sz = size[2];
-    const size_t total = (size_t)sx * sy * sz;
     const float a = params->contact_voxels, bb = params->blend_voxels;
+    size_t active = 0;
     for (int z = 0; z < sz; z++)
-        for (int y = 0; y < sy; y++)
-            for (int x = 0; x < sx; x++) {
+        for (int y = 0; y < sy; y++) {
+            int v[3] = { lo[0], lo[1] + y, lo[2] + z };
+            bool inner = y > 0 && z > 0 && y < sy - 1 && z < sz - 1;
+            /* the box less its border lies inside the owner array (it bounds the rock's voxels) */
+            const int32_t *owner = inner ? b->owner + ((size_t)(v[2] - b->vlo[2]) * b->vdim[1] + (v[1] - b->vlo[1])) * b->vdim[0] +
+                                               (v[0] - b->vlo[0])
+                                         : NULL;
+            for (int x = 0; x < sx; x++, v[0]++) {
                 size_t i = ((size_t)z * sy + y) * sx + x;
-                int v[3] = { lo[0] + x, lo[1] + y, lo[2] + z };
-                bool mine = x > 0 && y > 0 && z > 0 && x < sx - 1 && y < sy - 1 && z < sz - 1 && owner_at(b, v) == self;
-                rho[i] = mine ? 1.0f : 0.0f;
-                float w = 1.0f;
-                if (mine)
-                    for (int c = 0; c < contact_count; c++) {
-                        double dx = v[0] + 0.5 - contacts[c][0], dy = v[1] + 0.5 - contacts[c][1], dz = v[2] + 0.5 - contacts[c][2];
-                        float r = (float)sqrt(dx * dx + dy * dy + dz * dz);
-                        float wc = r < a ? 0.0f : r < bb ? (r - a) / (bb - a) : 1.0f;
-                        if (wc < w) w = wc;
-                    }
-                omega[i] = w;
+                bool mine = inner && x > 0 && x < sx - 1 && owner[x] == self;
+                e->rho[i] = mine ? 1.0f : 0.0f;
+                e->empty[i] = !mine;
+                e->omega[i] = mine ? damping(v, contacts, contact_count, a, bb) : 1.0f;
+                if (mine && e->omega[i] > 0.0f) e->active[active++] = (uint32_t)i;
             }
+        }
+    count_empty_neighbours(e, size);
     const float rate = params->desc.erosion_rate;
-    const size_t plane = (size_t)sx * sy;
+    const ptrdiff_t plane = (ptrdiff_t)sx * sy;
     for (int step = 0; step < params->desc.erosion_steps; step++) {
-        memcpy(scratch, rho, total * sizeof *rho);
-        for (int z = 1; z < sz - 1; z++)
-            for (int y = 1; y < sy - 1; y++)
-                for (int x = 1; x < sx - 1; x++) {
-                    size_t i = ((size_t)z * sy + y) * sx + x;
-                    if (scratch[i] <= 0.0f || omega[i] <= 0.0f) continue;
-                    if (scratch[i - 1] > 0.0f && scratch[i + 1] > 0.0f && scratch[i - sx] > 0.0f && scratch[i + sx] > 0.0f &&
-                        scratch[i - plane] > 0.0f && scratch[i + plane] > 0.0f)
-                        continue;   /* not at the surface */
-                    int outside = 0;
-                    for (int dz = -1; dz <= 1; dz++)
-                        for (int dy = -1; dy <= 1; dy++)
-                            for (int dx = -1; dx <= 1; dx++)
-                                outside += scratch[i + (ptrdiff_t)dz * (ptrdiff_t)plane + dy * sx + dx] <= 0.0f;
-                    float value = scratch[i] - rate * ((float)outside / 26.0f) * omega[i];
-                    rho[i] = value > 0.0f ? value : 0.0f;
-                }
+        size_t kept = 0, emptied = 0;
+        for (size_t k = 0; k < active; k++) {
+            uint32_t i = e->active[k];
+            if (e->faces[i] == 0) {   /* not at the surface */
+                e->active[kept++] = i;
+                continue;
+            }
+            float value = e->rho[i] - rate * ((float)e->outside[i] / 26.0f) * e->omega[i];
+            if (value > 0.0f) e->rho[i] = value, e->active[kept++] = i;
+            else e->rho[i] = 0.0f, e->emptied[emptied++] = i;
+        }
+        active = kept;
+        for (size_t k = 0; k < emptied; k++) {
+            uint8_t *outside = e->outside + e->emptied[k], *faces = e->faces + e->emptied[k];
+            for (ptrdiff_t dz = -plane; dz <= plane; dz += plane)
+                for (ptrdiff_t dy = -sx; dy <= sx; dy += sx)
+                    for (ptrdiff_t dx = -1; dx <= 1; dx++) outside[dz + dy + dx]++;
+            outside[0]--;   /* itself */
+            faces[-1]++, faces[1]++, faces[-sx]++, faces[sx]++, faces[-plane]++, faces[plane]++;
+        }
     }
 }
 
@@ -312,8 +392,9 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
             }
 
     const size_t box_max = (size_t)(2 * m + 3) * (2 * m + 3) * (2 * m + 3);
-    float *rho = core_alloc(box_max * sizeof *rho), *scratch = core_alloc(box_max * sizeof *scratch);
-    float *omega = core_alloc(box_max * sizeof *omega);
+    erosion_buffers erosion;
+    erosion_buffers_make(&erosion, box_max);
+    const float *rho = erosion.rho;
     double (*points)[3] = core_alloc(27 * ROCKS__MAX_SEEDS_PER_CELL * sizeof *points);
     const float tile_scale = 1.0f / (float)(b.n * m);
     for (uint32_t s = 0; s < b.seed_count; s++) {
@@ -364,7 +445,7 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
             lo[a] = box[r][a] - 1;
             size[a] = box[r][3 + a] - box[r][a] + 3;
         }
-        erode(&b, (int32_t)s, lo, size, (const double (*)[3])points, points_count, rho, scratch, omega);
+        erode(&b, (int32_t)s, lo, size, (const double (*)[3])points, points_count, &erosion);
         bool kept = rocks__rock_mesh(params, rho, lo, size, p, out, &rock);
         if (!kept && !options->keep_empty) {
             out->contact_count = contact_first;   /* a rock without contacts; drop it */
@@ -406,9 +487,7 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
         }
     }
     core_free(points, 27 * ROCKS__MAX_SEEDS_PER_CELL * sizeof *points);
-    core_free(rho, box_max * sizeof *rho);
-    core_free(scratch, box_max * sizeof *scratch);
-    core_free(omega, box_max * sizeof *omega);
+    erosion_buffers_free(&erosion);
     core_free(box, (rocks ? rocks : 1) * sizeof *box);
     core_free(count, (rocks ? rocks : 1) * sizeof *count);
     core_free(slot, b.seed_count * sizeof *slot);
