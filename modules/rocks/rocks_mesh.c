@@ -72,6 +72,55 @@ static size_t simplify(uint32_t *out, const uint32_t *in, size_t count, const fl
 #define LOD2_ERROR 8.0f
 #define LOD2_SHARE 12
 
+/* Anchors (001 §6): the seed, then voxel centres with ρ ≥ ½ spread by farthest-point sampling.
+ * 001 uses every voxel centre; 15 spread ones bound the cost of testing a rock against the
+ * support (placement stays under 0.5 ms a chunk) and still see where it lies. The centres are
+ * kept as three arrays and each round's distance update also finds the next farthest one (the
+ * first of equals, as a separate scan would). Returns the count written to `anchors`. */
+static uint32_t spread_anchors(const float *rho, const int box_lo[3], const int size[3], const float seed_pos[3],
+                               float tile_scale, float (*anchors)[3]) {
+    const size_t total = (size_t)size[0] * size[1] * size[2];
+    size_t solid = 0;
+    for (size_t i = 0; i < total; i++) solid += rho[i] >= 0.5f;
+    float *centres = core_alloc(4 * solid * sizeof *centres);
+    float *cx = centres, *cy = cx + solid, *cz = cy + solid, *nearest = cz + solid;
+    size_t c = 0, best = 0;
+    for (int z = 0; z < size[2]; z++)
+        for (int y = 0; y < size[1]; y++)
+            for (int x = 0; x < size[0]; x++) {
+                if (rho[((size_t)z * size[1] + y) * size[0] + x] < 0.5f) continue;
+                cx[c] = ((float)(box_lo[0] + x) + 0.5f) * tile_scale;
+                cy[c] = ((float)(box_lo[1] + y) + 0.5f) * tile_scale;
+                cz[c] = ((float)(box_lo[2] + z) + 0.5f) * tile_scale;
+                float d2 = 0.0f;
+                d2 += (cx[c] - seed_pos[0]) * (cx[c] - seed_pos[0]);
+                d2 += (cy[c] - seed_pos[1]) * (cy[c] - seed_pos[1]);
+                d2 += (cz[c] - seed_pos[2]) * (cz[c] - seed_pos[2]);
+                nearest[c] = d2;
+                if (d2 > nearest[best]) best = c;
+                c++;
+            }
+    memcpy(anchors[0], seed_pos, 3 * sizeof *seed_pos);
+    uint32_t count = 1;
+    while (count < ROCKS__ANCHORS && solid > 0 && nearest[best] > 0.0f) {
+        const float bx = cx[best], by = cy[best], bz = cz[best];
+        anchors[count][0] = bx, anchors[count][1] = by, anchors[count][2] = bz;
+        count++;
+        float farthest = -1.0f;
+        for (size_t i = 0; i < solid; i++) {
+            float d2 = 0.0f;
+            d2 += (cx[i] - bx) * (cx[i] - bx);
+            d2 += (cy[i] - by) * (cy[i] - by);
+            d2 += (cz[i] - bz) * (cz[i] - bz);
+            float n = d2 < nearest[i] ? d2 : nearest[i];
+            nearest[i] = n;
+            if (n > farthest) farthest = n, best = i;
+        }
+    }
+    core_free(centres, 4 * solid * sizeof *centres);
+    return count;
+}
+
 #define GROW(res, field, cap, needed) ((res)->field = core_grow((res)->field, &(res)->cap, (needed), sizeof *(res)->field))
 
 bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int box_lo[3], const int size[3],
@@ -167,45 +216,9 @@ bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int b
     core_free(positions, vc * 3 * sizeof *positions);
     terrain_mesh_free(&mesh);
 
-    /* Anchors (001 §6): the seed, then voxel centres with ρ ≥ ½ spread by farthest-point
-     * sampling. 001 uses every voxel centre; 15 spread ones bound the cost of testing a rock
-     * against the support (placement stays under 0.5 ms a chunk) and still see where it lies. */
     rock->anchor_first = res->anchor_count;
     GROW(res, anchors, anchor_cap, res->anchor_count + ROCKS__ANCHORS);
-    float (*anchors)[3] = res->anchors + res->anchor_count;
-    memcpy(anchors[0], seed_pos, sizeof seed_pos);
-    uint32_t anchor_count = 1;
-    size_t solid = 0;
-    for (size_t i = 0; i < total; i++) solid += rho[i] >= 0.5f;
-    float (*centres)[3] = core_alloc(solid * sizeof *centres);
-    float *nearest = core_alloc(solid * sizeof *nearest);
-    size_t c = 0;
-    for (int z = 0; z < size[2]; z++)
-        for (int y = 0; y < size[1]; y++)
-            for (int x = 0; x < size[0]; x++) {
-                if (rho[((size_t)z * size[1] + y) * size[0] + x] < 0.5f) continue;
-                int v[3] = { box_lo[0] + x, box_lo[1] + y, box_lo[2] + z };
-                float d2 = 0.0f;
-                for (int a = 0; a < 3; a++) {
-                    centres[c][a] = ((float)v[a] + 0.5f) * tile_scale;
-                    d2 += (centres[c][a] - seed_pos[a]) * (centres[c][a] - seed_pos[a]);
-                }
-                nearest[c++] = d2;
-            }
-    while (anchor_count < ROCKS__ANCHORS) {
-        size_t best = 0;
-        for (size_t i = 1; i < solid; i++)
-            if (nearest[i] > nearest[best]) best = i;
-        if (solid == 0 || nearest[best] <= 0.0f) break;
-        memcpy(anchors[anchor_count++], centres[best], sizeof centres[best]);
-        for (size_t i = 0; i < solid; i++) {
-            float d2 = 0.0f;
-            for (int a = 0; a < 3; a++) d2 += (centres[i][a] - centres[best][a]) * (centres[i][a] - centres[best][a]);
-            if (d2 < nearest[i]) nearest[i] = d2;
-        }
-    }
-    core_free(centres, solid * sizeof *centres);
-    core_free(nearest, solid * sizeof *nearest);
+    uint32_t anchor_count = spread_anchors(rho, box_lo, size, seed_pos, tile_scale, res->anchors + res->anchor_count);
     rock->anchor_count = anchor_count;
     res->anchor_count += anchor_count;
     return true;
