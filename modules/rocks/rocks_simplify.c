@@ -28,11 +28,13 @@
 #include <math.h>
 #include <string.h>
 
+#define NONE UINT32_MAX
 #define SORT_BINS 257                 /* 16 an octave over the 16 octaves under the limit */
 
 typedef struct collapse {
     uint32_t from, to;
     float error;
+    uint32_t key;                     /* its bin in the ranking's counting sort */
 } collapse;
 
 /* The plane quadric of a vertex, Σ w (n·p + d)² = pᵀAp + 2bᵀp + c, as a00 a11 a22 2a01 2a02 2a12
@@ -58,7 +60,10 @@ struct rocks__simplifier {
     size_t index_count, capacity;
     uint32_t *first, *triangles;      /* the pass's adjacency: vertex v's triangles are
                                          triangles[first[v] … first[v + 1]) */
-    uint32_t *locked, pass_id;        /* the last pass that moved a vertex or moved one onto it */
+    uint32_t pass_id;
+    uint32_t *took;                   /* the last pass in which a vertex took another */
+    uint32_t *taken_first, *taken_next;   /* the vertices it took then, as a list */
+    uint8_t *gone;                    /* moved onto another */
     uint32_t *stamp, stamp_value;
     collapse *collapses;
     uint32_t *order;
@@ -118,25 +123,25 @@ static void build_adjacency(rocks__simplifier *s) {
  * costs at most `limit`; sorted into s->order by error. Returns the count. Branch-free: the
  * candidate is written and kept by advancing the count. */
 static size_t rank_collapses(rocks__simplifier *s, float limit) {
+    const uint32_t top = float_bits(limit) >> 19;
     size_t count = 0;
     for (size_t i = 0; i < s->index_count; i += 3)
         for (int k = 0; k < 3; k++) {
             uint32_t a = s->indices[i + k], b = s->indices[i + (k == 2 ? 0 : k + 1)];
             float error = quadric_error(&s->quadrics[a], s->inverse[a], s->positions + 3 * (size_t)b);
-            s->collapses[count] = (collapse){ a, b, error };
+            s->collapses[count] = (collapse){ a, b, error, sort_key(error, top) };
             count += error <= limit;
         }
-    const uint32_t top = float_bits(limit) >> 19;
     uint32_t histogram[SORT_BINS];
     memset(histogram, 0, sizeof histogram);
-    for (size_t i = 0; i < count; i++) histogram[sort_key(s->collapses[i].error, top)]++;
+    for (size_t i = 0; i < count; i++) histogram[s->collapses[i].key]++;
     uint32_t sum = 0;
     for (uint32_t k = 0; k < SORT_BINS; k++) {
         uint32_t here = histogram[k];
         histogram[k] = sum;
         sum += here;
     }
-    for (size_t i = 0; i < count; i++) s->order[histogram[sort_key(s->collapses[i].error, top)]++] = (uint32_t)i;
+    for (size_t i = 0; i < count; i++) s->order[histogram[s->collapses[i].key]++] = (uint32_t)i;
     return count;
 }
 
@@ -154,26 +159,37 @@ static inline bool current_triangle(const rocks__simplifier *s, uint32_t t, uint
     return out[0] != out[1] && out[1] != out[2] && out[0] != out[2];
 }
 
+/* The next list of vertex v's triangles as they are in the middle of a pass: its own list from
+ * the pass's start (x = v), then the lists of the vertices it took in this pass (their triangles
+ * now hold v). Nothing else changes a vertex's triangles, and a vertex that took one does not
+ * move again in the pass (so a vertex about to move has its own list only). NONE at the end. */
+static inline uint32_t next_list(const rocks__simplifier *s, uint32_t v, uint32_t x) {
+    if (x != v) return s->taken_next[x];
+    return s->took[v] == s->pass_id ? s->taken_first[v] : NONE;
+}
+
 /* Whether v has a triangle on both b and c. */
 static bool has_triangle_on(const rocks__simplifier *s, uint32_t v, uint32_t b, uint32_t c) {
     uint32_t tri[3];
-    for (uint32_t i = s->first[v]; i < s->first[v + 1]; i++)
-        if (current_triangle(s, s->triangles[i], tri) && (tri[0] == b || tri[1] == b || tri[2] == b) &&
-            (tri[0] == c || tri[1] == c || tri[2] == c))
-            return true;
+    for (uint32_t x = v; x != NONE; x = next_list(s, v, x))
+        for (uint32_t i = s->first[x]; i < s->first[x + 1]; i++)
+            if (current_triangle(s, s->triangles[i], tri) && (tri[0] == b || tri[1] == b || tri[2] == b) &&
+                (tri[0] == c || tri[1] == c || tri[2] == c))
+                return true;
     return false;
 }
 
-/* The link condition of a closed 2-manifold for u and v untouched in this pass: exactly two
- * common neighbours (the apexes a, b of the edge's triangles), and not both triangles u a b and
- * v a b (collapsing would fold them onto each other); and no turned triangle. */
+/* The link condition of a closed 2-manifold: exactly two common neighbours (the apexes a, b of
+ * the edge's triangles), and not both triangles u a b and v a b (collapsing would fold them onto
+ * each other); and no turned triangle. u has taken none in this pass. */
 static bool can_collapse(rocks__simplifier *s, uint32_t u, uint32_t v) {
     uint32_t near_v = ++s->stamp_value, counted = ++s->stamp_value, tri[3];
-    for (uint32_t i = s->first[v]; i < s->first[v + 1]; i++)
-        if (current_triangle(s, s->triangles[i], tri))
-            for (int k = 0; k < 3; k++) s->stamp[tri[k]] = near_v;
+    for (uint32_t x = v; x != NONE; x = next_list(s, v, x))
+        for (uint32_t i = s->first[x]; i < s->first[x + 1]; i++)
+            if (current_triangle(s, s->triangles[i], tri))
+                for (int k = 0; k < 3; k++) s->stamp[tri[k]] = near_v;
     int common = 0;
-    uint32_t apexes[2] = { UINT32_MAX, UINT32_MAX };
+    uint32_t apexes[2] = { NONE, NONE };
     const float *pu = s->positions + 3 * (size_t)u, *pv = s->positions + 3 * (size_t)v;
     for (uint32_t i = s->first[u]; i < s->first[u + 1]; i++) {
         if (!current_triangle(s, s->triangles[i], tri)) continue;
@@ -189,38 +205,48 @@ static bool can_collapse(rocks__simplifier *s, uint32_t u, uint32_t v) {
         if (turns_over(s->positions + 3 * (size_t)b, s->positions + 3 * (size_t)c, pu, pv)) return false;
     }
     if (common != 2) return false;
-    return apexes[0] == UINT32_MAX || !has_triangle_on(s, v, apexes[0], apexes[1]);
+    return apexes[0] == NONE || !has_triangle_on(s, v, apexes[0], apexes[1]);
 }
 
-/* One pass towards `limit` and `target_index_count`; returns the collapses made. */
+/* Moves u onto v: u's triangles now hold v (those on both collapse), v takes u's planes. */
+static void collapse_onto(rocks__simplifier *s, uint32_t u, uint32_t v) {
+    for (uint32_t j = s->first[u]; j < s->first[u + 1]; j++) {
+        uint32_t *tri = s->indices + 3 * (size_t)s->triangles[j];
+        for (int k = 0; k < 3; k++) tri[k] = tri[k] == u ? v : tri[k];
+    }
+    s->taken_next[u] = s->took[v] == s->pass_id ? s->taken_first[v] : NONE;
+    s->taken_first[v] = u;
+    s->took[v] = s->pass_id;
+    s->gone[u] = 1;
+    quadric_add(&s->quadrics[v], &s->quadrics[u]);
+    s->inverse[v] = inverse_weight(&s->quadrics[v]);
+    s->live_vertices--;
+}
+
+/* One pass towards `limit` and `target_index_count`; returns the collapses made. In a pass a
+ * vertex may take several others, but once it has taken one it does not move: the ranked cost
+ * of moving u onto v reads u's quadric and v's position only, so it stays exact while v takes
+ * others, and only a vertex that has taken one carries a stale cost. */
 static size_t pass(rocks__simplifier *s, float limit, size_t target_index_count) {
     build_adjacency(s);
     size_t count = rank_collapses(s, limit);
     if (count == 0) return 0;
-    const uint32_t pass_id = ++s->pass_id;   /* locked[v] == pass_id: moved or moved onto */
-    /* as meshoptimizer: most collapses remove two triangles and lock about six others, so the
-     * pass ends when the error passes 1.5× that of the edge_goal-th cheapest, once a sixth of
-     * the goal is done */
+    s->pass_id++;
+    /* as meshoptimizer: the pass ends when the error passes 1.5× that of the edge_goal-th
+     * cheapest, once a sixth of the goal is done, so cheap collapses go first across passes */
     size_t triangle_goal = (s->index_count - target_index_count) / 3, edge_goal = triangle_goal / 2;
     size_t removed = 0, made = 0;
     for (size_t i = 0; i < count && removed < triangle_goal && s->live_vertices > 4; i++) {
         const collapse *c = &s->collapses[s->order[i]];
         float error_goal = edge_goal < count ? 1.5f * s->collapses[s->order[edge_goal]].error : INFINITY;
         if (c->error > error_goal && c->error > s->worst && removed > triangle_goal / 6) break;
-        if (s->locked[c->from] == pass_id || s->locked[c->to] == pass_id) continue;
+        if (s->gone[c->from] || s->gone[c->to] || s->took[c->from] == s->pass_id) continue;
         if (!can_collapse(s, c->from, c->to)) {
             edge_goal++;   /* a refused collapse does not count towards the goal's error */
             continue;
         }
-        for (uint32_t j = s->first[c->from]; j < s->first[c->from + 1]; j++) {
-            uint32_t *tri = s->indices + 3 * (size_t)s->triangles[j];
-            for (int k = 0; k < 3; k++) tri[k] = tri[k] == c->from ? c->to : tri[k];
-        }
-        s->locked[c->from] = s->locked[c->to] = pass_id;
-        quadric_add(&s->quadrics[c->to], &s->quadrics[c->from]);
-        s->inverse[c->to] = inverse_weight(&s->quadrics[c->to]);
+        collapse_onto(s, c->from, c->to);
         if (c->error > s->worst) s->worst = c->error;
-        s->live_vertices--;
         removed += 2, made++;
     }
     size_t write = 0;   /* drop the collapsed triangles */
@@ -273,7 +299,10 @@ rocks__simplifier *rocks__simplify_begin(const uint32_t *indices, size_t index_c
     s->stamp_value = 1;
     s->first = core_alloc((n + 1) * sizeof *s->first);
     s->triangles = core_alloc(capacity * sizeof *s->triangles);
-    s->locked = core_calloc(n, sizeof *s->locked);
+    s->took = core_calloc(n, sizeof *s->took);
+    s->taken_first = core_alloc(n * sizeof *s->taken_first);
+    s->taken_next = core_alloc(n * sizeof *s->taken_next);
+    s->gone = core_calloc(n, 1);
     s->collapses = core_alloc(capacity * sizeof *s->collapses);
     s->order = core_alloc(capacity * sizeof *s->order);
     return s;
@@ -296,7 +325,10 @@ void rocks__simplify_end(rocks__simplifier *s) {
     core_free(s->stamp, n * sizeof *s->stamp);
     core_free(s->first, (n + 1) * sizeof *s->first);
     core_free(s->triangles, s->capacity * sizeof *s->triangles);
-    core_free(s->locked, n * sizeof *s->locked);
+    core_free(s->took, n * sizeof *s->took);
+    core_free(s->taken_first, n * sizeof *s->taken_first);
+    core_free(s->taken_next, n * sizeof *s->taken_next);
+    core_free(s->gone, n);
     core_free(s->inverse, n * sizeof *s->inverse);
     core_free(s->collapses, s->capacity * sizeof *s->collapses);
     core_free(s->order, s->capacity * sizeof *s->order);
