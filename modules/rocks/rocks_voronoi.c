@@ -23,7 +23,7 @@
 #include <math.h>
 #include <string.h>
 
-#define BLOCK_MAX 512   /* voxels of one cell octant: ⌈m/2⌉³ ≤ 8³ */
+#define BLOCK_SIDE 8    /* voxels along a cell octant's side at most: ⌈m/2⌉ ≤ 8 */
 
 typedef struct region_build {
     const rocks__params *params;
@@ -88,14 +88,16 @@ static void own_block(region_build *b, const int v0[3], const int size[3], const
         while (j >= 0 && b->seeds[cand[j]].id > b->seeds[x].id) cand[j + 1] = cand[j], j--;
         cand[j + 1] = x;
     }
-    float best[BLOCK_MAX];
-    int32_t who[BLOCK_MAX];
+    /* rows padded to BLOCK_SIDE: a loop of fixed length, which the compiler vectorises; the
+     * padding lanes compute with dx = 0 and are never read */
+    float best[BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE];
+    int32_t who[BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE];
     const int nx = size[0], ny = size[1], nz = size[2], m = b->m;
-    for (int i = 0; i < nx * ny * nz; i++) best[i] = INFINITY, who[i] = -1;
+    for (int i = 0; i < BLOCK_SIDE * ny * nz; i++) best[i] = INFINITY, who[i] = -1;
     for (int k = 0; k < count; k++) {
         const rocks__seed *s = &b->seeds[cand[k]];
         const float *q = s->q;
-        float dxs[16];
+        float dxs[BLOCK_SIDE] = { 0 };
         for (int x = 0; x < nx; x++) dxs[x] = (float)(v0[0] + x - s->cell[0] * m) + 0.5f - s->u[0];
         int32_t id = (int32_t)cand[k];
         for (int z = 0; z < nz; z++) {
@@ -104,13 +106,13 @@ static void own_block(region_build *b, const int v0[3], const int size[3], const
                 float dy = (float)(v0[1] + y - s->cell[1] * m) + 0.5f - s->u[1];
                 float bq = q[3] * dy + q[4] * dz;                     /* rocks__distance, split */
                 float aq = (q[1] * dy + q[5] * dz) * dy + q[2] * dz * dz;
-                float *row = best + (z * ny + y) * nx;
-                int32_t *row_who = who + (z * ny + y) * nx;
-                for (int x = 0; x < nx; x++) {
-                    float d = (q[0] * dxs[x] + bq) * dxs[x] + aq;
-                    bool better = d < row[x];
-                    row[x] = better ? d : row[x];
-                    row_who[x] = better ? id : row_who[x];
+                float *row = best + (z * ny + y) * BLOCK_SIDE;
+                int32_t *row_who = who + (z * ny + y) * BLOCK_SIDE;
+                for (int x = 0; x < BLOCK_SIDE; x++) {   /* branch-free, so it vectorises */
+                    float d = (q[0] * dxs[x] + bq) * dxs[x] + aq, r = row[x];
+                    int32_t better = -(int32_t)(d < r);
+                    row[x] = d < r ? d : r;
+                    row_who[x] = (row_who[x] & ~better) | (id & better);
                 }
             }
         }
@@ -119,7 +121,7 @@ static void own_block(region_build *b, const int v0[3], const int size[3], const
         for (int y = 0; y < ny; y++) {
             int32_t *dst = b->owner + ((size_t)(v0[2] + z - b->vlo[2]) * b->vdim[1] + (v0[1] + y - b->vlo[1])) * b->vdim[0] +
                            (v0[0] - b->vlo[0]);
-            memcpy(dst, who + (z * ny + y) * nx, (size_t)nx * sizeof *dst);
+            memcpy(dst, who + (z * ny + y) * BLOCK_SIDE, (size_t)nx * sizeof *dst);
         }
 }
 
@@ -221,7 +223,7 @@ typedef struct erosion_buffers {
     float *rho, *omega;
     uint8_t *empty, *sum_x, *sum_xy;  /* the emptiness indicator and its partial box sums */
     uint8_t *outside, *faces;         /* empty voxels among the 26 (6 face) neighbours */
-    uint32_t *active, *emptied;       /* voxels that may still erode; those emptied this step */
+    uint32_t *active, *emptied;       /* surface voxels that may still erode; those emptied in a step */
     size_t capacity;
 } erosion_buffers;
 
@@ -243,21 +245,43 @@ static void erosion_buffers_free(erosion_buffers *e) {
     core_free(e->active, 2 * e->capacity * sizeof *e->active);
 }
 
-/* ω at voxel v (001 §5): 0 within a of a contact, linear to 1 at b. A contact at r ≥ b gives 1
- * and cannot lower the minimum, so its square root is skipped: d² ≥ b² (b² exact in double)
- * already means (float)√d² ≥ b, the same bits as evaluating it. */
-static float damping(const int v[3], const double (*contacts)[3], int contact_count, float a, float b) {
+/* ω (001 §5): 0 within a of a contact, linear to 1 at b, the minimum over the contacts; 1 where
+ * the box's voxels start. A contact at r ≥ b gives ω_c = 1 and cannot lower the minimum, so each
+ * contact visits only the voxels of its ball: per row, a run a voxel wider each way than the
+ * chord, and not the rows whose y, z terms alone reach b² (d² only grows with the x term, in
+ * floats too). Within, d² ≥ b² skips the square root (b² is exact in double, so (float)√d² ≥ b
+ * there): the same bits as evaluating every contact at every voxel, whose order does not
+ * matter to a minimum. */
+static void damping(float *omega, const uint8_t *empty, const int lo[3], const int size[3], const double (*contacts)[3],
+                    int contact_count, float a, float b) {
     const double b2 = (double)b * (double)b;
-    float w = 1.0f;
-    for (int c = 0; c < contact_count && w > 0.0f; c++) {
-        double dx = v[0] + 0.5 - contacts[c][0], dy = v[1] + 0.5 - contacts[c][1], dz = v[2] + 0.5 - contacts[c][2];
-        double d2 = dx * dx + dy * dy + dz * dz;
-        if (d2 >= b2) continue;
-        float r = (float)sqrt(d2);
-        float wc = r < a ? 0.0f : r < b ? (r - a) / (b - a) : 1.0f;
-        if (wc < w) w = wc;
+    for (int c = 0; c < contact_count; c++) {
+        const double *p = contacts[c];
+        for (int z = 1; z < size[2] - 1; z++) {
+            double dz = lo[2] + z + 0.5 - p[2];
+            if (dz * dz >= b2) continue;
+            for (int y = 1; y < size[1] - 1; y++) {
+                double dy = lo[1] + y + 0.5 - p[1];
+                double rest = b2 - (dy * dy + dz * dz);
+                if (!(rest > 0.0)) continue;
+                double half = sqrt(rest) + 1.0;
+                int from = (int)floor(p[0] - 0.5 - half) - lo[0], to = (int)ceil(p[0] - 0.5 + half) - lo[0];
+                if (from < 1) from = 1;
+                if (to > size[0] - 2) to = size[0] - 2;
+                size_t row = ((size_t)z * size[1] + y) * size[0];
+                for (int x = from; x <= to; x++) {
+                    size_t i = row + x;
+                    if (empty[i] || omega[i] == 0.0f) continue;
+                    double dx = lo[0] + x + 0.5 - p[0];
+                    double d2 = dx * dx + dy * dy + dz * dz;
+                    if (d2 >= b2) continue;
+                    float r = (float)sqrt(d2);
+                    float wc = r < a ? 0.0f : r < b ? (r - a) / (b - a) : 1.0f;
+                    if (wc < omega[i]) omega[i] = wc;
+                }
+            }
+        }
     }
-    return w;
 }
 
 /* How many of each voxel's 26 neighbours are empty, by three separable 3-sums of the emptiness
@@ -267,6 +291,7 @@ static void count_empty_neighbours(erosion_buffers *e, const int size[3]) {
     const int sx = size[0], sy = size[1], sz = size[2];
     const size_t plane = (size_t)sx * sy, total = plane * sz;
     memset(e->outside, 0, total);
+    memset(e->faces, 0, total);
     for (size_t row = 0; row < (size_t)sy * sz; row++) {
         const uint8_t *in = e->empty + row * sx;
         uint8_t *out = e->sum_x + row * sx;
@@ -302,47 +327,47 @@ static void erode(const region_build *b, int32_t self, const int lo[3], const in
     const rocks__params *params = b->params;
     const int sx = size[0], sy = size[1], sz = size[2];
     const float a = params->contact_voxels, bb = params->blend_voxels;
-    size_t active = 0;
     for (int z = 0; z < sz; z++)
         for (int y = 0; y < sy; y++) {
-            int v[3] = { lo[0], lo[1] + y, lo[2] + z };
             bool inner = y > 0 && z > 0 && y < sy - 1 && z < sz - 1;
             /* the box less its border lies inside the owner array (it bounds the rock's voxels) */
-            const int32_t *owner = inner ? b->owner + ((size_t)(v[2] - b->vlo[2]) * b->vdim[1] + (v[1] - b->vlo[1])) * b->vdim[0] +
-                                               (v[0] - b->vlo[0])
+            const int32_t *owner = inner ? b->owner + ((size_t)(lo[2] + z - b->vlo[2]) * b->vdim[1] + (lo[1] + y - b->vlo[1])) * b->vdim[0] +
+                                               (lo[0] - b->vlo[0])
                                          : NULL;
-            for (int x = 0; x < sx; x++, v[0]++) {
+            for (int x = 0; x < sx; x++) {
                 size_t i = ((size_t)z * sy + y) * sx + x;
                 bool mine = inner && x > 0 && x < sx - 1 && owner[x] == self;
                 e->rho[i] = mine ? 1.0f : 0.0f;
                 e->empty[i] = !mine;
-                e->omega[i] = mine ? damping(v, contacts, contact_count, a, bb) : 1.0f;
-                if (mine && e->omega[i] > 0.0f) e->active[active++] = (uint32_t)i;
+                e->omega[i] = 1.0f;
             }
         }
+    damping(e->omega, e->empty, lo, size, contacts, contact_count, a, bb);
     count_empty_neighbours(e, size);
+    size_t active = 0;   /* the surface voxels that can erode */
+    for (size_t i = 0; i < (size_t)sx * sy * sz; i++)
+        if (!e->empty[i] && e->omega[i] > 0.0f && e->faces[i] > 0) e->active[active++] = (uint32_t)i;
     const float rate = params->desc.erosion_rate;
-    const ptrdiff_t plane = (ptrdiff_t)sx * sy;
+    const ptrdiff_t plane = (ptrdiff_t)sx * sy, face[6] = { -1, 1, -sx, sx, -plane, plane };
     for (int step = 0; step < params->desc.erosion_steps; step++) {
         size_t kept = 0, emptied = 0;
         for (size_t k = 0; k < active; k++) {
             uint32_t i = e->active[k];
-            if (e->faces[i] == 0) {   /* not at the surface */
-                e->active[kept++] = i;
-                continue;
-            }
             float value = e->rho[i] - rate * ((float)e->outside[i] / 26.0f) * e->omega[i];
             if (value > 0.0f) e->rho[i] = value, e->active[kept++] = i;
             else e->rho[i] = 0.0f, e->emptied[emptied++] = i;
         }
         active = kept;
         for (size_t k = 0; k < emptied; k++) {
-            uint8_t *outside = e->outside + e->emptied[k], *faces = e->faces + e->emptied[k];
+            uint8_t *outside = e->outside + e->emptied[k];
             for (ptrdiff_t dz = -plane; dz <= plane; dz += plane)
                 for (ptrdiff_t dy = -sx; dy <= sx; dy += sx)
                     for (ptrdiff_t dx = -1; dx <= 1; dx++) outside[dz + dy + dx]++;
             outside[0]--;   /* itself */
-            faces[-1]++, faces[1]++, faces[-sx]++, faces[sx]++, faces[-plane]++, faces[plane]++;
+            for (int f = 0; f < 6; f++) {   /* a voxel that reaches the surface joins the list */
+                size_t j = (size_t)((ptrdiff_t)e->emptied[k] + face[f]);
+                if (e->faces[j]++ == 0 && !e->empty[j] && e->omega[j] > 0.0f) e->active[active++] = (uint32_t)j;
+            }
         }
     }
 }
