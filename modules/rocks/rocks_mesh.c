@@ -64,16 +64,18 @@ bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t v
 /* Anchors (001 §6): the seed, then voxel centres with ρ ≥ ½ spread by farthest-point sampling.
  * 001 uses every voxel centre; 15 spread ones bound the cost of testing a rock against the
  * support (placement stays under 0.5 ms a chunk) and still see where it lies. The centres are
- * kept as three arrays and each round's distance update also finds the next farthest one (the
- * first of equals, as a separate scan would). Returns the count written to `anchors`. */
+ * kept as three arrays padded to groups of four (a pad's distance is −1, never the farthest);
+ * each round updates the distances, takes their maximum in four lanes and then the first centre
+ * at it, as one scan would. Returns the count written. */
 static uint32_t spread_anchors(const float *rho, const int box_lo[3], const int size[3], const float seed_pos[3],
                                float tile_scale, float (*anchors)[3]) {
     const size_t total = (size_t)size[0] * size[1] * size[2];
     size_t solid = 0;
     for (size_t i = 0; i < total; i++) solid += rho[i] >= 0.5f;
-    float *centres = core_alloc(4 * solid * sizeof *centres);
-    float *cx = centres, *cy = cx + solid, *cz = cy + solid, *nearest = cz + solid;
-    size_t c = 0, best = 0;
+    const size_t padded = (solid + 3) & ~(size_t)3;
+    float *centres = core_calloc(4 * padded + 4, sizeof *centres);
+    float *restrict cx = centres, *restrict cy = cx + padded, *restrict cz = cy + padded, *restrict nearest = cz + padded;
+    size_t c = 0;
     for (int z = 0; z < size[2]; z++)
         for (int y = 0; y < size[1]; y++)
             for (int x = 0; x < size[0]; x++) {
@@ -85,28 +87,38 @@ static uint32_t spread_anchors(const float *rho, const int box_lo[3], const int 
                 d2 += (cx[c] - seed_pos[0]) * (cx[c] - seed_pos[0]);
                 d2 += (cy[c] - seed_pos[1]) * (cy[c] - seed_pos[1]);
                 d2 += (cz[c] - seed_pos[2]) * (cz[c] - seed_pos[2]);
-                nearest[c] = d2;
-                if (d2 > nearest[best]) best = c;
-                c++;
+                nearest[c++] = d2;
             }
+    for (; c < padded; c++) nearest[c] = -1.0f;
     memcpy(anchors[0], seed_pos, 3 * sizeof *seed_pos);
     uint32_t count = 1;
-    while (count < ROCKS__ANCHORS && solid > 0 && nearest[best] > 0.0f) {
-        const float bx = cx[best], by = cy[best], bz = cz[best];
+    float bx = 0.0f, by = 0.0f, bz = 0.0f;
+    while (count < ROCKS__ANCHORS) {
+        if (count > 1)
+            for (size_t i = 0; i < padded; i++) {
+                float d2 = 0.0f;
+                d2 += (cx[i] - bx) * (cx[i] - bx);
+                d2 += (cy[i] - by) * (cy[i] - by);
+                d2 += (cz[i] - bz) * (cz[i] - bz);
+                nearest[i] = d2 < nearest[i] ? d2 : nearest[i];
+            }
+        float lane[4] = { -1.0f, -1.0f, -1.0f, -1.0f };   /* four chains of comparisons, not one */
+        for (size_t g = 0; g < padded; g += 4) {
+            lane[0] = nearest[g] > lane[0] ? nearest[g] : lane[0];
+            lane[1] = nearest[g + 1] > lane[1] ? nearest[g + 1] : lane[1];
+            lane[2] = nearest[g + 2] > lane[2] ? nearest[g + 2] : lane[2];
+            lane[3] = nearest[g + 3] > lane[3] ? nearest[g + 3] : lane[3];
+        }
+        float farthest = lane[0];
+        for (int l = 1; l < 4; l++) farthest = lane[l] > farthest ? lane[l] : farthest;
+        if (!(farthest > 0.0f)) break;
+        size_t best = 0;
+        while (nearest[best] != farthest) best++;
+        bx = cx[best], by = cy[best], bz = cz[best];
         anchors[count][0] = bx, anchors[count][1] = by, anchors[count][2] = bz;
         count++;
-        float farthest = -1.0f;
-        for (size_t i = 0; i < solid; i++) {
-            float d2 = 0.0f;
-            d2 += (cx[i] - bx) * (cx[i] - bx);
-            d2 += (cy[i] - by) * (cy[i] - by);
-            d2 += (cz[i] - bz) * (cz[i] - bz);
-            float n = d2 < nearest[i] ? d2 : nearest[i];
-            nearest[i] = n;
-            if (n > farthest) farthest = n, best = i;
-        }
     }
-    core_free(centres, 4 * solid * sizeof *centres);
+    core_free(centres, (4 * padded + 4) * sizeof *centres);
     return count;
 }
 
