@@ -327,26 +327,24 @@ static void erode(const region_build *b, int32_t self, const int lo[3], const in
     const rocks__params *params = b->params;
     const int sx = size[0], sy = size[1], sz = size[2];
     const float a = params->contact_voxels, bb = params->blend_voxels;
-    for (int z = 0; z < sz; z++)
-        for (int y = 0; y < sy; y++) {
-            bool inner = y > 0 && z > 0 && y < sy - 1 && z < sz - 1;
+    const size_t total = (size_t)sx * sy * sz;
+    for (size_t i = 0; i < total; i++) e->empty[i] = 1, e->omega[i] = 1.0f;
+    for (int z = 1; z < sz - 1; z++)
+        for (int y = 1; y < sy - 1; y++) {
             /* the box less its border lies inside the owner array (it bounds the rock's voxels) */
-            const int32_t *owner = inner ? b->owner + ((size_t)(lo[2] + z - b->vlo[2]) * b->vdim[1] + (lo[1] + y - b->vlo[1])) * b->vdim[0] +
-                                               (lo[0] - b->vlo[0])
-                                         : NULL;
-            for (int x = 0; x < sx; x++) {
-                size_t i = ((size_t)z * sy + y) * sx + x;
-                bool mine = inner && x > 0 && x < sx - 1 && owner[x] == self;
-                e->rho[i] = mine ? 1.0f : 0.0f;
-                e->empty[i] = !mine;
-                e->omega[i] = 1.0f;
-            }
+            const int32_t *owner = b->owner + ((size_t)(lo[2] + z - b->vlo[2]) * b->vdim[1] + (lo[1] + y - b->vlo[1])) * b->vdim[0] +
+                                   (lo[0] - b->vlo[0]);
+            uint8_t *empty = e->empty + ((size_t)z * sy + y) * sx;
+            for (int x = 1; x < sx - 1; x++) empty[x] = owner[x] != self;
         }
+    for (size_t i = 0; i < total; i++) e->rho[i] = e->empty[i] ? 0.0f : 1.0f;
     damping(e->omega, e->empty, lo, size, contacts, contact_count, a, bb);
     count_empty_neighbours(e, size);
-    size_t active = 0;   /* the surface voxels that can erode */
-    for (size_t i = 0; i < (size_t)sx * sy * sz; i++)
-        if (!e->empty[i] && e->omega[i] > 0.0f && e->faces[i] > 0) e->active[active++] = (uint32_t)i;
+    size_t active = 0;   /* the surface voxels that can erode (kept by advancing the count) */
+    for (size_t i = 0; i < total; i++) {
+        e->active[active] = (uint32_t)i;
+        active += !e->empty[i] & (e->omega[i] > 0.0f) & (e->faces[i] > 0);
+    }
     const float rate = params->desc.erosion_rate;
     const ptrdiff_t plane = (ptrdiff_t)sx * sy, face[6] = { -1, 1, -sx, sx, -plane, plane };
     for (int step = 0; step < params->desc.erosion_steps; step++) {
