@@ -290,12 +290,11 @@ rocks__simplifier *rocks__simplify_begin(const uint32_t *indices, size_t index_c
     }
     s->inverse = core_alloc(n * sizeof *s->inverse);
     s->stamp = core_calloc(n, sizeof *s->stamp);
+    for (size_t i = 0; i < index_count; i++) s->stamp[indices[i]] = 1;   /* live: a triangle uses it */
     for (size_t v = 0; v < vertex_count; v++) {
         s->inverse[v] = inverse_weight(&s->quadrics[v]);
-        s->stamp[v] = 1;
+        s->live_vertices += s->stamp[v];
     }
-    for (size_t i = 0; i < index_count; i++)   /* live vertices: those a triangle uses */
-        if (s->stamp[indices[i]] == 1) s->stamp[indices[i]] = 0, s->live_vertices++;
     s->stamp_value = 1;
     s->first = core_alloc((n + 1) * sizeof *s->first);
     s->triangles = core_alloc(capacity * sizeof *s->triangles);
