@@ -216,6 +216,36 @@ static bool contact_point(const region_build *b, const rocks__seed *p, const roc
     return dual_holds(m, w, p->cell, q->cell) && owner_at(b, w) == other;
 }
 
+/* contact_point for both rocks of a pair in the region, computed once: the answer (from the
+ * seed with the smaller id) is the same whichever rock asks. Results are kept per region rock
+ * and neighbour: the cell offset (27) and the seed's index in its cell. */
+typedef struct contact_memo {
+    uint8_t state;                    /* 0 not yet, 1 no contact, 2 contact at point */
+    double point[3];
+} contact_memo;
+
+static size_t memo_slot(const region_build *b, int32_t rock, const rocks__seed *p, const rocks__seed *q) {
+    int offset = (q->cell[2] - p->cell[2] + 1) * 9 + (q->cell[1] - p->cell[1] + 1) * 3 + (q->cell[0] - p->cell[0] + 1);
+    return ((size_t)rock * 27 + (size_t)offset) * (size_t)b->params->seeds_max + (size_t)q->k;
+}
+
+static bool remembered_contact(const region_build *b, contact_memo *memo, const int32_t *slot, const rocks__seed *p,
+                               const rocks__seed *q, double c[3]) {
+    int32_t rp = slot[p - b->seeds], rq = slot[q - b->seeds];
+    contact_memo *mine = rp >= 0 ? &memo[memo_slot(b, rp, p, q)] : NULL;
+    if (mine && mine->state) {
+        memcpy(c, mine->point, sizeof mine->point);
+        return mine->state == 2;
+    }
+    bool kept = contact_point(b, p, q, c);
+    if (rq >= 0) {   /* for q's turn */
+        contact_memo *theirs = &memo[memo_slot(b, rq, q, p)];
+        theirs->state = kept ? 2 : 1;
+        memcpy(theirs->point, c, sizeof theirs->point);
+    }
+    return kept;
+}
+
 /* ---- erosion (001 §5) ------------------------------------------------------------------------- */
 
 /* Per-region buffers for erode(), each sized for the largest rock box (no allocation per rock). */
@@ -419,6 +449,8 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
     erosion_buffers_make(&erosion, box_max);
     const float *rho = erosion.rho;
     double (*points)[3] = core_alloc(27 * ROCKS__MAX_SEEDS_PER_CELL * sizeof *points);
+    const size_t memo_count = (size_t)(rocks ? rocks : 1) * 27 * (size_t)params->seeds_max;
+    contact_memo *memo = core_calloc(memo_count, sizeof *memo);
     const float tile_scale = 1.0f / (float)(b.n * m);
     for (uint32_t s = 0; s < b.seed_count; s++) {
         if (slot[s] < 0) continue;
@@ -438,7 +470,7 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
                         const rocks__seed *q = &b.seeds[b.cell_first[cs] + i];
                         if (q == p) continue;
                         double point[3];
-                        if (!contact_point(&b, p, q, point)) continue;
+                        if (!remembered_contact(&b, memo, slot, p, q, point)) continue;
                         memcpy(points[points_count++], point, sizeof point);
                         size_t old_cap = out->contact_cap;
                         GROW(out, contacts, contact_cap, out->contact_count + 1);
@@ -510,6 +542,7 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
         }
     }
     core_free(points, 27 * ROCKS__MAX_SEEDS_PER_CELL * sizeof *points);
+    core_free(memo, memo_count * sizeof *memo);
     erosion_buffers_free(&erosion);
     core_free(box, (rocks ? rocks : 1) * sizeof *box);
     core_free(count, (rocks ? rocks : 1) * sizeof *count);
