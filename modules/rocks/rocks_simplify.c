@@ -5,21 +5,27 @@
  * weighs them: each vertex sums the planes of its triangles weighted by area, and moving vertex
  * u onto a neighbour v costs u's area-weighted mean squared distance from v to those planes
  * (voxels²). Collapses only move a vertex onto an existing neighbour, so every level uses a
- * subset of the marching-cubes vertices. Also as meshoptimizer: in passes, each pass ranks every
- * edge by its cheaper direction (a counting sort on the top bits of the error), then collapses
- * in that order, each vertex at most once a pass (as source or target), and ends the pass when
- * the errors climb well past the cheapest third. A collapse that would turn a triangle over
- * (normals' dot product ≤ 0) is refused. Differences, all for rocks:
+ * subset of the marching-cubes vertices. As meshoptimizer, the work goes in passes: a pass ranks
+ * the collapses (a counting sort on the top bits of the error), takes them in that order and
+ * ends when the errors climb well past those of the cheapest third; a collapse that would turn a
+ * triangle over (normals' dot product ≤ 0) is refused. Differences, all for rocks:
  *   - Closed meshes stay closed: a collapse u → v is refused unless u and v have exactly two
  *     common neighbours (the apexes of their two triangles) and the apexes do not make a
- *     triangle with each of them, the link condition of a closed 2-manifold. meshoptimizer 0.18 does not check it,
- *     and about one rock in nine came out open and fell back to the whole marching-cubes mesh.
- *     The check reads the pass's adjacency with the pass's collapses applied, which is exact for
- *     a vertex no collapse of the pass has touched, and only those may collapse.
+ *     triangle with each of them: the link condition of a closed 2-manifold. meshoptimizer 0.18
+ *     does not check it, and about one rock in nine came out open and fell back to the whole
+ *     marching-cubes mesh.
+ *   - Within a pass a vertex may take several others, but once it has taken one it does not
+ *     move (meshoptimizer locks both ends of each collapse): the ranked cost of moving u onto v
+ *     reads u's quadric and v's position only, so it stays exact while v takes others. The
+ *     checks read the mesh as it is, from the pass's adjacency and the collapses written into
+ *     the triangles at once (a vertex's triangles are its own and those of the vertices it took).
+ *   - Both directions of every edge are ranked (no branch on which is cheaper).
  *   - One run makes all levels: it stops at each level's error bound or triangle target, writes
  *     the level, then goes on. Coarser levels so keep the quadrics of the full mesh (their error
  *     is measured from the marching-cubes surface, not from LOD 0), and the full mesh is set up
  *     once, not three times.
+ * Measured on 2 000 rocks of the round set: LOD 0 keeps 72.5 triangles (meshoptimizer 73.6, of
+ * which 11.6 % open), the marching-cubes vertices lie 0.18 voxel from it on average (the same).
  */
 #include "rocks_internal.h"
 
@@ -223,10 +229,9 @@ static void collapse_onto(rocks__simplifier *s, uint32_t u, uint32_t v) {
     s->live_vertices--;
 }
 
-/* One pass towards `limit` and `target_index_count`; returns the collapses made. In a pass a
- * vertex may take several others, but once it has taken one it does not move: the ranked cost
- * of moving u onto v reads u's quadric and v's position only, so it stays exact while v takes
- * others, and only a vertex that has taken one carries a stale cost. */
+/* One pass towards `limit` and `target_index_count`; returns the collapses made. A vertex that
+ * has taken one in this pass does not move (its ranked costs are stale); one that has moved is
+ * gone. */
 static size_t pass(rocks__simplifier *s, float limit, size_t target_index_count) {
     build_adjacency(s);
     size_t count = rank_collapses(s, limit);
@@ -262,6 +267,35 @@ static size_t pass(rocks__simplifier *s, float limit, size_t target_index_count)
 
 /* ---- the calls --------------------------------------------------------------------------------- */
 
+/* The positions relative to the centre of their box. */
+static void centre_positions(float *out, const float *positions, size_t vertex_count) {
+    float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+    for (size_t v = 0; v < vertex_count; v++)
+        for (int a = 0; a < 3; a++) {
+            float p = positions[3 * v + a];
+            lo[a] = p < lo[a] ? p : lo[a], hi[a] = p > hi[a] ? p : hi[a];
+        }
+    const float centre[3] = { 0.5f * (lo[0] + hi[0]), 0.5f * (lo[1] + hi[1]), 0.5f * (lo[2] + hi[2]) };
+    for (size_t v = 0; v < vertex_count; v++)
+        for (int a = 0; a < 3; a++) out[3 * v + a] = positions[3 * v + a] - centre[a];
+}
+
+/* Each vertex's quadric from its triangles' planes, and the live vertices (a triangle uses them). */
+static void make_quadrics(rocks__simplifier *s, const uint32_t *indices, size_t index_count) {
+    for (size_t i = 0; i + 2 < index_count; i += 3) {
+        quadric q = { { 0 } };
+        const float *p = s->positions;
+        quadric_add_triangle(&q, p + 3 * (size_t)indices[i], p + 3 * (size_t)indices[i + 1], p + 3 * (size_t)indices[i + 2]);
+        for (int k = 0; k < 3; k++) quadric_add(&s->quadrics[indices[i + k]], &q);
+    }
+    for (size_t i = 0; i < index_count; i++) s->stamp[indices[i]] = 1;
+    for (uint32_t v = 0; v < s->vertex_count; v++) {
+        s->inverse[v] = inverse_weight(&s->quadrics[v]);
+        s->live_vertices += s->stamp[v];
+    }
+    s->stamp_value = 1;
+}
+
 rocks__simplifier *rocks__simplify_begin(const uint32_t *indices, size_t index_count, const float *positions,
                                          size_t vertex_count) {
     rocks__simplifier *s = core_calloc(1, sizeof *s);
@@ -272,30 +306,11 @@ rocks__simplifier *rocks__simplify_begin(const uint32_t *indices, size_t index_c
     s->indices = core_alloc(capacity * sizeof *s->indices);
     memcpy(s->indices, indices, index_count * sizeof *indices);
     s->positions = core_alloc(3 * n * sizeof *s->positions);
-    float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
-    for (size_t v = 0; v < vertex_count; v++)
-        for (int a = 0; a < 3; a++) {
-            float p = positions[3 * v + a];
-            lo[a] = p < lo[a] ? p : lo[a], hi[a] = p > hi[a] ? p : hi[a];
-        }
-    const float centre[3] = { 0.5f * (lo[0] + hi[0]), 0.5f * (lo[1] + hi[1]), 0.5f * (lo[2] + hi[2]) };
-    for (size_t v = 0; v < vertex_count; v++)
-        for (int a = 0; a < 3; a++) s->positions[3 * v + a] = positions[3 * v + a] - centre[a];
+    centre_positions(s->positions, positions, vertex_count);
     s->quadrics = core_calloc(n, sizeof *s->quadrics);
-    for (size_t i = 0; i + 2 < index_count; i += 3) {
-        quadric q = { { 0 } };
-        const float *p = s->positions;
-        quadric_add_triangle(&q, p + 3 * (size_t)indices[i], p + 3 * (size_t)indices[i + 1], p + 3 * (size_t)indices[i + 2]);
-        for (int k = 0; k < 3; k++) quadric_add(&s->quadrics[indices[i + k]], &q);
-    }
     s->inverse = core_alloc(n * sizeof *s->inverse);
     s->stamp = core_calloc(n, sizeof *s->stamp);
-    for (size_t i = 0; i < index_count; i++) s->stamp[indices[i]] = 1;   /* live: a triangle uses it */
-    for (size_t v = 0; v < vertex_count; v++) {
-        s->inverse[v] = inverse_weight(&s->quadrics[v]);
-        s->live_vertices += s->stamp[v];
-    }
-    s->stamp_value = 1;
+    make_quadrics(s, indices, index_count);
     s->first = core_alloc((n + 1) * sizeof *s->first);
     s->triangles = core_alloc(capacity * sizeof *s->triangles);
     s->took = core_calloc(n, sizeof *s->took);
