@@ -24,7 +24,8 @@
 #define ROCKS__ANCHORS 16                         /* the seed and up to 15 voxel centres */
 /* Bump it with ANY change to what a build makes (seeds, ownership, contacts, erosion, meshes,
  * anchors): a cache holds a build's output under its desc, so an old one would read as valid. */
-#define ROCKS__CACHE_VERSION 2u   /* 2: LOD 0 at 0.6 voxel; contacts across the nearest face */
+#define ROCKS__CACHE_VERSION 3u   /* 2: LOD 0 at 0.6 voxel; contacts across the nearest face;
+                                     3: LODs by rocks_simplify.c, closed without falling back */
 
 enum { ROCKS__VERTEX = 0, ROCKS__EDGE = 1, ROCKS__FACE = 2, ROCKS__CENTRE = 3 };
 
@@ -171,6 +172,18 @@ bool rocks__cache_parse(const unsigned char *data, size_t size, const rocks__par
 /* Bytes of the arrays, as set->bytes counts them. */
 size_t rocks__set_bytes(const rocks_tileset *set);
 void rocks__set_free_arrays(rocks__set *set);
+
+/* Levels of detail of a closed mesh by quadric edge collapse onto existing vertices
+ * (rocks_simplify.c): begin with the mesh (positions in voxels), then run once a level, finest
+ * first: each run collapses on until the next collapse would stray more than `error` voxels
+ * (root mean square over the planes it merged) or the mesh has at most target_index_count
+ * indices (0: no target), and writes the mesh so far to `out` (room for index_count). A closed
+ * mesh stays closed. end frees. */
+typedef struct rocks__simplifier rocks__simplifier;
+rocks__simplifier *rocks__simplify_begin(const uint32_t *indices, size_t index_count, const float *positions,
+                                         size_t vertex_count);
+size_t rocks__simplify_run(rocks__simplifier *s, float error, size_t target_index_count, uint32_t *out);
+void rocks__simplify_end(rocks__simplifier *s);
 
 /* Each edge of triangles[0, index_count) in exactly two triangles (once in each direction). */
 bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t vertex_count);

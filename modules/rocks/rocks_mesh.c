@@ -2,17 +2,17 @@
  *
  * The field r = 2ρ − 1 at voxel centres (001 §5), −1 outside the rock; the box carries a border
  * of empty voxels, so marching cubes (terrain_mesh_build, f > 0 solid) closes every mesh. LOD 0
- * is simplified (meshoptimizer, error ≤ 0.6 voxel: a voxel-grid surface has far more triangles
- * than its shape needs, and the set must stay small), LOD 1 and 2 aim at 1/4 and 1/12 of LOD 0's
- * triangles. A level that comes out not closed (every edge in exactly two triangles)
- * falls back to the level above it, so every level is watertight.
+ * is simplified (rocks_simplify.c, error ≤ 0.6 voxel: a voxel-grid surface has far more
+ * triangles than its shape needs, and the set must stay small), LOD 1 and 2 aim at 1/4 and 1/12
+ * of LOD 0's triangles, all in one run of the simplifier, which keeps closed meshes closed (each
+ * edge in exactly two triangles). A level that still comes out not closed falls back to the
+ * level above it, so every level is watertight.
  */
 #include "rocks_internal.h"
 
 #include "core/core.h"
 
 #include <math.h>
-#include <meshoptimizer.h>
 #include <string.h>
 
 /* Directed edges bucketed by their first vertex (a counting sort, O(n)): closed means each
@@ -51,26 +51,96 @@ bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t v
     return ok;
 }
 
-/* Simplifies `in` towards `target` indices within `error` voxels; the input when the result is not
- * closed. Returns the count written to `out`. */
-static size_t simplify(uint32_t *out, const uint32_t *in, size_t count, const float *positions, size_t vertex_count,
-                       size_t target, float error, float scale) {
-    size_t written = meshopt_simplify(out, in, count, positions, vertex_count, 3 * sizeof(float), target, error / scale, 0, NULL);
-    if (written == 0 || !rocks__watertight(out, (uint32_t)written, (uint32_t)vertex_count)) {
-        memcpy(out, in, count * sizeof *out);
-        return count;
-    }
-    return written;
-}
-
 /* Simplification, in voxels of error and shares of LOD 0's triangles. LOD 0 at 0.6 voxel keeps
- * about 130 triangles a rock (the marching-cubes mesh has ~1 100; at 0.25 voxel it kept 294, and
- * the default set held 89 MB): a rock's facets stay under 4 cm at the game's 3 m tiles. LOD 2 is
- * what most rocks in view draw (past 35 m), so it goes as far as 8 voxels. */
+ * about 75 triangles a rock of the round set (the marching-cubes mesh has ~1 350; at 0.25 voxel
+ * meshoptimizer kept 294, and the default set held 89 MB): a rock's facets stay under 4 cm at
+ * the game's 3 m tiles. LOD 2 is what most rocks in view draw (past 35 m), so it goes as far as
+ * 8 voxels. */
 #define LOD1_ERROR 2.0f
 #define LOD1_SHARE 4
 #define LOD2_ERROR 8.0f
 #define LOD2_SHARE 12
+
+/* Anchors (001 §6): the seed, then voxel centres with ρ ≥ ½ spread by farthest-point sampling.
+ * 001 uses every voxel centre; 15 spread ones bound the cost of testing a rock against the
+ * support (placement stays under 0.5 ms a chunk) and still see where it lies. The centres are
+ * kept as three arrays padded to groups of four (a pad's distance is −1, never the farthest);
+ * each round updates the distances, takes their maximum in four lanes and then the first centre
+ * at it, as one scan would. Returns the count written. */
+static uint32_t spread_anchors(const float *rho, const int box_lo[3], const int size[3], const float seed_pos[3],
+                               float tile_scale, float (*anchors)[3]) {
+    const size_t total = (size_t)size[0] * size[1] * size[2];
+    size_t solid = 0;
+    for (size_t i = 0; i < total; i++) solid += rho[i] >= 0.5f;
+    const size_t padded = (solid + 3) & ~(size_t)3;
+    float *centres = core_calloc(4 * padded + 4, sizeof *centres);
+    float *restrict cx = centres, *restrict cy = cx + padded, *restrict cz = cy + padded, *restrict nearest = cz + padded;
+    size_t c = 0;
+    for (int z = 0; z < size[2]; z++)
+        for (int y = 0; y < size[1]; y++)
+            for (int x = 0; x < size[0]; x++) {
+                if (rho[((size_t)z * size[1] + y) * size[0] + x] < 0.5f) continue;
+                cx[c] = ((float)(box_lo[0] + x) + 0.5f) * tile_scale;
+                cy[c] = ((float)(box_lo[1] + y) + 0.5f) * tile_scale;
+                cz[c] = ((float)(box_lo[2] + z) + 0.5f) * tile_scale;
+                float d2 = 0.0f;
+                d2 += (cx[c] - seed_pos[0]) * (cx[c] - seed_pos[0]);
+                d2 += (cy[c] - seed_pos[1]) * (cy[c] - seed_pos[1]);
+                d2 += (cz[c] - seed_pos[2]) * (cz[c] - seed_pos[2]);
+                nearest[c++] = d2;
+            }
+    for (; c < padded; c++) nearest[c] = -1.0f;
+    memcpy(anchors[0], seed_pos, 3 * sizeof *seed_pos);
+    uint32_t count = 1;
+    float bx = 0.0f, by = 0.0f, bz = 0.0f;
+    while (count < ROCKS__ANCHORS) {
+        if (count > 1)
+            for (size_t i = 0; i < padded; i++) {
+                float d2 = 0.0f;
+                d2 += (cx[i] - bx) * (cx[i] - bx);
+                d2 += (cy[i] - by) * (cy[i] - by);
+                d2 += (cz[i] - bz) * (cz[i] - bz);
+                nearest[i] = d2 < nearest[i] ? d2 : nearest[i];
+            }
+        float lane[4] = { -1.0f, -1.0f, -1.0f, -1.0f };   /* four chains of comparisons, not one */
+        for (size_t g = 0; g < padded; g += 4) {
+            lane[0] = nearest[g] > lane[0] ? nearest[g] : lane[0];
+            lane[1] = nearest[g + 1] > lane[1] ? nearest[g + 1] : lane[1];
+            lane[2] = nearest[g + 2] > lane[2] ? nearest[g + 2] : lane[2];
+            lane[3] = nearest[g + 3] > lane[3] ? nearest[g + 3] : lane[3];
+        }
+        float farthest = lane[0];
+        for (int l = 1; l < 4; l++) farthest = lane[l] > farthest ? lane[l] : farthest;
+        if (!(farthest > 0.0f)) break;
+        size_t best = 0;
+        while (nearest[best] != farthest) best++;
+        bx = cx[best], by = cy[best], bz = cz[best];
+        anchors[count][0] = bx, anchors[count][1] = by, anchors[count][2] = bz;
+        count++;
+    }
+    core_free(centres, (4 * padded + 4) * sizeof *centres);
+    return count;
+}
+
+/* The levels in one run of the simplifier (rocks_simplify.c). A level that is not closed (the
+ * simplifier keeps closed meshes closed, so only a marching-cubes mesh that is not would) is the
+ * level above it, or the input for LOD 0. */
+static void make_lods(const uint32_t *indices, size_t index_count, const float *positions, size_t vertex_count,
+                      uint32_t *lod[ROCKS_LODS], size_t lod_count[ROCKS_LODS]) {
+    static const float error[ROCKS_LODS] = { ROCKS__LOD0_ERROR, LOD1_ERROR, LOD2_ERROR };
+    static const size_t share[ROCKS_LODS] = { 0, LOD1_SHARE, LOD2_SHARE };
+    rocks__simplifier *simplifier = rocks__simplify_begin(indices, index_count, positions, vertex_count);
+    for (int l = 0; l < ROCKS_LODS; l++) {
+        size_t target = l == 0 ? 0 : (lod_count[0] / (3 * share[l])) * 3;
+        lod_count[l] = rocks__simplify_run(simplifier, error[l], target, lod[l]);
+        if (lod_count[l] == 0 || !rocks__watertight(lod[l], (uint32_t)lod_count[l], (uint32_t)vertex_count)) {
+            const uint32_t *above = l == 0 ? indices : lod[l - 1];
+            lod_count[l] = l == 0 ? index_count : lod_count[l - 1];
+            memcpy(lod[l], above, lod_count[l] * sizeof *lod[l]);
+        }
+    }
+    rocks__simplify_end(simplifier);
+}
 
 #define GROW(res, field, cap, needed) ((res)->field = core_grow((res)->field, &(res)->cap, (needed), sizeof *(res)->field))
 
@@ -103,16 +173,10 @@ bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int b
     float *positions = core_alloc(vc * 3 * sizeof *positions);
     for (size_t v = 0; v < vc; v++)
         for (int a = 0; a < 3; a++) positions[3 * v + a] = mesh.vertices[v].position[a];
-    float scale = meshopt_simplifyScale(positions, vc, 3 * sizeof(float));
-    if (!(scale > 0.0f)) scale = 1.0f;
     uint32_t *lod[ROCKS_LODS];
     size_t lod_count[ROCKS_LODS];
     for (int l = 0; l < ROCKS_LODS; l++) lod[l] = core_alloc(ic * sizeof *lod[l]);
-    lod_count[0] = simplify(lod[0], mesh.indices, ic, positions, vc, 0, ROCKS__LOD0_ERROR, scale);
-    lod_count[1] = simplify(lod[1], lod[0], lod_count[0], positions, vc, (lod_count[0] / (3 * LOD1_SHARE)) * 3,
-                            LOD1_ERROR, scale);
-    lod_count[2] = simplify(lod[2], lod[1], lod_count[1], positions, vc, (lod_count[0] / (3 * LOD2_SHARE)) * 3,
-                            LOD2_ERROR, scale);
+    make_lods(mesh.indices, ic, positions, vc, lod, lod_count);
 
     /* Keep LOD 0's vertices only, in order of first use (the others use a subset of them). */
     uint32_t *remap = core_alloc(vc * sizeof *remap);
@@ -167,45 +231,9 @@ bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int b
     core_free(positions, vc * 3 * sizeof *positions);
     terrain_mesh_free(&mesh);
 
-    /* Anchors (001 §6): the seed, then voxel centres with ρ ≥ ½ spread by farthest-point
-     * sampling. 001 uses every voxel centre; 15 spread ones bound the cost of testing a rock
-     * against the support (placement stays under 0.5 ms a chunk) and still see where it lies. */
     rock->anchor_first = res->anchor_count;
     GROW(res, anchors, anchor_cap, res->anchor_count + ROCKS__ANCHORS);
-    float (*anchors)[3] = res->anchors + res->anchor_count;
-    memcpy(anchors[0], seed_pos, sizeof seed_pos);
-    uint32_t anchor_count = 1;
-    size_t solid = 0;
-    for (size_t i = 0; i < total; i++) solid += rho[i] >= 0.5f;
-    float (*centres)[3] = core_alloc(solid * sizeof *centres);
-    float *nearest = core_alloc(solid * sizeof *nearest);
-    size_t c = 0;
-    for (int z = 0; z < size[2]; z++)
-        for (int y = 0; y < size[1]; y++)
-            for (int x = 0; x < size[0]; x++) {
-                if (rho[((size_t)z * size[1] + y) * size[0] + x] < 0.5f) continue;
-                int v[3] = { box_lo[0] + x, box_lo[1] + y, box_lo[2] + z };
-                float d2 = 0.0f;
-                for (int a = 0; a < 3; a++) {
-                    centres[c][a] = ((float)v[a] + 0.5f) * tile_scale;
-                    d2 += (centres[c][a] - seed_pos[a]) * (centres[c][a] - seed_pos[a]);
-                }
-                nearest[c++] = d2;
-            }
-    while (anchor_count < ROCKS__ANCHORS) {
-        size_t best = 0;
-        for (size_t i = 1; i < solid; i++)
-            if (nearest[i] > nearest[best]) best = i;
-        if (solid == 0 || nearest[best] <= 0.0f) break;
-        memcpy(anchors[anchor_count++], centres[best], sizeof centres[best]);
-        for (size_t i = 0; i < solid; i++) {
-            float d2 = 0.0f;
-            for (int a = 0; a < 3; a++) d2 += (centres[i][a] - centres[best][a]) * (centres[i][a] - centres[best][a]);
-            if (d2 < nearest[i]) nearest[i] = d2;
-        }
-    }
-    core_free(centres, solid * sizeof *centres);
-    core_free(nearest, solid * sizeof *nearest);
+    uint32_t anchor_count = spread_anchors(rho, box_lo, size, seed_pos, tile_scale, res->anchors + res->anchor_count);
     rock->anchor_count = anchor_count;
     res->anchor_count += anchor_count;
     return true;

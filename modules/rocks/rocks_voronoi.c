@@ -23,7 +23,7 @@
 #include <math.h>
 #include <string.h>
 
-#define BLOCK_MAX 512   /* voxels of one cell octant: ⌈m/2⌉³ ≤ 8³ */
+#define BLOCK_SIDE 8    /* voxels along a cell octant's side at most: ⌈m/2⌉ ≤ 8 */
 
 typedef struct region_build {
     const rocks__params *params;
@@ -88,14 +88,16 @@ static void own_block(region_build *b, const int v0[3], const int size[3], const
         while (j >= 0 && b->seeds[cand[j]].id > b->seeds[x].id) cand[j + 1] = cand[j], j--;
         cand[j + 1] = x;
     }
-    float best[BLOCK_MAX];
-    int32_t who[BLOCK_MAX];
+    /* rows padded to BLOCK_SIDE: a loop of fixed length, which the compiler vectorises; the
+     * padding lanes compute with dx = 0 and are never read */
+    float best[BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE];
+    int32_t who[BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE];
     const int nx = size[0], ny = size[1], nz = size[2], m = b->m;
-    for (int i = 0; i < nx * ny * nz; i++) best[i] = INFINITY, who[i] = -1;
+    for (int i = 0; i < BLOCK_SIDE * ny * nz; i++) best[i] = INFINITY, who[i] = -1;
     for (int k = 0; k < count; k++) {
         const rocks__seed *s = &b->seeds[cand[k]];
         const float *q = s->q;
-        float dxs[16];
+        float dxs[BLOCK_SIDE] = { 0 };
         for (int x = 0; x < nx; x++) dxs[x] = (float)(v0[0] + x - s->cell[0] * m) + 0.5f - s->u[0];
         int32_t id = (int32_t)cand[k];
         for (int z = 0; z < nz; z++) {
@@ -104,13 +106,13 @@ static void own_block(region_build *b, const int v0[3], const int size[3], const
                 float dy = (float)(v0[1] + y - s->cell[1] * m) + 0.5f - s->u[1];
                 float bq = q[3] * dy + q[4] * dz;                     /* rocks__distance, split */
                 float aq = (q[1] * dy + q[5] * dz) * dy + q[2] * dz * dz;
-                float *row = best + (z * ny + y) * nx;
-                int32_t *row_who = who + (z * ny + y) * nx;
-                for (int x = 0; x < nx; x++) {
-                    float d = (q[0] * dxs[x] + bq) * dxs[x] + aq;
-                    bool better = d < row[x];
-                    row[x] = better ? d : row[x];
-                    row_who[x] = better ? id : row_who[x];
+                float *row = best + (z * ny + y) * BLOCK_SIDE;
+                int32_t *row_who = who + (z * ny + y) * BLOCK_SIDE;
+                for (int x = 0; x < BLOCK_SIDE; x++) {   /* branch-free, so it vectorises */
+                    float d = (q[0] * dxs[x] + bq) * dxs[x] + aq, r = row[x];
+                    int32_t better = -(int32_t)(d < r);
+                    row[x] = d < r ? d : r;
+                    row_who[x] = (row_who[x] & ~better) | (id & better);
                 }
             }
         }
@@ -119,7 +121,7 @@ static void own_block(region_build *b, const int v0[3], const int size[3], const
         for (int y = 0; y < ny; y++) {
             int32_t *dst = b->owner + ((size_t)(v0[2] + z - b->vlo[2]) * b->vdim[1] + (v0[1] + y - b->vlo[1])) * b->vdim[0] +
                            (v0[0] - b->vlo[0]);
-            memcpy(dst, who + (z * ny + y) * nx, (size_t)nx * sizeof *dst);
+            memcpy(dst, who + (z * ny + y) * BLOCK_SIDE, (size_t)nx * sizeof *dst);
         }
 }
 
@@ -214,56 +216,187 @@ static bool contact_point(const region_build *b, const rocks__seed *p, const roc
     return dual_holds(m, w, p->cell, q->cell) && owner_at(b, w) == other;
 }
 
+/* contact_point for both rocks of a pair in the region, computed once: the answer (from the
+ * seed with the smaller id) is the same whichever rock asks. Results are kept per region rock
+ * and neighbour: the cell offset (27) and the seed's index in its cell. */
+typedef struct contact_memo {
+    uint8_t state;                    /* 0 not yet, 1 no contact, 2 contact at point */
+    double point[3];
+} contact_memo;
+
+static size_t memo_slot(const region_build *b, int32_t rock, const rocks__seed *p, const rocks__seed *q) {
+    int offset = (q->cell[2] - p->cell[2] + 1) * 9 + (q->cell[1] - p->cell[1] + 1) * 3 + (q->cell[0] - p->cell[0] + 1);
+    return ((size_t)rock * 27 + (size_t)offset) * (size_t)b->params->seeds_max + (size_t)q->k;
+}
+
+static bool remembered_contact(const region_build *b, contact_memo *memo, const int32_t *slot, const rocks__seed *p,
+                               const rocks__seed *q, double c[3]) {
+    int32_t rp = slot[p - b->seeds], rq = slot[q - b->seeds];
+    contact_memo *mine = rp >= 0 ? &memo[memo_slot(b, rp, p, q)] : NULL;
+    if (mine && mine->state) {
+        memcpy(c, mine->point, sizeof mine->point);
+        return mine->state == 2;
+    }
+    bool kept = contact_point(b, p, q, c);
+    if (rq >= 0) {   /* for q's turn */
+        contact_memo *theirs = &memo[memo_slot(b, rq, q, p)];
+        theirs->state = kept ? 2 : 1;
+        memcpy(theirs->point, c, sizeof theirs->point);
+    }
+    return kept;
+}
+
 /* ---- erosion (001 §5) ------------------------------------------------------------------------- */
+
+/* Per-region buffers for erode(), each sized for the largest rock box (no allocation per rock). */
+typedef struct erosion_buffers {
+    float *rho, *omega;
+    uint8_t *empty, *sum_x, *sum_xy;  /* the emptiness indicator and its partial box sums */
+    uint8_t *outside, *faces;         /* empty voxels among the 26 (6 face) neighbours */
+    uint32_t *active, *emptied;       /* surface voxels that may still erode; those emptied in a step */
+    size_t capacity;
+} erosion_buffers;
+
+static void erosion_buffers_make(erosion_buffers *e, size_t capacity) {
+    e->capacity = capacity;
+    e->rho = core_alloc(capacity * sizeof *e->rho);
+    e->omega = core_alloc(capacity * sizeof *e->omega);
+    e->empty = core_alloc(5 * capacity);
+    e->sum_x = e->empty + capacity, e->sum_xy = e->sum_x + capacity;
+    e->outside = e->sum_xy + capacity, e->faces = e->outside + capacity;
+    e->active = core_alloc(2 * capacity * sizeof *e->active);
+    e->emptied = e->active + capacity;
+}
+
+static void erosion_buffers_free(erosion_buffers *e) {
+    core_free(e->rho, e->capacity * sizeof *e->rho);
+    core_free(e->omega, e->capacity * sizeof *e->omega);
+    core_free(e->empty, 5 * e->capacity);
+    core_free(e->active, 2 * e->capacity * sizeof *e->active);
+}
+
+/* ω (001 §5): 0 within a of a contact, linear to 1 at b, the minimum over the contacts; 1 where
+ * the box's voxels start. A contact at r ≥ b gives ω_c = 1 and cannot lower the minimum, so each
+ * contact visits only the voxels of its ball: per row, a run a voxel wider each way than the
+ * chord, and not the rows whose y, z terms alone reach b² (d² only grows with the x term, in
+ * floats too). Within, d² ≥ b² skips the square root (b² is exact in double, so (float)√d² ≥ b
+ * there): the same bits as evaluating every contact at every voxel, whose order does not
+ * matter to a minimum. */
+static void damping(float *omega, const uint8_t *empty, const int lo[3], const int size[3], const double (*contacts)[3],
+                    int contact_count, float a, float b) {
+    const double b2 = (double)b * (double)b;
+    for (int c = 0; c < contact_count; c++) {
+        const double *p = contacts[c];
+        for (int z = 1; z < size[2] - 1; z++) {
+            double dz = lo[2] + z + 0.5 - p[2];
+            if (dz * dz >= b2) continue;
+            for (int y = 1; y < size[1] - 1; y++) {
+                double dy = lo[1] + y + 0.5 - p[1];
+                double rest = b2 - (dy * dy + dz * dz);
+                if (!(rest > 0.0)) continue;
+                double half = sqrt(rest) + 1.0;
+                int from = (int)floor(p[0] - 0.5 - half) - lo[0], to = (int)ceil(p[0] - 0.5 + half) - lo[0];
+                if (from < 1) from = 1;
+                if (to > size[0] - 2) to = size[0] - 2;
+                size_t row = ((size_t)z * size[1] + y) * size[0];
+                for (int x = from; x <= to; x++) {
+                    size_t i = row + x;
+                    if (empty[i] || omega[i] == 0.0f) continue;
+                    double dx = lo[0] + x + 0.5 - p[0];
+                    double d2 = dx * dx + dy * dy + dz * dz;
+                    if (d2 >= b2) continue;
+                    float r = (float)sqrt(d2);
+                    float wc = r < a ? 0.0f : r < b ? (r - a) / (b - a) : 1.0f;
+                    if (wc < omega[i]) omega[i] = wc;
+                }
+            }
+        }
+    }
+}
+
+/* How many of each voxel's 26 neighbours are empty, by three separable 3-sums of the emptiness
+ * indicator (interior voxels only: rock voxels never lie on the box's border), and of its 6 face
+ * neighbours. */
+static void count_empty_neighbours(erosion_buffers *e, const int size[3]) {
+    const int sx = size[0], sy = size[1], sz = size[2];
+    const size_t plane = (size_t)sx * sy, total = plane * sz;
+    memset(e->outside, 0, total);
+    memset(e->faces, 0, total);
+    for (size_t row = 0; row < (size_t)sy * sz; row++) {
+        const uint8_t *in = e->empty + row * sx;
+        uint8_t *out = e->sum_x + row * sx;
+        for (int x = 1; x < sx - 1; x++) out[x] = (uint8_t)(in[x - 1] + in[x] + in[x + 1]);
+    }
+    for (int z = 0; z < sz; z++)
+        for (int y = 1; y < sy - 1; y++) {
+            size_t i = (size_t)z * plane + (size_t)y * sx;
+            for (int x = 1; x < sx - 1; x++)
+                e->sum_xy[i + x] = (uint8_t)(e->sum_x[i + x - sx] + e->sum_x[i + x] + e->sum_x[i + x + sx]);
+        }
+    for (int z = 1; z < sz - 1; z++)
+        for (int y = 1; y < sy - 1; y++) {
+            size_t i = (size_t)z * plane + (size_t)y * sx;
+            for (int x = 1; x < sx - 1; x++) {
+                size_t j = i + x;
+                e->outside[j] = (uint8_t)(e->sum_xy[j - plane] + e->sum_xy[j] + e->sum_xy[j + plane]);
+                e->faces[j] = (uint8_t)(e->empty[j - 1] + e->empty[j + 1] + e->empty[j - sx] + e->empty[j + sx] +
+                                        e->empty[j - plane] + e->empty[j + plane]);
+            }
+        }
+}
 
 /* ρ over the rock's box grown by one voxel (the border stays 0), after the erosion steps:
  * surface voxels (a face neighbour outside the rock or emptied) lose ε·k·ω a step, with k the
  * share of the 26 neighbours outside (spheroidal weathering, [BFO*07]: corners first) and ω the
  * damping of 001 §5 (0 within a of a contact, linear to 1 at b). Updates read the previous step's
- * ρ, so the order of the voxels does not matter. */
+ * state: a voxel's update reads only its own ρ and its neighbour counts, and the counts take the
+ * voxels emptied in a step only after it, so the order of the voxels does not matter. Keeping
+ * counts instead of reading 26 neighbours a surface voxel a step is what makes this cheap. */
 static void erode(const region_build *b, int32_t self, const int lo[3], const int size[3], const double (*contacts)[3],
-                  int contact_count, float *rho, float *scratch, float *omega) {
+                  int contact_count, erosion_buffers *e) {
     const rocks__params *params = b->params;
     const int sx = size[0], sy = size[1], sz = size[2];
-    const size_t total = (size_t)sx * sy * sz;
     const float a = params->contact_voxels, bb = params->blend_voxels;
-    for (int z = 0; z < sz; z++)
-        for (int y = 0; y < sy; y++)
-            for (int x = 0; x < sx; x++) {
-                size_t i = ((size_t)z * sy + y) * sx + x;
-                int v[3] = { lo[0] + x, lo[1] + y, lo[2] + z };
-                bool mine = x > 0 && y > 0 && z > 0 && x < sx - 1 && y < sy - 1 && z < sz - 1 && owner_at(b, v) == self;
-                rho[i] = mine ? 1.0f : 0.0f;
-                float w = 1.0f;
-                if (mine)
-                    for (int c = 0; c < contact_count; c++) {
-                        double dx = v[0] + 0.5 - contacts[c][0], dy = v[1] + 0.5 - contacts[c][1], dz = v[2] + 0.5 - contacts[c][2];
-                        float r = (float)sqrt(dx * dx + dy * dy + dz * dz);
-                        float wc = r < a ? 0.0f : r < bb ? (r - a) / (bb - a) : 1.0f;
-                        if (wc < w) w = wc;
-                    }
-                omega[i] = w;
-            }
+    const size_t total = (size_t)sx * sy * sz;
+    for (size_t i = 0; i < total; i++) e->empty[i] = 1, e->omega[i] = 1.0f;
+    for (int z = 1; z < sz - 1; z++)
+        for (int y = 1; y < sy - 1; y++) {
+            /* the box less its border lies inside the owner array (it bounds the rock's voxels) */
+            const int32_t *owner = b->owner + ((size_t)(lo[2] + z - b->vlo[2]) * b->vdim[1] + (lo[1] + y - b->vlo[1])) * b->vdim[0] +
+                                   (lo[0] - b->vlo[0]);
+            uint8_t *empty = e->empty + ((size_t)z * sy + y) * sx;
+            for (int x = 1; x < sx - 1; x++) empty[x] = owner[x] != self;
+        }
+    for (size_t i = 0; i < total; i++) e->rho[i] = e->empty[i] ? 0.0f : 1.0f;
+    damping(e->omega, e->empty, lo, size, contacts, contact_count, a, bb);
+    count_empty_neighbours(e, size);
+    size_t active = 0;   /* the surface voxels that can erode (kept by advancing the count) */
+    for (size_t i = 0; i < total; i++) {
+        e->active[active] = (uint32_t)i;
+        active += !e->empty[i] & (e->omega[i] > 0.0f) & (e->faces[i] > 0);
+    }
     const float rate = params->desc.erosion_rate;
-    const size_t plane = (size_t)sx * sy;
+    const ptrdiff_t plane = (ptrdiff_t)sx * sy, face[6] = { -1, 1, -sx, sx, -plane, plane };
     for (int step = 0; step < params->desc.erosion_steps; step++) {
-        memcpy(scratch, rho, total * sizeof *rho);
-        for (int z = 1; z < sz - 1; z++)
-            for (int y = 1; y < sy - 1; y++)
-                for (int x = 1; x < sx - 1; x++) {
-                    size_t i = ((size_t)z * sy + y) * sx + x;
-                    if (scratch[i] <= 0.0f || omega[i] <= 0.0f) continue;
-                    if (scratch[i - 1] > 0.0f && scratch[i + 1] > 0.0f && scratch[i - sx] > 0.0f && scratch[i + sx] > 0.0f &&
-                        scratch[i - plane] > 0.0f && scratch[i + plane] > 0.0f)
-                        continue;   /* not at the surface */
-                    int outside = 0;
-                    for (int dz = -1; dz <= 1; dz++)
-                        for (int dy = -1; dy <= 1; dy++)
-                            for (int dx = -1; dx <= 1; dx++)
-                                outside += scratch[i + (ptrdiff_t)dz * (ptrdiff_t)plane + dy * sx + dx] <= 0.0f;
-                    float value = scratch[i] - rate * ((float)outside / 26.0f) * omega[i];
-                    rho[i] = value > 0.0f ? value : 0.0f;
-                }
+        size_t kept = 0, emptied = 0;
+        for (size_t k = 0; k < active; k++) {
+            uint32_t i = e->active[k];
+            float value = e->rho[i] - rate * ((float)e->outside[i] / 26.0f) * e->omega[i];
+            if (value > 0.0f) e->rho[i] = value, e->active[kept++] = i;
+            else e->rho[i] = 0.0f, e->emptied[emptied++] = i;
+        }
+        active = kept;
+        for (size_t k = 0; k < emptied; k++) {
+            uint8_t *outside = e->outside + e->emptied[k];
+            for (ptrdiff_t dz = -plane; dz <= plane; dz += plane)
+                for (ptrdiff_t dy = -sx; dy <= sx; dy += sx)
+                    for (ptrdiff_t dx = -1; dx <= 1; dx++) outside[dz + dy + dx]++;
+            outside[0]--;   /* itself */
+            for (int f = 0; f < 6; f++) {   /* a voxel that reaches the surface joins the list */
+                size_t j = (size_t)((ptrdiff_t)e->emptied[k] + face[f]);
+                if (e->faces[j]++ == 0 && !e->empty[j] && e->omega[j] > 0.0f) e->active[active++] = (uint32_t)j;
+            }
+        }
     }
 }
 
@@ -312,9 +445,12 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
             }
 
     const size_t box_max = (size_t)(2 * m + 3) * (2 * m + 3) * (2 * m + 3);
-    float *rho = core_alloc(box_max * sizeof *rho), *scratch = core_alloc(box_max * sizeof *scratch);
-    float *omega = core_alloc(box_max * sizeof *omega);
+    erosion_buffers erosion;
+    erosion_buffers_make(&erosion, box_max);
+    const float *rho = erosion.rho;
     double (*points)[3] = core_alloc(27 * ROCKS__MAX_SEEDS_PER_CELL * sizeof *points);
+    const size_t memo_count = (size_t)(rocks ? rocks : 1) * 27 * (size_t)params->seeds_max;
+    contact_memo *memo = core_calloc(memo_count, sizeof *memo);
     const float tile_scale = 1.0f / (float)(b.n * m);
     for (uint32_t s = 0; s < b.seed_count; s++) {
         if (slot[s] < 0) continue;
@@ -334,7 +470,7 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
                         const rocks__seed *q = &b.seeds[b.cell_first[cs] + i];
                         if (q == p) continue;
                         double point[3];
-                        if (!contact_point(&b, p, q, point)) continue;
+                        if (!remembered_contact(&b, memo, slot, p, q, point)) continue;
                         memcpy(points[points_count++], point, sizeof point);
                         size_t old_cap = out->contact_cap;
                         GROW(out, contacts, contact_cap, out->contact_count + 1);
@@ -364,7 +500,7 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
             lo[a] = box[r][a] - 1;
             size[a] = box[r][3 + a] - box[r][a] + 3;
         }
-        erode(&b, (int32_t)s, lo, size, (const double (*)[3])points, points_count, rho, scratch, omega);
+        erode(&b, (int32_t)s, lo, size, (const double (*)[3])points, points_count, &erosion);
         bool kept = rocks__rock_mesh(params, rho, lo, size, p, out, &rock);
         if (!kept && !options->keep_empty) {
             out->contact_count = contact_first;   /* a rock without contacts; drop it */
@@ -406,9 +542,8 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
         }
     }
     core_free(points, 27 * ROCKS__MAX_SEEDS_PER_CELL * sizeof *points);
-    core_free(rho, box_max * sizeof *rho);
-    core_free(scratch, box_max * sizeof *scratch);
-    core_free(omega, box_max * sizeof *omega);
+    core_free(memo, memo_count * sizeof *memo);
+    erosion_buffers_free(&erosion);
     core_free(box, (rocks ? rocks : 1) * sizeof *box);
     core_free(count, (rocks ? rocks : 1) * sizeof *count);
     core_free(slot, b.seed_count * sizeof *slot);

@@ -454,7 +454,7 @@ Test(rocks_tiles, every_level_of_every_rock_is_closed) {
     }
     cr_expect_eq(empty, 0);
     cr_expect_eq(open, 0, "%d rock levels are not closed", open);
-    /* the levels shrink as promised: about 1/3 and 1/10 of LOD 0 (meshoptimizer stops early where
+    /* the levels shrink as promised: about 1/4 and 1/12 of LOD 0 (the simplifier stops early where
      * collapsing would change the shape too much, so only roughly) */
     cr_expect_lt(triangles[1], 0.6 * triangles[0]);
     cr_expect_lt(triangles[2], 0.3 * triangles[0]);
