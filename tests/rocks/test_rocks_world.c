@@ -333,6 +333,15 @@ Test(rocks_place, placement_is_the_definition_applied_to_every_rock) {
     cr_assert_gt(p.count, 100, "%u rocks in the strata", p.count);
     cr_assert_gt(why.buried, 50, "%d buried", why.buried);
     cr_assert_gt(why.too_few, 50, "%d with too few anchors in", why.too_few);
+    /* an index made once places the same bytes as the one a call makes for itself */
+    rocks_place_index *index = rocks_place_index_create(set);
+    rocks_placement with = { 0 };
+    cr_assert(rocks_place_box(&(rocks_place_desc){ .tiles = set, .index = index, .world = strata }, boxes[0][0],
+                              boxes[0][1], &with));
+    cr_assert_eq(with.count, p.count);
+    cr_assert(memcmp(with.instances, p.instances, p.count * sizeof *p.instances) == 0);
+    rocks_place_index_destroy(index);
+    rocks_placement_free(&with);
     rocks_placement_free(&p);
     terrain_world_destroy(strata);
     terrain_world_destroy(pile);
@@ -482,6 +491,21 @@ Test(rocks_place, the_player_stands_on_a_rock_pile) {
                  fabs(player.position[2] - start_z));
     rocks_placement_free(&p);
     terrain_world_destroy(world);
+    rocks_tiles_destroy(set);
+}
+
+Test(rocks_place, an_index_of_another_tile_set_is_refused) {
+    rocks_tileset *set = small_set(), *other = small_set();
+    terrain_world *world = pile_world(false, NULL);
+    rocks_place_index *index = rocks_place_index_create(other);
+    rocks_placement p = { 0 };
+    cr_assert_not(rocks_place_box(&(rocks_place_desc){ .tiles = set, .index = index, .world = world }, PILE_MIN,
+                                  PILE_MAX, &p));
+    cr_assert_null(rocks_place_index_create(NULL));
+    rocks_place_index_destroy(index);
+    rocks_placement_free(&p);
+    terrain_world_destroy(world);
+    rocks_tiles_destroy(other);
     rocks_tiles_destroy(set);
 }
 
