@@ -47,17 +47,23 @@ static inline int64_t floor_int(double v) {
 
 /* ---- the index: the tile set laid out for placement ------------------------------------------ */
 
-/* One entry of a tile, with its anchors' heights in the tile's frame (offset + anchor, tile units;
- * rounded, for culling only). */
+/* One entry of a tile, with what deciding it in the tile's frame reads (tile units, offset +
+ * rock coordinate; rounded, so compared with a margin), in one place. */
 typedef struct index_entry {
-    float y_lo, y_hi;
+    float y_lo, y_hi;                 /* its anchors' lowest and highest height */
+    float seed[3];
     uint32_t entry;                   /* in set->entries */
+    uint32_t heights;                 /* its anchors' heights: index.anchor_y[heights …] */
+    uint16_t anchor_count;
+    int8_t offset_y;                  /* the entry's offset[1] */
+    uint8_t reserved;
 } index_entry;
 
 /* What placement reads of a rock, in one place (region frame, tile units). */
 typedef struct index_rock {
     float seed[3];
     float box[2][3];                  /* the lowest and highest coordinate of its anchors */
+    float mesh[2][3];                 /* its mesh's bounds (rocks_rock.bounds_min, _max) */
     uint32_t anchor_first, anchor_count;   /* its anchors' heights in index.anchor_y */
 } index_rock;
 
@@ -94,6 +100,8 @@ static void index_rocks(rocks_place_index *index) {
         index_rock *out = &index->rocks[r];
         const float *first = rock->anchor_count ? set->anchors[rock->anchor_first] : rock->seed;
         memcpy(out->seed, rock->seed, sizeof out->seed);
+        memcpy(out->mesh[0], rock->bounds_min, sizeof out->mesh[0]);
+        memcpy(out->mesh[1], rock->bounds_max, sizeof out->mesh[1]);
         memcpy(out->box[0], first, sizeof out->box[0]);
         memcpy(out->box[1], first, sizeof out->box[1]);
         out->anchor_first = rock->anchor_first, out->anchor_count = rock->anchor_count;
@@ -118,8 +126,11 @@ static void index_tiles(rocks_place_index *index) {
         for (uint32_t e = 0; e < tile->count; e++) {
             const rocks_tile_entry *entry = &set->entries[tile->first + e];
             const index_rock *rock = &index->rocks[entry->rock];
-            out[e] = (index_entry){ (float)entry->offset[1] + rock->box[0][1], (float)entry->offset[1] + rock->box[1][1],
-                                    tile->first + e };
+            out[e] = (index_entry){
+                .y_lo = (float)entry->offset[1] + rock->box[0][1], .y_hi = (float)entry->offset[1] + rock->box[1][1],
+                .seed = { entry->offset[0] + rock->seed[0], entry->offset[1] + rock->seed[1], entry->offset[2] + rock->seed[2] },
+                .entry = tile->first + e, .heights = rock->anchor_first, .anchor_count = (uint16_t)rock->anchor_count,
+                .offset_y = entry->offset[1] };
             index->tallest = max_f(index->tallest, out[e].y_hi - out[e].y_lo);
             index->y_lo = min_f(index->y_lo, out[e].y_lo), index->y_hi = max_f(index->y_hi, out[e].y_hi);
         }
@@ -644,26 +655,24 @@ static bool frame_rejects(const placer *p, const tile_frame *f, const tile_colum
 static int frame_kept_one(const placer *p, const tile_frame *f, const index_entry *e) {
     float m = f->margin, lo = f->lo[0], hi = f->hi[0];
     if (e->y_hi < lo - m || e->y_lo >= hi + m) return 0;       /* clear of the layer (runs: entries by height) */
-    const rocks_tile_entry *entry = &p->set->entries[e->entry];
-    const index_rock *rock = &p->index->rocks[entry->rock];
-    uint32_t n = rock->anchor_count;
+    uint32_t n = e->anchor_count;
     if (n == 0) return 0;
-    float seed[3] = { entry->offset[0] + rock->seed[0], entry->offset[1] + rock->seed[1], entry->offset[2] + rock->seed[2] };
     if (f->any_edge) {
-        frame_says in_box = frame_in_box(f, seed);
+        frame_says in_box = frame_in_box(f, e->seed);
         if (in_box != FRAME_YES) return in_box == FRAME_NO ? 0 : -1;
     }
+    float y = e->seed[1];
+    int by = (y >= f->bury_lo + m) & (y < f->bury_hi - m), away = (y < f->bury_lo - m) | (y >= f->bury_hi + m);
+    int buried = by & (y < f->bury_top - m), safe = away | (by & (y >= f->bury_top + m));
+    int above_lo = e->y_lo >= lo + m, below_hi = e->y_hi < hi - m;
+    if (!(buried | safe)) return -1;
+    if (above_lo & below_hi) return safe;                       /* every anchor in: the burial decides */
+    /* across hi only, the need-th height from the bottom decides; across lo, the need-th from the top */
     uint32_t need = anchors_needed(p, n);
-    int above_lo = e->y_lo >= lo + m, below_hi = e->y_hi < hi - m, all_in = above_lo & below_hi;
-    /* crossing hi only: the need-th height from the bottom decides; crossing lo: from the top */
-    float deciding = entry->offset[1] + p->index->anchor_y[rock->anchor_first + (above_lo ? need - 1 : n - need)];
+    float deciding = (float)e->offset_y + p->index->anchor_y[e->heights + (above_lo ? need - 1 : n - need)];
     int side = frame_side(deciding, above_lo ? hi : lo, m);
-    int anchors_in = all_in | (above_lo ? side < 0 : side > 0);
-    int anchors_close = (!all_in) & ((side == 0) | !(above_lo | below_hi));
-    int by = (seed[1] >= f->bury_lo + m) & (seed[1] < f->bury_hi - m);
-    int away = (seed[1] < f->bury_lo - m) | (seed[1] >= f->bury_hi + m);
-    int buried = by & (seed[1] < f->bury_top - m), safe = away | (by & (seed[1] >= f->bury_top + m));
-    if (anchors_close | !(buried | safe)) return -1;
+    int anchors_in = above_lo ? side < 0 : side > 0;
+    if ((side == 0) | !(above_lo | below_hi)) return -1;
     return anchors_in & safe;
 }
 
@@ -683,7 +692,7 @@ static bool frame_kept(const placer *p, const tile_frame *f, const tile_column *
     return entry_kept(p, column, e->entry, i, j, k);
 }
 
-static void placement_push(rocks_placement *out, const rocks_instance *instance, const rocks_rock *rock, double tile) {
+static void placement_push(rocks_placement *out, const rocks_instance *instance, const index_rock *rock, double tile) {
     if (out->count == out->capacity) {
         uint32_t capacity = out->capacity ? out->capacity * 2 : 64;
         out->instances = core_realloc(out->instances, out->capacity * sizeof *out->instances,
@@ -692,8 +701,8 @@ static void placement_push(rocks_placement *out, const rocks_instance *instance,
     }
     out->instances[out->count++] = *instance;
     for (int a = 0; a < 3; a++) {
-        out->bounds_min[a] = min_f(out->bounds_min[a], instance->position[a] + (float)(rock->bounds_min[a] * tile));
-        out->bounds_max[a] = max_f(out->bounds_max[a], instance->position[a] + (float)(rock->bounds_max[a] * tile));
+        out->bounds_min[a] = min_f(out->bounds_min[a], instance->position[a] + (float)(rock->mesh[0][a] * tile));
+        out->bounds_max[a] = max_f(out->bounds_max[a], instance->position[a] + (float)(rock->mesh[1][a] * tile));
     }
 }
 
@@ -709,7 +718,7 @@ static void place_entry(placer *p, uint32_t e, int64_t i, int64_t j, int64_t k) 
                                        ((uint64_t)j * 0xc2b2ae3d27d4eb4full) ^ ((uint64_t)k * 0x165667b19e3779f9ull) ^
                                        ((uint64_t)e << 40)),
     };
-    placement_push(p->out, &instance, &p->set->rocks[entry->rock], p->tile);
+    placement_push(p->out, &instance, &p->index->rocks[entry->rock], p->tile);
 }
 
 static int tile_at(const placer *p, int64_t i, int64_t j, int64_t k) {
