@@ -63,7 +63,7 @@ typedef struct index_entry {
 typedef struct index_rock {
     float seed[3];
     float box[2][3];                  /* the lowest and highest coordinate of its anchors */
-    float mesh[2][3];                 /* its mesh's bounds (rocks_rock.bounds_min, _max) */
+    float mesh_lo[4], mesh_hi[4];     /* its mesh's bounds (rocks_rock.bounds_min, _max; 4th: 0) */
     uint32_t anchor_first, anchor_count;   /* its anchors' heights in index.anchor_y */
 } index_rock;
 
@@ -100,8 +100,9 @@ static void index_rocks(rocks_place_index *index) {
         index_rock *out = &index->rocks[r];
         const float *first = rock->anchor_count ? set->anchors[rock->anchor_first] : rock->seed;
         memcpy(out->seed, rock->seed, sizeof out->seed);
-        memcpy(out->mesh[0], rock->bounds_min, sizeof out->mesh[0]);
-        memcpy(out->mesh[1], rock->bounds_max, sizeof out->mesh[1]);
+        memcpy(out->mesh_lo, rock->bounds_min, sizeof rock->bounds_min);
+        memcpy(out->mesh_hi, rock->bounds_max, sizeof rock->bounds_max);
+        out->mesh_lo[3] = out->mesh_hi[3] = 0.0f;
         memcpy(out->box[0], first, sizeof out->box[0]);
         memcpy(out->box[1], first, sizeof out->box[1]);
         out->anchor_first = rock->anchor_first, out->anchor_count = rock->anchor_count;
@@ -692,33 +693,54 @@ static bool frame_kept(const placer *p, const tile_frame *f, const tile_column *
     return entry_kept(p, column, e->entry, i, j, k);
 }
 
-static void placement_push(rocks_placement *out, const rocks_instance *instance, const index_rock *rock, double tile) {
-    if (out->count == out->capacity) {
-        uint32_t capacity = out->capacity ? out->capacity * 2 : 64;
-        out->instances = core_realloc(out->instances, out->capacity * sizeof *out->instances,
-                                      capacity * sizeof *out->instances);
-        out->capacity = capacity;
-    }
-    out->instances[out->count++] = *instance;
-    for (int a = 0; a < 3; a++) {
-        out->bounds_min[a] = min_f(out->bounds_min[a], instance->position[a] + (float)(rock->mesh[0][a] * tile));
-        out->bounds_max[a] = max_f(out->bounds_max[a], instance->position[a] + (float)(rock->mesh[1][a] * tile));
-    }
+/* Room for `more` instances (doubling, as one push at a time would). */
+static void placement_reserve(rocks_placement *out, uint32_t more) {
+    uint32_t capacity = out->capacity;
+    while (out->count + more > capacity) capacity = capacity ? capacity * 2 : 64;
+    if (capacity == out->capacity) return;
+    out->instances = core_realloc(out->instances, out->capacity * sizeof *out->instances, capacity * sizeof *out->instances);
+    out->capacity = capacity;
 }
 
-static void place_entry(placer *p, uint32_t e, int64_t i, int64_t j, int64_t k) {
-    const rocks_tile_entry *entry = &p->set->entries[e];
-    double origin[3];
-    entry_origin(p, entry, i, j, k, origin);
-    rocks_instance instance = {
-        .position = { (float)(origin[0] - p->out->origin[0]), (float)(origin[1] - p->out->origin[1]),
-                      (float)(origin[2] - p->out->origin[2]) },
-        .rock = entry->rock,
-        .key = (uint32_t)core_hash_u64(p->seed ^ ((uint64_t)i * 0x9e3779b97f4a7c15ull) ^
-                                       ((uint64_t)j * 0xc2b2ae3d27d4eb4full) ^ ((uint64_t)k * 0x165667b19e3779f9ull) ^
-                                       ((uint64_t)e << 40)),
-    };
-    placement_push(p->out, &instance, &p->index->rocks[entry->rock], p->tile);
+/* The kept entries of a tile (bits of p->kept), placed in the tile's order. What depends on the
+ * tile alone is worked out once: each offset's position and the key's lattice part. The bounds
+ * come from the smallest and largest mesh bound of the rocks at each of the 27 offsets:
+ * x + (float)(b·tile) rounds monotonically in b, so that is the bound the instances one by one
+ * would give. */
+static void place_kept(placer *p, const rocks_tile *tile, size_t words, int64_t i, int64_t j, int64_t k) {
+    rocks_placement *out = p->out;
+    const int64_t lattice[3] = { i, j, k };
+    float position[3][3];             /* [axis][offset + 1] */
+    float lo[27][4], hi[27][4];       /* [offset (o + 1)·(1, 3, 9)][axis] */
+    for (int a = 0; a < 3; a++)
+        for (int o = 0; o < 3; o++) position[a][o] = (float)(((double)lattice[a] + (o - 1)) * p->tile - out->origin[a]);
+    for (int c = 0; c < 27; c++)
+        for (int a = 0; a < 4; a++) lo[c][a] = INFINITY, hi[c][a] = -INFINITY;
+    uint32_t kept = 0;
+    for (size_t w = 0; w < words; w++) kept += (uint32_t)__builtin_popcountll(p->kept[w]);
+    placement_reserve(out, kept);
+    uint64_t key = p->seed ^ ((uint64_t)i * 0x9e3779b97f4a7c15ull) ^ ((uint64_t)j * 0xc2b2ae3d27d4eb4full) ^
+                   ((uint64_t)k * 0x165667b19e3779f9ull);
+    rocks_instance *instance = out->instances + out->count;
+    for (size_t w = 0; w < words; w++)
+        for (uint64_t bits = p->kept[w]; bits; bits &= bits - 1) {
+            uint32_t e = tile->first + (uint32_t)(w * 64 + (uint32_t)__builtin_ctzll(bits));
+            const rocks_tile_entry *entry = &p->set->entries[e];
+            const index_rock *rock = &p->index->rocks[entry->rock];
+            int ox = entry->offset[0] + 1, oy = entry->offset[1] + 1, oz = entry->offset[2] + 1, c = ox + 3 * oy + 9 * oz;
+            *instance++ = (rocks_instance){ .position = { position[0][ox], position[1][oy], position[2][oz] },
+                                            .rock = entry->rock, .key = (uint32_t)core_hash_u64(key ^ ((uint64_t)e << 40)) };
+            for (int a = 0; a < 4; a++) lo[c][a] = min_f(lo[c][a], rock->mesh_lo[a]), hi[c][a] = max_f(hi[c][a], rock->mesh_hi[a]);
+        }
+    out->count += kept;
+    for (int c = 0; c < 27; c++) {
+        if (lo[c][0] > hi[c][0]) continue;
+        const int o[3] = { c % 3, c / 3 % 3, c / 9 };
+        for (int a = 0; a < 3; a++) {
+            out->bounds_min[a] = min_f(out->bounds_min[a], position[a][o[a]] + (float)(lo[c][a] * p->tile));
+            out->bounds_max[a] = max_f(out->bounds_max[a], position[a][o[a]] + (float)(hi[c][a] * p->tile));
+        }
+    }
 }
 
 static int tile_at(const placer *p, int64_t i, int64_t j, int64_t k) {
@@ -780,9 +802,7 @@ static void place_tile(placer *p, const tile_column *column, int64_t i, int64_t 
         p->kept[local / 64] |= (uint64_t)kept << (local % 64);       /* no branch on the answer */
         any |= kept;
     }
-    for (size_t w = 0; any && w < words; w++)
-        for (uint64_t bits = p->kept[w]; bits; bits &= bits - 1)
-            place_entry(p, tile->first + (uint32_t)(w * 64 + (uint32_t)__builtin_ctzll(bits)), i, j, k);
+    if (any) place_kept(p, tile, words, i, j, k);
 }
 
 /* The tiles of lattice [lo, hi), in lattice order (k, j, i); each row of tile columns is worked out
