@@ -72,6 +72,8 @@ struct rocks_place_index {
     index_rock *rocks;
     float *anchor_y;                  /* each rock's anchor heights, ascending */
     index_entry *entries;             /* tile t's are [tiles[t].first, + count), by y_lo */
+    float (*entry_xz)[4];             /* beside each: its anchors' x and z ranges, tile frame
+                                         (x_lo, x_hi, z_lo, z_hi; rounded) */
     float reach[3];                   /* largest |anchor − seed| of any rock, per axis (tile units) */
     float tallest;                    /* largest y_hi − y_lo */
     float y_lo, y_hi;                 /* over every entry */
@@ -136,6 +138,13 @@ static void index_tiles(rocks_place_index *index) {
             index->y_lo = min_f(index->y_lo, out[e].y_lo), index->y_hi = max_f(index->y_hi, out[e].y_hi);
         }
         qsort(out, tile->count, sizeof *out, index_entry_order);
+        for (uint32_t e = 0; e < tile->count; e++) {
+            const rocks_tile_entry *entry = &set->entries[out[e].entry];
+            const index_rock *rock = &index->rocks[entry->rock];
+            float *xz = index->entry_xz[tile->first + e];
+            xz[0] = (float)entry->offset[0] + rock->box[0][0], xz[1] = (float)entry->offset[0] + rock->box[1][0];
+            xz[2] = (float)entry->offset[2] + rock->box[0][2], xz[3] = (float)entry->offset[2] + rock->box[1][2];
+        }
         if (tile->count > index->most_entries) index->most_entries = tile->count;
     }
 }
@@ -147,6 +156,7 @@ rocks_place_index *rocks_place_index_create(const rocks_tileset *set) {
     index->rocks = core_alloc((set->rock_count ? set->rock_count : 1) * sizeof *index->rocks);
     index->anchor_y = core_alloc((set->anchor_count ? set->anchor_count : 1) * sizeof *index->anchor_y);
     index->entries = core_alloc((set->entry_count ? set->entry_count : 1) * sizeof *index->entries);
+    index->entry_xz = core_alloc((set->entry_count ? set->entry_count : 1) * sizeof *index->entry_xz);
     index_rocks(index);
     index_tiles(index);
     return index;
@@ -158,6 +168,7 @@ void rocks_place_index_destroy(rocks_place_index *index) {
     core_free(index->rocks, (set->rock_count ? set->rock_count : 1) * sizeof *index->rocks);
     core_free(index->anchor_y, (set->anchor_count ? set->anchor_count : 1) * sizeof *index->anchor_y);
     core_free(index->entries, (set->entry_count ? set->entry_count : 1) * sizeof *index->entries);
+    core_free(index->entry_xz, (set->entry_count ? set->entry_count : 1) * sizeof *index->entry_xz);
     core_free(index, sizeof *index);
 }
 
@@ -515,6 +526,8 @@ typedef struct tile_frame {
     bool box_edge[3];                 /* the box's sides cut the tile on that axis (else every
                                          seed is surely in) */
     bool any_edge;
+    float column_x, column_z;         /* the tile's corner in the table's columns (x − x0 metres) */
+    float tile;                       /* metres */
     float margin;
 } tile_frame;
 
@@ -539,6 +552,9 @@ static void tile_frame_make(const placer *p, const tile_column *column, int64_t 
         f->box_edge[a] = !(f->box_lo[a] < -2 * f->margin && f->box_hi[a] >= 1 + 2 * f->margin);   /* seeds: [0, 1) */
     }
     f->any_edge = f->box_edge[0] || f->box_edge[1] || f->box_edge[2];
+    f->column_x = (float)(base[0] - (double)t->x0 * TERRAIN_COLUMN_SIZE);
+    f->column_z = (float)(base[2] - (double)t->z0 * TERRAIN_COLUMN_SIZE);
+    f->tile = (float)p->tile;
 }
 
 /* 1: v is surely at or above the bound, −1: surely below, 0: too close to tell in floats. */
@@ -622,17 +638,15 @@ static frame_says frame_band(const placer *p, const tile_frame *f, const index_e
  * outside the box, or its anchors' heights surely clear of the rock in every column they can
  * reach (the columns under its anchor box grown by the margin). */
 static bool frame_rejects(const placer *p, const tile_frame *f, const tile_column *column, const index_entry *e,
-                          int64_t i, int64_t j, int64_t k) {
-    const rocks_tile_entry *entry = &p->set->entries[e->entry];
-    const index_rock *rock = &p->index->rocks[entry->rock];
-    float seed[3] = { entry->offset[0] + rock->seed[0], entry->offset[1] + rock->seed[1], entry->offset[2] + rock->seed[2] };
-    if (frame_in_box(f, seed) == FRAME_NO) return true;
+                          const float xz[4], int64_t j) {
+    if (frame_in_box(f, e->seed) == FRAME_NO) return true;
     const column_table *t = p->table;
-    double m = f->margin;
-    int64_t x0 = floor_int(((double)i + entry->offset[0] + rock->box[0][0] - m) * p->tile) - t->x0;
-    int64_t x1 = floor_int(((double)i + entry->offset[0] + rock->box[1][0] + m) * p->tile) - t->x0;
-    int64_t z0 = floor_int(((double)k + entry->offset[2] + rock->box[0][2] - m) * p->tile) - t->z0;
-    int64_t z1 = floor_int(((double)k + entry->offset[2] + rock->box[1][2] + m) * p->tile) - t->z0;
+    /* the table's columns under the anchors, a superset: the margin covers the floats' rounding
+     * (coordinates of at most a few hundred metres here); truncation is floor at or above 0, and
+     * below 0 there is no column to miss */
+    float grow = f->margin * f->tile + 1e-3f;
+    int64_t x0 = (int64_t)(f->column_x + xz[0] * f->tile - grow), x1 = (int64_t)(f->column_x + xz[1] * f->tile + grow);
+    int64_t z0 = (int64_t)(f->column_z + xz[2] * f->tile - grow), z1 = (int64_t)(f->column_z + xz[3] * f->tile + grow);
     x0 = x0 < column->x0 ? column->x0 : x0, x1 = x1 > column->x1 ? column->x1 : x1;
     z0 = z0 < column->z0 ? column->z0 : z0, z1 = z1 > column->z1 ? column->z1 : z1;
     float span_lo = INFINITY, span_hi = -INFINITY;
@@ -647,6 +661,7 @@ static bool frame_rejects(const placer *p, const tile_frame *f, const tile_colum
                 span_lo = min_f(span_lo, span[0]), span_hi = max_f(span_hi, span[1]);
             }
     }
+    double m = f->margin;
     return ((double)j + e->y_hi + m) * p->tile < span_lo || ((double)j + e->y_lo - m) * p->tile > span_hi;
 }
 
@@ -796,7 +811,8 @@ static void place_tile(placer *p, const tile_column *column, int64_t i, int64_t 
         int kept = !column ? entry_kept(p, column, sorted[s].entry, i, j, k)
                    : column->same && frame.count == 1 ? frame_kept_one(p, &frame, &sorted[s])
                    : column->same ? frame_kept(p, &frame, column, &sorted[s], i, j, k)
-                   : !frame_rejects(p, &frame, column, &sorted[s], i, j, k) && entry_kept(p, column, sorted[s].entry, i, j, k);
+                   : !frame_rejects(p, &frame, column, &sorted[s], p->index->entry_xz[s], j) &&
+                     entry_kept(p, column, sorted[s].entry, i, j, k);
         if (kept < 0) kept = entry_kept(p, column, sorted[s].entry, i, j, k);
         uint32_t local = sorted[s].entry - tile->first;
         p->kept[local / 64] |= (uint64_t)kept << (local % 64);       /* no branch on the answer */
