@@ -642,9 +642,9 @@ static bool frame_rejects(const placer *p, const tile_frame *f, const tile_colum
     if (frame_in_box(f, e->seed) == FRAME_NO) return true;
     const column_table *t = p->table;
     /* the table's columns under the anchors, a superset: the margin covers the floats' rounding
-     * (coordinates of at most a few hundred metres here); truncation is floor at or above 0, and
-     * below 0 there is no column to miss */
-    float grow = f->margin * f->tile + 1e-3f;
+     * (a few ulps of coordinates no larger than the table); truncation is floor at or above 0,
+     * and below 0 there is no column to miss */
+    float grow = f->margin * f->tile + 1e-3f + 1e-6f * (float)(t->w + t->d);
     int64_t x0 = (int64_t)(f->column_x + xz[0] * f->tile - grow), x1 = (int64_t)(f->column_x + xz[1] * f->tile + grow);
     int64_t z0 = (int64_t)(f->column_z + xz[2] * f->tile - grow), z1 = (int64_t)(f->column_z + xz[3] * f->tile + grow);
     x0 = x0 < column->x0 ? column->x0 : x0, x1 = x1 > column->x1 ? column->x1 : x1;

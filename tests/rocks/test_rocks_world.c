@@ -325,7 +325,8 @@ Test(rocks_place, placement_is_the_definition_applied_to_every_rock) {
     reference_counts why = { 0 };
     expect_reference(set, pile, PILE_MIN, PILE_MAX, &why);
     /* boxes off the tile lattice and the chunk grid, across chunk borders and negative coordinates */
-    const double boxes[][2][3] = { { { -7.5, 3.25, -12.0 }, { 21.0, 19.0, 9.5 } }, { { 20.2, 6.0, 27.7 }, { 45.1, 16.5, 41.0 } } };
+    const double boxes[][2][3] = { { { -7.5, 3.25, -12.0 }, { 21.0, 19.0, 9.5 } }, { { 20.2, 6.0, 27.7 }, { 45.1, 16.5, 41.0 } },
+                                   { { 100000.5, 6.0, -70003.2 }, { 100013.0, 14.0, -69990.0 } } };   /* 100 km out */
     for (size_t b = 0; b < sizeof boxes / sizeof boxes[0]; b++) expect_reference(set, strata, boxes[b][0], boxes[b][1], &why);
     /* the strata hold rocks of every kind: kept, buried under the sand, dropped with some anchors in */
     rocks_placement p = { 0 };
