@@ -803,20 +803,29 @@ static void place_tile(placer *p, const tile_column *column, int64_t i, int64_t 
     if (from == to) return;
     size_t words = (tile->count + 63) / 64;
     memset(p->kept, 0, words * sizeof *p->kept);
-    bool any = false;
+    int any = 0;
     tile_frame frame;
     if (column) tile_frame_make(p, column, i, j, k, &frame);
-    for (uint32_t s = from; s < to; s++) {
-        if (sorted[s].y_hi < window[0]) continue;
-        int kept = !column ? entry_kept(p, column, sorted[s].entry, i, j, k)
-                   : column->same && frame.count == 1 ? frame_kept_one(p, &frame, &sorted[s])
-                   : column->same ? frame_kept(p, &frame, column, &sorted[s], i, j, k)
-                   : !frame_rejects(p, &frame, column, &sorted[s], p->index->entry_xz[s], j) &&
-                     entry_kept(p, column, sorted[s].entry, i, j, k);
-        if (kept < 0) kept = entry_kept(p, column, sorted[s].entry, i, j, k);
-        uint32_t local = sorted[s].entry - tile->first;
-        p->kept[local / 64] |= (uint64_t)kept << (local % 64);       /* no branch on the answer */
-        any |= kept;
+    if (column && column->same && frame.count == 1) {   /* the usual case, a loop of its own */
+        for (uint32_t s = from; s < to; s++) {
+            if (sorted[s].y_hi < window[0]) continue;
+            int kept = frame_kept_one(p, &frame, &sorted[s]);
+            if (kept < 0) kept = entry_kept(p, column, sorted[s].entry, i, j, k);
+            uint32_t local = sorted[s].entry - tile->first;
+            p->kept[local / 64] |= (uint64_t)kept << (local % 64);   /* no branch on the answer */
+            any |= kept;
+        }
+    } else {
+        for (uint32_t s = from; s < to; s++) {
+            if (sorted[s].y_hi < window[0]) continue;
+            int kept = !column ? entry_kept(p, column, sorted[s].entry, i, j, k)
+                       : column->same ? frame_kept(p, &frame, column, &sorted[s], i, j, k)
+                       : !frame_rejects(p, &frame, column, &sorted[s], p->index->entry_xz[s], j) &&
+                         entry_kept(p, column, sorted[s].entry, i, j, k);
+            uint32_t local = sorted[s].entry - tile->first;
+            p->kept[local / 64] |= (uint64_t)kept << (local % 64);
+            any |= kept;
+        }
     }
     if (any) place_kept(p, tile, words, i, j, k);
 }
