@@ -201,18 +201,19 @@ bool rocks_tile_write_ply(const rocks_tileset *set, int t, const char *path, cha
  */
 typedef bool (*rocks_support_fn)(void *user, const double point[3]);
 
-/* The tile set laid out for placement: each rock's anchor box, each tile's rocks by the height of
- * their lowest anchor (about 1.3 MB for the default set, a few ms to make). Read-only once made:
- * any number of threads may place with one index. It reads the set's rocks and anchors (not its
- * meshes), so it outlives rocks_tiles_release_meshes but not the set. */
+/* The tile set laid out for placement: each rock's anchor box and sorted anchor heights, each
+ * tile's rocks by the height of their lowest anchor (5.3 MB for the default set, about 10 ms to
+ * make). Read-only once made: any number of threads may place with one index. Made from the
+ * set's rocks and anchors (not its meshes), so it may be made after rocks_tiles_release_meshes;
+ * destroy it before the set. */
 typedef struct rocks_place_index rocks_place_index;
 rocks_place_index *rocks_place_index_create(const rocks_tileset *set);   /* NULL for a NULL set */
 void rocks_place_index_destroy(rocks_place_index *index);
 
 typedef struct rocks_place_desc {
     const rocks_tileset *tiles;       /* required */
-    const rocks_place_index *index;   /* made from `tiles`; NULL = one is made for the call (a few
-                                         ms: pass one to place more than once) */
+    const rocks_place_index *index;   /* made from `tiles`; NULL = one is made for the call (about
+                                         10 ms: pass one to place more than once) */
     terrain_world *world;             /* the support's stacks (when support is NULL) */
     rocks_support_fn support;         /* NULL = rock layers of `world` */
     void *support_user;

@@ -9,11 +9,18 @@
  *
  * The support of a world is its rock layers. Reading the stacks per anchor would cost a chunk
  * lookup each, so the box's columns (plus the reach of a rock) are read once into a table of
- * rock intervals. A tile set's index (rocks_place_index) holds each rock's anchor box and each
- * tile's rocks by the height of their lowest anchor, so a tile reads only the rocks whose
- * anchors reach the heights of the rock under its columns (two binary searches), and decides most
- * of them from their box alone: every anchor in, none in, or a count of heights in one layer.
- * The rest test each anchor. Every such shortcut gives what the anchor-by-anchor test gives.
+ * rock intervals. A tile set's index (rocks_place_index) holds each rock's anchor box and sorted
+ * anchor heights and each tile's rocks by the height of their lowest anchor, so a tile reads only
+ * the rocks whose anchors reach the heights of the rock under its columns (two binary searches).
+ * Those are decided, fastest first:
+ *   - over columns that all hold the same one interval (a flat layer), in the tile's frame in
+ *     floats, where a margin proves the rounding cannot matter: every anchor in, none in, or, for
+ *     a rock across one face of the layer, the one anchor that decides the count (frame_kept_one);
+ *   - over differing columns, a quick float test that the anchors clear the rock in every column
+ *     they can reach (frame_rejects), then the exact test of entry_kept: the columns under the
+ *     anchor box (all in, none in, one shared interval: count heights), else anchor by anchor.
+ * Every shortcut gives what the anchor-by-anchor test gives (tests/rocks: placement against the
+ * definition applied to every rock of every tile).
  */
 #include "rocks_world_internal.h"
 
@@ -54,7 +61,7 @@ typedef struct index_entry {
     float seed[3];
     uint32_t entry;                   /* in set->entries */
     uint32_t heights;                 /* its anchors' heights: index.anchor_y[heights …] */
-    uint16_t anchor_count;
+    uint16_t anchor_count;            /* ROCKS__ANCHORS (16) a rock */
     int8_t offset_y;                  /* the entry's offset[1] */
     uint8_t reserved;
 } index_entry;
@@ -427,12 +434,14 @@ static void entry_origin(const placer *p, const rocks_tile_entry *entry, int64_t
     origin[2] = ((double)k + entry->offset[2]) * p->tile;
 }
 
-/* What the columns under the rock's anchor box say of its anchors (table_classify). */
+/* What the columns under the rock's anchor box say of its anchors (table_classify); the box's
+ * columns (table indices) in foot: x0, x1, z0, z1. */
 static anchors_are rock_columns(const placer *p, const tile_column *column, const double lo[3], const double hi[3],
-                                double band[2]) {
+                                double band[2], int64_t foot[4]) {
     const column_table *t = p->table;
     int64_t x0 = floor_int(lo[0]) - t->x0, x1 = floor_int(hi[0]) - t->x0;
     int64_t z0 = floor_int(lo[2]) - t->z0, z1 = floor_int(hi[2]) - t->z0;
+    foot[0] = x0, foot[1] = x1, foot[2] = z0, foot[3] = z1;
     if (column->same && x0 >= column->x0 && x1 <= column->x1 && z0 >= column->z0 && z1 <= column->z1)
         return table_classify(t, column->x0, column->x0, column->z0, column->z0, lo[1], hi[1], band);
     if (x0 >= 0 && z0 >= 0 && x1 < t->w && z1 < t->d) return table_classify(t, x0, x1, z0, z1, lo[1], hi[1], band);
@@ -490,8 +499,9 @@ static bool entry_kept(const placer *p, const tile_column *column, uint32_t e, i
     uint32_t need = anchors_needed(p, rock->anchor_count);
     if (!p->table) return anchors_inside(p, rock, origin, need) >= need;
     double lo[3], hi[3], band[2];
+    int64_t foot[4];
     rock_anchor_box(p, rock, origin, lo, hi);
-    anchors_are what = rock_columns(p, column, lo, hi, band);
+    anchors_are what = rock_columns(p, column, lo, hi, band, foot);
     if (what == ANCHORS_NONE || seed_buried(p, column, seed)) return false;
     switch (what) {
     case ANCHORS_ALL: return true;                              /* need ≤ anchor_count */
@@ -499,8 +509,7 @@ static bool entry_kept(const placer *p, const tile_column *column, uint32_t e, i
     default: break;
     }
     const column_table *t = p->table;
-    int64_t x0 = floor_int(lo[0]) - t->x0, x1 = floor_int(hi[0]) - t->x0;
-    int64_t z0 = floor_int(lo[2]) - t->z0, z1 = floor_int(hi[2]) - t->z0;
+    int64_t x0 = foot[0], x1 = foot[1], z0 = foot[2], z1 = foot[3];
     if (x0 >= 0 && z0 >= 0 && x1 < t->w && z1 < t->d && x1 - x0 <= 1 && z1 - z0 <= 1)
         return anchors_inside_2x2(p, rock, origin, x0, z0, need) >= need;
     return anchors_inside(p, rock, origin, need) >= need;
