@@ -26,6 +26,7 @@
 
 struct rocks_system {
     rocks_desc desc;
+    rocks_place_index *index;         /* the tile set laid out for placement, made once */
     rocks_place_desc place;
     ecs_component mesh_chunk, tiles;
     ecs_query *placed;                /* TerrainMeshChunk with RockTiles */
@@ -198,7 +199,9 @@ rocks_system *rocks_create(const rocks_desc *desc) {
     r->desc = *desc;
     rocks_defaults(&r->desc);
     r->renderer = renderer;
-    r->place = (rocks_place_desc){ .tiles = desc->tiles, .world = desc->world, .tile_size = r->desc.tile_size };
+    r->index = rocks_place_index_create(desc->tiles);
+    r->place = (rocks_place_desc){ .tiles = desc->tiles, .index = r->index, .world = desc->world,
+                                   .tile_size = r->desc.tile_size };
     r->mesh_chunk = mesh_chunk;
     r->tiles = ecs_component_lookup(desc->ecs, "RockTiles");
     if (!r->tiles) r->tiles = ECS_COMPONENT(desc->ecs, RockTiles);
@@ -225,6 +228,7 @@ void rocks_destroy(rocks_system *r) {
     }
     ecs_component_on_remove(r->desc.ecs, r->tiles, rock_tiles_removed, NULL);
     rocks__renderer_destroy(r->renderer);
+    rocks_place_index_destroy(r->index);
     core_free(r->focus, r->focus_capacity * sizeof *r->focus);
     core_free(r, sizeof *r);
 }

@@ -177,6 +177,178 @@ Test(rocks_place, boxes_that_partition_space_place_each_rock_once) {
     rocks_tiles_destroy(set);
 }
 
+/* ---- a brute-force reference ------------------------------------------------------------------ */
+
+/* Layers that vary from column to column: rock on bedrock, on some columns a cave (air) and a
+ * second rock layer over it, sand, a third rock layer, and on every fifth row of columns 3 m of
+ * sand that buries the rock under it. Columns hold one to three rock intervals, so a rock's
+ * footprint meets columns that differ. */
+static void strata_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
+    (void)user;
+    double u = (double)x, v = (double)z;
+    terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, GROUND - TERRAIN_FLOOR_Y);
+    terrain_stacks_builder_push(builder, TERRAIN_ROCKS, 0.5f + 1.5f * (float)(0.5 + 0.5 * sin(u * 0.7) * cos(v * 0.5)));
+    if ((x + z) % 3 == 0) {
+        terrain_stacks_builder_push(builder, TERRAIN_AIR, 0.75f);
+        terrain_stacks_builder_push(builder, TERRAIN_ROCKS, 0.5f);
+    }
+    terrain_stacks_builder_push(builder, TERRAIN_SAND, 0.25f + 0.5f * (float)((x * 7 + z * 3) % 4) / 4.0f);
+    if (x % 4 != 0) terrain_stacks_builder_push(builder, TERRAIN_ROCKS, 1.0f);
+    if (z % 5 == 0) terrain_stacks_builder_push(builder, TERRAIN_SAND, 3.0f);
+}
+
+static terrain_stacks *strata_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, strata_column, user);
+}
+
+/* The layers of the column under world (x, z). */
+static int column_layers(terrain_world *world, double x, double z, terrain_layer layers[64]) {
+    int64_t i = (int64_t)floor(x), k = (int64_t)floor(z);
+    int64_t cx = (i >= 0 ? i : i - 31) / 32, cz = (k >= 0 ? k : k - 31) / 32;
+    const terrain_stacks *stacks = terrain_world_stacks(world, (terrain_chunk_coord){ cx, cz });
+    int n = terrain_stacks_column(stacks, (int)(i - cx * 32), (int)(k - cz * 32), layers, 64);
+    return n < 64 ? n : 64;
+}
+
+/* A point is in the support when its height lies in a rock layer of its column, bottom included,
+ * top not: [lo, hi) read from the layers (sums of multiples of 1/32 m from the floor, exact). Not
+ * terrain_world_material_at, which rounds the height to a float first: the small set's voxel
+ * centres lie on the 1/32 m grid of the layers' bounds, so that rounding decides ties there. */
+static bool reference_in_rocks(terrain_world *world, double x, double y, double z) {
+    terrain_layer layers[64];
+    int n = column_layers(world, x, z, layers);
+    double lo = TERRAIN_FLOOR_Y;
+    for (int l = 0; l < n; l++) {
+        double hi = lo + layers[l].thickness;
+        if (layers[l].material == TERRAIN_ROCKS && y >= lo && y < hi) return true;
+        lo = hi;
+    }
+    return false;
+}
+
+/* The definition, read from the world's own layers: the seed's column, its rock layers bottom-up
+ * (adjacent ones one layer); the first within `depth` of the seed buries it when the solid run it
+ * lies in rises more than `depth` above the seed. */
+static bool reference_buried(terrain_world *world, const double seed[3], double depth) {
+    terrain_layer layers[64];
+    int n = column_layers(world, seed[0], seed[2], layers);
+    double y = TERRAIN_FLOOR_Y;
+    for (int l = 0; l < n; l++) {
+        double lo = y, hi = y + layers[l].thickness;
+        y = hi;
+        if (layers[l].material != TERRAIN_ROCKS) continue;
+        while (l + 1 < n && layers[l + 1].material == TERRAIN_ROCKS) hi = y = y + layers[++l].thickness;
+        if (!(seed[1] >= lo - depth && seed[1] < hi + depth)) continue;
+        double run_top = hi;
+        for (int m = l + 1; m < n && layers[m].material != TERRAIN_AIR && layers[m].material != TERRAIN_WATER; m++)
+            run_top += layers[m].thickness;
+        return run_top - seed[1] > depth;
+    }
+    return false;
+}
+
+typedef struct reference_counts { int buried, too_few; } reference_counts;
+
+/* Every tile of the lattice over the box, every rock it lists, tested by the definition alone
+ * (rocks.h), with no culling: seed in the box, not buried, at least 60 % of its anchors in a rock
+ * layer. In lattice order (k, j, i), then the tile's order. */
+
+static uint32_t reference_place(const rocks_tileset *set, terrain_world *world, const double min[3],
+                                const double max[3], rocks_instance *out, uint32_t capacity, reference_counts *why) {
+    const double tile = 3.0;
+    uint64_t seed = terrain_world_generation(world)->seed ^ 0x726f636b73ull;
+    uint32_t count = 0;
+    for (int64_t k = (int64_t)floor(min[2] / tile); k < (int64_t)ceil(max[2] / tile); k++)
+        for (int64_t j = (int64_t)floor(min[1] / tile); j < (int64_t)ceil(max[1] / tile); j++)
+            for (int64_t i = (int64_t)floor(min[0] / tile); i < (int64_t)ceil(max[0] / tile); i++) {
+                uint8_t colour[8];
+                for (int c = 0; c < 8; c++)
+                    colour[c] = (uint8_t)rocks_lattice_colour(seed, i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+                const rocks_tile *t = &set->tiles[rocks_tile_index(colour)];
+                for (uint32_t e = t->first; e < t->first + t->count; e++) {
+                    const rocks_rock *rock = &set->rocks[set->entries[e].rock];
+                    double origin[3], at[3];
+                    bool in_box = true;
+                    for (int a = 0; a < 3; a++) {
+                        origin[a] = ((double)(a == 0 ? i : a == 1 ? j : k) + set->entries[e].offset[a]) * tile;
+                        at[a] = origin[a] + rock->seed[a] * tile;
+                        in_box = in_box && at[a] >= min[a] && at[a] < max[a];
+                    }
+                    if (!in_box) continue;
+                    if (reference_buried(world, at, 2.0 * set->max_radius * tile)) {
+                        why->buried++;
+                        continue;
+                    }
+                    int inside = 0;
+                    for (uint32_t a = 0; a < rock->anchor_count; a++) {
+                        const float *q = set->anchors[rock->anchor_first + a];
+                        inside += reference_in_rocks(world, origin[0] + q[0] * tile, origin[1] + q[1] * tile,
+                                                     origin[2] + q[2] * tile);
+                    }
+                    if (inside * 10 < (int)rock->anchor_count * 6) {
+                        why->too_few += inside > 0;
+                        continue;
+                    }
+                    cr_assert_lt(count, capacity);
+                    out[count++] = (rocks_instance){ .position = { (float)(origin[0] - min[0]), (float)(origin[1] - min[1]),
+                                                                   (float)(origin[2] - min[2]) },
+                                                     .rock = set->entries[e].rock };
+                }
+            }
+    return count;
+}
+
+static void expect_reference(const rocks_tileset *set, terrain_world *world, const double min[3], const double max[3],
+                             reference_counts *why) {
+    rocks_placement p = { 0 };
+    place(set, world, min, max, &p);
+    uint32_t capacity = p.count + 4096;
+    rocks_instance *expected = calloc(capacity, sizeof *expected);
+    uint32_t count = reference_place(set, world, min, max, expected, capacity, why);
+    cr_assert_eq(p.count, count, "box (%g, %g, %g): %u rocks placed, the definition keeps %u", min[0], min[1], min[2],
+                 p.count, count);
+    for (uint32_t r = 0; r < count; r++) {
+        cr_assert_eq(p.instances[r].rock, expected[r].rock, "instance %u: rock %u, the definition's %u", r,
+                     p.instances[r].rock, expected[r].rock);
+        for (int a = 0; a < 3; a++)
+            cr_assert_float_eq(p.instances[r].position[a], expected[r].position[a], 1e-4f, "instance %u axis %d", r, a);
+    }
+    free(expected);
+    rocks_placement_free(&p);
+}
+
+Test(rocks_place, placement_is_the_definition_applied_to_every_rock) {
+    rocks_tileset *set = small_set();
+    terrain_world *pile = pile_world(false, NULL);
+    terrain_world *strata = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(5),
+                                                                        .generate = strata_chunk });
+    reference_counts why = { 0 };
+    expect_reference(set, pile, PILE_MIN, PILE_MAX, &why);
+    /* boxes off the tile lattice and the chunk grid, across chunk borders and negative coordinates */
+    const double boxes[][2][3] = { { { -7.5, 3.25, -12.0 }, { 21.0, 19.0, 9.5 } }, { { 20.2, 6.0, 27.7 }, { 45.1, 16.5, 41.0 } },
+                                   { { 100000.5, 6.0, -70003.2 }, { 100013.0, 14.0, -69990.0 } } };   /* 100 km out */
+    for (size_t b = 0; b < sizeof boxes / sizeof boxes[0]; b++) expect_reference(set, strata, boxes[b][0], boxes[b][1], &why);
+    /* the strata hold rocks of every kind: kept, buried under the sand, dropped with some anchors in */
+    rocks_placement p = { 0 };
+    place(set, strata, boxes[0][0], boxes[0][1], &p);
+    cr_assert_gt(p.count, 100, "%u rocks in the strata", p.count);
+    cr_assert_gt(why.buried, 50, "%d buried", why.buried);
+    cr_assert_gt(why.too_few, 50, "%d with too few anchors in", why.too_few);
+    /* an index made once places the same bytes as the one a call makes for itself */
+    rocks_place_index *index = rocks_place_index_create(set);
+    rocks_placement with = { 0 };
+    cr_assert(rocks_place_box(&(rocks_place_desc){ .tiles = set, .index = index, .world = strata }, boxes[0][0],
+                              boxes[0][1], &with));
+    cr_assert_eq(with.count, p.count);
+    cr_assert(memcmp(with.instances, p.instances, p.count * sizeof *p.instances) == 0);
+    rocks_place_index_destroy(index);
+    rocks_placement_free(&with);
+    rocks_placement_free(&p);
+    terrain_world_destroy(strata);
+    terrain_world_destroy(pile);
+    rocks_tiles_destroy(set);
+}
+
 /* A vertical shaft swept through the pile's centre: everything within 1.5 m becomes air. */
 static terrain_edit shaft(double points[2][3]) {
     points[0][0] = PILE_X, points[0][1] = GROUND + 6, points[0][2] = PILE_Z;
@@ -320,6 +492,21 @@ Test(rocks_place, the_player_stands_on_a_rock_pile) {
                  fabs(player.position[2] - start_z));
     rocks_placement_free(&p);
     terrain_world_destroy(world);
+    rocks_tiles_destroy(set);
+}
+
+Test(rocks_place, an_index_of_another_tile_set_is_refused) {
+    rocks_tileset *set = small_set(), *other = small_set();
+    terrain_world *world = pile_world(false, NULL);
+    rocks_place_index *index = rocks_place_index_create(other);
+    rocks_placement p = { 0 };
+    cr_assert_not(rocks_place_box(&(rocks_place_desc){ .tiles = set, .index = index, .world = world }, PILE_MIN,
+                                  PILE_MAX, &p));
+    cr_assert_null(rocks_place_index_create(NULL));
+    rocks_place_index_destroy(index);
+    rocks_placement_free(&p);
+    terrain_world_destroy(world);
+    rocks_tiles_destroy(other);
     rocks_tiles_destroy(set);
 }
 

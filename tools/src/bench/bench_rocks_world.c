@@ -10,6 +10,8 @@
  *                                 around the spawn that hold any rock layer (the generator's talus,
  *                                 scree and lake stones): what the game pays a chunk
  *   rocks.instance.chunk.world.rocks   rocks a chunk over those
+ *   rocks.instance.index          ms to lay the tile set out for placement (rocks_place_index_create),
+ *                                 once per set: the rows above place with one, as the game does
  *   rocks.draw.640x360            frame ms the rocks add on the world walk's start view (seed 1,
  *                                 the spawn, facing +z; world.walk's first view), 640×360: the
  *                                 frame with rocks less the same frame without (peers in one run)
@@ -54,11 +56,11 @@ static double sample_place(void *user) {
     return (double)(core_time_ns() - start) * 1e-6;
 }
 
-static void bench_place(bench_context *ctx, const rocks_tileset *set) {
+static void bench_place(bench_context *ctx, const rocks_tileset *set, const rocks_place_index *index) {
     if (!bench_wants(ctx, "rocks.instance")) return;
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(1),
                                                                       .generate = layer_chunk });
-    place_bench b = { .desc = { .tiles = set, .world = world } };
+    place_bench b = { .desc = { .tiles = set, .index = index, .world = world } };
     /* the stacks of every chunk the samples read, generated before timing */
     for (int z = -1; z <= 8; z++)
         for (int x = -1; x <= 8; x++) terrain_world_stacks(world, (terrain_chunk_coord){ x, z });
@@ -92,10 +94,10 @@ static double sample_world(void *user) {
     return (double)(core_time_ns() - start) * 1e-6 / b->box_count;
 }
 
-static void bench_place_world(bench_context *ctx, const rocks_tileset *set) {
+static void bench_place_world(bench_context *ctx, const rocks_tileset *set, const rocks_place_index *index) {
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(1) });
     world_bench *b = core_calloc(1, sizeof *b);
-    b->desc = (rocks_place_desc){ .tiles = set, .world = world };
+    b->desc = (rocks_place_desc){ .tiles = set, .index = index, .world = world };
     terrain_layer layers[64];
     for (int cz = -4; cz < 4; cz++)
         for (int cx = -4; cx < 4; cx++) {
@@ -125,6 +127,21 @@ static void bench_place_world(bench_context *ctx, const rocks_tileset *set) {
     rocks_placement_free(&b->placement);
     core_free(b, sizeof *b);
     terrain_world_destroy(world);
+}
+
+/* ---- the index ------------------------------------------------------------------------------- */
+
+typedef struct index_bench {
+    const rocks_tileset *set;
+    rocks_place_index **index;        /* the last one made, kept for the rows above */
+} index_bench;
+
+static double sample_index(void *user) {
+    index_bench *b = user;
+    rocks_place_index_destroy(*b->index);
+    uint64_t start = core_time_ns();
+    *b->index = rocks_place_index_create(b->set);
+    return (double)(core_time_ns() - start) * 1e-6;
 }
 
 /* ---- drawing the start view ------------------------------------------------------------------- */
@@ -161,8 +178,12 @@ void bench_group_rocks_world(bench_context *ctx) {
             core_error("bench", "rocks: no tile set; rows skipped");
             return;
         }
-        bench_place(ctx, set);
-        bench_place_world(ctx, set);
+        rocks_place_index *index = NULL;
+        bench_run(ctx, "rocks.instance.index", "ms", 5, sample_index, &(index_bench){ set, &index });
+        if (!index) index = rocks_place_index_create(set);      /* --filter left that row out */
+        bench_place(ctx, set, index);
+        bench_place_world(ctx, set, index);
+        rocks_place_index_destroy(index);
         rocks_tiles_destroy(set);
     }
     bench_draw(ctx);
