@@ -12,7 +12,7 @@
 
 static rocks_block_tile *small_tile(rocks_block_type type, uint64_t seed, float relief) {
     rocks_block_tile *t = rocks_block_tile_create(&(rocks_block_tile_desc){
-        .type = type, .seed = seed, .size = 8.0f, .point_spacing = 0.45f, .fracture_spacing = 2.5f,
+        .type = type, .seed = seed, .size = 8.0f, .point_spacing = 0.6f, .fracture_spacing = 2.5f,
         .fracture_radius = 3.0f, .relief = relief });
     cr_assert_not_null(t);
     return t;
