@@ -1060,9 +1060,7 @@ void rocks_block_tile_amplify(const rocks_block_tile *tile, terrain_field *field
             }
 }
 
-bool rocks_block_on_walls(void *wall_presence, uint32_t block, const double anchor[3]) {
-    (void)block;
-    const rocks_wall_presence *w = wall_presence;
+bool rocks__wall_at(const rocks_wall_presence *w, const double anchor[3], float g[3]) {
     float depth_min = w->depth_min, depth_max = w->depth_max;
     if (depth_min == 0 && depth_max == 0) depth_min = -0.6f, depth_max = 0.9f;
     float steep = w->steepness > 0 ? w->steepness : 0.5f;
@@ -1070,7 +1068,6 @@ bool rocks_block_on_walls(void *wall_presence, uint32_t block, const double anch
     if (!(f >= depth_min && f <= depth_max)) return false;
     /* the gradient by central differences half a metre apart (the field is linear over the
      * kernel's metre near a plane, so this is exact on a flat wall) */
-    float g[3];
     for (int a = 0; a < 3; a++) {
         double p[3] = { anchor[0], anchor[1], anchor[2] }, q[3] = { anchor[0], anchor[1], anchor[2] };
         p[a] -= 0.25, q[a] += 0.25;
@@ -1078,4 +1075,10 @@ bool rocks_block_on_walls(void *wall_presence, uint32_t block, const double anch
     }
     float length = sqrtf(dot3(g, g));
     return length > 0 && fabsf(g[1]) < steep * length;
+}
+
+bool rocks_block_on_walls(void *wall_presence, uint32_t block, const double anchor[3]) {
+    (void)block;
+    float g[3];
+    return rocks__wall_at(wall_presence, anchor, g);
 }

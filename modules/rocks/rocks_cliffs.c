@@ -120,21 +120,15 @@ static int stratum_type(const rocks_cliffs_desc *d, double y) {
 static bool on_bedrock_wall(const rocks_cliffs *c, terrain_world *world, const double a[3]) {
     rocks_wall_presence walls = { .world = world, .steepness = c->desc.steepness, .depth_min = c->desc.depth_min,
                                   .depth_max = c->desc.depth_max };
-    if (!rocks_block_on_walls(&walls, 0, a)) return false;
+    float g[3];
+    if (!rocks__wall_at(&walls, a, g)) return false;
     /* a wall, not a step: the face goes on a metre above and below (a shard on a knee-high step
      * reads as debris, not as a cliff) */
     for (int side = -1; side <= 1; side += 2) {
         const double b[3] = { a[0], a[1] + 1.0 * side, a[2] };
         if (!rocks_block_on_walls(&walls, 0, b)) return false;
     }
-    double g[3], length = 0;
-    for (int k = 0; k < 3; k++) {
-        double lo[3] = { a[0], a[1], a[2] }, hi[3] = { a[0], a[1], a[2] };
-        lo[k] -= 0.25, hi[k] += 0.25;
-        g[k] = terrain_field_base_at(world, hi[0], hi[1], hi[2], 0) - terrain_field_base_at(world, lo[0], lo[1], lo[2], 0);
-        length += g[k] * g[k];
-    }
-    length = sqrt(length);
+    double length = sqrt((double)g[0] * g[0] + (double)g[1] * g[1] + (double)g[2] * g[2]);
     return terrain_world_material_at(world, a[0] + 0.75 * g[0] / length, a[1] + 0.75 * g[1] / length,
                                      a[2] + 0.75 * g[2] / length) == TERRAIN_BEDROCK;
 }
