@@ -1033,15 +1033,29 @@ void rocks__amplify_copy(const rocks_block_tile *tile, uint32_t b, const double 
             }
 }
 
+void rocks__cell_range(const rocks_block_tile *tile, const double lo[3], const double hi[3], int64_t c0[3],
+                       int64_t c1[3]) {
+    const double s = tile->desc.size;
+    double reach_lo[3] = { 0, 0, 0 }, reach_hi[3] = { 0, 0, 0 };
+    for (uint32_t b = 0; b < tile->block_count; b++)
+        for (int a = 0; a < 3; a++) {
+            reach_lo[a] = fmin(reach_lo[a], tile->blocks[b].bounds_min[a]);
+            reach_hi[a] = fmax(reach_hi[a], tile->blocks[b].bounds_max[a]);
+        }
+    for (int a = 0; a < 3; a++) {
+        c0[a] = (int64_t)ceil((lo[a] - reach_hi[a]) / s);
+        c1[a] = (int64_t)floor((hi[a] - reach_lo[a]) / s);
+    }
+}
+
 void rocks_block_tile_amplify(const rocks_block_tile *tile, terrain_field *field, rocks_block_presence_fn present,
                               void *user) {
     const double s = tile->desc.size;
     double lo[3], hi[3];
     int n[3] = { field->nx, field->ny, field->nz };
     for (int a = 0; a < 3; a++) lo[a] = field->origin[a], hi[a] = field->origin[a] + (n[a] - 1) * (double)field->spacing;
-    /* the tile copies whose blocks can reach the box: a block lies within a tile of its own */
     int64_t c0[3], c1[3];
-    for (int a = 0; a < 3; a++) c0[a] = (int64_t)floor(lo[a] / s) - 1, c1[a] = (int64_t)floor(hi[a] / s) + 1;
+    rocks__cell_range(tile, lo, hi, c0, c1);
     for (int64_t cz = c0[2]; cz <= c1[2]; cz++)
         for (int64_t cy = c0[1]; cy <= c1[1]; cy++)
             for (int64_t cx = c0[0]; cx <= c1[0]; cx++) {

@@ -234,9 +234,8 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
         const rocks_block_tile *tile = c->tiles[type];
         if (!tile || c->words[type] > CORE_COUNTOF(bits)) continue;
         const double s = tile->desc.size;
-        /* a block lies within a tile of its own cell: the cells one past the box can reach it */
         int64_t c0[3], c1[3];
-        for (int a = 0; a < 3; a++) c0[a] = (int64_t)floor(lo[a] / s) - 1, c1[a] = (int64_t)floor(hi[a] / s) + 1;
+        rocks__cell_range(tile, lo, hi, c0, c1);
         for (int64_t z = c0[2]; z <= c1[2]; z++)
             for (int64_t y = c0[1]; y <= c1[1]; y++)
                 for (int64_t x = c0[0]; x <= c1[0]; x++) {

@@ -23,6 +23,10 @@ uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const
  * inside its bounds (rocks_blocks.c; the cliffs' amplifier shares it). */
 void rocks__amplify_copy(const rocks_block_tile *tile, uint32_t block, const double cell[3], terrain_field *field);
 
+/* The tile copies (their tile coordinates c0 … c1, inclusive) some block of which can reach the
+ * box [lo, hi]: the union of the blocks' bounds, moved by whole tiles, meets it. */
+void rocks__cell_range(const rocks_block_tile *tile, const double lo[3], const double hi[3], int64_t c0[3],
+                       int64_t c1[3]);
 /* rocks_block_on_walls, with the field's gradient at the anchor in g (unnormalised; written
  * whenever the anchor is near the surface): the cliffs read the wall's inside from it. */
 bool rocks__wall_at(const rocks_wall_presence *walls, const double anchor[3], float g[3]);
