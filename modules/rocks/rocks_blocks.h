@@ -163,9 +163,12 @@ bool rocks_block_on_walls(void *wall_presence, uint32_t block, const double anch
  *                                                 .amplify_user = cliffs });
  * Strata: a block copy belongs to the stratum of its anchor's height, floor(y / stratum_height),
  * whose type is strata[stratum mod strata_count]: cliffs change block type with height (003
- * Fig. 11). Presence is rocks_block_on_walls at the anchor and a metre above and below it (a
- * wall, not a step), the wall must be bedrock (sand slopes get no blocks), and 4 of the block's 6 extreme points (along each axis) must lie inside
- * the wall or within half a metre of its face (003 §5's several anchors); it is worked out once per tile cell and kept, checked against the versions of the
+ * Fig. 11). Presence is rocks_block_on_walls at the anchor (down to a metre inside the face) and,
+ * a metre above and below it, a steep face within a metre (a wall, not a step); the wall must be
+ * bedrock (sand slopes get no blocks), and 4 of the block's 6 extreme points (along each axis)
+ * must lie inside the wall or within half a metre of its face (003 §5's several anchors), the
+ * highest among them (no block stands over the wall's rim as a spike). It is
+ * worked out once per tile cell and kept, checked against the versions of the
  * column chunks it read, so an edit brings it up to date. Fields sampled coarser than
  * max_spacing get no blocks (a block is a few metres: below such a grid it is noise); every
  * field at one spacing is treated alike, so chunks and their LOD seams agree. */
@@ -178,7 +181,8 @@ typedef struct rocks_cliffs_desc {
     float tile_size;                  /* s; 0 = 16 */
     float joint;                      /* 0 = 0.6 m (at most s / 24): fields sampled every metre
                                          lose thinner ones */
-    float steepness, depth_min, depth_max;   /* rocks_wall_presence's; 0 = its defaults */
+    float steepness, depth_min, depth_max;   /* rocks_wall_presence's; all 0 = ε 0.5 and the
+                                         anchor in [−0.6, 1.0] (up to the field's clamp) */
     float max_spacing;                /* 0 = 1 m (level of detail 0: at 2 m a block of a few
                                          metres aliases into spikes) */
 } rocks_cliffs_desc;

@@ -116,17 +116,25 @@ static int stratum_type(const rocks_cliffs_desc *d, double y) {
 }
 
 /* On a steep wall (rocks_block_on_walls) at least 2 m tall whose inside, three quarters of a
- * metre along the field's gradient, is bedrock: no blocks on steep sand. */
+ * metre along the field's gradient, is bedrock: no blocks on steep sand.
+ *
+ * The anchor may lie up to the field's clamp (1 m) inside the face: a block of a few metres whose
+ * centroid is a metre deep still stands out of the face, and on the generator's curved walls
+ * the narrower band left most of a wall bare. */
 static bool on_bedrock_wall(const rocks_cliffs *c, terrain_world *world, const double a[3]) {
     rocks_wall_presence walls = { .world = world, .steepness = c->desc.steepness, .depth_min = c->desc.depth_min,
                                   .depth_max = c->desc.depth_max };
+    if (walls.depth_min == 0 && walls.depth_max == 0) walls.depth_min = -0.6f, walls.depth_max = 1.0f;
     float g[3];
     if (!rocks__wall_at(&walls, a, g)) return false;
-    /* a wall, not a step: the face goes on a metre above and below (a shard on a knee-high step
-     * reads as debris, not as a cliff) */
+    /* a wall, not a step: a metre above and below, the face is still near and still steep (a
+     * shard on a knee-high step reads as debris, not as a cliff). Near, not at the anchor's
+     * depth: a wall that leans by 30° moves half a metre over that metre. */
+    rocks_wall_presence near = walls;
+    near.depth_min = -0.99f, near.depth_max = 0.99f;
     for (int side = -1; side <= 1; side += 2) {
         const double b[3] = { a[0], a[1] + 1.0 * side, a[2] };
-        if (!rocks_block_on_walls(&walls, 0, b)) return false;
+        if (!rocks_block_on_walls(&near, 0, b)) return false;
     }
     double length = sqrt((double)g[0] * g[0] + (double)g[1] * g[1] + (double)g[2] * g[2]);
     return terrain_world_material_at(world, a[0] + 0.75 * g[0] / length, a[1] + 0.75 * g[1] / length,
@@ -135,11 +143,13 @@ static bool on_bedrock_wall(const rocks_cliffs *c, terrain_world *world, const d
 
 /* 003 §5 with a set of anchors ("more than half ... satisfy"): the block's extreme points along
  * each axis must be mostly inside the wall or within half a metre of its face, so a long block
- * whose centre sits at the face does not stand metres out of it. */
+ * whose centre sits at the face does not stand metres out of it; and its highest point must be
+ * one of them: a column whose foot is in the wall's top would stand over the rim as a spike. */
 static bool mostly_in_the_wall(terrain_world *world, const rocks_block *b, const float (*points)[3], double ox, double oy,
                                double oz) {
     if (b->point_count == 0) return true;
     int inside = 0;
+    bool top_inside = false;
     for (int a = 0; a < 3; a++)
         for (int side = 0; side < 2; side++) {
             const float *best = points[b->point_first];
@@ -147,9 +157,11 @@ static bool mostly_in_the_wall(terrain_world *world, const rocks_block *b, const
                 const float *p = points[b->point_first + i];
                 if (side ? p[a] > best[a] : p[a] < best[a]) best = p;
             }
-            inside += terrain_field_base_at(world, ox + best[0], oy + best[1], oz + best[2], 0) >= -0.5f;
+            bool in = terrain_field_base_at(world, ox + best[0], oy + best[1], oz + best[2], 0) >= -0.5f;
+            inside += in;
+            if (a == 1 && side == 1) top_inside = in;
         }
-    return inside >= 4;
+    return inside >= 4 && top_inside;
 }
 
 /* The versions of the column chunks under the cell (and the margin its presence reads). */
