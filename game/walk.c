@@ -174,7 +174,7 @@ static bool point_words(parser *p, const char *rest, const char *end, game_walk_
     return true;
 }
 
-/* `cave R [words]`, `shore R [words]` or `rocks R [words]` (`kind`): resolved later
+/* `cave R [words]`, `shore R [words]`, `rocks R [words]` or `cliff R [words]` (`kind`): resolved later
  * (game_walk_resolve_stops), so only shot may follow. */
 static bool found_line(parser *p, const char *kind, const char *rest, const char *end) {
     game_walk_point point = { 0 };
@@ -192,7 +192,8 @@ static bool found_line(parser *p, const char *kind, const char *rest, const char
     }
     if (strcmp(kind, "cave") == 0) point.cave_radius = (float)radius;
     else if (strcmp(kind, "shore") == 0) point.shore_radius = (float)radius;
-    else point.rocks_radius = (float)radius;
+    else if (strcmp(kind, "rocks") == 0) point.rocks_radius = (float)radius;
+    else point.cliff_radius = (float)radius;
     if (p->walk.count >= GAME_WALK_MAX_POINTS) return FAIL(p, "more than %d waypoints", GAME_WALK_MAX_POINTS);
     p->walk.points = core_grow(p->walk.points, &p->capacity, (size_t)p->walk.count + 1, sizeof point);
     p->walk.points[p->walk.count++] = point;
@@ -228,6 +229,7 @@ static bool line(parser *p, const char *begin, const char *end) {
     if (is(first, "cave")) return found_line(p, "cave", at, end);
     if (is(first, "shore")) return found_line(p, "shore", at, end);
     if (is(first, "rocks")) return found_line(p, "rocks", at, end);
+    if (is(first, "cliff")) return found_line(p, "cliff", at, end);
     return directive(p, first, at, end);
 }
 
@@ -385,10 +387,10 @@ static void view_point(const game_walk *walk, const game_walker *frame, const ga
     to_walk_frame(walk, frame->origin, frame->origin_yaw, feet, point);
     point->fly = point->has_y = point->has_look = true;
     point->look_yaw = yaw, point->look_pitch = pitch;
-    point->cave_radius = point->shore_radius = point->rocks_radius = 0.0f;
+    point->cave_radius = point->shore_radius = point->rocks_radius = point->cliff_radius = 0.0f;
 }
 
-/* A `cave R`, `shore R` or `rocks R` point resolved against the world from `centre`; false (with a notice)
+/* A `cave R`, `shore R`, `rocks R` or `cliff R` point resolved against the world from `centre`; false (with a notice)
  * when there is nothing to see within R. */
 static bool resolve_found(game_walk *walk, const game_walker *frame, terrain_world *world, const game_player *player,
                           const double centre[3], int index, game_walk_point *point) {
@@ -414,6 +416,18 @@ static bool resolve_found(game_walk *walk, const game_walker *frame, terrain_wor
         for (int a = 0; a < 3; a++) point->look_at[a] = view.pile[a];
         return true;
     }
+    if (point->cliff_radius > 0.0f) {
+        game_cliff_view view;
+        if (!game_find_cliff_view(world, centre[0], centre[2], point->cliff_radius, &view)) {
+            core_info("walk", "no cliff within %.0f m of waypoint %d: that stop is skipped",
+                      (double)point->cliff_radius, index);
+            return false;
+        }
+        view_point(walk, frame, player, view.eye, view.yaw, view.pitch, point);
+        point->has_look_at = true;
+        for (int a = 0; a < 3; a++) point->look_at[a] = view.face[a];
+        return true;
+    }
     game_shore_view view;
     if (!game_find_shore_view(world, centre[0], centre[2], point->shore_radius, &view)) {
         core_info("walk", "no shore within %.0f m of waypoint %d: that stop is skipped", (double)point->shore_radius,
@@ -433,9 +447,10 @@ game_walk_found game_walk_resolve_stops(game_walk *walk, terrain_world *world, c
     for (int i = 0; i < walk->count; i++) {
         game_walk_point point = walk->points[i];
         bool cave = point.cave_radius > 0.0f, shore = point.shore_radius > 0.0f, rocks = point.rocks_radius > 0.0f;
-        if (cave || shore || rocks) {
+        bool cliff = point.cliff_radius > 0.0f;
+        if (cave || shore || rocks || cliff) {
             if (!resolve_found(walk, &frame, world, player, centre, i, &point)) continue;
-            found.caves += cave, found.shores += shore, found.rocks += rocks;
+            found.caves += cave, found.shores += shore, found.rocks += rocks, found.cliffs += cliff;
         }
         walk->points[kept++] = point;
         frame.walk = walk;
@@ -508,10 +523,10 @@ static float gait_speed(const game_player *pl, const game_walk_point *p) {
 }
 
 static bool unresolved(const game_walk_point *p) {
-    return p->cave_radius > 0.0f || p->shore_radius > 0.0f || p->rocks_radius > 0.0f;
+    return p->cave_radius > 0.0f || p->shore_radius > 0.0f || p->rocks_radius > 0.0f || p->cliff_radius > 0.0f;
 }
 
-/* Horizontally within the radius; also vertically for `fly y=H`. An unresolved `cave`, `shore` or `rocks` line
+/* Horizontally within the radius; also vertically for `fly y=H`. An unresolved `cave`, `shore`, `rocks` or `cliff` line
  * (game_walk_resolve_stops never ran) is passed over at once. */
 static bool reached(const game_walker *w, const game_player *pl, int i) {
     if (unresolved(&w->walk->points[i])) return true;

@@ -47,6 +47,9 @@
  *   (1 ≤ R ≤ 1000) of the previous waypoint, resolved likewise (game_find_rocks_view) into a flight
  *   to a point in the air on the pile's sunlit side; the picture is turned to the pile from
  *   wherever the eye got to (look_at), so it stays in the middle.
+ * - `cliff R [shot]` instead of X Z: a look at the nearest cliff within R metres (1 ≤ R ≤ 1000) of
+ *   the previous waypoint, resolved likewise (game_find_cliff_view) into a flight to a point
+ *   before its sunlit face, the face kept in the middle of the picture (look_at).
  * - Directives, each at most once and before the first waypoint: `relative` (X Z and y= are
  *   offsets from the walker's start), `ahead` (offsets in the start's own frame: X metres to the
  *   right, Z metres ahead, as straight:M is `ahead` + `0 M`), `radius R` (0.1 ≤ R ≤ 1000 m),
@@ -124,9 +127,11 @@ typedef struct game_walk_point {
     float cave_radius;                /* > 0: a `cave R` line not yet resolved (the walker skips it) */
     float shore_radius;               /* > 0: a `shore R` line not yet resolved (skipped likewise) */
     float rocks_radius;               /* > 0: a `rocks R` line not yet resolved (skipped likewise) */
+    float cliff_radius;               /* > 0: a `cliff R` line not yet resolved (skipped likewise) */
     bool has_look_at;                 /* at the shot, face look_at from wherever the eye got to (within
                                          the walk's radius of the waypoint): set by resolving a `rocks`
-                                         line, never by a file, so the pile stays in the middle */
+                                         or `cliff` line, never by a file, so the pile or the face
+                                         stays in the middle */
     double look_at[3];                /* world metres (whatever the walk's frame) */
 } game_walk_point;
 
@@ -150,11 +155,13 @@ extern const char game_walk_tour[];
  * metres of the waypoint before it (of the player, for the first): game_find_cave_view, the view's
  * eye as a `fly y=H` point in the walk's own frame, facing the mouth (has_look); and each `shore R`
  * waypoint likewise into a flight to a view over water from the nearest shore
- * (game_find_shore_view), and each `rocks R` waypoint into a flight to a view of the nearest pile
- * of rocks (game_find_rocks_view; look_at set to the pile). A line with nothing to find is
+ * (game_find_shore_view), each `rocks R` waypoint into a flight to a view of the nearest pile
+ * of rocks (game_find_rocks_view; look_at set to the pile), and each `cliff R` waypoint into a
+ * flight to a view of the nearest cliff (game_find_cliff_view; look_at set to its face). A line
+ * with nothing to find is
  * dropped, with a notice. Call it with the player where the walker will start (game_walker_start
  * measures relative and ahead walks from there). Returns how many of each were found. */
-typedef struct game_walk_found { int caves, shores, rocks; } game_walk_found;
+typedef struct game_walk_found { int caves, shores, rocks, cliffs; } game_walk_found;
 game_walk_found game_walk_resolve_stops(game_walk *walk, terrain_world *world, const game_player *player);
 /* game_walk_resolve_stops (shore and rocks lines too), returning the caves found. */
 int game_walk_resolve_caves(game_walk *walk, terrain_world *world, const game_player *player);
@@ -230,6 +237,26 @@ typedef struct game_rocks_view {
  * nearest pile with an open view wins, else the nearest pile with a view. False when there is
  * none. Generates the chunks it reads (walk_rocks.c). */
 bool game_find_rocks_view(terrain_world *world, double x, double z, double radius, game_rocks_view *out);
+
+/* A look at a cliff: where to stand and which way to face. */
+typedef struct game_cliff_view {
+    double eye[3];                    /* world metres, in the air before the face */
+    double face[3];                   /* the point looked at: a metre past the foot, up to 6 m over it */
+    float height;                     /* metres the ground rises over the 4 m past the foot */
+    float yaw, pitch;                 /* degrees as --look: yaw 0 = +z, 90 = −x; pitch up */
+} game_cliff_view;
+
+/* Searches the columns within `radius` metres of (x, z) (every 2 m, square rings outwards) for a
+ * cliff: a dry foot column from which the ground rises at least 4 m over the next 2 m and 8 m
+ * over the next 4 m, along one of the 8 directions whose dot with (0.55, 0.35) is positive (the
+ * face lit by the default sun), the same 2 and 4 m to either side along the wall, with bedrock
+ * behind the middle of that rise. The eye looks along that direction from 16, 20, 24, 28 or 34 m
+ * before the foot (the first that works), 2.12 m over the ground there (or over the foot, if
+ * higher): its feet clear of the ground around by 0.5 m, the ground under its line of sight to
+ * the face, and the wall's top (the highest ground up to 16 m past the foot) at least 6° under
+ * the top edge of a 60° picture aimed at the face. The nearest cliff with such a view wins. False
+ * when there is none. Generates the chunks it reads (walk_cliff.c). */
+bool game_find_cliff_view(terrain_world *world, double x, double z, double radius, game_cliff_view *out);
 
 #define GAME_WALKER_HISTORY 64
 
