@@ -81,6 +81,12 @@ typedef struct rocks_block_tile_desc {
     float relief_scale;               /* the relief's wavelength, metres; 0 = 0.8 */
     const rocks_block_custom *custom; /* blocks placed by hand (copied); up to ROCKS_BLOCK_MAX_CUSTOM */
     int custom_count;
+    /* Read from / written to this file; NULL = no cache. Ignored for a tile with custom blocks
+     * (custom_count > 0): their fields are function pointers, which no file can hold, so such a
+     * tile is always built. The file holds the desc's fields above (defaults filled) and the
+     * build's arrays; one for other parameters, of another format version, cut short or damaged
+     * is rebuilt and rewritten with one notice (a missing one too), never an error. */
+    const char *cache_path;
 } rocks_block_tile_desc;
 
 typedef struct rocks_block {
@@ -96,7 +102,7 @@ typedef struct rocks_block_disc {
 } rocks_block_disc;
 
 typedef struct rocks_block_tile {
-    rocks_block_tile_desc desc;       /* with the defaults filled in */
+    rocks_block_tile_desc desc;       /* with the defaults filled in (cache_path NULL) */
     rocks_block *blocks;
     uint32_t block_count;
     float (*planes)[4];               /* n.x, n.y, n.z, d */
@@ -106,7 +112,8 @@ typedef struct rocks_block_tile {
     uint32_t sample_count;            /* sample points made (003 Table 1's #P) */
     rocks_block_disc *discs;          /* the fractures (#D), centres in [0, s)³ */
     uint32_t disc_count;
-    double build_seconds;
+    double build_seconds;             /* 0 when read from the cache (as rocks_tileset) */
+    bool from_cache;                  /* read from desc.cache_path, not built */
     /* internal: the lookup grid of blocks (and their images) per cell of the tile */
     int grid;
     uint32_t *grid_first;             /* grid³ + 1 */
@@ -114,7 +121,10 @@ typedef struct rocks_block_tile {
     uint32_t grid_entry_count;
 } rocks_block_tile;
 
-/* NULL with a message naming the field for a bad desc. */
+/* NULL with a message naming the field for a bad desc. With desc->cache_path (and no custom
+ * blocks) the tile is read from that file when it holds this desc's tile, else built and the
+ * file rewritten (a temporary beside it, renamed; its folder made if missing) with one notice
+ * saying why: a tile read back is the built one, array for array. */
 rocks_block_tile *rocks_block_tile_create(const rocks_block_tile_desc *desc);
 void rocks_block_tile_destroy(rocks_block_tile *tile);
 
