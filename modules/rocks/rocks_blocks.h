@@ -191,6 +191,13 @@ typedef struct rocks_cliffs_desc {
     float steepness, depth_min, depth_max;   /* rocks_wall_presence's; 0 = its defaults */
     float max_spacing;                /* 0 = 1 m (level of detail 0: at 2 m a block of a few
                                          metres aliases into spikes) */
+    /* A folder for the tiles' cache files (rocks_block_tile_desc.cache_path), one a type:
+     * blocks-<type>-<seed as 16 hex digits>.bin (the seed above, with its default), so worlds of
+     * other seeds keep their own; made if missing. NULL = the tiles are built each run. */
+    const char *cache_dir;
+    /* Builds (or reads) the tiles, one per type the strata use, at once on these workers; NULL
+     * = one after another on the calling thread. The tiles are the same either way. */
+    job_system *jobs;
 } rocks_cliffs_desc;
 
 /* One rocks_cliffs serves one world (its cache is keyed by the world's chunk versions). */
@@ -201,7 +208,8 @@ void rocks_cliffs_destroy(rocks_cliffs *cliffs);
 void rocks_cliffs_amplify(void *cliffs, terrain_world *world, terrain_field *field);
 typedef struct rocks_cliffs_stats {
     uint64_t fields, cells_computed, cells_reused, copies_present;
-    double build_seconds;             /* the tiles */
+    double build_seconds;             /* the tiles, built or read from cache_dir */
+    uint32_t tiles_from_cache;        /* of the tiles, those read from cache_dir */
 } rocks_cliffs_stats;
 rocks_cliffs_stats rocks_cliffs_stats_get(rocks_cliffs *cliffs);
 
