@@ -30,8 +30,13 @@
  * So here: f_A∩̃B = min(f_A, f_B) − R·k(f_A, f_B)³/6, k = max(1 − |f_A − f_B|/R, 0), the paper's
  * k and term in the terrain's sign. rocks_smooth_intersection is that formula.
  *
+ * Cache: with desc.cache_path a tile is read from that file when it holds this desc's tile
+ * (under a millisecond for a 16 m tile, against a few tenths of a second of building), else
+ * built and written there with a one-line notice; tiles with custom blocks are always built.
+ *
  * Threads: creation runs on the calling thread (tiles are independent: build several at once on
- * jobs); a built tile is read-only and may be evaluated from any thread.
+ * jobs, as rocks_cliffs_desc.jobs does); a built tile is read-only and may be evaluated from any
+ * thread.
  */
 #ifndef ROCKS_BLOCKS_H
 #define ROCKS_BLOCKS_H
