@@ -7,7 +7,11 @@
  * own unwrapped frame (each new point placed at the minimal-image offset from the point that
  * reached it), so a block that straddles the border is one convex set; it is then moved by a
  * whole tile so that its anchor lies in [0, s)³.
+ *
+ * A change to what a build makes (any array of the tile) must bump ROCKS__BLOCK_CACHE_VERSION
+ * (rocks_internal.h): cache files hold a build's output under its desc.
  */
+#include "rocks_internal.h"
 #include "rocks_world_internal.h"
 
 #include "core/core.h"
@@ -735,9 +739,11 @@ static bool desc_make(const rocks_block_tile_desc *in, rocks_block_tile_desc *d)
 
 /* The lookup grid: for each of grid³ cells of the tile, the blocks (and which of their 27
  * copies, this tile's or a neighbour's) whose bounds reach it. */
+int rocks__block_grid_cells(float size) { return (int)fmaxf(1.0f, floorf(size / 2.0f)); }
+
 static void build_grid(rocks_block_tile *t) {
     const float s = t->desc.size;
-    int g = t->grid = (int)fmaxf(1.0f, floorf(s / 2.0f));
+    int g = t->grid = rocks__block_grid_cells(s);
     size_t cells = (size_t)g * g * g;
     uint32_t *count = core_calloc(cells + 1, sizeof *count);
     for (int pass = 0; pass < 2; pass++) {
@@ -860,9 +866,9 @@ static void add_custom_block(rocks_block_tile *t, int k, const float (*points)[3
     t->block_count++;
 }
 
-rocks_block_tile *rocks_block_tile_create(const rocks_block_tile_desc *desc) {
-    rocks_block_tile_desc d;
-    if (!desc_make(desc, &d)) return NULL;
+/* The tile of desc `d` (defaults filled, checked), built. */
+static rocks_block_tile *build_tile(const rocks_block_tile_desc *desc) {
+    const rocks_block_tile_desc d = *desc;
     uint64_t start = core_time_ns();
     rocks_block_tile *t = core_calloc(1, sizeof *t);
     t->desc = d;
@@ -931,15 +937,45 @@ rocks_block_tile *rocks_block_tile_create(const rocks_block_tile_desc *desc) {
     return t;
 }
 
+rocks_block_tile *rocks_block_tile_create(const rocks_block_tile_desc *desc) {
+    rocks_block_tile_desc d;
+    if (!desc_make(desc, &d)) return NULL;
+    /* a tile with custom blocks is never cached: their fields are function pointers */
+    const char *path = d.custom_count ? NULL : d.cache_path;
+    d.cache_path = NULL;   /* the tile's desc does not keep the caller's string */
+    const char *why = NULL;
+    if (path) {
+        rocks_block_tile *t = core_calloc(1, sizeof *t);
+        if (rocks__block_cache_read(path, &d, t, &why)) {
+            t->from_cache = true;   /* build_seconds stays 0, as for a tile set read back */
+            return t;
+        }
+        core_free(t, sizeof *t);
+    }
+    rocks_block_tile *t = build_tile(&d);
+    if (path) {
+        bool written = rocks__block_cache_write(path, t);
+        core_warn("rocks", "block tile cache %s: %s; rebuilt in %.2f s%s", path, why ? why : "not read",
+                  t->build_seconds, written ? " and rewrote it" : " (could not rewrite it)");
+    }
+    return t;
+}
+
+void rocks__block_tile_free_arrays(rocks_block_tile *t) {
+    size_t cells = (size_t)t->grid * t->grid * t->grid;
+    if (t->blocks) core_free(t->blocks, (t->block_count + 1) * sizeof *t->blocks);
+    if (t->planes) core_free(t->planes, (t->plane_count + 1) * sizeof *t->planes);
+    if (t->points) core_free(t->points, (t->point_count + 1) * sizeof *t->points);
+    if (t->discs) core_free(t->discs, (t->disc_count + 1) * sizeof *t->discs);
+    if (t->grid_first) core_free(t->grid_first, (cells + 1) * sizeof *t->grid_first);
+    if (t->grid_entries) core_free(t->grid_entries, (t->grid_entry_count + 1) * sizeof *t->grid_entries);
+    t->blocks = NULL, t->planes = NULL, t->points = NULL, t->discs = NULL;
+    t->grid_first = NULL, t->grid_entries = NULL;
+}
+
 void rocks_block_tile_destroy(rocks_block_tile *t) {
     if (!t) return;
-    size_t cells = (size_t)t->grid * t->grid * t->grid;
-    core_free(t->blocks, (t->block_count + 1) * sizeof *t->blocks);
-    core_free(t->planes, (t->plane_count + 1) * sizeof *t->planes);
-    core_free(t->points, (t->point_count + 1) * sizeof *t->points);
-    core_free(t->discs, (t->disc_count + 1) * sizeof *t->discs);
-    core_free(t->grid_first, (cells + 1) * sizeof *t->grid_first);
-    core_free(t->grid_entries, (t->grid_entry_count + 1) * sizeof *t->grid_entries);
+    rocks__block_tile_free_arrays(t);
     if (t->desc.custom_count) core_free((void *)t->desc.custom, (size_t)t->desc.custom_count * sizeof *t->desc.custom);
     core_free(t, sizeof *t);
 }

@@ -12,8 +12,11 @@
 
 #include "core/core.h"
 
+#include "jobs/jobs.h"
+
 #include <math.h>
 #include <pthread.h>
+#include <stdio.h>
 #include <string.h>
 
 #define CACHE_CAPACITY 16384          /* entries (a power of two); emptied when 3/4 full */
@@ -59,27 +62,61 @@ static bool cliffs_desc_make(const rocks_cliffs_desc *in, rocks_cliffs_desc *d) 
     return bad == NULL;
 }
 
+/* The tiles to make: one per type the strata use, each built (or read) on its own. */
+typedef struct tile_jobs {
+    const rocks_cliffs_desc *desc;
+    rocks_block_type types[ROCKS_BLOCK_TYPE_COUNT];
+    rocks_block_tile *tiles[ROCKS_BLOCK_TYPE_COUNT];
+} tile_jobs;
+
+static void make_tiles(void *user, size_t begin, size_t end) {
+    tile_jobs *jobs = user;
+    const rocks_cliffs_desc *d = jobs->desc;
+    for (size_t i = begin; i < end; i++) {
+        rocks_block_type type = jobs->types[i];
+        char *path = NULL;
+        size_t path_size = 0;
+        if (d->cache_dir) {   /* one file per type and seed: worlds of other seeds keep theirs */
+            path_size = strlen(d->cache_dir) + 64;
+            path = core_alloc(path_size);
+            snprintf(path, path_size, "%s/blocks-%s-%016llx.bin", d->cache_dir, rocks_block_type_name(type),
+                     (unsigned long long)d->seed);
+        }
+        /* no relief: its 8 cm are below the metre the world samples at (the renderer's detail
+         * layer shades the faces) and it would double the cost of every sample */
+        jobs->tiles[i] = rocks_block_tile_create(&(rocks_block_tile_desc){
+            .type = type, .seed = core_hash_combine(d->seed, (uint64_t)type), .size = d->tile_size, .joint = d->joint,
+            .relief = -1.0f, .cache_path = path });
+        if (path) core_free(path, path_size);
+    }
+}
+
 rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc) {
     rocks_cliffs_desc d;
     if (!cliffs_desc_make(desc, &d)) return NULL;
     rocks_cliffs *c = core_calloc(1, sizeof *c);
     c->desc = d;
+    c->desc.cache_dir = NULL, c->desc.jobs = NULL;   /* used here only: not kept */
     pthread_mutex_init(&c->lock, NULL);
     c->cache = core_calloc(CACHE_CAPACITY, sizeof *c->cache);
     uint64_t start = core_time_ns();
-    for (int i = 0; i < d.strata_count; i++) {
-        rocks_block_type type = d.strata[i];
-        if (c->tiles[type]) continue;
-        /* no relief: its 8 cm are below the metre the world samples at (the renderer's detail
-         * layer shades the faces) and it would double the cost of every sample */
-        c->tiles[type] = rocks_block_tile_create(&(rocks_block_tile_desc){
-            .type = type, .seed = core_hash_combine(d.seed, (uint64_t)type), .size = d.tile_size, .joint = d.joint,
-            .relief = -1.0f });
-        if (!c->tiles[type]) {
-            rocks_cliffs_destroy(c);
-            return NULL;
-        }
-        c->words[type] = (c->tiles[type]->block_count + 63) / 64;
+    tile_jobs jobs = { .desc = &d };
+    size_t count = 0;
+    bool used[ROCKS_BLOCK_TYPE_COUNT] = { false };
+    for (int i = 0; i < d.strata_count; i++)
+        if (!used[d.strata[i]]) used[d.strata[i]] = true, jobs.types[count++] = d.strata[i];
+    if (d.jobs) job_parallel_for(d.jobs, count, 1, make_tiles, &jobs, "rocks_block_tile");
+    else make_tiles(&jobs, 0, count);
+    bool ok = true;
+    for (size_t i = 0; i < count; i++) {
+        c->tiles[jobs.types[i]] = jobs.tiles[i];
+        if (!jobs.tiles[i]) ok = false;
+        else c->words[jobs.types[i]] = (jobs.tiles[i]->block_count + 63) / 64;
+        if (jobs.tiles[i] && jobs.tiles[i]->from_cache) c->stats.tiles_from_cache++;
+    }
+    if (!ok) {
+        rocks_cliffs_destroy(c);
+        return NULL;
     }
     c->stats.build_seconds = (double)(core_time_ns() - start) * 1e-9;
     return c;

@@ -1,5 +1,6 @@
 /* rocks_internal.h — the tile set's private parts (paper 001), shared by rocks_tiles.c,
- * rocks_voronoi.c, rocks_mesh.c, rocks_cache.c and the tests (which may include it).
+ * rocks_voronoi.c, rocks_mesh.c, rocks_cache.c and the tests (which may include it); and the
+ * block tiles' cache file (rocks_blocks_cache.c, paper 003), shared with rocks_blocks.c.
  *
  * Frames. Everything inside the builder is in integer cells and voxels relative to one origin
  * (a region's origin, or the test's block origin): cell C covers voxels C·m … C·m + m − 1 on each
@@ -172,6 +173,34 @@ bool rocks__cache_parse(const unsigned char *data, size_t size, const rocks__par
 /* Bytes of the arrays, as set->bytes counts them. */
 size_t rocks__set_bytes(const rocks_tileset *set);
 void rocks__set_free_arrays(rocks__set *set);
+
+/* ---- the block tiles' cache (rocks_blocks_cache.c; paper 003 cliff blocks) ------------------ */
+
+/* Bump it with ANY change to what a block tile's build makes (points, discs, clusters, planes,
+ * bounds, the lookup grid) or to the file's layout: a cache holds a build's output under its
+ * desc, so an old one would read as valid. */
+#define ROCKS__BLOCK_CACHE_VERSION 1u
+#define ROCKS__BLOCK_CACHE_CHECKSUM_SEED 0x726f636b626c6b73ull   /* core_hash_bytes' seed */
+
+/* Writes `tile` (one without custom blocks) to `path`: a temporary beside it, renamed over it,
+ * the folder made if missing. False with a message when it cannot. */
+bool rocks__block_cache_write(const char *path, const rocks_block_tile *tile);
+/* Reads `path` into `tile` (a zeroed struct: the reader sets its desc, arrays, counts and
+ * grid): true when the file holds exactly the tile of `desc` (defaults filled,
+ * no custom blocks) and is whole; otherwise false with *why ("missing", "cut short", …) and
+ * nothing kept (the tile's arrays NULL, its counts 0). */
+bool rocks__block_cache_read(const char *path, const rocks_block_tile_desc *desc, rocks_block_tile *tile,
+                             const char **why);
+/* The reader's checks on a file's bytes in memory (the tests and the fuzz target cut and damage
+ * them); as rocks__block_cache_read. On success the tile's arrays are the caller's: free them
+ * with rocks__block_tile_free_arrays (or rocks_block_tile_destroy for a core_alloc'd tile). */
+bool rocks__block_cache_parse(const unsigned char *data, size_t size, const rocks_block_tile_desc *desc,
+                              rocks_block_tile *tile, const char **why);
+/* The lookup grid's cells a side for a tile of side `size` (rocks_blocks.c's build_grid). */
+int rocks__block_grid_cells(float size);
+/* Frees a tile's arrays (each allocated with one item more than its count; grid_first with
+ * grid³ + 1) and sets them NULL; the struct itself stays. */
+void rocks__block_tile_free_arrays(rocks_block_tile *tile);
 
 /* Levels of detail of a closed mesh by quadric edge collapse onto existing vertices
  * (rocks_simplify.c): begin with the mesh (positions in voxels), then run once a level, finest

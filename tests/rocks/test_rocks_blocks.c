@@ -1,14 +1,23 @@
 /* Block tiles for cliffs (paper 003 §4–§5): the smooth intersection against hand-worked values,
  * a block made by hand (a cube corner), the replication's continuity across tile borders (value
  * and gradient), the clusters' defining property (no fracture between two points of a block),
- * every point inside its block's planes, block shapes by type, presence, determinism, bad input.
+ * every point inside its block's planes, block shapes by type, presence, determinism, bad input;
+ * the tiles' cache file (round trip, cuts, flipped bytes, old versions, other parameters, files
+ * whose checksum matches but whose indices do not) and the cliffs' cache folder and jobs.
  * Tiles are small (12 m, or 8 m) so the suite runs in seconds under the sanitizers. */
 #include "../engine/test.h"
 #include "core/core.h"
+#include "jobs/jobs.h"
 #include "rocks/rocks.h"
+#include "rocks/rocks_internal.h"
 
+#include <dirent.h>
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 static rocks_block_tile *small_tile(rocks_block_type type, uint64_t seed, float relief) {
     rocks_block_tile *t = rocks_block_tile_create(&(rocks_block_tile_desc){
@@ -568,4 +577,461 @@ Test(rocks_blocks, strata_choose_the_type) {
     terrain_world_destroy(b);
     rocks_cliffs_destroy(both);
     rocks_cliffs_destroy(tabular);
+}
+
+/* ---- the cache file (rocks_blocks_cache.c) -------------------------------------------------- */
+
+/* The layout's header, worked out from the file's comment: magic, version, marker, seed, type,
+ * 8 floats of the desc, 6 counts, the grid. Then the arrays and a u64 checksum. */
+enum { CACHE_HEADER = 8 + 4 + 4 + 8 + 4 + 8 * 4 + 6 * 4 + 4 };
+
+static rocks_block_tile_desc cache_tile_desc(const char *path) {
+    return (rocks_block_tile_desc){ .type = ROCKS_BLOCK_TABULAR, .seed = 17, .size = 8.0f, .point_spacing = 0.6f,
+                                    .fracture_spacing = 2.5f, .fracture_radius = 3.0f, .cache_path = path };
+}
+
+static size_t grid_cells(const rocks_block_tile *t) { return (size_t)t->grid * t->grid * t->grid; }
+
+/* Every array, count and parameter of two tiles the same. */
+static bool same_tile(const rocks_block_tile *a, const rocks_block_tile *b) {
+    const rocks_block_tile_desc *p = &a->desc, *q = &b->desc;
+    if (p->type != q->type || p->seed != q->seed || p->size != q->size || p->point_spacing != q->point_spacing ||
+        p->fracture_spacing != q->fracture_spacing || p->fracture_radius != q->fracture_radius ||
+        p->rounding != q->rounding || p->joint != q->joint || p->relief != q->relief ||
+        p->relief_scale != q->relief_scale || p->custom_count != q->custom_count)
+        return false;
+    if (a->block_count != b->block_count || a->plane_count != b->plane_count || a->point_count != b->point_count ||
+        a->disc_count != b->disc_count || a->sample_count != b->sample_count || a->grid != b->grid ||
+        a->grid_entry_count != b->grid_entry_count)
+        return false;
+    return memcmp(a->blocks, b->blocks, a->block_count * sizeof *a->blocks) == 0 &&
+           memcmp(a->planes, b->planes, a->plane_count * sizeof *a->planes) == 0 &&
+           memcmp(a->points, b->points, a->point_count * sizeof *a->points) == 0 &&
+           memcmp(a->discs, b->discs, a->disc_count * sizeof *a->discs) == 0 &&
+           memcmp(a->grid_first, b->grid_first, (grid_cells(a) + 1) * sizeof *a->grid_first) == 0 &&
+           memcmp(a->grid_entries, b->grid_entries, a->grid_entry_count * sizeof *a->grid_entries) == 0;
+}
+
+static unsigned char *read_all(const char *path, size_t *size) {
+    FILE *f = fopen(path, "rb");
+    cr_assert_not_null(f, "%s", path);
+    fseek(f, 0, SEEK_END);
+    *size = (size_t)ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *data = malloc(*size ? *size : 1);
+    cr_assert_eq(fread(data, 1, *size, f), *size);
+    fclose(f);
+    return data;
+}
+
+static void write_all(const char *path, const unsigned char *data, size_t size) {
+    FILE *f = fopen(path, "wb");
+    cr_assert_not_null(f);
+    if (size) fwrite(data, 1, size, f);
+    fclose(f);
+}
+
+static bool file_exists(const char *path) {
+    struct stat info;
+    return stat(path, &info) == 0;
+}
+
+/* Files in a folder (the temporaries of a write must all be gone). */
+static int files_in(const char *dir) {
+    DIR *d = opendir(dir);
+    cr_assert_not_null(d);
+    int count = 0;
+    struct dirent *e;
+    while ((e = readdir(d))) count += strcmp(e->d_name, ".") != 0 && strcmp(e->d_name, "..") != 0;
+    closedir(d);
+    return count;
+}
+
+/* Removes a folder made by the test and everything under it. */
+static void remove_tree(const char *path) {
+    DIR *d = opendir(path);
+    if (!d) {
+        remove(path);
+        return;
+    }
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
+        char child[1024];
+        snprintf(child, sizeof child, "%s/%s", path, e->d_name);
+        remove_tree(child);
+    }
+    closedir(d);
+    rmdir(path);
+}
+
+/* Runs `create(user)` with stderr in a file; returns what it made and the lines logged. */
+static void *counting_notices(void *(*create)(const void *), const void *user, int *lines) {
+    fflush(stderr);
+    int saved = dup(2);
+    FILE *log = tmpfile();
+    dup2(fileno(log), 2);
+    void *made = create(user);
+    fflush(stderr);
+    dup2(saved, 2);
+    close(saved);
+    rewind(log);
+    *lines = 0;
+    int c;
+    while ((c = fgetc(log)) != EOF) *lines += c == '\n';
+    fclose(log);
+    return made;
+}
+
+static void *create_tile(const void *desc) { return rocks_block_tile_create(desc); }
+static void *create_cliffs(const void *desc) { return rocks_cliffs_create(desc); }
+
+static rocks_block_tile *tile_counting_notices(const rocks_block_tile_desc *desc, int *lines) {
+    return counting_notices(create_tile, desc, lines);
+}
+
+/* Recomputes a file's checksum after the test changed it on purpose (core_hash_bytes of every
+ * byte before the last 8, with the seed the layout names). */
+static void reseal(unsigned char *data, size_t size) {
+    uint64_t sum = core_hash_bytes(data, size - 8, ROCKS__BLOCK_CACHE_CHECKSUM_SEED);
+    memcpy(data + size - 8, &sum, 8);
+}
+
+/* Parses bytes; a tile accepted is freed. Returns whether it was accepted, its reason in *why. */
+static bool parses(const unsigned char *data, size_t size, const rocks_block_tile_desc *desc, const char **why) {
+    rocks_block_tile t;
+    *why = NULL;
+    bool ok = rocks__block_cache_parse(data, size, desc, &t, why);
+    if (ok) rocks__block_tile_free_arrays(&t);
+    else {
+        cr_assert_not_null(*why, "a refusal says why");
+        cr_assert(t.blocks == NULL && t.block_count == 0 && t.grid_first == NULL, "a refusal keeps nothing");
+    }
+    return ok;
+}
+
+/* The desc as the tile keeps it: defaults filled, no path (what the parser is given). */
+static rocks_block_tile_desc filled(const rocks_block_tile *t) { return t->desc; }
+
+/* A tile read back is the built one: the same arrays, and the same field (value and block) at
+ * points all over, with and without presence; the file's size is the layout's; no temporary is
+ * left; the folder is made when missing. */
+Test(rocks_blocks, cache_round_trip) {
+    char dir[] = "/tmp/test_blocks_XXXXXX";
+    cr_assert_not_null(mkdtemp(dir));
+    char path[256];
+    snprintf(path, sizeof path, "%s/sub/deeper/tile.bin", dir);
+    rocks_block_tile_desc desc = cache_tile_desc(path);
+    int lines;
+    rocks_block_tile *built = tile_counting_notices(&desc, &lines);
+    cr_assert_not_null(built);
+    cr_expect_not(built->from_cache);
+    cr_expect_gt(built->build_seconds, 0.0);
+    cr_expect_eq(lines, 1, "a missing cache: one notice, %d lines", lines);
+    cr_assert(file_exists(path), "the folder is made and the file written");
+    cr_assert_null(built->desc.cache_path, "the tile does not keep the caller's path");
+    snprintf(path, sizeof path, "%s/sub/deeper", dir);
+    cr_expect_eq(files_in(path), 1, "no temporary left beside the file");
+    snprintf(path, sizeof path, "%s/sub/deeper/tile.bin", dir);
+
+    rocks_block_tile *loaded = tile_counting_notices(&desc, &lines);
+    cr_assert_not_null(loaded);
+    cr_expect(loaded->from_cache);
+    cr_expect_eq(loaded->build_seconds, 0.0);
+    cr_expect_eq(lines, 0, "read without a word");
+    cr_assert(same_tile(built, loaded));
+    uint64_t state = 31;
+    for (int i = 0; i < 2000; i++) {
+        double p[3];
+        for (int a = 0; a < 3; a++) p[a] = (unit(&state) - 0.5) * 5.0 * built->desc.size;
+        uint32_t block_a, block_b;
+        float a = rocks_block_tile_field(built, p, NULL, NULL, &block_a);
+        float b = rocks_block_tile_field(loaded, p, NULL, NULL, &block_b);
+        cr_assert(a == b || (isinf(a) && isinf(b)), "at %g %g %g: %g vs %g", p[0], p[1], p[2], a, b);
+        cr_assert_eq(block_a, block_b);
+        a = rocks_block_tile_field(built, p, every_other_copy, NULL, &block_a);
+        b = rocks_block_tile_field(loaded, p, every_other_copy, NULL, &block_b);
+        cr_assert(a == b || (isinf(a) && isinf(b)));
+        cr_assert_eq(block_a, block_b);
+    }
+    size_t size;
+    unsigned char *data = read_all(path, &size);
+    size_t expected = CACHE_HEADER + built->block_count * (5 * 4 + 9 * 4) + built->plane_count * 16 +
+                      built->point_count * 12 + built->disc_count * 7 * 4 + (grid_cells(built) + 1) * 4 +
+                      built->grid_entry_count * 4 + 8;
+    cr_expect_eq(size, expected, "%zu bytes, the layout gives %zu", size, expected);
+    cr_expect_eq(memcmp(data, "ROCKBLCK", 8), 0);
+    free(data);
+    rocks_block_tile_destroy(built);
+    rocks_block_tile_destroy(loaded);
+    remove_tree(dir);
+}
+
+/* The parser on bytes in memory: every truncation and a longer file refused (the size the
+ * counts imply is checked before an array is read), flipped bits anywhere refused, another
+ * version, byte order or parameters refused and named. */
+Test(rocks_blocks, cache_parser_refuses_cuts_and_damage) {
+    char dir[] = "/tmp/test_blocks_XXXXXX";
+    cr_assert_not_null(mkdtemp(dir));
+    char path[256];
+    snprintf(path, sizeof path, "%s/tile.bin", dir);
+    rocks_block_tile_desc desc = cache_tile_desc(path);
+    rocks_block_tile *built = rocks_block_tile_create(&desc);
+    cr_assert_not_null(built);
+    const rocks_block_tile_desc want = filled(built);
+    size_t size;
+    unsigned char *good = read_all(path, &size);
+    const char *why;
+    cr_assert(parses(good, size, &want, &why), "the good file: %s", why ? why : "");
+
+    int accepted = 0;
+    for (size_t cut = 0; cut < size; cut++) accepted += parses(good, cut, &want, &why);
+    cr_expect_eq(accepted, 0, "%d truncated caches accepted", accepted);
+    unsigned char *longer = malloc(size + 16);
+    memcpy(longer, good, size);
+    memset(longer + size, 0, 16);
+    cr_expect_not(parses(longer, size + 16, &want, &why));
+    cr_expect(why && strstr(why, "longer"), "%s", why ? why : "");
+    free(longer);
+
+    /* flipped bits: every byte of the header, then spread over every array and the checksum */
+    unsigned char *bad = malloc(size);
+    int flips = 0;
+    for (size_t i = 0; i < CACHE_HEADER + 400; i++) {
+        size_t at = i < CACHE_HEADER + 8 ? (i < CACHE_HEADER ? i : size - 8 + (i - CACHE_HEADER))
+                                         : (size_t)(((uint64_t)i * 2654435761u) % size);
+        memcpy(bad, good, size);
+        bad[at] ^= (unsigned char)(1u << (i % 8));
+        bool ok = parses(bad, size, &want, &why);
+        cr_expect_not(ok, "a flipped bit at byte %zu of %zu was accepted", at, size);
+        flips++;
+    }
+    cr_expect_gt(flips, 400);
+
+    /* each header field named: version, byte order, parameters */
+    uint32_t value = ROCKS__BLOCK_CACHE_VERSION + 1;
+    memcpy(bad, good, size), memcpy(bad + 8, &value, 4), reseal(bad, size);
+    cr_expect_not(parses(bad, size, &want, &why));
+    cr_expect(why && strstr(why, "version"), "%s", why ? why : "");
+    value = 0x04030201u;   /* the marker as the other byte order reads it */
+    memcpy(bad, good, size), memcpy(bad + 12, &value, 4), reseal(bad, size);
+    cr_expect_not(parses(bad, size, &want, &why));
+    cr_expect(why && strstr(why, "byte order"), "%s", why ? why : "");
+    rocks_block_tile_desc other = want;
+    other.seed++;
+    cr_expect_not(parses(good, size, &other, &why));
+    cr_expect(why && strstr(why, "parameters"), "%s", why ? why : "");
+    other = want;
+    other.joint = 0.2f;
+    cr_expect_not(parses(good, size, &other, &why));
+    other = want;
+    other.type = ROCKS_BLOCK_COLUMNAR;
+    cr_expect_not(parses(good, size, &other, &why));
+    memcpy(bad, good, size);
+    bad[size - 1] ^= 1;
+    cr_expect_not(parses(bad, size, &want, &why));
+    cr_expect(why && strstr(why, "checksum"), "%s", why ? why : "");
+    free(bad);
+    free(good);
+    rocks_block_tile_destroy(built);
+    remove_tree(dir);
+}
+
+/* A file whose checksum matches (written again over changed bytes) but whose contents break an
+ * invariant is refused as inconsistent, before anything indexes with it. */
+Test(rocks_blocks, cache_parser_refuses_inconsistent_files) {
+    char dir[] = "/tmp/test_blocks_XXXXXX";
+    cr_assert_not_null(mkdtemp(dir));
+    char path[256];
+    snprintf(path, sizeof path, "%s/tile.bin", dir);
+    rocks_block_tile_desc desc = cache_tile_desc(path);
+    rocks_block_tile *t = rocks_block_tile_create(&desc);
+    cr_assert_not_null(t);
+    const rocks_block_tile_desc want = filled(t);
+    size_t size;
+    unsigned char *good = read_all(path, &size);
+    cr_assert_gt(t->block_count, 3);
+    cr_assert_gt(t->grid_entry_count, 3);
+    const size_t blocks = CACHE_HEADER, block_size = sizeof(rocks_block);
+    const size_t planes = blocks + t->block_count * block_size;
+    const size_t grid_first = planes + t->plane_count * 16 + t->point_count * 12 + t->disc_count * sizeof(rocks_block_disc);
+    const size_t entries = grid_first + (grid_cells(t) + 1) * 4;
+    const uint32_t last = t->block_count - 1;
+    const float nan = NAN, huge = 1e30f;
+    struct { size_t at; const void *value; size_t bytes; const char *what; } cases[] = {
+        { blocks + last * block_size + offsetof(rocks_block, plane_first), &t->plane_count, 4, "a plane range past the end" },
+        { blocks + offsetof(rocks_block, plane_count), &(uint32_t){ t->plane_count + 1 }, 4, "a plane count past the end" },
+        { blocks + offsetof(rocks_block, point_first), &(uint32_t){ UINT32_MAX }, 4, "a point range past the end" },
+        { blocks + offsetof(rocks_block, custom), &(uint32_t){ 1 }, 4, "a custom block" },
+        { blocks + offsetof(rocks_block, bounds_min), &nan, 4, "a NaN bound" },
+        { blocks + offsetof(rocks_block, anchor), &huge, 4, "an anchor far off" },
+        { planes + 12, &nan, 4, "a NaN plane" },
+        { entries, &(uint32_t){ t->block_count << 5 }, 4, "a grid entry's block past the count" },
+        { entries, &(uint32_t){ 27 }, 4, "a grid entry's image past 26" },
+        { grid_first, &(uint32_t){ 1 }, 4, "grid_first not starting at 0" },
+        { grid_first + grid_cells(t) * 4, &(uint32_t){ t->grid_entry_count - 1 }, 4, "grid_first not ending at the count" },
+        { grid_first + 4, &(uint32_t){ t->grid_entry_count + 5 }, 4, "grid_first decreasing" },
+        { 8 + 4 + 4 + 8 + 4 + 8 * 4 + 6 * 4, &(int32_t){ t->grid + 1 }, 4, "another grid" },
+        { 8 + 4 + 4 + 8 + 4 + 8 * 4 + 5 * 4, &(uint32_t){ t->point_count - 1 }, 4, "fewer samples than points" },
+    };
+    unsigned char *bad = malloc(size);
+    for (size_t i = 0; i < CORE_COUNTOF(cases); i++) {
+        memcpy(bad, good, size);
+        memcpy(bad + cases[i].at, cases[i].value, cases[i].bytes);
+        reseal(bad, size);
+        const char *why;
+        cr_expect_not(parses(bad, size, &want, &why), "%s was accepted", cases[i].what);
+        cr_expect(why && strstr(why, "inconsistent"), "%s: %s", cases[i].what, why ? why : "");
+    }
+    free(bad);
+    free(good);
+    rocks_block_tile_destroy(t);
+    remove_tree(dir);
+}
+
+/* Through rocks_block_tile_create: a cut file, a flipped byte, an old version number, an empty
+ * file, another seed's file: each rebuilt with exactly one notice, the same tile as built, and
+ * the file rewritten is read back next time without a word. */
+Test(rocks_blocks, cache_damage_rebuilds_with_one_notice) {
+    char dir[] = "/tmp/test_blocks_XXXXXX";
+    cr_assert_not_null(mkdtemp(dir));
+    char path[256];
+    snprintf(path, sizeof path, "%s/tile.bin", dir);
+    rocks_block_tile_desc desc = cache_tile_desc(path);
+    int lines;
+    rocks_block_tile *built = tile_counting_notices(&desc, &lines);
+    cr_assert_not_null(built);
+    size_t size;
+    unsigned char *good = read_all(path, &size);
+    for (int kind = 0; kind < 4; kind++) {
+        unsigned char *bad = malloc(size);
+        memcpy(bad, good, size);
+        size_t bad_size = size;
+        if (kind == 0) bad_size = size / 2;
+        if (kind == 1) bad[size / 3] ^= 0x10;
+        if (kind == 2) {
+            uint32_t old = ROCKS__BLOCK_CACHE_VERSION - 1;
+            memcpy(bad + 8, &old, sizeof old);
+        }
+        if (kind == 3) bad_size = 0;
+        write_all(path, bad, bad_size);
+        free(bad);
+        rocks_block_tile *again = tile_counting_notices(&desc, &lines);
+        cr_assert_not_null(again);
+        cr_expect_not(again->from_cache, "case %d", kind);
+        cr_expect_eq(lines, 1, "case %d: %d lines", kind, lines);
+        cr_expect(same_tile(built, again), "case %d", kind);
+        rocks_block_tile_destroy(again);
+        rocks_block_tile *reread = tile_counting_notices(&desc, &lines);
+        cr_expect(reread->from_cache, "case %d: the rewritten cache", kind);
+        cr_expect_eq(lines, 0, "case %d", kind);
+        cr_expect(same_tile(built, reread), "case %d", kind);
+        rocks_block_tile_destroy(reread);
+    }
+    /* other parameters: rebuilt (one notice), and a tile of those parameters, not the file's */
+    rocks_block_tile_desc other = desc;
+    other.seed = 18;
+    rocks_block_tile *rebuilt = tile_counting_notices(&other, &lines);
+    cr_expect_not(rebuilt->from_cache);
+    cr_expect_eq(lines, 1);
+    cr_expect_eq(rebuilt->desc.seed, 18u);
+    cr_expect_not(same_tile(built, rebuilt));
+    rocks_block_tile_destroy(rebuilt);
+    other = desc;
+    other.relief = -1.0f;
+    rebuilt = tile_counting_notices(&other, &lines);
+    cr_expect_not(rebuilt->from_cache);
+    cr_expect_eq(lines, 1);
+    rocks_block_tile_destroy(rebuilt);
+    /* an unwritable path (under a file) is never fatal: the tile is built */
+    char blocked[300];
+    snprintf(blocked, sizeof blocked, "%s/tile.bin/inside.bin", dir);
+    other = desc;
+    other.cache_path = blocked;
+    rebuilt = tile_counting_notices(&other, &lines);
+    cr_assert_not_null(rebuilt);
+    cr_expect_not(rebuilt->from_cache);
+    cr_expect(same_tile(built, rebuilt));
+    rocks_block_tile_destroy(rebuilt);
+    free(good);
+    rocks_block_tile_destroy(built);
+    remove_tree(dir);
+}
+
+/* A tile with custom blocks holds function pointers: never cached, cache_path ignored. */
+Test(rocks_blocks, custom_tile_not_cached) {
+    char dir[] = "/tmp/test_blocks_XXXXXX";
+    cr_assert_not_null(mkdtemp(dir));
+    char path[256];
+    snprintf(path, sizeof path, "%s/custom.bin", dir);
+    sphere ball = { .centre = { 4.0f, 4.0f, 4.0f }, .radius = 1.0f };
+    rocks_block_custom custom = { .field = sphere_field, .user = &ball, .bounds_min = { 3, 3, 3 }, .bounds_max = { 5, 5, 5 } };
+    rocks_block_tile_desc desc = cache_tile_desc(path);
+    desc.custom = &custom, desc.custom_count = 1;
+    for (int run = 0; run < 2; run++) {
+        int lines;
+        rocks_block_tile *t = tile_counting_notices(&desc, &lines);
+        cr_assert_not_null(t);
+        cr_expect_not(t->from_cache);
+        cr_expect_eq(lines, 0, "no cache, no notice");
+        cr_expect_eq(t->blocks[0].custom, 1u);
+        rocks_block_tile_destroy(t);
+    }
+    cr_expect_not(file_exists(path));
+    cr_expect_eq(files_in(dir), 0);
+    remove_tree(dir);
+}
+
+/* rocks_cliffs with cache_dir writes a file per type, named by type and seed (42 = 0x2a: a
+ * world of another seed has files of its own); a second create reads them; with jobs the tiles
+ * (their files, byte for byte) are those made without. The two cheapest types: four tile builds
+ * are most of the suite's time under the sanitizers. */
+Test(rocks_blocks, cliffs_cache_dir_and_jobs) {
+    char dir[] = "/tmp/test_blocks_XXXXXX";
+    cr_assert_not_null(mkdtemp(dir));
+    char serial_dir[300], parallel_dir[300];
+    snprintf(serial_dir, sizeof serial_dir, "%s/serial", dir);
+    snprintf(parallel_dir, sizeof parallel_dir, "%s/parallel", dir);
+    rocks_cliffs_desc desc = { .seed = 42, .strata_count = 3, .stratum_height = 10, .tile_size = 8,
+                               .strata = { ROCKS_BLOCK_COLUMNAR, ROCKS_BLOCK_TABULAR, ROCKS_BLOCK_COLUMNAR },
+                               .cache_dir = serial_dir };
+    int lines;
+    rocks_cliffs *first = counting_notices(create_cliffs, &desc, &lines);
+    cr_assert_not_null(first);
+    cr_expect_eq(lines, 2, "one notice per type's missing file: %d lines", lines);
+    cr_expect_eq(rocks_cliffs_stats_get(first).tiles_from_cache, 0u);
+    cr_expect_eq(files_in(serial_dir), 2, "a file per type the strata use");
+    char columnar[400], tabular[400];
+    snprintf(columnar, sizeof columnar, "%s/blocks-columnar-000000000000002a.bin", serial_dir);
+    snprintf(tabular, sizeof tabular, "%s/blocks-tabular-000000000000002a.bin", serial_dir);
+    cr_assert(file_exists(columnar) && file_exists(tabular));
+    rocks_cliffs_destroy(first);
+
+    rocks_cliffs *second = counting_notices(create_cliffs, &desc, &lines);
+    cr_assert_not_null(second);
+    cr_expect_eq(lines, 0);
+    cr_expect_eq(rocks_cliffs_stats_get(second).tiles_from_cache, 2u, "both tiles read back");
+    rocks_cliffs_destroy(second);
+
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 3 });
+    rocks_cliffs_desc parallel = desc;
+    parallel.cache_dir = parallel_dir, parallel.jobs = jobs;
+    rocks_cliffs *third = counting_notices(create_cliffs, &parallel, &lines);
+    cr_assert_not_null(third);
+    cr_expect_eq(lines, 2);
+    cr_expect_eq(rocks_cliffs_stats_get(third).tiles_from_cache, 0u);
+    rocks_cliffs_destroy(third);
+    job_system_destroy(jobs);
+    const char *types[] = { "columnar", "tabular" };
+    for (int i = 0; i < 2; i++) {
+        char a[400], b[400];
+        snprintf(a, sizeof a, "%s/blocks-%s-000000000000002a.bin", serial_dir, types[i]);
+        snprintf(b, sizeof b, "%s/blocks-%s-000000000000002a.bin", parallel_dir, types[i]);
+        size_t size_a, size_b;
+        unsigned char *da = read_all(a, &size_a), *db = read_all(b, &size_b);
+        cr_expect(size_a == size_b && memcmp(da, db, size_a) == 0, "%s: the jobs' tile differs", types[i]);
+        free(da);
+        free(db);
+    }
+    remove_tree(dir);
 }
