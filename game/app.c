@@ -33,7 +33,7 @@ struct game_app {
     rocks_tileset *own_rock_tiles;         /* the default set, when desc.rock_tiles is NULL */
     const rocks_tileset *rock_tiles;       /* NULL with --rocks off */
     rocks_system *rocks;
-    rocks_cliffs *cliffs;                  /* NULL unless desc.cliffs */
+    rocks_cliffs *cliffs;                  /* NULL with desc.cliffs off */
     terrain_water *water;                  /* NULL with --water off */
     input_bindings *bindings;
     input_system *input;
@@ -222,7 +222,9 @@ static bool app_open_terrain(game_app *app) {
      * edited. With a world folder it is also loaded and saved. */
     app->edits = terrain_edit_log_create(terrain_generation_key(&params));
     if (app->desc.world_dir && !app_open_store(app)) return false;
-    if (app->desc.cliffs && !(app->cliffs = rocks_cliffs_create(&(rocks_cliffs_desc){ .seed = app->desc.seed })))
+    if (app->desc.cliffs != ROCKS_OFF && !(app->cliffs = rocks_cliffs_create(&(rocks_cliffs_desc){
+                                            .seed = app->desc.seed, .jobs = app->jobs,
+                                            .cache_dir = app->desc.cliffs_cache_dir })))
         return false;
     app->world = terrain_world_create(&(terrain_world_desc){ .generation = params, .generate = app->desc.generate,
                                                              .generate_user = app->desc.generate_user,
@@ -649,6 +651,8 @@ static void app_finish_loading(game_app *app) {
             printf("world: %d look%s over water from a shore on the walk\n", found.shores, found.shores == 1 ? "" : "s");
         if (found.rocks)
             printf("world: %d look%s at a pile of rocks on the walk\n", found.rocks, found.rocks == 1 ? "" : "s");
+        if (found.cliffs)
+            printf("world: %d look%s at a cliff on the walk\n", found.cliffs, found.cliffs == 1 ? "" : "s");
         game_walker_start(&app->walker, app->desc.walk, &app->player);
     }
     gfx_window_set_title(app->gfx, "world");
@@ -766,6 +770,13 @@ game_app_stats game_app_stats_get(const game_app *app) {
         s.rocks_drawn = r.instances_drawn;
         s.rock_shapes = app->rock_tiles->rock_count;
         s.rocks_build_seconds = app->rock_tiles->build_seconds;
+    }
+    if (app->cliffs) {
+        rocks_cliffs_stats c = rocks_cliffs_stats_get(app->cliffs);
+        s.cliffs = true;
+        s.cliff_blocks = c.copies_present;
+        s.cliffs_build_seconds = c.build_seconds;
+        s.cliff_tiles_from_cache = c.tiles_from_cache;
     }
     s.grass_ms_mean = app->frames ? app->grass_ms_sum / app->frames : 0.0;
     s.grass_ms_max = app->grass_ms_max;

@@ -74,8 +74,10 @@ typedef struct game_app_desc {
     const rocks_tileset *rock_tiles;  /* the rocks' tile set (not owned; tests pass small ones);
                                          NULL = the default set, from rocks_cache_path */
     const char *rocks_cache_path;     /* the default set's cache file; NULL = built each run */
-    bool cliffs;                      /* fractured blocks on steep bedrock walls (rocks_cliffs,
-                                         paper 003), through the world's amplify hook */
+    rocks_quality cliffs;             /* fractured blocks on steep bedrock walls (rocks_cliffs,
+                                         paper 003), through the world's amplify hook; 0 = on */
+    const char *cliffs_cache_dir;     /* a folder for their block tiles' cache files
+                                         (rocks_cliffs_desc.cache_dir); NULL = built each run */
     bool no_head_bob;                 /* the view without the walking dip (game_player_bob) */
     bool no_occlusion;                /* terrain lit without its ambient occlusion
                                          (terrain_renderer_desc.no_occlusion) */
@@ -144,6 +146,12 @@ typedef struct game_app_stats {
     uint64_t rocks_placed, rocks_drawn;
     uint32_t rock_shapes;
     double rocks_build_seconds;
+    /* Cliff blocks (rocks_cliffs): on or not, the block copies raised into the fields made so
+     * far, and their tiles' seconds (built or read from the cache) and how many were read. */
+    bool cliffs;
+    uint64_t cliff_blocks;
+    double cliffs_build_seconds;
+    uint32_t cliff_tiles_from_cache;
 } game_app_stats;
 
 game_app_stats game_app_stats_get(const game_app *app);

@@ -96,7 +96,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "water", CORE_OPTION_STRING, &o->water, "off|low|high", "the sea and lakes (default low)" },
         { "rocks", CORE_OPTION_STRING, &o->rocks, "on|off", "rock piles (default on; the tile set is cached "
           "in out/rocks_tiles.bin when out/ exists)" },
-        { "cliffs", CORE_OPTION_STRING, &o->cliffs, "on|off", "fractured blocks on steep bedrock walls (default off)" },
+        { "cliffs", CORE_OPTION_STRING, &o->cliffs, "on|off", "fractured blocks on steep bedrock walls (default on; their tiles are cached in out/ when it exists)" },
         { "detail", CORE_OPTION_STRING, &o->detail, "on|off", "the ground's 1 m detail layer and scale blend (default on)" },
         { "shadows", CORE_OPTION_STRING, &o->shadows, "off|low|high", "sun shadows (default low)" },
         { "memory", CORE_OPTION_INT, &o->memory_mb, "MB", "memory budget for terrain (default 384)", 16, 65536 },
@@ -131,14 +131,15 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         snprintf(error, sizeof error, "'%s' is not on or off", o->rocks);
         return bad_value(&cli, "rocks", error);
     }
-    rocks_quality cliffs = ROCKS_OFF;
-    if (o->cliffs && !rocks_parse_quality(o->cliffs, &cliffs)) {
+    if (o->cliffs && !rocks_parse_quality(o->cliffs, &desc->cliffs)) {
         snprintf(error, sizeof error, "'%s' is not on or off", o->cliffs);
         return bad_value(&cli, "cliffs", error);
     }
-    desc->cliffs = cliffs == ROCKS_ON;
     struct stat out_dir;
-    if (stat("out", &out_dir) == 0 && S_ISDIR(out_dir.st_mode)) desc->rocks_cache_path = "out/rocks_tiles.bin";
+    if (stat("out", &out_dir) == 0 && S_ISDIR(out_dir.st_mode)) {
+        desc->rocks_cache_path = "out/rocks_tiles.bin";
+        desc->cliffs_cache_dir = "out";
+    }
     if (o->detail && strcmp(o->detail, "on") != 0 && strcmp(o->detail, "off") != 0) {
         snprintf(error, sizeof error, "'%s' is not on or off", o->detail);
         return bad_value(&cli, "detail", error);
@@ -203,6 +204,10 @@ static void print_results(const game_app_stats *s, bool walked) {
         printf("world: rocks %llu placed, %llu drawn in the last frame; %u rock shapes in the tile set (%s)\n",
                (unsigned long long)s->rocks_placed, (unsigned long long)s->rocks_drawn, s->rock_shapes,
                s->rocks_build_seconds > 0 ? "built this run" : "from its cache");
+    if (s->cliffs)
+        printf("world: cliffs %llu blocks raised on steep bedrock walls; their tiles %s in %.2f s\n",
+               (unsigned long long)s->cliff_blocks, s->cliff_tiles_from_cache ? "read from their cache" : "built",
+               s->cliffs_build_seconds);
     printf("world: player at (%.4f, %.4f, %.4f), looking %.1f,%.1f\n", s->feet[0], s->feet[1], s->feet[2],
            s->look[0], s->look[1]);
 }

@@ -262,6 +262,9 @@ expect "world: --look past straight up" 2 "bad value for '--look': '0,90': PITCH
 expect "world: --look past straight down" 2 "bad value for '--look': '0,-89.5': PITCH is beyond" -- "$bin/world" --look 0,-89.5
 expect "world: --at and --look" 0 "player at \(10\.0000, 78\.3800, 20\.0000\), looking 90\.0,-20\.0" -- \
   "$bin/world" --headless --size 64x48 --radius 1 --levels 2 --frames 2 --at 10,80,20 --look 90,-20
+expect "world: cliff blocks on by default" 0 "world: cliffs [0-9]+ blocks raised on steep bedrock walls" -- \
+  "$bin/world" --headless --size 64x48 --radius 1 --levels 2 --frames 2 --at 10,80,20 --look 90,-20
+expect "world: --cliffs off" 0 "player at" -- "$bin/world" --headless --size 64x48 --radius 1 --levels 2 --frames 2 --cliffs off
 expect "world: scripted walk, eye always in the air" 0 "walked (8[0-9]|9[0-9]|1[0-9][0-9])\.[0-9] m .*eye in solid on 0 frames" -- \
   "$bin/world" --headless --size 64x48 --radius 1 --levels 2 --walk straight:90 --seed 5 --trace "$tmp/walk.json" \
   --screenshot "$tmp/world.png"

@@ -27,9 +27,13 @@ static rocks_tileset *small_rock_tiles(void) {
 }
 
 /* Worlds here run without rocks unless a test gives a tile set: the default set takes the debug
- * build 40 s to make (test_render_rocks and test_rocks cover the rocks with small sets). */
+ * build 40 s to make (test_render_rocks and test_rocks cover the rocks with small sets). Cliff
+ * blocks only where a test asks for them (ROCKS_ON): under the sanitizers their tiles and their
+ * presence tests more than double the tour's time (test_rocks covers them; tests/programs.sh
+ * runs the release world, cliffs on). */
 static game_app_stats run_world(game_app_desc desc) {
     if (!desc.rock_tiles) desc.rocks = ROCKS_OFF;
+    if (desc.cliffs == ROCKS_DEFAULT) desc.cliffs = ROCKS_OFF;
     game_app *app = game_app_create(&desc);
     cr_assert(app, "the world did not start");
     int guard = 0;
@@ -157,7 +161,8 @@ typedef struct edited_run {
 static edited_run carve_and_close(const char *dir) {
     game_app *app = game_app_create(&(game_app_desc){ .seed = 3, .width = 96, .height = 64, .headless = true,
                                                       .threads = 2, .frames = 100000, .stream = small_view,
-                                                      .no_clipmap = true, .world_dir = dir, .rocks = ROCKS_OFF });
+                                                      .no_clipmap = true, .world_dir = dir, .rocks = ROCKS_OFF,
+                                                      .cliffs = ROCKS_OFF });
     cr_assert(app);
     for (int guard = 0; !game_app_loaded(app) && guard < 20000; guard++) game_app_frame(app);
     game_app_stats s = game_app_stats_get(app);
@@ -183,7 +188,8 @@ static uint64_t chunk_hash_in(const char *dir, uint64_t seed, terrain_chunk_coor
                               double *feet) {
     game_app *app = game_app_create(&(game_app_desc){ .seed = seed, .width = 96, .height = 64, .headless = true,
                                                       .threads = 2, .frames = 1, .stream = small_view,
-                                                      .no_clipmap = true, .world_dir = dir, .rocks = ROCKS_OFF });
+                                                      .no_clipmap = true, .world_dir = dir, .rocks = ROCKS_OFF,
+                                                      .cliffs = ROCKS_OFF });
     *started = app != NULL;
     if (!app) return 0;
     uint64_t hash = terrain_stacks_hash(terrain_world_stacks(game_app_world(app), chunk));
