@@ -775,6 +775,11 @@ game_app_stats game_app_stats_get(const game_app *app) {
         rocks_cliffs_stats c = rocks_cliffs_stats_get(app->cliffs);
         s.cliffs = true;
         s.cliff_blocks = c.copies_present;
+        s.cliff_fields = c.fields;
+        s.cliff_cells_computed = c.cells_computed;
+        s.cliff_cells_reused = c.cells_reused;
+        s.cliffs_amplify_seconds = c.amplify_seconds;
+        s.cliffs_presence_seconds = c.presence_seconds;
         s.cliffs_build_seconds = c.build_seconds;
         s.cliff_tiles_from_cache = c.tiles_from_cache;
     }

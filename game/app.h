@@ -147,10 +147,11 @@ typedef struct game_app_stats {
     uint32_t rock_shapes;
     double rocks_build_seconds;
     /* Cliff blocks (rocks_cliffs): on or not, the block copies raised into the fields made so
-     * far, and their tiles' seconds (built or read from the cache) and how many were read. */
+     * far, those fields, the tile cells whose presence was worked out and those reused, and
+     * their tiles' seconds (built or read from the cache) and how many were read. */
     bool cliffs;
-    uint64_t cliff_blocks;
-    double cliffs_build_seconds;
+    uint64_t cliff_blocks, cliff_fields, cliff_cells_computed, cliff_cells_reused;
+    double cliffs_build_seconds, cliffs_amplify_seconds, cliffs_presence_seconds;
     uint32_t cliff_tiles_from_cache;
 } game_app_stats;
 

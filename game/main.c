@@ -205,8 +205,11 @@ static void print_results(const game_app_stats *s, bool walked) {
                (unsigned long long)s->rocks_placed, (unsigned long long)s->rocks_drawn, s->rock_shapes,
                s->rocks_build_seconds > 0 ? "built this run" : "from its cache");
     if (s->cliffs)
-        printf("world: cliffs %llu blocks raised on steep bedrock walls; their tiles %s in %.2f s\n",
-               (unsigned long long)s->cliff_blocks, s->cliff_tiles_from_cache ? "read from their cache" : "built",
+        printf("world: cliffs %llu blocks raised on steep bedrock walls in %llu fields (%.2f s of CPU, %.2f s of it "
+               "for presence in %llu tile cells, reused %llu times); their tiles %s in %.2f s\n",
+               (unsigned long long)s->cliff_blocks, (unsigned long long)s->cliff_fields, s->cliffs_amplify_seconds,
+               s->cliffs_presence_seconds, (unsigned long long)s->cliff_cells_computed,
+               (unsigned long long)s->cliff_cells_reused, s->cliff_tiles_from_cache ? "read from their cache" : "built",
                s->cliffs_build_seconds);
     printf("world: player at (%.4f, %.4f, %.4f), looking %.1f,%.1f\n", s->feet[0], s->feet[1], s->feet[2],
            s->look[0], s->look[1]);

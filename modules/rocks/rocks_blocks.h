@@ -217,6 +217,8 @@ void rocks_cliffs_destroy(rocks_cliffs *cliffs);
 void rocks_cliffs_amplify(void *cliffs, terrain_world *world, terrain_field *field);
 typedef struct rocks_cliffs_stats {
     uint64_t fields, cells_computed, cells_reused, copies_present;
+    double amplify_seconds;           /* in rocks_cliffs_amplify, summed over threads */
+    double presence_seconds;          /* of which working out presence (cells_computed) */
     double build_seconds;             /* the tiles, built or read from cache_dir */
     uint32_t tiles_from_cache;        /* of the tiles, those read from cache_dir */
 } rocks_cliffs_stats;

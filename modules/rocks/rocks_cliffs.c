@@ -152,6 +152,16 @@ static int stratum_type(const rocks_cliffs_desc *d, double y) {
     return (int)d->strata[((band % n) + n) % n];
 }
 
+/* Whether some height in [y0, y1) belongs to a stratum of `type`: a tile cell whose anchors all
+ * lie in other strata has no block of this type present, and is not asked. */
+static bool stratum_meets(const rocks_cliffs_desc *d, int type, double y0, double y1) {
+    for (int64_t band = (int64_t)floor(y0 / d->stratum_height); (double)band * d->stratum_height < y1; band++) {
+        int64_t n = d->strata_count;
+        if ((int)d->strata[((band % n) + n) % n] == type) return true;
+    }
+    return false;
+}
+
 /* On a steep wall (rocks_block_on_walls) at least 2 m tall whose inside, three quarters of a
  * metre along the field's gradient, is bedrock: no blocks on steep sand.
  *
@@ -201,6 +211,54 @@ static bool mostly_in_the_wall(terrain_world *world, const rocks_block *b, const
     return inside >= 4 && top_inside;
 }
 
+/* ---- a cheap first test: anchors far from any surface ------------------------------------- */
+
+/* The field at p is 2·(solid fraction of the cube p ± 1 m) − 1 (terrain_field_base_at), and the
+ * wall test reads it up to a quarter metre further (its gradient). So an anchor whose cube
+ * p ± ANCHOR_REACH lies wholly above every column chunk's highest interface (terrain_stacks_
+ * interface_range) sees only air, f = −1 exactly, and fails the distance range; wholly below
+ * the lowest, only solid, f = 1 and a gradient of exactly zero: it fails the steepness. Such
+ * anchors, most of a cell's, are passed over without the field's cost, with the same answer. */
+#define ANCHOR_REACH 1.25
+
+typedef struct surface_bounds {
+    int64_t chunk_x0, chunk_z0;       /* the cell's first column chunk */
+    int nx, nz;                       /* chunks it spans (1 or 2 each way at s ≤ 32 m) */
+    float lowest[3][3], highest[3][3];
+} surface_bounds;
+
+static int64_t chunk_of(double x) {
+    return (int64_t)floor(x / (TERRAIN_CHUNK_COLUMNS * TERRAIN_COLUMN_SIZE));
+}
+
+static bool surface_bounds_make(terrain_world *world, const int64_t cell[3], double s, surface_bounds *b) {
+    b->chunk_x0 = chunk_of((double)cell[0] * s - ANCHOR_REACH);
+    b->chunk_z0 = chunk_of((double)cell[2] * s - ANCHOR_REACH);
+    b->nx = (int)(chunk_of((double)cell[0] * s + s + ANCHOR_REACH) - b->chunk_x0 + 1);
+    b->nz = (int)(chunk_of((double)cell[2] * s + s + ANCHOR_REACH) - b->chunk_z0 + 1);
+    if (b->nx > 3 || b->nz > 3) return false;   /* a tile wider than a chunk: no shortcut */
+    for (int k = 0; k < b->nz; k++)
+        for (int i = 0; i < b->nx; i++) {
+            const terrain_stacks *stacks =
+                terrain_world_stacks(world, (terrain_chunk_coord){ b->chunk_x0 + i, b->chunk_z0 + k });
+            if (!stacks) return false;
+            terrain_stacks_interface_range(stacks, &b->lowest[k][i], &b->highest[k][i]);
+        }
+    return true;
+}
+
+static bool far_from_surface(const surface_bounds *b, const double a[3]) {
+    int i0 = (int)(chunk_of(a[0] - ANCHOR_REACH) - b->chunk_x0), i1 = (int)(chunk_of(a[0] + ANCHOR_REACH) - b->chunk_x0);
+    int k0 = (int)(chunk_of(a[2] - ANCHOR_REACH) - b->chunk_z0), k1 = (int)(chunk_of(a[2] + ANCHOR_REACH) - b->chunk_z0);
+    bool above = true, below = true;
+    for (int k = k0; k <= k1; k++)
+        for (int i = i0; i <= i1; i++) {
+            above &= a[1] - ANCHOR_REACH > (double)b->highest[k][i];
+            below &= a[1] + ANCHOR_REACH < (double)b->lowest[k][i];
+        }
+    return above || below;
+}
+
 /* The versions of the column chunks under the cell (and the margin its presence reads). */
 static uint64_t cell_versions(terrain_world *world, const int64_t cell[3], double s) {
     const double size = TERRAIN_MESH_CELLS * TERRAIN_COLUMN_SIZE;
@@ -241,12 +299,17 @@ static void cell_presence(rocks_cliffs *c, terrain_world *world, int type, const
     }
     pthread_mutex_unlock(&c->lock);
 
+    const uint64_t presence_start = core_time_ns();
     memset(bits, 0, words * sizeof *bits);
     const double s = tile->desc.size;
+    surface_bounds bounds;
+    int shortcut = -1;                /* made at the first anchor in a stratum of `type` */
     for (uint32_t b = 0; b < tile->block_count; b++) {
         double anchor[3];
         for (int a = 0; a < 3; a++) anchor[a] = (double)cell[a] * s + tile->blocks[b].anchor[a];
-        if (stratum_type(&c->desc, anchor[1]) == type && on_bedrock_wall(c, world, anchor) &&
+        if (stratum_type(&c->desc, anchor[1]) != type) continue;
+        if (shortcut < 0) shortcut = surface_bounds_make(world, cell, s, &bounds);
+        if (!(shortcut && far_from_surface(&bounds, anchor)) && on_bedrock_wall(c, world, anchor) &&
             mostly_in_the_wall(world, &tile->blocks[b], tile->points, (double)cell[0] * s, (double)cell[1] * s,
                                (double)cell[2] * s))
             bits[b / 64] |= 1ull << (b % 64);
@@ -254,6 +317,7 @@ static void cell_presence(rocks_cliffs *c, terrain_world *world, int type, const
 
     pthread_mutex_lock(&c->lock);
     c->stats.cells_computed++;
+    c->stats.presence_seconds += (double)(core_time_ns() - presence_start) * 1e-9;
     if (c->used >= CACHE_CAPACITY * 3 / 4) cache_clear(c);
     size_t i = key & (CACHE_CAPACITY - 1);
     while (c->cache[i].key && !(c->cache[i].key == key && c->cache[i].type == type &&
@@ -275,6 +339,7 @@ static void cell_presence(rocks_cliffs *c, terrain_world *world, int type, const
 void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field) {
     rocks_cliffs *c = user;
     if (field->spacing > c->desc.max_spacing) return;   /* the same for every field at a spacing */
+    const uint64_t start = core_time_ns();
     const int n[3] = { field->nx, field->ny, field->nz };
     double lo[3], hi[3];
     for (int a = 0; a < 3; a++) lo[a] = field->origin[a], hi[a] = field->origin[a] + (n[a] - 1) * (double)field->spacing;
@@ -290,6 +355,7 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
                 for (int64_t x = c0[0]; x <= c1[0]; x++) {
                     const int64_t cell[3] = { x, y, z };
                     const double origin[3] = { (double)x * s, (double)y * s, (double)z * s };
+                    if (!stratum_meets(&c->desc, type, origin[1], origin[1] + s)) continue;
                     bool any = false;   /* only cells one of whose blocks reaches the box */
                     for (uint32_t b = 0; b < tile->block_count && !any; b++) {
                         bool meets = true;
@@ -311,5 +377,6 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
     pthread_mutex_lock(&c->lock);
     c->stats.fields++;
     c->stats.copies_present += present;
+    c->stats.amplify_seconds += (double)(core_time_ns() - start) * 1e-9;
     pthread_mutex_unlock(&c->lock);
 }

@@ -50,13 +50,24 @@ static int64_t terrain_floor_div(int64_t a, int64_t b) {
 
 /* Fetches columns by global column index, keeping the last chunk's stacks at hand (a row of
  * columns crosses at most a few chunks). */
+#define FIELD_INLINE_LAYERS 64          /* a column's layers read without the allocator (most have a few) */
+
 typedef struct field_column_source {
     terrain_world *world;
     terrain_chunk_coord chunk;
     const terrain_stacks *stacks;
-    terrain_layer *layers;
+    terrain_layer *layers;            /* `inline_layers` until a column needs more */
     size_t layer_capacity;
+    terrain_layer inline_layers[FIELD_INLINE_LAYERS];
 } field_column_source;
+
+/* Point queries run by the hundred thousand (an amplifier's presence tests): no allocation. */
+static void field_column_source_begin(field_column_source *src, terrain_world *world) {
+    src->world = world;
+    src->stacks = NULL;
+    src->layers = src->inline_layers;
+    src->layer_capacity = FIELD_INLINE_LAYERS;
+}
 
 /* The layers of global column (gx, gz); returns how many (valid until the next call). */
 static int field_column_layers(field_column_source *src, int64_t gx, int64_t gz) {
@@ -72,13 +83,17 @@ static int field_column_layers(field_column_source *src, int64_t gx, int64_t gz)
         if (count <= (int)src->layer_capacity) return count;
         size_t old = src->layer_capacity;
         src->layer_capacity = (size_t)count * 2;
-        src->layers = core_realloc(src->layers, old * sizeof *src->layers,
-                                   src->layer_capacity * sizeof *src->layers);
+        if (src->layers == src->inline_layers) {
+            src->layers = core_alloc(src->layer_capacity * sizeof *src->layers);
+            memcpy(src->layers, src->inline_layers, sizeof src->inline_layers);
+        } else {
+            src->layers = core_realloc(src->layers, old * sizeof *src->layers, src->layer_capacity * sizeof *src->layers);
+        }
     }
 }
 
 static void field_column_source_end(field_column_source *src) {
-    core_free(src->layers, src->layer_capacity * sizeof *src->layers);
+    if (src->layers != src->inline_layers) core_free(src->layers, src->layer_capacity * sizeof *src->layers);
 }
 
 /* A column as runs of solid (in-field) and empty material: adjacent layers of the same kind
@@ -277,8 +292,8 @@ static void field_sample_strided(terrain_world *world, const terrain_field_desc 
     const int slots = disjoint ? window : ncz;
     int64_t *rows_inner = core_alloc((size_t)slots * row_samples * sizeof *rows_inner);
     int64_t *rows_edge = core_alloc((size_t)slots * row_samples * sizeof *rows_edge);
-    field_column_source src = { .world = world, .layer_capacity = 64 };
-    src.layers = core_alloc(src.layer_capacity * sizeof *src.layers);
+    field_column_source src;
+    field_column_source_begin(&src, world);
     field_runs column = { 0 };
     const double limit = (double)(desc->first[1] + (int64_t)(ny - 1) * step) * TERRAIN_COLUMN_SIZE + (double)sigma;
     for (int row = 0; row < ncz; row++) {
@@ -350,8 +365,8 @@ bool terrain_field_sample(terrain_world *world, const terrain_field_desc *desc, 
     /* Running z sums over the interior rows of the window. */
     int64_t *z_inner = core_calloc(row_samples, sizeof *z_inner);   /* Σ interior-row inner */
     int64_t *z_edge = core_calloc(row_samples, sizeof *z_edge);     /* Σ interior-row edge  */
-    field_column_source src = { .world = world, .layer_capacity = 64 };
-    src.layers = core_alloc(src.layer_capacity * sizeof *src.layers);
+    field_column_source src;
+    field_column_source_begin(&src, world);
     field_runs column = { 0 };
     const double scale = c * c / TERRAIN_FIELD_FIXED, to_f = 1.0 / (4.0 * (double)sigma * sigma * sigma);
     const double limit = (double)(desc->first[1] + ny - 1) * TERRAIN_COLUMN_SIZE + (double)sigma;
@@ -441,8 +456,8 @@ float terrain_field_base_at(terrain_world *world, double x, double y, double z, 
     const double sigma = field_sigma(sigma_in), c = TERRAIN_COLUMN_SIZE;
     int64_t gx0 = (int64_t)floor((x - sigma) / c), gx1 = (int64_t)ceil((x + sigma) / c);
     int64_t gz0 = (int64_t)floor((z - sigma) / c), gz1 = (int64_t)ceil((z + sigma) / c);
-    field_column_source src = { .world = world, .layer_capacity = 64 };
-    src.layers = core_alloc(src.layer_capacity * sizeof *src.layers);
+    field_column_source src;
+    field_column_source_begin(&src, world);
     double volume = 0.0;
     for (int64_t gz = gz0; gz < gz1; gz++) {
         double wz = field_overlap((double)gz * c, (double)(gz + 1) * c, z - sigma, z + sigma);
