@@ -937,6 +937,18 @@ static rocks_block_tile *build_tile(const rocks_block_tile_desc *desc) {
     return t;
 }
 
+/* The tile copies a box can meet come from the union of the blocks' bounds (rocks__cell_range):
+ * worked out once, not per field. */
+static rocks_block_tile *tile_finish(rocks_block_tile *t) {
+    for (int a = 0; a < 3; a++) t->reach_min[a] = 0.0f, t->reach_max[a] = 0.0f;
+    for (uint32_t b = 0; b < t->block_count; b++)
+        for (int a = 0; a < 3; a++) {
+            t->reach_min[a] = fminf(t->reach_min[a], t->blocks[b].bounds_min[a]);
+            t->reach_max[a] = fmaxf(t->reach_max[a], t->blocks[b].bounds_max[a]);
+        }
+    return t;
+}
+
 rocks_block_tile *rocks_block_tile_create(const rocks_block_tile_desc *desc) {
     rocks_block_tile_desc d;
     if (!desc_make(desc, &d)) return NULL;
@@ -948,11 +960,11 @@ rocks_block_tile *rocks_block_tile_create(const rocks_block_tile_desc *desc) {
         rocks_block_tile *t = core_calloc(1, sizeof *t);
         if (rocks__block_cache_read(path, &d, t, &why)) {
             t->from_cache = true;   /* build_seconds stays 0, as for a tile set read back */
-            return t;
+            return tile_finish(t);
         }
         core_free(t, sizeof *t);
     }
-    rocks_block_tile *t = build_tile(&d);
+    rocks_block_tile *t = tile_finish(build_tile(&d));
     if (path) {
         bool written = rocks__block_cache_write(path, t);
         core_warn("rocks", "block tile cache %s: %s; rebuilt in %.2f s%s", path, why ? why : "not read",
@@ -1046,14 +1058,14 @@ static bool may_exceed(const rocks_block_tile *tile, const rocks_block *b, const
 }
 
 /* One present copy (block `b` moved by `cell` tiles) raised into the samples its bounds cover. */
-void rocks__amplify_copy(const rocks_block_tile *tile, uint32_t b, const double cell[3], terrain_field *field) {
+bool rocks__amplify_copy(const rocks_block_tile *tile, uint32_t b, const double cell[3], terrain_field *field) {
     const rocks_block *block = &tile->blocks[b];
     const double s = tile->desc.size;
     int first[3], last[3];
     for (int a = 0; a < 3; a++)
         if (!sample_range(field, a, cell[a] * s + block->bounds_min[a], cell[a] * s + block->bounds_max[a], &first[a],
                           &last[a]))
-            return;
+            return false;
     for (int z = first[2]; z <= last[2]; z++)
         for (int y = first[1]; y <= last[1]; y++)
             for (int x = first[0]; x <= last[0]; x++) {
@@ -1067,20 +1079,15 @@ void rocks__amplify_copy(const rocks_block_tile *tile, uint32_t b, const double 
                 float t = fminf(1.0f, rocks_block_field(tile, b, local, NULL));
                 if (t > *v) *v = t;
             }
+    return true;
 }
 
 void rocks__cell_range(const rocks_block_tile *tile, const double lo[3], const double hi[3], int64_t c0[3],
                        int64_t c1[3]) {
     const double s = tile->desc.size;
-    double reach_lo[3] = { 0, 0, 0 }, reach_hi[3] = { 0, 0, 0 };
-    for (uint32_t b = 0; b < tile->block_count; b++)
-        for (int a = 0; a < 3; a++) {
-            reach_lo[a] = fmin(reach_lo[a], tile->blocks[b].bounds_min[a]);
-            reach_hi[a] = fmax(reach_hi[a], tile->blocks[b].bounds_max[a]);
-        }
     for (int a = 0; a < 3; a++) {
-        c0[a] = (int64_t)ceil((lo[a] - reach_hi[a]) / s);
-        c1[a] = (int64_t)floor((hi[a] - reach_lo[a]) / s);
+        c0[a] = (int64_t)ceil((lo[a] - (double)tile->reach_max[a]) / s);
+        c1[a] = (int64_t)floor((hi[a] - (double)tile->reach_min[a]) / s);
     }
 }
 

@@ -124,6 +124,7 @@ typedef struct rocks_block_tile {
     uint32_t *grid_first;             /* grid³ + 1 */
     uint32_t *grid_entries;           /* block << 5 | image (0 … 26: offset ∈ {−1, 0, 1}³) */
     uint32_t grid_entry_count;
+    float reach_min[3], reach_max[3]; /* the union of the blocks' bounds with the tile's origin */
 } rocks_block_tile;
 
 /* NULL with a message naming the field for a bad desc. With desc->cache_path (and no custom
@@ -216,7 +217,8 @@ void rocks_cliffs_destroy(rocks_cliffs *cliffs);
 /* terrain_world_desc.amplify, with amplify_user = the cliffs (thread-safe). */
 void rocks_cliffs_amplify(void *cliffs, terrain_world *world, terrain_field *field);
 typedef struct rocks_cliffs_stats {
-    uint64_t fields, cells_computed, cells_reused, copies_present;
+    uint64_t fields, cells_computed, cells_reused;
+    uint64_t copies_present;          /* block copies present whose bounds met a field's samples, summed over fields */
     double amplify_seconds;           /* in rocks_cliffs_amplify, summed over threads */
     double presence_seconds;          /* of which working out presence (cells_computed) */
     double build_seconds;             /* the tiles, built or read from cache_dir */

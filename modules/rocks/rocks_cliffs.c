@@ -259,17 +259,44 @@ static bool far_from_surface(const surface_bounds *b, const double a[3]) {
     return above || below;
 }
 
+/* The column chunks' versions one amplify call reads, each looked up once (a lookup takes the
+ * world's lock, and a call asks about its chunks for every cell and type). */
+#define VERSION_TABLE_MAX 64
+
+typedef struct version_table {
+    terrain_world *world;
+    int64_t x0, z0;
+    int nx, nz;                       /* 0 when the call's chunks are too many to hold */
+    uint32_t version[VERSION_TABLE_MAX];
+} version_table;
+
+static int64_t version_chunk(double x) { return (int64_t)floor(x / (TERRAIN_MESH_CELLS * TERRAIN_COLUMN_SIZE)); }
+
+static void version_table_make(version_table *t, terrain_world *world, const double lo[3], const double hi[3]) {
+    t->world = world;
+    t->x0 = version_chunk(lo[0] - VERSION_MARGIN), t->z0 = version_chunk(lo[2] - VERSION_MARGIN);
+    int64_t nx = version_chunk(hi[0] + VERSION_MARGIN) - t->x0 + 1, nz = version_chunk(hi[2] + VERSION_MARGIN) - t->z0 + 1;
+    t->nx = t->nz = 0;
+    if (nx * nz > VERSION_TABLE_MAX) return;
+    t->nx = (int)nx, t->nz = (int)nz;
+    for (int k = 0; k < t->nz; k++)
+        for (int i = 0; i < t->nx; i++)
+            t->version[k * t->nx + i] = terrain_world_chunk_version(world, (terrain_chunk_coord){ t->x0 + i, t->z0 + k });
+}
+
+static uint32_t version_of(const version_table *t, int64_t x, int64_t z) {
+    int64_t i = x - t->x0, k = z - t->z0;
+    if (i >= 0 && k >= 0 && i < t->nx && k < t->nz) return t->version[k * t->nx + i];
+    return terrain_world_chunk_version(t->world, (terrain_chunk_coord){ x, z });
+}
+
 /* The versions of the column chunks under the cell (and the margin its presence reads). */
-static uint64_t cell_versions(terrain_world *world, const int64_t cell[3], double s) {
-    const double size = TERRAIN_MESH_CELLS * TERRAIN_COLUMN_SIZE;
-    int64_t x0 = (int64_t)floor(((double)cell[0] * s - VERSION_MARGIN) / size);
-    int64_t x1 = (int64_t)floor(((double)cell[0] * s + s + VERSION_MARGIN) / size);
-    int64_t z0 = (int64_t)floor(((double)cell[2] * s - VERSION_MARGIN) / size);
-    int64_t z1 = (int64_t)floor(((double)cell[2] * s + s + VERSION_MARGIN) / size);
+static uint64_t cell_versions(const version_table *t, const int64_t cell[3], double s) {
+    int64_t x0 = version_chunk((double)cell[0] * s - VERSION_MARGIN), x1 = version_chunk((double)cell[0] * s + s + VERSION_MARGIN);
+    int64_t z0 = version_chunk((double)cell[2] * s - VERSION_MARGIN), z1 = version_chunk((double)cell[2] * s + s + VERSION_MARGIN);
     uint64_t h = 0x51ed27;
     for (int64_t z = z0; z <= z1; z++)
-        for (int64_t x = x0; x <= x1; x++)
-            h = core_hash_combine(h, terrain_world_chunk_version(world, (terrain_chunk_coord){ x, z }));
+        for (int64_t x = x0; x <= x1; x++) h = core_hash_combine(h, version_of(t, x, z));
     return h;
 }
 
@@ -282,10 +309,11 @@ static uint64_t cell_key(int type, const int64_t cell[3]) {
 
 /* The present blocks of `type`'s tile copy at `cell`, into bits (c->words[type] words): from the
  * cache when its versions still hold, else worked out and kept. */
-static void cell_presence(rocks_cliffs *c, terrain_world *world, int type, const int64_t cell[3], uint64_t *bits) {
+static void cell_presence(rocks_cliffs *c, const version_table *table, int type, const int64_t cell[3], uint64_t *bits) {
+    terrain_world *world = table->world;
     const rocks_block_tile *tile = c->tiles[type];
     const size_t words = c->words[type];
-    const uint64_t key = cell_key(type, cell), versions = cell_versions(world, cell, tile->desc.size);
+    const uint64_t key = cell_key(type, cell), versions = cell_versions(table, cell, tile->desc.size);
     pthread_mutex_lock(&c->lock);
     for (size_t i = key & (CACHE_CAPACITY - 1);; i = (i + 1) & (CACHE_CAPACITY - 1)) {
         cell_entry *e = &c->cache[i];
@@ -343,35 +371,39 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
     const int n[3] = { field->nx, field->ny, field->nz };
     double lo[3], hi[3];
     for (int a = 0; a < 3; a++) lo[a] = field->origin[a], hi[a] = field->origin[a] + (n[a] - 1) * (double)field->spacing;
+    int64_t c0[ROCKS_BLOCK_TYPE_COUNT][3], c1[ROCKS_BLOCK_TYPE_COUNT][3];
+    double reach_lo[3] = { INFINITY, INFINITY, INFINITY }, reach_hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+    for (int type = 0; type < ROCKS_BLOCK_TYPE_COUNT; type++) {
+        const rocks_block_tile *tile = c->tiles[type];
+        if (!tile) continue;
+        rocks__cell_range(tile, lo, hi, c0[type], c1[type]);
+        for (int a = 0; a < 3; a++) {
+            reach_lo[a] = fmin(reach_lo[a], (double)c0[type][a] * tile->desc.size);
+            reach_hi[a] = fmax(reach_hi[a], (double)(c1[type][a] + 1) * tile->desc.size);
+        }
+    }
+    if (!(reach_lo[0] <= reach_hi[0])) return;   /* no tiles */
+    version_table versions;
+    version_table_make(&versions, world, reach_lo, reach_hi);
     uint64_t present = 0, bits[64];
     for (int type = 0; type < ROCKS_BLOCK_TYPE_COUNT; type++) {
         const rocks_block_tile *tile = c->tiles[type];
         if (!tile || c->words[type] > CORE_COUNTOF(bits)) continue;
         const double s = tile->desc.size;
-        int64_t c0[3], c1[3];
-        rocks__cell_range(tile, lo, hi, c0, c1);
-        for (int64_t z = c0[2]; z <= c1[2]; z++)
-            for (int64_t y = c0[1]; y <= c1[1]; y++)
-                for (int64_t x = c0[0]; x <= c1[0]; x++) {
+        for (int64_t z = c0[type][2]; z <= c1[type][2]; z++)
+            for (int64_t y = c0[type][1]; y <= c1[type][1]; y++)
+                for (int64_t x = c0[type][0]; x <= c1[type][0]; x++) {
                     const int64_t cell[3] = { x, y, z };
-                    const double origin[3] = { (double)x * s, (double)y * s, (double)z * s };
-                    if (!stratum_meets(&c->desc, type, origin[1], origin[1] + s)) continue;
-                    bool any = false;   /* only cells one of whose blocks reaches the box */
-                    for (uint32_t b = 0; b < tile->block_count && !any; b++) {
-                        bool meets = true;
-                        for (int a = 0; a < 3; a++)
-                            meets &= origin[a] + tile->blocks[b].bounds_max[a] >= lo[a] &&
-                                     origin[a] + tile->blocks[b].bounds_min[a] <= hi[a];
-                        any = meets;
-                    }
-                    if (!any) continue;
-                    cell_presence(c, world, type, cell, bits);
+                    if (!stratum_meets(&c->desc, type, (double)y * s, (double)y * s + s)) continue;
+                    /* every cell the blocks' union reaches is asked once and kept (asking which
+                     * block reaches the box cost more than the cached answer, for the small
+                     * fields of collision and picking) */
+                    cell_presence(c, &versions, type, cell, bits);
                     const double at[3] = { (double)x, (double)y, (double)z };
-                    for (uint32_t b = 0; b < tile->block_count; b++) {
-                        if (!(bits[b / 64] >> (b % 64) & 1)) continue;
-                        rocks__amplify_copy(tile, b, at, field);
-                        present++;
-                    }
+                    for (size_t w = 0; w < c->words[type]; w++)
+                        for (uint64_t m = bits[w]; m; m &= m - 1) {
+                            present += rocks__amplify_copy(tile, (uint32_t)(w * 64 + (size_t)__builtin_ctzll(m)), at, field);
+                        }
                 }
     }
     pthread_mutex_lock(&c->lock);

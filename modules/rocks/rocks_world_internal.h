@@ -20,8 +20,9 @@ uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const
                               const rocks_placement *const *placements, int count, int *commands);
 
 /* Block copy `block` of the tile copy at tile coordinate `cell` raised into the field's samples
- * inside its bounds (rocks_blocks.c; the cliffs' amplifier shares it). */
-void rocks__amplify_copy(const rocks_block_tile *tile, uint32_t block, const double cell[3], terrain_field *field);
+ * inside its bounds (rocks_blocks.c; the cliffs' amplifier shares it); false when its bounds
+ * hold none of them. */
+bool rocks__amplify_copy(const rocks_block_tile *tile, uint32_t block, const double cell[3], terrain_field *field);
 
 /* The tile copies (their tile coordinates c0 … c1, inclusive) some block of which can reach the
  * box [lo, hi]: the union of the blocks' bounds, moved by whole tiles, meets it. */
