@@ -260,6 +260,12 @@ expect "world: --look with trailing junk" 2 "bad value for '--look': '90,0,' is 
 expect "world: --look of NaN" 2 "bad value for '--look': 'NaN,0': YAW is not a finite number" -- "$bin/world" --look NaN,0
 expect "world: --look past straight up" 2 "bad value for '--look': '0,90': PITCH is beyond ±89" -- "$bin/world" --look 0,90
 expect "world: --look past straight down" 2 "bad value for '--look': '0,-89.5': PITCH is beyond" -- "$bin/world" --look 0,-89.5
+# The rock tile set is data made once and cached in out/ (tools/play makes it the same way):
+# made here, outside each check's 60 s, so that the first world run does not pay for it (the
+# debug build takes most of a minute).
+mkdir -p out
+[[ -f out/rocks_tiles.bin ]] ||
+  timeout 600 "$bin/rocks_export" --tiles 1 --out "$tmp/rocks-tiles" --cache out/rocks_tiles.bin >/dev/null 2>&1
 expect "world: --at and --look" 0 "player at \(10\.0000, 78\.3800, 20\.0000\), looking 90\.0,-20\.0" -- \
   "$bin/world" --headless --size 64x48 --radius 1 --levels 2 --frames 2 --at 10,80,20 --look 90,-20
 expect "world: cliff blocks on by default" 0 "world: cliffs [0-9]+ blocks raised on steep bedrock walls" -- \
