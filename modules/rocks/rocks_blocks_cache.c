@@ -31,17 +31,13 @@
 
 #include "core/core.h"
 
-#include <errno.h>
 #include <math.h>
-#include <stdatomic.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <string.h>
-#include <unistd.h>
 
 #define MAGIC "ROCKBLCK"
 #define ENDIAN_MARK 0x01020304u
-#define FILE_MAX ((size_t)1 << 31)
 #define COORDINATE_LIMIT 16.0f        /* tile sides: a built tile's values stay within ~3 s */
 
 typedef struct block_cache_header {
@@ -97,15 +93,6 @@ static void sections(rocks_block_tile *t, section out[SECTIONS]) {
     memcpy(out, list, sizeof list);
 }
 
-/* A unique temporary beside `path` (two tiles of one process may be written at once). */
-static char *temporary_path(const char *path, size_t *size) {
-    static atomic_uint counter;
-    *size = strlen(path) + 48;
-    char *temp = core_alloc(*size);
-    snprintf(temp, *size, "%s.tmp.%ld.%u", path, (long)getpid(), atomic_fetch_add(&counter, 1));
-    return temp;
-}
-
 bool rocks__block_cache_write(const char *path, const rocks_block_tile *tile_in) {
     rocks_block_tile *tile = (rocks_block_tile *)tile_in;   /* read only; sections() wants pointers */
     block_cache_header h = header_of(&tile->desc);
@@ -113,13 +100,6 @@ bool rocks__block_cache_write(const char *path, const rocks_block_tile *tile_in)
     h.discs = tile->disc_count, h.grid_entries = tile->grid_entry_count, h.sample_count = tile->sample_count;
     h.grid = tile->grid;
 
-    const char *slash = strrchr(path, '/');
-    if (slash && slash != path) {
-        char *dir = core_strdup(path);
-        dir[slash - path] = 0;
-        core_make_dirs(dir);   /* a failure shows as the open's below */
-        core_free(dir, strlen(path) + 1);
-    }
     /* The whole file in memory first: one checksum over exactly the bytes the reader checks. */
     section list[SECTIONS];
     sections(tile, list);
@@ -136,47 +116,16 @@ bool rocks__block_cache_write(const char *path, const rocks_block_tile *tile_in)
     uint64_t sum = core_hash_bytes(data, at, ROCKS__BLOCK_CACHE_CHECKSUM_SEED);
     memcpy(data + at, &sum, sizeof sum);
 
-    size_t temp_size;
-    char *temp = temporary_path(path, &temp_size);
-    FILE *f = fopen(temp, "wb");
-    bool ok = f != NULL;
-    if (ok) {
-        ok &= fwrite(data, size, 1, f) == 1;
-        ok &= fclose(f) == 0;
-    }
+    bool ok = rocks__file_store(path, data, size, "block tile cache");
     core_free(data, size);
-    if (ok) ok = rename(temp, path) == 0;
-    if (!ok) {
-        core_error("rocks", "cannot write the block tile cache %s: %s", path, strerror(errno));
-        remove(temp);
-    }
-    core_free(temp, temp_size);
     return ok;
 }
 
 bool rocks__block_cache_read(const char *path, const rocks_block_tile_desc *desc, rocks_block_tile *tile,
                              const char **why) {
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        *why = errno == ENOENT ? "missing" : "unreadable";
-        return false;
-    }
-    unsigned char *data = NULL;
-    size_t size = 0;
-    bool ok = fseek(f, 0, SEEK_END) == 0;
-    long end = ok ? ftell(f) : -1;
-    ok = ok && end >= 0 && (size_t)end <= FILE_MAX && fseek(f, 0, SEEK_SET) == 0;
-    if (ok) {
-        size = (size_t)end;
-        data = core_alloc(size ? size : 1);
-        ok = fread(data, 1, size, f) == size;
-    }
-    fclose(f);
-    if (!ok) {
-        *why = end > 0 && (size_t)end > FILE_MAX ? "too large" : "unreadable";
-        if (data) core_free(data, size ? size : 1);
-        return false;
-    }
+    unsigned char *data;
+    size_t size;
+    if (!rocks__file_load(path, &data, &size, why)) return false;
     bool parsed = rocks__block_cache_parse(data, size, desc, tile, why);
     core_free(data, size ? size : 1);
     return parsed;

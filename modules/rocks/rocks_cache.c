@@ -17,6 +17,7 @@
 #include "core/core.h"
 
 #include <errno.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -82,6 +83,64 @@ static int sections(rocks__set *full, section out[9]) {
     return 9;
 }
 
+/* ---- files ------------------------------------------------------------------------------- */
+
+bool rocks__file_load(const char *path, unsigned char **data_out, size_t *size_out, const char **why) {
+    *data_out = NULL, *size_out = 0;
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        *why = errno == ENOENT ? "missing" : "unreadable";
+        return false;
+    }
+    unsigned char *data = NULL;
+    size_t size = 0;
+    bool ok = fseek(f, 0, SEEK_END) == 0;
+    long end = ok ? ftell(f) : -1;
+    ok = ok && end >= 0 && (size_t)end <= FILE_MAX && fseek(f, 0, SEEK_SET) == 0;
+    if (ok) {
+        size = (size_t)end;
+        data = core_alloc(size ? size : 1);
+        ok = fread(data, 1, size, f) == size;
+    }
+    fclose(f);
+    if (!ok) {
+        *why = end > 0 && (size_t)end > FILE_MAX ? "too large" : "unreadable";
+        if (data) core_free(data, size ? size : 1);
+        return false;
+    }
+    *data_out = data, *size_out = size;
+    return true;
+}
+
+bool rocks__file_store(const char *path, const void *data, size_t size, const char *what) {
+    static atomic_uint counter;   /* several files of one process may be written at once */
+    const char *slash = strrchr(path, '/');
+    if (slash && slash != path) {
+        char *dir = core_strdup(path);
+        dir[slash - path] = 0;
+        core_make_dirs(dir);   /* a failure shows as the open's below */
+        core_free(dir, strlen(path) + 1);
+    }
+    size_t temp_size = strlen(path) + 48;
+    char *temp = core_alloc(temp_size);
+    snprintf(temp, temp_size, "%s.tmp.%ld.%u", path, (long)getpid(), atomic_fetch_add(&counter, 1));
+    FILE *f = fopen(temp, "wb");
+    bool ok = f != NULL;
+    if (ok) {
+        ok &= fwrite(data, size, 1, f) == 1;
+        ok &= fclose(f) == 0;
+    }
+    if (ok) ok = rename(temp, path) == 0;
+    if (!ok) {
+        core_error("rocks", "cannot write the %s %s: %s", what, path, strerror(errno));
+        remove(temp);
+    }
+    core_free(temp, temp_size);
+    return ok;
+}
+
+/* ---- the tile set ---------------------------------------------------------------------------- */
+
 bool rocks__cache_write(const char *path, const rocks__set *full_in) {
     rocks__set *full = (rocks__set *)full_in;   /* read only; sections() wants pointers */
     const rocks_tileset *set = &full->set;
@@ -90,16 +149,6 @@ bool rocks__cache_write(const char *path, const rocks__set *full_in) {
     h.indices = set->index_count, h.anchors = set->anchor_count, h.contacts = set->contact_count;
     h.max_radius = set->max_radius;
 
-    char *slash = strrchr(path, '/');
-    if (slash && slash != path) {
-        char *dir = core_strdup(path);
-        dir[slash - path] = 0;
-        core_make_dirs(dir);
-        core_free(dir, strlen(path) + 1);
-    }
-    size_t temp_size = strlen(path) + 32;
-    char *temp = core_alloc(temp_size);
-    snprintf(temp, temp_size, "%s.tmp.%ld", path, (long)getpid());
     /* The whole file in memory first: one checksum over exactly the bytes the reader checks. */
     section list[9];
     int count = sections(full, list);
@@ -116,19 +165,8 @@ bool rocks__cache_write(const char *path, const rocks__set *full_in) {
     }
     uint64_t sum = core_hash_bytes(data, at, CHECKSUM_SEED);
     memcpy(data + at, &sum, sizeof sum);
-    FILE *f = fopen(temp, "wb");
-    bool ok = f != NULL;
-    if (ok) {
-        ok &= fwrite(data, size, 1, f) == 1;
-        ok &= fclose(f) == 0;
-    }
+    bool ok = rocks__file_store(path, data, size, "tile cache");
     core_free(data, size);
-    if (ok) ok = rename(temp, path) == 0;
-    if (!ok) {
-        core_error("rocks", "cannot write the tile cache %s: %s", path, strerror(errno));
-        remove(temp);
-    }
-    core_free(temp, temp_size);
     return ok;
 }
 
@@ -158,27 +196,9 @@ static bool consistent(const rocks__set *full) {
 }
 
 bool rocks__cache_read(const char *path, const rocks__params *params, rocks__set *full, const char **why) {
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        *why = errno == ENOENT ? "missing" : "unreadable";
-        return false;
-    }
-    unsigned char *data = NULL;
-    size_t size = 0;
-    bool ok = fseek(f, 0, SEEK_END) == 0;
-    long end = ok ? ftell(f) : -1;
-    ok = ok && end >= 0 && (size_t)end <= FILE_MAX && fseek(f, 0, SEEK_SET) == 0;
-    if (ok) {
-        size = (size_t)end;
-        data = core_alloc(size ? size : 1);
-        ok = fread(data, 1, size, f) == size;
-    }
-    fclose(f);
-    if (!ok) {
-        *why = "unreadable";
-        if (data) core_free(data, size ? size : 1);
-        return false;
-    }
+    unsigned char *data;
+    size_t size;
+    if (!rocks__file_load(path, &data, &size, why)) return false;
     bool parsed = rocks__cache_parse(data, size, params, full, why);
     core_free(data, size ? size : 1);
     return parsed;

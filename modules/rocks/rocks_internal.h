@@ -165,6 +165,12 @@ rocks_tileset *rocks__tiles_create(const rocks_tiles_desc *desc, const rocks__bu
 
 /* The cache (rocks_cache.c). Read: true when `path` holds exactly this set's parameters and is
  * whole; otherwise false with *why set ("missing", "old version", …) and nothing kept. */
+/* The caches' files (rocks_cache.c). The whole of `path` read into *data (free it with
+ * core_free(*data, *size ? *size : 1)); false with *why "missing", "unreadable" or "too large". */
+bool rocks__file_load(const char *path, unsigned char **data, size_t *size, const char **why);
+/* data[0, size) written to a unique temporary beside `path` (its folder made if missing), then
+ * renamed over it: a reader never sees half a file. False with a message naming `what`. */
+bool rocks__file_store(const char *path, const void *data, size_t size, const char *what);
 bool rocks__cache_read(const char *path, const rocks__params *params, rocks__set *out, const char **why);
 bool rocks__cache_write(const char *path, const rocks__set *set);
 /* The reader's checks on a file's bytes in memory (the tests cut and damage them). */
