@@ -227,6 +227,7 @@ typedef struct surface_bounds {
     float lowest[3][3], highest[3][3];
 } surface_bounds;
 
+/* The column chunk (terrain_chunk_coord) holding world coordinate x (or z). */
 static int64_t chunk_of(double x) {
     return (int64_t)floor(x / (TERRAIN_CHUNK_COLUMNS * TERRAIN_COLUMN_SIZE));
 }
@@ -270,12 +271,10 @@ typedef struct version_table {
     uint32_t version[VERSION_TABLE_MAX];
 } version_table;
 
-static int64_t version_chunk(double x) { return (int64_t)floor(x / (TERRAIN_MESH_CELLS * TERRAIN_COLUMN_SIZE)); }
-
 static void version_table_make(version_table *t, terrain_world *world, const double lo[3], const double hi[3]) {
     t->world = world;
-    t->x0 = version_chunk(lo[0] - VERSION_MARGIN), t->z0 = version_chunk(lo[2] - VERSION_MARGIN);
-    int64_t nx = version_chunk(hi[0] + VERSION_MARGIN) - t->x0 + 1, nz = version_chunk(hi[2] + VERSION_MARGIN) - t->z0 + 1;
+    t->x0 = chunk_of(lo[0] - VERSION_MARGIN), t->z0 = chunk_of(lo[2] - VERSION_MARGIN);
+    int64_t nx = chunk_of(hi[0] + VERSION_MARGIN) - t->x0 + 1, nz = chunk_of(hi[2] + VERSION_MARGIN) - t->z0 + 1;
     t->nx = t->nz = 0;
     if (nx * nz > VERSION_TABLE_MAX) return;
     t->nx = (int)nx, t->nz = (int)nz;
@@ -292,8 +291,8 @@ static uint32_t version_of(const version_table *t, int64_t x, int64_t z) {
 
 /* The versions of the column chunks under the cell (and the margin its presence reads). */
 static uint64_t cell_versions(const version_table *t, const int64_t cell[3], double s) {
-    int64_t x0 = version_chunk((double)cell[0] * s - VERSION_MARGIN), x1 = version_chunk((double)cell[0] * s + s + VERSION_MARGIN);
-    int64_t z0 = version_chunk((double)cell[2] * s - VERSION_MARGIN), z1 = version_chunk((double)cell[2] * s + s + VERSION_MARGIN);
+    int64_t x0 = chunk_of((double)cell[0] * s - VERSION_MARGIN), x1 = chunk_of((double)cell[0] * s + s + VERSION_MARGIN);
+    int64_t z0 = chunk_of((double)cell[2] * s - VERSION_MARGIN), z1 = chunk_of((double)cell[2] * s + s + VERSION_MARGIN);
     uint64_t h = 0x51ed27;
     for (int64_t z = z0; z <= z1; z++)
         for (int64_t x = x0; x <= x1; x++) h = core_hash_combine(h, version_of(t, x, z));
