@@ -1,17 +1,19 @@
 #version 450 core
 // clipmap.frag — the far terrain's colour, made to read like the meshes' (terrain.frag) from far
 // away: bedrock tinted by height bands and slope (002 §4.1: α = (1 − n_y)·90°), sand where the
-// generator lays it (slopes below sand_max_slope), the sea over ground below sea level, then
-// the sun, sky ambient and fog of common.glsl, and towards the end of the world a fade into
-// the sky (002 §4.4).
+// generator lays it (slopes below sand_max_slope), the sea over ground below sea level, the
+// lakes over their beds, then the sun, sky ambient and fog of common.glsl, and towards the end
+// of the world a fade into the sky (002 §4.4).
 
 #include "common.glsl"
 #include "materials.glsl"
 #include "shadow.glsl"
+#include "water_optics.glsl"
 
 in vec3 v_relative_position;
 in vec3 v_normal;
 in float v_height;
+in float v_lake_depth;                // metres of lake water over the ground here (≤ 0: dry)
 
 uniform vec3 u_bedrock_mean, u_sand_mean;  // their layers' mean colours (tint · mean shade)
 uniform vec3 u_texture_offset;        // camera position modulo the textures' period (200 m)
@@ -29,6 +31,23 @@ const vec3 WATER_SHALLOW = vec3(0.16, 0.36, 0.40);
 const vec3 WATER_DEEP = vec3(0.05, 0.16, 0.28);
 
 const float TEXTURE_FAR = 400.0;      // metres: beyond, an 8 m texture repeat is a few pixels
+const float LAKE_SHORE_METRES = 0.5;  // depth over which a far lake fades in from its waterline
+
+// A far lake over the lit ground `bed` (water.frag's optics without its maps: from a hundred
+// metres off, waves are below a pixel). The bed is seen through the water along the view ray,
+// refraction bending it to the vertical inside (Snell), Beer–Lambert taking its light and the
+// water body's scatter replacing it; a Schlick Fresnel term blends in the sky mirrored by a flat
+// surface; the shore fades in over LAKE_SHORE_METRES of depth, as the near water's does.
+vec3 far_lake(vec3 bed, float depth, vec3 view_dir) {
+    float cos_i = max(-view_dir.y, 0.0);
+    float sin_t = sqrt(1.0 - cos_i * cos_i) / WATER_IOR;
+    float thickness = depth / sqrt(1.0 - sin_t * sin_t);
+    vec3 transmittance = exp(-WATER_EXTINCTION * thickness);
+    vec3 refracted = bed * transmittance + water_body_color() * (1.0 - transmittance);
+    vec3 reflected = sky_color(reflect(view_dir, vec3(0.0, 1.0, 0.0)));
+    vec3 water = mix(refracted, reflected, water_fresnel(cos_i));
+    return mix(bed, water, smoothstep(0.0, LAKE_SHORE_METRES, depth));
+}
 
 // 000 §6's triplanar blend with weights w = |n_i|^8 / Σ|n_j|^8 (projections under 5 % left
 // out), the base mixed with itself at 25 m as terrain.frag does; far away the material's mean
@@ -99,8 +118,9 @@ void main() {
         albedo = mix(albedo, mix(WATER_SHALLOW, WATER_DEEP, 1.0 - exp(-depth / 25.0)), cover);
         n = normalize(mix(n, vec3(0.0, 1.0, 0.0), cover));
     }
-    vec3 color = apply_fog(light_surface_shadowed(albedo, n, shadow_visibility(v_relative_position, n)),
-                           v_relative_position);
+    vec3 color = light_surface_shadowed(albedo, n, shadow_visibility(v_relative_position, n));
+    if (v_lake_depth > 0.0) color = far_lake(color, v_lake_depth, v_relative_position / max(distance, 1e-4));
+    color = apply_fog(color, v_relative_position);
     // 002 §4.4: the end of the world melts into the sky seen in the same direction.
     float edge = max(smoothstep(u_edge_fade.x, u_edge_fade.y, max(abs(p.x), abs(p.y))),
                      smoothstep(u_far_fade.x, u_far_fade.y, distance));

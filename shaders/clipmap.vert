@@ -8,7 +8,8 @@
 // Everything arrives camera-relative: positions are small wherever the camera is.
 
 uniform mat4 u_view_projection;    // camera at the origin
-uniform sampler2DArray u_heights;  // RGBA32F, one layer per level: height, then the unit normal
+uniform sampler2DArray u_heights;  // RGBA32F, one layer per level: height, the unit normal's x
+                                   // and z, the lake level (−1e30: none)
 uniform int u_size;                // texels along each side of a layer (toroidal period)
 uniform int u_cells;               // cells along each side of a level
 uniform int u_layer, u_coarse_layer;   // this level's layer, the coarser level's (−1: none)
@@ -29,12 +30,18 @@ uniform vec4 u_clip_plane;         // camera-relative: keeps dot((p, 1), plane) 
 out vec3 v_relative_position;      // to the camera
 out vec3 v_normal;
 out float v_height;                // world height of the ground (before any sinking)
+out float v_lake_depth;            // metres of lake water over the ground (≤ 0: dry land)
 
-// The height and the normal (central differences over the level's own grid, one texel ring
-// beyond the vertices kept for them) in one read: the CPU packs them (packed_texel in
-// terrain_clipmap.c), which spares four reads per vertex.
+// The height, the normal (central differences over the level's own grid, one texel ring
+// beyond the vertices kept for them) and the lake level in one read: the CPU packs them
+// (packed_texel in terrain_clipmap.c), which spares four reads per vertex.
 vec4 texel_at(int layer, ivec2 texel) {
     return texelFetch(u_heights, ivec3((texel + u_size) % u_size, layer), 0);
+}
+
+// The normal's y from its x and z: a height field's normals all point up.
+vec3 texel_normal(vec4 texel) {
+    return vec3(texel.g, sqrt(max(1.0 - texel.g * texel.g - texel.b * texel.b, 0.0)), texel.b);
 }
 
 // How deep inside a hole a camera-relative point is (≤ 0 outside).
@@ -50,8 +57,13 @@ void main() {
     ivec2 texel = u_start + grid;
     vec4 here = texel_at(u_layer, texel);
     float fine = here.r;
-    vec3 normal = here.gba;
+    vec3 normal = texel_normal(here);
+    float lake = here.a;
     precise float height = fine;
+    // What is drawn: the ground, or a lake's surface where its vertices stand in a lake (far
+    // lakes; the near ones are WaterPlane components that terrain_water draws). It morphs as a
+    // whole, so a finer border vertex lies on the coarser level's drawn edge, shore or not.
+    precise float surface = max(fine, lake);
     if (u_coarse_layer >= 0) {
         bool border = grid.x == 0 || grid.y == 0 || grid.x == u_cells || grid.y == u_cells;
         // Measured from the camera the levels were placed for, so that the transition always
@@ -65,9 +77,14 @@ void main() {
             ivec2 c0 = u_coarse_start + (grid >> 1), c1 = c0 + (grid & 1);
             vec4 t0 = texel_at(u_coarse_layer, c0), t1 = texel_at(u_coarse_layer, c1);
             precise float coarse = 0.5 * (t0.r + t1.r);
-            vec3 coarse_normal = t0.gba + t1.gba;
+            vec3 coarse_normal = texel_normal(t0) + texel_normal(t1);
             height = (1.0 - alpha) * fine + alpha * coarse;
+            precise float coarse_surface = 0.5 * (max(t0.r, t0.a) + max(t1.r, t1.a));
+            surface = (1.0 - alpha) * surface + alpha * coarse_surface;
             normal = mix(normal, normalize(coarse_normal), alpha);
+            // A level without lakes (coarser than 8 m) averages the level away: its sentinel
+            // pulls any mix far below the ground, so a lake ends at the morph's far edge.
+            lake = (1.0 - alpha) * lake + alpha * 0.5 * (t0.a + t1.a);
         }
     }
     // Inside a hole the surface sinks within u_hole_band of the border to u_hole_depth below
@@ -79,7 +96,14 @@ void main() {
         float inside = hole_depth_inside(u_holes[h], position);
         sink = max(sink, inside > 0.0 ? u_hole_depth * clamp(inside / u_hole_band, 0.0, 1.0) : 0.0);
     }
-    v_relative_position = vec3(position.x, height - sink - u_camera_y, position.y);
+    // Inside a hole the meshes draw the lake's bed and terrain_water its surface: the pit stays
+    // the ground's.
+    if (sink > 0.0) surface = height;
+    // Clamped: a vertex out of the lake (its level the sentinel) is dry by a metre, as the shore
+    // around a lake's water stands (terrain_generate.c, "Lakes"), so the waterline falls inside
+    // the triangles between it and the lake's vertices.
+    v_lake_depth = sink > 0.0 ? -1.0 : max(lake - height, -1.0);
+    v_relative_position = vec3(position.x, surface - sink - u_camera_y, position.y);
     v_normal = normal;
     v_height = height;
     gl_ClipDistance[0] = dot(vec4(v_relative_position, 1.0), u_clip_plane);

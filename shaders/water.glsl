@@ -1,19 +1,10 @@
-// water.glsl — what water.frag and water_under.frag share: the water's optics (002 §3.4, 004
-// §4.3) and distances read back from a depth texture of the frame.
+// water.glsl — what water.frag and water_under.frag share: the water's optics (water_optics.glsl)
+// and distances read back from a depth texture of the frame.
+
+#include "water_optics.glsl"
 
 uniform sampler2D u_scene_depth;           // the frame's depth under the water (a copy or a pass)
 uniform mat4 u_inverse_view_projection;    // of the view the frame was drawn with, camera at 0
-
-const float WATER_IOR = 1.33;
-const float WATER_F0 = 0.02;               // ((n − 1)/(n + 1))² at normal incidence, n = 1.33
-// Beer–Lambert extinction per metre of water: red goes first, green lasts longest, so thick
-// water turns dark blue-green and a metre of it leaves at least three quarters of each channel.
-const vec3 WATER_EXTINCTION = vec3(0.28, 0.055, 0.075);
-const vec3 WATER_BODY = vec3(0.025, 0.15, 0.13);   // what thick water scatters back, lit by the sun
-const vec3 WATER_FOG = vec3(0.05, 0.26, 0.28);     // the colour of distance seen under water
-
-// The light the water body scatters: the sun from above and the sky's ambient.
-vec3 water_body_color() { return WATER_BODY * (0.35 + 0.65 * max(u_sun_direction.y, 0.0)); }
 
 // Metres from the camera to the frame's surface at `uv` (1e6 where only the sky was drawn).
 float scene_distance(vec2 uv) {
@@ -22,6 +13,3 @@ float scene_distance(vec2 uv) {
     vec4 p = u_inverse_view_projection * vec4(uv * 2.0 - 1.0, depth * 2.0 - 1.0, 1.0);
     return length(p.xyz / p.w);
 }
-
-// Schlick's approximation of the Fresnel reflectance for a cosine on the air side.
-float water_fresnel(float cosine) { return WATER_F0 + (1.0 - WATER_F0) * pow(1.0 - clamp(cosine, 0.0, 1.0), 5.0); }

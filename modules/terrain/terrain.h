@@ -1372,7 +1372,9 @@ typedef struct WaterPlane {
  * with no colour, and nothing is copied or shaded; water that comes into view appears a frame
  * later. Off: nothing drawn, no cost. A lake's plane covers the
  * cells of its row mask and one cell around them (the ground and the shore's fade draw the
- * waterline there, not the cells' square edges). */
+ * waterline there, not the cells' square edges). Lakes beyond the volumetric rings are the far
+ * terrain's own (its clipmap stands their surface at the lake's level and shades it with the
+ * same optics, without maps), drawn whatever the quality, as its sea tint is. */
 typedef enum terrain_water_quality {
     TERRAIN_WATER_DEFAULT = 0,        /* low */
     TERRAIN_WATER_OFF,                /* nothing drawn */

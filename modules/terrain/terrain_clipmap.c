@@ -14,9 +14,14 @@
  * toroidal array of (n + 4)² floats: grid point (i, k) lives at (i mod T, k mod T), so when the
  * level moves only the rows and columns that came in are computed (terrain__ground_row_spaced:
  * G with the octaves the spacing carries, 004 §4.1) and uploaded, at the same toroidal place in
- * one RGBA32F texture layer per level (the height and its normal, packed at upload: one read per
+ * one RGBA32F texture layer per level (the height, its normal's x and z, and the level of a lake
+ * whose water holds the point, terrain__lake_row_spaced, packed at upload: one read per
  * vertex). A height depends only on its grid point, so an incremental
  * update gives exactly the array a fresh build at the new place would (tested).
+ *
+ * Far lakes. The vertex shader stands a lake's vertices at its level (the drawn surface is
+ * max(ground, lake), morphed as a whole) and clipmap.frag shades them as water; block bounds
+ * take the lakes' levels in. Levels coarser than 8 m have no basins and so no lakes.
  *
  * Blocks. The vertex and index data are one static grid of (n + 1)² vertices shared by every
  * level (the vertex shader places and displaces them). Its cells are cut at 0, n/4, n/4 + 1,
@@ -76,6 +81,7 @@ typedef struct clipmap_level {
     float octaves;
     bool valid;                     /* heights hold the window around `first` */
     float *heights;                 /* size × size, toroidal */
+    float *lakes;                   /* the same: a lake's level, or TERRAIN__NO_LAKE */
     uint8_t *dirty_columns, *dirty_rows;  /* toroidal columns / rows to upload */
     bool bounds_dirty;
     float block_min[BLOCKS], block_max[BLOCKS];
@@ -208,6 +214,7 @@ terrain_clipmap *terrain_clipmap_create(const terrain_clipmap_desc *desc) {
         lv->spacing = ldexp((double)c->desc.finest_spacing, l);
         lv->octaves = terrain__ground_octaves(&c->desc.generation, (float)lv->spacing);
         lv->heights = core_calloc(texels, sizeof(float));
+        lv->lakes = core_calloc(texels, sizeof(float));
         lv->dirty_columns = core_calloc((size_t)c->size, 1);
         lv->dirty_rows = core_calloc((size_t)c->size, 1);
     }
@@ -225,6 +232,7 @@ void terrain_clipmap_destroy(terrain_clipmap *c) {
     size_t texels = (size_t)c->size * (size_t)c->size;
     for (int l = 0; l < c->level_count; l++) {
         core_free(c->levels[l].heights, texels * sizeof(float));
+        core_free(c->levels[l].lakes, texels * sizeof(float));
         core_free(c->levels[l].dirty_columns, (size_t)c->size);
         core_free(c->levels[l].dirty_rows, (size_t)c->size);
     }
@@ -314,12 +322,14 @@ static void plan_level(terrain_clipmap *c, int level, const int64_t next[2]) {
 
 static void run_task(terrain_clipmap *c, const row_task *t) {
     clipmap_level *lv = &c->levels[t->level];
-    float *row = lv->heights + (size_t)floor_mod(t->k, c->size) * (size_t)c->size;
+    size_t row_start = (size_t)floor_mod(t->k, c->size) * (size_t)c->size;
+    float *row = lv->heights + row_start, *lakes = lv->lakes + row_start;
     int64_t i = t->i0;
     for (int left = t->count; left > 0;) {
         int start = floor_mod(i, c->size), run = CORE_MIN(left, c->size - start);   /* split at the wrap */
-        terrain__ground_row_spaced(&c->desc.generation, (double)i * lv->spacing, lv->spacing, (double)t->k * lv->spacing,
-                                   run, (float)lv->spacing, row + start);
+        double x0 = (double)i * lv->spacing, z = (double)t->k * lv->spacing;
+        terrain__ground_row_spaced(&c->desc.generation, x0, lv->spacing, z, run, (float)lv->spacing, row + start);
+        terrain__lake_row_spaced(&c->desc.generation, x0, lv->spacing, z, run, (float)lv->spacing, lakes + start);
         i += run;
         left -= run;
     }
@@ -332,13 +342,12 @@ static void run_task_range(void *user, size_t begin, size_t end) {
 
 /* ---- block bounds ---- */
 
-static void texel_range(const terrain_clipmap *c, int level, int64_t i0, int64_t i1, int64_t k0, int64_t k1, float *lo,
-                        float *hi) {
-    const clipmap_level *lv = &c->levels[level];
+static void texel_range(const terrain_clipmap *c, const float *texels, int64_t i0, int64_t i1, int64_t k0, int64_t k1,
+                        float *lo, float *hi) {
     int first_column = floor_mod(i0, c->size), columns = (int)(i1 - i0 + 1);
     float low = *lo, high = *hi;                  /* locals: the loop then vectorises */
     for (int64_t k = k0; k <= k1; k++) {
-        const float *row = lv->heights + (size_t)floor_mod(k, c->size) * (size_t)c->size;
+        const float *row = texels + (size_t)floor_mod(k, c->size) * (size_t)c->size;
         /* The row's texels are one or two runs of the toroidal array. */
         for (int column = first_column, left = columns; left > 0;) {
             int run = CORE_MIN(left, c->size - column);
@@ -354,6 +363,15 @@ static void texel_range(const terrain_clipmap *c, int level, int64_t i0, int64_t
     *hi = high;
 }
 
+/* The heights and lake levels texels [i0, i1] × [k0, k1] of a level reach: the lakes raise the
+ * top only (their sentinel lies far below any ground). */
+static void level_range(const terrain_clipmap *c, int level, int64_t i0, int64_t i1, int64_t k0, int64_t k1, float *lo,
+                        float *hi) {
+    float unused = INFINITY;
+    texel_range(c, c->levels[level].heights, i0, i1, k0, k1, lo, hi);
+    texel_range(c, c->levels[level].lakes, i0, i1, k0, k1, &unused, hi);
+}
+
 /* Heights a block can be drawn at: its own vertices (and one more cell around, for the border
  * slivers) and, because it may morph, the coarser level's vertices under it. */
 static void level_bounds(terrain_clipmap *c, int level) {
@@ -362,9 +380,9 @@ static void level_bounds(terrain_clipmap *c, int level) {
         int x0 = CORE_MAX(c->cuts[b % SEGMENTS] - 1, 0), x1 = CORE_MIN(c->cuts[b % SEGMENTS + 1] + 1, c->cells);
         int z0 = CORE_MAX(c->cuts[b / SEGMENTS] - 1, 0), z1 = CORE_MIN(c->cuts[b / SEGMENTS + 1] + 1, c->cells);
         float lo = INFINITY, hi = -INFINITY;
-        texel_range(c, level, lv->first[0] + x0, lv->first[0] + x1, lv->first[1] + z0, lv->first[1] + z1, &lo, &hi);
+        level_range(c, level, lv->first[0] + x0, lv->first[0] + x1, lv->first[1] + z0, lv->first[1] + z1, &lo, &hi);
         if (level + 1 < c->level_count)
-            texel_range(c, level + 1, floor_div(lv->first[0] + x0, 2), floor_div(lv->first[0] + x1 + 1, 2),
+            level_range(c, level + 1, floor_div(lv->first[0] + x0, 2), floor_div(lv->first[0] + x1 + 1, 2),
                         floor_div(lv->first[1] + z0, 2), floor_div(lv->first[1] + z1 + 1, 2), &lo, &hi);
         lv->block_min[b] = lo;
         lv->block_max[b] = hi;
@@ -588,10 +606,11 @@ terrain_clipmap_stats terrain_clipmap_stats_get(const terrain_clipmap *c) { retu
 
 /* ---- GPU ---- */
 
-/* Texel (i, k) of a level as the GPU keeps it: the height and the normal from central
- * differences over the level's own grid, so the vertex shader reads one texel where it read
- * five (on llvmpipe those reads were a third of the clipmap's draw). Neighbours wrap like the
- * grid; only the ring's own normals (which no vertex uses) see a stale neighbour. */
+/* Texel (i, k) of a level as the GPU keeps it: the height, the normal's x and z from central
+ * differences over the level's own grid (its y, always positive on a height field, the shader
+ * makes from them), and the lake level, so the vertex shader reads one texel where it read five
+ * (on llvmpipe those reads were a third of the clipmap's draw). Neighbours wrap like the grid;
+ * only the ring's own normals (which no vertex uses) see a stale neighbour. */
 static void packed_texel(const clipmap_level *lv, int size, int i, int k, float out[4]) {
     const float *h = lv->heights;
     int left = (i + size - 1) % size, right = (i + 1) % size, back = (k + size - 1) % size, front = (k + 1) % size;
@@ -599,7 +618,8 @@ static void packed_texel(const clipmap_level *lv, int size, int i, int k, float 
     float dz = h[(size_t)back * size + i] - h[(size_t)front * size + i];
     float dy = 2.0f * (float)lv->spacing, length = sqrtf(dx * dx + dy * dy + dz * dz);
     out[0] = h[(size_t)k * size + i];
-    out[1] = dx / length, out[2] = dy / length, out[3] = dz / length;
+    out[1] = dx / length, out[2] = dz / length;
+    out[3] = lv->lakes[(size_t)k * size + i];
 }
 
 /* Uploads the flagged rows (or columns) and their neighbours, whose normals the new heights

@@ -507,6 +507,15 @@ void terrain__ground_row_spaced(const terrain_generation_params *params, double 
     }
 }
 
+void terrain__lake_row_spaced(const terrain_generation_params *params, double x0, double dx, double z, int count,
+                              float spacing, float *out) {
+    ground_model g = ground_model_spaced(params, spacing);
+    for (int j = 0; j < count; j++) {
+        float basin, level = lake_level_at(&g, x0 + (double)j * dx, z, &basin);
+        out[j] = isnan(level) ? TERRAIN__NO_LAKE : level;
+    }
+}
+
 float terrain__ground_octaves(const terrain_generation_params *params, float spacing) {
     return ground_model_spaced(params, spacing).multifractal.octaves;
 }

@@ -1,12 +1,14 @@
 /* The far terrain's geometry clipmap through OSMesa: ground under the horizon and sky above it,
  * no sky through the ground (cracks between levels), nothing of the clipmap inside the hole,
- * the same picture 100 km out, and no gap where the volumetric chunks meet it. */
+ * the same picture 100 km out, no gap where the volumetric chunks meet it, and far lakes drawn
+ * as water at their level. */
 #include "../engine/test.h"
 #include "render_util.h"
 
 #include "ecs/ecs.h"
 #include "jobs/jobs.h"
 #include "terrain/terrain.h"
+#include "terrain/terrain_internal.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -216,6 +218,88 @@ Test(render_clipmap, the_hole_leaves_nothing_at_ground_level) {
     free(depths);
     render_image_free(&image);
     render_image_free(&sky);
+    far_scene_close(&s);
+}
+
+/* ---- far lakes ---- */
+
+/* The centre of seed 1's first lake east of the origin and its level, from the far terrain's own
+ * lake rows (whose agreement with the chunks' water test_terrain_water checks): the mean of the
+ * 4 m texels at that level. */
+static void find_far_lake(const terrain_generation_params *p, double centre[2], float *level) {
+    float row[160];
+    *level = TERRAIN__NO_LAKE;
+    for (int k = -50; k < 50 && *level == TERRAIN__NO_LAKE; k++) {
+        terrain__lake_row_spaced(p, 0.0, 8.0, k * 8.0, 160, 8.0f, row);
+        for (int j = 0; j < 160 && *level == TERRAIN__NO_LAKE; j++)
+            if (row[j] != TERRAIN__NO_LAKE) *level = row[j], centre[0] = j * 8.0, centre[1] = k * 8.0;
+    }
+    cr_assert_neq(*level, TERRAIN__NO_LAKE, "seed 1 has a lake within 1.3 km");
+    double sum[2] = { 0, 0 };
+    int count = 0;
+    const double x0 = centre[0] - 160.0, z0 = centre[1] - 160.0;
+    for (int k = 0; k < 80; k++) {
+        terrain__lake_row_spaced(p, x0, 4.0, z0 + k * 4.0, 80, 4.0f, row);
+        for (int j = 0; j < 80; j++)
+            if (row[j] == *level) sum[0] += x0 + j * 4.0, sum[1] += z0 + k * 4.0, count++;
+    }
+    centre[0] = sum[0] / count;
+    centre[1] = sum[1] / count;
+}
+
+/* Whether the finest level's cell under world (x, z) lies wholly in the lake at `level` with its
+ * ground at least `depth` metres under it (all four corners). */
+static bool deep_lake_cell(const terrain_generation_params *p, double x, double z, float level, float depth) {
+    double x0 = floor(x / 4.0) * 4.0, z0 = floor(z / 4.0) * 4.0;
+    for (int k = 0; k < 2; k++) {
+        float lakes[2], ground[2];
+        terrain__lake_row_spaced(p, x0, 4.0, z0 + 4.0 * k, 2, 4.0f, lakes);
+        terrain__ground_row_spaced(p, x0, 4.0, z0 + 4.0 * k, 2, 4.0f, ground);
+        for (int j = 0; j < 2; j++)
+            if (lakes[j] != level || ground[j] > level - depth) return false;
+    }
+    return true;
+}
+
+/* A far lake seen straight down from 150 m above its level, with the clipmap alone (as beyond the
+ * volumetric rings): every pixel over a cell whose ground lies 2 m or more under the lake is
+ * drawn at the lake's level, 150 m away (not on its bed), in the water's colour: blue-green
+ * over a bed of sand and grass, whose red the water takes first (water_optics.glsl). */
+Test(render_clipmap, a_far_lake_is_drawn_as_water_at_its_level) {
+    terrain_generation_params p = terrain_generation_defaults(1);
+    double centre[2];
+    float level;
+    find_far_lake(&p, centre, &level);
+    far_scene s = far_scene_open(p, (terrain_renderer_desc){ .cloud_cover = -1 });
+    terrain_view view = { .camera = { centre[0], level + 150.0, centre[1] }, .pitch = -1.5707f, .aspect = (float)W / H };
+    float *depths = malloc(W * H * sizeof *depths);
+    terrain_clipmap_update(s.clipmap, view.camera);
+    terrain_frustum frustum = terrain_frustum_from_view(&view);
+    terrain_clipmap_cull(s.clipmap, &frustum);
+    gfx_frame_begin(s.gfx);
+    terrain_clipmap_upload(s.clipmap);
+    terrain_renderer_draw(s.renderer, &view, NULL, 0);
+    render_image image = { W, H, malloc(W * H * 4) };
+    gfx_read_pixels(s.gfx, image.rgba);
+    read_view_depths(depths);
+    gfx_frame_end(s.gfx);
+    int deep = 0, at_level = 0, water_coloured = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            double g[2];
+            ground_under_pixel(x, y, 150.0, g);
+            if (!deep_lake_cell(&p, centre[0] + g[0], centre[1] + g[1], level, 2.0f)) continue;
+            deep++;
+            const uint8_t *c = render_pixel(&image, x, y);
+            at_level += fabsf(depths[y * W + x] - 150.0f) < 0.2f;
+            water_coloured += c[1] > c[0] + 15 && c[2] > c[0] + 15;
+        }
+    cr_assert_gt(deep, 50, "%d pixels over deep water (lake at %.2f m, centre %.0f, %.0f)", deep, (double)level,
+                 centre[0], centre[1]);
+    cr_expect_eq(at_level, deep, "%d of %d pixels over deep water are not at the lake's level", deep - at_level, deep);
+    cr_expect_eq(water_coloured, deep, "%d of %d pixels over deep water are not blue-green", deep - water_coloured, deep);
+    free(depths);
+    render_image_free(&image);
     far_scene_close(&s);
 }
 

@@ -3,6 +3,7 @@
  * made by hand, so every plane, mask and depth below is worked out from the column functions. */
 #include "../engine/test.h"
 #include "terrain/terrain.h"
+#include "terrain/terrain_internal.h"
 
 #include "core/core.h"
 #include "ecs/ecs.h"
@@ -480,6 +481,55 @@ Test(water_lakes, every_lake_column_is_held_by_its_neighbours) {
         terrain_world_trim(world);
     }
     cr_expect_gt(checked, 100, "%d lake columns checked", checked);
+    terrain_world_destroy(world);
+}
+
+/* The far terrain's lakes (terrain__lake_row_spaced, which the clipmap draws) are the water the
+ * chunks hold: over seed 1's first lake in lake_corner, every column whose top is that lake's
+ * water gets its level from the row (to the layers' quantum, which the water's top is rounded
+ * to), and every column the row puts in the lake with ground a quantum or more under the level
+ * holds that water. The clipmap's own grids (4 and 8 m) give the same level as the columns' 1 m
+ * grid, and grids coarser than 8 m (no basins) no lake. */
+Test(water_lakes, the_far_terrains_lake_levels_are_the_chunks_water) {
+    terrain_world *world = seed_1_world();
+    const terrain_generation_params *p = terrain_world_generation(world);
+    float sea = p->sea_level;
+    lake_found lakes[LAKES_MAX];
+    cr_assert_gt(find_lakes(world, sea, lake_corner, lakes), 0);
+    const lake_found *lake = &lakes[0];
+    int wet = 0, filled = 0;
+    for (int64_t z = lake->z - 90; z <= lake->z + 90; z += 3) {
+        float row[61];
+        terrain__lake_row_spaced(p, (double)(lake->x - 90) + 0.5, 3.0, (double)z + 0.5, 61, 1.0f, row);
+        for (int j = 0; j < 61; j++) {
+            int64_t x = lake->x - 90 + 3 * j;
+            float level;
+            if (lake_at(world, x, z, sea, &level) && level == lake->level) {
+                wet++;
+                cr_expect_leq(fabsf(row[j] - level), TERRAIN_HEIGHT_QUANTUM, "column (%lld, %lld) holds the lake at %g; the row says %g", (long long)x,
+                             (long long)z, (double)level, (double)row[j]);
+            }
+            bool in_lake = fabsf(row[j] - lake->level) <= TERRAIN_HEIGHT_QUANTUM;
+            if (in_lake && terrain_world_top(world, (double)x + 0.5, (double)z + 0.5) <= row[j] - TERRAIN_HEIGHT_QUANTUM) {
+                filled++;
+                cr_expect(lake_at(world, x, z, sea, &level) && level == lake->level,
+                          "column (%lld, %lld) lies under the row's lake at %g and is dry", (long long)x, (long long)z,
+                          (double)lake->level);
+            }
+        }
+        terrain_world_trim(world);
+    }
+    cr_expect_gt(wet, 50, "%d lake columns sampled", wet);
+    cr_expect_gt(filled, 50, "%d columns the row floods", filled);
+    const float spacings[] = { 4.0f, 8.0f, 16.0f, 64.0f };
+    float columns_level;
+    terrain__lake_row_spaced(p, (double)lake->x + 0.5, 1.0, (double)lake->z + 0.5, 1, 1.0f, &columns_level);
+    for (int s = 0; s < 4; s++) {
+        float level;
+        terrain__lake_row_spaced(p, (double)lake->x + 0.5, 1.0, (double)lake->z + 0.5, 1, spacings[s], &level);
+        if (spacings[s] <= 8.0f) cr_expect_eq(level, columns_level, "at a %g m spacing: %g", (double)spacings[s], (double)level);
+        else cr_expect_eq(level, TERRAIN__NO_LAKE, "at a %g m spacing: %g", (double)spacings[s], (double)level);
+    }
     terrain_world_destroy(world);
 }
 
