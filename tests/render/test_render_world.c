@@ -103,7 +103,8 @@ Test(render_world, a_scripted_walk_stays_above_ground_within_budget_and_shows_gr
 }
 
 /* Recording and replaying go through the same loading wait, so frame N of the recording is
- * frame N of the replay however long either took to load: the player ends where it did. */
+ * frame N of the replay however long either took to load: the player ends where it did. Nothing
+ * but the terrain is drawn, as in the walk 100 km out. */
 Test(render_world, a_recorded_walk_replays_to_the_same_place, .timeout = 600) {
     game_walk walk = parse_walk("ahead\n0 40\n10 60 walk\n");
     char rec[] = "/tmp/world_rec_XXXXXX";
@@ -111,7 +112,8 @@ Test(render_world, a_recorded_walk_replays_to_the_same_place, .timeout = 600) {
     cr_assert(fd >= 0);
     close(fd);
     game_app_desc desc = { .seed = 9, .width = 64, .height = 48, .headless = true, .threads = 2, .walk = &walk,
-                           .stream = small_view, .no_hud = true, .frames = 1500 };
+                           .stream = small_view, .no_hud = true, .frames = 1500, .grass = GRASS_OFF,
+                           .water = TERRAIN_WATER_OFF, .shadows = TERRAIN_SHADOWS_OFF };
     desc.record_path = rec;
     game_app_stats recorded = run_world(desc);
     desc.record_path = NULL;
@@ -127,6 +129,8 @@ Test(render_world, a_recorded_walk_replays_to_the_same_place, .timeout = 600) {
     game_walk_free(&walk);
 }
 
+/* Where the player ends is all this looks at: no grass, water or shadows to draw (the pictures
+ * are other tests'), which halves its time under the sanitizers. */
 Test(render_world, a_walk_a_hundred_kilometres_out_goes_as_at_the_origin, .timeout = 600) {
     game_walk walk = parse_walk("relative\n30 30\n-20 60 walk\n");
     game_app_stats at[2];
@@ -134,7 +138,9 @@ Test(render_world, a_walk_a_hundred_kilometres_out_goes_as_at_the_origin, .timeo
         double offset = far ? 100800.0 : 0.0;
         at[far] = run_world((game_app_desc){ .width = 64, .height = 48, .headless = true, .threads = 2,
                                              .walk = &walk, .stream = small_view, .no_hud = true, .frames = 1500,
-                                             .spawn = { offset + 8, offset + 8 }, .generate = render_rolling_chunk });
+                                             .spawn = { offset + 8, offset + 8 }, .generate = render_rolling_chunk,
+                                             .grass = GRASS_OFF, .water = TERRAIN_WATER_OFF,
+                                             .shadows = TERRAIN_SHADOWS_OFF });
         at[far].feet[0] -= offset;
         at[far].feet[2] -= offset;
         cr_expect_eq(at[far].eye_in_solid_frames, 0);
