@@ -328,8 +328,8 @@ static void run_task(terrain_clipmap *c, const row_task *t) {
     for (int left = t->count; left > 0;) {
         int start = floor_mod(i, c->size), run = CORE_MIN(left, c->size - start);   /* split at the wrap */
         double x0 = (double)i * lv->spacing, z = (double)t->k * lv->spacing;
-        terrain__ground_row_spaced(&c->desc.generation, x0, lv->spacing, z, run, (float)lv->spacing, row + start);
-        terrain__lake_row_spaced(&c->desc.generation, x0, lv->spacing, z, run, (float)lv->spacing, lakes + start);
+        terrain__ground_row_spaced(&c->desc.generation, x0, lv->spacing, z, run, (float)lv->spacing, row + start,
+                                   lakes + start);
         i += run;
         left -= run;
     }

@@ -421,15 +421,25 @@ static lake_cache *lake_thread_cache(uint64_t key) {
     return &cache;
 }
 
-/* G: the natural ground with the lakes' basins. */
-static void ground_row(const ground_model *g, const double *xs, double z, int count, float *out) {
+/* G: the natural ground with the lakes' basins; with `levels`, also the level of the lake whose
+ * water circle holds each point (lake_level_at's), TERRAIN__NO_LAKE elsewhere. */
+static void ground_row_lakes(const ground_model *g, const double *xs, double z, int count, float *out, float *levels) {
     ground_row_natural(g, xs, z, count, out);
+    if (levels)
+        for (int j = 0; j < count; j++) levels[j] = TERRAIN__NO_LAKE;
     if (!(g->lake_spacing > 0.0f)) return;
     lake_cache *cache = g->lakes ? g->lakes : lake_thread_cache(g->key);
     for (int j = 0; j < count; j++) {
         const lake_site *s = lake_site_at(g, cache, xs[j], z);
-        if (s) out[j] = lake_shape(s, (float)hypot(xs[j] - s->x, z - s->z), out[j]);
+        if (!s) continue;
+        float r = (float)hypot(xs[j] - s->x, z - s->z);
+        out[j] = lake_shape(s, r, out[j]);
+        if (levels && r < s->water) levels[j] = s->level;
     }
+}
+
+static void ground_row(const ground_model *g, const double *xs, double z, int count, float *out) {
+    ground_row_lakes(g, xs, z, count, out, NULL);
 }
 
 /* The lake level over column centre (x, z) when it lies in a lake's water circle, else NAN;
@@ -497,22 +507,22 @@ static ground_model ground_model_spaced(const terrain_generation_params *p, floa
 }
 
 void terrain__ground_row_spaced(const terrain_generation_params *params, double x0, double dx, double z, int count,
-                                float spacing, float *out) {
+                                float spacing, float *out, float *lakes) {
     ground_model g = ground_model_spaced(params, spacing);
     double xs[GROUND_ROW_MAX];
     for (int done = 0; done < count; done += GROUND_ROW_MAX) {
         int n = CORE_MIN(count - done, GROUND_ROW_MAX);
         for (int j = 0; j < n; j++) xs[j] = x0 + (double)(done + j) * dx;
-        ground_row(&g, xs, z, n, out + done);
+        ground_row_lakes(&g, xs, z, n, out + done, lakes ? lakes + done : NULL);
     }
 }
 
 void terrain__lake_row_spaced(const terrain_generation_params *params, double x0, double dx, double z, int count,
                               float spacing, float *out) {
-    ground_model g = ground_model_spaced(params, spacing);
-    for (int j = 0; j < count; j++) {
-        float basin, level = lake_level_at(&g, x0 + (double)j * dx, z, &basin);
-        out[j] = isnan(level) ? TERRAIN__NO_LAKE : level;
+    float ground[GROUND_ROW_MAX];
+    for (int done = 0; done < count; done += GROUND_ROW_MAX) {
+        int n = CORE_MIN(count - done, GROUND_ROW_MAX);
+        terrain__ground_row_spaced(params, x0 + (double)done * dx, dx, z, n, spacing, ground, out + done);
     }
 }
 

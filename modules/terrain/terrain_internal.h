@@ -95,12 +95,13 @@ float terrain__ground_height(const terrain_generation_params *params, double x, 
  * fade out between 4 and 16 m. spacing ≤ TERRAIN_COLUMN_SIZE gives terrain__ground_height's
  * values bit for bit. A value depends only on (params, x, z, spacing), not on the row. */
 void terrain__ground_row_spaced(const terrain_generation_params *params, double x0, double dx, double z, int count,
-                                float spacing, float *out);
-/* The far terrain's lakes, on the same grid: the level of the lake whose water circle holds
- * (x0 + j·dx, z) (the level generated chunks fill with water there, where their ground lies
- * below it), else TERRAIN__NO_LAKE. None for spacings whose G has no basins (coarser than 8 m).
- * Finite, so that the clipmap's morph may average it with a neighbour's level: any mix with it
- * stays far below the ground. */
+                                float spacing, float *out, float *lakes);
+/* The far terrain's lakes, on the same grid (terrain__ground_row_spaced's `lakes`, NULL for
+ * none, in the same pass): the level of the lake whose water circle holds (x0 + j·dx, z) (the
+ * level generated chunks fill with water there, where their ground lies below it), else
+ * TERRAIN__NO_LAKE. None for spacings whose G has no basins (coarser than 8 m). Finite, so that
+ * the clipmap's morph may average it with a neighbour's level: any mix with it stays far below
+ * the ground. */
 #define TERRAIN__NO_LAKE (-1.0e30f)
 void terrain__lake_row_spaced(const terrain_generation_params *params, double x0, double dx, double z, int count,
                               float spacing, float *out);

@@ -254,7 +254,7 @@ static bool deep_lake_cell(const terrain_generation_params *p, double x, double 
     for (int k = 0; k < 2; k++) {
         float lakes[2], ground[2];
         terrain__lake_row_spaced(p, x0, 4.0, z0 + 4.0 * k, 2, 4.0f, lakes);
-        terrain__ground_row_spaced(p, x0, 4.0, z0 + 4.0 * k, 2, 4.0f, ground);
+        terrain__ground_row_spaced(p, x0, 4.0, z0 + 4.0 * k, 2, 4.0f, ground, NULL);
         for (int j = 0; j < 2; j++)
             if (lakes[j] != level || ground[j] > level - depth) return false;
     }
@@ -267,7 +267,7 @@ static bool deep_lake_cell(const terrain_generation_params *p, double x, double 
  * over a bed of sand and grass, whose red the water takes first (water_optics.glsl). */
 Test(render_clipmap, a_far_lake_is_drawn_as_water_at_its_level) {
     terrain_generation_params p = terrain_generation_defaults(1);
-    double centre[2];
+    double centre[2] = { 0, 0 };
     float level;
     find_far_lake(&p, centre, &level);
     far_scene s = far_scene_open(p, (terrain_renderer_desc){ .cloud_cover = -1 });

@@ -45,7 +45,7 @@ Test(terrain_clipmap, texels_are_the_ground_at_the_levels_spacing) {
         for (int64_t k = info.first[1] - 1; k <= info.first[1] + info.cells + 1; k++) {
             int count = info.cells + 3;
             terrain__ground_row_spaced(&p, (double)(info.first[0] - 1) * info.spacing, info.spacing,
-                                       (double)k * info.spacing, count, (float)info.spacing, row);
+                                       (double)k * info.spacing, count, (float)info.spacing, row, NULL);
             for (int j = 0; j < count; j++)
                 cr_assert_eq(terrain__clipmap_texel(c, l, info.first[0] - 1 + j, k), row[j], "level %d texel (%lld, %lld)", l,
                              (long long)(info.first[0] - 1 + j), (long long)k);
@@ -75,7 +75,7 @@ static float ground_slope_max(const terrain_generation_params *p, double x, doub
     float grid[2 * 16 + 3][2 * 16 + 3];
     int size = 2 * r + 3;
     for (int k = 0; k < size; k++)
-        terrain__ground_row_spaced(p, x - r - 1, 1.0, z - r - 1 + k, size, 1.0f, grid[k]);
+        terrain__ground_row_spaced(p, x - r - 1, 1.0, z - r - 1 + k, size, 1.0f, grid[k], NULL);
     float slope = 0;
     for (int k = 1; k + 1 < size; k++)
         for (int i = 1; i + 1 < size; i++) {
@@ -113,8 +113,8 @@ Test(terrain_clipmap, heights_match_the_stacks_top_within_the_generators_bound) 
             int i = 4 + (sample % 3) * 11, k = 4 + (sample / 3) * 11;
             double x = (double)coord.x * TERRAIN_CHUNK_COLUMNS + i + 0.5, z = (double)coord.z * TERRAIN_CHUNK_COLUMNS + k + 0.5;
             float top = terrain_stacks_top(s, i, k), g1, g4;
-            terrain__ground_row_spaced(&p, x, 1.0, z, 1, 1.0f, &g1);
-            terrain__ground_row_spaced(&p, x, 4.0, z, 1, 4.0f, &g4);
+            terrain__ground_row_spaced(&p, x, 1.0, z, 1, 1.0f, &g1, NULL);
+            terrain__ground_row_spaced(&p, x, 4.0, z, 1, 4.0f, &g4, NULL);
             slopes[count] = ground_slope_max(&p, x, z, reach);
             float bound = a * 1.41422f * 1.25f * slopes[count] + 0.5f * quantum + 0.05f;
             errors_1m[count] = fabsf(top - g1);
