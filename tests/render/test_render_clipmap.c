@@ -39,9 +39,23 @@ static void far_scene_close(far_scene *s) {
     gfx_destroy(s->gfx);
 }
 
-/* One frame as a game would draw it: update, cull, upload, draw (optionally with meshes). */
+/* Distance along the view axis of every pixel (top row first), from the depth buffer. */
+static void read_view_depths(float *depths) {
+    float *raw = malloc(W * H * sizeof *raw);
+    glReadPixels(0, 0, W, H, GL_DEPTH_COMPONENT, GL_FLOAT, raw);
+    const double n = 0.1, f = 4000.0;                     /* terrain_view's defaults */
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            double z = 2.0 * raw[(H - 1 - y) * W + x] - 1.0;
+            depths[y * W + x] = (float)(2.0 * n * f / (f + n - z * (f - n)));
+        }
+    free(raw);
+}
+
+/* One frame as a game would draw it: update, cull, upload, draw (optionally with meshes); with
+ * `depths`, the view-axis distance of every pixel too. */
 static render_image far_draw_with(far_scene *s, const terrain_view *view, const terrain_gpu_mesh *meshes, int mesh_count,
-                                  bool upload) {
+                                  bool upload, float *depths) {
     terrain_clipmap_update(s->clipmap, view->camera);
     terrain_frustum frustum = terrain_frustum_from_view(view);
     terrain_clipmap_cull(s->clipmap, &frustum);
@@ -50,12 +64,13 @@ static render_image far_draw_with(far_scene *s, const terrain_view *view, const 
     terrain_renderer_draw(s->renderer, view, meshes, mesh_count);
     render_image image = { W, H, malloc(W * H * 4) };
     gfx_read_pixels(s->gfx, image.rgba);
+    if (depths) read_view_depths(depths);
     gfx_frame_end(s->gfx);
     return image;
 }
 
 static render_image far_draw(far_scene *s, const terrain_view *view, const terrain_gpu_mesh *meshes, int mesh_count) {
-    return far_draw_with(s, view, meshes, mesh_count, true);
+    return far_draw_with(s, view, meshes, mesh_count, true, NULL);
 }
 
 /* The same view with nothing but the sky. */
@@ -114,7 +129,7 @@ Test(render_clipmap, ground_below_the_horizon_sky_above) {
     /* 700 m on, drawn without an explicit upload (the draw uploads what the update left) and
      * again after one: the same picture. */
     view.camera[0] += 700.0;
-    render_image lazy = far_draw_with(&s, &view, NULL, 0, false), eager = far_draw(&s, &view, NULL, 0);
+    render_image lazy = far_draw_with(&s, &view, NULL, 0, false, NULL), eager = far_draw(&s, &view, NULL, 0);
     cr_assert(memcmp(lazy.rgba, eager.rgba, W * H * 4) == 0);
     render_image_free(&lazy);
     render_image_free(&eager);
@@ -165,19 +180,6 @@ static void ground_under_pixel(int x, int y, double height, double ground[2]) {
     ground[1] = -ndc_y * t;                    /* screen up is −z (yaw 0) */
 }
 
-/* Distance along the view axis of every pixel (top row first), from the depth buffer. */
-static void read_view_depths(float *depths) {
-    float *raw = malloc(W * H * sizeof *raw);
-    glReadPixels(0, 0, W, H, GL_DEPTH_COMPONENT, GL_FLOAT, raw);
-    const double n = 0.1, f = 4000.0;                     /* terrain_view's defaults */
-    for (int y = 0; y < H; y++)
-        for (int x = 0; x < W; x++) {
-            double z = 2.0 * raw[(H - 1 - y) * W + x] - 1.0;
-            depths[y * W + x] = (float)(2.0 * n * f / (f + n - z * (f - n)));
-        }
-    free(raw);
-}
-
 /* The hole: ±40 m around the camera, over flat ground at 10 m seen straight down from 110 m.
  * Inside it, nothing of the clipmap is at ground level: it has sunk to the pit's floor 156 m
  * below (hole_depth by default), over the hole's 8 m band; around it is the ground. */
@@ -187,16 +189,7 @@ Test(render_clipmap, the_hole_leaves_nothing_at_ground_level) {
     terrain_view view = { .camera = { camera[0], 110.0, camera[1] }, .pitch = -1.5707f, .aspect = (float)W / H };
     terrain_clipmap_set_hole(s.clipmap, (double[2]){ camera[0] - 40, camera[1] - 40 }, (double[2]){ camera[0] + 40, camera[1] + 40 });
     float *depths = malloc(W * H * sizeof *depths);
-    terrain_clipmap_update(s.clipmap, view.camera);
-    terrain_frustum frustum = terrain_frustum_from_view(&view);
-    terrain_clipmap_cull(s.clipmap, &frustum);
-    gfx_frame_begin(s.gfx);
-    terrain_clipmap_upload(s.clipmap);
-    terrain_renderer_draw(s.renderer, &view, NULL, 0);
-    render_image image = { W, H, malloc(W * H * 4) };
-    gfx_read_pixels(s.gfx, image.rgba);
-    read_view_depths(depths);
-    gfx_frame_end(s.gfx);
+    render_image image = far_draw_with(&s, &view, NULL, 0, true, depths);
     render_image sky = sky_draw(&s, &view);
     /* The floor, 256 m down, shows its edge (32 m out) at 32·100/256 = 12.5 m at the ground's
      * depth; the ground starts 40 m out. */
@@ -273,16 +266,7 @@ Test(render_clipmap, a_far_lake_is_drawn_as_water_at_its_level) {
     far_scene s = far_scene_open(p, (terrain_renderer_desc){ .cloud_cover = -1 });
     terrain_view view = { .camera = { centre[0], level + 150.0, centre[1] }, .pitch = -1.5707f, .aspect = (float)W / H };
     float *depths = malloc(W * H * sizeof *depths);
-    terrain_clipmap_update(s.clipmap, view.camera);
-    terrain_frustum frustum = terrain_frustum_from_view(&view);
-    terrain_clipmap_cull(s.clipmap, &frustum);
-    gfx_frame_begin(s.gfx);
-    terrain_clipmap_upload(s.clipmap);
-    terrain_renderer_draw(s.renderer, &view, NULL, 0);
-    render_image image = { W, H, malloc(W * H * 4) };
-    gfx_read_pixels(s.gfx, image.rgba);
-    read_view_depths(depths);
-    gfx_frame_end(s.gfx);
+    render_image image = far_draw_with(&s, &view, NULL, 0, true, depths);
     int deep = 0, at_level = 0, water_coloured = 0;
     for (int y = 0; y < H; y++)
         for (int x = 0; x < W; x++) {
