@@ -158,22 +158,25 @@ static void report_text_value(trace_report_detail *d, const core_json_value *val
 }
 
 /* A zone's "args" object as "key=value key=value" in the text pool; 0 when it has none. Only
- * the slowest frames show it, so nested values are not spelled out. */
+ * the slowest frames show it, so nested values are not spelled out, and a long one is cut
+ * (on a UTF-8 character boundary) with "...". */
 static size_t report_args_text(report_builder *b, const core_json_value *event) {
     const core_json_value *args = core_json_get(event, "args");
     if (!args || args->type != CORE_JSON_OBJECT || args->object.count == 0) return 0;
     trace_report_detail *d = b->detail;
-    if (d->text_size == 0) report_text_append(d, "", 0), d->text_size = 1; /* offset 0 means none */
-    size_t start = d->text_size;
-    for (size_t i = 0; i < args->object.count && d->text_size - start < REPORT_ARGS_MAX_CHARS; i++) {
+    if (d->text_size == 0) report_text_append(d, "", 1); /* offset 0 stays "none" */
+    size_t start = d->text_size, i = 0;
+    for (; i < args->object.count && d->text_size - start < REPORT_ARGS_MAX_CHARS; i++) {
         if (i) report_text_append(d, " ", 1);
         const core_json_string *key = &args->object.keys[i];
         report_text_append(d, key->chars, strnlen(key->chars, key->length));
         report_text_append(d, "=", 1);
         report_text_value(d, &args->object.values[i]);
     }
-    if (d->text_size - start > REPORT_ARGS_MAX_CHARS) {
-        d->text_size = start + REPORT_ARGS_MAX_CHARS - 3;
+    if (d->text_size - start > REPORT_ARGS_MAX_CHARS || i < args->object.count) {
+        size_t end = start + CORE_MIN(d->text_size - start, (size_t)REPORT_ARGS_MAX_CHARS - 3);
+        while (end > start && ((unsigned char)d->text[end] & 0xc0) == 0x80) end--;
+        d->text_size = end;
         report_text_append(d, "...", 3);
     }
     d->text_size++; /* keep the NUL */

@@ -379,6 +379,13 @@ Test(trace_report_detail, odd_args_are_parsed) {
         "0123456789012345678901234567890123456789012345678901234567890123456789012345678901234567890123456789"
         "0123456789012345678901234567890123456789012345678901234567890123456789012345678901234567890123456789"
         "\"}},"
+        "{\"ph\":\"X\",\"name\":\"d\",\"ts\":500,\"dur\":5,\"tid\":1,\"args\":{\"lon\":\""
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\"}},"
         "{\"ph\":\"C\",\"name\":\"c\",\"ts\":0,\"args\":7}]";
     trace_report report;
     cr_assert(trace_report_parse(json, strlen(json), &report), "%s", report.error);
@@ -386,11 +393,11 @@ Test(trace_report_detail, odd_args_are_parsed) {
     trace_slowest slowest;
     trace_report_slowest(&report, 1, 8, &slowest);
     cr_assert_eq(slowest.frame_count, 1);
-    /* frame self 1 − 0.1 − 0.05 − 0.01 = 0.84, a 0.1, b 0.05, c 0.01. */
-    cr_assert_eq(slowest.frames[0].zone_count, 4);
+    /* frame self 1 − 0.1 − 0.05 − 0.01 − 0.005 = 0.835, a 0.1, b 0.05, c 0.01, d 0.005. */
+    cr_assert_eq(slowest.frames[0].zone_count, 5);
     const trace_frame_zone *zones = slowest.frames[0].zones;
     cr_expect_str_eq(zones[0].name, "frame");
-    cr_expect_float_eq(zones[0].self_ms, 0.84, 1e-9);
+    cr_expect_float_eq(zones[0].self_ms, 0.835, 1e-9);
     cr_expect_null(zones[0].args);
     cr_expect_str_eq(zones[1].name, "a");
     cr_expect_str_eq(zones[1].args, "s=x n=-1.5 t=true f=false z=null l=[...] o={...}");
@@ -401,6 +408,17 @@ Test(trace_report_detail, odd_args_are_parsed) {
     cr_expect_leq(strlen(zones[3].args), 160);
     cr_expect(strncmp(zones[3].args, "long=0123", 9) == 0, "%s", zones[3].args);
     cr_expect(strcmp(zones[3].args + strlen(zones[3].args) - 3, "...") == 0, "%s", zones[3].args);
+    /* "lon=" and 100 two-byte characters: cut before 157 bytes, on a character boundary, so
+     * an even number of bytes of é (0xc3 0xa9) come before the "...". */
+    cr_expect_str_eq(zones[4].name, "d");
+    const char *cut = zones[4].args;
+    cr_assert_not_null(cut);
+    size_t length = strlen(cut);
+    cr_expect_leq(length, 160);
+    cr_expect(strncmp(cut, "lon=\xc3\xa9", 6) == 0 && strcmp(cut + length - 3, "...") == 0, "%s", cut);
+    cr_expect_eq((length - 4 - 3) % 2, 0, "%zu bytes", length);
+    for (size_t i = 4; i + 3 < length; i += 2)
+        cr_expect((unsigned char)cut[i] == 0xc3 && (unsigned char)cut[i + 1] == 0xa9, "byte %zu", i);
     trace_slowest_free(&slowest);
     trace_report_free(&report);
 }
