@@ -42,6 +42,8 @@ struct trace_report_detail {
     size_t instance_count, instance_capacity;
     size_t *frames;                 /* instance index of each frame, as report->frame_ms */
     size_t frame_capacity;
+    size_t *by_begin;               /* instance indices sorted by begin time */
+    double *reach_us;               /* reach_us[k]: the latest end among by_begin[0..k] */
     report_counter_sample *samples; /* sorted by (series, ts, event) */
     size_t sample_count, sample_capacity;
     size_t *counter_first;          /* report->counters[i]'s first sample */
@@ -510,6 +512,37 @@ static void report_counter_stats(report_builder *b) {
     core_free(entries, series * sizeof *entries);
 }
 
+typedef struct report_begin_key {
+    double begin_us;
+    size_t instance;
+} report_begin_key;
+
+static int report_compare_begin_keys(const void *a, const void *b) {
+    const report_begin_key *x = a, *y = b;
+    if (x->begin_us != y->begin_us) return x->begin_us < y->begin_us ? -1 : 1;
+    return (x->instance > y->instance) - (x->instance < y->instance);
+}
+
+/* Zones by begin time, with the latest end reached so far: the zones that overlap a span
+ * [begin, end) all lie between the first whose reach passes `begin` and the first that begins
+ * at `end`, so a slow frame looks at the zones near it rather than at all of them. */
+static void report_time_index(trace_report_detail *d) {
+    size_t n = d->instance_count;
+    if (n == 0) return;
+    report_begin_key *keys = core_alloc(n * sizeof *keys);
+    for (size_t i = 0; i < n; i++) keys[i] = (report_begin_key){ .begin_us = d->instances[i].begin_us, .instance = i };
+    qsort(keys, n, sizeof *keys, report_compare_begin_keys);
+    d->by_begin = core_alloc(n * sizeof *d->by_begin);
+    d->reach_us = core_alloc(n * sizeof *d->reach_us);
+    double reach = -INFINITY;
+    for (size_t k = 0; k < n; k++) {
+        d->by_begin[k] = keys[k].instance;
+        reach = fmax(reach, d->instances[keys[k].instance].end_us);
+        d->reach_us[k] = reach;
+    }
+    core_free(keys, n * sizeof *keys);
+}
+
 static void report_frame_stats(report_builder *b) {
     trace_report *report = b->report;
     size_t n = report->frame_count;
@@ -539,6 +572,8 @@ static void report_detail_free(trace_report_detail *d, size_t counter_count) {
     core_free(d->frames, d->frame_capacity * sizeof *d->frames);
     core_free(d->samples, d->sample_capacity * sizeof *d->samples);
     core_free(d->counter_first, counter_count * sizeof *d->counter_first);
+    core_free(d->by_begin, d->instance_count * sizeof *d->by_begin);
+    core_free(d->reach_us, d->instance_count * sizeof *d->reach_us);
     core_free(d->text, d->text_capacity);
     core_free(d, sizeof *d);
 }
@@ -579,6 +614,7 @@ bool trace_report_parse(const char *json, size_t size, trace_report *report) {
         report_zone_stats(&b);
         report_counter_stats(&b);
         report_frame_stats(&b);
+        report_time_index(b.detail);
         report->detail = b.detail;
     } else {
         report->frame_count = 0;
@@ -717,8 +753,13 @@ static void report_frame_zones(const trace_report *report, double begin_us, doub
                                trace_slow_frame *frame) {
     const trace_report_detail *d = report->detail;
     trace_frame_zone *all = core_calloc(report->zone_count, sizeof *all);
-    for (size_t i = 0; i < d->instance_count; i++) {
-        const report_instance *z = &d->instances[i];
+    size_t low = 0, high = d->instance_count; /* the first zone whose reach passes begin_us */
+    while (low < high) {
+        size_t mid = low + (high - low) / 2;
+        if (d->reach_us[mid] > begin_us) high = mid; else low = mid + 1;
+    }
+    for (size_t k = low; k < d->instance_count && d->instances[d->by_begin[k]].begin_us < end_us; k++) {
+        const report_instance *z = &d->instances[d->by_begin[k]];
         double overlap = fmin(z->end_us, end_us) - fmax(z->begin_us, begin_us);
         if (!(overlap > 0)) continue;
         double duration = z->end_us - z->begin_us;

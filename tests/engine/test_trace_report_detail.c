@@ -422,3 +422,24 @@ Test(trace_report_detail, odd_args_are_parsed) {
     trace_slowest_free(&slowest);
     trace_report_free(&report);
 }
+
+Test(trace_report_detail, memory_is_returned) {
+    /* Everything the report and the slowest frames allocate is counted, and freeing them gives
+     * it all back (the sizes passed to core_free match the allocations). */
+    size_t before = core_memory_in_use();
+    trace_report report;
+    load_drill(&report);
+    trace_slowest slowest;
+    trace_report_slowest(&report, 3, 4, &slowest);
+    cr_expect_gt(core_memory_in_use(), before);
+    trace_slowest_free(&slowest);
+    trace_report_free(&report);
+    cr_expect_eq(core_memory_in_use(), before);
+    /* And after a failed parse that had collected zones, counters and args. */
+    const char *bad = "[{\"ph\":\"C\",\"name\":\"m\",\"ts\":0,\"args\":{\"a\":1,\"b\":2}},"
+                      "{\"ph\":\"X\",\"name\":\"x\",\"ts\":0,\"dur\":1,\"args\":{\"k\":\"v\"}},"
+                      "{\"ph\":\"E\",\"ts\":2}]";
+    cr_expect_not(trace_report_parse(bad, strlen(bad), &report));
+    trace_report_free(&report);
+    cr_expect_eq(core_memory_in_use(), before);
+}
