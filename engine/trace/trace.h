@@ -41,7 +41,7 @@
  *     trace_slowest slowest;                          // the 5 slowest frames, 8 zones each
  *     trace_report_slowest(&report, 5, 8, &slowest);
  *     trace_slowest_print(&slowest, stdout);
- *     trace_slowest_free(&slowest);                   // before the report: it points into it
+ *     trace_slowest_free(&slowest);                   // its names point into the report
  *     trace_report_free(&report);
  *
  *   Self time is a zone's time minus the time of the zones directly nested in it on the same
@@ -130,7 +130,7 @@ void trace_report_print(const trace_report *report, FILE *out);
 bool trace_report_write_svg(const trace_report *report, const char *svg_path);
 void trace_report_free(trace_report *report);
 
-/* ---- the slowest frames ------------------------------------------------------------------ */
+/* ---- the slowest frames ----------------------------------------------------------------- */
 
 /* A zone's share of one frame: every instance (any thread) that overlaps the frame's span
  * counts its self time times the part of its duration inside the span. */
@@ -162,10 +162,12 @@ typedef struct trace_slowest {
 } trace_slowest;
 
 /* Fills *out with the n slowest frames of a loaded report, each with its top_zones zones by
- * self time. Free with trace_slowest_free before the report (names and args point into it). */
+ * self time. Its names and args point into the report: read it while the report lives. The
+ * caller frees it with trace_slowest_free. */
 void trace_report_slowest(const trace_report *report, size_t n, size_t top_zones, trace_slowest *out);
 void trace_slowest_print(const trace_slowest *slowest, FILE *out);
 void trace_slowest_free(trace_slowest *slowest);
+
 /* Nearest-rank percentile of sorted values: sorted[ceil(p/100 · n) − 1]; 0 for n = 0. */
 double trace_percentile(const double *sorted, size_t n, double p);
 

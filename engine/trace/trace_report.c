@@ -150,8 +150,12 @@ static void report_text_append(trace_report_detail *d, const char *chars, size_t
 static void report_text_value(trace_report_detail *d, const core_json_value *value) {
     char number[32];
     switch (value->type) {
-    case CORE_JSON_STRING: report_text_append(d, value->string.chars, strnlen(value->string.chars, value->string.length)); break;
-    case CORE_JSON_NUMBER: report_text_append(d, number, (size_t)snprintf(number, sizeof number, "%.10g", value->number)); break;
+    case CORE_JSON_STRING:
+        report_text_append(d, value->string.chars, strnlen(value->string.chars, value->string.length));
+        break;
+    case CORE_JSON_NUMBER:
+        report_text_append(d, number, (size_t)snprintf(number, sizeof number, "%.10g", value->number));
+        break;
     case CORE_JSON_BOOL: report_text_append(d, value->boolean ? "true" : "false", value->boolean ? 4 : 5); break;
     case CORE_JSON_NULL: report_text_append(d, "null", 4); break;
     case CORE_JSON_ARRAY: report_text_append(d, "[...]", 5); break;
@@ -268,8 +272,9 @@ static bool report_end(report_builder *b, const core_json_value *event, size_t i
     uint32_t thread_index = report_thread_of(b, event);
     report_thread *thread = &b->threads[thread_index];
     if (thread->open_count == 0)
-        return report_fail(b->report, "event %zu: unbalanced \"E\": no matching \"B\" open on its thread (pid %g, tid %g)",
-                           index, core_json_number_or(core_json_get(event, "pid"), 0),
+        return report_fail(b->report,
+                           "event %zu: unbalanced \"E\": no matching \"B\" open on its thread (pid %g, tid %g)", index,
+                           core_json_number_or(core_json_get(event, "pid"), 0),
                            core_json_number_or(core_json_get(event, "tid"), 0));
     report_open_zone zone = thread->open[--thread->open_count];
     if (ts < zone.ts_us)

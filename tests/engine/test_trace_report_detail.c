@@ -273,7 +273,8 @@ Test(trace_report_detail, slowest_frames) {
     expect_frame_zones(second, (const expected_zone[]){ { "frame", 1, 13, 15, NULL },
                                                         { "gen", 1, 6, 8, "chunk=5,0,5" },
                                                         { "A", 1, 2, 2, "chunk=0,0,1" } }, 3);
-    expect_frame_counters(second, (const char *const[]){ "jobs.run", "jobs.stolen", "mem", "queue.peak", "queue.value" },
+    expect_frame_counters(second,
+                          (const char *const[]){ "jobs.run", "jobs.stolen", "mem", "queue.peak", "queue.value" },
                           (const double[]){ 10, 3, 200, 9, 7 }, 5);
     trace_slowest_free(&slowest);
     trace_report_free(&report);
@@ -380,11 +381,16 @@ Test(trace_report_detail, odd_args_are_parsed) {
         "0123456789012345678901234567890123456789012345678901234567890123456789012345678901234567890123456789"
         "\"}},"
         "{\"ph\":\"X\",\"name\":\"d\",\"ts\":500,\"dur\":5,\"tid\":1,\"args\":{\"lon\":\""
-        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
-        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
-        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
-        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
-        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
+        "\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9\u00e9"
         "\"}},"
         "{\"ph\":\"C\",\"name\":\"c\",\"ts\":0,\"args\":7}]";
     trace_report report;
