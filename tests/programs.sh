@@ -95,6 +95,8 @@ expect "trace_report: --slowest 5 lists both frames" 0 "^frame 0 +at 0\\.000 ms 
 expect "hello_systems: runs with a trace" 0 "" -- "$bin/hello_systems" --frames 30 --threads 2 --trace "$tmp/run.json"
 expect "trace_report: frames of the run" 0 "30 frames" -- "$bin/trace_report" "$tmp/run.json"
 expect "trace_report: phases in the run" 0 "(^| )cull( |$)" -- "$bin/trace_report" "$tmp/run.json"
+expect "trace_report: memory counter of the run" 0 "^memory\\.bytes +[0-9]+ +[0-9]" -- "$bin/trace_report" "$tmp/run.json"
+expect "trace_report: --slowest 3 of the run" 0 "^slowest 3 frames" -- "$bin/trace_report" --slowest 3 "$tmp/run.json"
 expect "trace_report: svg beside the trace" 0 "^<svg|<svg " -- cat "$tmp/run.frames.svg"
 
 # The platform example: flags, a headless run with a screenshot and a trace, shader errors.
