@@ -361,9 +361,10 @@ static int report_compare_spans(const void *a, const void *b) {
     return (x->begin_event > y->begin_event) - (x->begin_event < y->begin_event);
 }
 
-/* Each zone's parent is the innermost zone of its thread that began before it and has not
- * ended before it ends; the parent's self time loses the child's duration. X events that
- * overlap without nesting (not valid in a trace) could take a parent below zero: clamped. */
+/* Each zone's parent is the innermost zone of its thread that begins no later and ends no
+ * earlier (a stack over the sorted spans); the parent's self time loses the child's duration.
+ * X events that overlap without nesting (not valid in a trace) could take a parent below
+ * zero: clamped. */
 static void report_self_times(trace_report_detail *d) {
     size_t n = d->instance_count;
     if (n == 0) return;
