@@ -51,11 +51,52 @@ printf 'this is not json' >"$tmp/garbage.json"
 expect "trace_report: not JSON" 1 "garbage.json" -- "$bin/trace_report" "$tmp/garbage.json"
 printf '{"traceEvents":[{"ph":"E","name":"frame","ts":5,"pid":1,"tid":1}]}' >"$tmp/unbalanced.json"
 expect "trace_report: unbalanced zones" 1 "unbalanced|without|no matching" -- "$bin/trace_report" "$tmp/unbalanced.json"
+printf '{"traceEvents":[{"ph":"B","name":"frame","ts":0,"pid":1,"tid":1},{"ph":"E","ts":1' >"$tmp/truncated.json"
+expect "trace_report: truncated trace" 1 "truncated.json: not valid JSON: line 1" -- "$bin/trace_report" "$tmp/truncated.json"
+expect "trace_report: --slowest 0" 2 "bad value for '--slowest': '0' is out of range" -- "$bin/trace_report" --slowest 0 "$tmp/unbalanced.json"
+expect "trace_report: --slowest -2" 2 "bad value for '--slowest'" -- "$bin/trace_report" --slowest -2 "$tmp/unbalanced.json"
+expect "trace_report: --slowest many" 2 "bad value for '--slowest': 'many' is not a whole number" -- "$bin/trace_report" --slowest many "$tmp/unbalanced.json"
+expect "trace_report: --slowest without N" 2 "option '--slowest' needs a value" -- "$bin/trace_report" "$tmp/unbalanced.json" --slowest
+
+# A hand-built trace (ms): frame 0 0-10 with A 2-8 (args chunk 3,0,-2) holding B 3-5 (A self
+# 4, B 2, frame 4); frame 1 10-40 with a stolen job gen 12-36 (args chunk 1,0,0) inside a wait
+# 11-38 (gen self 24, wait 3, frame 3); counter mem 100 @5, 300 @20, 200 @39.
+cat >"$tmp/drill.json" <<'JSON'
+{"traceEvents":[
+{"ph":"B","name":"frame","ts":0,"pid":1,"tid":1},
+{"ph":"B","name":"A","ts":2000,"pid":1,"tid":1,"args":{"chunk":"3,0,-2"}},
+{"ph":"B","name":"B","ts":3000,"pid":1,"tid":1},
+{"ph":"C","name":"mem","ts":5000,"pid":1,"tid":1,"args":{"value":100}},
+{"ph":"E","ts":5000,"pid":1,"tid":1},
+{"ph":"E","ts":8000,"pid":1,"tid":1},
+{"ph":"E","ts":10000,"pid":1,"tid":1},
+{"ph":"B","name":"frame","ts":10000,"pid":1,"tid":1},
+{"ph":"B","name":"wait","ts":11000,"pid":1,"tid":1},
+{"ph":"B","name":"gen","ts":12000,"pid":1,"tid":1,"args":{"chunk":"1,0,0"}},
+{"ph":"C","name":"mem","ts":20000,"pid":1,"tid":1,"args":{"value":300}},
+{"ph":"E","ts":36000,"pid":1,"tid":1},
+{"ph":"E","ts":38000,"pid":1,"tid":1},
+{"ph":"C","name":"mem","ts":39000,"pid":1,"tid":1,"args":{"value":200}},
+{"ph":"E","ts":40000,"pid":1,"tid":1}
+]}
+JSON
+expect "trace_report: self beside total (gen 24 of 24)" 0 "^gen +1 +24\\.000 +24\\.000 " -- "$bin/trace_report" "$tmp/drill.json"
+expect "trace_report: frame self 4 + 3 of 40" 0 "^frame +2 +7\\.000 +40\\.000 " -- "$bin/trace_report" "$tmp/drill.json"
+expect "trace_report: counter min max mean last" 0 "^mem +3 +100 +300 +200 +200$" -- "$bin/trace_report" "$tmp/drill.json"
+expect "trace_report: --slowest 1 is frame 1" 0 "^frame 1 +at 10\\.000 ms +30\\.000 ms$" -- "$bin/trace_report" --slowest 1 "$tmp/drill.json"
+expect "trace_report: --slowest lists its zones with args" 0 "^  gen +24\\.000 +1 +24\\.000 +chunk=1,0,0$" -- \
+  "$bin/trace_report" --slowest 1 "$tmp/drill.json"
+expect "trace_report: --slowest shows counters at the frame's end" 0 "counters at its end: mem 200$" -- \
+  "$bin/trace_report" --slowest 1 "$tmp/drill.json"
+expect "trace_report: --slowest 5 lists both frames" 0 "^frame 0 +at 0\\.000 ms +10\\.000 ms$" -- \
+  "$bin/trace_report" --slowest 5 "$tmp/drill.json"
 
 # End to end: the example runs, writes a trace, and the report reads its frames and phases.
 expect "hello_systems: runs with a trace" 0 "" -- "$bin/hello_systems" --frames 30 --threads 2 --trace "$tmp/run.json"
 expect "trace_report: frames of the run" 0 "30 frames" -- "$bin/trace_report" "$tmp/run.json"
 expect "trace_report: phases in the run" 0 "(^| )cull( |$)" -- "$bin/trace_report" "$tmp/run.json"
+expect "trace_report: memory counter of the run" 0 "^memory\\.bytes +[0-9]+ +[0-9]" -- "$bin/trace_report" "$tmp/run.json"
+expect "trace_report: --slowest 3 of the run" 0 "^slowest 3 frames" -- "$bin/trace_report" --slowest 3 "$tmp/run.json"
 expect "trace_report: svg beside the trace" 0 "^<svg|<svg " -- cat "$tmp/run.frames.svg"
 
 # The platform example: flags, a headless run with a screenshot and a trace, shader errors.

@@ -31,8 +31,21 @@
  *
  * REPORT
  *   trace_report_load reads such a file back (any Chrome trace with B/E or X events) and
- *   computes frame-time percentiles and per-zone statistics; tools/trace_report prints them
- *   and writes an SVG plot of frame times beside the trace.
+ *   computes frame-time percentiles, per-zone inclusive and self times and per-counter
+ *   min / max / mean / last; tools/trace_report prints them and writes an SVG plot of frame
+ *   times beside the trace.
+ *
+ *     trace_report report;
+ *     if (!trace_report_load("run.json", &report)) { fprintf(stderr, "%s\n", report.error); return 1; }
+ *     trace_report_print(&report, stdout);
+ *     trace_slowest slowest;                          // the 5 slowest frames, 8 zones each
+ *     trace_report_slowest(&report, 5, 8, &slowest);
+ *     trace_slowest_print(&slowest, stdout);
+ *     trace_slowest_free(&slowest);                   // its names point into the report
+ *     trace_report_free(&report);
+ *
+ *   Self time is a zone's time minus the time of the zones directly nested in it on the same
+ *   thread (B/E pairs and X events, nested by time).
  */
 #ifndef TRACE_H
 #define TRACE_H
@@ -81,17 +94,33 @@ const char *trace_intern(const char *s);
 typedef struct trace_zone_stats {
     const char *name;
     size_t count;
-    double total_ms, p99_ms, max_ms;
+    double total_ms;               /* inclusive: the sum of the zone's durations */
+    double self_ms;                /* total_ms minus the zones directly nested in it, same thread */
+    double p99_ms, max_ms;         /* of the inclusive durations */
 } trace_zone_stats;
+
+/* One counter series: a "C" event's args {"value": v} is the series NAME; any other args are
+ * one series per key, NAME.KEY. Non-numeric values are skipped. */
+typedef struct trace_counter_stats {
+    const char *name;
+    size_t count;                  /* samples */
+    double min, max, mean;         /* mean of the samples, not weighted by time */
+    double last;                   /* the sample with the latest ts (the later in the file on ties) */
+} trace_counter_stats;
+
+typedef struct trace_report_detail trace_report_detail; /* internal: zones and samples for --slowest */
 
 typedef struct trace_report {
     size_t frame_count;
-    double *frame_ms;              /* frame durations in file order */
+    double *frame_ms;              /* frame durations in file order (the order their ends appear) */
     double frame_p50_ms, frame_p95_ms, frame_p99_ms, frame_max_ms;
     size_t frames_over_16ms, frames_over_33ms;  /* > 16.7 ms and > 33.3 ms */
-    trace_zone_stats *zones;       /* sorted by total time, largest first */
+    trace_zone_stats *zones;       /* sorted by self time, largest first */
     size_t zone_count;
     size_t counter_count;          /* "C" events seen */
+    trace_counter_stats *counters; /* one per series, sorted by name */
+    size_t counter_series_count;
+    trace_report_detail *detail;
     char error[256];               /* why loading failed, when it did */
 } trace_report;
 
@@ -100,6 +129,45 @@ bool trace_report_parse(const char *json, size_t size, trace_report *report);
 void trace_report_print(const trace_report *report, FILE *out);
 bool trace_report_write_svg(const trace_report *report, const char *svg_path);
 void trace_report_free(trace_report *report);
+
+/* ---- the slowest frames ----------------------------------------------------------------- */
+
+/* A zone's share of one frame: every instance (any thread) that overlaps the frame's span
+ * counts its self time times the part of its duration inside the span. */
+typedef struct trace_frame_zone {
+    const char *name;              /* points into the report */
+    size_t count;                  /* instances overlapping the span */
+    double self_ms;                /* self time inside the span */
+    double slowest_ms;             /* the longest of those instances (inclusive) */
+    const char *args;              /* that instance's args as "key=value key=value"; NULL if none */
+} trace_frame_zone;
+
+typedef struct trace_frame_counter {
+    const char *name;              /* points into the report */
+    double value;                  /* the last sample at or before the frame's end */
+} trace_frame_counter;
+
+typedef struct trace_slow_frame {
+    size_t index;                  /* into report->frame_ms */
+    double start_ms, duration_ms;  /* start on the trace's clock (ts / 1000) */
+    trace_frame_zone *zones;       /* by self time inside the frame, largest first */
+    size_t zone_count;
+    trace_frame_counter *counters; /* series with a sample by the frame's end, by name */
+    size_t counter_count;
+} trace_slow_frame;
+
+typedef struct trace_slowest {
+    trace_slow_frame *frames;      /* slowest first; ties in file order */
+    size_t frame_count;            /* min(n, report->frame_count) */
+} trace_slowest;
+
+/* Fills *out with the n slowest frames of a loaded report, each with its top_zones zones by
+ * self time. Its names and args point into the report: read it while the report lives. The
+ * caller frees it with trace_slowest_free. */
+void trace_report_slowest(const trace_report *report, size_t n, size_t top_zones, trace_slowest *out);
+void trace_slowest_print(const trace_slowest *slowest, FILE *out);
+void trace_slowest_free(trace_slowest *slowest);
+
 /* Nearest-rank percentile of sorted values: sorted[ceil(p/100 · n) − 1]; 0 for n = 0. */
 double trace_percentile(const double *sorted, size_t n, double p);
 

@@ -1,10 +1,13 @@
 /* trace_report.c — reads a Chrome trace back and summarises it: frame-time percentiles, per-zone
- * statistics and an SVG plot of frame times (trace.h, REPORT).
+ * inclusive and self times, per-counter statistics, the slowest frames and an SVG plot of frame
+ * times (trace.h, REPORT).
  *
  * Zones are B/E pairs, matched per (pid, tid) with a stack as Chrome does (an "E" closes the
  * innermost open "B" of its thread, whatever its name), or X events. Frames are zones named
- * "frame". Every zone's duration is kept as a sample; sorting the samples by (zone, duration)
- * then gives each zone's count, total, p99 and max in one pass.
+ * "frame". Every zone is kept as an instance (thread, begin, end, args); a sweep over each
+ * thread's instances in time order nests them and gives self times; sorting copies of them by
+ * (zone, duration) then gives each zone's count, totals, p99 and max in one pass. Counter
+ * samples are kept too, so the slowest frames can show the counters at their end.
  */
 #include "trace/trace.h"
 
@@ -18,15 +21,49 @@
 
 #define REPORT_FRAME_BUDGET_60HZ_MS 16.7
 #define REPORT_FRAME_BUDGET_30HZ_MS 33.3
+#define REPORT_ARGS_MAX_CHARS 160  /* a zone's args as text, cut beyond this */
 
-typedef struct report_sample {
-    uint32_t zone; /* index into report_builder.zone_names */
-    double ms;
-} report_sample;
+typedef struct report_instance {
+    uint32_t zone;        /* name index while loading; index into report->zones after */
+    uint32_t thread;
+    size_t begin_event;   /* file index of its B or X: orders zones with equal spans */
+    double begin_us, end_us, self_us;
+    size_t args;          /* offset of its args text in detail->text; 0 = none */
+} report_instance;
+
+typedef struct report_counter_sample {
+    uint32_t series;      /* series name index */
+    size_t event;         /* file index: orders samples with equal ts */
+    double ts_us, value;
+} report_counter_sample;
+
+struct trace_report_detail {
+    report_instance *instances;
+    size_t instance_count, instance_capacity;
+    size_t *frames;                 /* instance index of each frame, as report->frame_ms */
+    size_t frame_capacity;
+    size_t *by_begin;               /* instance indices sorted by begin time */
+    double *reach_us;               /* reach_us[k]: the latest end among by_begin[0..k] */
+    report_counter_sample *samples; /* sorted by (series, ts, event) */
+    size_t sample_count, sample_capacity;
+    size_t *counter_first;          /* report->counters[i]'s first sample */
+    char *text;                     /* args texts, NUL-terminated, from offset 1 */
+    size_t text_size, text_capacity;
+};
+
+/* Names → small indices, with an open-addressing hash. Names point into the JSON arena until
+ * the statistics copy them out. */
+typedef struct report_names {
+    const char **names;
+    size_t count, capacity;
+    uint32_t *slots;      /* name index + 1; 0 = empty */
+    size_t slot_capacity;
+} report_names;
 
 typedef struct report_open_zone {
     const char *name;
     double ts_us;
+    size_t event, args;
 } report_open_zone;
 
 /* The zones still open on one (pid, tid), innermost last. */
@@ -38,14 +75,10 @@ typedef struct report_thread {
 
 typedef struct report_builder {
     trace_report *report;
-    const char **zone_names;   /* point into the JSON arena until copied out */
-    size_t zone_count, zone_capacity;
-    uint32_t *zone_slots;      /* hash of name → zone index + 1; 0 = empty */
-    size_t slot_capacity;
-    report_sample *samples;
-    size_t sample_count, sample_capacity;
-    double *frames;
-    size_t frame_count, frame_capacity;
+    trace_report_detail *detail;
+    core_arena *arena;
+    report_names zones, series;
+    uint32_t frame_zone;            /* name index of "frame", UINT32_MAX until seen */
     report_thread *threads;
     size_t thread_count, thread_capacity, last_thread;
 } report_builder;
@@ -76,41 +109,105 @@ double trace_percentile(const double *sorted, size_t n, double p) {
     return sorted[(size_t)rank - 1];
 }
 
-/* ---- zones and threads ------------------------------------------------------------------ */
-
-static uint32_t report_zone_index(report_builder *b, const char *name) {
-    if (2 * (b->zone_count + 1) > b->slot_capacity) {
+static uint32_t report_name_index(report_names *t, const char *name) {
+    if (2 * (t->count + 1) > t->slot_capacity) {
         /* Rehash into a table twice the size. */
-        size_t capacity = b->slot_capacity ? b->slot_capacity * 2 : 64;
+        size_t capacity = t->slot_capacity ? t->slot_capacity * 2 : 64;
         uint32_t *slots = core_calloc(capacity, sizeof *slots);
-        for (size_t z = 0; z < b->zone_count; z++) {
-            size_t i = core_hash_bytes(b->zone_names[z], strlen(b->zone_names[z]), 0) & (capacity - 1);
+        for (size_t z = 0; z < t->count; z++) {
+            size_t i = core_hash_bytes(t->names[z], strlen(t->names[z]), 0) & (capacity - 1);
             while (slots[i]) i = (i + 1) & (capacity - 1);
             slots[i] = (uint32_t)z + 1;
         }
-        core_free(b->zone_slots, b->slot_capacity * sizeof *slots);
-        b->zone_slots = slots;
-        b->slot_capacity = capacity;
+        core_free(t->slots, t->slot_capacity * sizeof *slots);
+        t->slots = slots;
+        t->slot_capacity = capacity;
     }
-    size_t mask = b->slot_capacity - 1;
+    size_t mask = t->slot_capacity - 1;
     size_t i = core_hash_bytes(name, strlen(name), 0) & mask;
-    for (; b->zone_slots[i]; i = (i + 1) & mask)
-        if (strcmp(b->zone_names[b->zone_slots[i] - 1], name) == 0) return b->zone_slots[i] - 1;
-    b->zone_names = core_grow(b->zone_names, &b->zone_capacity, b->zone_count + 1, sizeof *b->zone_names);
-    b->zone_names[b->zone_count] = name;
-    b->zone_slots[i] = (uint32_t)++b->zone_count;
-    return (uint32_t)(b->zone_count - 1);
+    for (; t->slots[i]; i = (i + 1) & mask)
+        if (strcmp(t->names[t->slots[i] - 1], name) == 0) return t->slots[i] - 1;
+    t->names = core_grow(t->names, &t->capacity, t->count + 1, sizeof *t->names);
+    t->names[t->count] = name;
+    t->slots[i] = (uint32_t)++t->count;
+    return (uint32_t)(t->count - 1);
 }
 
-static bool report_add_zone(report_builder *b, size_t index, const char *name, double ms) {
-    /* Finite timestamps far apart can still overflow their difference. */
-    if (!isfinite(ms)) return report_fail(b->report, "event %zu: zone duration out of range", index);
-    b->samples = core_grow(b->samples, &b->sample_capacity, b->sample_count + 1, sizeof *b->samples);
-    b->samples[b->sample_count++] = (report_sample){ .zone = report_zone_index(b, name), .ms = ms };
-    if (strcmp(name, "frame") == 0) {
-        b->frames = core_grow(b->frames, &b->frame_capacity, b->frame_count + 1, sizeof *b->frames);
-        b->frames[b->frame_count++] = ms;
+static void report_names_free(report_names *t) {
+    core_free(t->names, t->capacity * sizeof *t->names);
+    core_free(t->slots, t->slot_capacity * sizeof *t->slots);
+}
+
+/* ---- zone arguments --------------------------------------------------------------------- */
+
+static void report_text_append(trace_report_detail *d, const char *chars, size_t length) {
+    d->text = core_grow(d->text, &d->text_capacity, d->text_size + length + 1, 1);
+    memcpy(d->text + d->text_size, chars, length);
+    d->text_size += length;
+    d->text[d->text_size] = '\0';
+}
+
+static void report_text_value(trace_report_detail *d, const core_json_value *value) {
+    char number[32];
+    switch (value->type) {
+    case CORE_JSON_STRING:
+        report_text_append(d, value->string.chars, strnlen(value->string.chars, value->string.length));
+        break;
+    case CORE_JSON_NUMBER:
+        report_text_append(d, number, (size_t)snprintf(number, sizeof number, "%.10g", value->number));
+        break;
+    case CORE_JSON_BOOL: report_text_append(d, value->boolean ? "true" : "false", value->boolean ? 4 : 5); break;
+    case CORE_JSON_NULL: report_text_append(d, "null", 4); break;
+    case CORE_JSON_ARRAY: report_text_append(d, "[...]", 5); break;
+    case CORE_JSON_OBJECT: report_text_append(d, "{...}", 5); break;
     }
+}
+
+/* A zone's "args" object as "key=value key=value" in the text pool; 0 when it has none. Only
+ * the slowest frames show it, so nested values are not spelled out, and a long one is cut
+ * (on a UTF-8 character boundary) with "...". */
+static size_t report_args_text(report_builder *b, const core_json_value *event) {
+    const core_json_value *args = core_json_get(event, "args");
+    if (!args || args->type != CORE_JSON_OBJECT || args->object.count == 0) return 0;
+    trace_report_detail *d = b->detail;
+    if (d->text_size == 0) report_text_append(d, "", 1); /* offset 0 stays "none" */
+    size_t start = d->text_size, i = 0;
+    for (; i < args->object.count && d->text_size - start < REPORT_ARGS_MAX_CHARS; i++) {
+        if (i) report_text_append(d, " ", 1);
+        const core_json_string *key = &args->object.keys[i];
+        report_text_append(d, key->chars, strnlen(key->chars, key->length));
+        report_text_append(d, "=", 1);
+        report_text_value(d, &args->object.values[i]);
+    }
+    if (d->text_size - start > REPORT_ARGS_MAX_CHARS || i < args->object.count) {
+        size_t end = start + CORE_MIN(d->text_size - start, (size_t)REPORT_ARGS_MAX_CHARS - 3);
+        while (end > start && ((unsigned char)d->text[end] & 0xc0) == 0x80) end--;
+        d->text_size = end;
+        report_text_append(d, "...", 3);
+    }
+    d->text_size++; /* keep the NUL */
+    return start;
+}
+
+/* ---- zones and threads ------------------------------------------------------------------ */
+
+static bool report_add_zone(report_builder *b, size_t index, uint32_t thread, const report_open_zone *zone,
+                            double end_us) {
+    /* Finite timestamps far apart can still overflow their difference. */
+    if (!isfinite(end_us - zone->ts_us)) return report_fail(b->report, "event %zu: zone duration out of range", index);
+    trace_report_detail *d = b->detail;
+    uint32_t name = report_name_index(&b->zones, zone->name);
+    d->instances = core_grow(d->instances, &d->instance_capacity, d->instance_count + 1, sizeof *d->instances);
+    d->instances[d->instance_count] = (report_instance){
+        .zone = name, .thread = thread, .begin_event = zone->event, .begin_us = zone->ts_us, .end_us = end_us,
+        .self_us = end_us - zone->ts_us, .args = zone->args,
+    };
+    if (strcmp(zone->name, "frame") == 0) {
+        trace_report *report = b->report;
+        d->frames = core_grow(d->frames, &d->frame_capacity, report->frame_count + 1, sizeof *d->frames);
+        d->frames[report->frame_count++] = d->instance_count;
+    }
+    d->instance_count++;
     return true;
 }
 
@@ -126,21 +223,21 @@ static uint64_t report_id(const core_json_value *value) {
     return 0;
 }
 
-static report_thread *report_thread_of(report_builder *b, const core_json_value *event) {
+static uint32_t report_thread_of(report_builder *b, const core_json_value *event) {
     uint64_t pid = report_id(core_json_get(event, "pid")), tid = report_id(core_json_get(event, "tid"));
     /* Consecutive events are usually from the same thread: try the last one first. */
     if (b->thread_count && b->threads[b->last_thread].pid == pid && b->threads[b->last_thread].tid == tid)
-        return &b->threads[b->last_thread];
+        return (uint32_t)b->last_thread;
     for (size_t i = 0; i < b->thread_count; i++) {
         if (b->threads[i].pid == pid && b->threads[i].tid == tid) {
             b->last_thread = i;
-            return &b->threads[i];
+            return (uint32_t)i;
         }
     }
     b->threads = core_grow(b->threads, &b->thread_capacity, b->thread_count + 1, sizeof *b->threads);
     b->threads[b->thread_count] = (report_thread){ .pid = pid, .tid = tid };
     b->last_thread = b->thread_count++;
-    return &b->threads[b->last_thread];
+    return (uint32_t)b->last_thread;
 }
 
 /* ---- events ----------------------------------------------------------------------------- */
@@ -161,25 +258,30 @@ static bool report_event_time(report_builder *b, const core_json_value *event, s
 static bool report_begin(report_builder *b, const core_json_value *event, size_t index) {
     double ts = 0;
     if (!report_event_time(b, event, index, "ts", 'B', &ts)) return false;
-    report_thread *thread = report_thread_of(b, event);
+    uint32_t thread_index = report_thread_of(b, event); /* may grow b->threads */
+    report_thread *thread = &b->threads[thread_index];
     thread->open = core_grow(thread->open, &thread->open_capacity, thread->open_count + 1, sizeof *thread->open);
-    thread->open[thread->open_count++] = (report_open_zone){ .name = report_event_name(event), .ts_us = ts };
+    thread->open[thread->open_count++] = (report_open_zone){
+        .name = report_event_name(event), .ts_us = ts, .event = index, .args = report_args_text(b, event) };
     return true;
 }
 
 static bool report_end(report_builder *b, const core_json_value *event, size_t index) {
     double ts = 0;
     if (!report_event_time(b, event, index, "ts", 'E', &ts)) return false;
-    report_thread *thread = report_thread_of(b, event);
+    uint32_t thread_index = report_thread_of(b, event);
+    report_thread *thread = &b->threads[thread_index];
     if (thread->open_count == 0)
-        return report_fail(b->report, "event %zu: \"E\" without a matching \"B\" on its thread (pid %g, tid %g)",
-                           index, core_json_number_or(core_json_get(event, "pid"), 0),
+        return report_fail(b->report,
+                           "event %zu: unbalanced \"E\": no matching \"B\" open on its thread (pid %g, tid %g)", index,
+                           core_json_number_or(core_json_get(event, "pid"), 0),
                            core_json_number_or(core_json_get(event, "tid"), 0));
     report_open_zone zone = thread->open[--thread->open_count];
     if (ts < zone.ts_us)
         return report_fail(b->report, "event %zu: zone \"%.64s\" ends (ts %g) before it begins (ts %g)", index,
                            zone.name, ts, zone.ts_us);
-    return report_add_zone(b, index, zone.name, (ts - zone.ts_us) / 1000.0);
+    if (!zone.args) zone.args = report_args_text(b, event); /* Chrome merges an E's args into its zone */
+    return report_add_zone(b, index, thread_index, &zone, ts);
 }
 
 static bool report_complete(report_builder *b, const core_json_value *event, size_t index) {
@@ -187,7 +289,43 @@ static bool report_complete(report_builder *b, const core_json_value *event, siz
     if (!report_event_time(b, event, index, "ts", 'X', &ts)) return false;
     if (!report_event_time(b, event, index, "dur", 'X', &dur)) return false;
     if (dur < 0) return report_fail(b->report, "event %zu: \"X\" with a negative \"dur\" (%g)", index, dur);
-    return report_add_zone(b, index, report_event_name(event), dur / 1000.0);
+    report_open_zone zone = { .name = report_event_name(event), .ts_us = ts, .event = index,
+                              .args = report_args_text(b, event) };
+    return report_add_zone(b, index, report_thread_of(b, event), &zone, ts + dur);
+}
+
+static void report_add_sample(report_builder *b, const char *series, size_t index, double ts, double value) {
+    trace_report_detail *d = b->detail;
+    d->samples = core_grow(d->samples, &d->sample_capacity, d->sample_count + 1, sizeof *d->samples);
+    d->samples[d->sample_count++] = (report_counter_sample){
+        .series = report_name_index(&b->series, series), .event = index, .ts_us = ts, .value = value };
+}
+
+/* A "C" event: {"value": v} alone is the series NAME; other keys are series NAME.KEY each. */
+static bool report_counter(report_builder *b, const core_json_value *event, size_t index) {
+    b->report->counter_count++;
+    double ts = 0;
+    if (!report_event_time(b, event, index, "ts", 'C', &ts)) return false;
+    const char *name = report_event_name(event);
+    const core_json_value *args = core_json_get(event, "args");
+    if (!args || args->type != CORE_JSON_OBJECT) return true; /* a counter with no values */
+    bool only_value = args->object.count == 1 && strcmp(args->object.keys[0].chars, "value") == 0;
+    for (size_t i = 0; i < args->object.count; i++) {
+        const core_json_value *value = &args->object.values[i];
+        if (value->type != CORE_JSON_NUMBER) continue; /* Chrome plots numbers only */
+        if (only_value) {
+            report_add_sample(b, name, index, ts, value->number);
+            continue;
+        }
+        const char *key = args->object.keys[i].chars;
+        size_t name_length = strlen(name), key_length = strlen(key);
+        char *series = core_arena_alloc(b->arena, name_length + key_length + 2, 1);
+        memcpy(series, name, name_length);
+        series[name_length] = '.';
+        memcpy(series + name_length + 1, key, key_length + 1);
+        report_add_sample(b, series, index, ts, value->number);
+    }
+    return true;
 }
 
 static bool report_event(report_builder *b, const core_json_value *event, size_t index) {
@@ -200,12 +338,67 @@ static bool report_event(report_builder *b, const core_json_value *event, size_t
     case 'B': return report_begin(b, event, index);
     case 'E': return report_end(b, event, index);
     case 'X': return report_complete(b, event, index);
-    case 'C': b->report->counter_count++; return true;
+    case 'C': return report_counter(b, event, index);
     default: return true; /* metadata, instants, flows, …: not part of the summary */
     }
 }
 
+/* ---- self times ------------------------------------------------------------------------- */
+
+typedef struct report_span {
+    uint32_t thread;
+    size_t begin_event, instance;
+    double begin_us, end_us;
+} report_span;
+
+/* Per thread, by begin; a zone that ends later encloses one that begins with it; equal spans
+ * nest in the order their B events come (the outer B comes first). */
+static int report_compare_spans(const void *a, const void *b) {
+    const report_span *x = a, *y = b;
+    if (x->thread != y->thread) return x->thread < y->thread ? -1 : 1;
+    if (x->begin_us != y->begin_us) return x->begin_us < y->begin_us ? -1 : 1;
+    if (x->end_us != y->end_us) return x->end_us > y->end_us ? -1 : 1;
+    return (x->begin_event > y->begin_event) - (x->begin_event < y->begin_event);
+}
+
+/* Each zone's parent is the innermost zone of its thread that begins no later and ends no
+ * earlier (a stack over the sorted spans); the parent's self time loses the child's duration.
+ * X events that overlap without nesting (not valid in a trace) could take a parent below
+ * zero: clamped. */
+static void report_self_times(trace_report_detail *d) {
+    size_t n = d->instance_count;
+    if (n == 0) return;
+    report_span *spans = core_alloc(n * sizeof *spans);
+    for (size_t i = 0; i < n; i++) {
+        const report_instance *z = &d->instances[i];
+        spans[i] = (report_span){ .thread = z->thread, .begin_event = z->begin_event, .instance = i,
+                                  .begin_us = z->begin_us, .end_us = z->end_us };
+    }
+    qsort(spans, n, sizeof *spans, report_compare_spans);
+    size_t *stack = core_alloc(n * sizeof *stack), depth = 0;
+    for (size_t i = 0; i < n; i++) {
+        const report_span *s = &spans[i];
+        while (depth && (spans[stack[depth - 1]].thread != s->thread || spans[stack[depth - 1]].end_us < s->end_us))
+            depth--;
+        if (depth) d->instances[spans[stack[depth - 1]].instance].self_us -= s->end_us - s->begin_us;
+        stack[depth++] = i;
+    }
+    for (size_t i = 0; i < n; i++) d->instances[i].self_us = fmax(d->instances[i].self_us, 0.0);
+    core_free(stack, n * sizeof *stack);
+    core_free(spans, n * sizeof *spans);
+}
+
 /* ---- statistics ------------------------------------------------------------------------- */
+
+typedef struct report_sample {
+    uint32_t zone;
+    double ms, self_ms;
+} report_sample;
+
+typedef struct report_zone_entry {
+    trace_zone_stats stats;
+    uint32_t zone; /* name index */
+} report_zone_entry;
 
 static int report_compare_samples(const void *a, const void *b) {
     const report_sample *x = a, *y = b;
@@ -214,64 +407,189 @@ static int report_compare_samples(const void *a, const void *b) {
 }
 
 static int report_compare_zones(const void *a, const void *b) {
-    const trace_zone_stats *x = a, *y = b;
+    const trace_zone_stats *x = &((const report_zone_entry *)a)->stats, *y = &((const report_zone_entry *)b)->stats;
+    if (x->self_ms != y->self_ms) return x->self_ms > y->self_ms ? -1 : 1;
     if (x->total_ms != y->total_ms) return x->total_ms > y->total_ms ? -1 : 1;
-    return strcmp(x->name, y->name); /* a stable order for equal totals */
+    return strcmp(x->name, y->name); /* a stable order for equal times */
 }
 
-/* One pass over the samples sorted by (zone, duration); each zone's run is its sorted durations. */
+/* Statistics of one zone from its samples, sorted by duration. */
+static trace_zone_stats report_one_zone(const char *name, const report_sample *run, size_t n, double *scratch) {
+    trace_zone_stats stats = { .name = core_strdup(name), .count = n, .max_ms = run[n - 1].ms };
+    for (size_t i = 0; i < n; i++) {
+        scratch[i] = run[i].ms;
+        stats.total_ms += run[i].ms;
+        stats.self_ms += run[i].self_ms;
+    }
+    stats.p99_ms = trace_percentile(scratch, n, 99);
+    return stats;
+}
+
+/* One pass over the zones sorted by (zone, duration); then zones are sorted by self time and
+ * every instance learns its zone's place in report->zones. */
 static void report_zone_stats(report_builder *b) {
     trace_report *report = b->report;
-    if (b->sample_count == 0) return;
-    qsort(b->samples, b->sample_count, sizeof *b->samples, report_compare_samples);
-    double *run = core_alloc(b->sample_count * sizeof *run);
-    report->zones = core_calloc(b->zone_count, sizeof *report->zones);
-    for (size_t i = 0; i < b->sample_count;) {
-        uint32_t zone = b->samples[i].zone;
-        size_t n = 0;
-        double total = 0;
-        for (; i < b->sample_count && b->samples[i].zone == zone; i++) {
-            run[n++] = b->samples[i].ms;
-            total += b->samples[i].ms;
-        }
-        report->zones[report->zone_count++] = (trace_zone_stats){
-            .name = core_strdup(b->zone_names[zone]),
-            .count = n,
-            .total_ms = total,
-            .p99_ms = trace_percentile(run, n, 99),
-            .max_ms = run[n - 1],
-        };
+    trace_report_detail *d = b->detail;
+    size_t n = d->instance_count;
+    if (n == 0) return;
+    report_sample *samples = core_alloc(n * sizeof *samples);
+    for (size_t i = 0; i < n; i++)
+        samples[i] = (report_sample){ .zone = d->instances[i].zone,
+                                      .ms = (d->instances[i].end_us - d->instances[i].begin_us) / 1000.0,
+                                      .self_ms = d->instances[i].self_us / 1000.0 };
+    qsort(samples, n, sizeof *samples, report_compare_samples);
+    double *scratch = core_alloc(n * sizeof *scratch);
+    report_zone_entry *entries = core_calloc(b->zones.count, sizeof *entries);
+    size_t count = 0;
+    for (size_t i = 0, first = 0; i < n; first = i) {
+        uint32_t zone = samples[i].zone;
+        while (i < n && samples[i].zone == zone) i++;
+        entries[count++] = (report_zone_entry){
+            .stats = report_one_zone(b->zones.names[zone], samples + first, i - first, scratch), .zone = zone };
     }
-    core_free(run, b->sample_count * sizeof *run);
-    qsort(report->zones, report->zone_count, sizeof *report->zones, report_compare_zones);
+    qsort(entries, count, sizeof *entries, report_compare_zones);
+    uint32_t *place = core_alloc(b->zones.count * sizeof *place);
+    report->zones = core_calloc(count, sizeof *report->zones);
+    for (size_t i = 0; i < count; i++) {
+        report->zones[i] = entries[i].stats;
+        place[entries[i].zone] = (uint32_t)i;
+    }
+    report->zone_count = count;
+    for (size_t i = 0; i < n; i++) d->instances[i].zone = place[d->instances[i].zone];
+    core_free(place, b->zones.count * sizeof *place);
+    core_free(entries, b->zones.count * sizeof *entries);
+    core_free(scratch, n * sizeof *scratch);
+    core_free(samples, n * sizeof *samples);
+}
+
+static int report_compare_counter_samples(const void *a, const void *b) {
+    const report_counter_sample *x = a, *y = b;
+    if (x->series != y->series) return x->series < y->series ? -1 : 1;
+    if (x->ts_us != y->ts_us) return x->ts_us < y->ts_us ? -1 : 1;
+    return (x->event > y->event) - (x->event < y->event);
+}
+
+typedef struct report_counter_entry {
+    trace_counter_stats stats;
+    size_t first; /* first sample */
+} report_counter_entry;
+
+static int report_compare_counters(const void *a, const void *b) {
+    return strcmp(((const report_counter_entry *)a)->stats.name, ((const report_counter_entry *)b)->stats.name);
+}
+
+static trace_counter_stats report_one_counter(const char *name, const report_counter_sample *run, size_t n) {
+    trace_counter_stats stats = { .name = core_strdup(name), .count = n, .min = run[0].value, .max = run[0].value,
+                                  .last = run[n - 1].value };
+    double sum = 0;
+    for (size_t i = 0; i < n; i++) {
+        stats.min = fmin(stats.min, run[i].value);
+        stats.max = fmax(stats.max, run[i].value);
+        sum += run[i].value;
+    }
+    stats.mean = sum / (double)n;
+    return stats;
+}
+
+/* Samples sorted by (series, ts): each series' run gives its statistics, its last sample is the
+ * latest, and trace_report_slowest can search it by time. */
+static void report_counter_stats(report_builder *b) {
+    trace_report *report = b->report;
+    trace_report_detail *d = b->detail;
+    size_t n = d->sample_count, series = b->series.count;
+    if (n == 0) return;
+    qsort(d->samples, n, sizeof *d->samples, report_compare_counter_samples);
+    report_counter_entry *entries = core_calloc(series, sizeof *entries);
+    size_t count = 0;
+    for (size_t i = 0, first = 0; i < n; first = i) {
+        uint32_t s = d->samples[i].series;
+        while (i < n && d->samples[i].series == s) i++;
+        entries[count++] = (report_counter_entry){
+            .stats = report_one_counter(b->series.names[s], d->samples + first, i - first), .first = first };
+    }
+    qsort(entries, count, sizeof *entries, report_compare_counters);
+    report->counters = core_calloc(count, sizeof *report->counters);
+    d->counter_first = core_calloc(count, sizeof *d->counter_first);
+    for (size_t i = 0; i < count; i++) {
+        report->counters[i] = entries[i].stats;
+        d->counter_first[i] = entries[i].first;
+    }
+    report->counter_series_count = count;
+    core_free(entries, series * sizeof *entries);
+}
+
+typedef struct report_begin_key {
+    double begin_us;
+    size_t instance;
+} report_begin_key;
+
+static int report_compare_begin_keys(const void *a, const void *b) {
+    const report_begin_key *x = a, *y = b;
+    if (x->begin_us != y->begin_us) return x->begin_us < y->begin_us ? -1 : 1;
+    return (x->instance > y->instance) - (x->instance < y->instance);
+}
+
+/* Zones by begin time, with the latest end reached so far: the zones that overlap a span
+ * [begin, end) all lie between the first whose reach passes `begin` and the first that begins
+ * at `end`, so a slow frame looks at the zones near it rather than at all of them. */
+static void report_time_index(trace_report_detail *d) {
+    size_t n = d->instance_count;
+    if (n == 0) return;
+    report_begin_key *keys = core_alloc(n * sizeof *keys);
+    for (size_t i = 0; i < n; i++) keys[i] = (report_begin_key){ .begin_us = d->instances[i].begin_us, .instance = i };
+    qsort(keys, n, sizeof *keys, report_compare_begin_keys);
+    d->by_begin = core_alloc(n * sizeof *d->by_begin);
+    d->reach_us = core_alloc(n * sizeof *d->reach_us);
+    double reach = -INFINITY;
+    for (size_t k = 0; k < n; k++) {
+        d->by_begin[k] = keys[k].instance;
+        reach = fmax(reach, d->instances[keys[k].instance].end_us);
+        d->reach_us[k] = reach;
+    }
+    core_free(keys, n * sizeof *keys);
 }
 
 static void report_frame_stats(report_builder *b) {
     trace_report *report = b->report;
-    size_t n = b->frame_count;
-    report->frame_count = n;
+    size_t n = report->frame_count;
     if (n == 0) return;
     report->frame_ms = core_alloc(n * sizeof *report->frame_ms);
-    memcpy(report->frame_ms, b->frames, n * sizeof *report->frame_ms);
-    qsort(b->frames, n, sizeof *b->frames, report_compare_doubles); /* file order is kept above */
-    report->frame_p50_ms = trace_percentile(b->frames, n, 50);
-    report->frame_p95_ms = trace_percentile(b->frames, n, 95);
-    report->frame_p99_ms = trace_percentile(b->frames, n, 99);
-    report->frame_max_ms = b->frames[n - 1];
     for (size_t i = 0; i < n; i++) {
-        report->frames_over_16ms += b->frames[i] > REPORT_FRAME_BUDGET_60HZ_MS;
-        report->frames_over_33ms += b->frames[i] > REPORT_FRAME_BUDGET_30HZ_MS;
+        const report_instance *frame = &b->detail->instances[b->detail->frames[i]];
+        report->frame_ms[i] = (frame->end_us - frame->begin_us) / 1000.0;
     }
+    double *sorted = core_alloc(n * sizeof *sorted);
+    memcpy(sorted, report->frame_ms, n * sizeof *sorted);
+    qsort(sorted, n, sizeof *sorted, report_compare_doubles); /* file order is kept above */
+    report->frame_p50_ms = trace_percentile(sorted, n, 50);
+    report->frame_p95_ms = trace_percentile(sorted, n, 95);
+    report->frame_p99_ms = trace_percentile(sorted, n, 99);
+    report->frame_max_ms = sorted[n - 1];
+    for (size_t i = 0; i < n; i++) {
+        report->frames_over_16ms += sorted[i] > REPORT_FRAME_BUDGET_60HZ_MS;
+        report->frames_over_33ms += sorted[i] > REPORT_FRAME_BUDGET_30HZ_MS;
+    }
+    core_free(sorted, n * sizeof *sorted);
+}
+
+static void report_detail_free(trace_report_detail *d, size_t counter_count) {
+    if (!d) return;
+    core_free(d->instances, d->instance_capacity * sizeof *d->instances);
+    core_free(d->frames, d->frame_capacity * sizeof *d->frames);
+    core_free(d->samples, d->sample_capacity * sizeof *d->samples);
+    core_free(d->counter_first, counter_count * sizeof *d->counter_first);
+    core_free(d->by_begin, d->instance_count * sizeof *d->by_begin);
+    core_free(d->reach_us, d->instance_count * sizeof *d->reach_us);
+    core_free(d->text, d->text_capacity);
+    core_free(d, sizeof *d);
 }
 
 static void report_builder_free(report_builder *b) {
     for (size_t i = 0; i < b->thread_count; i++)
         core_free(b->threads[i].open, b->threads[i].open_capacity * sizeof *b->threads[i].open);
     core_free(b->threads, b->thread_capacity * sizeof *b->threads);
-    core_free(b->zone_names, b->zone_capacity * sizeof *b->zone_names);
-    core_free(b->zone_slots, b->slot_capacity * sizeof *b->zone_slots);
-    core_free(b->samples, b->sample_capacity * sizeof *b->samples);
-    core_free(b->frames, b->frame_capacity * sizeof *b->frames);
+    report_names_free(&b->zones);
+    report_names_free(&b->series);
 }
 
 /* ---- loading ---------------------------------------------------------------------------- */
@@ -295,11 +613,19 @@ bool trace_report_parse(const char *json, size_t size, trace_report *report) {
     if (!ok) report_fail(report, "not valid JSON: %s", error.message);
     const core_json_value *events = ok ? report_find_events(root, report) : NULL;
     ok = events != NULL;
-    report_builder b = { .report = report };
+    report_builder b = { .report = report, .arena = &arena, .detail = core_calloc(1, sizeof(trace_report_detail)) };
     for (size_t i = 0; ok && i < events->array.count; i++) ok = report_event(&b, &events->array.items[i], i);
     if (ok) {
+        report_self_times(b.detail);
         report_zone_stats(&b);
+        report_counter_stats(&b);
         report_frame_stats(&b);
+        report_time_index(b.detail);
+        report->detail = b.detail;
+    } else {
+        report->frame_count = 0;
+        report->counter_count = 0;
+        report_detail_free(b.detail, 0);
     }
     report_builder_free(&b);
     core_arena_release(&arena);
@@ -353,13 +679,16 @@ void trace_report_free(trace_report *report) {
     for (size_t i = 0; i < report->zone_count; i++)
         core_free((char *)report->zones[i].name, strlen(report->zones[i].name) + 1);
     core_free(report->zones, report->zone_count * sizeof *report->zones);
+    for (size_t i = 0; i < report->counter_series_count; i++)
+        core_free((char *)report->counters[i].name, strlen(report->counters[i].name) + 1);
+    core_free(report->counters, report->counter_series_count * sizeof *report->counters);
+    report_detail_free(report->detail, report->counter_series_count);
     *report = (trace_report){ 0 };
 }
 
 /* ---- printing --------------------------------------------------------------------------- */
 
-/* A zone name padded to `width`; control characters would garble the terminal, so they show
- * as '?'. */
+/* A name padded to `width`; control characters would garble the terminal, so they show as '?'. */
 static void report_print_name(FILE *out, const char *name, int width) {
     int written = 0;
     for (const char *c = name; *c; c++) {
@@ -370,6 +699,17 @@ static void report_print_name(FILE *out, const char *name, int width) {
 }
 
 static double report_share(size_t part, size_t whole) { return whole ? 100.0 * (double)part / (double)whole : 0.0; }
+
+static void report_print_counters(const trace_report *report, FILE *out) {
+    fprintf(out, "counters     %zu events, %zu series\n", report->counter_count, report->counter_series_count);
+    if (report->counter_series_count == 0) return;
+    fprintf(out, "\n%-32s %8s %14s %14s %14s %14s\n", "counter", "samples", "min", "max", "mean", "last");
+    for (size_t i = 0; i < report->counter_series_count; i++) {
+        const trace_counter_stats *c = &report->counters[i];
+        report_print_name(out, c->name, 32);
+        fprintf(out, " %8zu %14.10g %14.10g %14.10g %14.10g\n", c->count, c->min, c->max, c->mean, c->last);
+    }
+}
 
 void trace_report_print(const trace_report *report, FILE *out) {
     if (report->frame_count == 0) {
@@ -382,13 +722,166 @@ void trace_report_print(const trace_report *report, FILE *out) {
                 report->frames_over_16ms, report_share(report->frames_over_16ms, report->frame_count),
                 report->frames_over_33ms, report_share(report->frames_over_33ms, report->frame_count));
     }
-    fprintf(out, "counters     %zu events\n\n", report->counter_count);
-    fprintf(out, "%-32s %10s %12s %10s %10s\n", "zone", "count", "total ms", "p99 ms", "max ms");
+    report_print_counters(report, out);
+    fprintf(out, "\n%-32s %10s %12s %12s %10s %10s\n", "zone (by self time)", "count", "self ms", "total ms",
+            "p99 ms", "max ms");
     for (size_t i = 0; i < report->zone_count; i++) {
         const trace_zone_stats *zone = &report->zones[i];
         report_print_name(out, zone->name, 32);
-        fprintf(out, " %10zu %12.3f %10.3f %10.3f\n", zone->count, zone->total_ms, zone->p99_ms, zone->max_ms);
+        fprintf(out, " %10zu %12.3f %12.3f %10.3f %10.3f\n", zone->count, zone->self_ms, zone->total_ms,
+                zone->p99_ms, zone->max_ms);
     }
+}
+
+/* ---- the slowest frames ----------------------------------------------------------------- */
+
+typedef struct report_frame_key {
+    double ms;
+    size_t index;
+} report_frame_key;
+
+static int report_compare_frame_keys(const void *a, const void *b) {
+    const report_frame_key *x = a, *y = b;
+    if (x->ms != y->ms) return x->ms > y->ms ? -1 : 1;
+    return (x->index > y->index) - (x->index < y->index);
+}
+
+static int report_compare_frame_zones(const void *a, const void *b) {
+    const trace_frame_zone *x = a, *y = b;
+    if (x->self_ms != y->self_ms) return x->self_ms > y->self_ms ? -1 : 1;
+    return strcmp(x->name, y->name);
+}
+
+/* Every zone instance that overlaps [begin, end), on any thread, adds its self time in the
+ * proportion of its duration that lies inside: exact for zones inside the frame, a fair share
+ * for a job that straddles its edge. */
+static void report_frame_zones(const trace_report *report, double begin_us, double end_us, size_t top,
+                               trace_slow_frame *frame) {
+    const trace_report_detail *d = report->detail;
+    trace_frame_zone *all = core_calloc(report->zone_count, sizeof *all);
+    size_t low = 0, high = d->instance_count; /* the first zone whose reach passes begin_us */
+    while (low < high) {
+        size_t mid = low + (high - low) / 2;
+        if (d->reach_us[mid] > begin_us) high = mid; else low = mid + 1;
+    }
+    for (size_t k = low; k < d->instance_count && d->instances[d->by_begin[k]].begin_us < end_us; k++) {
+        const report_instance *z = &d->instances[d->by_begin[k]];
+        double overlap = fmin(z->end_us, end_us) - fmax(z->begin_us, begin_us);
+        if (!(overlap > 0)) continue;
+        double duration = z->end_us - z->begin_us;
+        trace_frame_zone *entry = &all[z->zone];
+        entry->count++;
+        entry->self_ms += z->self_us * (overlap / duration) / 1000.0;
+        if (duration / 1000.0 > entry->slowest_ms) {
+            entry->slowest_ms = duration / 1000.0;
+            entry->args = z->args ? d->text + z->args : NULL;
+        }
+    }
+    size_t used = 0;
+    for (size_t z = 0; z < report->zone_count; z++) {
+        if (all[z].count == 0) continue;
+        all[used] = all[z];
+        all[used++].name = report->zones[z].name;
+    }
+    qsort(all, used, sizeof *all, report_compare_frame_zones);
+    frame->zone_count = CORE_MIN(used, top);
+    if (frame->zone_count) {
+        frame->zones = core_alloc(frame->zone_count * sizeof *frame->zones);
+        memcpy(frame->zones, all, frame->zone_count * sizeof *frame->zones);
+    }
+    core_free(all, report->zone_count * sizeof *all);
+}
+
+/* Each series' samples are sorted by time: the last at or before `end_us` by bisection. */
+static void report_frame_counters(const trace_report *report, double end_us, trace_slow_frame *frame) {
+    const trace_report_detail *d = report->detail;
+    if (report->counter_series_count == 0) return;
+    frame->counters = core_alloc(report->counter_series_count * sizeof *frame->counters);
+    for (size_t c = 0; c < report->counter_series_count; c++) {
+        const report_counter_sample *run = d->samples + d->counter_first[c];
+        size_t low = 0, high = report->counters[c].count; /* samples [0, low) are at or before end_us */
+        while (low < high) {
+            size_t mid = low + (high - low) / 2;
+            if (run[mid].ts_us <= end_us) low = mid + 1; else high = mid;
+        }
+        if (low == 0) continue; /* no sample yet */
+        frame->counters[frame->counter_count++] =
+            (trace_frame_counter){ .name = report->counters[c].name, .value = run[low - 1].value };
+    }
+    /* Keep exactly counter_count, so the frame can be freed knowing only its own fields. */
+    trace_frame_counter *all = frame->counters;
+    frame->counters = NULL;
+    if (frame->counter_count) {
+        frame->counters = core_alloc(frame->counter_count * sizeof *frame->counters);
+        memcpy(frame->counters, all, frame->counter_count * sizeof *frame->counters);
+    }
+    core_free(all, report->counter_series_count * sizeof *all);
+}
+
+void trace_report_slowest(const trace_report *report, size_t n, size_t top_zones, trace_slowest *out) {
+    *out = (trace_slowest){ 0 };
+    size_t frames = report->frame_count;
+    if (!report->detail || frames == 0 || n == 0) return;
+    report_frame_key *keys = core_alloc(frames * sizeof *keys);
+    for (size_t i = 0; i < frames; i++) keys[i] = (report_frame_key){ .ms = report->frame_ms[i], .index = i };
+    qsort(keys, frames, sizeof *keys, report_compare_frame_keys);
+    out->frame_count = CORE_MIN(n, frames);
+    out->frames = core_calloc(out->frame_count, sizeof *out->frames);
+    for (size_t i = 0; i < out->frame_count; i++) {
+        const report_instance *z = &report->detail->instances[report->detail->frames[keys[i].index]];
+        trace_slow_frame *frame = &out->frames[i];
+        frame->index = keys[i].index;
+        frame->start_ms = z->begin_us / 1000.0;
+        frame->duration_ms = (z->end_us - z->begin_us) / 1000.0;
+        report_frame_zones(report, z->begin_us, z->end_us, top_zones, frame);
+        report_frame_counters(report, z->end_us, frame);
+    }
+    core_free(keys, frames * sizeof *keys);
+}
+
+void trace_slowest_free(trace_slowest *slowest) {
+    for (size_t i = 0; i < slowest->frame_count; i++) {
+        trace_slow_frame *frame = &slowest->frames[i];
+        core_free(frame->zones, frame->zone_count * sizeof *frame->zones);
+        core_free(frame->counters, frame->counter_count * sizeof *frame->counters);
+    }
+    core_free(slowest->frames, slowest->frame_count * sizeof *slowest->frames);
+    *slowest = (trace_slowest){ 0 };
+}
+
+/* Args are text from the file: control characters show as '?', like names. */
+static void report_print_args(FILE *out, const char *args) {
+    for (const char *c = args; *c; c++) fputc((unsigned char)*c < 0x20 ? '?' : *c, out);
+}
+
+static void report_print_slow_frame(FILE *out, const trace_slow_frame *frame) {
+    fprintf(out, "\nframe %zu   at %.3f ms   %.3f ms\n", frame->index, frame->start_ms, frame->duration_ms);
+    fprintf(out, "  %-30s %10s %8s %10s   %s\n", "zone (by self time)", "self ms", "count", "max ms",
+            "args of the longest");
+    for (size_t i = 0; i < frame->zone_count; i++) {
+        const trace_frame_zone *zone = &frame->zones[i];
+        fputs("  ", out);
+        report_print_name(out, zone->name, 30);
+        fprintf(out, " %10.3f %8zu %10.3f", zone->self_ms, zone->count, zone->slowest_ms);
+        if (zone->args) {
+            fputs("   ", out);
+            report_print_args(out, zone->args);
+        }
+        fputc('\n', out);
+    }
+    if (frame->counter_count == 0) return;
+    fputs("  counters at its end:", out);
+    for (size_t i = 0; i < frame->counter_count; i++) {
+        fputs(i ? ", " : " ", out);
+        report_print_args(out, frame->counters[i].name);
+        fprintf(out, " %.10g", frame->counters[i].value);
+    }
+    fputc('\n', out);
+}
+
+void trace_slowest_print(const trace_slowest *slowest, FILE *out) {
+    fprintf(out, "slowest %zu frames (zones by self time inside the frame, all threads)\n", slowest->frame_count);
+    for (size_t i = 0; i < slowest->frame_count; i++) report_print_slow_frame(out, &slowest->frames[i]);
 }
 
 /* ---- SVG plot --------------------------------------------------------------------------- */

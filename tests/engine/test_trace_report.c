@@ -107,21 +107,26 @@ Test(trace_report, zones_of_a_hand_built_trace) {
     trace_report report;
     cr_assert(parse_text(hand_built_trace, &report), "%s", report.error);
     cr_assert_eq(report.zone_count, 5);
-    /* By total, largest first:
-     *   frame    5 zones  12+18+35+16+20 = 101 ms   p99 rank ceil(4.95) = 5 of 12 16 18 20 35 → 35
-     *   update   3 zones  4+30+2.5 = 36.5 ms        p99 rank ceil(2.97) = 3 of 2.5 4 30 → 30
-     *   mesh     2 zones  8+2 = 10 ms               p99 rank ceil(1.98) = 2 of 2 8 → 8
-     *   gpu      2 zones  3+5 = 8 ms                p99 → 5
-     *   physics  1 zone   1.5 ms                    p99 → 1.5 */
+    /* By self time, largest first (inclusive totals, and self = total − zones nested in them on
+     * the same thread):
+     *   frame    5 zones  12+18+35+16+20 = 101 ms   self 101 − 36.5 (updates) = 64.5
+     *                                               p99 rank ceil(4.95) = 5 of 12 16 18 20 35 → 35
+     *   update   3 zones  4+30+2.5 = 36.5 ms        self 36.5 − 1.5 (physics) = 35
+     *                                               p99 rank ceil(2.97) = 3 of 2.5 4 30 → 30
+     *   mesh     2 zones  8+2 = 10 ms (own thread)  self 10; p99 rank ceil(1.98) = 2 of 2 8 → 8
+     *   gpu      2 zones  3+5 = 8 ms (own lane)     self 8; p99 → 5
+     *   physics  1 zone   1.5 ms                    self 1.5; p99 → 1.5 */
     const char *order[] = { "frame", "update", "mesh", "gpu", "physics" };
     const size_t counts[] = { 5, 3, 2, 2, 1 };
     const double totals[] = { 101, 36.5, 10, 8, 1.5 };
+    const double selfs[] = { 64.5, 35, 10, 8, 1.5 };
     const double p99s[] = { 35, 30, 8, 5, 1.5 };
     for (size_t i = 0; i < 5; i++) {
         const trace_zone_stats *zone = &report.zones[i];
         cr_expect_str_eq(zone->name, order[i]);
         cr_expect_eq(zone->count, counts[i], "%s count %zu", zone->name, zone->count);
         cr_expect_float_eq(zone->total_ms, totals[i], 1e-9, "%s total %g", zone->name, zone->total_ms);
+        cr_expect_float_eq(zone->self_ms, selfs[i], 1e-9, "%s self %g", zone->name, zone->self_ms);
         cr_expect_float_eq(zone->p99_ms, p99s[i], 1e-9, "%s p99 %g", zone->name, zone->p99_ms);
         cr_expect_float_eq(zone->max_ms, p99s[i], 1e-9, "%s max %g", zone->name, zone->max_ms);
     }
@@ -140,13 +145,14 @@ Test(trace_report, print_shows_frames_and_zones) {
     cr_expect(strstr(text, "5 frames   p50 18.000 ms   p95 35.000 ms   p99 35.000 ms   max 35.000 ms\n") != NULL,
               "%s", text);
     cr_expect(strstr(text, "3 over 16.7 ms (60.0%), 1 over 33.3 ms (20.0%)") != NULL, "%s", text);
-    cr_expect(strstr(text, "counters     2 events") != NULL, "%s", text);
-    /* The zone table, largest total first: frame on the first row after the header. */
-    const char *header = strstr(text, "zone ");
+    cr_expect(strstr(text, "counters     2 events, 1 series") != NULL, "%s", text);
+    /* The zone table, largest self time first: frame on the first row after the header, with
+     * self 101 − 36.5 (the updates nested in it) = 64.5 beside its total 101. */
+    const char *header = strstr(text, "zone (by self time) ");
     cr_assert_not_null(header);
     const char *frame_row = strchr(header, '\n') + 1;
     cr_expect(strncmp(frame_row, "frame ", 6) == 0, "%s", text);
-    cr_expect(strstr(frame_row, "         5      101.000     35.000     35.000\n") != NULL, "%s", text);
+    cr_expect(strstr(frame_row, "         5       64.500      101.000     35.000     35.000\n") != NULL, "%s", text);
     free(text);
     trace_report_free(&report);
 }
@@ -253,7 +259,7 @@ Test(trace_report, unbalanced_end_is_named) {
     expect_report_error("{\"traceEvents\":["
                         "{\"ph\":\"B\",\"name\":\"a\",\"ts\":0,\"pid\":1,\"tid\":1},"
                         "{\"ph\":\"E\",\"ts\":5,\"pid\":1,\"tid\":2}]}",
-                        "event 1: \"E\" without a matching \"B\" on its thread (pid 1, tid 2)");
+                        "event 1: unbalanced \"E\": no matching \"B\" open on its thread (pid 1, tid 2)");
     expect_report_error("{\"traceEvents\":["
                         "{\"ph\":\"B\",\"name\":\"a\",\"ts\":10,\"tid\":1},"
                         "{\"ph\":\"E\",\"ts\":5,\"tid\":1}]}",

@@ -2,7 +2,8 @@
  * writer, and the trace report built on them (engine/trace/trace_report.c).
  *
  *   tests/fuzz/run.sh 20     (builds every target with the engine's sources, runs each 20 s)
- * Seeds: tests/fuzz/corpus/fuzz_json/ (a small trace, a bare-array trace, every kind of value).
+ * Seeds: tests/fuzz/corpus/fuzz_json/ (a small trace, a bare-array trace, every kind of value,
+ * a trace with nested zones, zone args and counter series for the slowest frames).
  *
  * Besides "no crash, no leak, no read out of bounds" it checks two properties and traps when
  * one fails: a failed parse always says where (line and column from 1), and whatever bytes the
@@ -66,10 +67,15 @@ static void fuzz_report(const char *data, size_t size) {
     trace_report report;
     if (trace_report_parse(data, size, &report)) {
         FILE *sink = fopen("/dev/null", "w");
+        /* The drill-down reads what the summary kept (zone instances, counter samples, args). */
+        trace_slowest slowest;
+        trace_report_slowest(&report, 3, 4, &slowest);
         if (sink) {
             trace_report_print(&report, sink);
+            trace_slowest_print(&slowest, sink);
             fclose(sink);
         }
+        trace_slowest_free(&slowest);
     } else if (report.error[0] == '\0') {
         __builtin_trap(); /* a failure always says why */
     }

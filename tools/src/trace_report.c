@@ -1,8 +1,11 @@
-/* trace_report — prints a summary of a Chrome trace (frame-time percentiles, slow frames, the
- * zones that took the most time) and writes an SVG plot of frame times beside it.
+/* trace_report — prints a summary of a Chrome trace (frame-time percentiles, slow frames,
+ * counters' min / max / mean / last, the zones that took the most self time, with their
+ * inclusive time beside it) and writes an SVG plot of frame times beside it.
  *
  *     trace_report run.json                  # summary; plot in run.frames.svg
  *     trace_report run.json --svg plot.svg   # plot elsewhere
+ *     trace_report run.json --slowest 5      # and the 5 slowest frames: their top zones by
+ *                                            # self time (args of the longest) and counters
  *
  * Exit status: 0 done, 1 the trace could not be read or the plot written, 2 bad arguments or
  * an unwritable --trace (the report can trace itself, like every program).
@@ -10,8 +13,11 @@
 #include "core/core.h"
 #include "trace/trace.h"
 
+#include <limits.h>
 #include <stdio.h>
 #include <string.h>
+
+enum { TRACE_REPORT_TOP_ZONES = 8 }; /* zones listed per slow frame */
 
 /* "dir/run.json" → "dir/run.frames.svg"; a name without an extension just gets the suffix. */
 static char *trace_report_svg_path_for(const char *trace_path) {
@@ -29,16 +35,20 @@ static char *trace_report_svg_path_for(const char *trace_path) {
 int main(int argc, char **argv) {
     const char *svg_path = NULL;
     const char *trace_path = NULL;
+    int slowest_count = 0;
     int positional_count = 0;
     core_common_args common = { 0 };
     core_option options[] = {
         CORE_COMMON_OPTIONS(common), /* every program takes them; --threads changes nothing here */
         { .name = "svg", .kind = CORE_OPTION_STRING, .value = &svg_path, .metavar = "OUT",
           .help = "where to write the frame-time plot (default: FILE with .frames.svg)" },
+        { .name = "slowest", .kind = CORE_OPTION_INT, .value = &slowest_count, .metavar = "N", .min = 1,
+          .max = INT_MAX, .help = "also list the N slowest frames: top zones by self time, counters" },
     };
     core_cli cli = {
         .program = "trace_report",
-        .summary = "Summarise a Chrome trace: frame times, slow frames, zones; plot frame times.",
+        .summary = "Summarise a Chrome trace: frame times, counters, zones (self and inclusive time), "
+                   "the slowest frames; plot frame times.",
         .options = options,
         .option_count = (int)CORE_COUNTOF(options),
         .positional_name = "FILE",
@@ -59,6 +69,13 @@ int main(int argc, char **argv) {
     bool plotted = false;
     if (loaded) {
         trace_report_print(&report, stdout);
+        if (slowest_count > 0) {
+            trace_slowest slowest;
+            trace_report_slowest(&report, (size_t)slowest_count, TRACE_REPORT_TOP_ZONES, &slowest);
+            fputc('\n', stdout);
+            trace_slowest_print(&slowest, stdout);
+            trace_slowest_free(&slowest);
+        }
         char *default_svg = svg_path ? NULL : trace_report_svg_path_for(trace_path);
         const char *plot_path = svg_path ? svg_path : default_svg;
         trace_zone_begin("plot");
