@@ -658,6 +658,21 @@ static void app_finish_loading(game_app *app) {
     gfx_window_set_title(app->gfx, "world");
 }
 
+/* The frame's memory by what holds it, as counters (the trace's "memory.bytes" is the whole
+ * process's heap): terrain stacks, meshes made and uploaded, rocks, grass, the trace itself. */
+static void app_memory_counters(game_app *app) {
+    if (!trace_active()) return;
+    terrain_stream_stats st = terrain_ecs_stream_stats(app->terrain);
+    trace_counter("memory.terrain_stacks", (double)st.stacks_bytes);
+    trace_counter("memory.meshes_cpu", (double)st.cpu_mesh_bytes);
+    trace_counter("memory.meshes_gpu", (double)st.gpu_mesh_bytes);
+    if (app->rocks) {
+        rocks_stats r = rocks_stats_get(app->rocks);
+        trace_counter("memory.rocks", (double)(r.tiles_bytes + r.placed_bytes + r.gpu_bytes));
+    }
+    if (app->grass) trace_counter("memory.grass", (double)grass_stats_get(app->grass).bytes);
+}
+
 bool game_app_frame(game_app *app) {
     if (app->over) return false;
     trace_frame_begin();
@@ -695,6 +710,7 @@ bool game_app_frame(game_app *app) {
         if (!written) running = false;
     }
     gfx_frame_end(app->gfx);
+    app_memory_counters(app);
     trace_frame_end();
     if (app->loading) {
         app->loading_frames++;

@@ -338,6 +338,10 @@ typedef struct rocks_stats {
     uint64_t placements;              /* chunks placed since creation */
     double place_ms;                  /* CPU ms placing, last frame */
     double draw_ms;                   /* CPU ms of the last rocks_draw */
+    size_t tiles_bytes;               /* the tile set (rocks_tileset.bytes; shared, not owned) */
+    size_t placed_bytes;              /* the placed rocks' instances, CPU side */
+    size_t gpu_bytes;                 /* the renderer's buffers: the set's meshes, instances,
+                                         draw commands */
 } rocks_stats;
 rocks_stats rocks_stats_get(const rocks_system *rocks);
 /* A hash of every placed rock (chunk coordinates, rock, key, position): tests and tools. */

@@ -124,6 +124,12 @@ void rocks__renderer_destroy(rocks_renderer *r) {
     core_free(r, sizeof *r);
 }
 
+size_t rocks__renderer_gpu_bytes(const rocks_renderer *r) {
+    if (!r) return 0;
+    return (size_t)r->set->vertex_count * sizeof(rock_gpu_vertex) + (size_t)r->set->index_count * sizeof(uint16_t) +
+           r->instance_capacity * sizeof(rock_gpu_instance) + r->command_capacity * sizeof(draw_command);
+}
+
 static float key_unit(uint32_t key, int which) {
     return (float)((core_hash_u64((uint64_t)key * 4 + (uint64_t)which) >> 40) & 0xffffff) / 16777216.0f;
 }

@@ -238,7 +238,13 @@ void rocks_set_view(rocks_system *r, const terrain_view *view) {
     r->has_view = true;
 }
 
-rocks_stats rocks_stats_get(const rocks_system *r) { return r->stats; }
+rocks_stats rocks_stats_get(const rocks_system *r) {
+    rocks_stats s = r->stats;
+    s.tiles_bytes = r->desc.tiles ? r->desc.tiles->bytes : 0;
+    s.placed_bytes = (size_t)s.instances * sizeof(rocks_instance);
+    s.gpu_bytes = rocks__renderer_gpu_bytes(r->renderer);
+    return s;
+}
 
 /* ---- drawing -------------------------------------------------------------------------------- */
 

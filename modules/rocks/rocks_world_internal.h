@@ -10,6 +10,7 @@ typedef struct rocks_renderer rocks_renderer;
 /* The tile set's meshes on the GPU, and the per-frame instance and command buffers. */
 rocks_renderer *rocks__renderer_create(gfx_context *gfx, const rocks_tileset *set);
 void rocks__renderer_destroy(rocks_renderer *r);
+size_t rocks__renderer_gpu_bytes(const rocks_renderer *r);   /* its buffers' sizes */
 typedef struct rocks_draw_params {
     float tile_size, range, fog_density;
     float lod_distance[ROCKS_LODS - 1];

@@ -713,6 +713,9 @@ typedef struct terrain_stream_stats {
     int jobs_in_flight;
     uint64_t chunks_meshed, chunks_skipped_empty, chunks_cancelled, chunks_evicted;
     size_t resident_bytes, peak_resident_bytes;   /* stacks cached + CPU and GPU meshes */
+    size_t stacks_bytes;              /* of resident_bytes: the column chunks' stacks cached */
+    size_t cpu_mesh_bytes;            /* meshes made and not uploaded yet */
+    size_t gpu_mesh_bytes;            /* meshes uploaded (their vertex and index buffers) */
 } terrain_stream_stats;
 terrain_stream_stats terrain_ecs_stream_stats(terrain_ecs *te);
 /* Far terrain (after terrain_ecs_stream; the clipmap is not owned): the lod phase

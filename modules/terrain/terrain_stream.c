@@ -87,7 +87,7 @@ struct terrain__streamer {
     size_t scratch_capacity;
     terrain_gpu_mesh *frees;               /* GPU meshes to free, spread over frames */
     size_t free_count, free_capacity;
-    size_t mesh_bytes;                     /* CPU and GPU meshes held */
+    size_t cpu_mesh_bytes, gpu_mesh_bytes; /* meshes held: made and not uploaded, uploaded */
     uint64_t frame;
     int64_t y_first[16], y_last[16];       /* mesh layers per level */
     bool layout_ready;                     /* every wanted chunk of the current layout is ready */
@@ -371,7 +371,8 @@ static void stream_record_destroy(terrain_ecs *te, ecs_commands *commands, strea
     stream_task_cancel(s, r);
     TerrainMeshChunk *c = r->entity ? ecs_get(te->ecs, r->entity, te->mesh_chunk) : NULL;
     if (c) {
-        s->mesh_bytes -= terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count) + c->gpu_bytes;
+        s->cpu_mesh_bytes -= terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count);
+        s->gpu_mesh_bytes -= c->gpu_bytes;
         terrain_mesh_free(&c->mesh);
         terrain__water_free(&c->water);
         if (c->gpu.vertex_array) {
@@ -391,7 +392,7 @@ static int compare_last_wanted(const void *a, const void *b) {
 }
 
 static size_t stream_resident(const terrain_ecs *te) {
-    return terrain_world_bytes(te->terrain) + te->stream->mesh_bytes;
+    return terrain_world_bytes(te->terrain) + te->stream->cpu_mesh_bytes + te->stream->gpu_mesh_bytes;
 }
 
 /* Refreshes hidden flags and evicts, least recently wanted first, the records out of range
@@ -502,14 +503,14 @@ static void stream_deliver(terrain_ecs *te, ecs_commands *commands, stream_task 
     if (!c) return;
     c->edited = r->edited;                         /* uploaded ahead of the budget */
     r->edited = false;
-    s->mesh_bytes -= terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count);
+    s->cpu_mesh_bytes -= terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count);
     terrain_mesh_free(&c->mesh);                   /* an older mesh never uploaded */
     c->mesh = t->mesh;
     t->mesh = (terrain_mesh){ 0 };
     terrain__water_free(&c->water);                /* an older mesh's, never uploaded */
     c->water = t->water;
     t->water = NULL;
-    s->mesh_bytes += terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count);
+    s->cpu_mesh_bytes += terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count);
     c->lod = t->lod;
     c->state = TERRAIN_MESH_MESHED;
     if (!ecs_has(te->ecs, r->entity, te->mesh_ready)) ecs_defer_add(commands, r->entity, te->mesh_ready);
@@ -641,6 +642,9 @@ static void terrain_stream_mesh_system(ecs_iter *it) {
     size_t resident = stream_resident(te);
     if (resident > s->stats.peak_resident_bytes) s->stats.peak_resident_bytes = resident;
     s->stats.resident_bytes = resident;
+    s->stats.stacks_bytes = terrain_world_bytes(te->terrain);
+    s->stats.cpu_mesh_bytes = s->cpu_mesh_bytes;
+    s->stats.gpu_mesh_bytes = s->gpu_mesh_bytes;
     trace_counter("terrain.stream.chunks_wanted", s->stats.mesh_chunks_wanted);
     trace_counter("terrain.stream.chunks_pending", s->stats.mesh_chunks_wanted - s->stats.mesh_chunks_ready);
     trace_counter("terrain.stream.jobs_in_flight", s->stats.jobs_in_flight);
@@ -771,7 +775,8 @@ uint64_t terrain__stream_upload_budget(const terrain_ecs *te) {
 
 void terrain__stream_uploaded(terrain_ecs *te, size_t cpu_bytes, size_t gpu_bytes, size_t old_gpu_bytes) {
     terrain__streamer *s = te->stream;
-    s->mesh_bytes = s->mesh_bytes + gpu_bytes - cpu_bytes - old_gpu_bytes;
+    s->cpu_mesh_bytes -= cpu_bytes;
+    s->gpu_mesh_bytes = s->gpu_mesh_bytes + gpu_bytes - old_gpu_bytes;
 }
 
 void terrain__stream_free_pending(terrain_ecs *te, uint64_t deadline) {

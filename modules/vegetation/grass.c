@@ -477,7 +477,11 @@ uint64_t grass_visible_tufts(grass_system *g) {
     return command[1];
 }
 
-grass_stats grass_stats_get(const grass_system *g) { return g->stats; }
+grass_stats grass_stats_get(const grass_system *g) {
+    grass_stats s = g->stats;
+    s.bytes = (size_t)s.tufts * GRASS_TUFT_BYTES;
+    return s;
+}
 
 /* ---- reading back (tests, tools) -------------------------------------------------------- */
 

@@ -115,6 +115,7 @@ typedef struct grass_stats {
     int patches_drawn;
     uint64_t placements;              /* patches placed since creation (re-placements too) */
     double cpu_ms;                    /* CPU ms of the last frame: placing and drawing */
+    size_t bytes;                     /* GPU memory of the patches' tufts (32 bytes a tuft) */
 } grass_stats;
 
 grass_stats grass_stats_get(const grass_system *grass);

@@ -153,6 +153,38 @@ Test(render_stream, walking_away_cancels_keeps_and_evicts) {
     streamed_close(&s);
 }
 
+/* The stream's memory by kind adds up to what it reports resident, and each kind is what its
+ * holders hold: the uploaded meshes' buffers (TerrainMeshChunk.gpu_bytes) and the meshes made
+ * but not uploaded, counted over the components; the stacks are the world's cache. */
+Test(render_stream, memory_by_kind_is_what_the_chunks_hold) {
+    streamed s = streamed_open(2, &small_rings);
+    double eye[1][3] = { { 1, 5, 1 } };
+    for (int step = 0; step < 3; step++) {
+        eye[0][0] = 64.0 * step;
+        cr_assert(streamed_settle(&s, eye, 1, 3000) > 0, "step %d never settled", step);
+        terrain_ecs_set_viewers(s.te, eye, 1);
+        ecs_progress(s.ecs, DT);                   /* the counts are taken in the stream phase */
+        terrain_stream_stats st = terrain_ecs_stream_stats(s.te);
+        size_t gpu = 0, cpu = 0;
+        ecs_query *q = ecs_query_create(s.ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(s.ecs, "TerrainMeshChunk") } });
+        ecs_iter it = ecs_query_iter(s.ecs, q);
+        while (ecs_query_next(&it)) {
+            const TerrainMeshChunk *c = ecs_field(&it, 0);
+            for (int i = 0; i < it.count; i++) {
+                gpu += c[i].gpu_bytes;
+                cpu += terrain__mesh_bytes(c[i].mesh.vertex_count, c[i].mesh.index_count);
+            }
+        }
+        ecs_query_destroy(s.ecs, q);
+        cr_expect_eq(st.stacks_bytes + st.cpu_mesh_bytes + st.gpu_mesh_bytes, st.resident_bytes, "step %d", step);
+        cr_expect_eq(st.stacks_bytes, terrain_world_bytes(s.world), "step %d", step);
+        cr_expect_eq(st.gpu_mesh_bytes, gpu, "step %d: %zu counted, %zu over the chunks", step, st.gpu_mesh_bytes, gpu);
+        cr_expect_eq(st.cpu_mesh_bytes, cpu, "step %d: %zu counted, %zu over the chunks", step, st.cpu_mesh_bytes, cpu);
+        cr_expect_gt(gpu, 0, "step %d: meshes uploaded", step);
+    }
+    streamed_close(&s);
+}
+
 /* A tiny memory budget evicts everything out of range that is hidden. */
 Test(render_stream, memory_budget_evicts_out_of_range_chunks) {
     terrain_stream_desc desc = small_rings;
