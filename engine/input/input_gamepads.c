@@ -198,6 +198,22 @@ static void input_device_name(const struct hid_device_info *info, char *out, siz
     else snprintf(out, capacity, "HID %04x:%04x", info->vendor_id, info->product_id);
 }
 
+/* Names the node and, when it is a permission problem, the udev rule that fixes it. The pad may
+ * still work: the GLFW fallback reads it through evdev when a window exists. */
+static void input_log_open_failure(const char *name, const struct hid_device_info *info, int error) {
+    if (error == EACCES || error == EPERM) {
+        core_warn("input",
+                  "cannot open gamepad %s (%04x:%04x): %s is not readable by this user (%s). The udev rule "
+                  "data/input/70-gamepads.rules fixes it: install it with `sudo tools/setup --udev` (or add "
+                  "KERNEL==\"hidraw*\", ATTRS{idVendor}==\"%04x\", TAG+=\"uaccess\" to "
+                  "/etc/udev/rules.d/70-gamepads.rules), then replug the pad",
+                  name, info->vendor_id, info->product_id, info->path, strerror(error), info->vendor_id);
+        return;
+    }
+    core_warn("input", "cannot open gamepad %s (%04x:%04x, %s): %s", name, info->vendor_id, info->product_id,
+              info->path, error ? strerror(error) : "hid_open_path failed");
+}
+
 /* ---- devices -------------------------------------------------------------------------------- */
 
 static input_device *input_device_find(input_gamepads *g, const char *path) {
@@ -246,9 +262,7 @@ static void input_device_examine(input_gamepads *g, input_device *dev, const str
     errno = 0;
     hid_device *handle = hid_open_path(info->path);
     if (!handle) {
-        core_warn("input", "cannot open gamepad %s (%s): %s%s", dev->name, info->path,
-                  errno ? strerror(errno) : "hid_open_path failed",
-                  errno == EACCES ? " (no permission: see engine/input/README.md, 'Permissions')" : "");
+        input_log_open_failure(dev->name, info, errno);
         g->slot_used[slot] = false;
         input_decoder_destroy(decoder);
         return;
