@@ -121,7 +121,8 @@ static bool app_open_input(game_app *app) {
     const game_app_desc *d = &app->desc;
     if (d->bindings_path && !(app->bindings = input_bindings_load(d->bindings_path, NULL))) return false;
     app->input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(app->gfx), .bindings = app->bindings,
-                                             .record_path = d->record_path, .replay_path = d->replay_path });
+                                             .record_path = d->record_path, .replay_path = d->replay_path,
+                                             .gamepad_mappings_path = d->gamepad_mappings_path });
     return app->input != NULL;
 }
 

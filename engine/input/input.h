@@ -186,6 +186,10 @@ typedef struct input_desc {
     float dead_zone;                 /* radial stick dead zone; 0 = default 0.15 */
     const char *record_path;         /* --record FILE: write frames here */
     const char *replay_path;         /* --replay FILE: read frames from here instead of devices */
+    /* --gamepad-mappings FILE: lines in SDL's game controller database format for the pads read
+     * through GLFW (bad lines are reported with FILE:LINE and skipped; an unreadable file fails
+     * input_create) */
+    const char *gamepad_mappings_path;
 } input_desc;
 
 typedef struct input_system input_system;

@@ -164,15 +164,27 @@ typedef struct input_pad_slot {
     uint32_t generation;            /* bumped on every connect, so a quick re-plug is seen */
     input_gamepad_state state;      /* latest decoded, before the dead zone */
     uint32_t latched;               /* buttons that went down since the main thread last looked */
+    /* who reads the pad in this slot: the hidraw thread or GLFW on the main thread */
+    bool claimed, hidraw;
+    uint16_t vendor_id, product_id; /* 0 when unknown */
+    char name[64];
 } input_pad_slot;
 
-/* Shared between the gamepad thread (writes) and the main thread (reads in input_update). */
+/* Shared between the gamepad thread (writes) and the main thread (reads in input_update; writes
+ * for the pads it reads through GLFW). */
 typedef struct input_pads_shared {
     pthread_mutex_t lock;
     pthread_cond_t wake;            /* CLOCK_MONOTONIC; signalled to stop the thread */
     bool stop;
+    bool hid_scanned;               /* the hidraw thread has enumerated once (GLFW waits for it) */
     input_pad_slot slots[INPUT_MAX_GAMEPADS];
 } input_pads_shared;
+
+/* A free slot, marked as read by hidraw or GLFW, with the pad's ids and name; −1 when all 8 are
+ * taken. Either thread may claim; each releases only what it claimed. */
+int input__pad_slot_claim(input_pads_shared *shared, bool hidraw, uint16_t vendor_id, uint16_t product_id,
+                          const char *name);
+void input__pad_slot_release(input_pads_shared *shared, int slot);
 
 typedef struct input_gamepads input_gamepads;
 
@@ -284,6 +296,35 @@ const input_sdl_mapping *input__sdl_mappings_find(const input_sdl_mappings *mapp
  * 0000, vendor, 0000, product, 0000, version, 0000, each 16-bit little-endian); false when the
  * GUID is the other form (bus and the device's name), which carries none. */
 bool input__guid_ids(const char *guid, uint16_t *vendor_id, uint16_t *product_id);
+
+/* ---- gamepads through GLFW, on the main thread (input_glfw_pads.c) ---------------------------- */
+
+enum { INPUT_GLFW_JOYSTICKS = 16 };     /* GLFW_JOYSTICK_LAST + 1 */
+
+/* Pads hidapi cannot read (xpad exposes no hidraw node; a node this user cannot open) are read
+ * through GLFW's gamepad API, which knows SDL's mappings; `--gamepad-mappings FILE` adds lines. */
+typedef struct input_glfw_pads {
+    bool active;                                /* a window (so GLFW) and gamepads wanted */
+    input_sdl_mappings mappings;                /* the file's good lines */
+    int slot[INPUT_GLFW_JOYSTICKS];             /* the slot a joystick is read into, −1 none */
+    bool noted[INPUT_GLFW_JOYSTICKS];           /* "no mapping for it" logged since it appeared */
+    bool warned_full;
+} input_glfw_pads;
+
+/* Loads the mappings file (when given) and hands its good lines to GLFW (when `active`); false
+ * (logged) only when the file cannot be read. */
+bool input__glfw_pads_init(input_glfw_pads *pads, const char *mappings_path, bool active);
+/* Once a frame, main thread, before the slots are gathered: joysticks that are gamepads and not
+ * read by the hidraw thread are read and published into `shared`'s slots. */
+void input__glfw_pads_poll(input_glfw_pads *pads, input_pads_shared *shared, bool wait_for_hid);
+void input__glfw_pads_close(input_glfw_pads *pads, input_pads_shared *shared);
+
+/* The duplicate rule: a GLFW joystick is a pad the hidraw thread already reads when its GUID
+ * carries vendor and product ids and more hidraw slots have those ids than `same_ids_before`
+ * (GLFW gamepads with the same ids at lower joystick numbers); when the GUID carries no ids, when
+ * a hidraw pad's product name appears in the joystick's name. */
+bool input__glfw_pad_is_duplicate(const input_pad_slot slots[INPUT_MAX_GAMEPADS], const char *guid, const char *name,
+                                  int same_ids_before);
 
 /* ---- record and replay (input_record.c) ----------------------------------------------------- */
 

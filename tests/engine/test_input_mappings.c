@@ -174,3 +174,41 @@ Test(input_mappings, guid_gives_vendor_and_product) {
     cr_expect(!input__guid_ids("0300000058626f782047616d65706100", &vendor, &product));
     cr_expect(!input__guid_ids("not a guid", &vendor, &product));
 }
+
+/* The duplicate rule (input_internal.h): a GLFW joystick is left to hidraw when hidraw has a pad
+ * of its ids open — as many joysticks of those ids as hidraw has pads of them. */
+Test(input_mappings, a_pad_open_on_hidraw_is_not_read_through_glfw_again) {
+    input_pad_slot slots[INPUT_MAX_GAMEPADS] = { 0 };
+    slots[2] = (input_pad_slot){ .claimed = true, .hidraw = true, .vendor_id = 0x045e, .product_id = 0x028e,
+                                 .name = "Controller" };
+    slots[5] = (input_pad_slot){ .claimed = true, .hidraw = false, .vendor_id = 0x054c, .product_id = 0x09cc };
+    const char *xbox = "030000005e0400008e02000014010000", *ds4 = "030000004c050000cc09000011010000";
+    cr_expect(input__glfw_pad_is_duplicate(slots, xbox, "Microsoft X-Box 360 pad", 0));
+    /* A second pad of the same kind: hidraw reads only one, so GLFW reads the other. */
+    cr_expect(!input__glfw_pad_is_duplicate(slots, xbox, "Microsoft X-Box 360 pad", 1));
+    /* Slot 5 is GLFW's own claim, not hidraw's. */
+    cr_expect(!input__glfw_pad_is_duplicate(slots, ds4, "Sony Wireless Controller", 0));
+    /* A GUID without ids: by name. */
+    cr_expect(input__glfw_pad_is_duplicate(slots, "0300000058626f782047616d65706100", "Xbox Controller", 0));
+    cr_expect(!input__glfw_pad_is_duplicate(slots, "0300000058626f782047616d65706100", "Other Pad", 0));
+    /* Nothing on hidraw: nothing is a duplicate. */
+    slots[2].claimed = false;
+    cr_expect(!input__glfw_pad_is_duplicate(slots, xbox, "Microsoft X-Box 360 pad", 0));
+}
+
+Test(input_mappings, slots_are_claimed_once_and_released) {
+    input_pads_shared shared;
+    input__pads_shared_init(&shared);
+    int taken[INPUT_MAX_GAMEPADS];
+    for (int i = 0; i < INPUT_MAX_GAMEPADS; i++) {
+        taken[i] = input__pad_slot_claim(&shared, i & 1, 0x1234, (uint16_t)i, "pad");
+        cr_expect_eq(taken[i], i);
+    }
+    cr_expect_eq(input__pad_slot_claim(&shared, true, 1, 2, "ninth"), -1);
+    input__pad_slot_release(&shared, 3);
+    cr_expect(!shared.slots[3].claimed);
+    cr_expect_eq(input__pad_slot_claim(&shared, false, 1, 2, "again"), 3);
+    cr_expect_str_eq(shared.slots[3].name, "again");
+    cr_expect(!shared.slots[3].hidraw);
+    input__pads_shared_destroy(&shared);
+}
