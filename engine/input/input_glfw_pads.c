@@ -58,8 +58,7 @@ bool input__glfw_pads_init(input_glfw_pads *g, const char *mappings_path, bool a
         core_info("input", "gamepad mappings %s: %zu for this platform, %d bad line%s skipped", mappings_path,
                   g->mappings.count, bad, bad == 1 ? "" : "s");
     }
-    /* Every line was checked above, so GLFW (which refuses the whole string over one bad line)
-     * gets only lines it accepts. */
+    /* Every line was checked above (GLFW would skip or half-read a bad one without naming it). */
     if (active && g->mappings.text_size && glfwUpdateGamepadMappings(g->mappings.text) != GLFW_TRUE)
         core_warn("input", "GLFW refused the gamepad mappings from %s", mappings_path);
     return true;

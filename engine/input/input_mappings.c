@@ -3,8 +3,11 @@
  *
  * GLFW reads pads it has no hidraw decoder for through these mappings (its own built-in copy of
  * SDL's database, plus the lines of `--gamepad-mappings FILE`). GLFW's glfwUpdateGamepadMappings
- * refuses a whole string for one bad line and says nothing about which, so every line is checked
- * here first: a bad one is reported with its file and line number and left out.
+ * never says which line is wrong: GLFW 3.3.8 (tried under Xvfb) skips a line with a bad GUID with
+ * a bare "Invalid value for parameter" and still returns GLFW_TRUE, and quietly drops or misreads
+ * an element it cannot parse (leftshoulderr:b4, a:x0, dpup:h0.3, a:b300), so a typo silently
+ * unmaps a button. So every line is checked here first: a bad one is reported with its file and
+ * line number and left out, and GLFW gets only lines that mean what they say.
  *
  * Format (SDL's gamecontrollerdb.txt): GUID,name,output:input,...  where
  *   output  a b x y back guide start leftstick rightstick leftshoulder rightshoulder dpup dpdown
