@@ -1,14 +1,14 @@
 /* world — the walkable infinite world (game/app.h) on the command line.
  *
  *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT | --tour] [--record FILE]
- *         [--replay FILE] [--bindings FILE] [--screenshot FILE] [--radius R] [--levels N]
+ *         [--replay FILE] [--bindings FILE] [--gamepad-mappings FILE] [--screenshot FILE] [--radius R] [--levels N]
  *         [--memory MB] [--grass off|low|high] [--water off|low|high] [--shadows off|low|high]
  *         [--detail on|off] [--rocks on|off] [--threads N]
  *         [--trace FILE] [--world DIR] [--at X,Y,Z] [--look YAW,PITCH]
  *
  * In a window: WASD or the left stick to walk, the mouse (click to capture, Escape to let go) or
  * the right stick to look, Space to jump, Shift to sprint, Ctrl or C to crouch, F to fly, F11
- * fullscreen, F12 a screenshot. Terrain tools: left and right mouse buttons (or the triggers)
+ * fullscreen, F12 a screenshot (a new dated file in screenshots/, never over another). Terrain tools: left and right mouse buttons (or the triggers)
  * use the tool on the HUD where the view meets the ground, Tab (right shoulder) picks the next
  * one; --world DIR keeps the edits across runs. Without a display it renders offscreen; give it --frames or a
  * --walk so it ends. At the end it prints what happened: frames, the walk, CPU frame times,
