@@ -7,6 +7,7 @@
 #include "input/input.h"
 #include "jobs/jobs.h"
 #include "player.h"
+#include "screenshot.h"
 #include "tools.h"
 #include "trace/trace.h"
 
@@ -16,6 +17,7 @@
 #include <string.h>
 #include <time.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 #define APP_HITCH_MS 33.0
 #define APP_PI 3.14159265358979323846
@@ -50,6 +52,8 @@ struct game_app {
     bool spawned;                          /* the player stands in the world (its pose is saved) */
     bool holding;                          /* the view desc.at/look asked for, until input moves it */
     bool hud_hidden;                       /* F1 (toggle_hud) */
+    char hud_note[300];                    /* a passing message ("screenshot: …"), shown a few seconds */
+    uint64_t hud_note_ns;                  /* when it was set */
     uint64_t play_start_ns;                /* when loading ended: the hint's clock */
     int frames, loading_frames;
     uint64_t start_ns, last_ns;
@@ -117,7 +121,8 @@ static bool app_open_input(game_app *app) {
     const game_app_desc *d = &app->desc;
     if (d->bindings_path && !(app->bindings = input_bindings_load(d->bindings_path, NULL))) return false;
     app->input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(app->gfx), .bindings = app->bindings,
-                                             .record_path = d->record_path, .replay_path = d->replay_path });
+                                             .record_path = d->record_path, .replay_path = d->replay_path,
+                                             .gamepad_mappings_path = d->gamepad_mappings_path });
     return app->input != NULL;
 }
 
@@ -501,6 +506,8 @@ static float app_hud_scale(int height) { return fmaxf(1.0f, floorf((float)height
 #define APP_HUD_LINES 4
 #define APP_HINT_SECONDS 6.0               /* the controls' hint shows this long, then fades */
 #define APP_HINT_FADE 1.5
+#define APP_NOTE_SECONDS 4.0               /* a note (where F12's picture went) shows this long */
+#define APP_SCREENSHOT_FOLDER "screenshots"
 static const char app_hint[] = "WASD move   mouse look   Space jump   Shift sprint   F fly   "
                                "mouse buttons use the tool   Tab next tool   F1 HUD   Esc quit";
 
@@ -518,6 +525,22 @@ static void app_draw_hint(game_app *app, int width, int height, float scale) {
                    app_hint);
 }
 
+/* The passing note (where a screenshot went), above the hint's line, then faded out. */
+static void app_draw_note(game_app *app, int width, int height, float scale) {
+    if (!app->hud_note[0]) return;
+    double shown = (double)(core_time_ns() - app->hud_note_ns) * 1e-9;
+    float alpha = (float)fmin(1.0, fmax(0.0, (APP_NOTE_SECONDS + APP_HINT_FADE - shown) / APP_HINT_FADE));
+    if (alpha <= 0.0f) {
+        app->hud_note[0] = '\0';
+        return;
+    }
+    while (scale > 1.0f && gfx_text_width(app->hud_note, scale) > 0.9f * (float)width) scale -= 1.0f;
+    float text_width = gfx_text_width(app->hud_note, scale);
+    const float colour[4] = { 1, 1, 0.6f, alpha };
+    gfx_text_print(app->hud, fmaxf(0.0f, 0.5f * ((float)width - text_width)), (float)height - 34.0f * scale, scale,
+                   colour, "%s", app->hud_note);
+}
+
 /* Frame rate, streaming, position and the tool, in the top-left corner: at most half the width
  * and a quarter of the height, shrunk or cut to fit (a tiny window shows none). F1 hides it. */
 static void app_draw_hud(game_app *app) {
@@ -526,6 +549,7 @@ static void app_draw_hud(game_app *app) {
     gfx_size(app->gfx, &width, &height);
     float scale = app_hud_scale(height);
     app_draw_hint(app, width, height, scale);
+    app_draw_note(app, width, height, scale);
     if (app->hud_hidden) {
         gfx_text_draw(app->hud);
         return;
@@ -562,6 +586,23 @@ static void app_draw_hud(game_app *app) {
     gfx_text_draw(app->hud);
 }
 
+/* F12: a new dated file in screenshots/, never over another (game/screenshot.h); the HUD says
+ * where it went, or that it failed. */
+static void app_take_screenshot(game_app *app) {
+    char path[256];
+    time_t now = time(NULL);
+    struct tm local;
+    localtime_r(&now, &local);
+    bool ok = game_screenshot_reserve(APP_SCREENSHOT_FOLDER, "world", &local, path, sizeof path);
+    if (ok && !gfx_screenshot(app->gfx, path)) {
+        unlink(path); /* our own empty file: nothing else was there */
+        ok = false;
+    }
+    if (ok) snprintf(app->hud_note, sizeof app->hud_note, "screenshot: %s", path);
+    else snprintf(app->hud_note, sizeof app->hud_note, "screenshot failed (see the log)");
+    app->hud_note_ns = core_time_ns();
+}
+
 /* Input that moves the player or turns the view (tools, pictures and the HUD do not). */
 static bool app_moves(const input_actions *a) {
     uint32_t moving = INPUT_ACTION_BIT(INPUT_ACTION_JUMP) | INPUT_ACTION_BIT(INPUT_ACTION_CROUCH) |
@@ -581,7 +622,7 @@ static bool app_update_player(game_app *app, float dt) {
         actions = input_actions_get(app->input);
     }
     if ((actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_QUIT)) || gfx_window_should_close(app->gfx)) return false;
-    if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_SCREENSHOT)) gfx_screenshot(app->gfx, "world.png");
+    if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_SCREENSHOT)) app_take_screenshot(app);
     if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_FULLSCREEN)) gfx_window_toggle_fullscreen(app->gfx);
     if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_TOGGLE_HUD)) app->hud_hidden = !app->hud_hidden;
     if (app->loading) return true;

@@ -47,6 +47,7 @@ typedef struct game_app_desc {
     const char *record_path;          /* record every frame's input */
     const char *replay_path;          /* play a recording back */
     const char *bindings_path;        /* input bindings; NULL = built-in defaults */
+    const char *gamepad_mappings_path; /* SDL mapping lines for pads read through GLFW; NULL = none */
     const char *screenshot_path;      /* written after the last frame */
     double spawn[2];                  /* x, z of the spawn column; the player stands on top */
     bool face_open_view;              /* spawn facing the most open view (game_player_open_yaw);

@@ -1,14 +1,14 @@
 /* world — the walkable infinite world (game/app.h) on the command line.
  *
  *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT | --tour] [--record FILE]
- *         [--replay FILE] [--bindings FILE] [--screenshot FILE] [--radius R] [--levels N]
+ *         [--replay FILE] [--bindings FILE] [--gamepad-mappings FILE] [--screenshot FILE] [--radius R] [--levels N]
  *         [--memory MB] [--grass off|low|high] [--water off|low|high] [--shadows off|low|high]
  *         [--detail on|off] [--rocks on|off] [--threads N]
  *         [--trace FILE] [--world DIR] [--at X,Y,Z] [--look YAW,PITCH]
  *
  * In a window: WASD or the left stick to walk, the mouse (click to capture, Escape to let go) or
  * the right stick to look, Space to jump, Shift to sprint, Ctrl or C to crouch, F to fly, F11
- * fullscreen, F12 a screenshot. Terrain tools: left and right mouse buttons (or the triggers)
+ * fullscreen, F12 a screenshot (a new dated file in screenshots/, never over another). Terrain tools: left and right mouse buttons (or the triggers)
  * use the tool on the HUD where the view meets the ground, Tab (right shoulder) picks the next
  * one; --world DIR keeps the edits across runs. Without a display it renders offscreen; give it --frames or a
  * --walk so it ends. At the end it prints what happened: frames, the walk, CPU frame times,
@@ -34,7 +34,7 @@
 
 typedef struct options {
     core_common_args common;
-    const char *size, *screenshot, *walk, *record, *replay, *bindings, *world, *grass, *water, *shadows, *detail, *at,
+    const char *size, *screenshot, *walk, *record, *replay, *bindings, *gamepad_mappings, *world, *grass, *water, *shadows, *detail, *at,
         *look, *rocks, *cliffs;
     int seed, frames, radius, levels, memory_mb;
     bool headless, tour, no_head_bob, no_ao;
@@ -89,6 +89,8 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "record", CORE_OPTION_STRING, &o->record, "FILE", "record every frame's input" },
         { "replay", CORE_OPTION_STRING, &o->replay, "FILE", "play recorded input back" },
         { "bindings", CORE_OPTION_STRING, &o->bindings, "FILE", "input bindings (data/input/bindings.txt)" },
+        { "gamepad-mappings", CORE_OPTION_STRING, &o->gamepad_mappings, "FILE",
+          "SDL game controller database lines for pads read through GLFW (bad lines are reported and skipped)" },
         { "screenshot", CORE_OPTION_STRING, &o->screenshot, "FILE", "write the last frame as a PNG" },
         { "radius", CORE_OPTION_INT, &o->radius, "R", "full-detail chunks of 32 m each way (default 2)", 1, 32 },
         { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
@@ -237,6 +239,7 @@ int main(int argc, char **argv) {
     desc.record_path = o.record;
     desc.replay_path = o.replay;
     desc.bindings_path = o.bindings;
+    desc.gamepad_mappings_path = o.gamepad_mappings;
     desc.screenshot_path = o.screenshot;
     desc.world_dir = o.world;
     desc.stream = (terrain_stream_desc){ .half_width = o.radius, .levels = o.levels,

@@ -283,6 +283,15 @@ expect "world: bad waypoint file" 2 "bad value for '--walk': .*bad.walk:3: z: 't
 expect "world: bad --size" 2 "bad value for '--size'" -- "$bin/world" --size 10x10000000
 expect "world: --record with --replay" 2 "cannot be used together" -- "$bin/world" --record a --replay b
 expect "world: missing replay" 1 "$tmp/none.rec" -- "$bin/world" --headless --replay "$tmp/none.rec"
+# --gamepad-mappings: an unreadable file fails at start-up naming it; a bad line is reported with
+# its file and line number and skipped, and the run goes on.
+expect "world: missing --gamepad-mappings" 1 "cannot open gamepad mappings $tmp/none-pads.txt" -- \
+  "$bin/world" --headless --frames 1 --gamepad-mappings "$tmp/none-pads.txt"
+printf '# pads\n030000005e0400008e02000014010001,Typo,a:b0,leftshoulderr:b4,\n030000005e0400008e02000014010000,Good,a:b0,leftx:a0,platform:Linux,\n' >"$tmp/pads.txt"
+expect "world: bad --gamepad-mappings line skipped" 0 "pads.txt:2: unknown output 'leftshoulderr' \(line skipped\)" -- \
+  "$bin/world" --headless --frames 1 --size 160x90 --radius 1 --levels 1 --rocks off --cliffs off --grass off \
+  --water off --gamepad-mappings "$tmp/pads.txt"
+expect "world: --help lists --gamepad-mappings" 0 "--gamepad-mappings FILE" -- "$bin/world" --help
 expect "world: bad --memory" 2 "bad value for '--memory'" -- "$bin/world" --memory 1
 # --at X,Y,Z and --look YAW,PITCH: each malformed form named, with the usage; a view asked for is
 # where the player ends two frames later (feet = eye − 1.62 m), looking that way.

@@ -16,7 +16,12 @@
  *
  *   2. The input system owns the devices: it enumerates hidapi gamepads on a background thread
  *      (about once a second; a frame never waits on the OS), reads their reports there, and
- *      takes keyboard and mouse events from a GLFW window (raw mouse motion where offered).
+ *      takes keyboard and mouse events from a GLFW window (raw mouse motion where offered). Pads
+ *      hidapi cannot read (the xpad driver's, or a hidraw node this user may not open: the log
+ *      names the node and data/input/70-gamepads.rules) are read through GLFW's gamepad API while a
+ *      window exists, with SDL's mappings and the lines of input_desc.gamepad_mappings_path:
+ *          input_create(&(input_desc){ .glfw_window = window,
+ *                                      .gamepad_mappings_path = "gamecontrollerdb.txt" });
  *
  *   3. Actions (move, look, jump, sprint, crouch, tool, toggle fly) are what a game reads. They
  *      are fed by both devices through bindings loaded from a small text file the user can edit
@@ -186,6 +191,10 @@ typedef struct input_desc {
     float dead_zone;                 /* radial stick dead zone; 0 = default 0.15 */
     const char *record_path;         /* --record FILE: write frames here */
     const char *replay_path;         /* --replay FILE: read frames from here instead of devices */
+    /* --gamepad-mappings FILE: lines in SDL's game controller database format for the pads read
+     * through GLFW (bad lines are reported with FILE:LINE and skipped; an unreadable file fails
+     * input_create) */
+    const char *gamepad_mappings_path;
 } input_desc;
 
 typedef struct input_system input_system;

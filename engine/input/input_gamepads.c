@@ -62,7 +62,6 @@ struct input_gamepads {
     pthread_t thread;
     input_device *devices;
     size_t device_count, device_capacity;
-    bool slot_used[INPUT_MAX_GAMEPADS];
     bool warned_full;
 };
 
@@ -104,6 +103,34 @@ void input__gamepad_publish(input_pads_shared *shared, int slot, const input_gam
         s->state = (input_gamepad_state){ 0 };
         s->latched = 0;
     }
+    pthread_mutex_unlock(&shared->lock);
+}
+
+int input__pad_slot_claim(input_pads_shared *shared, bool hidraw, uint16_t vendor_id, uint16_t product_id,
+                          const char *name) {
+    int slot = -1;
+    pthread_mutex_lock(&shared->lock);
+    for (int i = 0; i < INPUT_MAX_GAMEPADS && slot < 0; i++) {
+        input_pad_slot *s = &shared->slots[i];
+        if (s->claimed) continue;
+        slot = i;
+        s->claimed = true;
+        s->hidraw = hidraw;
+        s->vendor_id = vendor_id;
+        s->product_id = product_id;
+        snprintf(s->name, sizeof s->name, "%s", name ? name : "");
+    }
+    pthread_mutex_unlock(&shared->lock);
+    return slot;
+}
+
+void input__pad_slot_release(input_pads_shared *shared, int slot) {
+    if (slot < 0 || slot >= INPUT_MAX_GAMEPADS) return;
+    pthread_mutex_lock(&shared->lock);
+    input_pad_slot *s = &shared->slots[slot];
+    s->claimed = s->hidraw = false;
+    s->vendor_id = s->product_id = 0;
+    s->name[0] = '\0';
     pthread_mutex_unlock(&shared->lock);
 }
 
@@ -198,21 +225,28 @@ static void input_device_name(const struct hid_device_info *info, char *out, siz
     else snprintf(out, capacity, "HID %04x:%04x", info->vendor_id, info->product_id);
 }
 
+/* Names the node and, when it is a permission problem, the udev rule that fixes it. The pad may
+ * still work: the GLFW fallback reads it through evdev when a window exists. */
+static void input_log_open_failure(const char *name, const struct hid_device_info *info, int error) {
+    if (error == EACCES || error == EPERM) {
+        core_warn("input",
+                  "cannot open gamepad %s (%04x:%04x): %s is not readable by this user (%s). The udev rule "
+                  "data/input/70-gamepads.rules fixes it: install it with `sudo tools/setup --udev` (or add "
+                  "KERNEL==\"hidraw*\", ATTRS{idVendor}==\"%04x\", TAG+=\"uaccess\" to "
+                  "/etc/udev/rules.d/70-gamepads.rules), then replug the pad",
+                  name, info->vendor_id, info->product_id, info->path, strerror(error), info->vendor_id);
+        return;
+    }
+    core_warn("input", "cannot open gamepad %s (%04x:%04x, %s): %s", name, info->vendor_id, info->product_id,
+              info->path, error ? strerror(error) : "hid_open_path failed");
+}
+
 /* ---- devices -------------------------------------------------------------------------------- */
 
 static input_device *input_device_find(input_gamepads *g, const char *path) {
     for (size_t i = 0; i < g->device_count; i++)
         if (strcmp(g->devices[i].path, path) == 0) return &g->devices[i];
     return NULL;
-}
-
-static int input_slot_take(input_gamepads *g) {
-    for (int i = 0; i < INPUT_MAX_GAMEPADS; i++)
-        if (!g->slot_used[i]) {
-            g->slot_used[i] = true;
-            return i;
-        }
-    return -1;
 }
 
 /* Decides what a newly seen device is and opens it when it is a gamepad. Failures are logged
@@ -236,20 +270,19 @@ static void input_device_examine(input_gamepads *g, input_device *dev, const str
                   info->path, error[0] ? error : "its report descriptor cannot be decoded");
         return;
     }
-    int slot = input_slot_take(g);
-    if (slot < 0) {
-        if (!g->warned_full) core_warn("input", "more than %d gamepads: %s ignored", INPUT_MAX_GAMEPADS, dev->name);
-        g->warned_full = true;
-        input_decoder_destroy(decoder);
-        return;
-    }
     errno = 0;
     hid_device *handle = hid_open_path(info->path);
     if (!handle) {
-        core_warn("input", "cannot open gamepad %s (%s): %s%s", dev->name, info->path,
-                  errno ? strerror(errno) : "hid_open_path failed",
-                  errno == EACCES ? " (no permission: see engine/input/README.md, 'Permissions')" : "");
-        g->slot_used[slot] = false;
+        input_log_open_failure(dev->name, info, errno);
+        input_decoder_destroy(decoder);
+        return;
+    }
+    /* Claimed only once open: a slot marked hidraw tells the GLFW reader to leave this pad alone. */
+    int slot = input__pad_slot_claim(g->shared, true, info->vendor_id, info->product_id, dev->name);
+    if (slot < 0) {
+        if (!g->warned_full) core_warn("input", "more than %d gamepads: %s ignored", INPUT_MAX_GAMEPADS, dev->name);
+        g->warned_full = true;
+        hid_close(handle);
         input_decoder_destroy(decoder);
         return;
     }
@@ -270,7 +303,7 @@ static void input_device_close(input_gamepads *g, input_device *dev, input_devic
     input__gamepad_publish(g->shared, dev->slot, NULL);
     hid_close(dev->handle);
     input_decoder_destroy(dev->decoder);
-    g->slot_used[dev->slot] = false;
+    input__pad_slot_release(g->shared, dev->slot);
     dev->handle = NULL;
     dev->decoder = NULL;
     dev->fate = fate;
@@ -363,6 +396,9 @@ static void *input_gamepad_thread(void *arg) {
         if (now >= next_scan) {
             input_devices_enumerate(g);
             next_scan = now + INPUT_ENUMERATE_NS;
+            pthread_mutex_lock(&g->shared->lock);
+            g->shared->hid_scanned = true;
+            pthread_mutex_unlock(&g->shared->lock);
         }
         if (!input_devices_read(g) && input_wait_until(g, next_scan)) break;
     }

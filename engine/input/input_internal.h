@@ -164,15 +164,27 @@ typedef struct input_pad_slot {
     uint32_t generation;            /* bumped on every connect, so a quick re-plug is seen */
     input_gamepad_state state;      /* latest decoded, before the dead zone */
     uint32_t latched;               /* buttons that went down since the main thread last looked */
+    /* who reads the pad in this slot: the hidraw thread or GLFW on the main thread */
+    bool claimed, hidraw;
+    uint16_t vendor_id, product_id; /* 0 when unknown */
+    char name[64];
 } input_pad_slot;
 
-/* Shared between the gamepad thread (writes) and the main thread (reads in input_update). */
+/* Shared between the gamepad thread (writes) and the main thread (reads in input_update; writes
+ * for the pads it reads through GLFW). */
 typedef struct input_pads_shared {
     pthread_mutex_t lock;
     pthread_cond_t wake;            /* CLOCK_MONOTONIC; signalled to stop the thread */
     bool stop;
+    bool hid_scanned;               /* the hidraw thread has enumerated once (GLFW waits for it) */
     input_pad_slot slots[INPUT_MAX_GAMEPADS];
 } input_pads_shared;
+
+/* A free slot, marked as read by hidraw or GLFW, with the pad's ids and name; −1 when all 8 are
+ * taken. Either thread may claim; each releases only what it claimed. */
+int input__pad_slot_claim(input_pads_shared *shared, bool hidraw, uint16_t vendor_id, uint16_t product_id,
+                          const char *name);
+void input__pad_slot_release(input_pads_shared *shared, int slot);
 
 typedef struct input_gamepads input_gamepads;
 
@@ -190,6 +202,129 @@ void input__gamepads_stop(input_gamepads *gamepads);
 /* Top-level usages of a HID report descriptor: true when one of its top-level application
  * collections is Generic Desktop Joystick (0x04) or Gamepad (0x05). Safe on any bytes. */
 bool input__descriptor_is_gamepad(const uint8_t *descriptor, size_t size);
+
+/* ---- SDL game controller mappings (input_mappings.c) ------------------------------------------ */
+
+/* A pad's outputs in SDL's terms: GLFW's 15 gamepad buttons in GLFW's order (GLFW_GAMEPAD_BUTTON_A
+ * … _DPAD_LEFT), then the ones GLFW lacks; GLFW's 6 gamepad axes in its order (sticks −1…1, y down
+ * positive; triggers −1 at rest … 1 pulled). */
+typedef enum input_sdl_output {
+    INPUT_SDL_A, INPUT_SDL_B, INPUT_SDL_X, INPUT_SDL_Y,
+    INPUT_SDL_LEFTSHOULDER, INPUT_SDL_RIGHTSHOULDER, INPUT_SDL_BACK, INPUT_SDL_START, INPUT_SDL_GUIDE,
+    INPUT_SDL_LEFTSTICK, INPUT_SDL_RIGHTSTICK,
+    INPUT_SDL_DPUP, INPUT_SDL_DPRIGHT, INPUT_SDL_DPDOWN, INPUT_SDL_DPLEFT,
+    INPUT_SDL_MISC1, INPUT_SDL_TOUCHPAD,
+    INPUT_SDL_PADDLE1, INPUT_SDL_PADDLE2, INPUT_SDL_PADDLE3, INPUT_SDL_PADDLE4,
+    INPUT_SDL_BUTTON_COUNT,
+    INPUT_SDL_LEFTX = INPUT_SDL_BUTTON_COUNT, INPUT_SDL_LEFTY, INPUT_SDL_RIGHTX, INPUT_SDL_RIGHTY,
+    INPUT_SDL_LEFTTRIGGER, INPUT_SDL_RIGHTTRIGGER,
+    INPUT_SDL_OUTPUT_COUNT
+} input_sdl_output;
+enum {
+    INPUT_SDL_AXIS_COUNT = INPUT_SDL_OUTPUT_COUNT - INPUT_SDL_BUTTON_COUNT,
+    INPUT_SDL_GLFW_BUTTONS = INPUT_SDL_MISC1,  /* the first 15 are GLFW's */
+    INPUT_SDL_MAX_BINDINGS = 48,               /* elements per mapping line */
+    INPUT_SDL_MAX_LINE = 1024,                 /* bytes per mappings line */
+    INPUT_SDL_MAX_FILE = 4 << 20,
+};
+
+/* The pad as SDL/GLFW's gamepad layer sees it: what glfwGetGamepadState gives, and what
+ * input__sdl_mapping_apply makes from a raw joystick. */
+typedef struct input_sdl_pad {
+    bool buttons[INPUT_SDL_BUTTON_COUNT];
+    float axes[INPUT_SDL_AXIS_COUNT];
+} input_sdl_pad;
+
+/* One "output:input" pair of a mapping line, e.g. "-leftx:h0.8" or "lefttrigger:a2~". */
+typedef struct input_sdl_binding {
+    uint8_t output;          /* input_sdl_output */
+    int8_t output_half;      /* 0 the whole axis, +1 "+leftx", −1 "-leftx" */
+    uint8_t kind;            /* 'b' button, 'a' axis, 'h' hat */
+    uint8_t index;           /* button, axis or hat number */
+    uint8_t hat_mask;        /* 1 up, 2 right, 4 down, 8 left */
+    int8_t input_half;       /* 0 the whole axis, +1 "+a2", −1 "-a2" */
+    bool invert;             /* "a2~" */
+} input_sdl_binding;
+
+typedef struct input_sdl_mapping {
+    char guid[33];           /* 32 lower-case hex digits */
+    char name[128];
+    bool other_platform;     /* "platform:" names another OS: valid, but not for this machine */
+    uint8_t binding_count;
+    input_sdl_binding bindings[INPUT_SDL_MAX_BINDINGS];
+} input_sdl_mapping;
+
+/* One line of the SDL game controller database format (no newline):
+ *     GUID,name,output:input,...,platform:Linux,
+ * false with a one-line reason in `error` when it is not one; safe on any bytes. */
+bool input__sdl_mapping_parse(const char *line, size_t length, input_sdl_mapping *mapping, char *error,
+                              size_t error_size);
+
+/* A raw joystick as glfwGetJoystickAxes/Buttons/Hats give it (hats as GLFW_HAT_* bits, which are
+ * SDL's: 1 up, 2 right, 4 down, 8 left). Elements the mapping names beyond the counts read as
+ * released / at rest. */
+typedef struct input_sdl_joystick {
+    const float *axes;
+    const uint8_t *buttons;
+    const uint8_t *hats;
+    int axis_count, button_count, hat_count;
+} input_sdl_joystick;
+void input__sdl_mapping_apply(const input_sdl_mapping *mapping, const input_sdl_joystick *joystick, input_sdl_pad *pad);
+/* SDL's layout to ours: buttons by the same positions, triggers from −1…1 to 0…1. */
+void input__sdl_pad_to_state(const input_sdl_pad *pad, input_gamepad_state *state);
+
+/* A mappings file's good lines: parsed, and as text for glfwUpdateGamepadMappings. */
+typedef struct input_sdl_mappings {
+    input_sdl_mapping *items;
+    size_t count, capacity;
+    char *text;              /* the good lines for this platform, each ending in '\n'; NUL-terminated */
+    size_t text_size, text_capacity;
+} input_sdl_mappings;
+
+/* Reads text[0, size): each bad line is reported as "NAME:LINE: reason (line skipped)" through
+ * core_warn and counted in *bad_lines; blank lines and '#' comments are skipped. Lines for
+ * another platform are kept out of `text` and `items` without complaint. Never fails. */
+void input__sdl_mappings_parse(input_sdl_mappings *mappings, const char *text, size_t size, const char *name,
+                               int *bad_lines);
+/* false (logged) when the file cannot be read. */
+bool input__sdl_mappings_load(input_sdl_mappings *mappings, const char *path, int *bad_lines);
+void input__sdl_mappings_free(input_sdl_mappings *mappings);
+/* The mapping for a GUID (32 hex digits, any case), or NULL. */
+const input_sdl_mapping *input__sdl_mappings_find(const input_sdl_mappings *mappings, const char *guid);
+
+/* The USB vendor and product ids inside a Linux joystick GUID (SDL's and GLFW's layout: bus,
+ * 0000, vendor, 0000, product, 0000, version, 0000, each 16-bit little-endian); false when the
+ * GUID is the other form (bus and the device's name), which carries none. */
+bool input__guid_ids(const char *guid, uint16_t *vendor_id, uint16_t *product_id);
+
+/* ---- gamepads through GLFW, on the main thread (input_glfw_pads.c) ---------------------------- */
+
+enum { INPUT_GLFW_JOYSTICKS = 16 };     /* GLFW_JOYSTICK_LAST + 1 */
+
+/* Pads hidapi cannot read (xpad exposes no hidraw node; a node this user cannot open) are read
+ * through GLFW's gamepad API, which knows SDL's mappings; `--gamepad-mappings FILE` adds lines. */
+typedef struct input_glfw_pads {
+    bool active;                                /* a window (so GLFW) and gamepads wanted */
+    input_sdl_mappings mappings;                /* the file's good lines */
+    int slot[INPUT_GLFW_JOYSTICKS];             /* the slot a joystick is read into, −1 none */
+    bool noted[INPUT_GLFW_JOYSTICKS];           /* "no mapping for it" logged since it appeared */
+    bool warned_full;
+} input_glfw_pads;
+
+/* Loads the mappings file (when given) and hands its good lines to GLFW (when `active`); false
+ * (logged) only when the file cannot be read. */
+bool input__glfw_pads_init(input_glfw_pads *pads, const char *mappings_path, bool active);
+/* Once a frame, main thread, before the slots are gathered: joysticks that are gamepads and not
+ * read by the hidraw thread are read and published into `shared`'s slots. */
+void input__glfw_pads_poll(input_glfw_pads *pads, input_pads_shared *shared, bool wait_for_hid);
+void input__glfw_pads_close(input_glfw_pads *pads, input_pads_shared *shared);
+
+/* The duplicate rule: a GLFW joystick is a pad the hidraw thread already reads when its GUID
+ * carries vendor and product ids and more hidraw slots have those ids than `same_ids_before`
+ * (GLFW gamepads with the same ids at lower joystick numbers); when the GUID carries no ids, when
+ * a hidraw pad's product name appears in the joystick's name. */
+bool input__glfw_pad_is_duplicate(const input_pad_slot slots[INPUT_MAX_GAMEPADS], const char *guid, const char *name,
+                                  int same_ids_before);
 
 /* ---- record and replay (input_record.c) ----------------------------------------------------- */
 

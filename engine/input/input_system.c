@@ -41,6 +41,7 @@ struct input_system {
     /* gamepads: the slots the thread publishes, and what the main thread last took from them */
     input_pads_shared pads;
     input_gamepads *gamepads;
+    input_glfw_pads glfw_pads;      /* pads hidraw cannot read, through GLFW (main thread) */
     bool pad_connected[INPUT_MAX_GAMEPADS];
     uint32_t pad_generation[INPUT_MAX_GAMEPADS];
     input_gamepad_state pad_taken[INPUT_MAX_GAMEPADS];
@@ -216,6 +217,12 @@ input_system *input_create(const input_desc *desc) {
 
     input_system *in = core_calloc(1, sizeof *in);
     input__pads_shared_init(&in->pads);
+    /* GLFW's pads need its joystick API, so a window (GLFW initialised); a replay opens no device. */
+    bool glfw_pads = d.glfw_window && !d.no_gamepads && !d.replay_path;
+    if (!input__glfw_pads_init(&in->glfw_pads, d.gamepad_mappings_path, glfw_pads)) {
+        input_destroy(in);
+        return NULL;
+    }
     if (d.replay_path) {
         in->replay_path = core_strdup(d.replay_path);
         in->replayer = input__replayer_open(d.replay_path, &bindings, &dead_zone);
@@ -245,6 +252,7 @@ input_system *input_create(const input_desc *desc) {
 void input_destroy(input_system *in) {
     if (!in) return;
     input__gamepads_stop(in->gamepads);
+    input__glfw_pads_close(&in->glfw_pads, &in->pads);
     if (in->window) input_glfw_detach(in);
     input__recorder_close(in->recorder);
     input__replayer_close(in->replayer);
@@ -303,6 +311,7 @@ bool input_update(input_system *in, float dt) {
             in->warned_dt = true;
             dt = 0.0f;
         }
+        input__glfw_pads_poll(&in->glfw_pads, &in->pads, in->gamepads != NULL);
         input_gather_gamepads(in);
         events = in->events;
         count = in->event_count;

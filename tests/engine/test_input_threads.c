@@ -7,6 +7,7 @@
 #include "test.h"
 
 #include <pthread.h>
+#include <sched.h>
 #include <time.h>
 
 static double ms_since(uint64_t t0) { return (double)(core_time_ns() - t0) * 1e-6; }
@@ -74,6 +75,44 @@ Test(input_threads, published_states_arrive_whole_and_in_order) {
     cr_expect_eq(input_gamepad_count(in), 1);
     cr_expect_leq(presses, PUBLISHED / 2 + 1);
     input_destroy(in);
+}
+
+/* Two readers (as the hidraw thread and the GLFW reader on the main thread) claiming and releasing
+ * slots at once: a slot is never held by both; each checks that the slot it got still carries its
+ * own mark while it holds it. */
+enum { CLAIMS = 5000 };
+
+typedef struct claimer { input_pads_shared *pads; bool hidraw; int clashes, claimed; } claimer;
+
+static void *claim_loop(void *arg) {
+    claimer *c = arg;
+    uint16_t mark = c->hidraw ? 0xaaaa : 0x5555;
+    for (int i = 0; i < CLAIMS; i++) {
+        int slot = input__pad_slot_claim(c->pads, c->hidraw, mark, (uint16_t)i, "pad");
+        if (slot < 0) continue;
+        c->claimed++;
+        sched_yield(); /* hold it a moment, so the other reader has a chance to claim meanwhile */
+        pthread_mutex_lock(&c->pads->lock);
+        c->clashes += c->pads->slots[slot].vendor_id != mark || c->pads->slots[slot].hidraw != c->hidraw;
+        pthread_mutex_unlock(&c->pads->lock);
+        input__pad_slot_release(c->pads, slot);
+    }
+    return NULL;
+}
+
+Test(input_threads, slots_are_never_claimed_twice) {
+    input_pads_shared pads;
+    input__pads_shared_init(&pads);
+    claimer a = { .pads = &pads, .hidraw = true }, b = { .pads = &pads, .hidraw = false };
+    pthread_t thread;
+    cr_assert_eq(pthread_create(&thread, NULL, claim_loop, &a), 0);
+    claim_loop(&b);
+    pthread_join(thread, NULL);
+    cr_expect_eq(a.clashes + b.clashes, 0);
+    cr_expect_eq(a.claimed, CLAIMS); /* 8 slots, at most 2 held at once: every claim succeeds */
+    cr_expect_eq(b.claimed, CLAIMS);
+    for (int i = 0; i < INPUT_MAX_GAMEPADS; i++) cr_expect(!pads.slots[i].claimed);
+    input__pads_shared_destroy(&pads);
 }
 
 /* ---- which HID devices are gamepads (the thread's check of a report descriptor) -------------- */
