@@ -41,6 +41,7 @@ void bench_consume(double value);
 void bench_group_ecs(bench_context *ctx);
 void bench_group_jobs(bench_context *ctx);
 void bench_group_trace(bench_context *ctx);
+void bench_group_trace_overhead(bench_context *ctx);
 void bench_group_input(bench_context *ctx);
 void bench_group_gfx(bench_context *ctx);
 void bench_group_terrain_generate(bench_context *ctx);

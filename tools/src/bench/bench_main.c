@@ -149,7 +149,7 @@ int main(int argc, char **argv) {
                                    bench_group_terrain_detail,
                                    bench_group_shadows, bench_group_water, bench_group_rocks,
                                    bench_group_rocks_world,
-                                   bench_group_play };
+                                   bench_group_play, bench_group_trace_overhead };
     for (size_t i = 0; i < CORE_COUNTOF(groups); i++) groups[i](&ctx);
 
     if (common.trace_path) trace_stop();
