@@ -222,6 +222,7 @@ int main(int argc, char **argv) {
     int rc = parse(argc, argv, &o, &desc, &walk);
     if (rc >= 0) return rc;
     if (o.common.trace_path && !trace_start(o.common.trace_path)) return 2;
+    trace_thread_name("main");
     desc.seed = (uint64_t)o.seed;
     desc.headless = o.headless;
     desc.threads = o.common.threads;
