@@ -695,6 +695,7 @@ bool game_app_frame(game_app *app) {
         if (!written) running = false;
     }
     gfx_frame_end(app->gfx);
+    job_system_trace_counters(app->jobs); /* the frame's jobs.* counters */
     trace_frame_end();
     if (app->loading) {
         app->loading_frames++;

@@ -34,6 +34,10 @@
 
 enum {
     TRACE_CHUNK_EVENTS = 2048, /* 64 KiB chunks of 32-byte events */
+    /* Full chunks queued before the writer is woken without a frame end: a thread that records
+     * fast wakes it every 2 MiB, not every chunk (each wake is a context switch, and on a
+     * machine with few cores the writer then runs in the recording thread's time). */
+    TRACE_WRITER_BATCH = 32,
     TRACE_PID = 1,
 };
 
@@ -101,6 +105,7 @@ static bool trace_use_tsc; /* set once in trace_init, before any capture */
 static struct {
     trace_thread *threads;
     trace_chunk *full_first, **full_last; /* handed over, oldest first */
+    size_t full_count;
     trace_chunk *pool;
     trace_tid_name *names; /* indexed by tid; tid 0 is unused */
     uint32_t tid_count;    /* next tid to give out */
@@ -232,19 +237,24 @@ static void trace_chunks_to_pool(trace_chunk *first) {
     }
 }
 
-/* Queues a chunk for the writer and wakes it (a signal with nobody waiting costs next to
- * nothing, and this runs once per 2048 events or once a frame). */
+/* Queues a chunk for the writer, and wakes it once TRACE_WRITER_BATCH are waiting (a frame end
+ * wakes it whatever the count: trace_wake_writer). */
 static void trace_chunk_append_full(trace_chunk *chunk) {
     chunk->next = NULL;
     *trace_registry.full_last = chunk;
     trace_registry.full_last = &chunk->next;
-    pthread_cond_signal(&trace_work_ready);
+    if (++trace_registry.full_count >= TRACE_WRITER_BATCH) pthread_cond_signal(&trace_work_ready);
+}
+
+static void trace_wake_writer(void) {
+    if (trace_registry.full_first) pthread_cond_signal(&trace_work_ready);
 }
 
 static trace_chunk *trace_take_full_list(void) {
     trace_chunk *first = trace_registry.full_first;
     trace_registry.full_first = NULL;
     trace_registry.full_last = &trace_registry.full_first;
+    trace_registry.full_count = 0;
     return first;
 }
 
@@ -477,6 +487,7 @@ void trace_frame_end(void) {
     /* The frame's events go to the writer now; formatting and writing them is its work. */
     pthread_mutex_lock(&trace_lock);
     trace_hand_over_partial(trace_local);
+    trace_wake_writer();
     pthread_mutex_unlock(&trace_lock);
 }
 
