@@ -35,9 +35,9 @@
 enum {
     TRACE_CHUNK_EVENTS = 2048, /* 64 KiB chunks of 32-byte events */
     /* Full chunks queued before the writer is woken without a frame end: a thread that records
-     * fast wakes it every 2 MiB, not every chunk (each wake is a context switch, and on a
+     * fast wakes it every 4 MiB, not every chunk (each wake is a context switch, and on a
      * machine with few cores the writer then runs in the recording thread's time). */
-    TRACE_WRITER_BATCH = 32,
+    TRACE_WRITER_BATCH = 64,
     TRACE_PID = 1,
 };
 
