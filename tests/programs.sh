@@ -243,6 +243,8 @@ expect "world: bad --size" 2 "bad value for '--size'" -- "$bin/world" --size 10x
 expect "world: --record with --replay" 2 "cannot be used together" -- "$bin/world" --record a --replay b
 expect "world: missing replay" 1 "$tmp/none.rec" -- "$bin/world" --headless --replay "$tmp/none.rec"
 expect "world: bad --memory" 2 "bad value for '--memory'" -- "$bin/world" --memory 1
+expect "world: --trace-frames without --trace" 2 "'--trace-frames' needs '--trace FILE'" -- "$bin/world" --trace-frames 5
+expect "world: negative --trace-frames" 2 "bad value for '--trace-frames'" -- "$bin/world" --trace-frames -1 --trace "$tmp/ring.json"
 # --at X,Y,Z and --look YAW,PITCH: each malformed form named, with the usage; a view asked for is
 # where the player ends two frames later (feet = eye − 1.62 m), looking that way.
 expect "world: --at of two numbers" 2 "bad value for '--at': '1,2' is not X,Y,Z" -- "$bin/world" --at 1,2

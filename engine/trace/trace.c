@@ -62,7 +62,8 @@ typedef struct trace_event {
 } trace_event;
 
 typedef struct trace_chunk {
-    struct trace_chunk *next; /* in the full list or the pool */
+    struct trace_chunk *next; /* in the full list, the kept list or the pool */
+    uint64_t handed;          /* clock ticks when handed to the writer (trace_keep_frames) */
     uint32_t tid;             /* the thread whose events these are */
     /* Stored with release by the owner after each event, so trace_stop can read a live
      * thread's events [0, count) without a lock on the recording side. */
@@ -106,6 +107,11 @@ static struct {
     trace_thread *threads;
     trace_chunk *full_first, **full_last; /* handed over, oldest first */
     size_t full_count;
+    /* trace_keep_frames: the window, and the ticks of the last frame ends (a ring). A chunk
+     * handed over no later than `cutoff` holds only events from before the window. */
+    int keep_frames;       /* 0 = keep everything */
+    uint64_t *frame_ends;  /* keep_frames entries */
+    uint64_t frame_count, cutoff;
     trace_chunk *pool;
     trace_tid_name *names; /* indexed by tid; tid 0 is unused */
     uint32_t tid_count;    /* next tid to give out */
@@ -135,6 +141,9 @@ static struct {
     size_t events_written;
     trace_name_entry *names; /* pending names of the batch being written */
     size_t name_count, name_capacity;
+    uint32_t *depth;         /* per tid: zones open in what was written */
+    size_t depth_capacity;
+    trace_chunk *kept_first, **kept_last; /* trace_keep_frames: chunks held back, oldest first */
 } trace_writer;
 
 /* ---- clock ------------------------------------------------------------------------------ */
@@ -241,6 +250,7 @@ static void trace_chunks_to_pool(trace_chunk *first) {
  * wakes it whatever the count: trace_wake_writer). */
 static void trace_chunk_append_full(trace_chunk *chunk) {
     chunk->next = NULL;
+    chunk->handed = trace_ticks();
     *trace_registry.full_last = chunk;
     trace_registry.full_last = &chunk->next;
     if (++trace_registry.full_count >= TRACE_WRITER_BATCH) pthread_cond_signal(&trace_work_ready);
@@ -477,6 +487,24 @@ void trace_thread_name(const char *name) {
     pthread_mutex_unlock(&trace_lock);
 }
 
+/* trace_keep_frames: moves the window on by one frame (trace_lock held, after the frame's chunk
+ * was handed over, so that chunk is inside the window's last frame). */
+static void trace_note_frame_end(void) {
+    int keep = trace_registry.keep_frames;
+    if (!keep || !trace_registry.frame_ends) return;
+    uint64_t now = trace_ticks();
+    size_t slot = (size_t)(trace_registry.frame_count % (uint64_t)keep);
+    if (trace_registry.frame_count >= (uint64_t)keep) trace_registry.cutoff = trace_registry.frame_ends[slot];
+    trace_registry.frame_ends[slot] = now;
+    trace_registry.frame_count++;
+}
+
+void trace_keep_frames(int frames) {
+    pthread_mutex_lock(&trace_lock);
+    if (!trace_capturing()) trace_registry.keep_frames = frames > 0 ? frames : 0;
+    pthread_mutex_unlock(&trace_lock);
+}
+
 void trace_frame_begin(void) { trace_zone_begin("frame"); }
 
 void trace_frame_end(void) {
@@ -487,6 +515,7 @@ void trace_frame_end(void) {
     /* The frame's events go to the writer now; formatting and writing them is its work. */
     pthread_mutex_lock(&trace_lock);
     trace_hand_over_partial(trace_local);
+    trace_note_frame_end();
     trace_wake_writer();
     pthread_mutex_unlock(&trace_lock);
 }
@@ -555,6 +584,26 @@ static uint64_t trace_clamp_to_tid(uint32_t tid, uint64_t ns) {
     return ns;
 }
 
+/* Whether to write a BEGIN or END, keeping count of open zones per tid: an END whose BEGIN was
+ * not written (dropped with the frames before a trace_keep_frames window) is left out, so the
+ * file stays balanced. A capture of everything never meets one. */
+static bool trace_balance(uint32_t tid, uint32_t kind) {
+    if (kind != TRACE_EVENT_BEGIN && kind != TRACE_EVENT_END) return true;
+    if (tid >= trace_writer.depth_capacity) {
+        size_t old = trace_writer.depth_capacity;
+        trace_writer.depth = core_grow(trace_writer.depth, &trace_writer.depth_capacity, (size_t)tid + 1,
+                                       sizeof *trace_writer.depth);
+        memset(trace_writer.depth + old, 0, (trace_writer.depth_capacity - old) * sizeof *trace_writer.depth);
+    }
+    if (kind == TRACE_EVENT_BEGIN) {
+        trace_writer.depth[tid]++;
+        return true;
+    }
+    if (trace_writer.depth[tid] == 0) return false;
+    trace_writer.depth[tid]--;
+    return true;
+}
+
 static void trace_write_complete(const trace_event *event) {
     uint64_t begin = event->time > trace_writer.start_ns ? event->time - trace_writer.start_ns : 0;
     uint64_t end = begin + event->payload;
@@ -595,6 +644,7 @@ static uint32_t trace_write_event(const trace_event *event, uint32_t available, 
         return 1;
     }
     if (event->kind == TRACE_EVENT_ARG) return 1; /* its zone was left out: nothing to attach to */
+    if (!trace_balance(tid, event->kind)) return 1;
     static const char *const phases[] = { [TRACE_EVENT_BEGIN] = "B", [TRACE_EVENT_END] = "E",
                                           [TRACE_EVENT_COUNTER] = "C" };
     uint64_t ts = trace_clamp_to_tid(tid, trace_ticks_to_ns(map, event->time));
@@ -650,16 +700,43 @@ static size_t trace_chunk_list_length(const trace_chunk *first) {
     return n;
 }
 
-/* One batch: the names and chunks taken under trace_lock, written without it. */
-static void trace_write_batch(const trace_chunk *full) {
-    if (!full && !trace_writer.name_count) return;
+/* trace_keep_frames: holds the chunks back instead of writing them, and returns those now
+ * wholly before the window (to go back to the pool). */
+static trace_chunk *trace_keep(trace_chunk *full, uint64_t cutoff) {
+    if (full) {
+        *trace_writer.kept_last = full;
+        while (full->next) full = full->next;
+        trace_writer.kept_last = &full->next;
+    }
+    trace_chunk *dropped = NULL, **dropped_last = &dropped;
+    while (trace_writer.kept_first && trace_writer.kept_first->handed <= cutoff) {
+        trace_chunk *chunk = trace_writer.kept_first;
+        trace_writer.kept_first = chunk->next;
+        chunk->next = NULL;
+        *dropped_last = chunk;
+        dropped_last = &chunk->next;
+    }
+    if (!trace_writer.kept_first) trace_writer.kept_last = &trace_writer.kept_first;
+    return dropped;
+}
+
+/* One batch: the names and chunks taken under trace_lock, written without it (or, keeping only
+ * the last frames, held back). Returns the chunks done with. */
+static trace_chunk *trace_write_batch(trace_chunk *full, bool keep, uint64_t cutoff) {
+    if (!full && !trace_writer.name_count) return NULL;
     TRACE_ZONE("trace.write");
     trace_zone_arg_int("chunks", (int64_t)trace_chunk_list_length(full));
     trace_write_names();
+    if (keep) {
+        trace_chunk *dropped = trace_keep(full, cutoff);
+        fflush(trace_writer.file);
+        return dropped;
+    }
     trace_clock_map map = trace_clock_map_now(); /* after the events were taken */
     trace_write_chunks(full, &map);
     /* A run that crashes later still leaves every written event on disk. */
     fflush(trace_writer.file);
+    return full;
 }
 
 /* The writer thread: waits for chunks (or a flush or stop request), writes them, recycles them.
@@ -672,14 +749,14 @@ static void *trace_writer_main(void *arg) {
         while (!trace_registry.full_first && trace_registry.flush_requested == trace_registry.flush_done &&
                !trace_registry.writer_stop)
             pthread_cond_wait(&trace_work_ready, &trace_lock);
-        bool stop = trace_registry.writer_stop;
-        uint64_t request = trace_registry.flush_requested;
+        bool stop = trace_registry.writer_stop, keep = trace_registry.keep_frames > 0;
+        uint64_t request = trace_registry.flush_requested, cutoff = trace_registry.cutoff;
         trace_chunk *full = trace_take_full_list();
         trace_take_pending_names();
         pthread_mutex_unlock(&trace_lock);
-        trace_write_batch(full);
+        trace_chunk *done = trace_write_batch(full, keep, cutoff);
         pthread_mutex_lock(&trace_lock);
-        trace_chunks_to_pool(full);
+        trace_chunks_to_pool(done);
         trace_registry.flush_done = request;
         pthread_cond_broadcast(&trace_written);
         if (stop) break;
@@ -722,6 +799,12 @@ bool trace_start(const char *path) {
     trace_writer.path = core_strdup(path);
     trace_writer.events_written = 0;
     if (trace_writer.last_ns) memset(trace_writer.last_ns, 0, trace_writer.last_capacity * sizeof(uint64_t));
+    if (trace_writer.depth) memset(trace_writer.depth, 0, trace_writer.depth_capacity * sizeof(uint32_t));
+    trace_writer.kept_first = NULL;
+    trace_writer.kept_last = &trace_writer.kept_first;
+    trace_registry.frame_count = trace_registry.cutoff = 0;
+    if (trace_registry.keep_frames)
+        trace_registry.frame_ends = core_calloc((size_t)trace_registry.keep_frames, sizeof(uint64_t));
     trace_writer.start_ns = core_time_ns();
     trace_writer.start_ticks = trace_ticks();
     trace_write_header();
@@ -814,10 +897,22 @@ void trace_stop(void) {
     trace_take_pending_names();
     trace_clock_map map = trace_clock_map_now();
     trace_write_names();
+    if (trace_registry.keep_frames) {
+        /* What the writer had not yet taken joins the window, and what is before it goes. */
+        trace_chunks_to_pool(trace_keep(full, trace_registry.cutoff));
+        full = NULL;
+    }
+    trace_chunk *kept = trace_writer.kept_first;
+    trace_writer.kept_first = NULL;
+    trace_writer.kept_last = &trace_writer.kept_first;
+    trace_write_chunks(kept, &map);
     trace_write_chunks(full, &map);
     trace_write_live_threads(&map);
     trace_close_file();
+    trace_chunks_to_pool(kept);
     trace_chunks_to_pool(full);
+    if (trace_registry.frame_ends) core_free(trace_registry.frame_ends, (size_t)trace_registry.keep_frames * sizeof(uint64_t));
+    trace_registry.frame_ends = NULL;
     trace_free_pool();
     trace_registry.stopping = false;
     pthread_mutex_unlock(&trace_lock);

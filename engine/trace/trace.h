@@ -31,6 +31,7 @@
  *   anything else (another zone, a counter): an argument that does not directly follow its
  *   zone's begin (or its other arguments) is dropped, as is any past TRACE_ZONE_ARGS_MAX. Keys
  *   and string values must outlive the capture, like names. Each costs about what an event does.
+ *   trace_keep_frames(n) before trace_start keeps only the last n frames (--trace-frames N).
  *   trace_frame_end also records the counter "memory.bytes" (core_memory_in_use). A thread may
  *   name itself before any capture starts; the name is kept. Stop the capture once the other
  *   threads are idle: events recorded while trace_stop runs may be dropped. See README.md.
@@ -60,6 +61,12 @@
 /* ---- capture ---------------------------------------------------------------------------- */
 
 bool trace_start(const char *path);
+/* Keep only the last `frames` frames (trace_frame_end marks them) of the next captures; 0 (the
+ * default) keeps everything. Called with no capture running. The writer then holds chunks in
+ * memory instead of writing them, drops those wholly before the window, and trace_stop writes
+ * the window: a long run's file stays the size of `frames` frames. An E whose B fell before
+ * the window is left out, so every zone in the file is whole or (at the end) open. */
+void trace_keep_frames(int frames);
 void trace_stop(void);
 void trace_flush(void);
 

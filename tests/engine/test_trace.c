@@ -626,3 +626,74 @@ Test(trace, zone_arguments_are_written_as_args) {
     }
     capture_free(&c);
 }
+
+/* ---- keeping the last frames ------------------------------------------------------------ */
+
+enum { KEEP_FRAMES = 5, KEEP_RUN = 30, KEEP_WORKER_ZONES = 3000 };
+
+typedef struct keep_lockstep {
+    pthread_barrier_t frame_started, worker_done;
+} keep_lockstep;
+
+/* Records KEEP_WORKER_ZONES zones (6000 events: ~3 chunks) inside each of the main thread's
+ * frames, and a zone "long" open across all of them. */
+static void *record_in_lockstep(void *arg) {
+    keep_lockstep *lockstep = arg;
+    trace_thread_name("keeper");
+    trace_zone_begin("long");
+    for (int frame = 0; frame < KEEP_RUN; frame++) {
+        pthread_barrier_wait(&lockstep->frame_started);
+        for (int i = 0; i < KEEP_WORKER_ZONES; i++) { TRACE_ZONE("w"); }
+        if (frame == KEEP_RUN - 1) trace_zone_end(); /* "long" ends in the last frame */
+        pthread_barrier_wait(&lockstep->worker_done);
+    }
+    return NULL;
+}
+
+/* trace_keep_frames(5) over 30 frames: the file has exactly the last 5 frames of the main thread
+ * (their counters read 25 … 29), a worker's zones only from about those frames (a chunk of 2048
+ * events spans at most two frames of 6000, so between 5 and 7 frames' worth), and it stays
+ * balanced: "long", whose B fell before the window, is left out whole. */
+Test(trace, keep_frames_writes_only_the_last_frames) {
+    char path[128];
+    temp_trace_path(path, sizeof path, "keep");
+    trace_keep_frames(KEEP_FRAMES);
+    cr_assert(trace_start(path));
+    keep_lockstep lockstep;
+    pthread_barrier_init(&lockstep.frame_started, NULL, 2);
+    pthread_barrier_init(&lockstep.worker_done, NULL, 2);
+    pthread_t worker;
+    pthread_create(&worker, NULL, record_in_lockstep, &lockstep);
+    for (int frame = 0; frame < KEEP_RUN; frame++) {
+        trace_frame_begin();
+        trace_counter("frame.index", frame);
+        pthread_barrier_wait(&lockstep.frame_started);
+        pthread_barrier_wait(&lockstep.worker_done);
+        trace_frame_end();
+    }
+    pthread_join(worker, NULL);
+    trace_stop();
+    trace_keep_frames(0); /* later captures in this process keep everything */
+    pthread_barrier_destroy(&lockstep.frame_started);
+    pthread_barrier_destroy(&lockstep.worker_done);
+
+    capture c;
+    capture_load(&c, path);
+    check_invariants(&c);
+    cr_expect_eq(count_events(&c, "B", "frame", -1), KEEP_FRAMES);
+    cr_expect_eq(count_events(&c, "C", "frame.index", -1), KEEP_FRAMES);
+    double expected = KEEP_RUN - KEEP_FRAMES;
+    for (size_t i = 0; i < c.events->array.count; i++) {
+        const core_json_value *e = event_at(&c, i);
+        if (!event_is(e, "C") || !core_json_string_equals(core_json_get(e, "name"), "frame.index")) continue;
+        double value = core_json_number_or(core_json_get(core_json_get(e, "args"), "value"), NAN);
+        cr_expect(value == expected, "frame.index %g, expected %g", value, expected);
+        expected++;
+    }
+    size_t worker_zones = count_events(&c, "B", "w", -1);
+    cr_expect_geq(worker_zones, (size_t)(KEEP_FRAMES * KEEP_WORKER_ZONES));
+    cr_expect_leq(worker_zones, (size_t)((KEEP_FRAMES + 2) * KEEP_WORKER_ZONES));
+    cr_expect_eq(count_events(&c, "B", "long", -1), 0);
+    cr_expect_gt(tid_named(&c, "keeper"), 0, "names are kept whatever the window");
+    capture_free(&c);
+}
