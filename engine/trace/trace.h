@@ -21,6 +21,10 @@
  *   formats or writes. trace_flush waits until the writer has written everything the calling
  *   thread recorded so far (for tests and benchmarks; it blocks, so not in a frame loop).
  *   With no capture running every call returns after one load of a flag.
+ *   trace_keep_frames(n) before trace_start keeps only the last n frames (--trace-frames N).
+ *   trace_frame_end also records the counter "memory.bytes" (core_memory_in_use). A thread may
+ *   name itself before any capture starts; the name is kept. Stop the capture once the other
+ *   threads are idle: events recorded while trace_stop runs may be dropped. See README.md.
  *
  * ZONE ARGUMENTS
  *     trace_zone_begin("mesh");                  // or TRACE_ZONE, or a job's zone
@@ -31,10 +35,6 @@
  *   anything else (another zone, a counter): an argument that does not directly follow its
  *   zone's begin (or its other arguments) is dropped, as is any past TRACE_ZONE_ARGS_MAX. Keys
  *   and string values must outlive the capture, like names. Each costs about what an event does.
- *   trace_keep_frames(n) before trace_start keeps only the last n frames (--trace-frames N).
- *   trace_frame_end also records the counter "memory.bytes" (core_memory_in_use). A thread may
- *   name itself before any capture starts; the name is kept. Stop the capture once the other
- *   threads are idle: events recorded while trace_stop runs may be dropped. See README.md.
  *
  * FILE
  *   {"traceEvents":[ ... ],"displayTimeUnit":"ms"} with events
