@@ -113,6 +113,7 @@ program("test_engine", { files = { "tests/engine/**.c", "tests/engine/**.h" },
 -- The tests that exercise threads, without Criterion, so they can run under ThreadSanitizer
 -- (tests/engine/test.h says why). tools/test builds and runs this in the tsan configuration.
 program("test_threads", { files = { "tests/engine/test_shim.c", "tests/engine/test_jobs.c",
+                                    "tests/engine/test_jobs_trace.c",
                                     "tests/engine/test_ecs_scheduler.c", "tests/engine/test_ecs_commands.c",
                                     "tests/engine/test_ecs_hooks.c",
                                     "tests/engine/test_trace.c", "tests/engine/test_input_threads.c",

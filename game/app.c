@@ -752,6 +752,7 @@ bool game_app_frame(game_app *app) {
     }
     gfx_frame_end(app->gfx);
     app_memory_counters(app);
+    job_system_trace_counters(app->jobs); /* the frame's jobs.* counters */
     trace_frame_end();
     if (app->loading) {
         app->loading_frames++;

@@ -4,7 +4,7 @@
  *         [--replay FILE] [--bindings FILE] [--gamepad-mappings FILE] [--screenshot FILE] [--radius R] [--levels N]
  *         [--memory MB] [--grass off|low|high] [--water off|low|high] [--shadows off|low|high]
  *         [--detail on|off] [--rocks on|off] [--threads N]
- *         [--trace FILE] [--world DIR] [--at X,Y,Z] [--look YAW,PITCH]
+ *         [--trace FILE [--trace-frames N]] [--world DIR] [--at X,Y,Z] [--look YAW,PITCH]
  *
  * In a window: WASD or the left stick to walk, the mouse (click to capture, Escape to let go) or
  * the right stick to look, Space to jump, Shift to sprint, Ctrl or C to crouch, F to fly, F11
@@ -36,7 +36,7 @@ typedef struct options {
     core_common_args common;
     const char *size, *screenshot, *walk, *record, *replay, *bindings, *gamepad_mappings, *world, *grass, *water, *shadows, *detail, *at,
         *look, *rocks, *cliffs;
-    int seed, frames, radius, levels, memory_mb;
+    int seed, frames, radius, levels, memory_mb, trace_frames;
     bool headless, tour, no_head_bob, no_ao;
 } options;
 
@@ -74,6 +74,8 @@ static int bad_value(const core_cli *cli, const char *flag, const char *problem)
 static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_walk *walk) {
     const core_option list[] = {
         CORE_COMMON_OPTIONS(o->common),
+        { "trace-frames", CORE_OPTION_INT, &o->trace_frames, "N", "with --trace: keep only the last N frames "
+          "(a ring, for long runs; 0 = all)", 0, 100000000 },
         { "seed", CORE_OPTION_INT, &o->seed, "S", "world seed (default 1, or the --world folder's)", 0,
           2147483647 },
         { "world", CORE_OPTION_STRING, &o->world, "DIR", "keep the world's edits in DIR (loaded, autosaved)" },
@@ -170,6 +172,11 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         fprintf(stderr, "world: the built-in tour does not parse: %s\n", error);   /* a programmer's error */
         return 1;
     }
+    if (o->trace_frames && !o->common.trace_path) {
+        fprintf(stderr, "world: '--trace-frames' needs '--trace FILE'\n");
+        core_cli_print_usage(&cli, stderr);
+        return 2;
+    }
     if (o->record && o->replay) {
         fprintf(stderr, "world: '--record' and '--replay' cannot be used together\n");
         core_cli_print_usage(&cli, stderr);
@@ -223,7 +230,9 @@ int main(int argc, char **argv) {
     game_walk walk = { 0 };
     int rc = parse(argc, argv, &o, &desc, &walk);
     if (rc >= 0) return rc;
+    trace_keep_frames(o.trace_frames);
     if (o.common.trace_path && !trace_start(o.common.trace_path)) return 2;
+    trace_thread_name("main");
     desc.seed = (uint64_t)o.seed;
     desc.headless = o.headless;
     desc.threads = o.common.threads;

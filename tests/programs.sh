@@ -293,6 +293,8 @@ expect "world: bad --gamepad-mappings line skipped" 0 "pads.txt:2: unknown outpu
   --water off --gamepad-mappings "$tmp/pads.txt"
 expect "world: --help lists --gamepad-mappings" 0 "--gamepad-mappings FILE" -- "$bin/world" --help
 expect "world: bad --memory" 2 "bad value for '--memory'" -- "$bin/world" --memory 1
+expect "world: --trace-frames without --trace" 2 "'--trace-frames' needs '--trace FILE'" -- "$bin/world" --trace-frames 5
+expect "world: negative --trace-frames" 2 "bad value for '--trace-frames'" -- "$bin/world" --trace-frames -1 --trace "$tmp/ring.json"
 # --at X,Y,Z and --look YAW,PITCH: each malformed form named, with the usage; a view asked for is
 # where the player ends two frames later (feet = eye − 1.62 m), looking that way.
 expect "world: --at of two numbers" 2 "bad value for '--at': '1,2' is not X,Y,Z" -- "$bin/world" --at 1,2

@@ -16,6 +16,9 @@
 
 /* The worker record of the calling thread, when it is one of a job system's workers. */
 static _Thread_local job_thread *current_worker;
+/* The system whose background job the calling thread is running, if it is running one: what
+ * that job submits is background too (jobs.h). */
+static _Thread_local job_system *running_background_of;
 
 /* ---- queues ----------------------------------------------------------------------------- */
 
@@ -180,15 +183,47 @@ static inline void full_fence(void) {
 
 /* ---- waking ----------------------------------------------------------------------------- */
 
-/* Sleepers count themselves (holding sleep_lock) before their last look at the queues, and
- * producers publish work before they look for sleepers, with a full fence between: one of the
- * two always sees the other, so no wake-up is lost. */
-static void wake_sleepers(job_system *jobs, bool everyone) {
+/* Sleepers put themselves on the list (holding sleep_lock) before their last look at the queues,
+ * and producers publish work before they look for sleepers, with a full fence between: one of
+ * the two always sees the other, so no wake-up is lost. Each sleeper has a condition variable of
+ * its own; a wake picks one sleeper and marks it, so two wakes never go to the same one. */
+static void wake_one(job_system *jobs, job_sleeper *sleeper) {
+    sleeper->signalled = true;
+    atomic_fetch_add_explicit(&jobs->wakes, 1, memory_order_relaxed);
+    pthread_cond_signal(&sleeper->wake);
+}
+
+typedef enum job_kind { JOB_KIND_ANY, JOB_KIND_MAIN, JOB_KIND_BACKGROUND } job_kind;
+
+static bool takes_background(const job_system *jobs, const job_thread *self);
+
+static bool sleeper_can_run(const job_system *jobs, const job_sleeper *sleeper, job_kind kind) {
+    if (sleeper->signalled) return false;
+    if (kind == JOB_KIND_MAIN) return sleeper->self && sleeper->self->index == 0;
+    if (kind == JOB_KIND_BACKGROUND) return takes_background(jobs, sleeper->self);
+    return true;
+}
+
+/* A job of `kind` was queued: wakes one sleeper that can run it, an idle worker before a thread
+ * that waits (the waiter would run it in its own wait). */
+static void wake_for_job(job_system *jobs, job_kind kind) {
     full_fence();
     if (atomic_load(&jobs->sleepers) == 0) return;
     pthread_mutex_lock(&jobs->sleep_lock);
-    if (everyone) pthread_cond_broadcast(&jobs->wake);
-    else pthread_cond_signal(&jobs->wake);
+    job_sleeper *chosen = NULL;
+    for (job_sleeper *s = jobs->sleeper_list; s && (!chosen || chosen->done); s = s->next)
+        if (sleeper_can_run(jobs, s, kind) && (!chosen || !s->done)) chosen = s;
+    if (chosen) wake_one(jobs, chosen);
+    pthread_mutex_unlock(&jobs->sleep_lock);
+}
+
+/* A job finished: wakes the threads whose wait it ends, and no one else. */
+static void wake_finished_waiters(job_system *jobs) {
+    full_fence();
+    if (atomic_load(&jobs->waiters) == 0) return;
+    pthread_mutex_lock(&jobs->sleep_lock);
+    for (job_sleeper *s = jobs->sleeper_list; s; s = s->next)
+        if (s->done && !s->signalled && s->done(jobs, s->arg)) wake_one(jobs, s);
     pthread_mutex_unlock(&jobs->sleep_lock);
 }
 
@@ -196,19 +231,16 @@ static void make_ready(job_system *jobs, job_thread *self, uint32_t index) {
     job_slot *slot = slot_at(jobs, index);
     if (slot->main_thread) {
         queue_push(&jobs->main_queue, index);
-        /* The main thread may sleep next to workers: wake them all so it is among them. */
-        wake_sleepers(jobs, true);
+        wake_for_job(jobs, JOB_KIND_MAIN);
         return;
     }
     if (slot->background) {
         queue_push(&jobs->background_queue, index);
-        /* Only workers take it: a single signal could go to a waiting main thread and be lost. */
-        wake_sleepers(jobs, true);
+        wake_for_job(jobs, JOB_KIND_BACKGROUND);
         return;
     }
     queue_push(self ? &self->queue : &jobs->threads[0].queue, index);
-    /* A waiter may take the signal instead of a worker; it then runs the job itself. */
-    wake_sleepers(jobs, false);
+    wake_for_job(jobs, JOB_KIND_ANY);
 }
 
 /* ---- running ---------------------------------------------------------------------------- */
@@ -257,16 +289,18 @@ static void finish_job(job_system *jobs, job_thread *self, uint32_t index) {
     atomic_store_explicit(&slot->generation, next ? next : 1, memory_order_release);
     free_slot(jobs, self, index);
     count_one(self ? &self->completed : NULL, &jobs->foreign_completed);
-    /* Someone may be waiting for exactly this job (or for all of them): let them look. */
-    full_fence();
-    if (atomic_load(&jobs->waiters) > 0) wake_sleepers(jobs, true);
+    /* Someone may be waiting for exactly this job (or for all of them). */
+    wake_finished_waiters(jobs);
 }
 
 static void run_job(job_system *jobs, job_thread *self, uint32_t index) {
     job_slot *slot = slot_at(jobs, index);
+    job_system *outer = running_background_of;
+    running_background_of = slot->background ? jobs : NULL;
     trace_zone_begin(slot->name ? slot->name : "job");
     slot->fn(slot->user);
     trace_zone_end();
+    running_background_of = outer;
     finish_job(jobs, self, index);
 }
 
@@ -317,23 +351,47 @@ static bool has_work_for(job_system *jobs, const job_thread *self) {
     return takes_background(jobs, self) && !queue_looks_empty(&jobs->background_queue);
 }
 
-/* Sleeps until there may be work for `self` or `done` holds (a NULL predicate: work only). */
-static void sleep_until(job_system *jobs, const job_thread *self, wait_predicate done, const void *arg) {
-    pthread_mutex_lock(&jobs->sleep_lock);
-    atomic_fetch_add(&jobs->sleepers, 1);
-    if (done) atomic_fetch_add(&jobs->waiters, 1);
-    full_fence(); /* pairs with the fence in wake_sleepers */
-    while (!has_work_for(jobs, self) && !(done && done(jobs, arg)) && !atomic_load(&jobs->stopping)) {
-        atomic_fetch_add_explicit(&jobs->sleeps, 1, memory_order_relaxed);
-        pthread_cond_wait(&jobs->wake, &jobs->sleep_lock);
+static void sleeper_unlink(job_system *jobs, job_sleeper *sleeper) {
+    for (job_sleeper **link = &jobs->sleeper_list; *link; link = &(*link)->next) {
+        if (*link == sleeper) {
+            *link = sleeper->next;
+            return;
+        }
     }
-    if (done) atomic_fetch_sub(&jobs->waiters, 1);
-    atomic_fetch_sub(&jobs->sleepers, 1);
-    pthread_mutex_unlock(&jobs->sleep_lock);
 }
 
-/* Runs jobs on the calling thread until `done` holds; never just blocks while work exists. */
+/* Sleeps until there may be work for `self` or `done` holds (a NULL predicate: work only). The
+ * time asleep is a trace zone "sleep". */
+static void sleep_until(job_system *jobs, const job_thread *self, wait_predicate done, const void *arg) {
+    job_sleeper sleeper = { .self = self, .done = done, .arg = arg };
+    pthread_cond_init(&sleeper.wake, NULL);
+    pthread_mutex_lock(&jobs->sleep_lock);
+    sleeper.next = jobs->sleeper_list;
+    jobs->sleeper_list = &sleeper;
+    atomic_fetch_add(&jobs->sleepers, 1);
+    if (done) atomic_fetch_add(&jobs->waiters, 1);
+    full_fence(); /* pairs with the fences in wake_for_job and wake_finished_waiters */
+    bool slept = false;
+    while (!has_work_for(jobs, self) && !(done && done(jobs, arg)) && !atomic_load(&jobs->stopping)) {
+        if (!slept) trace_zone_begin("sleep");
+        slept = true;
+        atomic_fetch_add_explicit(&jobs->sleeps, 1, memory_order_relaxed);
+        sleeper.signalled = false;
+        pthread_cond_wait(&sleeper.wake, &jobs->sleep_lock);
+    }
+    if (slept) trace_zone_end();
+    if (done) atomic_fetch_sub(&jobs->waiters, 1);
+    atomic_fetch_sub(&jobs->sleepers, 1);
+    sleeper_unlink(jobs, &sleeper);
+    pthread_mutex_unlock(&jobs->sleep_lock);
+    pthread_cond_destroy(&sleeper.wake);
+}
+
+/* Runs jobs on the calling thread until `done` holds; never just blocks while work exists. The
+ * wait is a trace zone "wait", the jobs it runs nested in it. */
 static void wait_until(job_system *jobs, wait_predicate done, const void *arg) {
+    if (done(jobs, arg)) return;
+    TRACE_ZONE("wait");
     job_thread *self = caller_thread(jobs);
     while (!done(jobs, arg)) {
         uint32_t index;
@@ -383,7 +441,6 @@ job_system *job_system_create(const job_system_desc *desc) {
     jobs->threads = core_calloc((size_t)threads, sizeof *jobs->threads);
     pthread_mutex_init(&jobs->slot_lock, NULL);
     pthread_mutex_init(&jobs->sleep_lock, NULL);
-    pthread_cond_init(&jobs->wake, NULL);
     queue_init(&jobs->main_queue);
     queue_init(&jobs->background_queue);
     for (int i = 0; i < threads; i++) {
@@ -406,7 +463,7 @@ void job_system_destroy(job_system *jobs) {
     job_wait_all(jobs);
     atomic_store(&jobs->stopping, true);
     pthread_mutex_lock(&jobs->sleep_lock);
-    pthread_cond_broadcast(&jobs->wake);
+    for (job_sleeper *s = jobs->sleeper_list; s; s = s->next) pthread_cond_signal(&s->wake);
     pthread_mutex_unlock(&jobs->sleep_lock);
     for (int i = 1; i < jobs->thread_count; i++) pthread_join(jobs->threads[i].thread, NULL);
 
@@ -419,7 +476,6 @@ void job_system_destroy(job_system *jobs) {
     core_free(jobs->shared_free, jobs->shared_free_capacity * sizeof(uint32_t));
     pthread_mutex_destroy(&jobs->slot_lock);
     pthread_mutex_destroy(&jobs->sleep_lock);
-    pthread_cond_destroy(&jobs->wake);
     core_free(jobs, sizeof *jobs);
 }
 
@@ -440,7 +496,8 @@ job_handle job_submit(job_system *jobs, const job_desc *desc) {
     slot->user = desc->user;
     slot->name = desc->name;
     slot->main_thread = desc->main_thread;
-    slot->background = desc->background && !desc->main_thread;
+    /* What a background job submits is background too: a frame waiting on it must not run it. */
+    slot->background = (desc->background || running_background_of == jobs) && !desc->main_thread;
     slot->finished = false;
     slot->dependent_count = 0;
     job_handle handle = { index, atomic_load_explicit(&slot->generation, memory_order_relaxed) };
@@ -604,6 +661,7 @@ job_stats job_system_stats(job_system *jobs) {
         .completed = sum_completed(jobs),
         .submitted = sum_submitted(jobs),
         .sleeps = atomic_load_explicit(&jobs->sleeps, memory_order_relaxed),
+        .wakes = atomic_load_explicit(&jobs->wakes, memory_order_relaxed),
         .queued = (int)(atomic_load_explicit(&jobs->main_queue.size_hint, memory_order_relaxed) +
                         atomic_load_explicit(&jobs->background_queue.size_hint, memory_order_relaxed)),
     };
@@ -612,4 +670,16 @@ job_stats job_system_stats(job_system *jobs) {
         stats.queued += (int)atomic_load_explicit(&jobs->threads[i].queue.size_hint, memory_order_relaxed);
     }
     return stats;
+}
+
+/* The one place the job system's counters are recorded (jobs.h, TRACES). */
+void job_system_trace_counters(job_system *jobs) {
+    if (!trace_active()) return;
+    job_stats now = job_system_stats(jobs), *last = &jobs->traced;
+    trace_counter("jobs.run", (double)(now.completed - last->completed));
+    trace_counter("jobs.stolen", (double)(now.stolen - last->stolen));
+    trace_counter("jobs.sleeps", (double)(now.sleeps - last->sleeps));
+    trace_counter("jobs.wakes", (double)(now.wakes - last->wakes));
+    trace_counter("jobs.queued", (double)now.queued);
+    *last = now;
 }

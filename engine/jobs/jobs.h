@@ -27,8 +27,8 @@
  *
  * MAIN-THREAD JOBS
  *   A job with .main_thread = true runs only on the thread that created the job system (the
- *   OpenGL thread): inside job_wait there, or in job_run_main_thread_jobs, which the frame loop
- *   calls once a frame.
+ *   OpenGL thread): inside job_wait / job_wait_all / job_help there, or in
+ *   job_run_main_thread_jobs for a caller that wants them run without waiting on anything.
  *
  * BACKGROUND JOBS
  *     job_submit(jobs, &(job_desc){ .fn = mesh_chunk, .user = task, .background = true });
@@ -37,12 +37,22 @@
  *   never picks one up while it waits for a frame's jobs (job_wait, job_parallel_for), so a
  *   frame is never stalled behind one. The main thread runs them only in job_help, or when it
  *   is the only thread (threads = 1) and has nothing else to do while it waits. Poll them with
- *   job_is_done; job_wait_all and job_system_destroy wait for them too.
+ *   job_is_done; job_wait_all and job_system_destroy wait for them too. Jobs submitted by a
+ *   running background job are background too, so a frame's wait never picks up a piece of a
+ *   long job.
  *
  * THREADS AND SLEEP
  *   Each worker owns a queue; an idle worker steals from the others, and with nothing to steal
- *   it sleeps on a condition variable (an idle engine uses ~0% CPU). Every job runs inside a
- *   trace zone named by job_desc.name ("job" when NULL).
+ *   it sleeps (an idle engine uses ~0% CPU). A new job wakes one sleeper that can run it (a
+ *   worker first); a finished job wakes only a thread waiting for it.
+ *
+ * TRACES
+ *   Every job runs inside a trace zone named by job_desc.name ("job" when NULL). A thread
+ *   waiting in job_wait / job_wait_all is inside a zone "wait" (jobs it runs meanwhile nest in
+ *   it), and a thread asleep in the job system inside a zone "sleep". Once a frame:
+ *     job_system_trace_counters(jobs);   // before trace_frame_end
+ *   records the counters jobs.run, jobs.stolen, jobs.sleeps, jobs.wakes (each since the last
+ *   call) and jobs.queued (ready jobs not started, now).
  */
 #ifndef JOBS_H
 #define JOBS_H
@@ -92,7 +102,8 @@ void job_wait_all(job_system *jobs);
 /* Runs queued jobs on the calling thread until none is left or `budget_ns` has passed;
  * returns how many ran. From the main thread this includes main-thread jobs. */
 int job_help(job_system *jobs, uint64_t budget_ns);
-/* Runs the main-thread jobs that are ready now; returns how many ran. Main thread only. */
+/* Runs the main-thread jobs that are ready now, without waiting for anything; returns how many
+ * ran. Main thread only. (job_wait and job_help run them too.) */
 int job_run_main_thread_jobs(job_system *jobs);
 
 /* batch = 0 picks a batch size that gives each thread about four ranges. */
@@ -103,9 +114,15 @@ job_handle job_parallel_for_async(job_system *jobs, size_t count, size_t batch,
 
 /* Statistics, for counters and tests. */
 typedef struct job_stats {
-    uint64_t submitted, completed, stolen, sleeps;
+    uint64_t submitted, completed; /* completed = jobs run */
+    uint64_t stolen;         /* jobs moved from one thread's queue to another's */
+    uint64_t sleeps;         /* times a thread went to sleep for want of work */
+    uint64_t wakes;          /* sleepers woken for a new job or a finished one */
     int queued;              /* ready jobs not yet started */
 } job_stats;
 job_stats job_system_stats(job_system *jobs);
+/* Records the TRACES counters above for the frame since the last call (one caller, once a
+ * frame, from the thread that ends frames). Nothing when no capture runs. */
+void job_system_trace_counters(job_system *jobs);
 
 #endif /* JOBS_H */

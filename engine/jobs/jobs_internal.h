@@ -61,6 +61,19 @@ typedef struct job_thread {
     _Atomic uint64_t submitted, completed, stolen;
 } job_thread;
 
+/* A thread asleep in the job system, on its own stack: a worker with nothing to do, or a thread
+ * in job_wait / job_wait_all (`done` set). Each has a condition variable of its own, so a wake
+ * reaches exactly the sleeper chosen for it (one that can run the new job, or the waiter whose
+ * job finished) instead of every sleeper. Guarded by sleep_lock. */
+typedef struct job_sleeper {
+    struct job_sleeper *next;
+    pthread_cond_t wake;
+    const job_thread *self;       /* NULL for a thread the system does not own */
+    bool (*done)(job_system *jobs, const void *arg); /* NULL for an idle worker */
+    const void *arg;
+    bool signalled;               /* woken and not yet running: not chosen again */
+} job_sleeper;
+
 struct job_system {
     int thread_count;             /* threads running (the main one included) */
     int thread_capacity;          /* job_thread records allocated */
@@ -75,14 +88,15 @@ struct job_system {
     uint32_t *shared_free;
     size_t shared_free_count, shared_free_capacity;
 
-    _Atomic int sleepers;         /* threads waiting on wake */
+    _Atomic int sleepers;         /* threads in the sleeper list */
     _Atomic int waiters;          /* of those, threads waiting for a job to finish */
     pthread_mutex_t sleep_lock;
-    pthread_cond_t wake;
+    job_sleeper *sleeper_list;    /* guarded by sleep_lock */
     _Atomic bool stopping;
 
     _Atomic uint64_t foreign_submitted, foreign_completed; /* by threads not in the pool */
-    _Atomic uint64_t sleeps;
+    _Atomic uint64_t sleeps, wakes;
+    job_stats traced;             /* at the last job_system_trace_counters (its caller's) */
 };
 
 #endif

@@ -1,20 +1,23 @@
 /* trace.c — capture: per-thread event buffers written out as Chrome Trace Event JSON (trace.h).
  *
  * Each thread appends fixed-size events to a chunk of its own, reached through a thread-local
- * pointer, so recording takes no lock. A full chunk is handed to a global list (the only time a
- * recording thread locks) and trace_flush writes that list to the file, which keeps memory
- * bounded in long runs. The registry, not the thread, owns the chunks: a thread that exits
- * hands its last chunk over, and trace_stop writes whatever every thread still holds.
+ * pointer, so recording takes no lock. A full chunk (and at trace_frame_end the frame thread's
+ * chunk) is handed to a global list, the only time a recording thread locks, and a writer thread
+ * of the capture's own formats that list and writes it to the file: no thread that records ever
+ * formats JSON or waits on the disk. The writer's work is a zone ("trace.write") on its own lane.
+ * The registry, not the thread, owns the chunks: a thread that exits hands its last chunk over,
+ * and trace_stop joins the writer and writes whatever every thread still holds.
  *
- * Locks: `trace_lock` guards the registry (threads, chunk lists, names, lanes); `trace_write_lock`
- * guards the file. When both are needed trace_lock is taken first. Recording threads only ever
- * take trace_lock, so a slow disk write in trace_flush never blocks them.
+ * Locks: `trace_lock` guards the registry (threads, chunk lists, names, lanes, the writer's
+ * requests). The file and `trace_writer` belong to the writer thread while it runs, and to
+ * trace_start / trace_stop before it starts and after it is joined, so they need no lock.
  */
 #include "trace/trace.h"
 
 #include "core/core.h"
 
 #include <errno.h>
+#include <inttypes.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
@@ -31,6 +34,10 @@
 
 enum {
     TRACE_CHUNK_EVENTS = 2048, /* 64 KiB chunks of 32-byte events */
+    /* Full chunks queued before the writer is woken without a frame end: a thread that records
+     * fast wakes it every 4 MiB, not every chunk (each wake is a context switch, and on a
+     * machine with few cores the writer then runs in the recording thread's time). */
+    TRACE_WRITER_BATCH = 64,
     TRACE_PID = 1,
 };
 
@@ -39,18 +46,24 @@ typedef enum trace_event_kind {
     TRACE_EVENT_END,
     TRACE_EVENT_COUNTER,
     TRACE_EVENT_COMPLETE,
+    TRACE_EVENT_ARG, /* an argument of the BEGIN just before it (after its other arguments) */
 } trace_event_kind;
+
+/* An ARG event's `lane` says what its payload holds. */
+enum { TRACE_ARG_INT, TRACE_ARG_STRING };
 
 typedef struct trace_event {
     uint64_t time;    /* clock ticks; for COMPLETE, trace_now() nanoseconds */
     const char *name; /* NULL for END */
-    uint64_t payload; /* COUNTER: the double's bits; COMPLETE: duration in nanoseconds */
+    uint64_t payload; /* COUNTER: the double's bits; COMPLETE: duration in nanoseconds;
+                         ARG: the int64's bits or the string's pointer */
     uint32_t kind;
-    uint32_t lane;    /* COMPLETE: the lane's tid */
+    uint32_t lane;    /* COMPLETE: the lane's tid; ARG: TRACE_ARG_INT or TRACE_ARG_STRING */
 } trace_event;
 
 typedef struct trace_chunk {
-    struct trace_chunk *next; /* in the full list or the pool */
+    struct trace_chunk *next; /* in the full list, the kept list or the pool */
+    uint64_t handed;          /* clock ticks when handed to the writer (trace_keep_frames) */
     uint32_t tid;             /* the thread whose events these are */
     /* Stored with release by the owner after each event, so trace_stop can read a live
      * thread's events [0, count) without a lock on the recording side. */
@@ -83,7 +96,8 @@ int trace__active;
 static _Atomic uint32_t trace_session; /* bumped by every trace_start */
 static _Thread_local trace_thread *trace_local;
 static pthread_mutex_t trace_lock = PTHREAD_MUTEX_INITIALIZER;
-static pthread_mutex_t trace_write_lock = PTHREAD_MUTEX_INITIALIZER;
+static pthread_cond_t trace_work_ready = PTHREAD_COND_INITIALIZER; /* the writer waits on it */
+static pthread_cond_t trace_written = PTHREAD_COND_INITIALIZER;    /* trace_flush waits on it */
 static pthread_once_t trace_once = PTHREAD_ONCE_INIT;
 static pthread_key_t trace_exit_key;
 static bool trace_use_tsc; /* set once in trace_init, before any capture */
@@ -92,13 +106,31 @@ static bool trace_use_tsc; /* set once in trace_init, before any capture */
 static struct {
     trace_thread *threads;
     trace_chunk *full_first, **full_last; /* handed over, oldest first */
+    size_t full_count;
+    /* trace_keep_frames: the window, and the ticks of the last frame ends (a ring). A chunk
+     * handed over no later than `cutoff` holds only events from before the window. */
+    int keep_frames;       /* 0 = keep everything */
+    uint64_t *frame_ends;  /* keep_frames entries */
+    uint64_t frame_count, cutoff;
     trace_chunk *pool;
     trace_tid_name *names; /* indexed by tid; tid 0 is unused */
     uint32_t tid_count;    /* next tid to give out */
     size_t name_capacity;
+    /* The writer thread and what it has been asked to do. */
+    pthread_t writer;
+    bool writer_running;   /* started by trace_start, joined by trace_stop */
+    bool writer_stop;      /* trace_stop asks it to write what is left and exit */
+    bool stopping;         /* trace_stop is running: a second call returns at once */
+    uint64_t flush_requested, flush_done; /* trace_flush tickets */
 } trace_registry;
 
-/* Guarded by trace_write_lock. */
+/* A tid and its name, copied out of the registry so the writer can write it without the lock. */
+typedef struct trace_name_entry {
+    uint32_t tid;
+    const char *name;
+} trace_name_entry;
+
+/* The writer's state: the writer thread's while it runs (see the locks above). */
 static struct {
     FILE *file;
     char *path;
@@ -107,6 +139,11 @@ static struct {
     uint64_t *last_ns;    /* per tid: the last timestamp written */
     size_t last_capacity;
     size_t events_written;
+    trace_name_entry *names; /* pending names of the batch being written */
+    size_t name_count, name_capacity;
+    uint32_t *depth;         /* per tid: zones open in what was written */
+    size_t depth_capacity;
+    trace_chunk *kept_first, **kept_last; /* trace_keep_frames: chunks held back, oldest first */
 } trace_writer;
 
 /* ---- clock ------------------------------------------------------------------------------ */
@@ -209,16 +246,25 @@ static void trace_chunks_to_pool(trace_chunk *first) {
     }
 }
 
+/* Queues a chunk for the writer, and wakes it once TRACE_WRITER_BATCH are waiting (a frame end
+ * wakes it whatever the count: trace_wake_writer). */
 static void trace_chunk_append_full(trace_chunk *chunk) {
     chunk->next = NULL;
+    chunk->handed = trace_ticks();
     *trace_registry.full_last = chunk;
     trace_registry.full_last = &chunk->next;
+    if (++trace_registry.full_count >= TRACE_WRITER_BATCH) pthread_cond_signal(&trace_work_ready);
+}
+
+static void trace_wake_writer(void) {
+    if (trace_registry.full_first) pthread_cond_signal(&trace_work_ready);
 }
 
 static trace_chunk *trace_take_full_list(void) {
     trace_chunk *first = trace_registry.full_first;
     trace_registry.full_first = NULL;
     trace_registry.full_last = &trace_registry.full_first;
+    trace_registry.full_count = 0;
     return first;
 }
 
@@ -234,6 +280,11 @@ static uint32_t trace_tid_new(const char *name, bool is_lane) {
     return tid;
 }
 
+/* Whether the thread's tid and chunk belong to the running capture. */
+static bool trace_thread_is_current(const trace_thread *thread) {
+    return thread && trace_capturing() && thread->session == atomic_load(&trace_session);
+}
+
 /* Runs on a thread that exits (a pthread key destructor): its events outlive it. */
 static void trace_thread_exit(void *arg) {
     trace_thread *thread = arg;
@@ -246,8 +297,7 @@ static void trace_thread_exit(void *arg) {
     }
     trace_chunk *chunk = thread->chunk;
     if (chunk) {
-        bool current = trace_capturing() && thread->session == atomic_load(&trace_session);
-        if (current && atomic_load_explicit(&chunk->count, memory_order_relaxed) > 0)
+        if (trace_thread_is_current(thread) && atomic_load_explicit(&chunk->count, memory_order_relaxed) > 0)
             trace_chunk_append_full(chunk);
         else
             trace_chunks_to_pool(chunk);
@@ -273,6 +323,15 @@ static trace_thread *trace_thread_self(void) {
     pthread_setspecific(trace_exit_key, thread);
     trace_local = thread;
     return thread;
+}
+
+/* Hands the calling thread's chunk to the writer however full it is, so what the thread has
+ * recorded reaches the file soon (trace_frame_end, trace_flush). */
+static void trace_hand_over_partial(trace_thread *thread) {
+    if (!trace_thread_is_current(thread) || !thread->chunk) return;
+    if (atomic_load_explicit(&thread->chunk->count, memory_order_relaxed) == 0) return;
+    trace_chunk_append_full(thread->chunk);
+    thread->chunk = trace_chunk_take(thread->tid);
 }
 
 /* The slow path of recording: the first event of this thread in the running capture. */
@@ -350,6 +409,36 @@ void trace__zone_end(void) {
     if (chunk) trace_chunk_push(chunk, TRACE_EVENT_END, NULL, trace_ticks(), 0, 0);
 }
 
+/* A full chunk whose last events are a BEGIN and its arguments: they move to the fresh chunk
+ * with the argument about to be added, so the writer always finds a zone's arguments in the
+ * same chunk as its BEGIN. */
+static trace_chunk *trace_chunk_carry_over(trace_thread *thread, uint32_t from) {
+    pthread_mutex_lock(&trace_lock);
+    trace_chunk *old = thread->chunk, *fresh = trace_chunk_take(thread->tid);
+    uint32_t count = atomic_load_explicit(&old->count, memory_order_relaxed);
+    memcpy(fresh->events, old->events + from, (count - from) * sizeof *old->events);
+    atomic_store_explicit(&fresh->count, count - from, memory_order_release);
+    atomic_store_explicit(&old->count, from, memory_order_release);
+    if (from > 0) trace_chunk_append_full(old);
+    else trace_chunks_to_pool(old);
+    thread->chunk = fresh;
+    pthread_mutex_unlock(&trace_lock);
+    return fresh;
+}
+
+void trace__zone_arg(const char *key, uint64_t value, uint32_t type) {
+    trace_thread *thread = trace_local;
+    if (!thread || thread->session != atomic_load_explicit(&trace_session, memory_order_relaxed)) return;
+    trace_chunk *chunk = thread->chunk;
+    uint32_t count = atomic_load_explicit(&chunk->count, memory_order_relaxed), first = count;
+    while (first > 0 && chunk->events[first - 1].kind == TRACE_EVENT_ARG) first--;
+    /* Only the zone opened just before takes arguments (trace.h), and only so many. */
+    if (first == 0 || chunk->events[first - 1].kind != TRACE_EVENT_BEGIN) return;
+    if (count - first >= TRACE_ZONE_ARGS_MAX) return;
+    if (count == TRACE_CHUNK_EVENTS) chunk = trace_chunk_carry_over(thread, first - 1);
+    trace_chunk_push(chunk, TRACE_EVENT_ARG, key, 0, value, type);
+}
+
 void trace_counter(const char *name, double value) {
     /* NaN and infinities have no JSON spelling. */
     if (!trace_active() || !isfinite(value)) return;
@@ -398,6 +487,24 @@ void trace_thread_name(const char *name) {
     pthread_mutex_unlock(&trace_lock);
 }
 
+/* trace_keep_frames: moves the window on by one frame (trace_lock held, after the frame's chunk
+ * was handed over, so that chunk is inside the window's last frame). */
+static void trace_note_frame_end(void) {
+    int keep = trace_registry.keep_frames;
+    if (!keep || !trace_registry.frame_ends) return;
+    uint64_t now = trace_ticks();
+    size_t slot = (size_t)(trace_registry.frame_count % (uint64_t)keep);
+    if (trace_registry.frame_count >= (uint64_t)keep) trace_registry.cutoff = trace_registry.frame_ends[slot];
+    trace_registry.frame_ends[slot] = now;
+    trace_registry.frame_count++;
+}
+
+void trace_keep_frames(int frames) {
+    pthread_mutex_lock(&trace_lock);
+    if (!trace_capturing()) trace_registry.keep_frames = frames > 0 ? frames : 0;
+    pthread_mutex_unlock(&trace_lock);
+}
+
 void trace_frame_begin(void) { trace_zone_begin("frame"); }
 
 void trace_frame_end(void) {
@@ -405,12 +512,17 @@ void trace_frame_end(void) {
     trace__zone_end();
     /* DESIGN.md: resident memory is a counter in every trace. */
     trace_counter("memory.bytes", (double)core_memory_in_use());
-    trace_flush();
+    /* The frame's events go to the writer now; formatting and writing them is its work. */
+    pthread_mutex_lock(&trace_lock);
+    trace_hand_over_partial(trace_local);
+    trace_note_frame_end();
+    trace_wake_writer();
+    pthread_mutex_unlock(&trace_lock);
 }
 
 uint64_t trace_now(void) { return core_time_ns(); }
 
-/* ---- writing (trace_write_lock held) ---------------------------------------------------- */
+/* ---- writing (the writer thread, or trace_stop once it is joined) ---------------------- */
 
 static void trace_write_separator(void) {
     fputs(trace_writer.events_written++ ? ",\n" : "\n", trace_writer.file);
@@ -472,6 +584,26 @@ static uint64_t trace_clamp_to_tid(uint32_t tid, uint64_t ns) {
     return ns;
 }
 
+/* Whether to write a BEGIN or END, keeping count of open zones per tid: an END whose BEGIN was
+ * not written (dropped with the frames before a trace_keep_frames window) is left out, so the
+ * file stays balanced. A capture of everything never meets one. */
+static bool trace_balance(uint32_t tid, uint32_t kind) {
+    if (kind != TRACE_EVENT_BEGIN && kind != TRACE_EVENT_END) return true;
+    if (tid >= trace_writer.depth_capacity) {
+        size_t old = trace_writer.depth_capacity;
+        trace_writer.depth = core_grow(trace_writer.depth, &trace_writer.depth_capacity, (size_t)tid + 1,
+                                       sizeof *trace_writer.depth);
+        memset(trace_writer.depth + old, 0, (trace_writer.depth_capacity - old) * sizeof *trace_writer.depth);
+    }
+    if (kind == TRACE_EVENT_BEGIN) {
+        trace_writer.depth[tid]++;
+        return true;
+    }
+    if (trace_writer.depth[tid] == 0) return false;
+    trace_writer.depth[tid]--;
+    return true;
+}
+
 static void trace_write_complete(const trace_event *event) {
     uint64_t begin = event->time > trace_writer.start_ns ? event->time - trace_writer.start_ns : 0;
     uint64_t end = begin + event->payload;
@@ -485,11 +617,34 @@ static void trace_write_complete(const trace_event *event) {
     trace_write_tail(event->lane);
 }
 
-static void trace_write_event(const trace_event *event, uint32_t tid, const trace_clock_map *map) {
+/* "args":{...}, for a BEGIN followed by ARG events; returns how many it wrote. */
+static uint32_t trace_write_args(const trace_event *args, uint32_t available) {
+    FILE *out = trace_writer.file;
+    uint32_t n = 0;
+    for (; n < available && args[n].kind == TRACE_EVENT_ARG; n++) {
+        fputs(n ? "," : "\"args\":{", out);
+        core_json_write_string(out, args[n].name ? args[n].name : "");
+        fputc(':', out);
+        if (args[n].lane == TRACE_ARG_STRING) {
+            const char *text = (const char *)(uintptr_t)args[n].payload;
+            core_json_write_string(out, text ? text : "");
+        } else {
+            fprintf(out, "%" PRId64, (int64_t)args[n].payload);
+        }
+    }
+    if (n) fputs("},", out);
+    return n;
+}
+
+/* Writes one event (a BEGIN with the ARG events after it); returns how many it used. */
+static uint32_t trace_write_event(const trace_event *event, uint32_t available, uint32_t tid,
+                                  const trace_clock_map *map) {
     if (event->kind == TRACE_EVENT_COMPLETE) {
         trace_write_complete(event);
-        return;
+        return 1;
     }
+    if (event->kind == TRACE_EVENT_ARG) return 1; /* its zone was left out: nothing to attach to */
+    if (!trace_balance(tid, event->kind)) return 1;
     static const char *const phases[] = { [TRACE_EVENT_BEGIN] = "B", [TRACE_EVENT_END] = "E",
                                           [TRACE_EVENT_COUNTER] = "C" };
     uint64_t ts = trace_clamp_to_tid(tid, trace_ticks_to_ns(map, event->time));
@@ -504,11 +659,14 @@ static void trace_write_event(const trace_event *event, uint32_t tid, const trac
         trace_write_double(value);
         fputs("},", trace_writer.file);
     }
+    uint32_t used = 1;
+    if (event->kind == TRACE_EVENT_BEGIN) used += trace_write_args(event + 1, available - 1);
     trace_write_tail(tid);
+    return used;
 }
 
 static void trace_write_events(const trace_chunk *chunk, uint32_t count, const trace_clock_map *map) {
-    for (uint32_t i = 0; i < count; i++) trace_write_event(&chunk->events[i], chunk->tid, map);
+    for (uint32_t i = 0; i < count;) i += trace_write_event(&chunk->events[i], count - i, chunk->tid, map);
 }
 
 static void trace_write_chunks(const trace_chunk *first, const trace_clock_map *map) {
@@ -516,14 +674,95 @@ static void trace_write_chunks(const trace_chunk *first, const trace_clock_map *
         trace_write_events(chunk, atomic_load_explicit(&chunk->count, memory_order_acquire), map);
 }
 
-/* Needs trace_lock too: the names live in the registry. */
-static void trace_write_pending_names(void) {
+/* Copies the names set since the last batch into trace_writer.names (trace_lock held), so that
+ * they are written outside the lock. */
+static void trace_take_pending_names(void) {
+    trace_writer.name_count = 0;
     for (uint32_t tid = 1; tid < trace_registry.tid_count; tid++) {
         trace_tid_name *entry = &trace_registry.names[tid];
         if (!entry->pending) continue;
-        trace_write_thread_name(tid, entry->name);
+        trace_writer.names = core_grow(trace_writer.names, &trace_writer.name_capacity, trace_writer.name_count + 1,
+                                       sizeof *trace_writer.names);
+        trace_writer.names[trace_writer.name_count++] = (trace_name_entry){ tid, entry->name };
         entry->pending = false;
     }
+}
+
+static void trace_write_names(void) {
+    for (size_t i = 0; i < trace_writer.name_count; i++)
+        trace_write_thread_name(trace_writer.names[i].tid, trace_writer.names[i].name);
+    trace_writer.name_count = 0;
+}
+
+static size_t trace_chunk_list_length(const trace_chunk *first) {
+    size_t n = 0;
+    for (; first; first = first->next) n++;
+    return n;
+}
+
+/* trace_keep_frames: holds the chunks back instead of writing them, and returns those now
+ * wholly before the window (to go back to the pool). */
+static trace_chunk *trace_keep(trace_chunk *full, uint64_t cutoff) {
+    if (full) {
+        *trace_writer.kept_last = full;
+        while (full->next) full = full->next;
+        trace_writer.kept_last = &full->next;
+    }
+    trace_chunk *dropped = NULL, **dropped_last = &dropped;
+    while (trace_writer.kept_first && trace_writer.kept_first->handed <= cutoff) {
+        trace_chunk *chunk = trace_writer.kept_first;
+        trace_writer.kept_first = chunk->next;
+        chunk->next = NULL;
+        *dropped_last = chunk;
+        dropped_last = &chunk->next;
+    }
+    if (!trace_writer.kept_first) trace_writer.kept_last = &trace_writer.kept_first;
+    return dropped;
+}
+
+/* One batch: the names and chunks taken under trace_lock, written without it (or, keeping only
+ * the last frames, held back). Returns the chunks done with. */
+static trace_chunk *trace_write_batch(trace_chunk *full, bool keep, uint64_t cutoff) {
+    if (!full && !trace_writer.name_count) return NULL;
+    TRACE_ZONE("trace.write");
+    trace_zone_arg_int("chunks", (int64_t)trace_chunk_list_length(full));
+    trace_write_names();
+    if (keep) {
+        trace_chunk *dropped = trace_keep(full, cutoff);
+        fflush(trace_writer.file);
+        return dropped;
+    }
+    trace_clock_map map = trace_clock_map_now(); /* after the events were taken */
+    trace_write_chunks(full, &map);
+    /* A run that crashes later still leaves every written event on disk. */
+    fflush(trace_writer.file);
+    return full;
+}
+
+/* The writer thread: waits for chunks (or a flush or stop request), writes them, recycles them.
+ * On a stop request it writes what is queued and exits; trace_stop writes the rest. */
+static void *trace_writer_main(void *arg) {
+    (void)arg;
+    trace_thread_name("trace.write");
+    pthread_mutex_lock(&trace_lock);
+    for (;;) {
+        while (!trace_registry.full_first && trace_registry.flush_requested == trace_registry.flush_done &&
+               !trace_registry.writer_stop)
+            pthread_cond_wait(&trace_work_ready, &trace_lock);
+        bool stop = trace_registry.writer_stop, keep = trace_registry.keep_frames > 0;
+        uint64_t request = trace_registry.flush_requested, cutoff = trace_registry.cutoff;
+        trace_chunk *full = trace_take_full_list();
+        trace_take_pending_names();
+        pthread_mutex_unlock(&trace_lock);
+        trace_chunk *done = trace_write_batch(full, keep, cutoff);
+        pthread_mutex_lock(&trace_lock);
+        trace_chunks_to_pool(done);
+        trace_registry.flush_done = request;
+        pthread_cond_broadcast(&trace_written);
+        if (stop) break;
+    }
+    pthread_mutex_unlock(&trace_lock);
+    return NULL;
 }
 
 /* ---- capture control -------------------------------------------------------------------- */
@@ -555,40 +794,46 @@ bool trace_start(const char *path) {
     trace_chunks_to_pool(trace_take_full_list());
     trace_registry.tid_count = 1;
 
-    pthread_mutex_lock(&trace_write_lock);
     setvbuf(file, NULL, _IOFBF, 1 << 20);
     trace_writer.file = file;
     trace_writer.path = core_strdup(path);
     trace_writer.events_written = 0;
     if (trace_writer.last_ns) memset(trace_writer.last_ns, 0, trace_writer.last_capacity * sizeof(uint64_t));
+    if (trace_writer.depth) memset(trace_writer.depth, 0, trace_writer.depth_capacity * sizeof(uint32_t));
+    trace_writer.kept_first = NULL;
+    trace_writer.kept_last = &trace_writer.kept_first;
+    trace_registry.frame_count = trace_registry.cutoff = 0;
+    if (trace_registry.keep_frames)
+        trace_registry.frame_ends = core_calloc((size_t)trace_registry.keep_frames, sizeof(uint64_t));
     trace_writer.start_ns = core_time_ns();
     trace_writer.start_ticks = trace_ticks();
     trace_write_header();
-    pthread_mutex_unlock(&trace_write_lock);
 
     atomic_fetch_add(&trace_session, 1);
     trace_set_capturing(true);
+    trace_registry.writer_stop = false;
+    trace_registry.flush_requested = trace_registry.flush_done = 0;
+    int error = pthread_create(&trace_registry.writer, NULL, trace_writer_main, NULL);
+    trace_registry.writer_running = error == 0;
     pthread_mutex_unlock(&trace_lock);
+    if (error) {
+        core_error("trace", "cannot start the writer thread for '%s': %s", path, strerror(error));
+        trace_stop();
+        return false;
+    }
     return true;
 }
 
 void trace_flush(void) {
     if (!trace_active()) return;
     pthread_mutex_lock(&trace_lock);
-    trace_chunk *full = trace_take_full_list();
-    pthread_mutex_lock(&trace_write_lock);
-    bool writing = trace_writer.file != NULL;
-    if (writing) trace_write_pending_names();
-    pthread_mutex_unlock(&trace_lock);
-    if (writing && full) {
-        trace_clock_map map = trace_clock_map_now(); /* after the events were taken */
-        trace_write_chunks(full, &map);
-        /* A run that crashes later still leaves every flushed event on disk. */
-        fflush(trace_writer.file);
+    if (trace_registry.writer_running && !pthread_equal(pthread_self(), trace_registry.writer)) {
+        trace_hand_over_partial(trace_local);
+        uint64_t ticket = ++trace_registry.flush_requested;
+        pthread_cond_signal(&trace_work_ready);
+        while (trace_registry.flush_done < ticket && trace_registry.writer_running && !trace_registry.writer_stop)
+            pthread_cond_wait(&trace_written, &trace_lock);
     }
-    pthread_mutex_unlock(&trace_write_lock);
-    pthread_mutex_lock(&trace_lock);
-    trace_chunks_to_pool(full);
     pthread_mutex_unlock(&trace_lock);
 }
 
@@ -625,22 +870,50 @@ static void trace_free_pool(void) {
     }
 }
 
+/* Asks the writer to write what is queued and exit, and waits for it (trace_lock not held). */
+static void trace_join_writer(void) {
+    pthread_mutex_lock(&trace_lock);
+    bool running = trace_registry.writer_running;
+    trace_registry.writer_stop = true;
+    pthread_cond_signal(&trace_work_ready);
+    pthread_cond_broadcast(&trace_written); /* a trace_flush waiting now returns */
+    pthread_mutex_unlock(&trace_lock);
+    if (running) pthread_join(trace_registry.writer, NULL);
+}
+
 void trace_stop(void) {
     pthread_mutex_lock(&trace_lock);
-    if (!trace_capturing()) {
-        pthread_mutex_unlock(&trace_lock);
-        return;
-    }
+    bool mine = trace_capturing() && !trace_registry.stopping;
+    trace_registry.stopping = trace_registry.stopping || mine;
+    pthread_mutex_unlock(&trace_lock);
+    if (!mine) return;
+    /* The writer's last chunk (its own zones) is handed over as it exits, while the capture runs. */
+    trace_join_writer();
+
+    pthread_mutex_lock(&trace_lock);
     trace_set_capturing(false);
+    trace_registry.writer_running = false;
     trace_chunk *full = trace_take_full_list();
-    pthread_mutex_lock(&trace_write_lock);
+    trace_take_pending_names();
     trace_clock_map map = trace_clock_map_now();
-    trace_write_pending_names();
+    trace_write_names();
+    if (trace_registry.keep_frames) {
+        /* What the writer had not yet taken joins the window, and what is before it goes. */
+        trace_chunks_to_pool(trace_keep(full, trace_registry.cutoff));
+        full = NULL;
+    }
+    trace_chunk *kept = trace_writer.kept_first;
+    trace_writer.kept_first = NULL;
+    trace_writer.kept_last = &trace_writer.kept_first;
+    trace_write_chunks(kept, &map);
     trace_write_chunks(full, &map);
     trace_write_live_threads(&map);
     trace_close_file();
-    pthread_mutex_unlock(&trace_write_lock);
+    trace_chunks_to_pool(kept);
     trace_chunks_to_pool(full);
+    if (trace_registry.frame_ends) core_free(trace_registry.frame_ends, (size_t)trace_registry.keep_frames * sizeof(uint64_t));
+    trace_registry.frame_ends = NULL;
     trace_free_pool();
+    trace_registry.stopping = false;
     pthread_mutex_unlock(&trace_lock);
 }

@@ -3,27 +3,43 @@
  *
  * CAPTURE
  *     if (!trace_start("run.json")) return 2;   // opens the file now: a bad path fails here
- *     trace_thread_name("main");
+ *     trace_thread_name("main");                // every program names its main thread
  *     for (;;) {
  *         trace_frame_begin();
  *         { TRACE_ZONE("stream"); ... }          // zone closes at the end of the block
  *         trace_zone_begin("mesh"); ...; trace_zone_end();
  *         trace_counter("chunks.resident", n);
- *         trace_frame_end();                     // also writes full buffers to the file
+ *         trace_frame_end();                     // hands the frame's events to the writer
  *     }
- *     trace_stop();                              // writes the rest and closes the JSON
+ *     trace_stop();                              // drains the writer, closes the JSON
  *
  *   Zone and counter names must outlive the capture: string literals, or trace_intern(s) for a
- *   name built at run time. Each thread records into its own buffer (no lock on the hot path);
- *   full buffers are handed over and written by trace_flush, which trace_frame_end calls.
+ *   name built at run time. Each thread records into its own buffer (no lock on the hot path).
+ *   Full buffers, and at trace_frame_end the calling thread's buffer, are handed to a writer
+ *   thread that trace_start starts: it formats and writes them, and its work shows as
+ *   "trace.write" zones on a lane of its own named "trace.write". No recording thread ever
+ *   formats or writes. trace_flush waits until the writer has written everything the calling
+ *   thread recorded so far (for tests and benchmarks; it blocks, so not in a frame loop).
  *   With no capture running every call returns after one load of a flag.
+ *   trace_keep_frames(n) before trace_start keeps only the last n frames (--trace-frames N).
  *   trace_frame_end also records the counter "memory.bytes" (core_memory_in_use). A thread may
  *   name itself before any capture starts; the name is kept. Stop the capture once the other
  *   threads are idle: events recorded while trace_stop runs may be dropped. See README.md.
  *
+ * ZONE ARGUMENTS
+ *     trace_zone_begin("mesh");                  // or TRACE_ZONE, or a job's zone
+ *     trace_zone_arg_int("x", chunk.x);          // right after the zone opens
+ *     trace_zone_arg_str("kind", "column");
+ *   Arguments go to the zone the calling thread opened last, and are written as the "args" of
+ *   its B event (Chrome and Perfetto show them on the slice). Add them before the thread records
+ *   anything else (another zone, a counter): an argument that does not directly follow its
+ *   zone's begin (or its other arguments) is dropped, as is any past TRACE_ZONE_ARGS_MAX. Keys
+ *   and string values must outlive the capture, like names. Each costs about what an event does.
+ *
  * FILE
  *   {"traceEvents":[ ... ],"displayTimeUnit":"ms"} with events
  *     {"ph":"B"/"E", "name", "ts", "pid", "tid"}         zones (frames are zones named "frame")
+ *     {"ph":"B", ..., "args":{"x":3,"kind":"column"}}    a zone with arguments
  *     {"ph":"X", ..., "dur"}                             zones recorded whole (trace_complete)
  *     {"ph":"C", "name", "ts", "args":{"value":v}}       counters
  *     {"ph":"M", "name":"thread_name", "args":{"name"}}  thread names
@@ -58,6 +74,12 @@
 /* ---- capture ---------------------------------------------------------------------------- */
 
 bool trace_start(const char *path);
+/* Keep only the last `frames` frames (trace_frame_end marks them) of the next captures; 0 (the
+ * default) keeps everything. Called with no capture running. The writer then holds chunks in
+ * memory instead of writing them, drops those wholly before the window, and trace_stop writes
+ * the window: a long run's file stays the size of `frames` frames. An E whose B fell before
+ * the window is left out, so every zone in the file is whole or (at the end) open. */
+void trace_keep_frames(int frames);
 void trace_stop(void);
 void trace_flush(void);
 
@@ -76,6 +98,16 @@ static inline void trace__scope_end(int *unused) { (void)unused; trace_zone_end(
 #define TRACE_ZONE(name)                                                                       \
     int TRACE__CAT(trace__scope_, __LINE__) __attribute__((cleanup(trace__scope_end), unused)) = \
         (trace_zone_begin(name), 0)
+
+enum { TRACE_ZONE_ARGS_MAX = 8 }; /* arguments one zone can carry */
+void trace__zone_arg(const char *key, uint64_t value, uint32_t type);
+/* An argument of the zone just opened (ZONE ARGUMENTS above). */
+static inline void trace_zone_arg_int(const char *key, int64_t value) {
+    if (trace_active()) trace__zone_arg(key, (uint64_t)value, 0);
+}
+static inline void trace_zone_arg_str(const char *key, const char *value) {
+    if (trace_active()) trace__zone_arg(key, (uint64_t)(uintptr_t)value, 1);
+}
 
 void trace_counter(const char *name, double value);
 void trace_thread_name(const char *name);

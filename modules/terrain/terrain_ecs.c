@@ -31,6 +31,10 @@ static void terrain_generate_system(ecs_iter *it) {
  * neighbours, the transition samples that close the seam. */
 static void terrain_mesh_chunk_build(terrain_ecs *te, TerrainMeshChunk *chunk) {
     TRACE_ZONE("terrain_mesh_chunk");
+    trace_zone_arg_int("x", chunk->x);
+    trace_zone_arg_int("y", chunk->y);
+    trace_zone_arg_int("z", chunk->z);
+    trace_zone_arg_int("level", chunk->lod.level);
     if (!terrain_mesh_chunk(te->terrain, chunk->x, chunk->y, chunk->z, &chunk->lod, &chunk->mesh))
         chunk->mesh = (terrain_mesh){ 0 };      /* nothing to show; the reason is logged */
     /* Its water surfaces, read from the same stacks (002 §3.4): handed to WaterPlane at upload. */

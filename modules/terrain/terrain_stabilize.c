@@ -296,6 +296,25 @@ static void pass_range(void *user, size_t begin, size_t end) {
     for (size_t n = begin; n < end; n++) pass_row(w, w->items[n].region, w->items[n].row);
 }
 
+/* pass_range as a job: its zone carries how many columns of the pass's colour its rows span, the
+ * measure of its work (rows differ in length), so a slow batch in a trace explains itself. */
+static void pass_batch(void *user, size_t begin, size_t end) {
+    const pass_work *w = user;
+    if (trace_active()) {
+        int64_t columns = 0;
+        for (size_t n = begin; n < end; n++) {
+            const terrain_columns *c = w->items[n].region;
+            int lo, hi;
+            if (!row_range(c, w->items[n].row, w->pass, &lo, &hi)) continue;
+            int first = lo + (int)floor_mod(w->colour_x - (c->x0 + lo), 3); /* as pass_row walks */
+            if (first <= hi) columns += (hi - first) / 3 + 1;
+        }
+        trace_zone_arg_int("columns", columns);
+        trace_zone_arg_int("rows", (int64_t)(end - begin));
+    }
+    pass_range(user, begin, end);
+}
+
 /* ---- regions side by side ------------------------------------------------------------------- */
 
 /* Copies region `from`'s columns along its side d into the halo of the neighbour there: all of
@@ -544,7 +563,7 @@ static pass_outcome run_pass(stabilizer *s) {
     if (s->jobs && job_thread_count(s->jobs) > 1 && columns >= PARALLEL_MIN_COLUMNS) {
         /* Rows of one colour are three apart, so their 3 × 3 writes never meet. */
         size_t batch = CORE_MAX((size_t)1, rows / ((size_t)job_thread_count(s->jobs) * 4));
-        job_parallel_for(s->jobs, rows, batch, pass_range, &w, "terrain.stabilize.pass");
+        job_parallel_for(s->jobs, rows, batch, pass_batch, &w, "terrain.stabilize.pass");
     } else {
         pass_range(&w, 0, rows);
     }

@@ -178,7 +178,16 @@ static bool stream_chunk_surely_empty(terrain_world *world, stream_key k) {
 
 static void stream_task_run(void *user) {
     stream_task *t = user;
-    if (atomic_load_explicit(&t->cancelled, memory_order_acquire)) return;
+    /* The job's zone (just opened by the job system) says which chunk it is: a column chunk
+     * (generate) by x, z; a mesh chunk by x, y, z and level. */
+    trace_zone_arg_int("x", t->key.x);
+    if (t->key.level != STREAM_COLUMN_LEVEL) trace_zone_arg_int("y", t->key.y);
+    trace_zone_arg_int("z", t->key.z);
+    if (t->key.level != STREAM_COLUMN_LEVEL) trace_zone_arg_int("level", t->key.level);
+    if (atomic_load_explicit(&t->cancelled, memory_order_acquire)) {
+        trace_zone_arg_str("cancelled", "yes");
+        return;
+    }
     uint64_t token = terrain_world_read_begin(t->world);
     if (t->key.level == STREAM_COLUMN_LEVEL) {
         terrain_world_stacks(t->world, (terrain_chunk_coord){ t->key.x, t->key.z });

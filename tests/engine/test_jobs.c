@@ -366,3 +366,40 @@ Test(jobs, background_jobs_start_oldest_first) {
     for (int i = 0; i < 32; i++) cr_expect_eq(probe.order[i], i, "job %d ran %d-th", i, probe.order[i]);
     job_system_destroy(jobs);
 }
+
+/* ---- children of background jobs -------------------------------------------------------- */
+
+typedef struct parent_probe {
+    job_system *jobs;
+    _Atomic int child_thread;       /* job_thread_index where the child ran; -2 until it ran */
+    _Atomic bool child_submitted;
+    job_handle child;
+} parent_probe;
+
+static void child_job(void *user) {
+    parent_probe *probe = user;
+    atomic_store(&probe->child_thread, job_thread_index(probe->jobs));
+}
+
+/* Submits a child, then holds the worker long enough for a main thread that steals normal jobs
+ * to have taken the child, had it not been background. */
+static void parent_job(void *user) {
+    parent_probe *probe = user;
+    probe->child = job_submit(probe->jobs, &(job_desc){ .fn = child_job, .user = probe, .name = "child" });
+    atomic_store(&probe->child_submitted, true);
+    usleep(50 * 1000);
+}
+
+/* A background job's children are background too: a main thread waiting for them never runs
+ * them (jobs.h), a worker does once the parent is done. */
+Test(jobs, children_of_background_jobs_are_background) {
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
+    parent_probe probe = { .jobs = jobs, .child_thread = -2 };
+    job_handle parent = job_submit(jobs, &(job_desc){ .fn = parent_job, .user = &probe, .background = true });
+    while (!atomic_load(&probe.child_submitted)) usleep(100);
+    job_wait(jobs, probe.child);  /* steals normal jobs from the worker's queue while it waits */
+    job_wait(jobs, parent);
+    cr_expect_eq(atomic_load(&probe.child_thread), 1, "the child ran on thread %d, not the worker",
+                 atomic_load(&probe.child_thread));
+    job_system_destroy(jobs);
+}

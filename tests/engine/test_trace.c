@@ -33,6 +33,7 @@ static char *read_file(const char *path, size_t *size) {
     fseek(file, 0, SEEK_SET);
     char *data = malloc((size_t)length + 1);
     *size = fread(data, 1, (size_t)length, file);
+    data[*size] = '\0';
     fclose(file);
     return data;
 }
@@ -81,6 +82,11 @@ static double tid_named(const capture *c, const char *name) {
         if (core_json_string_equals(core_json_get(core_json_get(e, "args"), "name"), name)) return event_number(e, "tid");
     }
     return -1;
+}
+
+/* B events other than the writer's own "trace.write" zones. */
+static size_t count_recorded_zones(const capture *c) {
+    return count_events(c, "B", NULL, -1) - count_events(c, "B", "trace.write", -1);
 }
 
 static const core_json_value *first_event_named(const capture *c, const char *ph, const char *name) {
@@ -285,9 +291,9 @@ Test(trace, start_and_stop_twice_in_one_process) {
     check_invariants(&first);
     check_invariants(&second);
     cr_expect_eq(count_events(&first, "B", "first", -1), 3);
-    cr_expect_eq(count_events(&first, "B", NULL, -1), 3);
+    cr_expect_eq(count_recorded_zones(&first), 3);
     cr_expect_eq(count_events(&second, "B", "second", -1), 2);
-    cr_expect_eq(count_events(&second, "B", NULL, -1), 2);
+    cr_expect_eq(count_recorded_zones(&second), 2);
     /* tids restart with each capture: this thread recorded first both times. */
     cr_expect(tid_named(&first, "control") == 1);
     cr_expect(tid_named(&second, "control") == 1);
@@ -446,15 +452,18 @@ Test(trace, flush_writes_full_chunks_and_memory_stays_bounded) {
         trace_frame_begin();
         for (int i = 0; i < 3000; i++) { TRACE_ZONE("busy"); }
         trace_frame_end();
+        /* The writer runs beside this thread; waiting for it here makes the memory bound below
+         * exact (a writer that keeps up), which a game relies on but cannot wait for. */
+        trace_flush();
         if (frame == 5) memory_at_frame_5 = core_memory_in_use();
         if (frame == 10) {
-            /* 11 frames × 6000 events, most in handed-over chunks flushed to disk by now. */
+            /* 11 frames × 6000 events, all handed over at frame ends and written by now. */
             struct stat st;
             cr_assert_eq(stat(path, &st), 0);
             cr_expect_gt(st.st_size, 11 * 4000 * 40, "only %lld bytes on disk", (long long)st.st_size);
         }
     }
-    /* Chunks written by a flush are reused, so 34 more frames took no more memory. Two chunks
+    /* Chunks the writer wrote are reused, so 34 more frames took no more memory. Two chunks
      * (2 × 64 KiB) of slack cover a frame that happens to straddle one more. */
     size_t memory_at_frame_39 = core_memory_in_use();
     cr_expect_leq(memory_at_frame_39, memory_at_frame_5 + 2 * 66000, "grew from %zu to %zu bytes",
@@ -484,4 +493,207 @@ Test(trace, intern_keeps_one_copy_per_string) {
         cr_assert_str_eq(trace_intern(buffer), buffer);
     }
     cr_expect_eq((const void *)trace_intern("chunk 13"), (const void *)b);
+}
+
+/* ---- the writer thread ------------------------------------------------------------------ */
+
+/* The frame thread never formats or writes: every "trace.write" zone is on the writer's own
+ * named lane, and none on the lane of the thread that ends the frames. */
+Test(trace, writing_happens_on_the_writer_lane) {
+    char path[128];
+    temp_trace_path(path, sizeof path, "writer");
+    cr_assert(trace_start(path));
+    trace_thread_name("main");
+    pthread_t workers[WORKERS];
+    for (int i = 0; i < WORKERS; i++) pthread_create(&workers[i], NULL, record_work, (void *)(intptr_t)i);
+    for (int frame = 0; frame < 10; frame++) {
+        trace_frame_begin();
+        for (int i = 0; i < 3000; i++) { TRACE_ZONE("busy"); } /* several chunks a frame */
+        usleep(1000);
+        trace_frame_end();
+    }
+    for (int i = 0; i < WORKERS; i++) pthread_join(workers[i], NULL);
+    trace_stop();
+
+    capture c;
+    capture_load(&c, path);
+    check_invariants(&c);
+    double main_tid = tid_named(&c, "main"), writer_tid = tid_named(&c, "trace.write");
+    cr_assert_gt(main_tid, 0);
+    cr_assert_gt(writer_tid, 0, "no thread_name event for the writer's lane");
+    cr_expect_neq(writer_tid, main_tid);
+    size_t writes = count_events(&c, "B", "trace.write", -1);
+    cr_expect_gt(writes, 0);
+    cr_expect_eq(count_events(&c, "B", "trace.write", writer_tid), writes, "a write zone off the writer's lane");
+    cr_expect_eq(count_events(&c, "B", "trace.write", main_tid), 0);
+    /* The writer records only its own zones, and each says how many chunks it wrote. */
+    for (size_t i = 0; i < c.events->array.count; i++) {
+        const core_json_value *e = event_at(&c, i);
+        if (event_number(e, "tid") != writer_tid || event_is(e, "M") || event_is(e, "E")) continue;
+        cr_expect(core_json_string_equals(core_json_get(e, "name"), "trace.write"));
+        cr_expect_geq(core_json_number_or(core_json_get(core_json_get(e, "args"), "chunks"), -1), 0);
+    }
+    capture_free(&c);
+}
+
+/* trace_flush returns once the writer has written what the caller recorded. */
+Test(trace, flush_waits_for_the_writer) {
+    char path[128];
+    temp_trace_path(path, sizeof path, "flush_waits");
+    cr_assert(trace_start(path));
+    for (int i = 0; i < 10; i++) { TRACE_ZONE("before.flush"); }
+    trace_flush();
+    size_t size;
+    char *text = read_file(path, &size);
+    size_t found = 0;
+    for (const char *p = text; (p = strstr(p, "\"before.flush\"")) != NULL; p++) found++;
+    free(text);
+    cr_expect_eq(found, 10, "%zu of 10 zones on disk after trace_flush", found);
+    trace_stop();
+    capture c;
+    capture_load(&c, path);
+    capture_free(&c);
+}
+
+/* ---- zone arguments --------------------------------------------------------------------- */
+
+static const core_json_value *zone_args(const capture *c, const char *name, size_t nth) {
+    for (size_t i = 0; i < c->events->array.count; i++) {
+        const core_json_value *e = event_at(c, i);
+        if (!event_is(e, "B") || !core_json_string_equals(core_json_get(e, "name"), name)) continue;
+        if (nth-- == 0) return core_json_get(e, "args");
+    }
+    return NULL;
+}
+
+Test(trace, zone_arguments_are_written_as_args) {
+    char path[128];
+    temp_trace_path(path, sizeof path, "args");
+    cr_assert(trace_start(path));
+    {
+        TRACE_ZONE("chunk");
+        trace_zone_arg_int("x", -3);
+        trace_zone_arg_int("big", INT64_C(1) << 40);
+        trace_zone_arg_str("kind", "col\"umn");
+        {
+            TRACE_ZONE("inner"); /* nested: its argument is its own */
+            trace_zone_arg_int("columns", 17);
+        }
+        trace_zone_arg_int("late", 1); /* not right after its zone's begin: dropped */
+    }
+    {
+        TRACE_ZONE("plain");
+        trace_counter("between", 1);
+        trace_zone_arg_int("dropped", 2); /* after a counter: dropped */
+    }
+    {
+        TRACE_ZONE("many");
+        for (int i = 0; i < TRACE_ZONE_ARGS_MAX + 3; i++) trace_zone_arg_int(trace_intern((char[]){ (char)('a' + i), 0 }), i);
+    }
+    /* Zones whose begin lands at the end of a full chunk: their arguments must follow them into
+     * the next chunk. 2048 events a chunk; zones of 1 B + 2 args + 1 E shift the phase by 4. */
+    for (int i = 0; i < 1100; i++) {
+        TRACE_ZONE("edge");
+        trace_zone_arg_int("i", i);
+        trace_zone_arg_int("twice", 2 * i);
+        if (i % 3 == 0) trace_counter("pad", i); /* vary the phase so every offset occurs */
+    }
+    trace_stop();
+
+    capture c;
+    capture_load(&c, path); /* valid JSON, or the test fails here */
+    check_invariants(&c);
+    const core_json_value *args = zone_args(&c, "chunk", 0);
+    cr_assert_not_null(args);
+    cr_expect(core_json_number_or(core_json_get(args, "x"), 0) == -3);
+    cr_expect(core_json_number_or(core_json_get(args, "big"), 0) == 1099511627776.0);
+    cr_expect(core_json_string_equals(core_json_get(args, "kind"), "col\"umn"));
+    cr_expect_null(core_json_get(args, "late"));
+    cr_expect_null(core_json_get(args, "columns"));
+    const core_json_value *inner = zone_args(&c, "inner", 0);
+    cr_assert_not_null(inner);
+    cr_expect(core_json_number_or(core_json_get(inner, "columns"), 0) == 17);
+    cr_expect_null(zone_args(&c, "plain", 0));
+    const core_json_value *many = zone_args(&c, "many", 0);
+    cr_assert_not_null(many);
+    cr_expect_eq(many->type, CORE_JSON_OBJECT);
+    cr_expect_eq(many->object.count, (size_t)TRACE_ZONE_ARGS_MAX);
+    for (int i = 0; i < 1100; i++) {
+        const core_json_value *edge = zone_args(&c, "edge", (size_t)i);
+        cr_assert_not_null(edge, "edge zone %d lost its arguments", i);
+        cr_assert(core_json_number_or(core_json_get(edge, "i"), -1) == i, "edge zone %d", i);
+        cr_assert(core_json_number_or(core_json_get(edge, "twice"), -1) == 2 * i, "edge zone %d", i);
+    }
+    capture_free(&c);
+}
+
+/* ---- keeping the last frames ------------------------------------------------------------ */
+
+enum { KEEP_FRAMES = 5, KEEP_RUN = 30, KEEP_WORKER_ZONES = 3000 };
+
+typedef struct keep_lockstep {
+    pthread_barrier_t frame_started, worker_done;
+} keep_lockstep;
+
+/* Records KEEP_WORKER_ZONES zones (6000 events: ~3 chunks) inside each of the main thread's
+ * frames, and a zone "long" open across all of them. */
+static void *record_in_lockstep(void *arg) {
+    keep_lockstep *lockstep = arg;
+    trace_thread_name("keeper");
+    trace_zone_begin("long");
+    for (int frame = 0; frame < KEEP_RUN; frame++) {
+        pthread_barrier_wait(&lockstep->frame_started);
+        for (int i = 0; i < KEEP_WORKER_ZONES; i++) { TRACE_ZONE("w"); }
+        if (frame == KEEP_RUN - 1) trace_zone_end(); /* "long" ends in the last frame */
+        pthread_barrier_wait(&lockstep->worker_done);
+    }
+    return NULL;
+}
+
+/* trace_keep_frames(5) over 30 frames: the file has exactly the last 5 frames of the main thread
+ * (their counters read 25 … 29), a worker's zones only from about those frames (a chunk of 2048
+ * events spans at most two frames of 6000, so between 5 and 7 frames' worth), and it stays
+ * balanced: "long", whose B fell before the window, is left out whole. */
+Test(trace, keep_frames_writes_only_the_last_frames) {
+    char path[128];
+    temp_trace_path(path, sizeof path, "keep");
+    trace_keep_frames(KEEP_FRAMES);
+    cr_assert(trace_start(path));
+    keep_lockstep lockstep;
+    pthread_barrier_init(&lockstep.frame_started, NULL, 2);
+    pthread_barrier_init(&lockstep.worker_done, NULL, 2);
+    pthread_t worker;
+    pthread_create(&worker, NULL, record_in_lockstep, &lockstep);
+    for (int frame = 0; frame < KEEP_RUN; frame++) {
+        trace_frame_begin();
+        trace_counter("frame.index", frame);
+        pthread_barrier_wait(&lockstep.frame_started);
+        pthread_barrier_wait(&lockstep.worker_done);
+        trace_frame_end();
+    }
+    pthread_join(worker, NULL);
+    trace_stop();
+    trace_keep_frames(0); /* later captures in this process keep everything */
+    pthread_barrier_destroy(&lockstep.frame_started);
+    pthread_barrier_destroy(&lockstep.worker_done);
+
+    capture c;
+    capture_load(&c, path);
+    check_invariants(&c);
+    cr_expect_eq(count_events(&c, "B", "frame", -1), KEEP_FRAMES);
+    cr_expect_eq(count_events(&c, "C", "frame.index", -1), KEEP_FRAMES);
+    double expected = KEEP_RUN - KEEP_FRAMES;
+    for (size_t i = 0; i < c.events->array.count; i++) {
+        const core_json_value *e = event_at(&c, i);
+        if (!event_is(e, "C") || !core_json_string_equals(core_json_get(e, "name"), "frame.index")) continue;
+        double value = core_json_number_or(core_json_get(core_json_get(e, "args"), "value"), NAN);
+        cr_expect(value == expected, "frame.index %g, expected %g", value, expected);
+        expected++;
+    }
+    size_t worker_zones = count_events(&c, "B", "w", -1);
+    cr_expect_geq(worker_zones, (size_t)(KEEP_FRAMES * KEEP_WORKER_ZONES));
+    cr_expect_leq(worker_zones, (size_t)((KEEP_FRAMES + 2) * KEEP_WORKER_ZONES));
+    cr_expect_eq(count_events(&c, "B", "long", -1), 0);
+    cr_expect_gt(tid_named(&c, "keeper"), 0, "names are kept whatever the window");
+    capture_free(&c);
 }

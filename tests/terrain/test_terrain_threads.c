@@ -154,6 +154,84 @@ Test(terrain_threads, regions_side_by_side_on_four_threads_give_the_bytes_of_one
     terrain_columns_destroy(whole);
 }
 
+/* ---- a stabilization's batches in a trace ---- */
+
+#include "core/core.h"
+#include "trace/trace.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+/* Each batch of a stabilization pass is a job zone "terrain.stabilize.pass" carrying its rows and
+ * the columns of the pass's colour they span. Every row of a 112-column region holds 37 or 38
+ * columns of one colour (112 = 3 · 37 + 1), so a batch of r rows spans between 37 r and 38 r;
+ * in the first pass every column of the bumpy region is marked and each row is whole. */
+Test(terrain_threads, stabilize_batches_carry_their_columns) {
+    char path[128];
+    snprintf(path, sizeof path, "/tmp/terrain_test_stabilize_trace_%d.json", (int)getpid());
+    terrain_columns *region = bumpy_region();
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 4 });
+    cr_assert(trace_start(path));
+    terrain_stabilize_result result;
+    cr_assert(terrain_stabilize_region(region, &(terrain_stabilize_params){ 0 }, jobs, &result));
+    trace_stop();
+    job_system_destroy(jobs);
+    terrain_columns_destroy(region);
+
+    FILE *file = fopen(path, "rb");
+    cr_assert_not_null(file);
+    fseek(file, 0, SEEK_END);
+    long length = ftell(file);
+    fseek(file, 0, SEEK_SET);
+    char *text = malloc((size_t)length + 1);
+    size_t size = fread(text, 1, (size_t)length, file);
+    fclose(file);
+    unlink(path);
+    core_arena arena = { 0 };
+    core_json_value *root;
+    core_json_error error;
+    bool parsed = core_json_parse(text, size, &arena, &root, &error);
+    free(text);
+    cr_assert(parsed, "not valid JSON: %s", error.message);
+    const core_json_value *events = core_json_get(root, "traceEvents");
+    cr_assert_not_null(events);
+
+    /* The first pass's batches all begin before its join job does (the join waits on them). */
+    double first_join = INFINITY;
+    for (size_t i = 0; i < events->array.count; i++) {
+        const core_json_value *e = &events->array.items[i];
+        if (core_json_string_equals(core_json_get(e, "ph"), "B") &&
+            core_json_string_equals(core_json_get(e, "name"), "parallel_for.join"))
+            first_join = fmin(first_join, core_json_number_or(core_json_get(e, "ts"), INFINITY));
+    }
+    size_t batches = 0;
+    double first_rows = 0, first_columns = 0;
+    for (size_t i = 0; i < events->array.count; i++) {
+        const core_json_value *e = &events->array.items[i];
+        if (!core_json_string_equals(core_json_get(e, "ph"), "B") ||
+            !core_json_string_equals(core_json_get(e, "name"), "terrain.stabilize.pass"))
+            continue;
+        const core_json_value *args = core_json_get(e, "args");
+        double rows = core_json_number_or(core_json_get(args, "rows"), -1);
+        double columns = core_json_number_or(core_json_get(args, "columns"), -1);
+        cr_assert_geq(rows, 1, "batch %zu: rows %g", batches, rows);
+        cr_assert_geq(columns, 0, "batch %zu: columns %g", batches, columns);
+        cr_expect_leq(columns, 38 * rows, "batch %zu: %g columns in %g rows", batches, columns, rows);
+        if (core_json_number_or(core_json_get(e, "ts"), INFINITY) < first_join) {
+            first_rows += rows;
+            first_columns += columns;
+        }
+        batches++;
+    }
+    cr_expect_gt(batches, 0, "no stabilization batch ran on the jobs");
+    cr_expect_gt(first_rows, 0);
+    cr_expect_geq(first_columns, 37 * first_rows, "first pass: %g columns in %g rows", first_columns, first_rows);
+    cr_expect_leq(first_columns, 38 * first_rows, "first pass: %g columns in %g rows", first_columns, first_rows);
+    core_arena_release(&arena);
+}
+
 /* ---- the edit log: four threads replay while one records, compacts and parses ---- */
 
 #include <pthread.h>

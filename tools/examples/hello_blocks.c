@@ -64,6 +64,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
+    trace_thread_name("main");
 
     /* The tile first: the world's hook reads it from the first chunk on. */
     /* joints of 0.6 m: the terrain samples its field every metre, and a thinner joint would not

@@ -69,6 +69,7 @@ int main(int argc, char **argv) {
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
+    trace_thread_name("main");
 
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = common.threads });
     terrain_generation_params params = terrain_generation_defaults((uint64_t)seed);

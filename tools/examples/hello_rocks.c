@@ -57,6 +57,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
+    trace_thread_name("main");
 
     gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "hello_rocks", .headless = headless });
     if (!gfx) return 1;

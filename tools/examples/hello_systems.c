@@ -130,8 +130,7 @@ int main(int argc, char **argv) {
         trace_frame_begin();
         ecs_progress(world, 1.0f / 60.0f);
         trace_counter("entities", ecs_entity_count(world));
-        trace_counter("memory.bytes", (double)core_memory_in_use());
-        trace_counter("jobs.queued", job_system_stats(jobs).queued);
+        job_system_trace_counters(jobs); /* jobs.run, jobs.stolen, jobs.sleeps, jobs.wakes, jobs.queued */
         trace_frame_end();
     }
     double ms = core_ns_to_ms(core_time_ns() - start);

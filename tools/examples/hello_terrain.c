@@ -76,6 +76,7 @@ int main(int argc, char **argv) {
     int rc = parse(argc, argv, &o, &width, &height);
     if (rc >= 0) return rc;
     if (o.common.trace_path && !trace_start(o.common.trace_path)) return 2;
+    trace_thread_name("main");
     gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "hello_terrain (loading)",
                                                .headless = o.headless });
     if (!gfx) return 1;

@@ -63,6 +63,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
+    trace_thread_name("main");
 
     /* The terrain: 5 × 5 chunks of 32 m around the origin, meshed as entities. */
     gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "hello_water", .headless = headless });

@@ -187,6 +187,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
+    trace_thread_name("main");
 
     int status = 1;
     size_t descriptor_size = 0, report_bytes_size = 0;

@@ -151,6 +151,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
+    trace_thread_name("main");
 
     int status = 1;
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(seed) });

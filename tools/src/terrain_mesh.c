@@ -54,6 +54,7 @@ int main(int argc, char **argv) {
         fclose(probe);
     }
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
+    trace_thread_name("main");
 
     int status = 1;
     char error[320];

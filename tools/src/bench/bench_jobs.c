@@ -6,7 +6,9 @@
 
 #include <math.h>
 #include <omp.h>
+#include <stdatomic.h>
 #include <stdlib.h>
+#include <unistd.h>
 
 /* ---- jobs.empty ------------------------------------------------------------------------- */
 
@@ -20,6 +22,34 @@ static double sample_empty_jobs(void *user) {
     for (int i = 0; i < EMPTY_JOBS; i++) job_submit(jobs, &(job_desc){ .fn = empty_job });
     job_wait_all(jobs);
     return (double)(core_time_ns() - start) / EMPTY_JOBS;
+}
+
+/* ---- jobs.wake_latency ------------------------------------------------------------------ */
+
+/* From a submit to a sleeping worker to that job starting: what a frame pays when it hands work
+ * to an idle engine. The main thread does not wait with job_wait (it would run the job itself);
+ * it spins on the start time the job writes, and only then collects the handle. */
+enum { WAKE_RUNS = 101, WAKE_IDLE_US = 3000 };
+
+typedef struct wake_probe {
+    _Atomic uint64_t started_ns;
+} wake_probe;
+
+static void note_start(void *user) {
+    wake_probe *probe = user;
+    atomic_store_explicit(&probe->started_ns, core_time_ns(), memory_order_release);
+}
+
+static double sample_wake_latency(void *user) {
+    job_system *jobs = user;
+    wake_probe probe = { 0 };
+    usleep(WAKE_IDLE_US); /* long past a worker's spinning (~0.3 ms): every worker sleeps */
+    uint64_t submitted = core_time_ns();
+    job_handle job = job_submit(jobs, &(job_desc){ .fn = note_start, .user = &probe, .name = "bench.wake" });
+    uint64_t started;
+    while ((started = atomic_load_explicit(&probe.started_ns, memory_order_acquire)) == 0) { }
+    job_wait(jobs, job);
+    return (double)(started - submitted) * 1e-3;
 }
 
 /* ---- parallel loops --------------------------------------------------------------------- */
@@ -98,6 +128,13 @@ void bench_group_jobs(bench_context *ctx) {
     if (bench_wants(ctx, "jobs.empty")) {
         job_system *jobs = job_system_create(&(job_system_desc){ .threads = bench_threads(ctx) });
         bench_run(ctx, "jobs.empty", "ns", 11, sample_empty_jobs, jobs);
+        job_system_destroy(jobs);
+    }
+    if (bench_wants(ctx, "jobs.wake_latency")) {
+        /* At least one worker, whatever --threads says: the row is about waking one. */
+        int threads = bench_threads(ctx) > 1 ? bench_threads(ctx) : 2;
+        job_system *jobs = job_system_create(&(job_system_desc){ .threads = threads });
+        bench_run(ctx, "jobs.wake_latency", "us", WAKE_RUNS, sample_wake_latency, jobs);
         job_system_destroy(jobs);
     }
     bench_parallel_loops(ctx);

@@ -135,6 +135,7 @@ int main(int argc, char **argv) {
         fclose(probe);
     }
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
+    trace_thread_name("main");
 
     bench_context ctx = { .filter = filter, .threads = common.threads, .runs_override = runs,
                           .rocks_off = rocks_on == ROCKS_OFF };

@@ -25,7 +25,10 @@ static double trace_bench_time_frame(void) {
 }
 
 /* Steady state, as in a game that flushes every frame: full chunks are handed over inside the
- * timed loop (a real frame pays that too), then written and recycled by trace_flush outside it.
+ * timed loop (a real frame pays that too), then written by the writer thread and recycled
+ * within trace_flush, outside it. A frame here is 49 chunks, under the 64 that wake the writer
+ * before a frame ends, so the row is the recording thread's own cost; what the writer costs a
+ * frame on a machine short of cores shows in the frame times of a traced run instead.
  * One untimed frame first fills the chunk pool, so the samples measure recording rather than
  * the page faults of fresh memory. A capture per sample keeps the file at one sample's ~30 MB. */
 static double trace_bench_sample_on(void *user) {
