@@ -121,6 +121,7 @@ void gfx_frame_end(gfx_context *gfx) {
         gfx__window_swap(gfx);
     } else {
         /* Offscreen there is no swap to wait on: finish, so a frame's time is the GPU's too. */
+        TRACE_ZONE("gpu.wait");
         glFinish();
     }
     gfx->frame_index++;

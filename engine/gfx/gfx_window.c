@@ -4,6 +4,7 @@
 #include "gfx_internal.h"
 
 #include "core/core.h"
+#include "trace/trace.h"
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -73,7 +74,10 @@ void gfx__window_close(gfx_context *gfx) {
 
 void gfx__window_swap(gfx_context *gfx) {
     GLFWwindow *window = gfx->window;
-    glfwSwapBuffers(window);
+    {
+        TRACE_ZONE("gpu.wait");     /* the swap waits for the GPU (and vsync) */
+        glfwSwapBuffers(window);
+    }
     int width, height;
     glfwGetFramebufferSize(window, &width, &height);
     /* A minimised window reports 0 × 0: keep the last real size. */

@@ -113,6 +113,7 @@ static struct {
     uint64_t *frame_ends;  /* keep_frames entries */
     uint64_t frame_count, cutoff;
     trace_chunk *pool;
+    size_t chunks_made;    /* allocated and not freed: the capture's buffers (trace_memory_bytes) */
     trace_tid_name *names; /* indexed by tid; tid 0 is unused */
     uint32_t tid_count;    /* next tid to give out */
     size_t name_capacity;
@@ -230,7 +231,7 @@ const char *trace_intern(const char *s) {
 static trace_chunk *trace_chunk_take(uint32_t tid) {
     trace_chunk *chunk = trace_registry.pool;
     if (chunk) trace_registry.pool = chunk->next;
-    else chunk = core_alloc(sizeof *chunk);
+    else chunk = core_alloc(sizeof *chunk), trace_registry.chunks_made++;
     chunk->next = NULL;
     chunk->tid = tid;
     atomic_store_explicit(&chunk->count, 0, memory_order_relaxed);
@@ -505,6 +506,13 @@ void trace_keep_frames(int frames) {
     pthread_mutex_unlock(&trace_lock);
 }
 
+size_t trace_memory_bytes(void) {
+    pthread_mutex_lock(&trace_lock);
+    size_t bytes = trace_registry.chunks_made * sizeof(trace_chunk);
+    pthread_mutex_unlock(&trace_lock);
+    return bytes;
+}
+
 void trace_frame_begin(void) { trace_zone_begin("frame"); }
 
 void trace_frame_end(void) {
@@ -512,6 +520,7 @@ void trace_frame_end(void) {
     trace__zone_end();
     /* DESIGN.md: resident memory is a counter in every trace. */
     trace_counter("memory.bytes", (double)core_memory_in_use());
+    trace_counter("memory.trace", (double)trace_memory_bytes());
     /* The frame's events go to the writer now; formatting and writing them is its work. */
     pthread_mutex_lock(&trace_lock);
     trace_hand_over_partial(trace_local);
@@ -866,6 +875,7 @@ static void trace_free_pool(void) {
     while (trace_registry.pool) {
         trace_chunk *next = trace_registry.pool->next;
         core_free(trace_registry.pool, sizeof *trace_registry.pool);
+        trace_registry.chunks_made--;
         trace_registry.pool = next;
     }
 }

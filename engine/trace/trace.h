@@ -22,7 +22,8 @@
  *   thread recorded so far (for tests and benchmarks; it blocks, so not in a frame loop).
  *   With no capture running every call returns after one load of a flag.
  *   trace_keep_frames(n) before trace_start keeps only the last n frames (--trace-frames N).
- *   trace_frame_end also records the counter "memory.bytes" (core_memory_in_use). A thread may
+ *   trace_frame_end also records the counters "memory.bytes" (core_memory_in_use) and
+ *   "memory.trace" (trace_memory_bytes: the capture's own buffers). A thread may
  *   name itself before any capture starts; the name is kept. Stop the capture once the other
  *   threads are idle: events recorded while trace_stop runs may be dropped. See README.md.
  *
@@ -113,6 +114,8 @@ void trace_counter(const char *name, double value);
 void trace_thread_name(const char *name);
 void trace_frame_begin(void);
 void trace_frame_end(void);
+/* Bytes of event buffers the capture holds (in use, waiting for the writer or pooled). */
+size_t trace_memory_bytes(void);
 
 /* A zone measured elsewhere (e.g. a GPU timer query), on a named lane of its own. Times are
  * trace_now() values. */

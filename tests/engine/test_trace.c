@@ -153,7 +153,11 @@ Test(trace, capture_from_several_threads) {
         trace_frame_end();
     }
     for (int i = 0; i < WORKERS; i++) pthread_join(workers[i], NULL);
+    size_t buffers = trace_memory_bytes();
     trace_stop();
+    /* Every worker filled buffers of its own (64 KiB: 2048 events of 32 bytes, trace.c), which
+     * go back to the pool, not away. */
+    cr_expect_geq(buffers, (size_t)WORKERS * 2048 * 32, "%zu bytes of buffers", buffers);
 
     capture c;
     capture_load(&c, path);
@@ -166,6 +170,7 @@ Test(trace, capture_from_several_threads) {
     cr_expect_eq(count_events(&c, "B", "frame", -1), 3);
     cr_expect_eq(count_events(&c, "B", "update", -1), 3);
     cr_expect_eq(count_events(&c, "C", "memory.bytes", -1), 3); /* one per trace_frame_end */
+    cr_expect_eq(count_events(&c, "C", "memory.trace", -1), 3);
     cr_expect_eq(count_events(&c, "B", NULL, -1), count_events(&c, "E", NULL, -1));
 
     double main_tid = tid_named(&c, "main");

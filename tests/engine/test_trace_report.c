@@ -308,6 +308,6 @@ Test(trace_report, reads_back_a_capture) {
     /* Each sleep is at least 2 ms; each frame holds its sleep. */
     cr_expect_geq(sleep->total_ms, 3 * 2.0 * 0.995);
     cr_expect_geq(report.frame_p50_ms, sleep->total_ms / 3 * 0.5);
-    cr_expect_eq(report.counter_count, 3); /* memory.bytes, once per frame */
+    cr_expect_eq(report.counter_count, 6); /* memory.bytes and memory.trace, once per frame */
     trace_report_free(&report);
 }

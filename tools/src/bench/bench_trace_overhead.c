@@ -2,9 +2,11 @@
  *
  *   trace.frame_overhead   the median frame of a short scripted walk with a trace being captured,
  *                          over the same walk without one: a ratio (target ≤ 1.03). The walk is
- *                          the world at 640×360 (seed 1, 60 m on foot after loading) run in pairs,
- *                          untraced then traced, so both halves of a pair meet the same machine
- *                          load; the row's samples are the pairs' ratios. Each frame is timed
+ *                          the world at 320×180 (seed 1, 30 m on foot after loading; a small
+ *                          frame, so the trace's share of it is large) run in pairs, untraced
+ *                          and traced in turns (the order swapped every pair), so both halves of
+ *                          a pair meet the same machine load; the row's samples are the pairs'
+ *                          ratios. Each frame is timed
  *                          whole, from one game_app_frame call to the next, so the trace's own
  *                          work on the frame thread (its zones, trace_frame_end) is in it.
  *   trace.frame_overhead.bytes_per_frame   the traced walks' trace file, bytes a frame.
@@ -24,7 +26,7 @@
 #define OVERHEAD_PAIRS 3
 #define OVERHEAD_FRAMES_MAX 4000
 
-static const char overhead_walk[] = "ahead\n0 60 walk\n";
+static const char overhead_walk[] = "ahead\n0 30 walk\n";
 
 static int compare_doubles(const void *a, const void *b) {
     double x = *(const double *)a, y = *(const double *)b;
@@ -33,7 +35,7 @@ static int compare_doubles(const void *a, const void *b) {
 
 /* The walk's median frame, ms, from the first frame past loading; frames counted in *frames. */
 static double walk_median_frame(bench_context *ctx, const game_walk *walk, int *frames) {
-    game_app *app = game_app_create(&(game_app_desc){ .seed = 1, .width = 640, .height = 360, .headless = true,
+    game_app *app = game_app_create(&(game_app_desc){ .seed = 1, .width = 320, .height = 180, .headless = true,
                                                       .threads = bench_threads(ctx), .walk = walk, .frames = 20000,
                                                       .rocks = ROCKS_OFF, .cliffs = ROCKS_OFF, .no_hud = true });
     if (!app) return 0.0;
@@ -72,10 +74,16 @@ void bench_group_trace_overhead(bench_context *ctx) {
     int pairs = 0;
     for (int p = 0; p < OVERHEAD_PAIRS; p++) {
         int plain_frames = 0, traced_frames = 0;
-        double plain = walk_median_frame(ctx, &walk, &plain_frames);
-        if (!trace_start(path)) break;
-        double traced = walk_median_frame(ctx, &walk, &traced_frames);
-        trace_stop();
+        double plain = 0, traced = 0;
+        for (int half = 0; half < 2; half++) {
+            if ((half + p) % 2 == 0) {
+                plain = walk_median_frame(ctx, &walk, &plain_frames);
+            } else {
+                if (!trace_start(path)) break;
+                traced = walk_median_frame(ctx, &walk, &traced_frames);
+                trace_stop();
+            }
+        }
         struct stat st;
         if (!(plain > 0 && traced > 0) || stat(path, &st) != 0 || traced_frames == 0) break;
         ratios[pairs] = traced / plain;
