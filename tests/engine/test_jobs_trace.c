@@ -6,6 +6,7 @@
 #include "trace/trace.h"
 
 #include "test.h"
+#include "trace_file.h"
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,22 +20,8 @@ typedef struct jobs_capture {
 } jobs_capture;
 
 static void jobs_capture_load(jobs_capture *c, const char *path) {
-    FILE *file = fopen(path, "rb");
-    cr_assert_not_null(file, "cannot open %s", path);
-    fseek(file, 0, SEEK_END);
-    long length = ftell(file);
-    fseek(file, 0, SEEK_SET);
-    char *text = malloc((size_t)length + 1);
-    size_t size = fread(text, 1, (size_t)length, file);
-    fclose(file);
-    unlink(path);
     *c = (jobs_capture){ 0 };
-    core_json_error error;
-    bool ok = core_json_parse(text, size, &c->arena, &c->root, &error);
-    free(text);
-    cr_assert(ok, "%s is not valid JSON: %s", path, error.message);
-    c->events = core_json_get(c->root, "traceEvents");
-    cr_assert_not_null(c->events);
+    c->events = trace_file_load(path, &c->arena, &c->root);
 }
 
 static const core_json_value *jobs_event(const jobs_capture *c, size_t i) { return &c->events->array.items[i]; }

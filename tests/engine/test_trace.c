@@ -5,6 +5,7 @@
 #include "trace/trace.h"
 
 #include "test.h"
+#include "trace_file.h"
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -25,33 +26,12 @@ static void temp_trace_path(char *path, size_t size, const char *tag) {
     snprintf(path, size, "/tmp/engine_test_trace_%d_%s.json", (int)getpid(), tag);
 }
 
-static char *read_file(const char *path, size_t *size) {
-    FILE *file = fopen(path, "rb");
-    cr_assert_not_null(file, "cannot open %s", path);
-    fseek(file, 0, SEEK_END);
-    long length = ftell(file);
-    fseek(file, 0, SEEK_SET);
-    char *data = malloc((size_t)length + 1);
-    *size = fread(data, 1, (size_t)length, file);
-    data[*size] = '\0';
-    fclose(file);
-    return data;
-}
 
 /* Reads a trace file back (and deletes it); fails the test unless it is valid JSON of the
  * {"traceEvents":[...],"displayTimeUnit":"ms"} shape. */
 static void capture_load(capture *c, const char *path) {
-    size_t size;
-    char *text = read_file(path, &size);
-    unlink(path);
     *c = (capture){ 0 };
-    core_json_error error;
-    bool ok = core_json_parse(text, size, &c->arena, &c->root, &error);
-    free(text);
-    cr_assert(ok, "%s is not valid JSON: %s", path, error.message);
-    c->events = core_json_get(c->root, "traceEvents");
-    cr_assert_not_null(c->events);
-    cr_assert_eq(c->events->type, CORE_JSON_ARRAY);
+    c->events = trace_file_load(path, &c->arena, &c->root);
     cr_expect(core_json_string_equals(core_json_get(c->root, "displayTimeUnit"), "ms"));
 }
 
@@ -549,7 +529,7 @@ Test(trace, flush_waits_for_the_writer) {
     for (int i = 0; i < 10; i++) { TRACE_ZONE("before.flush"); }
     trace_flush();
     size_t size;
-    char *text = read_file(path, &size);
+    char *text = trace_file_read(path, &size);
     size_t found = 0;
     for (const char *p = text; (p = strstr(p, "\"before.flush\"")) != NULL; p++) found++;
     free(text);

@@ -158,6 +158,7 @@ Test(terrain_threads, regions_side_by_side_on_four_threads_give_the_bytes_of_one
 
 #include "core/core.h"
 #include "trace/trace.h"
+#include "../engine/trace_file.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -180,23 +181,8 @@ Test(terrain_threads, stabilize_batches_carry_their_columns) {
     job_system_destroy(jobs);
     terrain_columns_destroy(region);
 
-    FILE *file = fopen(path, "rb");
-    cr_assert_not_null(file);
-    fseek(file, 0, SEEK_END);
-    long length = ftell(file);
-    fseek(file, 0, SEEK_SET);
-    char *text = malloc((size_t)length + 1);
-    size_t size = fread(text, 1, (size_t)length, file);
-    fclose(file);
-    unlink(path);
     core_arena arena = { 0 };
-    core_json_value *root;
-    core_json_error error;
-    bool parsed = core_json_parse(text, size, &arena, &root, &error);
-    free(text);
-    cr_assert(parsed, "not valid JSON: %s", error.message);
-    const core_json_value *events = core_json_get(root, "traceEvents");
-    cr_assert_not_null(events);
+    const core_json_value *events = trace_file_load(path, &arena, NULL);
 
     /* The first pass's batches all begin before its join job does (the join waits on them). */
     double first_join = INFINITY;
