@@ -60,6 +60,7 @@ int main(int argc, char **argv) {
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
 
+    trace_thread_name("main");
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
 
     trace_report report;
