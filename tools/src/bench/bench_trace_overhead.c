@@ -23,7 +23,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#define OVERHEAD_PAIRS 3
+#define OVERHEAD_PAIRS 5
 #define OVERHEAD_FRAMES_MAX 4000
 
 static const char overhead_walk[] = "ahead\n0 30 walk\n";
