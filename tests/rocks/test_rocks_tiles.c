@@ -162,10 +162,8 @@ static void check_consistency(const rocks__set *full, uint64_t colouring) {
     free(b);
 }
 
-Test(rocks_tiles, tiles_equal_the_global_voronoi) {
-    rocks__set *full = build_full();
+static void tiles_equal_the_global_voronoi(rocks__set *full) {
     for (uint64_t colouring = 1; colouring <= 4; colouring++) check_consistency(full, colouring * 7919);
-    rocks_tiles_destroy(&full->set);
 }
 
 Test(rocks_tiles, closures_of_same_dimension_features_do_not_overlap) {
@@ -181,8 +179,7 @@ Test(rocks_tiles, closures_of_same_dimension_features_do_not_overlap) {
 
 /* A face rock that straddles its face, checked against the global Voronoi in two colourings that
  * agree on the face's corners and differ everywhere else. */
-Test(rocks_tiles, straddling_rock_is_the_same_whatever_the_neighbours) {
-    rocks__set *full = build_full();
+static void straddling_rock_is_the_same_whatever_the_neighbours(rocks__set *full) {
     const rocks__params *params = &full->params;
     block *a = block_make(params, 11), *b = block_make(params, 11);
     /* the face x = 2 between tiles (1,1,1) and (2,1,1): its corners (2, 1…2, 1…2) */
@@ -244,7 +241,6 @@ Test(rocks_tiles, straddling_rock_is_the_same_whatever_the_neighbours) {
     cr_expect_gt(checked, 0, "no rock straddles the face");
     free(a);
     free(b);
-    rocks_tiles_destroy(&full->set);
 }
 
 /* ---- no doubled rocks ------------------------------------------------------------------------- */
@@ -263,8 +259,7 @@ static void list_rock(void *user, const rocks__set *full, uint32_t r, const int 
     l->seen[key] = 1;
 }
 
-Test(rocks_tiles, every_seed_is_listed_by_exactly_one_tile) {
-    rocks__set *full = build_full();
+static void every_seed_is_listed_by_exactly_one_tile(rocks__set *full) {
     block *b = block_make(&full->params, 99);
     listing l = { .seen = calloc((size_t)CELLS * CELLS * CELLS * 8, 1) };
     place_block(full, b, NULL, list_rock, &l);
@@ -280,7 +275,6 @@ Test(rocks_tiles, every_seed_is_listed_by_exactly_one_tile) {
     cr_expect_eq(missing, 0, "%d seeds of the block are in no tile", missing);
     free(l.seen);
     free(b);
-    rocks_tiles_destroy(&full->set);
 }
 
 /* ---- contacts, interpenetration ----------------------------------------------------------------- */
@@ -397,8 +391,7 @@ static void check_vertices(void *user, const rocks__set *full, uint32_t r, const
     }
 }
 
-Test(rocks_tiles, no_rock_reaches_deeper_than_a_voxel_into_another) {
-    rocks__set *full = build_full();
+static void no_rock_reaches_deeper_than_a_voxel_into_another(rocks__set *full) {
     block *b = block_make(&full->params, 31337);
     size_t total = (size_t)VOXELS * VOXELS * VOXELS;
     int32_t *owner = malloc(total * sizeof *owner);
@@ -412,6 +405,16 @@ Test(rocks_tiles, no_rock_reaches_deeper_than_a_voxel_into_another) {
     cr_expect_eq(p.deep, 0, "%d of %d vertices lie deep inside another rock", p.deep, p.vertices);
     free(owner);
     free(b);
+}
+
+/* The four checks above on one set: building it with its voxels kept is most of their time
+ * under the sanitizers, so it is built once (each check reads it and leaves it as it was). */
+Test(rocks_tiles, one_set_against_the_global_voronoi_its_seeds_its_straddling_rocks_and_overlaps) {
+    rocks__set *full = build_full();
+    tiles_equal_the_global_voronoi(full);
+    straddling_rock_is_the_same_whatever_the_neighbours(full);
+    every_seed_is_listed_by_exactly_one_tile(full);
+    no_rock_reaches_deeper_than_a_voxel_into_another(full);
     rocks_tiles_destroy(&full->set);
 }
 
