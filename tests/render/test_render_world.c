@@ -163,12 +163,14 @@ typedef struct edited_run {
 } edited_run;
 
 /* Loads the world, carves a ball where the ground is under the spawn, lets it settle and returns
- * the hash of the chunk it changed; the app saves its edits as it closes. */
+ * the hash of the chunk it changed; the app saves its edits as it closes. The saves are all these
+ * runs look at: nothing but the terrain is drawn. */
 static edited_run carve_and_close(const char *dir) {
     game_app *app = game_app_create(&(game_app_desc){ .seed = 3, .width = 96, .height = 64, .headless = true,
                                                       .threads = 2, .frames = 100000, .stream = small_view,
                                                       .no_clipmap = true, .world_dir = dir, .rocks = ROCKS_OFF,
-                                                      .cliffs = ROCKS_OFF });
+                                                      .cliffs = ROCKS_OFF, .grass = GRASS_OFF,
+                                                      .water = TERRAIN_WATER_OFF, .shadows = TERRAIN_SHADOWS_OFF });
     cr_assert(app);
     for (int guard = 0; !game_app_loaded(app) && guard < 20000; guard++) game_app_frame(app);
     game_app_stats s = game_app_stats_get(app);
@@ -195,7 +197,8 @@ static uint64_t chunk_hash_in(const char *dir, uint64_t seed, terrain_chunk_coor
     game_app *app = game_app_create(&(game_app_desc){ .seed = seed, .width = 96, .height = 64, .headless = true,
                                                       .threads = 2, .frames = 1, .stream = small_view,
                                                       .no_clipmap = true, .world_dir = dir, .rocks = ROCKS_OFF,
-                                                      .cliffs = ROCKS_OFF });
+                                                      .cliffs = ROCKS_OFF, .grass = GRASS_OFF,
+                                                      .water = TERRAIN_WATER_OFF, .shadows = TERRAIN_SHADOWS_OFF });
     *started = app != NULL;
     if (!app) return 0;
     uint64_t hash = terrain_stacks_hash(terrain_world_stacks(game_app_world(app), chunk));
