@@ -282,11 +282,11 @@ expect "world: bad waypoint file" 2 "bad value for '--walk': .*bad.walk:3: z: 't
   "$bin/world" --walk "$tmp/bad.walk"
 expect "world: bad --size" 2 "bad value for '--size'" -- "$bin/world" --size 10x10000000
 expect "world: --record with --replay" 2 "cannot be used together" -- "$bin/world" --record a --replay b
-expect "world: missing replay" 1 "$tmp/none.rec" -- "$bin/world" --headless --replay "$tmp/none.rec"
+expect "world: missing replay" 1 "$tmp/none.rec" -- "$bin/world" --headless --rocks off --replay "$tmp/none.rec"
 # --gamepad-mappings: an unreadable file fails at start-up naming it; a bad line is reported with
 # its file and line number and skipped, and the run goes on.
 expect "world: missing --gamepad-mappings" 1 "cannot open gamepad mappings $tmp/none-pads.txt" -- \
-  "$bin/world" --headless --frames 1 --gamepad-mappings "$tmp/none-pads.txt"
+  "$bin/world" --headless --rocks off --frames 1 --gamepad-mappings "$tmp/none-pads.txt"
 printf '# pads\n030000005e0400008e02000014010001,Typo,a:b0,leftshoulderr:b4,\n030000005e0400008e02000014010000,Good,a:b0,leftx:a0,platform:Linux,\n' >"$tmp/pads.txt"
 expect "world: bad --gamepad-mappings line skipped" 0 "pads.txt:2: unknown output 'leftshoulderr' \(line skipped\)" -- \
   "$bin/world" --headless --frames 1 --size 160x90 --radius 1 --levels 1 --rocks off --cliffs off --grass off \
@@ -312,21 +312,18 @@ expect "world: --look with trailing junk" 2 "bad value for '--look': '90,0,' is 
 expect "world: --look of NaN" 2 "bad value for '--look': 'NaN,0': YAW is not a finite number" -- "$bin/world" --look NaN,0
 expect "world: --look past straight up" 2 "bad value for '--look': '0,90': PITCH is beyond ±89" -- "$bin/world" --look 0,90
 expect "world: --look past straight down" 2 "bad value for '--look': '0,-89.5': PITCH is beyond" -- "$bin/world" --look 0,-89.5
-# The rock tile set is data made once and cached in out/ (tools/play makes it the same way):
-# made here, outside each check's 60 s, so that the first world run does not pay for it (the
-# debug build takes most of a minute).
-mkdir -p out
-[[ -f out/rocks_tiles.bin ]] ||
-  timeout 600 "$bin/rocks_export" --tiles 1 --out "$tmp/rocks-tiles" --cache out/rocks_tiles.bin >/dev/null 2>&1
+# Every world here runs with --rocks off: the rock tile set would take the debug build most of a
+# minute to make on a clean clone (test_rocks and test_render_rocks cover rocks, hello_rocks
+# the module's example; tools/play makes the set for the game).
 # Checks about other things run without the cliff blocks (their tiles and presence cost the
 # debug build seconds a world: the walk with its trace came near its 60 s); one world keeps the
 # default and must report blocks raised.
 expect "world: --at and --look" 0 "player at \(10\.0000, 78\.3800, 20\.0000\), looking 90\.0,-20\.0" -- \
-  "$bin/world" --headless --size 64x48 --radius 1 --levels 2 --frames 2 --at 10,80,20 --look 90,-20 --cliffs off
+  "$bin/world" --headless --rocks off --size 64x48 --radius 1 --levels 2 --frames 2 --at 10,80,20 --look 90,-20 --cliffs off
 expect "world: cliff blocks on by default" 0 "world: cliffs [1-9][0-9]* blocks raised on steep bedrock walls" -- \
-  "$bin/world" --headless --size 64x48 --radius 1 --levels 2 --frames 2 --at 10,80,20 --look 90,-20
+  "$bin/world" --headless --rocks off --size 64x48 --radius 1 --levels 2 --frames 2 --at 10,80,20 --look 90,-20
 expect "world: scripted walk, eye always in the air" 0 "walked (8[0-9]|9[0-9]|1[0-9][0-9])\.[0-9] m .*eye in solid on 0 frames" -- \
-  "$bin/world" --headless --size 64x48 --radius 1 --levels 2 --walk straight:90 --seed 5 --trace "$tmp/walk.json" \
+  "$bin/world" --headless --rocks off --size 64x48 --radius 1 --levels 2 --walk straight:90 --seed 5 --trace "$tmp/walk.json" \
   --screenshot "$tmp/world.png" --cliffs off
 expect "world: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu1 -N4 "$tmp/world.png"
 # One report of the walk's trace (a second each in the debug build), read by the checks below.
@@ -348,14 +345,14 @@ expect "hello_edit: unwritable --world" 1 "edit_file" -- "$bin/hello_edit" --wor
 # A world folder: a file in its place is refused, its seed is kept and another one refused, a
 # damaged world.txt is reported.
 touch "$tmp/not_a_folder"
-expect "world: --world that is a file" 1 "cannot (create|read)" -- "$bin/world" --headless --frames 1 --world "$tmp/not_a_folder"
+expect "world: --world that is a file" 1 "cannot (create|read)" -- "$bin/world" --headless --rocks off --frames 1 --world "$tmp/not_a_folder"
 mkdir -p "$tmp/saved"
 echo "seed 9" >"$tmp/saved/world.txt"
 expect "world: --world of another seed" 1 "holds the world of seed 9 \(run with --seed 9" -- \
-  "$bin/world" --headless --size 64x48 --frames 1 --seed 3 --world "$tmp/saved" --cliffs off
+  "$bin/world" --headless --rocks off --size 64x48 --frames 1 --seed 3 --world "$tmp/saved" --cliffs off
 echo "not a seed" >"$tmp/saved/world.txt"
 expect "world: damaged world.txt" 1 "world.txt does not say 'seed N'" -- \
-  "$bin/world" --headless --size 64x48 --frames 1 --seed 3 --world "$tmp/saved" --cliffs off
+  "$bin/world" --headless --rocks off --size 64x48 --frames 1 --seed 3 --world "$tmp/saved" --cliffs off
 # A world folder's database: it records its seed, a damaged one is set aside (the run goes on),
 # and a world another process holds is refused (python3's sqlite3 holds SQLite's lock here).
 # (Small worlds without rocks: the checks are about the database, and the debug build takes 20 s
@@ -365,7 +362,7 @@ expect "world: a new world folder" 0 "player at" -- \
   --trace "$tmp/db.json" --cliffs off
 expect "world: the save shows in the trace" 0 "terrain.store.save" -- "$bin/trace_report" "$tmp/db.json"
 expect "world: world.db of another seed" 1 "holds the world of seed 9 \(run with --seed 9" -- \
-  "$bin/world" --headless --size 64x48 --frames 1 --seed 3 --world "$tmp/db" --cliffs off
+  "$bin/world" --headless --rocks off --size 64x48 --frames 1 --seed 3 --world "$tmp/db" --cliffs off
 mkdir -p "$tmp/damaged_db"
 echo "not a database at all, a line of text long enough to be read" >"$tmp/damaged_db/world.db"
 expect "world: a damaged world.db is set aside" 0 "world.db: .*set aside as .*world.db.bad" -- \
@@ -378,7 +375,7 @@ open(sys.argv[1] + ".held", "w").close(); time.sleep(60)' "$tmp/db/world.db" &
 holder=$!
 for _ in $(seq 100); do [[ -e $tmp/db/world.db.held ]] && break; sleep 0.1; done
 expect "world: a world another process has open" 1 "world.db: in use by another process" -- \
-  "$bin/world" --headless --size 64x48 --frames 1 --seed 9 --world "$tmp/db" --cliffs off
+  "$bin/world" --headless --rocks off --size 64x48 --frames 1 --seed 9 --world "$tmp/db" --cliffs off
 kill "$holder" 2>/dev/null; wait "$holder" 2>/dev/null
 
 # tools/play with no display: the tour; the user's --trace and --screenshot win over the defaults,
