@@ -477,35 +477,47 @@ input_bindings *input_bindings_parse(const char *text, size_t size, const char *
     return p.bindings;
 }
 
-input_bindings *input_bindings_load(const char *path, int *bad_lines) {
-    if (bad_lines) *bad_lines = 0;
+char *input__file_read(const char *path, const char *what, size_t max_bytes, size_t *size, size_t *capacity) {
+    *size = *capacity = 0;
     FILE *file = fopen(path, "rb");
     if (!file) {
-        core_error("input", "cannot open bindings %s: %s", path, strerror(errno));
+        core_error("input", "cannot open %s %s: %s", what, path, strerror(errno));
         return NULL;
     }
-    size_t capacity = 0, size = 0;
     char *text = NULL;
     bool failed = false;
     for (;;) {
-        text = core_grow(text, &capacity, size + 4096, 1);
-        size_t got = fread(text + size, 1, capacity - size, file);
-        size += got;
-        if (size > INPUT_BINDINGS_MAX_FILE) {
-            core_error("input", "cannot load bindings %s: larger than %d bytes", path, INPUT_BINDINGS_MAX_FILE);
+        text = core_grow(text, capacity, *size + 4096, 1);
+        size_t got = fread(text + *size, 1, *capacity - *size, file);
+        *size += got;
+        if (*size > max_bytes) {
+            core_error("input", "cannot load %s %s: larger than %zu bytes", what, path, max_bytes);
             failed = true;
             break;
         }
         if (got == 0) {
             if (ferror(file)) {
-                core_error("input", "cannot read bindings %s: %s", path, strerror(errno));
+                core_error("input", "cannot read %s %s: %s", what, path, strerror(errno));
                 failed = true;
             }
             break;
         }
     }
     fclose(file);
-    input_bindings *bindings = failed ? NULL : input_bindings_parse(text, size, path, bad_lines);
-    if (text) core_free(text, capacity);
+    if (failed) {
+        core_free(text, *capacity);
+        *size = *capacity = 0;
+        return NULL;
+    }
+    return text;
+}
+
+input_bindings *input_bindings_load(const char *path, int *bad_lines) {
+    if (bad_lines) *bad_lines = 0;
+    size_t size, capacity;
+    char *text = input__file_read(path, "bindings", INPUT_BINDINGS_MAX_FILE, &size, &capacity);
+    if (!text) return NULL;
+    input_bindings *bindings = input_bindings_parse(text, size, path, bad_lines);
+    core_free(text, capacity);
     return bindings;
 }

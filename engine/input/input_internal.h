@@ -288,6 +288,10 @@ void input__sdl_mappings_parse(input_sdl_mappings *mappings, const char *text, s
                                int *bad_lines);
 /* false (logged) when the file cannot be read. */
 bool input__sdl_mappings_load(input_sdl_mappings *mappings, const char *path, int *bad_lines);
+/* A whole text file of at most max_bytes (the bindings, the gamepad mappings), for a parser;
+ * free it with core_free(text, *capacity). NULL with a message naming `what` and the path when
+ * it cannot be opened or read or is larger. */
+char *input__file_read(const char *path, const char *what, size_t max_bytes, size_t *size, size_t *capacity);
 void input__sdl_mappings_free(input_sdl_mappings *mappings);
 /* The mapping for a GUID (32 hex digits, any case), or NULL. */
 const input_sdl_mapping *input__sdl_mappings_find(const input_sdl_mappings *mappings, const char *guid);

@@ -321,35 +321,12 @@ void input__sdl_mappings_parse(input_sdl_mappings *ms, const char *text, size_t 
 
 bool input__sdl_mappings_load(input_sdl_mappings *ms, const char *path, int *bad_lines) {
     if (bad_lines) *bad_lines = 0;
-    FILE *file = fopen(path, "rb");
-    if (!file) {
-        core_error("input", "cannot open gamepad mappings %s: %s", path, strerror(errno));
-        return false;
-    }
-    size_t capacity = 0, size = 0;
-    char *text = NULL;
-    bool ok = true;
-    for (;;) {
-        text = core_grow(text, &capacity, size + 4096, 1);
-        size_t got = fread(text + size, 1, capacity - size, file);
-        size += got;
-        if (size > INPUT_SDL_MAX_FILE) {
-            core_error("input", "cannot load gamepad mappings %s: larger than %d bytes", path, INPUT_SDL_MAX_FILE);
-            ok = false;
-            break;
-        }
-        if (got == 0) {
-            if (ferror(file)) {
-                core_error("input", "cannot read gamepad mappings %s: %s", path, strerror(errno));
-                ok = false;
-            }
-            break;
-        }
-    }
-    fclose(file);
-    if (ok) input__sdl_mappings_parse(ms, text, size, path, bad_lines);
-    if (text) core_free(text, capacity);
-    return ok;
+    size_t size, capacity;
+    char *text = input__file_read(path, "gamepad mappings", INPUT_SDL_MAX_FILE, &size, &capacity);
+    if (!text) return false;
+    input__sdl_mappings_parse(ms, text, size, path, bad_lines);
+    core_free(text, capacity);
+    return true;
 }
 
 void input__sdl_mappings_free(input_sdl_mappings *ms) {

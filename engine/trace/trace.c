@@ -113,7 +113,7 @@ static struct {
     uint64_t *frame_ends;  /* keep_frames entries */
     uint64_t frame_count, cutoff;
     trace_chunk *pool;
-    size_t chunks_made;    /* allocated and not freed: the capture's buffers (trace_memory_bytes) */
+    _Atomic size_t chunks_made; /* allocated and not freed (trace_memory_bytes reads it lock-free) */
     trace_tid_name *names; /* indexed by tid; tid 0 is unused */
     uint32_t tid_count;    /* next tid to give out */
     size_t name_capacity;
@@ -231,7 +231,7 @@ const char *trace_intern(const char *s) {
 static trace_chunk *trace_chunk_take(uint32_t tid) {
     trace_chunk *chunk = trace_registry.pool;
     if (chunk) trace_registry.pool = chunk->next;
-    else chunk = core_alloc(sizeof *chunk), trace_registry.chunks_made++;
+    else chunk = core_alloc(sizeof *chunk), atomic_fetch_add_explicit(&trace_registry.chunks_made, 1, memory_order_relaxed);
     chunk->next = NULL;
     chunk->tid = tid;
     atomic_store_explicit(&chunk->count, 0, memory_order_relaxed);
@@ -507,10 +507,8 @@ void trace_keep_frames(int frames) {
 }
 
 size_t trace_memory_bytes(void) {
-    pthread_mutex_lock(&trace_lock);
-    size_t bytes = trace_registry.chunks_made * sizeof(trace_chunk);
-    pthread_mutex_unlock(&trace_lock);
-    return bytes;
+    /* No lock: trace_frame_end reads it on the frame thread just before taking the lock itself. */
+    return atomic_load_explicit(&trace_registry.chunks_made, memory_order_relaxed) * sizeof(trace_chunk);
 }
 
 void trace_frame_begin(void) { trace_zone_begin("frame"); }
@@ -875,7 +873,7 @@ static void trace_free_pool(void) {
     while (trace_registry.pool) {
         trace_chunk *next = trace_registry.pool->next;
         core_free(trace_registry.pool, sizeof *trace_registry.pool);
-        trace_registry.chunks_made--;
+        atomic_fetch_sub_explicit(&trace_registry.chunks_made, 1, memory_order_relaxed);
         trace_registry.pool = next;
     }
 }
