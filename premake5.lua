@@ -116,6 +116,7 @@ program("test_threads", { files = { "tests/engine/test_shim.c", "tests/engine/te
                                     "tests/engine/test_jobs_trace.c",
                                     "tests/engine/test_ecs_scheduler.c", "tests/engine/test_ecs_commands.c",
                                     "tests/engine/test_ecs_hooks.c",
+                                    "tests/engine/test_ecs_resources.c",
                                     "tests/engine/test_trace.c", "tests/engine/test_input_threads.c",
                                     "tests/terrain/test_terrain_threads.c" },
                           defines = { "TEST_WITHOUT_CRITERION" } })

@@ -57,10 +57,11 @@
  *     ecs_system_add(world, &(ecs_system_desc){ .name = "move", .phase = "physics",
  *         .query = { .with = { position, velocity } }, .writes = { position }, .fn = move });
  *     ecs_progress(world, dt);                             // one frame, every phase in order
- *   A system reads its query's components unless it lists them in `writes`; components it
- *   touches through ecs_get go in `reads` or `writes` too. Within a phase, two systems
- *   conflict when one writes what the other reads or writes: conflicting systems run one after
- *   the other in registration order, the others run at the same time on the job system.
+ *   A system reads its query's components unless it lists them in `writes`; components and
+ *   resources it touches otherwise go in `reads` or `writes` too (see ACCESS). Within a phase,
+ *   two systems conflict when one writes what the other reads or writes: conflicting systems
+ *   run one after the other in registration order, the others run at the same time on the job
+ *   system.
  *   `.main_thread` pins a system to the main thread (OpenGL); `.parallel` splits its query
  *   into batches of about `.batch_size` entities that run as parallel jobs, each batch with
  *   its own command buffer. Every phase and every system is a trace zone named after it.
@@ -70,10 +71,29 @@
  * is applied. Real ids are handed out at apply time, in apply order, which is what keeps them
  * identical for any thread count. Do not store a placeholder in component data.
  *
- * THREADS. All calls that change the world's structure (and registering components, queries,
- * phases and systems) belong to the thread that runs ecs_progress, outside a running phase:
- * while a phase runs, such a call is a programmer error and asserts. Systems may read anything
- * and write the components they declare, through fields or ecs_get.
+ * RESOURCES are the world's singletons (the terrain world, the renderer, the input system, the
+ * clock): one value per world, not per entity. A resource is registered like a component and
+ * declared like one in a system's `reads` and `writes`, so two systems writing the same resource
+ * never overlap while readers of it do.
+ *     typedef struct Clock { double seconds; } Clock;
+ *     ecs_component clock = ECS_RESOURCE(world, Clock);              // a zeroed value the world keeps
+ *     ecs_component terrain = ecs_resource_register(world, &(ecs_resource_desc){
+ *         .name = "terrain_world", .object = my_terrain });          // an object you own
+ *     Clock *c = ecs_resource_get(world, clock);                     // in a system that declared it
+ *     terrain_world *t = ecs_resource_get(world, terrain);           // the object itself
+ *
+ * ACCESS. A system reads its query's components and writes what it lists in `writes`; anything
+ * else it touches (components through ecs_get or ecs_set, another query, a resource) goes in
+ * `reads` or `writes`. Debug builds check it: ecs_get, ecs_set, ecs_query_iter and
+ * ecs_resource_get on a component or resource the running system did not declare stop the
+ * program with a message naming the system and the component. A system that declares nothing
+ * at all (no query, no reads, no writes) is exclusive: it runs alone in its phase, after the
+ * systems added before it and before those added after it, and may touch anything.
+ *
+ * THREADS. All calls that change the world's structure (and registering components, resources,
+ * queries, phases and systems) belong to the thread that runs ecs_progress, outside a running
+ * phase: while a phase runs, such a call is a programmer error and asserts. Inside a phase, a
+ * system reads what it declares and writes only what it lists in `writes`.
  */
 #ifndef ECS_H
 #define ECS_H
@@ -139,6 +159,29 @@ void ecs_component_on_remove(ecs_world *world, ecs_component component, ecs_remo
     ecs_component_register((world), &(ecs_component_desc){                                    \
         .name = #Type, .size = sizeof(Type), .align = alignof(Type) })
 #define ECS_TAG(world, Name) ecs_component_register((world), &(ecs_component_desc){ .name = #Name })
+
+/* ---- resources -------------------------------------------------------------------------- */
+
+typedef struct ecs_resource_desc {
+    const char *name;                        /* required, unique among components and resources */
+    size_t size;                             /* a value the world keeps, zeroed; or */
+    size_t align;                            /* 0 = alignof(max_align_t) */
+    void *object;                            /* an object the caller owns (size 0): the world
+                                                keeps the pointer, never frees it */
+} ecs_resource_desc;
+
+/* Registering a name again returns the same resource; for an object resource it also points it
+ * at the new object (a world that outlives what it names can be given the next one). */
+ecs_component ecs_resource_register(ecs_world *world, const ecs_resource_desc *desc);
+/* The world's copy of a value resource, or the object of an object resource. */
+void *ecs_resource_get(const ecs_world *world, ecs_component resource);
+/* Copies `value` into a value resource (declared in `writes` when called from a system). */
+void ecs_resource_set(ecs_world *world, ecs_component resource, const void *value);
+bool ecs_is_resource(const ecs_world *world, ecs_component id);
+
+#define ECS_RESOURCE(world, Type)                                                              \
+    ecs_resource_register((world), &(ecs_resource_desc){                                      \
+        .name = #Type, .size = sizeof(Type), .align = alignof(Type) })
 
 /* ---- entities --------------------------------------------------------------------------- */
 
@@ -247,8 +290,8 @@ typedef struct ecs_system_desc {
     const char *name;                        /* trace zone name; copied */
     const char *phase;                       /* required: an existing phase */
     ecs_query_desc query;                    /* empty: no query, fn is called once */
-    ecs_component reads[ECS_MAX_ACCESS];     /* besides the query's terms */
-    ecs_component writes[ECS_MAX_ACCESS];
+    ecs_component reads[ECS_MAX_ACCESS];     /* components and resources, besides the query's */
+    ecs_component writes[ECS_MAX_ACCESS];    /* nothing at all declared: exclusive (see ACCESS) */
     ecs_system_fn fn;                        /* required */
     void *user;
     bool main_thread;                        /* always run on the main thread */

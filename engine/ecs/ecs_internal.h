@@ -140,6 +140,31 @@ typedef struct ecs_phase {
 void ecs_scheduler_free(ecs_world *world);
 void ecs_pipeline_init(ecs_world *world);
 
+/* ---- resources and access --------------------------------------------------------------- */
+
+/* A resource's storage. Its id comes from the component id space, so that systems list it in
+ * their reads and writes and the conflict graph treats it like a component. */
+typedef struct ecs_resource_slot {
+    ecs_component id;
+    void *data;                      /* the value the world keeps, or the caller's object */
+    size_t size;                     /* 0 = an object the caller owns */
+    size_t allocated;                /* bytes of `data` the world allocated (0 for objects) */
+} ecs_resource_slot;
+
+const ecs_resource_slot *ecs_resource_slot_of(const ecs_world *world, ecs_component id);
+void ecs_resources_free(ecs_world *world);
+
+/* Debug builds: stops with a message naming the running system and the component when the
+ * system on this thread did not declare the access (reads or writes; `write`: writes). Nothing
+ * outside systems, nor in systems that declared nothing (they run alone in their phase). */
+#ifndef NDEBUG
+void ecs_access_check(const ecs_world *world, ecs_component component, bool write, const char *call);
+void ecs_access_check_query(const ecs_world *world, const ecs_query *query);
+#else
+#define ecs_access_check(world, component, write, call) ((void)0)
+#define ecs_access_check_query(world, query) ((void)0)
+#endif
+
 /* ---- the world -------------------------------------------------------------------------- */
 
 struct ecs_world {
@@ -168,6 +193,9 @@ struct ecs_world {
     bool in_phase;                   /* a phase is running: structural calls assert */
     bool in_hook;                    /* an on_remove hook runs: structural calls assert */
     uint32_t command_serial;
+
+    ecs_resource_slot *resources;    /* in registration order (a handful: scanned) */
+    uint32_t resource_count, resource_capacity;
 };
 
 /* Asserts that the world's structure may change now. A hook runs in the middle of a change

@@ -82,6 +82,7 @@ static ecs_iter iter_range(ecs_world *world, const ecs_query *query, uint32_t ma
 }
 
 ecs_iter ecs_query_iter(ecs_world *world, const ecs_query *query) {
+    ecs_access_check_query(world, query);
     return iter_range(world, query, 0, 0, UINT32_MAX);
 }
 

@@ -12,6 +12,7 @@
  */
 #include "ecs_internal.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 #include "trace/trace.h"
@@ -26,6 +27,7 @@ struct ecs_system_info {
     ecs_system_fn fn;
     void *user;
     bool main_thread, parallel;
+    bool exclusive;                  /* declared nothing: runs alone in its phase (ecs.h, ACCESS) */
     bool disabled;                   /* ecs_system_enable(…, false): planned with no invocation */
     int batch_size;
     uint32_t *conflicts;             /* positions in the phase of earlier conflicting systems */
@@ -104,7 +106,8 @@ static bool writes_what_other_touches(const ecs_system_info *a, const ecs_system
 }
 
 static bool systems_conflict(const ecs_system_info *a, const ecs_system_info *b) {
-    return writes_what_other_touches(a, b) || writes_what_other_touches(b, a);
+    return a->exclusive || b->exclusive || writes_what_other_touches(a, b) ||
+           writes_what_other_touches(b, a);
 }
 
 static void add_access(ecs_component *list, int *count, const ecs_component *from, int max) {
@@ -143,6 +146,7 @@ ecs_system ecs_system_add(ecs_world *world, const ecs_system_desc *desc) {
     add_access(system->reads, &system->read_count, desc->reads, ECS_MAX_ACCESS);
     add_access(system->reads, &system->read_count, desc->query.with, ECS_MAX_TERMS);
     add_access(system->reads, &system->read_count, desc->query.optional, ECS_MAX_TERMS);
+    system->exclusive = !system->query && !system->read_count && !system->write_count;
 
     for (uint32_t i = 0; i < phase->system_count; i++) {
         if (!systems_conflict(system, phase->systems[i])) continue;
@@ -185,11 +189,56 @@ void ecs_scheduler_free(ecs_world *world) {
     core_free(world->phases, world->phase_capacity * sizeof *world->phases);
 }
 
+/* ---- access checks (debug builds) --------------------------------------------------------- */
+
+/* The system whose function runs on this thread, and its world. A system that waits on jobs may
+ * run another system's invocation on this thread meanwhile: invocation_run saves and restores. */
+static _Thread_local const ecs_system_info *running_system;
+static _Thread_local const ecs_world *running_world;
+
+#ifndef NDEBUG
+static bool access_declared(const ecs_system_info *system, ecs_component component, bool write) {
+    if (contains(system->writes, system->write_count, component)) return true;
+    return !write && contains(system->reads, system->read_count, component);
+}
+
+static void access_refuse(const ecs_world *world, const ecs_system_info *system,
+                          ecs_component component, bool write, const char *call) {
+    const char *name = component > 0 && component < world->component_count
+                           ? world->components[component].name : "?";
+    core_error("ecs", "system '%s' calls %s on %s '%s' without declaring it in %s", system->name,
+               call, ecs_is_resource(world, component) ? "resource" : "component", name,
+               write ? "its writes" : "its reads or writes");
+    abort();
+}
+
+void ecs_access_check(const ecs_world *world, ecs_component component, bool write, const char *call) {
+    const ecs_system_info *system = running_system;
+    if (!system || running_world != world || system->exclusive) return;
+    if (!access_declared(system, component, write)) access_refuse(world, system, component, write, call);
+}
+
+void ecs_access_check_query(const ecs_world *world, const ecs_query *query) {
+    const ecs_system_info *system = running_system;
+    if (!system || running_world != world || system->exclusive || query == system->query) return;
+    for (int i = 0; i < query->with_count; i++)
+        if (!access_declared(system, query->with[i], false))
+            access_refuse(world, system, query->with[i], false, "ecs_query_iter");
+    for (int i = 0; i < query->optional_count; i++)
+        if (!access_declared(system, query->optional[i], false))
+            access_refuse(world, system, query->optional[i], false, "ecs_query_iter");
+}
+#endif
+
 /* ---- running a frame -------------------------------------------------------------------- */
 
 static void invocation_run(void *user) {
     ecs_invocation *invocation = user;
     const ecs_system_info *system = invocation->system;
+    const ecs_system_info *outer_system = running_system;
+    const ecs_world *outer_world = running_world;
+    running_system = system;
+    running_world = invocation->world;
     ecs_iter it = invocation->is_batch
                       ? ecs_batch_iter(invocation->world, system->query, invocation->batch)
                       : ecs_query_iter(invocation->world, system->query);
@@ -197,6 +246,8 @@ static void invocation_run(void *user) {
     it.commands = invocation->commands;
     it.user = system->user;
     system->fn(&it);
+    running_system = outer_system;
+    running_world = outer_world;
 }
 
 static ecs_commands *system_buffer(ecs_world *world, ecs_system_info *system, uint32_t index) {

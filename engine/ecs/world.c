@@ -198,6 +198,7 @@ void ecs_world_destroy(ecs_world *world) {
         for (uint32_t row = 0; row < world->tables[t]->count; row++)
             hooks_on_destroy(world, world->tables[t], row);
     ecs_scheduler_free(world);
+    ecs_resources_free(world);
     for (uint32_t i = 0; i < world->query_count; i++) ecs_query_free(world->queries[i]);
     core_free(world->queries, world->query_capacity * sizeof *world->queries);
     for (uint32_t i = 0; i < world->table_count; i++) table_free(world->tables[i]);
@@ -344,6 +345,7 @@ static void *record_data(const ecs_record *record, int column_index) {
 void *ecs_add(ecs_world *world, ecs_entity entity, ecs_component component) {
     ECS_ASSERT_STRUCTURAL(world);
     ECS_ASSERT_COMPONENT(world, component);
+    assert(!ecs_is_resource(world, component) && "a resource belongs to the world, not to an entity");
     ecs_record *record = alive_record(world, entity);
     assert(record && "ecs_add on a dead entity");
     if (!record) return NULL;
@@ -358,6 +360,7 @@ void *ecs_add(ecs_world *world, ecs_entity entity, ecs_component component) {
 void ecs_set(ecs_world *world, ecs_entity entity, ecs_component component, const void *value) {
     /* Writing a component the entity has is not a structural change (systems may do it for
      * components they declare); only the add is. */
+    ecs_access_check(world, component, true, "ecs_set");
     void *data = ecs_has(world, entity, component) ? ecs_get(world, entity, component)
                                                     : ecs_add(world, entity, component);
     if (data) memcpy(data, value, world->components[component].size);
@@ -379,6 +382,7 @@ bool ecs_has(const ecs_world *world, ecs_entity entity, ecs_component component)
 }
 
 void *ecs_get(const ecs_world *world, ecs_entity entity, ecs_component component) {
+    ecs_access_check(world, component, false, "ecs_get");
     const ecs_record *record = alive_record(world, entity);
     return record ? record_data(record, ecs_table_column_of(record->table, component)) : NULL;
 }
