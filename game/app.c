@@ -40,15 +40,18 @@ struct game_app {
     input_bindings *bindings;
     input_system *input;
     gfx_text *hud;
-    game_player player;
+    game_ids ids;                          /* the game's components and resources (app.h) */
+    ecs_entity player_entity, camera_entity;
     game_walker walker;
     game_walk walk;                        /* the app's copy of desc.walk: its cave lines resolved */
     game_tools tools;
     terrain_edit_log *edits;               /* every edit; loaded and saved with a world folder */
     terrain_store *store;                  /* the world folder's database, or NULL */
     uint64_t last_save_ns;
-    terrain_view view;
     bool windowed, interactive, loading, over;
+    bool running;                          /* false once input says quit (or a replay ran out) */
+    bool screenshot_wanted;                /* F12 this frame: taken once the frame is drawn */
+    uint64_t frame_ns, drawing_ns, drawn_ns, thread_start_ns;   /* this frame's clock marks */
     bool spawned;                          /* the player stands in the world (its pose is saved) */
     bool holding;                          /* the view desc.at/look asked for, until input moves it */
     bool hud_hidden;                       /* F1 (toggle_hud) */
@@ -69,6 +72,26 @@ struct game_app {
     int shot_count;
     size_t shot_capacity;
 };
+
+/* The player's body and the main camera's view. Outside systems or inside one that declared
+ * them (ecs.h, ACCESS). */
+static game_player *app_player(const game_app *app) {
+    return &((GamePlayer *)ecs_get(app->ecs, app->player_entity, app->ids.player))->body;
+}
+
+static terrain_view *app_view(const game_app *app) {
+    return &((GameCamera *)ecs_get(app->ecs, app->camera_entity, app->ids.camera))->view;
+}
+
+/* After the player is put somewhere (spawned, restored, a walk's start): nothing to interpolate
+ * from, so the camera starts there. */
+static void app_player_placed(game_app *app) {
+    GamePlayer *player = ecs_get(app->ecs, app->player_entity, app->ids.player);
+    memcpy(player->previous, player->body.position, sizeof player->previous);
+}
+
+static void app_create_entities(game_app *app);
+static void app_add_systems(game_app *app);
 
 /* The player waits at the edge of what has streamed in (interactive play only, see app.h). */
 static bool app_region_ready(void *user, const double min[3], const double max[3]) {
@@ -109,9 +132,9 @@ static bool app_open_rocks(game_app *app, float fog_density) {
                                              .fog_density = fog_density });
     if (!app->rocks) return false;
     rocks_tiles_release_meshes(app->own_rock_tiles);   /* on the GPU now; placing reads anchors */
-    app->player.params.obstacles_near = app_rocks_near;
-    app->player.params.obstacle_distance = app_rock_distance;
-    app->player.params.obstacle_user = app->rocks;
+    app_player(app)->params.obstacles_near = app_rocks_near;
+    app_player(app)->params.obstacle_distance = app_rock_distance;
+    app_player(app)->params.obstacle_user = app->rocks;
     app->tools.obstacle_raycast = app_rock_raycast;
     app->tools.obstacle_user = app->rocks;
     return true;
@@ -123,6 +146,7 @@ static bool app_open_input(game_app *app) {
     app->input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(app->gfx), .bindings = app->bindings,
                                              .record_path = d->record_path, .replay_path = d->replay_path,
                                              .gamepad_mappings_path = d->gamepad_mappings_path });
+    ecs_resource_register(app->ecs, &(ecs_resource_desc){ .name = "input", .object = app->input });
     return app->input != NULL;
 }
 
@@ -182,9 +206,9 @@ static bool app_open_store(game_app *app) {
 
 static void app_put_player(game_app *app) {
     char pose[160];
-    int length = snprintf(pose, sizeof pose, "%.17g %.17g %.17g %.9g %.9g %d", app->player.position[0],
-                          app->player.position[1], app->player.position[2], (double)app->player.yaw,
-                          (double)app->player.pitch, app->player.flying ? 1 : 0);
+    int length = snprintf(pose, sizeof pose, "%.17g %.17g %.17g %.9g %.9g %d", app_player(app)->position[0],
+                          app_player(app)->position[1], app_player(app)->position[2], (double)app_player(app)->yaw,
+                          (double)app_player(app)->pitch, app_player(app)->flying ? 1 : 0);
     terrain_store_put(app->store, APP_PLAYER_VALUE, pose, (size_t)length);
 }
 
@@ -202,9 +226,9 @@ static bool app_restore_player(game_app *app) {
         core_warn("game", "%s in the world folder reads '%s'; spawning as new", APP_PLAYER_VALUE, pose);
         return false;
     }
-    app->player.position[0] = x, app->player.position[1] = y, app->player.position[2] = z;
-    app->player.yaw = (float)yaw, app->player.pitch = (float)pitch;
-    app->player.flying = flying != 0;
+    app_player(app)->position[0] = x, app_player(app)->position[1] = y, app_player(app)->position[2] = z;
+    app_player(app)->yaw = (float)yaw, app_player(app)->pitch = (float)pitch;
+    app_player(app)->flying = flying != 0;
     return true;
 }
 
@@ -239,6 +263,7 @@ static bool app_open_terrain(game_app *app) {
     app->ecs = ecs_world_create(&(ecs_world_desc){ .jobs = app->jobs });
     app->terrain = terrain_ecs_create(app->ecs, app->world);
     terrain_ecs_stream(app->terrain, &app->desc.stream);
+    app_create_entities(app);
     return true;
 }
 
@@ -251,7 +276,7 @@ static bool app_open_terrain(game_app *app) {
  * ground asks (about the ground 400 m ahead, between 0.1 and 0.3 rad, so the sky stays in the
  * picture). */
 static void app_frame_shot(game_app *app) {
-    game_player *pl = &app->player;
+    game_player *pl = app_player(app);
     const game_walk_point *point = &app->walk.points[app->walker.index - 1];   /* the one reached */
     if (point->has_look_at) {              /* a point to keep in the middle (a pile of rocks) */
         double eye[3];
@@ -316,8 +341,8 @@ static void app_take_shot(game_app *app) {
     core_free(rgba, size);
     app->shots = core_grow(app->shots, &app->shot_capacity, (size_t)app->shot_count + 1, sizeof *app->shots);
     app->shots[app->shot_count++] = (struct app_shot){ half, hw, hh };
-    printf("world: picture %d at (%.0f, %.0f, %.0f)%s%s\n", number, app->player.position[0], app->player.position[1],
-           app->player.position[2], path[0] ? " -> " : "", path);
+    printf("world: picture %d at (%.0f, %.0f, %.0f)%s%s\n", number, app_player(app)->position[0], app_player(app)->position[1],
+           app_player(app)->position[2], path[0] ? " -> " : "", path);
     fflush(stdout);
 }
 
@@ -358,7 +383,7 @@ static void app_free_shots(game_app *app) {
  * feet (it would fall). */
 static void app_place_at(game_app *app) {
     const double *at = app->desc.at;
-    game_player *pl = &app->player;
+    game_player *pl = app_player(app);
     double feet = at[1] - (double)pl->params.eye_height;
     pl->position[0] = at[0], pl->position[1] = feet, pl->position[2] = at[2];
     memset(pl->velocity, 0, sizeof pl->velocity);
@@ -374,21 +399,22 @@ static void app_spawn_player(game_app *app) {
         params.region_ready = app_region_ready;
         params.region_user = app;
     }
-    game_player_init(&app->player, &params);
+    game_player *pl = app_player(app);
+    game_player_init(pl, &params);
     if (d->at_set) app_place_at(app);          /* no spawn search: the default view from there */
-    else game_player_spawn(&app->player, app->world, d->spawn[0], d->spawn[1]);
-    app->player.yaw = 3.14159265f;             /* towards +z: the slopes in view face the sun */
-    app->player.pitch = GAME_WALKER_PITCH;
+    else game_player_spawn(pl, app->world, d->spawn[0], d->spawn[1]);
+    pl->yaw = 3.14159265f;                     /* towards +z: the slopes in view face the sun */
+    pl->pitch = GAME_WALKER_PITCH;
     /* A first view of the land, not of a hillside. Scripted walks keep +z: their paths and the
      * benchmarks were laid out along it. */
-    if (app->interactive || d->face_open_view)
-        app->player.yaw = game_player_open_yaw(&app->player, app->world, app->player.yaw, NULL);
+    if (app->interactive || d->face_open_view) pl->yaw = game_player_open_yaw(pl, app->world, pl->yaw, NULL);
     /* --at and --look win over the saved pose, each over its own part of it. */
     if (app->interactive && app_restore_player(app) && d->at_set) app_place_at(app);
     if (d->look_set) {
-        app->player.yaw = (float)remainder(APP_PI + d->look[0] * (APP_PI / 180.0), 2.0 * APP_PI);
-        app->player.pitch = (float)(d->look[1] * (APP_PI / 180.0));
+        pl->yaw = (float)remainder(APP_PI + d->look[0] * (APP_PI / 180.0), 2.0 * APP_PI);
+        pl->pitch = (float)(d->look[1] * (APP_PI / 180.0));
     }
+    app_player_placed(app);
     app->holding = d->at_set || d->look_set;
     app->spawned = true;
 }
@@ -425,14 +451,14 @@ game_app *game_app_create(const game_app_desc *desc) {
     app->renderer = terrain_renderer_create(app->gfx, &(terrain_renderer_desc){
         .sea_level = terrain_world_generation(app->world)->sea_level, .fog_density = fog_density,
         .no_occlusion = d->no_occlusion, .detail_distance = d->no_terrain_detail ? -1.0f : 0.0f,
-        .shadows = d->shadows });
+        .shadows = d->shadows, .sky_apart = true });
     if (!app->renderer || !app_open_input(app) || !(app->hud = gfx_text_create(app->gfx))) goto fail;
     if (!d->no_clipmap) {
         app->clipmap = terrain_clipmap_create(&(terrain_clipmap_desc){
             .generation = *terrain_world_generation(app->world), .jobs = app->jobs });
         terrain_ecs_set_clipmap(app->terrain, app->clipmap);
         terrain_renderer_set_clipmap(app->renderer, app->clipmap);
-        app->view.far_distance = 6000.0f;
+        app_view(app)->far_distance = 6000.0f;
     }
     if (d->grass != GRASS_OFF &&
         !(app->grass = grass_create(&(grass_desc){ .gfx = app->gfx, .ecs = app->ecs, .world = app->world,
@@ -445,8 +471,10 @@ game_app *game_app_create(const game_app_desc *desc) {
     app_spawn_player(app);
     game_tools_init(&app->tools);
     if (!app_open_rocks(app, fog_density)) goto fail;
-    app->loading = true;
+    app_add_systems(app);
+    app->loading = app->running = true;
     app->start_ns = app->last_ns = app->last_save_ns = core_time_ns();
+    if (d->setup) d->setup(app, app->ecs, d->setup_user);
     return app;
 fail:
     game_app_destroy(app);
@@ -487,7 +515,7 @@ void game_app_destroy(game_app *app) {
  * and the player's collision chunks are generated. */
 static bool app_loaded(game_app *app) {
     terrain_stream_stats s = terrain_ecs_stream_stats(app->terrain);
-    double feet[3] = { app->player.position[0], app->player.position[1], app->player.position[2] };
+    double feet[3] = { app_player(app)->position[0], app_player(app)->position[1], app_player(app)->position[2] };
     double lo[3] = { feet[0] - 8, feet[1] - 8, feet[2] - 8 }, hi[3] = { feet[0] + 8, feet[1] + 8, feet[2] + 8 };
     bool ready = s.mesh_chunks_wanted > 0 && s.mesh_chunks_ready == s.mesh_chunks_wanted &&
                  terrain_ecs_region_ready(app->terrain, lo, hi);
@@ -564,10 +592,10 @@ static void app_draw_hud(game_app *app) {
              s.mesh_chunks_ready + s.mesh_chunks_kept, s.mesh_chunks_wanted - s.mesh_chunks_ready, s.jobs_in_flight,
              (double)s.resident_bytes / (1024.0 * 1024.0));
     double look[2];
-    app_look_degrees(app->view.yaw, app->view.pitch, look);   /* as --at and --look take them */
-    const game_player *pl = &app->player;
+    app_look_degrees(app_view(app)->yaw, app_view(app)->pitch, look);   /* as --at and --look take them */
+    const game_player *pl = app_player(app);
     snprintf(lines[count++], sizeof lines[0], "x %.1f y %.1f z %.1f  yaw %.0f pitch %.0f  seed %llu%s",
-             app->view.camera[0], app->view.camera[1], app->view.camera[2], look[0], look[1],
+             app_view(app)->camera[0], app_view(app)->camera[1], app_view(app)->camera[2], look[0], look[1],
              (unsigned long long)app->desc.seed, pl->swimming ? "  swimming" : pl->in_water && !pl->flying ? "  wading" : "");
     if (app->interactive) snprintf(lines[count++], sizeof lines[0], "%s", game_tools_hint(&app->tools));
     /* Shrink to the corner: a smaller scale, then fewer lines. */
@@ -610,54 +638,6 @@ static bool app_moves(const input_actions *a) {
     return a->move_x || a->move_y || a->look_x || a->look_y || ((a->down | a->pressed) & moving);
 }
 
-/* Input and the player; false when the run is over (quit, closed, end of a replay). */
-static bool app_update_player(game_app *app, float dt) {
-    static const input_actions none = { 0 };
-    const input_actions *actions = &none;
-    /* While loading, a recording neither records nor replays: loading takes however long it
-     * takes, and frame N of a recording must be frame N of its replay. */
-    bool read_input = !app->loading || app->interactive;
-    if (read_input) {
-        if (!input_update(app->input, dt)) return false;
-        actions = input_actions_get(app->input);
-    }
-    if ((actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_QUIT)) || gfx_window_should_close(app->gfx)) return false;
-    if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_SCREENSHOT)) app_take_screenshot(app);
-    if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_FULLSCREEN)) gfx_window_toggle_fullscreen(app->gfx);
-    if (actions->pressed & INPUT_ACTION_BIT(INPUT_ACTION_TOGGLE_HUD)) app->hud_hidden = !app->hud_hidden;
-    if (app->loading) return true;
-    float step = input_frame_dt(app->input);
-    input_actions scripted;
-    if (app->desc.walk) {
-        scripted = game_walker_step(&app->walker, &app->player, step);
-        actions = &scripted;
-        if (app->walker.shot_due && app->shot_hold++ == 0) app_frame_shot(app);
-    }
-    /* A view asked for stays exactly so until the first move: the controller would push an eye
-     * out of the ground, let the feet settle or clamp the pitch to its own limit. */
-    app->holding = app->holding && !app_moves(actions);
-    if (!app->holding) game_player_update(&app->player, app->world, actions, step);
-    app->waiting += app->player.waiting;
-    double eye[3];
-    game_player_eye(&app->player, eye);
-    game_tools_update(&app->tools, app->terrain, app->world, eye, app->player.yaw, app->player.pitch, actions, step);
-    return true;
-}
-
-static void app_update_view(game_app *app) {
-    game_player_eye(&app->player, app->view.camera);
-    if (!app->desc.no_head_bob) app->view.camera[1] -= game_player_bob(&app->player);
-    int width, height;
-    gfx_size(app->gfx, &width, &height);
-    app->view.yaw = app->player.yaw;
-    app->view.pitch = app->player.pitch;
-    app->view.aspect = (float)width / (float)height;
-    app->view.time = app->windowed ? (float)((double)(app->last_ns - app->start_ns) * 1e-9)
-                                   : (float)(app->frames + app->loading_frames) * app->desc.step_seconds;
-    terrain_ecs_set_viewers(app->terrain, &app->view.camera, 1);
-    terrain_ecs_set_view(app->terrain, &app->view);   /* what the cull phase tests against */
-}
-
 /* CPU time the calling thread has used: a frame's work on the main thread, without the time it
  * spent blocked (a driver waiting for its rasteriser, a lock). */
 static uint64_t app_thread_cpu_ns(void) {
@@ -685,7 +665,7 @@ static void app_finish_loading(game_app *app) {
     app->loading = false;
     app->play_start_ns = core_time_ns();
     if (app->desc.walk) {
-        game_walk_found found = game_walk_resolve_stops(&app->walk, app->world, &app->player);
+        game_walk_found found = game_walk_resolve_stops(&app->walk, app->world, app_player(app));
         if (found.caves)
             printf("world: %d look%s into a cave or under an arch on the walk\n", found.caves, found.caves == 1 ? "" : "s");
         if (found.shores)
@@ -694,7 +674,8 @@ static void app_finish_loading(game_app *app) {
             printf("world: %d look%s at a pile of rocks on the walk\n", found.rocks, found.rocks == 1 ? "" : "s");
         if (found.cliffs)
             printf("world: %d look%s at a cliff on the walk\n", found.cliffs, found.cliffs == 1 ? "" : "s");
-        game_walker_start(&app->walker, app->desc.walk, &app->player);
+        game_walker_start(&app->walker, app->desc.walk, app_player(app));
+        app_player_placed(app);
     }
     gfx_window_set_title(app->gfx, "world");
 }
@@ -714,42 +695,293 @@ static void app_memory_counters(game_app *app) {
     if (app->grass) trace_counter("memory.grass", (double)grass_stats_get(app->grass).bytes);
 }
 
+/* ---- the frame's systems (app.h, THE FRAME IS ONE ecs_progress) -------------------------- */
+
+#define APP_MAX_FRAME_SECONDS 0.25f        /* a longer frame steps this much (a stall, a debugger) */
+
+/* The box the player can reach within `seconds`, streamed in: scripted, recorded and replayed
+ * runs read input and step only then (app.h, ONE PATH). The bound is the controller's own
+ * (player.c) at the fastest it can go: a sprint in flight or in water, a frame of gravity, a
+ * step and the capsule. */
+static bool app_reach_ready(game_app *app, const game_player *pl, float seconds) {
+    const game_player_params *p = &pl->params;
+    float v = sqrtf(pl->velocity[0] * pl->velocity[0] + pl->velocity[1] * pl->velocity[1] +
+                    pl->velocity[2] * pl->velocity[2]);
+    float speed = v + fmaxf(p->fly_sprint_speed, p->swim_sprint_speed + p->dive_speed) + p->gravity * seconds;
+    float reach = speed * seconds + p->step_height + p->radius + 2.0f;
+    double min[3], max[3];
+    for (int i = 0; i < 3; i++) {
+        min[i] = floor(pl->position[i] - (double)reach);
+        max[i] = ceil(pl->position[i] + (double)reach + (i == 1 ? (double)p->height : 0.0));
+    }
+    return terrain_ecs_region_ready(app->terrain, min, max);
+}
+
+/* input: devices, a recording or its replay → the GameActions resource; and the keys the app
+ * answers itself (quit, F1, F11, F12). */
+static void app_input_system(ecs_iter *it) {
+    game_app *app = it->user;
+    GameActions *out = ecs_resource_get(it->world, app->ids.actions);
+    *out = (GameActions){ .dt = it->dt };
+    /* While loading, and while a scripted or recorded run waits for streaming, a recording
+     * neither records nor replays: frame N of a recording must be frame N of its replay. */
+    bool read = app->interactive ||
+                (!app->loading && app_reach_ready(app, app_player(app), APP_MAX_FRAME_SECONDS));
+    if (read) {
+        if (!input_update(app->input, it->dt)) {
+            app->running = false;
+            return;
+        }
+        out->actions = *input_actions_get(app->input);
+        out->dt = input_frame_dt(app->input);
+        out->read = true;
+    }
+    uint32_t pressed = out->actions.pressed;
+    if ((pressed & INPUT_ACTION_BIT(INPUT_ACTION_QUIT)) || gfx_window_should_close(app->gfx)) app->running = false;
+    app->screenshot_wanted = (pressed & INPUT_ACTION_BIT(INPUT_ACTION_SCREENSHOT)) != 0;
+    if (pressed & INPUT_ACTION_BIT(INPUT_ACTION_FULLSCREEN)) gfx_window_toggle_fullscreen(app->gfx);
+    if (pressed & INPUT_ACTION_BIT(INPUT_ACTION_TOGGLE_HUD)) app->hud_hidden = !app->hud_hidden;
+}
+
+/* The frame's input as one fixed step sees it: held keys and sticks in every step, presses and
+ * the view's turn in the first only (they happened once). */
+static input_actions app_step_actions(const input_actions *frame, bool first) {
+    input_actions a = *frame;
+    if (!first) {
+        a.pressed = a.released = 0;
+        a.look_x = a.look_y = 0.0f;
+    }
+    return a;
+}
+
+/* One fixed step of a body. The player's: the walk script or the frame's input; others: none. */
+static void app_player_step(game_app *app, GamePlayer *player, const input_actions *frame, bool first,
+                            bool controlled) {
+    static const input_actions none = { 0 };
+    game_player *pl = &player->body;
+    memcpy(player->previous, pl->position, sizeof player->previous);
+    input_actions actions = controlled ? app_step_actions(frame, first) : none;
+    if (controlled && app->desc.walk) actions = game_walker_step(&app->walker, pl, GAME_PLAYER_STEP);
+    /* A view asked for stays exactly so until the first move: the controller would push an eye
+     * out of the ground, let the feet settle or clamp the pitch to its own limit. */
+    if (controlled) app->holding = app->holding && !app_moves(&actions);
+    if (!(controlled && app->holding)) game_player_update(pl, app->world, &actions, GAME_PLAYER_STEP);
+}
+
+/* player: bodies in fixed steps of GAME_PLAYER_STEP over the frame's time. The simulation holds
+ * (no step, no time banked) while loading, while a scripted or recorded run waits for
+ * streaming, and while a walk stands still for a picture. */
+static void app_player_system(ecs_iter *it) {
+    game_app *app = it->user;
+    const GameActions *in = ecs_resource_get(it->world, app->ids.actions);
+    GameClock *clock = ecs_resource_get(it->world, app->ids.clock);
+    if (app->loading) return;
+    bool held = (!in->read && !app->interactive) || app->walker.shot_due;
+    bool waited = !in->read && !app->interactive;
+    clock->banked = held ? 0.0 : clock->banked + (double)fminf(in->dt, APP_MAX_FRAME_SECONDS);
+    int steps = 0;
+    for (; clock->banked >= (double)GAME_PLAYER_STEP; steps++) clock->banked -= (double)GAME_PLAYER_STEP;
+    while (ecs_query_next(it)) {
+        GamePlayer *players = ecs_field(it, 0);
+        for (int i = 0; i < it->count; i++) {
+            bool controlled = it->entities[i] == app->player_entity;
+            for (int step = 0; step < steps && !(controlled && app->walker.shot_due); step++)
+                app_player_step(app, &players[i], &in->actions, step == 0, controlled);
+            waited = waited || (controlled && players[i].body.waiting);
+        }
+    }
+    app->waiting += waited;
+    clock->steps += (uint64_t)steps;
+    clock->seconds = (double)clock->steps * (double)GAME_PLAYER_STEP;
+    clock->alpha = held ? 1.0f : (float)(clock->banked / (double)GAME_PLAYER_STEP);
+}
+
+/* A camera at its body's eye, between the last two steps by `alpha`, less the head bob. */
+static void app_camera_follow(game_app *app, GameCamera *camera, const GamePlayer *player, float alpha) {
+    const game_player *pl = &player->body;
+    terrain_view *view = &camera->view;
+    game_player_eye(pl, view->camera);
+    for (int i = 0; i < 3; i++)
+        view->camera[i] -= (1.0 - (double)alpha) * (pl->position[i] - player->previous[i]);
+    if (!app->desc.no_head_bob) view->camera[1] -= game_player_bob(pl);
+    view->yaw = pl->yaw;
+    view->pitch = pl->pitch;
+}
+
+/* camera: every camera's view; streaming follows those tagged GameStreamViewer, culling and
+ * drawing the app's own. */
+static void app_camera_system(ecs_iter *it) {
+    game_app *app = it->user;
+    const GameClock *clock = ecs_resource_get(it->world, app->ids.clock);
+    int width, height;
+    gfx_size(app->gfx, &width, &height);
+    float time = app->windowed ? (float)((double)(app->last_ns - app->start_ns) * 1e-9)
+                               : (float)(app->frames + app->loading_frames) * app->desc.step_seconds;
+    double eyes[TERRAIN_MAX_VIEWERS][3];
+    int viewers = 0;
+    while (ecs_query_next(it)) {
+        GameCamera *cameras = ecs_field(it, 0);
+        bool streams = ecs_field_is_set(it, 1);
+        for (int i = 0; i < it->count; i++) {
+            GameCamera *c = &cameras[i];
+            const GamePlayer *followed = c->follows ? ecs_get(it->world, c->follows, app->ids.player) : NULL;
+            if (followed) app_camera_follow(app, c, followed, clock->alpha);
+            c->view.aspect = (float)width / (float)height;
+            c->view.time = time;
+            if (streams && viewers < TERRAIN_MAX_VIEWERS) memcpy(eyes[viewers++], c->view.camera, sizeof eyes[0]);
+        }
+    }
+    terrain_view *view = app_view(app);
+    terrain_ecs_set_viewers(app->terrain, (const double(*)[3])eyes, viewers);
+    terrain_ecs_set_view(app->terrain, view);   /* what the cull phase tests against */
+    if (app->grass) grass_set_view(app->grass, view, app_player(app)->position);
+    if (app->rocks) rocks_set_view(app->rocks, view);
+    if (!app->loading && !app->holding)          /* a held eye is where the user put it */
+        app->eye_in_solid += terrain_field_at(app->world, view->camera[0], view->camera[1], view->camera[2], 0) >= 0;
+}
+
+/* tools: the player's tool, aimed from its eye. */
+static void app_tools_system(ecs_iter *it) {
+    game_app *app = it->user;
+    const GameActions *in = ecs_resource_get(it->world, app->ids.actions);
+    if (app->loading) return;
+    const game_player *pl = app_player(app);
+    double eye[3];
+    game_player_eye(pl, eye);
+    game_tools_update(&app->tools, app->terrain, app->world, eye, pl->yaw, pl->pitch, &in->actions, in->dt);
+}
+
+/* terrain_draw: the volumetric chunks and the far terrain (their shadows first). */
+static void app_terrain_draw_system(ecs_iter *it) {
+    game_app *app = it->user;
+    app->drawing_ns = core_time_ns();
+    terrain_ecs_draw(app->terrain, app->renderer, app_view(app));
+}
+
+/* sky: behind everything drawn so far. */
+static void app_sky_system(ecs_iter *it) {
+    game_app *app = it->user;
+    terrain_renderer_draw_sky(app->renderer, app_view(app));
+}
+
+static void app_rocks_draw_system(ecs_iter *it) {
+    game_app *app = it->user;
+    rocks_draw(app->rocks, app_view(app));
+}
+
+static void app_grass_draw_system(ecs_iter *it) {
+    game_app *app = it->user;
+    grass_draw(app->grass, app_view(app));
+}
+
+static void app_water_draw_system(ecs_iter *it) {
+    game_app *app = it->user;
+    terrain_water_draw(app->water, app->terrain, app->renderer, app_view(app));
+}
+
+static void app_hud_system(ecs_iter *it) {
+    game_app *app = it->user;
+    app_draw_hud(app);
+    app->drawn_ns = core_time_ns();
+}
+
+static bool app_last_frame(const game_app *app);
+
+/* screenshot: F12's picture, a walk's pictures at its `shot` waypoints, and the run's last
+ * picture (--screenshot: the walk's contact sheet, or the last frame). */
+static void app_screenshot_system(ecs_iter *it) {
+    game_app *app = it->user;
+    if (app->screenshot_wanted) app_take_screenshot(app);
+    if (app->walker.shot_due && app->shot_hold++ == 0) app_frame_shot(app);
+    else if (app->walker.shot_due && app_shot_ready(app)) {
+        app_take_shot(app);
+        app->shot_hold = 0;
+        game_walker_resume(&app->walker, app_player(app));
+    }
+    bool last = !app->running || app_last_frame(app);
+    if (last && app->desc.screenshot_path) {
+        bool written = app->shot_count ? app_write_contact_sheet(app, app->desc.screenshot_path)
+                                       : gfx_screenshot(app->gfx, app->desc.screenshot_path);
+        if (!written) app->running = false;
+    }
+    app->over = last;
+}
+
+/* The ids of app.h's game_ids, the player's and its camera's entities. */
+static void app_create_entities(game_app *app) {
+    ecs_world *ecs = app->ecs;
+    game_ids *ids = &app->ids;
+    ids->player = ECS_COMPONENT(ecs, GamePlayer);
+    ids->camera = ECS_COMPONENT(ecs, GameCamera);
+    ids->stream_viewer = ECS_TAG(ecs, GameStreamViewer);
+    ids->actions = ECS_RESOURCE(ecs, GameActions);
+    ids->clock = ECS_RESOURCE(ecs, GameClock);
+    ids->gfx = ecs_resource_register(ecs, &(ecs_resource_desc){ .name = "gfx", .object = app->gfx });
+    ids->terrain_world = ecs_resource_register(ecs, &(ecs_resource_desc){ .name = "terrain_world", .object = app->world });
+    ids->terrain_ecs = ecs_resource_register(ecs, &(ecs_resource_desc){ .name = "terrain_ecs", .object = app->terrain });
+    ids->input = ecs_resource_register(ecs, &(ecs_resource_desc){ .name = "input", .object = NULL });
+    app->player_entity = ecs_entity_create(ecs);
+    ecs_add(ecs, app->player_entity, ids->player);
+    app->camera_entity = ecs_entity_create(ecs);
+    ecs_set(ecs, app->camera_entity, ids->camera, &(GameCamera){ .follows = app->player_entity });
+    ecs_add(ecs, app->camera_entity, ids->stream_viewer);
+}
+
+/* The game's systems, after the modules' (their draw-phase uploads come first: each draw system
+ * reads what its module's systems write, and all of them write the gfx resource, so they run one
+ * after the other in this order). */
+static void app_add_systems(game_app *app) {
+    ecs_world *ecs = app->ecs;
+    const game_ids *ids = &app->ids;
+    ecs_component mesh_chunk = ecs_component_lookup(ecs, "TerrainMeshChunk");
+    ecs_component water_plane = ecs_component_lookup(ecs, "WaterPlane");
+    ecs_component chunk = ecs_component_lookup(ecs, "TerrainChunk");
+    ecs_component rock_tiles = ecs_component_lookup(ecs, "RockTiles");   /* 0 with rocks off: last */
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "input", .phase = "input", .fn = app_input_system, .user = app,
+        .main_thread = true, .writes = { ids->actions, ids->input }, .reads = { ids->player, ids->terrain_ecs } });
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "player", .phase = "game", .fn = app_player_system, .user = app,
+        .main_thread = true, .query = { .with = { ids->player } }, .writes = { ids->player, ids->clock },
+        .reads = { ids->actions, ids->terrain_world, mesh_chunk, rock_tiles } });  /* rocks: obstacles */
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "camera", .phase = "game", .fn = app_camera_system, .user = app,
+        .main_thread = true, .query = { .with = { ids->camera }, .optional = { ids->stream_viewer } },
+        .writes = { ids->camera, ids->terrain_ecs }, .reads = { ids->player, ids->clock, ids->terrain_world } });
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "tools", .phase = "game", .fn = app_tools_system, .user = app,
+        .main_thread = true, .reads = { ids->player, ids->actions, mesh_chunk, chunk, rock_tiles },
+        .writes = { ids->terrain_ecs, ids->terrain_world } });
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_draw", .phase = "draw", .fn = app_terrain_draw_system,
+        .user = app, .main_thread = true, .writes = { ids->gfx }, .reads = { ids->camera, mesh_chunk, ids->terrain_ecs } });
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "sky", .phase = "draw", .fn = app_sky_system, .user = app,
+        .main_thread = true, .writes = { ids->gfx }, .reads = { ids->camera } });
+    if (app->rocks)
+        ecs_system_add(ecs, &(ecs_system_desc){ .name = "rocks_draw", .phase = "draw", .fn = app_rocks_draw_system,
+            .user = app, .main_thread = true, .writes = { ids->gfx },
+            .reads = { ids->camera, ecs_component_lookup(ecs, "RockTiles"), mesh_chunk } });
+    if (app->grass)
+        ecs_system_add(ecs, &(ecs_system_desc){ .name = "grass_draw", .phase = "draw", .fn = app_grass_draw_system,
+            .user = app, .main_thread = true, .writes = { ids->gfx },
+            .reads = { ids->camera, ecs_component_lookup(ecs, "GrassPatch"), mesh_chunk } });
+    if (app->water)
+        ecs_system_add(ecs, &(ecs_system_desc){ .name = "water_draw", .phase = "draw", .fn = app_water_draw_system,
+            .user = app, .main_thread = true, .writes = { ids->gfx },
+            .reads = { ids->camera, water_plane, mesh_chunk, ids->terrain_ecs } });
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "hud", .phase = "draw", .fn = app_hud_system, .user = app,
+        .main_thread = true, .writes = { ids->gfx }, .reads = { ids->camera, ids->player, ids->terrain_ecs } });
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "screenshot", .phase = "draw", .fn = app_screenshot_system,
+        .user = app, .main_thread = true, .writes = { ids->gfx, ids->player }, .reads = { ids->camera, ids->terrain_ecs } });
+}
+
 bool game_app_frame(game_app *app) {
     if (app->over) return false;
     trace_frame_begin();
     uint64_t now = core_time_ns(), thread_start = app_thread_cpu_ns();
     app->frame_seconds = (double)(now - app->last_ns) * 1e-9;
     app->last_ns = now;
+    app->drawing_ns = app->drawn_ns = now;
     float dt = app->windowed ? (float)app->frame_seconds : app->desc.step_seconds;
-    bool running = app_update_player(app, dt);
-    app_update_view(app);
-    if (!app->loading && !app->holding)       /* a held eye is where the user put it */
-        app->eye_in_solid += terrain_field_at(app->world, app->view.camera[0], app->view.camera[1],
-                                              app->view.camera[2], 0) >= 0;
     gfx_frame_begin(app->gfx);
-    if (app->grass) grass_set_view(app->grass, &app->view, app->player.position);
-    if (app->rocks) rocks_set_view(app->rocks, &app->view);
-    ecs_progress(app->ecs, dt);                /* stream, generate, mesh, lod, cull, upload, grass */
-    uint64_t drawing = core_time_ns();
-    terrain_ecs_draw(app->terrain, app->renderer, &app->view);
-    if (app->rocks) rocks_draw(app->rocks, &app->view);
-    if (app->grass) grass_draw(app->grass, &app->view);
-    if (app->water) terrain_water_draw(app->water, app->terrain, app->renderer, &app->view);
-    app_draw_hud(app);
-    uint64_t drawn = core_time_ns();
-    double cpu_ms = (double)(drawn - now) * 1e-6, engine_ms = (double)(drawing - now) * 1e-6;
+    ecs_progress(app->ecs, dt);                /* input, game, stream … cull, draw (app.h) */
+    double cpu_ms = (double)(app->drawn_ns - now) * 1e-6, engine_ms = (double)(app->drawing_ns - now) * 1e-6;
     double thread_ms = (double)(app_thread_cpu_ns() - thread_start) * 1e-6;
-    if (app->walker.shot_due && app_shot_ready(app)) {
-        app_take_shot(app);
-        app->shot_hold = 0;
-        game_walker_resume(&app->walker, &app->player);
-    }
-    bool last = !running || app_last_frame(app);
-    if (last && app->desc.screenshot_path) {
-        bool written = app->shot_count ? app_write_contact_sheet(app, app->desc.screenshot_path)
-                                       : gfx_screenshot(app->gfx, app->desc.screenshot_path);
-        if (!written) running = false;
-    }
     gfx_frame_end(app->gfx);
     app_memory_counters(app);
     job_system_trace_counters(app->jobs); /* the frame's jobs.* counters */
@@ -766,8 +998,7 @@ bool game_app_frame(game_app *app) {
     }
     if (app->desc.world_dir && (double)(core_time_ns() - app->last_save_ns) * 1e-9 >= GAME_APP_AUTOSAVE_SECONDS)
         app_save(app, false);
-    app->over = last;
-    return !last;
+    return !app->over;
 }
 
 /* ---- results ------------------------------------------------------------------------------ */
@@ -786,10 +1017,10 @@ static double percentile(const double *sorted, size_t count, double p) {
 game_app_stats game_app_stats_get(const game_app *app) {
     game_app_stats s = { .frames = app->frames, .loading_frames = app->loading_frames,
                          .eye_in_solid_frames = app->eye_in_solid, .waiting_frames = app->waiting };
-    memcpy(s.eye, app->view.camera, sizeof s.eye);
-    memcpy(s.feet, app->player.position, sizeof s.feet);
-    s.flying = app->player.flying;
-    s.yaw = app->view.yaw, s.pitch = app->view.pitch;
+    memcpy(s.eye, app_view(app)->camera, sizeof s.eye);
+    memcpy(s.feet, app_player(app)->position, sizeof s.feet);
+    s.flying = app_player(app)->flying;
+    s.yaw = app_view(app)->yaw, s.pitch = app_view(app)->pitch;
     app_look_degrees(s.yaw, s.pitch, s.look);
     if (app->desc.walk && !app->loading) {
         s.walked = app->walker.walked;
@@ -853,6 +1084,10 @@ const double *game_app_frame_times(const game_app *app, int *count) {
     return app->cpu_ms;
 }
 
+ecs_world *game_app_ecs(game_app *app) { return app->ecs; }
+const game_ids *game_app_ids(const game_app *app) { return &app->ids; }
+ecs_entity game_app_player(const game_app *app) { return app->player_entity; }
+ecs_entity game_app_camera(const game_app *app) { return app->camera_entity; }
 terrain_world *game_app_world(game_app *app) { return app->world; }
 terrain_ecs *game_app_terrain(game_app *app) { return app->terrain; }
 grass_system *game_app_grass(game_app *app) { return app->grass; }

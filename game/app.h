@@ -12,14 +12,35 @@
  * Start-up: the world streams in around the spawn point while a loading line shows. The player
  * stands still (and, when recording or replaying, input is not read) until the chunks nearest it
  * and its collision chunks are ready, so a recording replays frame for frame whatever the
- * loading took. Then each frame: input (or the walk script) → player → viewers and view →
- * ecs_progress (stream, generate, mesh, lod, cull, upload) → draw → HUD.
+ * loading took.
  *
- * Collision never waits on a frame of its own: the streamer keeps the column chunks around the
- * player generated. Interactive play asks terrain_ecs_region_ready, so a player who outruns the
- * streaming waits at the edge; scripted and recorded runs read the world directly (it generates
- * a missing chunk on the spot), which gives the same result bit for bit however the background
- * jobs were scheduled: a replay ends where the recording did.
+ * THE FRAME IS ONE ecs_progress. The game is ECS systems like the terrain's, in the phases of
+ * ecs.h, each a trace zone inside its phase's:
+ *     input   input                          devices, a recording or its replay → GameActions
+ *     game    player, camera, tools          fixed steps of the body; the view; the tool
+ *     stream … cull                          the terrain's streaming, meshing, clipmap and culling
+ *     draw    terrain_upload, grass_place, … the modules' uploads, then
+ *             terrain_draw, sky, rocks_draw, grass_draw, water_draw, hud, screenshot
+ * The player is an entity with a GamePlayer, its camera an entity with a GameCamera that follows
+ * it, and streaming follows every camera tagged GameStreamViewer: a second viewer (a spectator,
+ * split screen) is one more entity. The body moves in fixed steps of GAME_PLAYER_STEP seconds and
+ * the camera interpolates between the last two, so a long frame is not slow motion and a walk
+ * ends at the same place at any frame rate.
+ *
+ * ONE PATH FOR EVERY RUN. Nothing generates terrain on the main thread for the player: every run
+ * waits at the edge of what has streamed. Interactive play reads input while it waits (the
+ * player looks around, standing still); scripted, recorded and replayed runs hold the whole
+ * simulation (no input read, no step taken) until the box the player can reach this frame has
+ * streamed in, so a replay ends where its recording did however the background jobs ran.
+ *
+ * EXTENDING THE WORLD. desc.setup runs once the game's systems exist: add components, resources
+ * and systems there, with the ids of game_app_ids (tools/examples/game/game_setup_system.c).
+ *     static void setup(game_app *app, ecs_world *ecs, void *user) {
+ *         const game_ids *ids = game_app_ids(app);
+ *         ecs_system_add(ecs, &(ecs_system_desc){ .name = "altimeter", .phase = "draw",
+ *             .main_thread = true, .query = { .with = { ids->camera } }, .writes = { ids->gfx },
+ *             .fn = altimeter, .user = user });
+ *     }
  */
 #ifndef GAME_APP_H
 #define GAME_APP_H
@@ -28,12 +49,55 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "ecs/ecs.h"
+#include "input/input.h"
+#include "player.h"
 #include "rocks/rocks.h"
 #include "terrain/terrain.h"
 #include "vegetation/vegetation.h"
 #include "walk.h"
 
 typedef struct game_app game_app;
+
+/* ---- the game's components and resources ------------------------------------------------- */
+
+#define GAME_PLAYER_STEP (1.0f / 120.0f)   /* seconds of one fixed step of the body */
+
+/* A player's body: the controller's state after the last fixed step, and its feet before it
+ * (the camera draws in between). */
+typedef struct GamePlayer {
+    game_player body;
+    double previous[3];
+} GamePlayer;
+
+/* A camera: the view drawn from it, following a GamePlayer entity's eye. */
+typedef struct GameCamera {
+    terrain_view view;
+    ecs_entity follows;               /* an entity with a GamePlayer; 0 = a free camera */
+} GameCamera;
+
+/* Resource: the frame's input, written by the `input` system. */
+typedef struct GameActions {
+    input_actions actions;            /* zero when input was not read this frame */
+    float dt;                         /* the seconds they stand for (a replay's recorded dt) */
+    bool read;                        /* input was read (not loading, not held for streaming) */
+} GameActions;
+
+/* Resource: the simulation's clock. */
+typedef struct GameClock {
+    double seconds;                   /* simulated time, fixed steps × GAME_PLAYER_STEP */
+    uint64_t steps;                   /* fixed steps taken */
+    double banked;                    /* frame time not yet stepped, [0, GAME_PLAYER_STEP) */
+    float alpha;                      /* banked / GAME_PLAYER_STEP: where cameras interpolate */
+} GameClock;
+
+/* What a system names in its query, reads and writes. The resources' objects are the gfx
+ * context (gfx.h), the terrain world and its ECS streamer (terrain.h) and the input system. */
+typedef struct game_ids {
+    ecs_component player, camera, stream_viewer;          /* components (the last is a tag) */
+    ecs_component actions, clock;                         /* value resources */
+    ecs_component gfx, terrain_world, terrain_ecs, input; /* object resources */
+} game_ids;
 
 /* Zero means the default for every field. */
 typedef struct game_app_desc {
@@ -92,6 +156,10 @@ typedef struct game_app_desc {
      * transaction. Another seed is refused, and so is a world another process has open.
      * Interactive play starts where the last run stood. NULL = edits last as long as the run. */
     const char *world_dir;
+    /* Called once at the end of game_app_create, when the game's own systems exist: add your
+     * components and systems here (see EXTENDING THE WORLD above). */
+    void (*setup)(game_app *app, ecs_world *ecs, void *user);
+    void *setup_user;
 } game_app_desc;
 
 #define GAME_APP_AUTOSAVE_SECONDS 30.0
@@ -157,6 +225,12 @@ typedef struct game_app_stats {
 } game_app_stats;
 
 game_app_stats game_app_stats_get(const game_app *app);
+/* The ECS and the ids of the game's components and resources (for desc.setup). */
+ecs_world *game_app_ecs(game_app *app);
+const game_ids *game_app_ids(const game_app *app);
+/* The player's and its camera's entities. */
+ecs_entity game_app_player(const game_app *app);
+ecs_entity game_app_camera(const game_app *app);
 /* The world and its ECS terrain, for code that extends the game (edits, more viewers, probes). */
 terrain_world *game_app_world(game_app *app);
 terrain_ecs *game_app_terrain(game_app *app);

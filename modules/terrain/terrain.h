@@ -428,6 +428,9 @@ typedef struct terrain_renderer_desc {
                                          and no 25 m scale blend (their fetches skipped; normal
                                          maps and the macro variation stay) */
     terrain_shadow_quality shadows;   /* 0 = low */
+    bool sky_apart;                   /* terrain_renderer_draw leaves the sky out: the caller
+                                         draws it with terrain_renderer_draw_sky (a system of its
+                                         own); reflections keep theirs */
 } terrain_renderer_desc;
 
 /* NULL when the shaders do not build (their errors printed at file:line). */
@@ -486,6 +489,9 @@ bool terrain_renderer_set_shadows(terrain_renderer *renderer, terrain_shadow_qua
  * terrain_renderer_draw_shadows since the last draw or else by these. */
 void terrain_renderer_draw(terrain_renderer *renderer, const terrain_view *view,
                            const terrain_gpu_mesh *meshes, int mesh_count);
+/* The sky alone, in a pass named "sky", behind what the bound framebuffer holds (its depth at
+ * the far plane): after terrain_renderer_draw with desc.sky_apart. */
+void terrain_renderer_draw_sky(terrain_renderer *renderer, const terrain_view *view);
 /* The shadow pass for the next terrain_renderer_draw, cast by `casters`: every mesh on the GPU
  * near the view, not only those in it (a hill behind the camera shades the ground in front). Each
  * cascade draws those whose bounds reach its footprint. Nothing happens with shadows off. */

@@ -256,27 +256,33 @@ void terrain_renderer_draw_shadows(terrain_renderer *r, const terrain_view *view
     r->shadows_drawn = true;
 }
 
-/* The meshes, the far terrain and the sky into the bound framebuffer with `view`, shadows from
- * `shadows` (NULL: none), keeping only what lies on the positive side of the camera-relative
- * `clip_plane` (all zero: everything; the sky is never clipped). */
+/* What the terrain's, the clipmap's and the sky's programs share. */
+static void terrain_scene_uniforms(terrain_renderer *r, gfx_program program, const vec3 sun, const float clip_plane[4]) {
+    const float zero[3] = { 0, 0, 0 };
+    gfx_uniform_vec3(r->gfx, program, "u_sun_direction", sun);
+    gfx_uniform_vec3(r->gfx, program, "u_camera_position", zero);
+    gfx_uniform_float(r->gfx, program, "u_fog_density", r->desc.fog_density);
+    gfx_uniform_vec4(r->gfx, program, "u_clip_plane", clip_plane);
+}
+
+static void terrain_draw_sky(terrain_renderer *r, const terrain_view *view, mat4 inverse);
+
+/* The meshes, the far terrain and (`with_sky`) the sky into the bound framebuffer with `view`,
+ * shadows from `shadows` (NULL: none), keeping only what lies on the positive side of the
+ * camera-relative `clip_plane` (all zero: everything; the sky is never clipped). */
 static void terrain_draw_scene(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,
-                               int mesh_count, const float clip_plane[4], const terrain__shadows *shadows) {
+                               int mesh_count, const float clip_plane[4], const terrain__shadows *shadows,
+                               bool with_sky) {
     gfx_context *gfx = r->gfx;
     mat4 view_projection, inverse;
     terrain_view_projection(view, view_projection);
     glm_mat4_inv(view_projection, inverse);
     vec3 sun;
     terrain_view_sun(view, sun);
-    const float zero[3] = { 0, 0, 0 };
     bool clipped = clip_plane[0] != 0 || clip_plane[1] != 0 || clip_plane[2] != 0 || clip_plane[3] != 0;
     if (clipped) glEnable(GL_CLIP_DISTANCE0);
     gfx_program programs[3] = { r->terrain, r->sky, r->clipmap };
-    for (int p = 0; p < 3; p++) {
-        gfx_uniform_vec3(gfx, programs[p], "u_sun_direction", sun);
-        gfx_uniform_vec3(gfx, programs[p], "u_camera_position", zero);
-        gfx_uniform_float(gfx, programs[p], "u_fog_density", r->desc.fog_density);
-        gfx_uniform_vec4(gfx, programs[p], "u_clip_plane", clip_plane);
-    }
+    for (int p = 0; p < 3; p++) terrain_scene_uniforms(r, programs[p], sun, clip_plane);
     gfx_program_use(gfx, r->terrain);
     gfx_uniform_mat4(gfx, r->terrain, "u_view_projection", (const float *)view_projection);
     gfx_uniform_float(gfx, r->terrain, "u_sea_level", r->desc.sea_level);
@@ -303,11 +309,32 @@ static void terrain_draw_scene(terrain_renderer *r, const terrain_view *view, co
     }
     if (r->far_terrain) terrain_draw_clipmap(r, view, view_projection, shadows);
     if (clipped) glDisable(GL_CLIP_DISTANCE0);     /* sky.vert writes no clip distance */
+    if (with_sky) terrain_draw_sky(r, view, inverse);
+}
+
+/* The sky behind what is drawn: a full-screen triangle at the far plane (the scene's uniforms
+ * already set on its program). */
+static void terrain_draw_sky(terrain_renderer *r, const terrain_view *view, mat4 inverse) {
+    gfx_context *gfx = r->gfx;
     gfx_program_use(gfx, r->sky);
     gfx_uniform_mat4(gfx, r->sky, "u_inverse_view_projection", (const float *)inverse);
     gfx_uniform_float(gfx, r->sky, "u_cloud_cover", r->desc.cloud_cover);
     gfx_uniform_float(gfx, r->sky, "u_time", view->time);
     gfx_draw(&(gfx_draw_desc){ .vertex_array = r->empty, .count = 3 });
+}
+
+void terrain_renderer_draw_sky(terrain_renderer *r, const terrain_view *view) {
+    TRACE_ZONE("terrain_renderer_draw_sky");
+    mat4 view_projection, inverse;
+    terrain_view_projection(view, view_projection);
+    glm_mat4_inv(view_projection, inverse);
+    vec3 sun;
+    terrain_view_sun(view, sun);
+    gfx_pass_begin(r->gfx, &(gfx_pass_desc){ .name = "sky" });
+    gfx_program_use(r->gfx, r->sky);
+    terrain_scene_uniforms(r, r->sky, sun, (const float[4]){ 0, 0, 0, 0 });
+    terrain_draw_sky(r, view, inverse);
+    gfx_pass_end(r->gfx);
 }
 
 void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,
@@ -316,14 +343,14 @@ void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const 
     if (!r->shadows_drawn) terrain_renderer_draw_shadows(r, view, meshes, mesh_count);
     r->shadows_drawn = false;
     gfx_pass_begin(r->gfx, &(gfx_pass_desc){ .name = "terrain", .clear_depth = true });
-    terrain_draw_scene(r, view, meshes, mesh_count, (const float[4]){ 0, 0, 0, 0 }, r->shadows);
+    terrain_draw_scene(r, view, meshes, mesh_count, (const float[4]){ 0, 0, 0, 0 }, r->shadows, !r->desc.sky_apart);
     gfx_pass_end(r->gfx);
 }
 
 void terrain__renderer_draw_clipped(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,
                                     int mesh_count, const float clip_plane[4]) {
     TRACE_ZONE("terrain_renderer_draw_clipped");
-    terrain_draw_scene(r, view, meshes, mesh_count, clip_plane, NULL);
+    terrain_draw_scene(r, view, meshes, mesh_count, clip_plane, NULL, true);
 }
 
 void terrain__renderer_set_water_drawn(terrain_renderer *r, bool drawn) { r->water_drawn = drawn; }
