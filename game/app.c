@@ -768,6 +768,11 @@ static void app_player_step(game_app *app, GamePlayer *player, const input_actio
     if (!(controlled && app->holding)) game_player_update(pl, app->world, &actions, GAME_PLAYER_STEP);
 }
 
+/* The walk holds the player still: for a picture, or done. */
+static bool app_walk_stands(const game_app *app) {
+    return app->desc.walk && (app->walker.shot_due || game_walker_done(&app->walker));
+}
+
 /* player: bodies in fixed steps of GAME_PLAYER_STEP over the frame's time. The simulation holds
  * (no step, no time banked) while loading, while a scripted or recorded run waits for
  * streaming, and while a walk stands still for a picture. */
@@ -785,7 +790,8 @@ static void app_player_system(ecs_iter *it) {
         GamePlayer *players = ecs_field(it, 0);
         for (int i = 0; i < it->count; i++) {
             bool controlled = it->entities[i] == app->player_entity;
-            for (int step = 0; step < steps && !(controlled && app->walker.shot_due); step++)
+            /* A walk ends on the step that finishes it, whatever the frame has left. */
+            for (int step = 0; step < steps && !(controlled && app_walk_stands(app)); step++)
                 app_player_step(app, &players[i], &in->actions, step == 0, controlled);
             waited = waited || (controlled && players[i].body.waiting);
         }

@@ -6,6 +6,7 @@
 
 #include "core/core.h"
 #include "game/app.h"
+#include "trace/trace.h"
 #include "../rocks/rocks_test_cache.h"
 
 #include <criterion/criterion.h>
@@ -16,6 +17,8 @@
 #include <unistd.h>
 
 #include <stb/stb_image.h>
+
+#include "../engine/trace_file.h"
 
 static const terrain_stream_desc small_view = { .half_width = 2, .levels = 2, .memory_budget = 64u << 20 };
 
@@ -465,4 +468,83 @@ Test(render_world, the_game_places_and_draws_the_generated_talus) {
     cr_expect_gt(s.rocks_drawn, 20, "%llu rocks drawn looking at it", (unsigned long long)s.rocks_drawn);
     cr_expect_eq(s.rock_shapes, tiles->rock_count);
     rocks_tiles_destroy(tiles);
+}
+
+/* ---- the frame as ECS systems (app.h) ---- */
+
+/* The fixed step (GAME_PLAYER_STEP) makes where a walk ends independent of the frame rate: the
+ * walker and the body see the same steps at 30, 60 and 144 frames a second; only how many
+ * frames they span differs. Synthetic rolling ground, nothing drawn but the terrain. */
+Test(render_world, a_walk_ends_at_the_same_place_at_30_60_and_144_frames_a_second, .timeout = 600) {
+    game_walk walk = parse_walk("relative\n10 8\n-4 14 walk\n");
+    const float rates[3] = { 30.0f, 60.0f, 144.0f };
+    game_app_stats at[3];
+    for (int r = 0; r < 3; r++) {
+        at[r] = run_world((game_app_desc){ .width = 48, .height = 32, .headless = true, .threads = 2, .walk = &walk,
+                                           .stream = small_view, .no_hud = true, .frames = 20000, .spawn = { 8, 8 },
+                                           .generate = render_rolling_chunk, .step_seconds = 1.0f / rates[r],
+                                           .no_clipmap = true, .grass = GRASS_OFF, .water = TERRAIN_WATER_OFF,
+                                           .shadows = TERRAIN_SHADOWS_OFF });
+        cr_expect(at[r].walk_done, "%.0f fps: the walk did not end", (double)rates[r]);
+    }
+    /* More frames at a higher rate, in proportion (loading frames aside). */
+    cr_expect_gt(at[2].frames, 4 * at[0].frames, "%d frames at 144/s, %d at 30/s", at[2].frames, at[0].frames);
+    for (int r = 1; r < 3; r++)
+        for (int a = 0; a < 3; a++)
+            cr_expect_eq(at[r].feet[a], at[0].feet[a], "axis %d: %.9f at %.0f fps, %.9f at 30 fps", a, at[r].feet[a],
+                         (double)rates[r], at[0].feet[a]);
+    game_walk_free(&walk);
+}
+
+/* The systems each phase zone holds on the main thread, as a trace of the world shows them. */
+static bool zone_inside(const core_json_value *events, const char *zone, const char *phase) {
+    enum { DEPTH = 64 };
+    const char *stack[DEPTH];
+    int depth = 0;
+    double main_tid = -1;
+    for (size_t i = 0; i < events->array.count; i++) {
+        const core_json_value *e = &events->array.items[i];
+        const core_json_value *ph = core_json_get(e, "ph"), *name = core_json_get(e, "name");
+        if (!ph || ph->type != CORE_JSON_STRING) continue;
+        double tid = core_json_number_or(core_json_get(e, "tid"), -1);
+        if (ph->string.chars[0] == 'E') {              /* ends carry no name */
+            if (tid == main_tid && depth > 0) depth--;
+            continue;
+        }
+        if (!name || name->type != CORE_JSON_STRING) continue;
+        if (ph->string.chars[0] == 'B' && strcmp(name->string.chars, "input") == 0 && main_tid < 0) main_tid = tid;   /* ecs_progress's thread */
+        if (tid != main_tid) continue;
+        if (ph->string.chars[0] == 'B') {
+            if (strcmp(name->string.chars, zone) == 0)
+                for (int d = 0; d < depth && d < DEPTH; d++)
+                    if (strcmp(stack[d], phase) == 0) return true;
+            if (depth < DEPTH) stack[depth] = name->string.chars;
+            depth++;
+        }
+    }
+    return false;
+}
+
+Test(render_world, the_frame_goes_through_the_input_game_and_draw_phases_as_systems, .timeout = 300) {
+    char path[] = "/tmp/world_phases_XXXXXX.json";
+    int fd = mkstemps(path, 5);
+    cr_assert(fd >= 0);
+    close(fd);
+    cr_assert(trace_start(path));
+    run_world((game_app_desc){ .seed = 3, .width = 48, .height = 32, .headless = true, .threads = 2, .frames = 4,
+                               .stream = small_view, .grass = GRASS_OFF, .water = TERRAIN_WATER_OFF,
+                               .shadows = TERRAIN_SHADOWS_OFF });
+    trace_stop();
+    core_arena arena = { 0 };
+    const core_json_value *events = trace_file_load(path, &arena, NULL);
+    static const char *const expected[][2] = {
+        { "input", "input" }, { "player", "game" }, { "camera", "game" }, { "tools", "game" },
+        { "terrain_draw", "draw" }, { "sky", "draw" }, { "hud", "draw" }, { "screenshot", "draw" },
+        { "terrain_stream", "stream" }, { "terrain_upload", "draw" },
+    };
+    for (size_t i = 0; i < sizeof expected / sizeof expected[0]; i++)
+        cr_expect(zone_inside(events, expected[i][0], expected[i][1]), "no '%s' zone inside a '%s' phase zone",
+                  expected[i][0], expected[i][1]);
+    cr_expect(!zone_inside(events, "player", "draw"), "the player system inside the draw phase");
+    core_arena_release(&arena);
 }
