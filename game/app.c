@@ -972,7 +972,9 @@ static void app_add_systems(game_app *app) {
             .reads = { ids->camera, water_plane, mesh_chunk, ids->terrain_ecs } });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "hud", .phase = "draw", .fn = app_hud_system, .user = app,
         .main_thread = true, .writes = { ids->gfx }, .reads = { ids->camera, ids->player, ids->terrain_ecs } });
-    ecs_system_add(ecs, &(ecs_system_desc){ .name = "screenshot", .phase = "draw", .fn = app_screenshot_system,
+    /* Pictures after every draw, a developer's own draw systems (desc.setup) included. */
+    ecs_phase_add(ecs, "present", "draw");
+    ecs_system_add(ecs, &(ecs_system_desc){ .name = "screenshot", .phase = "present", .fn = app_screenshot_system,
         .user = app, .main_thread = true, .writes = { ids->gfx, ids->player }, .reads = { ids->camera, ids->terrain_ecs } });
 }
 
@@ -1014,11 +1016,6 @@ static int compare_doubles(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
-static double percentile(const double *sorted, size_t count, double p) {
-    if (count == 0) return 0.0;
-    size_t i = (size_t)ceil(p * (double)count);
-    return sorted[i == 0 ? 0 : (i > count ? count : i) - 1];
-}
 
 game_app_stats game_app_stats_get(const game_app *app) {
     game_app_stats s = { .frames = app->frames, .loading_frames = app->loading_frames,
@@ -1037,18 +1034,18 @@ game_app_stats game_app_stats_get(const game_app *app) {
     double *sorted = core_alloc((app->cpu_count ? app->cpu_count : 1) * sizeof *sorted);
     if (app->cpu_count) memcpy(sorted, app->cpu_ms, app->cpu_count * sizeof *sorted);
     qsort(sorted, app->cpu_count, sizeof *sorted, compare_doubles);
-    s.cpu_ms_p50 = percentile(sorted, app->cpu_count, 0.50);
-    s.cpu_ms_p99 = percentile(sorted, app->cpu_count, 0.99);
+    s.cpu_ms_p50 = trace_percentile(sorted, app->cpu_count, 50);
+    s.cpu_ms_p99 = trace_percentile(sorted, app->cpu_count, 99);
     s.cpu_ms_max = app->cpu_count ? sorted[app->cpu_count - 1] : 0.0;
     for (size_t i = 0; i < app->cpu_count; i++) s.hitches += app->cpu_ms[i] > APP_HITCH_MS;
     if (app->cpu_count) memcpy(sorted, app->engine_ms, app->cpu_count * sizeof *sorted);
     qsort(sorted, app->cpu_count, sizeof *sorted, compare_doubles);
-    s.engine_ms_p50 = percentile(sorted, app->cpu_count, 0.50);
-    s.engine_ms_p99 = percentile(sorted, app->cpu_count, 0.99);
+    s.engine_ms_p50 = trace_percentile(sorted, app->cpu_count, 50);
+    s.engine_ms_p99 = trace_percentile(sorted, app->cpu_count, 99);
     if (app->cpu_count) memcpy(sorted, app->thread_ms, app->cpu_count * sizeof *sorted);
     qsort(sorted, app->cpu_count, sizeof *sorted, compare_doubles);
-    s.thread_ms_p50 = percentile(sorted, app->cpu_count, 0.50);
-    s.thread_ms_p99 = percentile(sorted, app->cpu_count, 0.99);
+    s.thread_ms_p50 = trace_percentile(sorted, app->cpu_count, 50);
+    s.thread_ms_p99 = trace_percentile(sorted, app->cpu_count, 99);
     core_free(sorted, (app->cpu_count ? app->cpu_count : 1) * sizeof *sorted);
     s.stream = terrain_ecs_stream_stats(app->terrain);
     s.edits = terrain_ecs_edit_stats(app->terrain);

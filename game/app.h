@@ -20,7 +20,8 @@
  *     game    player, camera, tools          fixed steps of the body; the view; the tool
  *     stream … cull                          the terrain's streaming, meshing, clipmap and culling
  *     draw    terrain_upload, grass_place, … the modules' uploads, then
- *             terrain_draw, sky, rocks_draw, grass_draw, water_draw, hud, screenshot
+ *             terrain_draw, sky, rocks_draw, grass_draw, water_draw, hud
+ *     present screenshot                     after every draw (a developer's own included)
  * The player is an entity with a GamePlayer, its camera an entity with a GameCamera that follows
  * it, and streaming follows every camera tagged GameStreamViewer: a second viewer (a spectator,
  * split screen) is one more entity. The body moves in fixed steps of GAME_PLAYER_STEP seconds and

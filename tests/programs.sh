@@ -28,7 +28,7 @@ expect() {
   fi
 }
 
-for program in bench trace_report hello_systems hello_scene hello_terrain hello_edit hello_grass hello_water hello_rocks hello_blocks world; do
+for program in bench trace_report hello_systems hello_scene hello_terrain hello_edit hello_grass hello_water hello_rocks hello_blocks hello_game_system world; do
   p=$bin/$program
   expect "$program: unknown flag" 2 "unknown option '--no-such-flag'.*" -- "$p" --no-such-flag
   expect "$program: usage on error" 2 "usage: $program" -- "$p" --no-such-flag
@@ -282,6 +282,11 @@ expect "world: bad waypoint file" 2 "bad value for '--walk': .*bad.walk:3: z: 't
   "$bin/world" --walk "$tmp/bad.walk"
 expect "world: bad --size" 2 "bad value for '--size'" -- "$bin/world" --size 10x10000000
 expect "world: --record with --replay" 2 "cannot be used together" -- "$bin/world" --record a --replay b
+# A system of the developer's own through game_app_desc.setup: the sun after 30 frames of 1/60 s
+# with a 1 s day stands at π(0.1 + 0.8 · 0.5) = π/2 along (cos, sin, 0.3): asin(1/√1.09) = 73°.
+expect "hello_game_system: the sun_clock system turns the sun" 0 "30 frames, the sun at 73 degrees" -- \
+  "$bin/hello_game_system" --headless --size 64x48 --radius 1 --levels 2 --frames 30 --day 1
+expect "hello_game_system: bad --day" 2 "bad value for '--day'" -- "$bin/hello_game_system" --day 0
 expect "world: missing replay" 1 "$tmp/none.rec" -- "$bin/world" --headless --rocks off --replay "$tmp/none.rec"
 # --gamepad-mappings: an unreadable file fails at start-up naming it; a bad line is reported with
 # its file and line number and skipped, and the run goes on.

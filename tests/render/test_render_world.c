@@ -525,7 +525,7 @@ static bool zone_inside(const core_json_value *events, const char *zone, const c
     return false;
 }
 
-Test(render_world, the_frame_goes_through_the_input_game_and_draw_phases_as_systems, .timeout = 300) {
+Test(render_world, the_frame_goes_through_the_input_game_draw_and_present_phases_as_systems, .timeout = 300) {
     char path[] = "/tmp/world_phases_XXXXXX.json";
     int fd = mkstemps(path, 5);
     cr_assert(fd >= 0);
@@ -539,7 +539,7 @@ Test(render_world, the_frame_goes_through_the_input_game_and_draw_phases_as_syst
     const core_json_value *events = trace_file_load(path, &arena, NULL);
     static const char *const expected[][2] = {
         { "input", "input" }, { "player", "game" }, { "camera", "game" }, { "tools", "game" },
-        { "terrain_draw", "draw" }, { "sky", "draw" }, { "hud", "draw" }, { "screenshot", "draw" },
+        { "terrain_draw", "draw" }, { "sky", "draw" }, { "hud", "draw" }, { "screenshot", "present" },
         { "terrain_stream", "stream" }, { "terrain_upload", "draw" },
     };
     for (size_t i = 0; i < sizeof expected / sizeof expected[0]; i++)
