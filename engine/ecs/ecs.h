@@ -144,14 +144,31 @@ ecs_component ecs_component_register(ecs_world *world, const ecs_component_desc 
 ecs_component ecs_component_lookup(const ecs_world *world, const char *name); /* 0 = unknown */
 size_t ecs_component_size(const ecs_world *world, ecs_component component);
 
-typedef void (*ecs_remove_fn)(ecs_world *world, ecs_entity entity, void *data, void *user);
-/* Calls fn(world, entity, data, user) with the component's data just before the component
- * leaves an entity: ecs_remove, ecs_entity_destroy (directly or through a command buffer), and
+/* Lifecycle hooks of a component (see COMPONENTS above). Every field may be NULL. They run on
+ * the thread making the structural change, once per event, and may read and write components
+ * but not change structure (that asserts). `count` elements lie back to back at `data`. */
+typedef void (*ecs_hook_fn)(ecs_world *world, ecs_entity entity, void *data, void *user);
+typedef struct ecs_hooks {
+    void (*ctor)(void *data, int count, void *user);           /* NULL = zero the memory */
+    void (*dtor)(void *data, int count, void *user);           /* NULL = nothing */
+    void (*move)(void *dst, void *src, int count, void *user); /* NULL = memcpy; src is dead
+                                                                  after (no dtor for it) */
+    ecs_hook_fn on_add;      /* after the component was added and constructed */
+    ecs_hook_fn on_set;      /* after ecs_set / ecs_defer_set copied a value in */
+    ecs_hook_fn on_remove;   /* just before it leaves the entity, before its dtor */
+    void *user;              /* passed to every hook above */
+} ecs_hooks;
+
+/* Replaces all of the component's hooks (hooks NULL clears them). Outside phases and hooks. */
+void ecs_component_set_hooks(ecs_world *world, ecs_component component, const ecs_hooks *hooks);
+ecs_hooks ecs_component_hooks(const ecs_world *world, ecs_component component);
+
+typedef ecs_hook_fn ecs_remove_fn;
+/* Sets only the on_remove hook (and the hooks' user when fn is not NULL); fn NULL clears it.
+ * The hook gets the component's data just before the component leaves an entity:
+ * ecs_remove, ecs_entity_destroy (directly or through a command buffer), and
  * ecs_world_destroy for every entity still holding it. Not called when ecs_set overwrites a
- * value. fn NULL clears the hook. Tags (size 0) get data NULL. The hook runs on the thread
- * making the structural change (the thread that calls ecs_progress, when command buffers are
- * applied), so it may call OpenGL when that is the main thread. The hook must not make
- * structural changes itself. */
+ * value. Tags (size 0) get data NULL. */
 void ecs_component_on_remove(ecs_world *world, ecs_component component, ecs_remove_fn fn,
                              void *user);
 
@@ -265,6 +282,40 @@ typedef struct ecs_batch {
 int ecs_query_batches(const ecs_world *world, const ecs_query *query, int batch_size,
                       ecs_batch *batches, int capacity);
 ecs_iter ecs_batch_iter(ecs_world *world, const ecs_query *query, ecs_batch batch);
+
+/* ---- observers ---------------------------------------------------------------------------- */
+
+/* An observer is called when an entity starts matching its query (ECS_ON_ADD) or stops
+ * matching it (ECS_ON_REMOVE) because a component was added or removed, the entity was created
+ * with ecs_entity_create_many or destroyed, or the world is destroyed. ON_ADD runs after the
+ * entity moved into the matching table and after its on_add hooks, ON_REMOVE before it leaves
+ * the last matching table and before its on_remove hooks. The query needs a `with` term;
+ * `optional` terms are ignored. Like hooks, observers run on the thread making the change and
+ * may not change structure. */
+typedef uint32_t ecs_observer;               /* 0 = none */
+typedef enum ecs_event { ECS_ON_ADD = 1, ECS_ON_REMOVE = 2 } ecs_event; /* bit flags */
+typedef void (*ecs_observer_fn)(ecs_world *world, ecs_entity entity, ecs_event event,
+                                void *user);
+typedef struct ecs_observer_desc {
+    const char *name;                        /* for messages; copied; NULL = "observer" */
+    ecs_query_desc query;
+    uint32_t events;                         /* ECS_ON_ADD | ECS_ON_REMOVE; 0 = both */
+    ecs_observer_fn fn;                      /* required */
+    void *user;
+} ecs_observer_desc;
+
+ecs_observer ecs_observer_add(ecs_world *world, const ecs_observer_desc *desc);
+void ecs_observer_remove(ecs_world *world, ecs_observer observer);   /* 0 is ignored */
+
+/* ---- stats ------------------------------------------------------------------------------ */
+
+typedef struct ecs_world_stats {
+    uint64_t table_moves;                    /* rows moved between tables (archetype changes)
+                                                since the world was created */
+    int entities, tables, components, queries, systems, observers;
+} ecs_world_stats;
+/* ecs_progress also emits the moves of each frame as the trace counter "ecs.table_moves". */
+ecs_world_stats ecs_stats(const ecs_world *world);
 
 /* ---- commands --------------------------------------------------------------------------- */
 

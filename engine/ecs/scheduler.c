@@ -357,4 +357,5 @@ void ecs_progress(ecs_world *world, float dt) {
         phase_run(world, phase, dt);
         trace_zone_end();
     }
+    ecs_world_frame_end(world);
 }
