@@ -160,6 +160,8 @@ typedef struct ecs_phase {
     const char *trace_name;          /* trace_intern'ed: outlives the world */
     ecs_system_info **systems;       /* in registration order */
     uint32_t system_count, system_capacity;
+    uint64_t work_ns;                /* its systems' time in the last frame (UINT64_MAX: not
+                                        run yet): light phases run on the calling thread */
 } ecs_phase;
 
 void ecs_scheduler_free(ecs_world *world);
