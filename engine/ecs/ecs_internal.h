@@ -60,6 +60,7 @@ struct ecs_table {
     ecs_column *columns;             /* columns[i] holds components[i] */
     ecs_entity *entities;
     uint32_t count, capacity;
+    bool hooked;                     /* some component has hooks: moves take the slow path */
     ecs_edge *edges;                 /* indexed by component id */
     uint32_t edge_capacity;
     struct ecs_observer_info **observers; /* those whose query matches, in registration order:

@@ -94,12 +94,28 @@ static void table_remove_row(ecs_world *world, ecs_table *table, uint32_t row) {
     if (row == last) return;
     ecs_entity moved = table->entities[last];
     table->entities[row] = moved;
-    for (uint32_t i = 0; i < table->component_count; i++) {
-        ecs_column *column = &table->columns[i];
-        elements_move(column_hooks(world, table, i), column_at(column, row),
-                      column_at(column, last), 1, column->size);
+    if (table->hooked) {
+        for (uint32_t i = 0; i < table->component_count; i++)
+            elements_move(column_hooks(world, table, i), column_at(&table->columns[i], row),
+                          column_at(&table->columns[i], last), 1, table->columns[i].size);
+    } else {
+        for (uint32_t i = 0; i < table->component_count; i++) {
+            ecs_column *column = &table->columns[i];
+            if (column->size)
+                memcpy(column_at(column, row), column_at(column, last), column->size);
+        }
     }
     world->records[ecs_id_index(moved)].row = row;
+}
+
+static bool hooks_any(const ecs_hooks *h) {
+    return h->ctor || h->dtor || h->move || h->on_add || h->on_set || h->on_remove;
+}
+
+static void table_update_hooked(const ecs_world *world, ecs_table *table) {
+    table->hooked = false;
+    for (uint32_t i = 0; i < table->component_count; i++)
+        table->hooked = table->hooked || hooks_any(column_hooks(world, table, i));
 }
 
 static uint64_t components_hash(const ecs_component *sorted, uint32_t count) {
@@ -119,6 +135,7 @@ static ecs_table *table_create(ecs_world *world, const ecs_component *sorted, ui
     }
     for (uint32_t i = 0; i < count; i++)
         table->columns[i].size = world->components[sorted[i]].size;
+    table_update_hooked(world, table);
 
     world->tables = ecs_grow(world->tables, &world->table_capacity, world->table_count + 1,
                              sizeof *world->tables);
@@ -311,6 +328,7 @@ void ecs_component_set_hooks(ecs_world *world, ecs_component component, const ec
     ECS_ASSERT_STRUCTURAL(world);
     ECS_ASSERT_COMPONENT(world, component);
     world->components[component].hooks = hooks ? *hooks : (ecs_hooks){ 0 };
+    for (uint32_t i = 0; i < world->table_count; i++) table_update_hooked(world, world->tables[i]);
 }
 
 ecs_hooks ecs_component_hooks(const ecs_world *world, ecs_component component) {
@@ -415,8 +433,35 @@ static uint32_t row_transfer(ecs_world *world, ecs_table *from, uint32_t old_row
 /* Moves the entity of `record` to table `to` (one component more or less). In order: observers
  * that stop matching, on_remove of what `to` lacks, the row's move (with dtor and ctor), on_add
  * of what `to` adds, observers that start matching. */
+/* entity_move without hooks: copies what both tables have, zeroes what only `to` has. */
+static void entity_move_plain(ecs_world *world, ecs_record *record, ecs_table *to) {
+    ecs_table *from = record->table;
+    uint32_t old_row = record->row;
+    uint32_t new_row = table_append(world, to, from->entities[old_row]);
+    uint32_t i = 0;
+    for (uint32_t j = 0; j < to->component_count; j++) {
+        while (i < from->component_count && from->components[i] < to->components[j]) i++;
+        ecs_column *dst = &to->columns[j];
+        if (!dst->size) continue;
+        uint8_t *value = column_at(dst, new_row);
+        if (i < from->component_count && from->components[i] == to->components[j])
+            memcpy(value, column_at(&from->columns[i], old_row), dst->size);
+        else
+            memset(value, 0, dst->size);
+    }
+    table_remove_row(world, from, old_row);
+    record->table = to;
+    record->row = new_row;
+    world->table_moves++;
+}
+
 static void entity_move(ecs_world *world, ecs_record *record, ecs_table *to) {
     ecs_table *from = record->table;
+    /* The usual case: nothing to call, and the add/remove cost stays that of two memcpys. */
+    if (!from->hooked && !to->hooked && !from->observer_count && !to->observer_count) {
+        entity_move_plain(world, record, to);
+        return;
+    }
     ecs_entity entity = from->entities[record->row];
     if (from->observer_count) ecs_observers_fire(world, entity, from, to, ECS_ON_REMOVE);
     for (uint32_t i = 0; i < from->component_count; i++)
