@@ -9,12 +9,28 @@
  *     typedef struct Position { float x, y; } Position;
  *     ecs_component position = ECS_COMPONENT(world, Position);
  *     ecs_component frozen = ECS_TAG(world, Frozen);
- *   A component that owns resources releases them in an on_remove hook, which runs whatever
- *   takes the component away (remove, destroy, a command buffer, ecs_world_destroy):
- *     static void mesh_release(ecs_world *w, ecs_entity e, void *data, void *user) {
- *         glDeleteBuffers(1, &((Mesh *)data)->vbo);
- *     }
- *     ecs_component_on_remove(world, mesh, mesh_release, NULL);
+ *   HOOKS. A component may have lifecycle hooks, all set at once (any may be NULL):
+ *     ecs_component_set_hooks(world, mesh, &(ecs_hooks){
+ *         .ctor = mesh_init,          // (data, count, user): new elements; NULL = zeroed
+ *         .dtor = mesh_fini,          // (data, count, user): elements that go; NULL = nothing
+ *         .move = mesh_move,          // (dst, src, count, user): NULL = memcpy; src is dead after
+ *         .on_add = mesh_added,       // (world, entity, data, user): after it was added
+ *         .on_set = mesh_changed,     // after ecs_set / ecs_defer_set copied a value in
+ *         .on_remove = mesh_release,  // before it leaves the entity, before the dtor
+ *         .user = renderer });
+ *   ctor runs for every add (ecs_add, ecs_set of a missing component, ecs_entity_create_many,
+ *   the same from a command buffer), dtor for every removal (ecs_remove, ecs_entity_destroy,
+ *   ecs_world_destroy), move wherever a row's bytes move (to another table on add or remove,
+ *   into a removed row's place, into a grown column). Each element is constructed, moved and
+ *   destructed once per event; create_many, column growth and ecs_world_destroy pass whole
+ *   runs of elements in one call. A value ecs_set copies in replaces the constructed bytes as
+ *   they are (nothing is freed), so a component whose ctor allocates is filled through ecs_add
+ *   and its fields, or takes its value over in on_set. A component that owns something (a GPU
+ *   buffer, a mesh) releases it in on_remove or dtor: one place, whatever takes it away.
+ *   ecs_component_on_remove(world, mesh, mesh_release, user) sets on_remove alone.
+ *   Hooks run on the thread making the structural change (the ecs_progress thread, when
+ *   command buffers are applied; on_set also in a system calling ecs_set), and may not change
+ *   structure themselves (that asserts).
  *
  * ENTITIES are 64-bit ids: a 32-bit index and a 32-bit generation (0 is the null entity). A
  * destroyed entity's index is reused with a new generation, so an old id never reaches the
@@ -65,11 +81,30 @@
  *   `.main_thread` pins a system to the main thread (OpenGL); `.parallel` splits its query
  *   into batches of about `.batch_size` entities that run as parallel jobs, each batch with
  *   its own command buffer. Every phase and every system is a trace zone named after it.
+ *   A phase whose systems took under 20 us in all last frame (and that has no system of
+ *   several batches now) runs on the calling thread: waking workers would cost more.
  *
  * PLACEHOLDER IDS. ecs_defer_create returns a placeholder that only the buffer it came from
  * understands: use it in later commands of that buffer; the real entity exists once the buffer
  * is applied. Real ids are handed out at apply time, in apply order, which is what keeps them
  * identical for any thread count. Do not store a placeholder in component data.
+ *
+ * OBSERVERS are called when an entity starts or stops matching a query because a component
+ * was added or removed, or the entity was created (create_many) or destroyed (ecs_world_destroy
+ * included):
+ *     static void on_body(ecs_world *w, ecs_entity e, ecs_event event, void *user) { ... }
+ *     ecs_observer body = ecs_observer_add(world, &(ecs_observer_desc){
+ *         .query = { .with = { position, velocity }, .without = { frozen } },
+ *         .events = ECS_ON_ADD | ECS_ON_REMOVE, .fn = on_body });
+ *   ON_ADD comes after the entity moved into the matching table (ecs_get works, on_add hooks
+ *   have run), ON_REMOVE before it leaves the last one (before on_remove hooks). A move
+ *   between two matching tables calls nothing. Each table keeps the observers that match it,
+ *   so moves between tables no observer cares about cost nothing more. Like hooks, observers
+ *   run on the thread making the change and may not change structure.
+ *
+ * STATS. ecs_stats(world) counts entities, tables, queries, systems, observers and the rows
+ * moved between tables since the world began (every add or remove that changes an entity's
+ * component set); ecs_progress emits each frame's moves as the trace counter ecs.table_moves.
  *
  * RESOURCES are the world's singletons (the terrain world, the renderer, the input system, the
  * clock): one value per world, not per entity. A resource is registered like a component and
