@@ -127,6 +127,9 @@ static void apply_one(ecs_commands *commands, const ecs_command *command) {
 
 void ecs_commands_apply(ecs_commands *commands) {
     ECS_ASSERT_STRUCTURAL(commands->world);
+    /* Most systems record nothing most frames: an empty buffer has no placeholders to retire,
+     * so it keeps its serial. */
+    if (commands->count == 0) return;
     commands->resolved = ecs_grow(commands->resolved, &commands->resolved_capacity,
                                   commands->placeholder_count, sizeof *commands->resolved);
     for (uint32_t i = 0; i < commands->count; i++) apply_one(commands, &commands->list[i]);

@@ -9,12 +9,28 @@
  *     typedef struct Position { float x, y; } Position;
  *     ecs_component position = ECS_COMPONENT(world, Position);
  *     ecs_component frozen = ECS_TAG(world, Frozen);
- *   A component that owns resources releases them in an on_remove hook, which runs whatever
- *   takes the component away (remove, destroy, a command buffer, ecs_world_destroy):
- *     static void mesh_release(ecs_world *w, ecs_entity e, void *data, void *user) {
- *         glDeleteBuffers(1, &((Mesh *)data)->vbo);
- *     }
- *     ecs_component_on_remove(world, mesh, mesh_release, NULL);
+ *   HOOKS. A component may have lifecycle hooks, all set at once (any may be NULL):
+ *     ecs_component_set_hooks(world, mesh, &(ecs_hooks){
+ *         .ctor = mesh_init,          // (data, count, user): new elements; NULL = zeroed
+ *         .dtor = mesh_fini,          // (data, count, user): elements that go; NULL = nothing
+ *         .move = mesh_move,          // (dst, src, count, user): NULL = memcpy; src is dead after
+ *         .on_add = mesh_added,       // (world, entity, data, user): after it was added
+ *         .on_set = mesh_changed,     // after ecs_set / ecs_defer_set copied a value in
+ *         .on_remove = mesh_release,  // before it leaves the entity, before the dtor
+ *         .user = renderer });
+ *   ctor runs for every add (ecs_add, ecs_set of a missing component, ecs_entity_create_many,
+ *   the same from a command buffer), dtor for every removal (ecs_remove, ecs_entity_destroy,
+ *   ecs_world_destroy), move wherever a row's bytes move (to another table on add or remove,
+ *   into a removed row's place, into a grown column). Each element is constructed, moved and
+ *   destructed once per event; create_many, column growth and ecs_world_destroy pass whole
+ *   runs of elements in one call. A value ecs_set copies in replaces the constructed bytes as
+ *   they are (nothing is freed), so a component whose ctor allocates is filled through ecs_add
+ *   and its fields, or takes its value over in on_set. A component that owns something (a GPU
+ *   buffer, a mesh) releases it in on_remove or dtor: one place, whatever takes it away.
+ *   ecs_component_on_remove(world, mesh, mesh_release, user) sets on_remove alone.
+ *   Hooks run on the thread making the structural change (the ecs_progress thread, when
+ *   command buffers are applied; on_set also in a system calling ecs_set), and may not change
+ *   structure themselves (that asserts).
  *
  * ENTITIES are 64-bit ids: a 32-bit index and a 32-bit generation (0 is the null entity). A
  * destroyed entity's index is reused with a new generation, so an old id never reaches the
@@ -65,11 +81,30 @@
  *   `.main_thread` pins a system to the main thread (OpenGL); `.parallel` splits its query
  *   into batches of about `.batch_size` entities that run as parallel jobs, each batch with
  *   its own command buffer. Every phase and every system is a trace zone named after it.
+ *   A phase whose systems took under 20 us in all last frame (and that has no system of
+ *   several batches now) runs on the calling thread: waking workers would cost more.
  *
  * PLACEHOLDER IDS. ecs_defer_create returns a placeholder that only the buffer it came from
  * understands: use it in later commands of that buffer; the real entity exists once the buffer
  * is applied. Real ids are handed out at apply time, in apply order, which is what keeps them
  * identical for any thread count. Do not store a placeholder in component data.
+ *
+ * OBSERVERS are called when an entity starts or stops matching a query because a component
+ * was added or removed, or the entity was created (create_many) or destroyed (ecs_world_destroy
+ * included):
+ *     static void on_body(ecs_world *w, ecs_entity e, ecs_event event, void *user) { ... }
+ *     ecs_observer body = ecs_observer_add(world, &(ecs_observer_desc){
+ *         .query = { .with = { position, velocity }, .without = { frozen } },
+ *         .events = ECS_ON_ADD | ECS_ON_REMOVE, .fn = on_body });
+ *   ON_ADD comes after the entity moved into the matching table (ecs_get works, on_add hooks
+ *   have run), ON_REMOVE before it leaves the last one (before on_remove hooks). A move
+ *   between two matching tables calls nothing. Each table keeps the observers that match it,
+ *   so moves between tables no observer cares about cost nothing more. Like hooks, observers
+ *   run on the thread making the change and may not change structure.
+ *
+ * STATS. ecs_stats(world) counts entities, tables, queries, systems, observers and the rows
+ * moved between tables since the world began (every add or remove that changes an entity's
+ * component set); ecs_progress emits each frame's moves as the trace counter ecs.table_moves.
  *
  * RESOURCES are the world's singletons (the terrain world, the renderer, the input system, the
  * clock): one value per world, not per entity. A resource is registered like a component and
@@ -144,14 +179,31 @@ ecs_component ecs_component_register(ecs_world *world, const ecs_component_desc 
 ecs_component ecs_component_lookup(const ecs_world *world, const char *name); /* 0 = unknown */
 size_t ecs_component_size(const ecs_world *world, ecs_component component);
 
-typedef void (*ecs_remove_fn)(ecs_world *world, ecs_entity entity, void *data, void *user);
-/* Calls fn(world, entity, data, user) with the component's data just before the component
- * leaves an entity: ecs_remove, ecs_entity_destroy (directly or through a command buffer), and
+/* Lifecycle hooks of a component (see COMPONENTS above). Every field may be NULL. They run on
+ * the thread making the structural change, once per event, and may read and write components
+ * but not change structure (that asserts). `count` elements lie back to back at `data`. */
+typedef void (*ecs_hook_fn)(ecs_world *world, ecs_entity entity, void *data, void *user);
+typedef struct ecs_hooks {
+    void (*ctor)(void *data, int count, void *user);           /* NULL = zero the memory */
+    void (*dtor)(void *data, int count, void *user);           /* NULL = nothing */
+    void (*move)(void *dst, void *src, int count, void *user); /* NULL = memcpy; src is dead
+                                                                  after (no dtor for it) */
+    ecs_hook_fn on_add;      /* after the component was added and constructed */
+    ecs_hook_fn on_set;      /* after ecs_set / ecs_defer_set copied a value in */
+    ecs_hook_fn on_remove;   /* just before it leaves the entity, before its dtor */
+    void *user;              /* passed to every hook above */
+} ecs_hooks;
+
+/* Replaces all of the component's hooks (hooks NULL clears them). Outside phases and hooks. */
+void ecs_component_set_hooks(ecs_world *world, ecs_component component, const ecs_hooks *hooks);
+ecs_hooks ecs_component_hooks(const ecs_world *world, ecs_component component);
+
+typedef ecs_hook_fn ecs_remove_fn;
+/* Sets only the on_remove hook (and the hooks' user when fn is not NULL); fn NULL clears it.
+ * The hook gets the component's data just before the component leaves an entity:
+ * ecs_remove, ecs_entity_destroy (directly or through a command buffer), and
  * ecs_world_destroy for every entity still holding it. Not called when ecs_set overwrites a
- * value. fn NULL clears the hook. Tags (size 0) get data NULL. The hook runs on the thread
- * making the structural change (the thread that calls ecs_progress, when command buffers are
- * applied), so it may call OpenGL when that is the main thread. The hook must not make
- * structural changes itself. */
+ * value. Tags (size 0) get data NULL. */
 void ecs_component_on_remove(ecs_world *world, ecs_component component, ecs_remove_fn fn,
                              void *user);
 
@@ -265,6 +317,40 @@ typedef struct ecs_batch {
 int ecs_query_batches(const ecs_world *world, const ecs_query *query, int batch_size,
                       ecs_batch *batches, int capacity);
 ecs_iter ecs_batch_iter(ecs_world *world, const ecs_query *query, ecs_batch batch);
+
+/* ---- observers ---------------------------------------------------------------------------- */
+
+/* An observer is called when an entity starts matching its query (ECS_ON_ADD) or stops
+ * matching it (ECS_ON_REMOVE) because a component was added or removed, the entity was created
+ * with ecs_entity_create_many or destroyed, or the world is destroyed. ON_ADD runs after the
+ * entity moved into the matching table and after its on_add hooks, ON_REMOVE before it leaves
+ * the last matching table and before its on_remove hooks. The query needs a `with` term;
+ * `optional` terms are ignored. Like hooks, observers run on the thread making the change and
+ * may not change structure. */
+typedef uint32_t ecs_observer;               /* 0 = none */
+typedef enum ecs_event { ECS_ON_ADD = 1, ECS_ON_REMOVE = 2 } ecs_event; /* bit flags */
+typedef void (*ecs_observer_fn)(ecs_world *world, ecs_entity entity, ecs_event event,
+                                void *user);
+typedef struct ecs_observer_desc {
+    const char *name;                        /* for messages; copied; NULL = "observer" */
+    ecs_query_desc query;
+    uint32_t events;                         /* ECS_ON_ADD | ECS_ON_REMOVE; 0 = both */
+    ecs_observer_fn fn;                      /* required */
+    void *user;
+} ecs_observer_desc;
+
+ecs_observer ecs_observer_add(ecs_world *world, const ecs_observer_desc *desc);
+void ecs_observer_remove(ecs_world *world, ecs_observer observer);   /* 0 is ignored */
+
+/* ---- stats ------------------------------------------------------------------------------ */
+
+typedef struct ecs_world_stats {
+    uint64_t table_moves;                    /* rows moved between tables (archetype changes)
+                                                since the world was created */
+    int entities, tables, components, queries, systems, observers;
+} ecs_world_stats;
+/* ecs_progress also emits the moves of each frame as the trace counter "ecs.table_moves". */
+ecs_world_stats ecs_stats(const ecs_world *world);
 
 /* ---- commands --------------------------------------------------------------------------- */
 

@@ -32,8 +32,7 @@ static inline bool ecs_id_is_placeholder(ecs_entity e) { return (e & ECS_PLACEHO
 typedef struct ecs_component_info {
     char *name;
     uint32_t size, align;
-    ecs_remove_fn on_remove;         /* NULL = none; see ecs_component_on_remove */
-    void *on_remove_user;
+    ecs_hooks hooks;                 /* all NULL = plain bytes, nothing to call */
 } ecs_component_info;
 
 /* ---- tables ----------------------------------------------------------------------------- */
@@ -61,8 +60,12 @@ struct ecs_table {
     ecs_column *columns;             /* columns[i] holds components[i] */
     ecs_entity *entities;
     uint32_t count, capacity;
+    bool hooked;                     /* some component has hooks: moves take the slow path */
     ecs_edge *edges;                 /* indexed by component id */
     uint32_t edge_capacity;
+    struct ecs_observer_info **observers; /* those whose query matches, in registration order:
+                                             none (the usual case) costs a move nothing */
+    uint32_t observer_count, observer_capacity;
 };
 
 /* Index of `component` among the table's columns, or -1. */
@@ -92,7 +95,30 @@ struct ecs_query {
 
 /* Adds `table` to the query's matches if it matches. */
 void ecs_query_consider_table(ecs_query *query, ecs_table *table);
+/* Whether the table has every `with` term and no `without` term. */
+bool ecs_query_matches_table(const ecs_query *query, const ecs_table *table);
+/* Fills a query's terms from a desc, without registering it with the world (no matches). */
+void ecs_query_terms_init(ecs_query *query, const ecs_world *world, const ecs_query_desc *desc);
 void ecs_query_free(ecs_query *query);
+
+/* ---- observers -------------------------------------------------------------------------- */
+
+typedef struct ecs_observer_info {
+    char *name;
+    ecs_query terms;                 /* with and without only; its matches stay empty */
+    uint32_t events;
+    ecs_observer_fn fn;
+    void *user;
+} ecs_observer_info;
+
+/* Offers a new table to every observer. */
+void ecs_observers_table_created(ecs_world *world, ecs_table *table);
+/* Calls, for `entity` going from table `from` to table `to` (either may be NULL: created,
+ * destroyed), the observers of `event` that match the table it leaves (ON_REMOVE) or enters
+ * (ON_ADD) but not the other one. */
+void ecs_observers_fire(ecs_world *world, ecs_entity entity, const ecs_table *from,
+                        const ecs_table *to, ecs_event event);
+void ecs_observers_free(ecs_world *world);
 
 /* ---- commands --------------------------------------------------------------------------- */
 
@@ -135,6 +161,8 @@ typedef struct ecs_phase {
     const char *trace_name;          /* trace_intern'ed: outlives the world */
     ecs_system_info **systems;       /* in registration order */
     uint32_t system_count, system_capacity;
+    uint64_t work_ns;                /* its systems' time in the last frame (UINT64_MAX: not
+                                        run yet): light phases run on the calling thread */
 } ecs_phase;
 
 void ecs_scheduler_free(ecs_world *world);
@@ -189,9 +217,15 @@ struct ecs_world {
     ecs_system_info **systems;       /* in registration order; ecs_system is index + 1 */
     uint32_t system_count, system_capacity;
 
+    ecs_observer_info **observers;   /* ecs_observer is index + 1; NULL = removed */
+    uint32_t observer_count, observer_capacity;
+
+    uint64_t table_moves;            /* rows moved between tables, ever (ecs_stats) */
+    uint64_t table_moves_reported;   /* table_moves at the last ecs.table_moves counter */
+
     core_arena frame;                /* scheduler scratch, reset every phase */
     bool in_phase;                   /* a phase is running: structural calls assert */
-    bool in_hook;                    /* an on_remove hook runs: structural calls assert */
+    bool in_hook;                    /* a hook or observer runs: structural calls assert */
     uint32_t command_serial;
 
     ecs_resource_slot *resources;    /* in registration order (a handful: scanned) */
@@ -203,13 +237,15 @@ struct ecs_world {
 #define ECS_ASSERT_STRUCTURAL(world)                                                          \
     do {                                                                                      \
         assert(!(world)->in_phase && "structural change while a phase runs: use it->commands"); \
-        assert(!(world)->in_hook && "structural change inside an on_remove hook");            \
+        assert(!(world)->in_hook && "structural change inside a hook or observer");            \
     } while (0)
 
 #define ECS_ASSERT_COMPONENT(world, component)                                                \
     assert((component) > 0 && (component) < (world)->component_count && "unknown component")
 
 ecs_table *ecs_table_for(ecs_world *world, const ecs_component *sorted, uint32_t count);
+/* Emits this frame's table moves as the trace counter "ecs.table_moves" (ecs_progress). */
+void ecs_world_frame_end(ecs_world *world);
 /* Returns `items` (an array of `*capacity` elements) grown to hold at least `needed`. */
 void *ecs_grow(void *items, uint32_t *capacity, uint32_t needed, size_t item_size);
 

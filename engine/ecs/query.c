@@ -14,14 +14,16 @@ static int copy_terms(ecs_component *to, const ecs_component *from, const ecs_wo
     return count;
 }
 
+void ecs_query_terms_init(ecs_query *query, const ecs_world *world, const ecs_query_desc *desc) {
+    query->with_count = copy_terms(query->with, desc->with, world);
+    query->without_count = copy_terms(query->without, desc->without, world);
+    query->optional_count = copy_terms(query->optional, desc->optional, world);
+}
+
 ecs_query *ecs_query_create(ecs_world *world, const ecs_query_desc *desc) {
     ECS_ASSERT_STRUCTURAL(world);
     ecs_query *query = core_calloc(1, sizeof *query);
-    if (desc) {
-        query->with_count = copy_terms(query->with, desc->with, world);
-        query->without_count = copy_terms(query->without, desc->without, world);
-        query->optional_count = copy_terms(query->optional, desc->optional, world);
-    }
+    if (desc) ecs_query_terms_init(query, world, desc);
     for (uint32_t i = 0; i < world->table_count; i++)
         ecs_query_consider_table(query, world->tables[i]);
     world->queries = ecs_grow(world->queries, &world->query_capacity, world->query_count + 1,
@@ -48,11 +50,16 @@ void ecs_query_destroy(ecs_world *world, ecs_query *query) {
     assert(!"ecs_query_destroy: not a query of this world");
 }
 
-void ecs_query_consider_table(ecs_query *query, ecs_table *table) {
+bool ecs_query_matches_table(const ecs_query *query, const ecs_table *table) {
     for (int i = 0; i < query->with_count; i++)
-        if (ecs_table_column_of(table, query->with[i]) < 0) return;
+        if (ecs_table_column_of(table, query->with[i]) < 0) return false;
     for (int i = 0; i < query->without_count; i++)
-        if (ecs_table_column_of(table, query->without[i]) >= 0) return;
+        if (ecs_table_column_of(table, query->without[i]) >= 0) return false;
+    return true;
+}
+
+void ecs_query_consider_table(ecs_query *query, ecs_table *table) {
+    if (!ecs_query_matches_table(query, table)) return;
 
     ecs_query_match match = { .table = table };
     for (int i = 0; i < query->with_count; i++)

@@ -5,6 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "trace/trace.h"
+
 /* core_grow for the ECS's 32-bit counts (they keep tables and records small). */
 void *ecs_grow(void *items, uint32_t *capacity, uint32_t needed, size_t item_size) {
     if (needed <= *capacity) return items;
@@ -23,45 +25,97 @@ int ecs_table_column_of(const ecs_table *table, ecs_component component) {
     return -1;
 }
 
-static void column_reserve(ecs_column *column, uint32_t count, uint32_t old_capacity,
-                           uint32_t capacity) {
+/* ---- element hooks: construct, destruct, move ------------------------------------------ */
+
+static inline const ecs_hooks *column_hooks(const ecs_world *world, const ecs_table *table,
+                                            uint32_t column) {
+    return &world->components[table->components[column]].hooks;
+}
+
+static inline uint8_t *column_at(const ecs_column *column, uint32_t row) {
+    return column->data + (size_t)row * column->size;
+}
+
+/* `count` fresh elements: the ctor, or zeros. */
+static void elements_construct(const ecs_hooks *hooks, const ecs_column *column, uint32_t row,
+                               uint32_t count) {
+    if (!column->size || !count) return;
+    if (hooks->ctor) hooks->ctor(column_at(column, row), (int)count, hooks->user);
+    else memset(column_at(column, row), 0, (size_t)count * column->size);
+}
+
+static void elements_destruct(const ecs_hooks *hooks, const ecs_column *column, uint32_t row,
+                              uint32_t count) {
+    if (column->size && count && hooks->dtor)
+        hooks->dtor(column_at(column, row), (int)count, hooks->user);
+}
+
+/* Moves `count` elements to memory that does not overlap them; the source is dead after. */
+static void elements_move(const ecs_hooks *hooks, uint8_t *dst, uint8_t *src, uint32_t count,
+                          uint32_t size) {
+    if (!size || !count) return;
+    if (hooks->move) hooks->move(dst, src, (int)count, hooks->user);
+    else memcpy(dst, src, (size_t)count * size);
+}
+
+/* ---- table storage ---------------------------------------------------------------------- */
+
+static void column_reserve(const ecs_hooks *hooks, ecs_column *column, uint32_t count,
+                           uint32_t old_capacity, uint32_t capacity) {
     if (column->size == 0) return;
     uint8_t *data = core_alloc_aligned((size_t)capacity * column->size, ECS_COLUMN_ALIGN);
-    if (column->data) memcpy(data, column->data, (size_t)count * column->size);
+    if (column->data) elements_move(hooks, data, column->data, count, column->size);
     core_free(column->data, (size_t)old_capacity * column->size);
     column->data = data;
 }
 
-static void table_reserve(ecs_table *table, uint32_t needed) {
+static void table_reserve(const ecs_world *world, ecs_table *table, uint32_t needed) {
     if (needed <= table->capacity) return;
     uint32_t capacity = CORE_MAX(CORE_MAX(needed, table->capacity * 2), 16u);
     table->entities = core_realloc(table->entities, table->capacity * sizeof(ecs_entity),
                                    capacity * sizeof(ecs_entity));
     for (uint32_t i = 0; i < table->component_count; i++)
-        column_reserve(&table->columns[i], table->count, table->capacity, capacity);
+        column_reserve(column_hooks(world, table, i), &table->columns[i], table->count,
+                       table->capacity, capacity);
     table->capacity = capacity;
 }
 
 /* Appends a row for `entity`; its column values are left for the caller to fill. */
-static uint32_t table_append(ecs_table *table, ecs_entity entity) {
-    table_reserve(table, table->count + 1);
+static uint32_t table_append(const ecs_world *world, ecs_table *table, ecs_entity entity) {
+    table_reserve(world, table, table->count + 1);
     table->entities[table->count] = entity;
     return table->count++;
 }
 
-/* Removes a row by moving the last row into its place, which keeps the columns dense. */
+/* Removes a row whose elements were destructed or moved out already, by moving the last row
+ * into its place, which keeps the columns dense. */
 static void table_remove_row(ecs_world *world, ecs_table *table, uint32_t row) {
     uint32_t last = --table->count;
     if (row == last) return;
     ecs_entity moved = table->entities[last];
     table->entities[row] = moved;
-    for (uint32_t i = 0; i < table->component_count; i++) {
-        ecs_column *column = &table->columns[i];
-        if (column->size)
-            memcpy(column->data + (size_t)row * column->size,
-                   column->data + (size_t)last * column->size, column->size);
+    if (table->hooked) {
+        for (uint32_t i = 0; i < table->component_count; i++)
+            elements_move(column_hooks(world, table, i), column_at(&table->columns[i], row),
+                          column_at(&table->columns[i], last), 1, table->columns[i].size);
+    } else {
+        for (uint32_t i = 0; i < table->component_count; i++) {
+            ecs_column *column = &table->columns[i];
+            if (column->size)
+                memcpy(column_at(column, row), column_at(column, last), column->size);
+        }
     }
     world->records[ecs_id_index(moved)].row = row;
+}
+
+static bool hooks_any(const ecs_hooks *h) {
+    return h->ctor || h->dtor || h->move || h->on_add || h->on_set || h->on_remove;
+}
+
+static void table_update_hooked(const ecs_world *world, ecs_table *table) {
+    table->hooked = false;
+    for (uint32_t i = 0; i < table->component_count; i++)
+        table->hooked = table->hooked || hooks_any(column_hooks(world, table, i));
 }
 
 static uint64_t components_hash(const ecs_component *sorted, uint32_t count) {
@@ -81,12 +135,14 @@ static ecs_table *table_create(ecs_world *world, const ecs_component *sorted, ui
     }
     for (uint32_t i = 0; i < count; i++)
         table->columns[i].size = world->components[sorted[i]].size;
+    table_update_hooked(world, table);
 
     world->tables = ecs_grow(world->tables, &world->table_capacity, world->table_count + 1,
                              sizeof *world->tables);
     world->tables[world->table_count++] = table;
     for (uint32_t i = 0; i < world->query_count; i++)
         ecs_query_consider_table(world->queries[i], table);
+    ecs_observers_table_created(world, table);
     return table;
 }
 
@@ -97,6 +153,7 @@ static void table_free(ecs_table *table) {
     core_free(table->components, table->component_count * sizeof *table->components);
     core_free(table->entities, table->capacity * sizeof *table->entities);
     core_free(table->edges, table->edge_capacity * sizeof *table->edges);
+    core_free(table->observers, table->observer_capacity * sizeof *table->observers);
     core_free(table, sizeof *table);
 }
 
@@ -154,22 +211,33 @@ static ecs_table *table_without(ecs_world *world, ecs_table *table, ecs_componen
     return target;
 }
 
-/* ---- on_remove hooks -------------------------------------------------------------------- */
+/* ---- entity hooks: on_add, on_set, on_remove -------------------------------------------- */
 
-/* Runs the hook of the component in `column` of the entity at `row`, if it has one. The row is
- * still in place, so the hook sees the current value and ecs_get works on the entity. */
-static void hook_on_remove(ecs_world *world, ecs_table *table, uint32_t row, uint32_t column) {
-    const ecs_component_info *info = &world->components[table->components[column]];
-    if (!info->on_remove) return;
+/* Calls `fn` (one of the component's entity hooks, or NULL) with the data of the component in
+ * `column` of the entity at `row`. The row is in place, so ecs_get works on the entity. */
+static void hook_call(ecs_world *world, ecs_hook_fn fn, const ecs_table *table, uint32_t row,
+                      uint32_t column) {
+    if (!fn) return;
     const ecs_column *data = &table->columns[column];
-    void *value = data->size ? data->data + (size_t)row * data->size : NULL;
-    world->in_hook = true;
-    info->on_remove(world, table->entities[row], value, info->on_remove_user);
-    world->in_hook = false;
+    void *value = data->size ? column_at(data, row) : NULL;
+    /* Inside a phase (on_set from a system's ecs_set) structure is frozen anyway, and workers
+     * must not write the flag. */
+    bool guard = !world->in_phase;
+    if (guard) world->in_hook = true;
+    fn(world, table->entities[row], value, column_hooks(world, table, column)->user);
+    if (guard) world->in_hook = false;
 }
 
-/* Runs the hooks of every component the entity at `row` has, before it goes. */
-static void hooks_on_destroy(ecs_world *world, ecs_table *table, uint32_t row) {
+static void hook_on_remove(ecs_world *world, const ecs_table *table, uint32_t row,
+                           uint32_t column) {
+    hook_call(world, column_hooks(world, table, column)->on_remove, table, row, column);
+}
+
+/* The entity at `row` is about to lose every component: its observers, then its on_remove
+ * hooks. */
+static void entity_leaving(ecs_world *world, const ecs_table *table, uint32_t row) {
+    if (table->observer_count)
+        ecs_observers_fire(world, table->entities[row], table, NULL, ECS_ON_REMOVE);
     for (uint32_t i = 0; i < table->component_count; i++) hook_on_remove(world, table, row, i);
 }
 
@@ -193,12 +261,19 @@ ecs_world *ecs_world_create(const ecs_world_desc *desc) {
 void ecs_world_destroy(ecs_world *world) {
     if (!world) return;
     /* Every entity still alive loses its components here, so owners of resources get to free
-     * them; first, while every table and record is whole. */
+     * them; first every observer and on_remove hook, while every table and record is whole,
+     * then the destructors, a column at a time. */
     for (uint32_t t = 0; t < world->table_count; t++)
         for (uint32_t row = 0; row < world->tables[t]->count; row++)
-            hooks_on_destroy(world, world->tables[t], row);
+            entity_leaving(world, world->tables[t], row);
+    for (uint32_t t = 0; t < world->table_count; t++) {
+        ecs_table *table = world->tables[t];
+        for (uint32_t i = 0; i < table->component_count; i++)
+            elements_destruct(column_hooks(world, table, i), &table->columns[i], 0, table->count);
+    }
     ecs_scheduler_free(world);
     ecs_resources_free(world);
+    ecs_observers_free(world);
     for (uint32_t i = 0; i < world->query_count; i++) ecs_query_free(world->queries[i]);
     core_free(world->queries, world->query_capacity * sizeof *world->queries);
     for (uint32_t i = 0; i < world->table_count; i++) table_free(world->tables[i]);
@@ -247,14 +322,27 @@ size_t ecs_component_size(const ecs_world *world, ecs_component component) {
     return world->components[component].size;
 }
 
-void ecs_component_on_remove(ecs_world *world, ecs_component component, ecs_remove_fn fn,
-                             void *user) {
+void ecs_component_set_hooks(ecs_world *world, ecs_component component, const ecs_hooks *hooks) {
     /* Set up like a registration: outside phases, and not from a hook (swapping hooks while an
      * entity's hooks run would make which of them ran hard to tell). */
     ECS_ASSERT_STRUCTURAL(world);
     ECS_ASSERT_COMPONENT(world, component);
-    world->components[component].on_remove = fn;
-    world->components[component].on_remove_user = fn ? user : NULL;
+    world->components[component].hooks = hooks ? *hooks : (ecs_hooks){ 0 };
+    for (uint32_t i = 0; i < world->table_count; i++) table_update_hooked(world, world->tables[i]);
+}
+
+ecs_hooks ecs_component_hooks(const ecs_world *world, ecs_component component) {
+    ECS_ASSERT_COMPONENT(world, component);
+    return world->components[component].hooks;
+}
+
+void ecs_component_on_remove(ecs_world *world, ecs_component component, ecs_remove_fn fn,
+                             void *user) {
+    ECS_ASSERT_COMPONENT(world, component);
+    ecs_hooks hooks = world->components[component].hooks;
+    hooks.on_remove = fn;
+    if (fn) hooks.user = user;
+    ecs_component_set_hooks(world, component, &hooks);
 }
 
 /* ---- entities --------------------------------------------------------------------------- */
@@ -296,7 +384,7 @@ ecs_entity ecs_entity_create(ecs_world *world) {
     ecs_table *empty = world->tables[0];
     ecs_record *record = &world->records[ecs_id_index(entity)];
     record->table = empty;
-    record->row = table_append(empty, entity);
+    record->row = table_append(world, empty, entity);
     return entity;
 }
 
@@ -304,8 +392,11 @@ void ecs_entity_destroy(ecs_world *world, ecs_entity entity) {
     ECS_ASSERT_STRUCTURAL(world);
     ecs_record *record = alive_record(world, entity);
     if (!record) return;
-    hooks_on_destroy(world, record->table, record->row);
-    table_remove_row(world, record->table, record->row);
+    ecs_table *table = record->table;
+    entity_leaving(world, table, record->row);
+    for (uint32_t i = 0; i < table->component_count; i++)
+        elements_destruct(column_hooks(world, table, i), &table->columns[i], record->row, 1);
+    table_remove_row(world, table, record->row);
     /* A new generation makes every copy of the old id dead for good. */
     record->generation = (record->generation + 1) & ECS_GENERATION_MASK;
     record->table = NULL;
@@ -314,26 +405,81 @@ void ecs_entity_destroy(ecs_world *world, ecs_entity entity) {
     world->alive_count--;
 }
 
-/* Moves the entity of `record` to table `to`, copying the components both tables have and
- * zeroing the ones only `to` has. */
-static void entity_move(ecs_world *world, ecs_record *record, ecs_table *to) {
+/* Moves the row's elements to `to`: moved where both tables have the component, destructed
+ * where only `from` has it, constructed where only `to` has it. Writes the columns of `to`
+ * that were constructed into `added` and returns how many. */
+static uint32_t row_transfer(ecs_world *world, ecs_table *from, uint32_t old_row, ecs_table *to,
+                             uint32_t new_row, uint32_t *added) {
+    uint32_t i = 0, j = 0, added_count = 0;
+    while (i < from->component_count || j < to->component_count) {
+        ecs_component a = i < from->component_count ? from->components[i] : UINT32_MAX;
+        ecs_component b = j < to->component_count ? to->components[j] : UINT32_MAX;
+        if (a == b) {
+            ecs_column *dst = &to->columns[j];
+            elements_move(column_hooks(world, to, j), column_at(dst, new_row),
+                          column_at(&from->columns[i], old_row), 1, dst->size);
+            i++, j++;
+        } else if (a < b) {
+            elements_destruct(column_hooks(world, from, i), &from->columns[i], old_row, 1);
+            i++;
+        } else {
+            elements_construct(column_hooks(world, to, j), &to->columns[j], new_row, 1);
+            added[added_count++] = j++;
+        }
+    }
+    return added_count;
+}
+
+/* Moves the entity of `record` to table `to` (one component more or less). In order: observers
+ * that stop matching, on_remove of what `to` lacks, the row's move (with dtor and ctor), on_add
+ * of what `to` adds, observers that start matching. */
+/* entity_move without hooks: copies what both tables have, zeroes what only `to` has. */
+static void entity_move_plain(ecs_world *world, ecs_record *record, ecs_table *to) {
     ecs_table *from = record->table;
     uint32_t old_row = record->row;
-    uint32_t new_row = table_append(to, from->entities[old_row]);
+    uint32_t new_row = table_append(world, to, from->entities[old_row]);
     uint32_t i = 0;
     for (uint32_t j = 0; j < to->component_count; j++) {
         while (i < from->component_count && from->components[i] < to->components[j]) i++;
         ecs_column *dst = &to->columns[j];
         if (!dst->size) continue;
-        uint8_t *value = dst->data + (size_t)new_row * dst->size;
+        uint8_t *value = column_at(dst, new_row);
         if (i < from->component_count && from->components[i] == to->components[j])
-            memcpy(value, from->columns[i].data + (size_t)old_row * dst->size, dst->size);
+            memcpy(value, column_at(&from->columns[i], old_row), dst->size);
         else
             memset(value, 0, dst->size);
     }
     table_remove_row(world, from, old_row);
     record->table = to;
     record->row = new_row;
+    world->table_moves++;
+}
+
+static void entity_move(ecs_world *world, ecs_record *record, ecs_table *to) {
+    ecs_table *from = record->table;
+    /* The usual case: nothing to call, and the add/remove cost stays that of two memcpys. */
+    if (!from->hooked && !to->hooked && !from->observer_count && !to->observer_count) {
+        entity_move_plain(world, record, to);
+        return;
+    }
+    ecs_entity entity = from->entities[record->row];
+    if (from->observer_count) ecs_observers_fire(world, entity, from, to, ECS_ON_REMOVE);
+    for (uint32_t i = 0; i < from->component_count; i++)
+        if (ecs_table_column_of(to, from->components[i]) < 0)
+            hook_on_remove(world, from, record->row, i);
+
+    uint32_t old_row = record->row;
+    uint32_t new_row = table_append(world, to, entity);
+    uint32_t added[to->component_count + 1];
+    uint32_t added_count = row_transfer(world, from, old_row, to, new_row, added);
+    table_remove_row(world, from, old_row);
+    record->table = to;
+    record->row = new_row;
+    world->table_moves++;
+
+    for (uint32_t k = 0; k < added_count; k++)
+        hook_call(world, column_hooks(world, to, added[k])->on_add, to, new_row, added[k]);
+    if (to->observer_count) ecs_observers_fire(world, entity, from, to, ECS_ON_ADD);
 }
 
 static void *record_data(const ecs_record *record, int column_index) {
@@ -361,9 +507,15 @@ void ecs_set(ecs_world *world, ecs_entity entity, ecs_component component, const
     /* Writing a component the entity has is not a structural change (systems may do it for
      * components they declare); only the add is. */
     ecs_access_check(world, component, true, "ecs_set");
-    void *data = ecs_has(world, entity, component) ? ecs_get(world, entity, component)
-                                                    : ecs_add(world, entity, component);
+    bool had = ecs_has(world, entity, component);
+    void *data = had ? ecs_get(world, entity, component) : ecs_add(world, entity, component);
     if (data) memcpy(data, value, world->components[component].size);
+    ecs_hook_fn on_set = world->components[component].hooks.on_set;
+    if (!on_set) return;
+    ecs_record *record = alive_record(world, entity);
+    if (record)
+        hook_call(world, on_set, record->table, record->row,
+                  (uint32_t)ecs_table_column_of(record->table, component));
 }
 
 void ecs_remove(ecs_world *world, ecs_entity entity, ecs_component component) {
@@ -372,7 +524,6 @@ void ecs_remove(ecs_world *world, ecs_entity entity, ecs_component component) {
     ecs_record *record = alive_record(world, entity);
     int column = record ? ecs_table_column_of(record->table, component) : -1;
     if (column < 0) return;
-    hook_on_remove(world, record->table, record->row, (uint32_t)column);
     entity_move(world, record, table_without(world, record->table, component));
 }
 
@@ -414,6 +565,18 @@ static uint32_t bulk_terms_sorted(const ecs_world *world, const ecs_bulk_desc *d
     return count;
 }
 
+/* Calls on_add of every column for rows first … first + count - 1; or, given the terms (in
+ * column order), on_set of the columns that were given values. */
+static void bulk_hooks(ecs_world *world, const ecs_table *table, uint32_t first, uint32_t count,
+                       const bulk_term *terms) {
+    for (uint32_t i = 0; i < table->component_count; i++) {
+        const ecs_hooks *hooks = column_hooks(world, table, i);
+        ecs_hook_fn fn = !terms ? hooks->on_add : terms[i].values ? hooks->on_set : NULL;
+        if (!fn) continue;
+        for (uint32_t k = 0; k < count; k++) hook_call(world, fn, table, first + k, i);
+    }
+}
+
 void ecs_entity_create_many(ecs_world *world, const ecs_bulk_desc *desc) {
     ECS_ASSERT_STRUCTURAL(world);
     assert(desc && desc->count >= 0);
@@ -424,7 +587,7 @@ void ecs_entity_create_many(ecs_world *world, const ecs_bulk_desc *desc) {
 
     ecs_table *table = ecs_table_for(world, set, term_count);
     uint32_t count = (uint32_t)desc->count, first = table->count;
-    table_reserve(table, first + count);
+    table_reserve(world, table, first + count);
     world->records = ecs_grow(world->records, &world->record_capacity,
                               world->record_count + count, sizeof *world->records);
     for (uint32_t k = 0; k < count; k++) {
@@ -434,14 +597,40 @@ void ecs_entity_create_many(ecs_world *world, const ecs_bulk_desc *desc) {
         table->entities[first + k] = entity;
         if (desc->ids) desc->ids[k] = entity;
     }
-    /* Whole columns at once: one memcpy per component instead of one per entity. */
+    /* Whole columns at once: one ctor (or memset) and one memcpy per component instead of
+     * one per entity. The same order as ecs_set on a missing component: construct, on_add,
+     * observers, copy the value in, on_set. */
+    for (uint32_t i = 0; i < term_count; i++)
+        elements_construct(column_hooks(world, table, i), &table->columns[i], first, count);
+    table->count = first + count;
+    bulk_hooks(world, table, first, count, NULL);
+    if (table->observer_count)
+        for (uint32_t k = 0; k < count; k++)
+            ecs_observers_fire(world, table->entities[first + k], NULL, table, ECS_ON_ADD);
     for (uint32_t i = 0; i < term_count; i++) {
         ecs_column *column = &table->columns[i];
         size_t bytes = (size_t)count * column->size;
-        if (!bytes) continue;
-        uint8_t *start = column->data + (size_t)first * column->size;
-        if (terms[i].values) memcpy(start, terms[i].values, bytes);
-        else memset(start, 0, bytes);
+        if (bytes && terms[i].values) memcpy(column_at(column, first), terms[i].values, bytes);
     }
-    table->count = first + count;
+    bulk_hooks(world, table, first, count, terms);
+}
+
+/* ---- stats ------------------------------------------------------------------------------ */
+
+ecs_world_stats ecs_stats(const ecs_world *world) {
+    ecs_world_stats stats = {
+        .table_moves = world->table_moves,
+        .entities = world->alive_count,
+        .tables = (int)world->table_count,
+        .components = (int)world->component_count - 1,
+        .queries = (int)world->query_count,
+        .systems = (int)world->system_count,
+    };
+    for (uint32_t i = 0; i < world->observer_count; i++) stats.observers += world->observers[i] != NULL;
+    return stats;
+}
+
+void ecs_world_frame_end(ecs_world *world) {
+    trace_counter("ecs.table_moves", (double)(world->table_moves - world->table_moves_reported));
+    world->table_moves_reported = world->table_moves;
 }

@@ -658,7 +658,8 @@ typedef struct terrain_ecs_stats {
 
 /* Registers the components and systems on `ecs`; `terrain` is not owned. */
 terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain);
-/* Frees the meshes the entities hold (GPU ones too: call on the main thread, with the context). */
+/* Destroys the mesh-chunk entities; TerrainMeshChunk's on_remove hook frees their meshes (GPU
+ * ones too: call on the main thread, with the context), as it does for any other removal. */
 void terrain_ecs_destroy(terrain_ecs *te);
 /* Spawns the column chunks within `radius` chunks of (cx, cz) and their mesh chunks for mesh
  * layers y_first … y_last (each TERRAIN_MESH_CELLS metres tall). */

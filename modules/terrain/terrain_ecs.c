@@ -110,12 +110,28 @@ static void terrain_upload_system(ecs_iter *it) {
     if (te->stream) terrain__stream_free_pending(te, deadline);
 }
 
+/* TerrainMeshChunk's on_remove hook: the one place its meshes and GPU buffers are freed,
+ * whatever removes it (streaming's eviction, terrain_ecs_destroy, a game's own destroy). When
+ * streaming, the GPU mesh joins the queue of frees spread over frames; the streamer counted
+ * the bytes out when it chose to evict. */
+static void terrain_mesh_chunk_removed(ecs_world *world, ecs_entity entity, void *data, void *user) {
+    (void)world, (void)entity;
+    terrain_ecs *te = user;
+    TerrainMeshChunk *c = data;
+    terrain_mesh_free(&c->mesh);
+    terrain__water_free(&c->water);
+    if (te->stream && c->gpu.vertex_array) terrain__stream_free_later(te, c->gpu);
+    else terrain_gpu_mesh_destroy(&c->gpu);
+    c->gpu = (terrain_gpu_mesh){ 0 };
+}
+
 terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
     terrain_ecs *te = core_calloc(1, sizeof *te);
     te->ecs = ecs;
     te->terrain = terrain;
     te->chunk = ECS_COMPONENT(ecs, TerrainChunk);
     te->mesh_chunk = ECS_COMPONENT(ecs, TerrainMeshChunk);
+    ecs_component_on_remove(ecs, te->mesh_chunk, terrain_mesh_chunk_removed, te);
     te->chunk_ready = ECS_TAG(ecs, TerrainChunkReady);
     te->mesh_ready = ECS_TAG(ecs, TerrainMeshReady);
     te->mesh_uploaded = ECS_TAG(ecs, TerrainMeshUploaded);
@@ -147,15 +163,18 @@ void terrain_ecs_destroy(terrain_ecs *te) {
     if (!te) return;
     terrain__stream_destroy(te);           /* waits for its background jobs */
     terrain__editor_destroy(te);
+    /* The mesh chunks are the terrain's entities: they go with it, their hook freeing what
+     * they hold (the streamer is gone, so GPU meshes go at once, on this thread). The hook's
+     * user is te, so it is cleared before te is freed. */
+    int mesh_count = ecs_query_count(te->ecs, te->mesh_chunks);
+    ecs_entity *doomed = core_alloc((size_t)(mesh_count + 1) * sizeof *doomed);
+    int doomed_count = 0;
     ecs_iter it = ecs_query_iter(te->ecs, te->mesh_chunks);
-    while (ecs_query_next(&it)) {
-        TerrainMeshChunk *chunks = ecs_field(&it, 0);
-        for (int i = 0; i < it.count; i++) {
-            terrain_mesh_free(&chunks[i].mesh);
-            terrain__water_free(&chunks[i].water);
-            terrain_gpu_mesh_destroy(&chunks[i].gpu);
-        }
-    }
+    while (ecs_query_next(&it))
+        for (int i = 0; i < it.count; i++) doomed[doomed_count++] = it.entities[i];
+    for (int i = 0; i < doomed_count; i++) ecs_entity_destroy(te->ecs, doomed[i]);
+    core_free(doomed, (size_t)(mesh_count + 1) * sizeof *doomed);
+    ecs_component_on_remove(te->ecs, te->mesh_chunk, NULL, NULL);
     it = ecs_query_iter(te->ecs, te->chunks);
     while (ecs_query_next(&it)) {
         TerrainChunk *chunks = ecs_field(&it, 0);

@@ -219,6 +219,8 @@ uint64_t terrain__stream_upload_budget(const terrain_ecs *te);
 void terrain__stream_uploaded(terrain_ecs *te, size_t cpu_bytes, size_t gpu_bytes, size_t old_gpu_bytes);
 /* Frees queued GPU meshes until the deadline (core_time_ns), at least a few a frame. */
 void terrain__stream_free_pending(terrain_ecs *te, uint64_t deadline);
+/* Queues a GPU mesh for terrain__stream_free_pending (from TerrainMeshChunk's on_remove hook). */
+void terrain__stream_free_later(terrain_ecs *te, terrain_gpu_mesh gpu);
 void terrain__stream_destroy(terrain_ecs *te);
 
 /* Editing (terrain_ecs_edit.c): the stabilize phase's system, and the editor's memory. */

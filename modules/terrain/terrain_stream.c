@@ -380,15 +380,11 @@ static void stream_record_destroy(terrain_ecs *te, ecs_commands *commands, strea
     stream_task_cancel(s, r);
     TerrainMeshChunk *c = r->entity ? ecs_get(te->ecs, r->entity, te->mesh_chunk) : NULL;
     if (c) {
+        /* Counted out now, so the eviction loop sees the budget it freed; the memory itself
+         * goes when the entity does, in TerrainMeshChunk's on_remove hook (terrain_ecs.c),
+         * at the end of this phase. */
         s->cpu_mesh_bytes -= terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count);
         s->gpu_mesh_bytes -= c->gpu_bytes;
-        terrain_mesh_free(&c->mesh);
-        terrain__water_free(&c->water);
-        if (c->gpu.vertex_array) {
-            s->frees = core_grow(s->frees, &s->free_capacity, s->free_count + 1, sizeof *s->frees);
-            s->frees[s->free_count++] = c->gpu;
-        }
-        *c = (TerrainMeshChunk){ 0 };
         ecs_defer_destroy(commands, r->entity);
     }
     map_remove(&s->meshes, r->key);
@@ -797,6 +793,12 @@ void terrain__stream_free_pending(terrain_ecs *te, uint64_t deadline) {
         terrain_gpu_mesh_destroy(&s->frees[done++]);
     memmove(s->frees, s->frees + done, (s->free_count - done) * sizeof *s->frees);
     s->free_count -= done;
+}
+
+void terrain__stream_free_later(terrain_ecs *te, terrain_gpu_mesh gpu) {
+    terrain__streamer *s = te->stream;
+    s->frees = core_grow(s->frees, &s->free_capacity, s->free_count + 1, sizeof *s->frees);
+    s->frees[s->free_count++] = gpu;
 }
 
 void terrain__stream_destroy(terrain_ecs *te) {

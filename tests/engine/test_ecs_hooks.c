@@ -1,6 +1,8 @@
 /* Tests of ECS component lifecycle hooks (engine/ecs): on_remove runs once, with the current
  * value, whatever takes a component away — ecs_remove, ecs_entity_destroy, a command buffer,
- * a system's commands during ecs_progress, ecs_world_destroy — and never for ecs_set.
+ * a system's commands during ecs_progress, ecs_world_destroy — and never for ecs_set. ctor,
+ * dtor, move, on_add and on_set run once per event on every path (counts worked out by hand),
+ * and a component owning heap memory neither leaks nor frees twice under ASan.
  * Also meant to run under ThreadSanitizer (one test uses a 2-thread job system). */
 #include "core/core.h"
 #include "ecs/ecs.h"
@@ -329,6 +331,373 @@ Test(ecs_hooks, tag_hook_gets_null_data) {
     cr_expect_eq(tags.entities[2], c);
     cr_expect(tags.data_null[2]);
     fixture_free(f);
+}
+
+/* ---- ctor, dtor, move, on_add, on_set ------------------------------------------------------ */
+
+/* A component that owns heap memory and points at itself: under ASan a missed dtor leaks, a
+ * second one frees twice, and a row moved without the move hook keeps a stale `self`. */
+typedef struct Tracked {
+    int *heap;
+    struct Tracked *self;
+} Tracked;
+typedef struct Counter { int value; } Counter;   /* no memory of its own; ctor sets 100 */
+
+typedef struct life {
+    int ctor, dtor, move, on_add, on_set, on_remove;   /* calls */
+    int constructed, destructed, moved;                /* elements */
+    int live;                                          /* constructed - destructed */
+    bool self_ok;                                      /* every element seen was in place */
+    int thread_max;                                    /* highest job_thread_index in a hook */
+} life;
+
+static void note_thread(life *l, ecs_world *world) {
+    job_system *jobs = world ? ecs_world_jobs(world) : NULL;
+    int thread = jobs ? job_thread_index(jobs) : 0;
+    if (thread > l->thread_max) l->thread_max = thread;
+}
+
+static void tracked_ctor(void *data, int count, void *user) {
+    life *l = user;
+    Tracked *t = data;
+    for (int i = 0; i < count; i++) {
+        t[i].heap = malloc(sizeof *t[i].heap);
+        *t[i].heap = 1;
+        t[i].self = &t[i];
+    }
+    l->ctor++, l->constructed += count, l->live += count;
+}
+
+static void tracked_dtor(void *data, int count, void *user) {
+    life *l = user;
+    Tracked *t = data;
+    for (int i = 0; i < count; i++) {
+        l->self_ok = l->self_ok && t[i].self == &t[i];
+        free(t[i].heap);
+        t[i].heap = NULL;
+    }
+    l->dtor++, l->destructed += count, l->live -= count;
+}
+
+static void tracked_move(void *dst, void *src, int count, void *user) {
+    life *l = user;
+    Tracked *to = dst, *from = src;
+    for (int i = 0; i < count; i++) {
+        l->self_ok = l->self_ok && from[i].self == &from[i];
+        to[i] = (Tracked){ .heap = from[i].heap, .self = &to[i] };
+        from[i] = (Tracked){ 0 }; /* dead: a dtor on it would be caught by self_ok */
+    }
+    l->move++, l->moved += count;
+}
+
+static void life_on_add(ecs_world *world, ecs_entity entity, void *data, void *user) {
+    life *l = user;
+    (void)entity;
+    Tracked *t = data;
+    l->self_ok = l->self_ok && t && t->self == t && t->heap;
+    l->on_add++;
+    note_thread(l, world);
+}
+
+static void life_on_set(ecs_world *world, ecs_entity entity, void *data, void *user) {
+    (void)entity, (void)data;
+    ((life *)user)->on_set++;
+    note_thread(user, world);
+}
+
+static void life_on_remove(ecs_world *world, ecs_entity entity, void *data, void *user) {
+    life *l = user;
+    (void)entity;
+    Tracked *t = data;
+    l->self_ok = l->self_ok && t && t->self == t && t->heap;
+    l->on_remove++;
+    note_thread(l, world);
+}
+
+static void counter_ctor(void *data, int count, void *user) {
+    for (int i = 0; i < count; i++) ((Counter *)data)[i].value = 100;
+    life *l = user;
+    l->ctor++, l->constructed += count, l->live += count;
+}
+
+static void counter_dtor(void *data, int count, void *user) {
+    (void)data;
+    life *l = user;
+    l->dtor++, l->destructed += count, l->live -= count;
+}
+
+static void counter_on_add(ecs_world *world, ecs_entity entity, void *data, void *user) {
+    (void)entity, (void)data;
+    ((life *)user)->on_add++;
+    note_thread(user, world);
+}
+
+static void counter_on_remove(ecs_world *world, ecs_entity entity, void *data, void *user) {
+    (void)entity, (void)data;
+    ((life *)user)->on_remove++;
+    note_thread(user, world);
+}
+
+typedef struct life_fixture {
+    job_system *jobs;
+    ecs_world *world;
+    ecs_component tracked, counter, position;
+    life t, c;                       /* of Tracked and of Counter */
+} life_fixture;
+
+static life_fixture *life_make(int threads) {
+    life_fixture *f = calloc(1, sizeof *f);
+    f->t.self_ok = f->c.self_ok = true;
+    if (threads) f->jobs = job_system_create(&(job_system_desc){ .threads = threads });
+    f->world = ecs_world_create(&(ecs_world_desc){ .jobs = f->jobs });
+    f->tracked = ECS_COMPONENT(f->world, Tracked);
+    f->counter = ECS_COMPONENT(f->world, Counter);
+    f->position = ECS_COMPONENT(f->world, Position);
+    ecs_component_set_hooks(f->world, f->tracked, &(ecs_hooks){
+        .ctor = tracked_ctor, .dtor = tracked_dtor, .move = tracked_move,
+        .on_add = life_on_add, .on_set = life_on_set, .on_remove = life_on_remove,
+        .user = &f->t });
+    ecs_component_set_hooks(f->world, f->counter, &(ecs_hooks){
+        .ctor = counter_ctor, .dtor = counter_dtor, .on_add = counter_on_add,
+        .on_set = life_on_set, .on_remove = counter_on_remove, .user = &f->c });
+    return f;
+}
+
+static void life_destroy_world(life_fixture *f) {
+    ecs_world_destroy(f->world);
+    f->world = NULL;
+    if (f->jobs) job_system_destroy(f->jobs);
+    f->jobs = NULL;
+}
+
+/* Every Tracked in the world is in place and owns its memory; returns how many there are. */
+static int tracked_check(life_fixture *f) {
+    ecs_query *q = ecs_query_create(f->world, &(ecs_query_desc){ .with = { f->tracked } });
+    int count = 0;
+    ecs_iter it = ecs_query_iter(f->world, q);
+    while (ecs_query_next(&it)) {
+        Tracked *t = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++, count++)
+            f->t.self_ok = f->t.self_ok && t[i].self == &t[i] && t[i].heap && *t[i].heap == 1;
+    }
+    ecs_query_destroy(f->world, q);
+    return count;
+}
+
+Test(ecs_hooks, lifecycle_counts_add_remove_destroy_world) {
+    life_fixture *f = life_make(0);
+    ecs_entity e[3];
+    for (int i = 0; i < 3; i++) {
+        e[i] = ecs_entity_create(f->world);
+        ecs_add(f->world, e[i], f->tracked);
+    }
+    /* Rows a, b, c of table {Tracked}. Removing a moves c into row 0 (one move); b is then
+     * the last row, so destroying it moves nothing. */
+    ecs_remove(f->world, e[0], f->tracked);
+    cr_expect_eq(f->t.move, 1, "c fills a's row");
+    ecs_entity_destroy(f->world, e[1]);
+    cr_expect_eq(tracked_check(f), 1);
+    cr_expect_eq(f->t.live, 1);
+    life_destroy_world(f);
+    cr_expect_eq(f->t.ctor, 3);
+    cr_expect_eq(f->t.on_add, 3);
+    cr_expect_eq(f->t.on_remove, 3);
+    cr_expect_eq(f->t.dtor, 3);
+    cr_expect_eq(f->t.move, 1);
+    cr_expect_eq(f->t.on_set, 0, "nothing was set");
+    cr_expect_eq(f->t.live, 0);
+    cr_expect(f->t.self_ok);
+    free(f);
+}
+
+Test(ecs_hooks, move_runs_once_per_row_move) {
+    life_fixture *f = life_make(0);
+    ecs_entity a = ecs_entity_create(f->world), b = ecs_entity_create(f->world);
+    ecs_add(f->world, a, f->tracked);
+    ecs_add(f->world, b, f->tracked);
+    cr_assert_eq(f->t.move, 0, "into fresh tables nothing moves");
+
+    /* b is the last row of {Tracked}: it moves to {Tracked, Position}, nothing fills its row. */
+    ecs_add(f->world, b, f->position);
+    cr_expect_eq(f->t.move, 1);
+    cr_expect_eq(f->t.moved, 1);
+    /* a is row 0 of {Tracked, …} alone now: one move out. */
+    ecs_add(f->world, a, f->position);
+    cr_expect_eq(f->t.move, 2);
+    /* a is row 1 of {Tracked, Position} (b, a): moving a back moves a only; then removing
+     * Position from b (row 0, a gone) moves b. */
+    ecs_remove(f->world, a, f->position);
+    ecs_remove(f->world, b, f->position);
+    cr_expect_eq(f->t.move, 4);
+    cr_expect_eq(f->t.ctor, 2, "moving is not constructing");
+    cr_expect_eq(f->t.dtor, 0, "nor destructing");
+    cr_expect_eq(f->t.on_add, 2, "adding another component is not adding this one");
+    cr_expect_eq(f->t.on_remove, 0);
+    cr_expect_eq(tracked_check(f), 2);
+    cr_expect(f->t.self_ok);
+    life_destroy_world(f);
+    cr_expect_eq(f->t.destructed, 2, "both in one table: one dtor call for its column");
+    cr_expect_eq(f->t.dtor, 1);
+    free(f);
+}
+
+Test(ecs_hooks, column_growth_moves_the_column_once) {
+    life_fixture *f = life_make(0);
+    /* A table's first capacity is 16 rows: the 17th entity grows it to 32, one move of the
+     * 16 elements already there. */
+    for (int i = 0; i < 17; i++) ecs_add(f->world, ecs_entity_create(f->world), f->tracked);
+    cr_expect_eq(f->t.move, 1);
+    cr_expect_eq(f->t.moved, 16);
+    cr_expect_eq(tracked_check(f), 17);
+    cr_expect(f->t.self_ok, "every element is where its self pointer says");
+    life_destroy_world(f);
+    cr_expect_eq(f->t.destructed, 17);
+    cr_expect_eq(f->t.live, 0);
+    free(f);
+}
+
+Test(ecs_hooks, set_runs_on_set_and_adds_once) {
+    life_fixture *f = life_make(0);
+    ecs_entity e = ecs_entity_create(f->world);
+    ecs_set(f->world, e, f->counter, &(Counter){ 5 });
+    cr_expect_eq(f->c.ctor, 1);
+    cr_expect_eq(f->c.on_add, 1);
+    cr_expect_eq(f->c.on_set, 1);
+    cr_expect_eq(((Counter *)ecs_get(f->world, e, f->counter))->value, 5, "the value wins");
+    ecs_set(f->world, e, f->counter, &(Counter){ 6 });
+    ecs_add(f->world, e, f->counter);
+    cr_expect_eq(f->c.ctor, 1, "overwriting is not constructing");
+    cr_expect_eq(f->c.on_add, 1);
+    cr_expect_eq(f->c.on_set, 2, "ecs_add of a present component sets nothing");
+    ecs_entity g = ecs_entity_create(f->world);
+    ecs_add(f->world, g, f->counter);
+    cr_expect_eq(((Counter *)ecs_get(f->world, g, f->counter))->value, 100, "the ctor's value");
+    cr_expect_eq(f->c.on_set, 2);
+    life_destroy_world(f);
+    cr_expect_eq(f->c.destructed, 2);
+    cr_expect_eq(f->c.on_remove, 2);
+    free(f);
+}
+
+Test(ecs_hooks, lifecycle_through_a_command_buffer) {
+    life_fixture *f = life_make(0);
+    ecs_entity a = ecs_entity_create(f->world), b = ecs_entity_create(f->world);
+    ecs_commands *commands = ecs_commands_create(f->world);
+    ecs_entity p = ecs_defer_create(commands);
+    ecs_defer_add(commands, a, f->tracked);
+    ecs_defer_add(commands, b, f->tracked);
+    ecs_defer_add(commands, p, f->tracked);
+    ecs_defer_set(commands, p, f->counter, &(Counter){ 7 });
+    ecs_defer_remove(commands, a, f->tracked);
+    ecs_defer_destroy(commands, b);
+    cr_expect_eq(f->t.ctor + f->c.ctor, 0, "nothing before apply");
+    ecs_commands_apply(commands);
+    cr_expect_eq(f->t.ctor, 3);
+    cr_expect_eq(f->t.on_add, 3);
+    cr_expect_eq(f->t.on_remove, 2, "a's removed, b destroyed");
+    cr_expect_eq(f->t.dtor, 2);
+    cr_expect_eq(f->c.ctor, 1);
+    cr_expect_eq(f->c.on_add, 1);
+    cr_expect_eq(f->c.on_set, 1);
+    cr_expect_eq(tracked_check(f), 1);
+    ecs_commands_destroy(commands);
+    life_destroy_world(f);
+    cr_expect_eq(f->t.dtor, 3);
+    cr_expect_eq(f->t.on_remove, 3);
+    cr_expect_eq(f->c.dtor, 1);
+    cr_expect_eq(f->t.live, 0);
+    cr_expect(f->t.self_ok);
+    free(f);
+}
+
+Test(ecs_hooks, lifecycle_through_create_many) {
+    life_fixture *f = life_make(0);
+    Counter values[5] = { { 1 }, { 2 }, { 3 }, { 4 }, { 5 } };
+    ecs_entity ids[5];
+    ecs_entity_create_many(f->world, &(ecs_bulk_desc){ .count = 5, .ids = ids,
+        .components = { f->counter, f->tracked }, .values = { values, NULL } });
+    cr_expect_eq(f->t.ctor, 1, "one ctor call for the whole column");
+    cr_expect_eq(f->t.constructed, 5);
+    cr_expect_eq(f->t.on_add, 5);
+    cr_expect_eq(f->t.on_set, 0, "Tracked got no values");
+    cr_expect_eq(f->c.constructed, 5);
+    cr_expect_eq(f->c.on_add, 5);
+    cr_expect_eq(f->c.on_set, 5, "Counter got values");
+    cr_expect_eq(((Counter *)ecs_get(f->world, ids[3], f->counter))->value, 4);
+    cr_expect_eq(tracked_check(f), 5);
+    life_destroy_world(f);
+    cr_expect_eq(f->t.destructed, 5);
+    cr_expect_eq(f->t.on_remove, 5);
+    cr_expect_eq(f->c.destructed, 5);
+    cr_expect_eq(f->c.on_remove, 5);
+    cr_expect(f->t.self_ok);
+    free(f);
+}
+
+/* Adds Tracked to entities with Position and no Tracked, removes it from those with both. */
+static void toggle_tracked(ecs_iter *it) {
+    const ecs_component *ids = it->user;   /* [0] Tracked */
+    while (ecs_query_next(it)) {
+        for (int i = 0; i < it->count; i++) {
+            if (ecs_has(it->world, it->entities[i], ids[0]))
+                ecs_defer_remove(it->commands, it->entities[i], ids[0]);
+            else
+                ecs_defer_add(it->commands, it->entities[i], ids[0]);
+        }
+    }
+}
+
+static void check_progress_lifecycle(int threads) {
+    life_fixture *f = life_make(threads);
+    ecs_component ids[1] = { f->tracked };
+    for (int i = 0; i < 8; i++) ecs_set(f->world, ecs_entity_create(f->world), f->position,
+                                       &(Position){ (float)i, 0 });
+    ecs_system_add(f->world, &(ecs_system_desc){ .name = "toggle", .phase = "game",
+        .fn = toggle_tracked, .query = { .with = { f->position } }, .user = ids,
+        .parallel = true, .batch_size = 2 });
+    ecs_progress(f->world, 0.016f);           /* 8 adds */
+    cr_expect_eq(f->t.ctor, 8, "threads %d", threads);
+    cr_expect_eq(f->t.on_add, 8, "threads %d", threads);
+    ecs_progress(f->world, 0.016f);           /* 8 removes */
+    cr_expect_eq(f->t.on_remove, 8, "threads %d", threads);
+    cr_expect_eq(f->t.dtor, 8, "threads %d", threads);
+    ecs_progress(f->world, 0.016f);           /* 8 adds again, left for the world */
+    cr_expect_eq(tracked_check(f), 8, "threads %d", threads);
+    cr_expect_eq(f->t.thread_max, 0, "threads %d: hooks run on the ecs_progress thread",
+                 threads);
+    life_destroy_world(f);
+    cr_expect_eq(f->t.ctor, 16, "threads %d", threads);
+    cr_expect_eq(f->t.on_add, 16, "threads %d", threads);
+    cr_expect_eq(f->t.on_remove, 16, "threads %d", threads);
+    cr_expect_eq(f->t.destructed, 16, "threads %d", threads);
+    cr_expect_eq(f->t.dtor, 8 + 1, "threads %d: 8 removes, then one column", threads);
+    cr_expect_eq(f->t.live, 0, "threads %d", threads);
+    cr_expect(f->t.self_ok, "threads %d", threads);
+    free(f);
+}
+
+Test(ecs_hooks, lifecycle_through_system_commands) {
+    check_progress_lifecycle(0);
+    check_progress_lifecycle(2);
+}
+
+Test(ecs_hooks, on_remove_wrapper_keeps_the_other_hooks) {
+    life_fixture *f = life_make(0);
+    hook_log log = { .component = f->tracked };
+    ecs_component_on_remove(f->world, f->tracked, log_call, &log);
+    ecs_hooks hooks = ecs_component_hooks(f->world, f->tracked);
+    cr_expect(hooks.ctor == tracked_ctor && hooks.dtor == tracked_dtor);
+    /* The user is shared: ctor and dtor now get the log. Put the life back for them. */
+    hooks.user = &f->t;
+    hooks.on_remove = life_on_remove;
+    ecs_component_set_hooks(f->world, f->tracked, &hooks);
+    ecs_entity e = ecs_entity_create(f->world);
+    ecs_add(f->world, e, f->tracked);
+    ecs_entity_destroy(f->world, e);
+    cr_expect_eq(f->t.on_remove, 1);
+    cr_expect_eq(f->t.dtor, 1);
+    life_destroy_world(f);
+    free(f);
 }
 
 /* ---- programmer errors ------------------------------------------------------------------ */

@@ -350,6 +350,46 @@ Test(ecs_scheduler, phases_and_systems_are_trace_zones) {
     check_trace_zones(2);
 }
 
+/* ---- light phases on the calling thread ------------------------------------------------- */
+
+static void note_thread(ecs_iter *it) {
+    thread_probe *probe = it->user;
+    probe->calls++;
+    probe->off_main += job_thread_index(probe->jobs) != 0;
+}
+
+/* A phase whose systems took well under 20 us last frame runs on the calling thread (waking a
+ * worker would cost more); a phase of heavy systems keeps running them at the same time, frame
+ * after frame, not just in its first frame. */
+Test(ecs_scheduler, light_phases_run_here_heavy_ones_on_jobs) {
+    fixture f = fixture_make(2);
+    thread_probe light[2] = { { .jobs = f.jobs }, { .jobs = f.jobs } };
+    for (int i = 0; i < 2; i++)
+        ecs_system_add(f.world, &(ecs_system_desc){ .name = "light", .phase = "input",
+            .fn = note_thread, .user = &light[i], .query = { .with = { f.position } } });
+    _Atomic int started_a = 0, started_b = 0;
+    timed_system a = { .started = &started_a, .partner_started = &started_b };
+    timed_system b = { .started = &started_b, .partner_started = &started_a };
+    ecs_system_add(f.world, &(ecs_system_desc){ .name = "a", .phase = "game", .fn = timed,
+        .user = &a, .query = { .with = { f.position } }, .writes = { f.velocity } });
+    ecs_system_add(f.world, &(ecs_system_desc){ .name = "b", .phase = "game", .fn = timed,
+        .user = &b, .query = { .with = { f.position } }, .writes = { f.counter } });
+    int frames = 4;
+    for (int frame = 0; frame < frames; frame++) {
+        atomic_store(&started_a, 0);
+        atomic_store(&started_b, 0);
+        if (frame == 1) light[0].off_main = light[1].off_main = 0; /* the first frame may use jobs */
+        ecs_progress(f.world, 0.016f);
+    }
+    cr_expect_eq(light[0].calls + light[1].calls, 2 * frames);
+    cr_expect_eq(light[0].off_main + light[1].off_main, 0, "after the first frame, light systems run here");
+    for (int frame = 0; frame < frames; frame++) {
+        bool overlap = a.begin[frame] < b.end[frame] && b.begin[frame] < a.end[frame];
+        cr_expect(overlap, "frame %d: heavy systems a and b ran one after the other", frame);
+    }
+    fixture_free(&f);
+}
+
 /* ---- programmer errors ------------------------------------------------------------------ */
 
 #if !defined(TEST_WITHOUT_CRITERION) && !defined(NDEBUG)
