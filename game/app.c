@@ -924,7 +924,7 @@ static void app_create_entities(game_app *app) {
     ids->clock = ECS_RESOURCE(ecs, GameClock);
     ids->gfx = ecs_resource_register(ecs, &(ecs_resource_desc){ .name = "gfx", .object = app->gfx });
     ids->terrain_world = ecs_resource_register(ecs, &(ecs_resource_desc){ .name = "terrain_world", .object = app->world });
-    ids->terrain_ecs = ecs_resource_register(ecs, &(ecs_resource_desc){ .name = "terrain_ecs", .object = app->terrain });
+    ids->terrain_ecs = terrain_ecs_resource(app->terrain);
     ids->input = ecs_resource_register(ecs, &(ecs_resource_desc){ .name = "input", .object = NULL });
     app->player_entity = ecs_entity_create(ecs);
     ecs_add(ecs, app->player_entity, ids->player);

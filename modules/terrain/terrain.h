@@ -615,6 +615,7 @@ void terrain_renderer_set_occlusion(terrain_renderer *renderer, bool on);
  * terrain_ecs_draw then draws every uploaded mesh chunk and trims the world's cache (call it
  * outside ecs_progress, on the main thread). */
 typedef struct ecs_world ecs_world;
+typedef uint32_t ecs_component;                /* as ecs.h's (C11 allows the same typedef twice) */
 
 typedef struct TerrainChunk {
     terrain_chunk_coord coord;
@@ -712,6 +713,11 @@ void terrain_ecs_set_viewers(terrain_ecs *te, const double (*eyes)[3], int count
 /* Whether every column chunk the field reads inside [min, max] (plus the kernel) is generated:
  * the player's region_ready hook (game/player.h). Never generates anything. */
 bool terrain_ecs_region_ready(terrain_ecs *te, const double min[3], const double max[3]);
+
+/* The terrain's resource (ecs.h, RESOURCES): this terrain_ecs, whose state (streaming, editing,
+ * the view) its systems declare through it. A system of yours that calls terrain_ecs functions
+ * names it in its reads (stats, region checks) or writes (edits, viewers, the view). */
+ecs_component terrain_ecs_resource(const terrain_ecs *te);
 
 typedef struct terrain_stream_stats {
     int mesh_chunks_wanted;           /* in the viewers' rings */

@@ -137,6 +137,8 @@ terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
     te->mesh_uploaded = ECS_TAG(ecs, TerrainMeshUploaded);
     te->streamed = ECS_TAG(ecs, TerrainMeshStreamed);
     te->water_plane = ECS_COMPONENT(ecs, WaterPlane);
+    te->self_resource = ecs_resource_register(ecs, &(ecs_resource_desc){ .name = "terrain_ecs", .object = te });
+    te->clipmap_resource = ecs_resource_register(ecs, &(ecs_resource_desc){ .name = "terrain_clipmap" });
     te->chunks = ecs_query_create(ecs, &(ecs_query_desc){ .with = { te->chunk } });
     te->mesh_chunks = ecs_query_create(ecs, &(ecs_query_desc){ .with = { te->mesh_chunk } });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_generate", .phase = "generate",
@@ -153,11 +155,13 @@ terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
         .fn = terrain_cull_system, .user = te, .parallel = true, .batch_size = 256 });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_upload", .phase = "draw",
         .query = { .with = { te->mesh_chunk, te->mesh_ready }, .without = { te->mesh_uploaded } },
-        .writes = { te->mesh_chunk, te->water_plane }, .fn = terrain_upload_system,
+        .writes = { te->mesh_chunk, te->water_plane, te->self_resource }, .fn = terrain_upload_system,
         .user = te, .main_thread = true });
     terrain__editor_register(te);
     return te;
 }
+
+ecs_component terrain_ecs_resource(const terrain_ecs *te) { return te->self_resource; }
 
 void terrain_ecs_destroy(terrain_ecs *te) {
     if (!te) return;

@@ -306,7 +306,8 @@ static void terrain_stabilize_system(ecs_iter *it) {
 
 void terrain__editor_register(terrain_ecs *te) {
     ecs_system_add(te->ecs, &(ecs_system_desc){ .name = "terrain_stabilize", .phase = "stabilize",
-        .writes = { te->chunk, te->mesh_chunk }, .fn = terrain_stabilize_system, .user = te, .main_thread = true });
+        .writes = { te->chunk, te->mesh_chunk, te->self_resource }, .fn = terrain_stabilize_system, .user = te,
+        .main_thread = true });
 }
 
 void terrain__editor_destroy(terrain_ecs *te) {

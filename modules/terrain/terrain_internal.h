@@ -197,6 +197,10 @@ struct terrain_ecs {
      * which the synchronous systems leave alone. */
     ecs_component chunk_ready, mesh_ready, mesh_uploaded, streamed;
     ecs_component water_plane;           /* WaterPlane (terrain.h, "water planes") */
+    /* Resources (ecs.h): this object (the streamer's and the editor's state, the view), and the
+     * far terrain's clipmap, which systems declare instead of reaching them behind the
+     * scheduler's back. */
+    ecs_component self_resource, clipmap_resource;
     ecs_query *chunks, *mesh_chunks;
     terrain_frustum frustum;             /* of the view set for the cull phase */
     bool culling;

@@ -697,6 +697,7 @@ static void terrain_clipmap_cull_system(ecs_iter *it) {
 
 void terrain_ecs_set_clipmap(terrain_ecs *te, terrain_clipmap *clipmap) {
     if (te->stream) te->stream->clipmap = clipmap;
+    ecs_resource_register(te->ecs, &(ecs_resource_desc){ .name = "terrain_clipmap", .object = clipmap });
 }
 
 /* ---- the API ------------------------------------------------------------------------------ */
@@ -736,17 +737,19 @@ void terrain_ecs_stream(terrain_ecs *te, const terrain_stream_desc *desc) {
         s->y_last[level] = (int64_t)ceil(y_max / height) - 1;
     }
     ecs_world *ecs = te->ecs;
+    /* The streamer's state is the terrain_ecs resource; the clipmap is a resource of its own. */
+    ecs_component self = te->self_resource, clipmap = te->clipmap_resource;
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_stream", .phase = "stream",
-        .writes = { te->mesh_chunk }, .fn = terrain_stream_system, .user = te, .main_thread = true });
+        .writes = { te->mesh_chunk, self }, .fn = terrain_stream_system, .user = te, .main_thread = true });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_stream_generate", .phase = "generate",
-        .fn = terrain_stream_generate_system, .user = te, .main_thread = true });
+        .writes = { self }, .fn = terrain_stream_generate_system, .user = te, .main_thread = true });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_stream_mesh", .phase = "mesh",
-        .query = { .with = { te->mesh_chunk, te->streamed } }, .writes = { te->mesh_chunk },
+        .query = { .with = { te->mesh_chunk, te->streamed } }, .writes = { te->mesh_chunk, self },
         .fn = terrain_stream_mesh_system, .user = te, .main_thread = true });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_clipmap", .phase = "lod",
-        .fn = terrain_clipmap_lod_system, .user = te, .main_thread = true });
+        .reads = { self }, .writes = { clipmap }, .fn = terrain_clipmap_lod_system, .user = te, .main_thread = true });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_clipmap_cull", .phase = "cull",
-        .fn = terrain_clipmap_cull_system, .user = te });
+        .reads = { self }, .writes = { clipmap }, .fn = terrain_clipmap_cull_system, .user = te });
 }
 
 void terrain_ecs_set_viewers(terrain_ecs *te, const double (*eyes)[3], int count) {
