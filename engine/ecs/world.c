@@ -611,8 +611,9 @@ void ecs_entity_create_many(ecs_world *world, const ecs_bulk_desc *desc) {
      * observers, copy the value in, on_set. */
     for (uint32_t i = 0; i < term_count; i++) {
         const ecs_hooks *hooks = column_hooks(world, table, i);
-        /* Zeroing what the values overwrite next would write the column twice. */
-        if (hooks->ctor || !terms[i].values)
+        /* Zeroing what the values overwrite next would write the column twice; but on_add
+         * and observers look at the entities before the values are in. */
+        if (!terms[i].values || table->hooked || table->observer_count)
             elements_construct(hooks, &table->columns[i], first, count);
     }
     table->count = first + count;
