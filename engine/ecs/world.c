@@ -396,9 +396,11 @@ void ecs_entity_destroy(ecs_world *world, ecs_entity entity) {
     ecs_record *record = alive_record(world, entity);
     if (!record) return;
     ecs_table *table = record->table;
-    entity_leaving(world, table, record->row);
-    for (uint32_t i = 0; i < table->component_count; i++)
-        elements_destruct(column_hooks(world, table, i), &table->columns[i], record->row, 1);
+    if (table->hooked || table->observer_count) {
+        entity_leaving(world, table, record->row);
+        for (uint32_t i = 0; i < table->component_count; i++)
+            elements_destruct(column_hooks(world, table, i), &table->columns[i], record->row, 1);
+    }
     table_remove_row(world, table, record->row);
     /* A new generation makes every copy of the old id dead for good. */
     record->generation = (record->generation + 1) & ECS_GENERATION_MASK;
