@@ -263,11 +263,14 @@ void ecs_world_destroy(ecs_world *world) {
     /* Every entity still alive loses its components here, so owners of resources get to free
      * them; first every observer and on_remove hook, while every table and record is whole,
      * then the destructors, a column at a time. */
-    for (uint32_t t = 0; t < world->table_count; t++)
-        for (uint32_t row = 0; row < world->tables[t]->count; row++)
-            entity_leaving(world, world->tables[t], row);
     for (uint32_t t = 0; t < world->table_count; t++) {
         ecs_table *table = world->tables[t];
+        if (!table->hooked && !table->observer_count) continue;
+        for (uint32_t row = 0; row < table->count; row++) entity_leaving(world, table, row);
+    }
+    for (uint32_t t = 0; t < world->table_count; t++) {
+        ecs_table *table = world->tables[t];
+        if (!table->hooked) continue;
         for (uint32_t i = 0; i < table->component_count; i++)
             elements_destruct(column_hooks(world, table, i), &table->columns[i], 0, table->count);
     }
@@ -393,9 +396,11 @@ void ecs_entity_destroy(ecs_world *world, ecs_entity entity) {
     ecs_record *record = alive_record(world, entity);
     if (!record) return;
     ecs_table *table = record->table;
-    entity_leaving(world, table, record->row);
-    for (uint32_t i = 0; i < table->component_count; i++)
-        elements_destruct(column_hooks(world, table, i), &table->columns[i], record->row, 1);
+    if (table->hooked || table->observer_count) {
+        entity_leaving(world, table, record->row);
+        for (uint32_t i = 0; i < table->component_count; i++)
+            elements_destruct(column_hooks(world, table, i), &table->columns[i], record->row, 1);
+    }
     table_remove_row(world, table, record->row);
     /* A new generation makes every copy of the old id dead for good. */
     record->generation = (record->generation + 1) & ECS_GENERATION_MASK;
@@ -430,9 +435,6 @@ static uint32_t row_transfer(ecs_world *world, ecs_table *from, uint32_t old_row
     return added_count;
 }
 
-/* Moves the entity of `record` to table `to` (one component more or less). In order: observers
- * that stop matching, on_remove of what `to` lacks, the row's move (with dtor and ctor), on_add
- * of what `to` adds, observers that start matching. */
 /* entity_move without hooks: copies what both tables have, zeroes what only `to` has. */
 static void entity_move_plain(ecs_world *world, ecs_record *record, ecs_table *to) {
     ecs_table *from = record->table;
@@ -455,13 +457,13 @@ static void entity_move_plain(ecs_world *world, ecs_record *record, ecs_table *t
     world->table_moves++;
 }
 
-static void entity_move(ecs_world *world, ecs_record *record, ecs_table *to) {
+/* entity_move with hooks or observers. In order: observers that stop matching, on_remove of
+ * what `to` lacks, the row's move (with dtor and ctor), on_add of what `to` adds, observers
+ * that start matching. Kept out of line: its stack frame (the VLA, the saved registers) would
+ * otherwise slow the plain path that almost every move takes (ecs.create.1m.each). */
+__attribute__((noinline)) static void entity_move_hooked(ecs_world *world, ecs_record *record,
+                                                         ecs_table *to) {
     ecs_table *from = record->table;
-    /* The usual case: nothing to call, and the add/remove cost stays that of two memcpys. */
-    if (!from->hooked && !to->hooked && !from->observer_count && !to->observer_count) {
-        entity_move_plain(world, record, to);
-        return;
-    }
     ecs_entity entity = from->entities[record->row];
     if (from->observer_count) ecs_observers_fire(world, entity, from, to, ECS_ON_REMOVE);
     for (uint32_t i = 0; i < from->component_count; i++)
@@ -480,6 +482,15 @@ static void entity_move(ecs_world *world, ecs_record *record, ecs_table *to) {
     for (uint32_t k = 0; k < added_count; k++)
         hook_call(world, column_hooks(world, to, added[k])->on_add, to, new_row, added[k]);
     if (to->observer_count) ecs_observers_fire(world, entity, from, to, ECS_ON_ADD);
+}
+
+static void entity_move(ecs_world *world, ecs_record *record, ecs_table *to) {
+    const ecs_table *from = record->table;
+    /* The usual case: nothing to call, and the add/remove cost stays that of two memcpys. */
+    if (!from->hooked && !to->hooked && !from->observer_count && !to->observer_count)
+        entity_move_plain(world, record, to);
+    else
+        entity_move_hooked(world, record, to);
 }
 
 static void *record_data(const ecs_record *record, int column_index) {
@@ -600,8 +611,13 @@ void ecs_entity_create_many(ecs_world *world, const ecs_bulk_desc *desc) {
     /* Whole columns at once: one ctor (or memset) and one memcpy per component instead of
      * one per entity. The same order as ecs_set on a missing component: construct, on_add,
      * observers, copy the value in, on_set. */
-    for (uint32_t i = 0; i < term_count; i++)
-        elements_construct(column_hooks(world, table, i), &table->columns[i], first, count);
+    for (uint32_t i = 0; i < term_count; i++) {
+        const ecs_hooks *hooks = column_hooks(world, table, i);
+        /* Zeroing what the values overwrite next would write the column twice; but on_add
+         * and observers look at the entities before the values are in. */
+        if (!terms[i].values || table->hooked || table->observer_count)
+            elements_construct(hooks, &table->columns[i], first, count);
+    }
     table->count = first + count;
     bulk_hooks(world, table, first, count, NULL);
     if (table->observer_count)

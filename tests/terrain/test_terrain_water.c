@@ -578,3 +578,45 @@ Test(water_lakes, lake_chunks_are_the_same_on_any_thread_count_and_order) {
     cr_expect_eq(terrain_stacks_hash(terrain_world_stacks(world, centre)), one.hashes[4]);
     terrain_world_destroy(world);
 }
+
+/* ---- what a mesh chunk holds is freed by its on_remove hook ------------------------------- */
+
+/* A TerrainMeshChunk holding a CPU mesh and its water planes, as one meshed but not uploaded
+ * holds them; `bytes` receives what it holds. */
+static ecs_entity mesh_chunk_holding(water_ecs *w, ecs_component mesh_chunk, size_t *bytes) {
+    terrain_mesh mesh = { .vertex_count = 4, .index_count = 6 };
+    mesh.vertices = core_alloc(mesh.vertex_count * sizeof *mesh.vertices);
+    mesh.indices = core_alloc(mesh.index_count * sizeof *mesh.indices);
+    WaterPlane *water = core_alloc(sizeof *water);
+    memset(water, 0, sizeof *water);
+    *bytes = mesh.vertex_count * sizeof *mesh.vertices + mesh.index_count * sizeof *mesh.indices +
+             sizeof *water;
+    ecs_entity e = ecs_entity_create(w->ecs);
+    ecs_set(w->ecs, e, mesh_chunk, &(TerrainMeshChunk){ .state = TERRAIN_MESH_MESHED,
+                                                         .mesh = mesh, .water = water });
+    return e;
+}
+
+/* Destroying the entity, removing the component and terrain_ecs_destroy each free the chunk's
+ * mesh and water once (core_memory_in_use drops by exactly what it held), and nothing counted
+ * is left once everything is closed. */
+Test(water_planes, a_mesh_chunk_frees_what_it_holds_through_its_hook) {
+    water_ecs warm = water_ecs_open();   /* what lives as long as the process is made now */
+    water_ecs_close(&warm);
+    size_t at_start = core_memory_in_use();
+    water_ecs w = water_ecs_open();
+    ecs_component mesh_chunk = ecs_component_lookup(w.ecs, "TerrainMeshChunk");
+    size_t held[3];
+    ecs_entity e[3];
+    for (int i = 0; i < 3; i++) e[i] = mesh_chunk_holding(&w, mesh_chunk, &held[i]);
+
+    size_t before = core_memory_in_use();
+    ecs_entity_destroy(w.ecs, e[0]);
+    cr_expect_eq(before - core_memory_in_use(), held[0], "destroy frees the chunk's mesh and water");
+    before = core_memory_in_use();
+    ecs_remove(w.ecs, e[1], mesh_chunk);
+    cr_expect_eq(before - core_memory_in_use(), held[1], "so does removing the component");
+    water_ecs_close(&w);                 /* e[2] goes with terrain_ecs_destroy */
+    cr_expect_eq(core_memory_in_use(), at_start, "nothing counted is left: %zd bytes",
+                 (ptrdiff_t)(core_memory_in_use() - at_start));
+}
