@@ -842,7 +842,11 @@ static void app_camera_system(ecs_iter *it) {
     terrain_ecs_set_view(app->terrain, view);   /* what the cull phase tests against */
     if (app->grass) grass_set_view(app->grass, view, app_player(app)->position);
     if (app->rocks) rocks_set_view(app->rocks, view);
-    if (!app->loading && !app->holding)          /* a held eye is where the user put it */
+    /* A held eye is where the user put it; an eye over ground not streamed in yet is not read
+     * (that would generate it here, on the main thread). */
+    double lo[3], hi[3];
+    for (int i = 0; i < 3; i++) lo[i] = floor(view->camera[i]) - 1.0, hi[i] = ceil(view->camera[i]) + 1.0;
+    if (!app->loading && !app->holding && terrain_ecs_region_ready(app->terrain, lo, hi))
         app->eye_in_solid += terrain_field_at(app->world, view->camera[0], view->camera[1], view->camera[2], 0) >= 0;
 }
 

@@ -531,16 +531,17 @@ Test(render_world, the_frame_goes_through_the_input_game_draw_and_present_phases
     cr_assert(fd >= 0);
     close(fd);
     cr_assert(trace_start(path));
-    run_world((game_app_desc){ .seed = 3, .width = 48, .height = 32, .headless = true, .threads = 2, .frames = 4,
-                               .stream = small_view, .grass = GRASS_OFF, .water = TERRAIN_WATER_OFF,
-                               .shadows = TERRAIN_SHADOWS_OFF });
+    /* Synthetic ground starts at once; the clipmap is kept for its lod-phase system. */
+    run_world((game_app_desc){ .width = 48, .height = 32, .headless = true, .threads = 2, .frames = 4,
+                               .stream = small_view, .generate = render_rolling_chunk, .spawn = { 8, 8 },
+                               .grass = GRASS_OFF, .water = TERRAIN_WATER_OFF, .shadows = TERRAIN_SHADOWS_OFF });
     trace_stop();
     core_arena arena = { 0 };
     const core_json_value *events = trace_file_load(path, &arena, NULL);
     static const char *const expected[][2] = {
         { "input", "input" }, { "player", "game" }, { "camera", "game" }, { "tools", "game" },
         { "terrain_draw", "draw" }, { "sky", "draw" }, { "hud", "draw" }, { "screenshot", "present" },
-        { "terrain_stream", "stream" }, { "terrain_upload", "draw" },
+        { "terrain_stream", "stream" }, { "terrain_clipmap", "lod" }, { "terrain_upload", "draw" },
     };
     for (size_t i = 0; i < sizeof expected / sizeof expected[0]; i++)
         cr_expect(zone_inside(events, expected[i][0], expected[i][1]), "no '%s' zone inside a '%s' phase zone",

@@ -72,9 +72,11 @@ int main(int argc, char **argv) {
     }
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
     trace_thread_name("main");
+    /* Rock piles and cliff blocks off: their tiles take seconds to build each run (the world
+     * program caches them in out/), and this example is about the system. */
     game_app *app = game_app_create(&(game_app_desc){
         .seed = (uint64_t)seed, .width = width, .height = height, .headless = headless, .threads = common.threads,
-        .frames = frames, .screenshot_path = screenshot, .stream = { .half_width = radius, .levels = levels }, .rocks = ROCKS_OFF, .setup = setup, .setup_user = &day_seconds });
+        .frames = frames, .screenshot_path = screenshot, .stream = { .half_width = radius, .levels = levels }, .rocks = ROCKS_OFF, .cliffs = ROCKS_OFF, .setup = setup, .setup_user = &day_seconds });
     if (!app) return 1;
     while (game_app_frame(app)) {}
     game_app_stats stats = game_app_stats_get(app);
