@@ -38,9 +38,11 @@
  * and systems there, with the ids of game_app_ids (tools/examples/game/game_setup_system.c).
  *     static void setup(game_app *app, ecs_world *ecs, void *user) {
  *         const game_ids *ids = game_app_ids(app);
- *         ecs_system_add(ecs, &(ecs_system_desc){ .name = "altimeter", .phase = "draw",
- *             .main_thread = true, .query = { .with = { ids->camera } }, .writes = { ids->gfx },
- *             .fn = altimeter, .user = user });
+ *         ecs_component sun = ECS_COMPONENT(ecs, SunClock);
+ *         ecs_set(ecs, game_app_camera(app), sun, &(SunClock){ 20.0f });
+ *         ecs_system_add(ecs, &(ecs_system_desc){ .name = "sun_clock", .phase = "game",
+ *             .query = { .with = { ids->camera, sun } }, .writes = { ids->camera },
+ *             .reads = { ids->clock }, .fn = sun_clock, .user = (void *)ids });
  *     }
  */
 #ifndef GAME_APP_H
