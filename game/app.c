@@ -814,6 +814,26 @@ static void app_camera_follow(game_app *app, GameCamera *camera, const GamePlaye
     view->pitch = pl->pitch;
 }
 
+/* Whether the eye is in the ground; false over ground not streamed in yet (reading it would
+ * generate it here, on the main thread). */
+static bool app_eye_in_ground(const game_app *app, const terrain_view *view) {
+    double lo[3], hi[3];
+    for (int i = 0; i < 3; i++) lo[i] = floor(view->camera[i]) - 1.0, hi[i] = ceil(view->camera[i]) + 1.0;
+    return terrain_ecs_region_ready(app->terrain, lo, hi) &&
+           terrain_field_at(app->world, view->camera[0], view->camera[1], view->camera[2], 0) >= 0;
+}
+
+/* A camera at its body, `alpha` of the way from the last step to this one. The straight line
+ * between two steps can cut a corner the body went round (a step up, a push out of a wall):
+ * then the view is drawn from this step itself. True when even that eye is in the ground. */
+static bool app_camera_place(game_app *app, GameCamera *camera, const GamePlayer *body, float alpha) {
+    app_camera_follow(app, camera, body, alpha);
+    if (!app_eye_in_ground(app, &camera->view)) return false;
+    if (alpha >= 1.0f) return true;
+    app_camera_follow(app, camera, body, 1.0f);
+    return app_eye_in_ground(app, &camera->view);
+}
+
 /* camera: every camera's view; streaming follows those tagged GameStreamViewer, culling and
  * drawing the app's own. */
 static void app_camera_system(ecs_iter *it) {
@@ -831,7 +851,9 @@ static void app_camera_system(ecs_iter *it) {
         for (int i = 0; i < it->count; i++) {
             GameCamera *c = &cameras[i];
             const GamePlayer *followed = c->follows ? ecs_get(it->world, c->follows, app->ids.player) : NULL;
-            if (followed) app_camera_follow(app, c, followed, clock->alpha);
+            bool in_ground = followed && app_camera_place(app, c, followed, clock->alpha);
+            /* A held eye is where the user put it. */
+            if (it->entities[i] == app->camera_entity && !app->loading && !app->holding) app->eye_in_solid += in_ground;
             c->view.aspect = (float)width / (float)height;
             c->view.time = time;
             if (streams && viewers < TERRAIN_MAX_VIEWERS) memcpy(eyes[viewers++], c->view.camera, sizeof eyes[0]);
@@ -842,12 +864,6 @@ static void app_camera_system(ecs_iter *it) {
     terrain_ecs_set_view(app->terrain, view);   /* what the cull phase tests against */
     if (app->grass) grass_set_view(app->grass, view, app_player(app)->position);
     if (app->rocks) rocks_set_view(app->rocks, view);
-    /* A held eye is where the user put it; an eye over ground not streamed in yet is not read
-     * (that would generate it here, on the main thread). */
-    double lo[3], hi[3];
-    for (int i = 0; i < 3; i++) lo[i] = floor(view->camera[i]) - 1.0, hi[i] = ceil(view->camera[i]) + 1.0;
-    if (!app->loading && !app->holding && terrain_ecs_region_ready(app->terrain, lo, hi))
-        app->eye_in_solid += terrain_field_at(app->world, view->camera[0], view->camera[1], view->camera[2], 0) >= 0;
 }
 
 /* tools: the player's tool, aimed from its eye. */
@@ -958,8 +974,17 @@ static void app_add_systems(game_app *app) {
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "tools", .phase = "game", .fn = app_tools_system, .user = app,
         .main_thread = true, .reads = { ids->player, ids->actions, mesh_chunk, chunk, rock_tiles },
         .writes = { ids->terrain_ecs, ids->terrain_world } });
-    ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_draw", .phase = "draw", .fn = app_terrain_draw_system,
-        .user = app, .main_thread = true, .writes = { ids->gfx }, .reads = { ids->camera, mesh_chunk, ids->terrain_ecs } });
+    /* The first draw reads every component the modules' draw-phase systems write, so it waits
+     * for all of them: a GPU cull that reads its results back (grass) must not queue behind the
+     * whole terrain on a software rasteriser. The draws after it follow through `gfx`. */
+    ecs_system_desc terrain_draw = { .name = "terrain_draw", .phase = "draw", .fn = app_terrain_draw_system,
+        .user = app, .main_thread = true, .writes = { ids->gfx },
+        .reads = { ids->camera, mesh_chunk, ids->terrain_ecs, water_plane } };
+    int reads = 4;
+    ecs_component grass_patch = ecs_component_lookup(ecs, "GrassPatch");
+    if (grass_patch) terrain_draw.reads[reads++] = grass_patch;
+    if (rock_tiles) terrain_draw.reads[reads++] = rock_tiles;
+    ecs_system_add(ecs, &terrain_draw);
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "sky", .phase = "draw", .fn = app_sky_system, .user = app,
         .main_thread = true, .writes = { ids->gfx }, .reads = { ids->camera } });
     if (app->rocks)
