@@ -285,7 +285,7 @@ expect "world: --record with --replay" 2 "cannot be used together" -- "$bin/worl
 # A system of the developer's own through game_app_desc.setup: the sun after 30 frames of 1/60 s
 # with a 1 s day stands at π(0.1 + 0.8 · 0.5) = π/2 along (cos, sin, 0.3): asin(1/√1.09) = 73°.
 expect "hello_game_system: the sun_clock system turns the sun" 0 "30 frames, the sun at 73 degrees" -- \
-  "$bin/hello_game_system" --headless --size 64x48 --radius 1 --levels 2 --frames 30 --day 1
+  "$bin/hello_game_system" --headless --size 64x48 --radius 1 --levels 1 --frames 30 --day 1
 expect "hello_game_system: bad --day" 2 "bad value for '--day'" -- "$bin/hello_game_system" --day 0
 expect "world: missing replay" 1 "$tmp/none.rec" -- "$bin/world" --headless --rocks off --replay "$tmp/none.rec"
 # --gamepad-mappings: an unreadable file fails at start-up naming it; a bad line is reported with
@@ -326,7 +326,7 @@ expect "world: --look past straight down" 2 "bad value for '--look': '0,-89.5': 
 # One run for two checks (each world start is seconds in the debug build): the view asked for,
 # and the cliff blocks that are on by default.
 expect "world: cliff blocks on by default" 0 "world: cliffs [1-9][0-9]* blocks raised on steep bedrock walls" -- \
-  "$bin/world" --headless --rocks off --size 64x48 --radius 1 --levels 2 --frames 2 --at 10,80,20 --look 90,-20
+  "$bin/world" --headless --rocks off --size 64x48 --radius 1 --levels 1 --frames 2 --at 10,80,20 --look 90,-20
 cp "$tmp/out" "$tmp/at_look.txt"
 expect "world: --at and --look" 0 "player at \(10\.0000, 78\.3800, 20\.0000\), looking 90\.0,-20\.0" -- cat "$tmp/at_look.txt"
 expect "world: scripted walk, eye always in the air" 0 "walked ([5-9][0-9]|1[0-9][0-9])\.[0-9] m .*eye in solid on 0 frames" -- \
@@ -365,7 +365,7 @@ expect "world: damaged world.txt" 1 "world.txt does not say 'seed N'" -- \
 # (Small worlds without rocks: the checks are about the database, and the debug build takes 20 s
 # to load the default rings.)
 expect "world: a new world folder" 0 "player at" -- \
-  "$bin/world" --headless --size 64x48 --radius 1 --levels 2 --rocks off --frames 1 --seed 9 --world "$tmp/db" \
+  "$bin/world" --headless --size 64x48 --radius 1 --levels 1 --rocks off --frames 1 --seed 9 --world "$tmp/db" \
   --trace "$tmp/db.json" --cliffs off
 expect "world: the save shows in the trace" 0 "terrain.store.save" -- "$bin/trace_report" "$tmp/db.json"
 expect "world: world.db of another seed" 1 "holds the world of seed 9 \(run with --seed 9" -- \
@@ -373,7 +373,7 @@ expect "world: world.db of another seed" 1 "holds the world of seed 9 \(run with
 mkdir -p "$tmp/damaged_db"
 echo "not a database at all, a line of text long enough to be read" >"$tmp/damaged_db/world.db"
 expect "world: a damaged world.db is set aside" 0 "world.db: .*set aside as .*world.db.bad" -- \
-  "$bin/world" --headless --size 64x48 --radius 1 --levels 2 --rocks off --frames 1 --world "$tmp/damaged_db" \
+  "$bin/world" --headless --size 64x48 --radius 1 --levels 1 --rocks off --frames 1 --world "$tmp/damaged_db" \
   --cliffs off
 python3 -c 'import sqlite3, sys, time
 c = sqlite3.connect(sys.argv[1], isolation_level=None)

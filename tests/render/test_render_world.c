@@ -109,7 +109,7 @@ Test(render_world, a_scripted_walk_stays_above_ground_within_budget_and_shows_gr
  * frame N of the replay however long either took to load: the player ends where it did. Nothing
  * but the terrain is drawn, as in the walk 100 km out. */
 Test(render_world, a_recorded_walk_replays_to_the_same_place, .timeout = 600) {
-    game_walk walk = parse_walk("ahead\n0 40\n10 60 walk\n");
+    game_walk walk = parse_walk("ahead\n0 25\n6 38 walk\n");
     char rec[] = "/tmp/world_rec_XXXXXX";
     int fd = mkstemp(rec);
     cr_assert(fd >= 0);
@@ -135,7 +135,7 @@ Test(render_world, a_recorded_walk_replays_to_the_same_place, .timeout = 600) {
 /* Where the player ends is all this looks at: no grass, water or shadows to draw (the pictures
  * are other tests'), which halves its time under the sanitizers. */
 Test(render_world, a_walk_a_hundred_kilometres_out_goes_as_at_the_origin, .timeout = 600) {
-    game_walk walk = parse_walk("relative\n30 30\n-20 60 walk\n");
+    game_walk walk = parse_walk("relative\n18 18\n-12 36 walk\n");
     game_app_stats at[2];
     for (int far = 0; far < 2; far++) {
         double offset = far ? 100800.0 : 0.0;
