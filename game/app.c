@@ -146,7 +146,7 @@ static bool app_open_input(game_app *app) {
     app->input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(app->gfx), .bindings = app->bindings,
                                              .record_path = d->record_path, .replay_path = d->replay_path,
                                              .gamepad_mappings_path = d->gamepad_mappings_path });
-    ecs_resource_register(app->ecs, &(ecs_resource_desc){ .name = "input", .object = app->input });
+    app->ids.input = ecs_resource_register(app->ecs, &(ecs_resource_desc){ .name = "input", .object = app->input });
     return app->input != NULL;
 }
 
@@ -945,7 +945,6 @@ static void app_create_entities(game_app *app) {
     ids->gfx = ecs_resource_register(ecs, &(ecs_resource_desc){ .name = "gfx", .object = app->gfx });
     ids->terrain_world = ecs_resource_register(ecs, &(ecs_resource_desc){ .name = "terrain_world", .object = app->world });
     ids->terrain_ecs = terrain_ecs_resource(app->terrain);
-    ids->input = ecs_resource_register(ecs, &(ecs_resource_desc){ .name = "input", .object = NULL });
     app->player_entity = ecs_entity_create(ecs);
     ecs_add(ecs, app->player_entity, ids->player);
     app->camera_entity = ecs_entity_create(ecs);
@@ -990,11 +989,11 @@ static void app_add_systems(game_app *app) {
     if (app->rocks)
         ecs_system_add(ecs, &(ecs_system_desc){ .name = "rocks_draw", .phase = "draw", .fn = app_rocks_draw_system,
             .user = app, .main_thread = true, .writes = { ids->gfx },
-            .reads = { ids->camera, ecs_component_lookup(ecs, "RockTiles"), mesh_chunk } });
+            .reads = { ids->camera, rock_tiles, mesh_chunk } });
     if (app->grass)
         ecs_system_add(ecs, &(ecs_system_desc){ .name = "grass_draw", .phase = "draw", .fn = app_grass_draw_system,
             .user = app, .main_thread = true, .writes = { ids->gfx },
-            .reads = { ids->camera, ecs_component_lookup(ecs, "GrassPatch"), mesh_chunk } });
+            .reads = { ids->camera, grass_patch, mesh_chunk } });
     if (app->water)
         ecs_system_add(ecs, &(ecs_system_desc){ .name = "water_draw", .phase = "draw", .fn = app_water_draw_system,
             .user = app, .main_thread = true, .writes = { ids->gfx },
