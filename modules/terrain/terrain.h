@@ -314,6 +314,9 @@ typedef struct terrain_mesh_desc {
                                          but not meshed (1 makes normals agree across chunks) */
     bool no_optimize;                 /* skip meshoptimizer's vertex-cache reordering */
     bool no_occlusion;                /* occlusion 0 everywhere (skips its cost) */
+    struct job_system *jobs;          /* large fields (64³ cells and up) are meshed on its
+                                         threads; NULL = the calling thread only. Same mesh
+                                         either way */
 } terrain_mesh_desc;
 
 /* Marching cubes over every cell of the field (nx−1 × ny−1 × nz−1 cells, less the apron) with

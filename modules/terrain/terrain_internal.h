@@ -12,6 +12,9 @@
 
 #include <math.h>
 #include <stdint.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 /* ==== stacks, noise, generation (terrain_stacks.c, terrain_noise.c, terrain_generate.c) ===== */
 
@@ -134,7 +137,14 @@ extern const uint8_t terrain__mc_edge_corners[12][2];
  * mesh computes a crossing with this, from the lower-index end, so shared crossings agree. */
 static inline float terrain__mesh_edge_t(float f0, float f1) {
     float t = f0 / (f0 - f1);
+#if defined(__SSE2__)
+    /* cvtss2si rounds half to even in the default rounding mode, as nearbyintf does, without a
+     * library call; out of int range (or NaN) it gives INT_MIN, which the clamp below takes to 0
+     * as it does NaN. t is in [0, 1] for samples of different signs. */
+    t = (float)_mm_cvtss_si32(_mm_set_ss(t * 8192.0f)) / 8192.0f;
+#else
     t = nearbyintf(t * 8192.0f) / 8192.0f;
+#endif
     if (!(t >= 0.0f)) t = 0.0f;  /* NaN too */
     if (t > 1.0f) t = 1.0f;
     return t;

@@ -1,10 +1,12 @@
 /* terrain_mesh.c — marching cubes over a terrain_field (000 §6: "standard polygonization
  * techniques"), with shared vertices, gradient normals and material weights.
  *
- * One vertex per crossed grid edge. The field is walked slice by slice along z; the vertices of
- * a slice's x- and y-edges live in a two-slice ring of caches and those of the z-edges between
- * two slices in a third, so a cell finds its 12 edges' vertices by index arithmetic (no hash
- * map) and every edge is interpolated once. The cell's triangles come from the case table of
+ * One vertex per crossed grid edge, shared by the cells around it. The cells are found and
+ * numbered by edge-based passes over rows of samples in the style of Flying Edges (Schroeder et
+ * al. 2015; "the cells" below): rows whose samples all agree with their neighbours' cost a word
+ * test, the others are visited only at the cells their signs say are crossed, and a prefix sum
+ * gives each row its place in the output, so big fields split over the job system's threads
+ * without locks and with the same result. The cell's triangles come from the case table of
  * terrain_mesh_tables.c, whose ambiguous faces are resolved from the face's signs alone (inside
  * corners kept apart), so neighbouring cells agree and closed surfaces come out watertight.
  *
@@ -31,18 +33,26 @@
  * shared vertices; computed once here, so the renderer pays nothing a frame for it.
  *
  * Then the triangles are reordered for the GPU's vertex cache with meshoptimizer (unless
- * desc.no_optimize), and the arrays trimmed to their exact sizes (terrain_mesh_free needs them).
- * A field whose meshed samples all have one sign costs one pass over them and no allocation.
+ * desc.no_optimize). The arrays have their exact sizes (terrain_mesh_free needs them). A field
+ * whose meshed samples all have one sign costs one pass over them and no output.
  */
+#define _DEFAULT_SOURCE   /* madvise's MADV_HUGEPAGE */
 #include "terrain_internal.h"
 
 #include "core/core.h"
 
+#include "jobs/jobs.h"
+
+#include <inttypes.h>
 #include <math.h>
 #include <meshoptimizer.h>
 #include <string.h>
-
-#define MESH_NO_VERTEX UINT32_MAX
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 typedef terrain__mesh_builder mesh_builder;   /* terrain_internal.h (terrain_lod.c builds one too) */
 
@@ -62,20 +72,34 @@ static void mesh_gradient(const mesh_builder *b, int x, int y, int z, float g[3]
     }
 }
 
-/* The vertex on the edge from sample (x, y, z) one step along `axis`; its two samples have
- * values f0 (at the lower index) and f1 of different signs. */
-static uint32_t mesh_add_vertex(mesh_builder *b, int x, int y, int z, int axis, float f0, float f1) {
+/* The gradient at an interior sample: the central differences of mesh_gradient, no branches. */
+static inline void mesh_gradient_inside(const mesh_builder *b, const float *at, float g[3]) {
+    const size_t row = (size_t)b->n[0];
+    g[0] = 0.5f * (at[1] - at[-1]);
+    g[1] = 0.5f * (at[row] - at[-(ptrdiff_t)row]);
+    g[2] = 0.5f * (at[b->slice] - at[-(ptrdiff_t)b->slice]);
+}
+
+/* Fills *v with the vertex on the edge from sample (x, y, z) one step along `axis`; its two
+ * samples have values f0 (at the lower index) and f1 of different signs. */
+static void mesh_make_vertex(const mesh_builder *b, terrain_vertex *v, int x, int y, int z, int axis, float f0, float f1) {
     float t = terrain__mesh_edge_t(f0, f1);
-    b->vertices = core_grow(b->vertices, &b->vertex_capacity, b->vertex_count + 1, sizeof *b->vertices);
-    terrain_vertex *v = &b->vertices[b->vertex_count];
     const float spacing = b->field->spacing;
     v->position[0] = (float)x * spacing;
     v->position[1] = (float)y * spacing;
     v->position[2] = (float)z * spacing;
     v->position[axis] = ((float)(axis == 0 ? x : axis == 1 ? y : z) + t) * spacing;
+    const int x1 = x + (axis == 0), y1 = y + (axis == 1), z1 = z + (axis == 2);
     float g0[3], g1[3];
-    mesh_gradient(b, x, y, z, g0);
-    mesh_gradient(b, x + (axis == 0), y + (axis == 1), z + (axis == 2), g1);
+    if (x > 0 && y > 0 && z > 0 && x1 < b->n[0] - 1 && y1 < b->n[1] - 1 && z1 < b->n[2] - 1) {
+        const float *at = b->field->values + (size_t)z * b->slice + (size_t)y * (size_t)b->n[0] + (size_t)x;
+        const size_t step = axis == 0 ? 1 : axis == 1 ? (size_t)b->n[0] : b->slice;
+        mesh_gradient_inside(b, at, g0);
+        mesh_gradient_inside(b, at + step, g1);
+    } else {
+        mesh_gradient(b, x, y, z, g0);
+        mesh_gradient(b, x1, y1, z1, g1);
+    }
     float g[3], length2 = 0.0f;
     for (int a = 0; a < 3; a++) {
         g[a] = g0[a] + t * (g1[a] - g0[a]);
@@ -91,6 +115,12 @@ static uint32_t mesh_add_vertex(mesh_builder *b, int x, int y, int z, int axis, 
         v->normal[axis] = f0 > 0.0f ? 1.0f : -1.0f;
     }
     v->weights[0] = 255, v->weights[1] = v->weights[2] = v->weights[3] = 0;
+}
+
+/* The same, appended to the builder's array (terrain_lod.c builds vertex by vertex). */
+static uint32_t mesh_add_vertex(mesh_builder *b, int x, int y, int z, int axis, float f0, float f1) {
+    b->vertices = core_grow(b->vertices, &b->vertex_capacity, b->vertex_count + 1, sizeof *b->vertices);
+    mesh_make_vertex(b, &b->vertices[b->vertex_count], x, y, z, axis, f0, f1);
     return (uint32_t)b->vertex_count++;
 }
 
@@ -376,74 +406,314 @@ static void mesh_openness(const mesh_builder *b, terrain_world *world, const dou
     core_free(ao.tops, column_count * sizeof *ao.tops);
 }
 
-/* ---- the cells ----------------------------------------------------------------------------- */
+/* ---- the cells: edge-based passes in the style of Flying Edges ----------------------------- */
 
-/* Whether the meshed box holds samples of both signs (otherwise there is no surface). */
-static bool mesh_has_surface(const mesh_builder *b) {
-    const float *v = b->field->values;
-    bool inside = v[(size_t)b->lo[2] * b->slice + (size_t)b->lo[1] * b->n[0] + (size_t)b->lo[0]] > 0.0f;
-    for (int z = b->lo[2]; z <= b->hi[2]; z++)
+/* Schroeder, Maynard and Geveci, "Flying Edges" (2015): rather than visiting every cell, the
+ * mesher works on rows of samples along x. Each row (y, z) owns the crossed edges that start on
+ * it: its x-edges, its y-edges to row (y + 1, z) and its z-edges to row (y, z + 1).
+ *   1. classify: the row's signs as bits (1 = inside), its crossed x-edges counted;
+ *   2. count: its crossed y- and z-edges, and the triangles of the cells between it and the rows
+ *      above it (+y, +z, +y+z). A cell is visited only where its 8 corners differ, found 64 cells
+ *      at a time from the four rows' bits; rows whose signs agree end to end cost one word test;
+ *   3. a prefix sum over the rows gives each its first vertex and first index;
+ *   4. generate: each row writes its vertices and its cells' triangles at those offsets.
+ * Passes 1, 2 and 4 touch only their own rows' outputs, so with a job system they run over slabs
+ * of z in parallel without locks, and the output is the same whatever the thread count. The
+ * vertex ids a cell needs come from eight running counters (the x-edges of its four rows, the
+ * y-edges of two, the z-edges of two), advanced at each visited cell: a skipped cell's corners all
+ * agree, so no edge it owns is crossed and no counter moves past it.
+ * Same case table, same edges, same vertex values as a cell-by-cell walk; only the numbering of
+ * the vertices is by row. */
+
+enum { FE_OUTSIDE, FE_INSIDE, FE_MIXED };
+
+typedef struct fe_row {
+    uint32_t x_count, y_count, z_count;   /* crossed edges the row owns along x, y and z */
+    uint32_t index_count;                 /* indices of the cells between it and the rows above */
+    uint32_t first_vertex, first_index;   /* its place in the output (the prefix sum) */
+    uint8_t kind;                         /* FE_OUTSIDE, FE_INSIDE or FE_MIXED over lo … hi */
+} fe_row;
+
+typedef struct fe_mesher {
+    mesh_builder *b;
+    const terrain__mc_case *table;
+    int data_words, words;       /* 64-bit words of signs per row: the data, and one spare (0) */
+    int rows_y, rows_z;          /* rows of the meshed box */
+    uint64_t *signs;             /* bit x of row (y, z): sample inside */
+    uint64_t *edge_mask;         /* bits lo … hi along x (edge starts along y and z, samples) */
+    uint64_t *cell_mask;         /* bits lo … hi − 1 (cells, x-edges) */
+    fe_row *rows;
+} fe_mesher;
+
+static inline int fe_count_bits(uint64_t w) {
+    /* Baseline x86-64 has no popcnt instruction (GCC calls a library routine); most words are 0. */
+    if (!w) return 0;
+    w = w - ((w >> 1) & 0x5555555555555555ull);
+    w = (w & 0x3333333333333333ull) + ((w >> 2) & 0x3333333333333333ull);
+    w = (w + (w >> 4)) & 0x0f0f0f0f0f0f0f0full;
+    return (int)((w * 0x0101010101010101ull) >> 56);
+}
+
+static inline size_t fe_row_index(const fe_mesher *m, int y, int z) {
+    return (size_t)(z - m->b->lo[2]) * (size_t)m->rows_y + (size_t)(y - m->b->lo[1]);
+}
+
+static inline const uint64_t *fe_signs(const fe_mesher *m, size_t row) { return m->signs + row * (size_t)m->words; }
+
+/* Bit x of the result is bit x + 1 of the row. */
+static inline uint64_t fe_next(const uint64_t *row, int w) { return (row[w] >> 1) | (row[w + 1] << 63); }
+
+/* Pass 1 for row (y, z). */
+static void fe_classify_row(fe_mesher *m, int y, int z) {
+    const mesh_builder *b = m->b;
+    const int n = b->n[0];
+    const float *v = b->field->values + (size_t)z * b->slice + (size_t)y * (size_t)n;
+    const size_t r = fe_row_index(m, y, z);
+    uint64_t *s = m->signs + r * (size_t)m->words;
+    /* Each word built in a register, four samples at a time where SSE2 is (every x86-64). */
+#if defined(__SSE2__)
+    const __m128 zero = _mm_setzero_ps();
+#endif
+    for (int w = 0; w < m->data_words; w++) {
+        const float *p = v + w * 64;
+        const int count = n - w * 64 < 64 ? n - w * 64 : 64;
+        uint64_t bits = 0;
+        int k = 0;
+#if defined(__SSE2__)
+        for (; k + 4 <= count; k += 4) bits |= (uint64_t)_mm_movemask_ps(_mm_cmpgt_ps(_mm_loadu_ps(p + k), zero)) << k;
+#endif
+        for (; k < count; k++) bits |= (uint64_t)(p[k] > 0.0f) << k;
+        s[w] = bits;
+    }
+    s[m->data_words] = 0;
+    bool some_inside = false, some_outside = false;
+    int crossed = 0;
+    for (int w = 0; w < m->data_words; w++) {
+        uint64_t inside = s[w] & m->edge_mask[w];
+        some_inside |= inside != 0;
+        some_outside |= inside != m->edge_mask[w];
+        crossed += fe_count_bits((s[w] ^ fe_next(s, w)) & m->cell_mask[w]);
+    }
+    m->rows[r].x_count = (uint32_t)crossed;
+    m->rows[r].kind = some_inside && some_outside ? FE_MIXED : some_inside ? FE_INSIDE : FE_OUTSIDE;
+}
+
+/* Crossed edges between two rows (their samples lo … hi differ). */
+static uint32_t fe_count_between(const fe_mesher *m, const fe_row *ra, const uint64_t *a, const fe_row *rb,
+                                 const uint64_t *b) {
+    if (ra->kind == rb->kind && ra->kind != FE_MIXED) return 0;
+    int crossed = 0;
+    for (int w = 0; w < m->data_words; w++) crossed += fe_count_bits((a[w] ^ b[w]) & m->edge_mask[w]);
+    return (uint32_t)crossed;
+}
+
+/* The cells between rows a = (y, z), b = (y + 1, z), c = (y, z + 1), d = (y + 1, z + 1): with
+ * out NULL, the number of indices they make; otherwise writes them, the vertex ids from the
+ * running counters (see the top of this part). Corner bits as in the case table: the cell's
+ * x = 0 side y0z0 → bit 0, y1z0 → 2, y0z1 → 4, y1z1 → 6, the x = 1 side one bit up. */
+static uint32_t fe_cells(const fe_mesher *m, const uint64_t *a, const uint64_t *b, const uint64_t *c,
+                         const uint64_t *d, uint32_t counter[8], uint32_t *out) {
+    uint32_t written = 0;
+    for (int w = 0; w < m->data_words; w++) {
+        const uint64_t A = a[w], A1 = fe_next(a, w), B = b[w], B1 = fe_next(b, w);
+        const uint64_t C = c[w], C1 = fe_next(c, w), D = d[w], D1 = fe_next(d, w);
+        uint64_t any = A | A1 | B | B1 | C | C1 | D | D1, all = A & A1 & B & B1 & C & C1 & D & D1;
+        uint64_t active = any & ~all & m->cell_mask[w];
+        while (active) {
+            const int x = __builtin_ctzll(active);
+            active &= active - 1;
+            const unsigned config = (unsigned)((A >> x & 1) | (A1 >> x & 1) << 1 | (B >> x & 1) << 2 |
+                                               (B1 >> x & 1) << 3 | (C >> x & 1) << 4 | (C1 >> x & 1) << 5 |
+                                               (D >> x & 1) << 6 | (D1 >> x & 1) << 7);
+            const terrain__mc_case *cell = &m->table[config];
+            const uint32_t count = (uint32_t)cell->triangle_count * 3;
+            if (out) {
+                /* Crossings at this x of the y-edges of rows a and c, the z-edges of rows a and b. */
+                const uint32_t ya = (config ^ config >> 2) & 1, yc = (config >> 4 ^ config >> 6) & 1;
+                const uint32_t za = (config ^ config >> 4) & 1, zb = (config >> 2 ^ config >> 6) & 1;
+                /* Edge numbering of terrain_mesh_tables.c: 0–3 x-edges of rows a, b, c, d; 4, 5 the
+                 * y-edges of row a at x, x + 1; 6, 7 those of row c; 8, 9 the z-edges of row a at
+                 * x, x + 1; 10, 11 those of row b. */
+                const uint32_t id[12] = { counter[0], counter[1], counter[2], counter[3],
+                                          counter[4], counter[4] + ya, counter[5], counter[5] + yc,
+                                          counter[6], counter[6] + za, counter[7], counter[7] + zb };
+                const uint8_t *edges = &cell->edges[0][0];
+                for (uint32_t k = 0; k < count; k++) out[written + k] = id[edges[k]];
+                counter[0] += (config ^ config >> 1) & 1;
+                counter[1] += (config >> 2 ^ config >> 3) & 1;
+                counter[2] += (config >> 4 ^ config >> 5) & 1;
+                counter[3] += (config >> 6 ^ config >> 7) & 1;
+                counter[4] += ya, counter[5] += yc, counter[6] += za, counter[7] += zb;
+            }
+            written += count;
+        }
+    }
+    return written;
+}
+
+static bool fe_is_cell_row(const fe_mesher *m, int y, int z) { return y < m->b->hi[1] && z < m->b->hi[2]; }
+
+/* Pass 2 for row (y, z). */
+static void fe_count_row(fe_mesher *m, int y, int z) {
+    const mesh_builder *b = m->b;
+    const size_t r = fe_row_index(m, y, z), up = r + 1, back = r + (size_t)m->rows_y;
+    fe_row *row = &m->rows[r];
+    const uint64_t *a = fe_signs(m, r);
+    row->y_count = y < b->hi[1] ? fe_count_between(m, row, a, &m->rows[up], fe_signs(m, up)) : 0;
+    row->z_count = z < b->hi[2] ? fe_count_between(m, row, a, &m->rows[back], fe_signs(m, back)) : 0;
+    row->index_count = 0;
+    if (!fe_is_cell_row(m, y, z)) return;
+    const fe_row *rb = &m->rows[up], *rc = &m->rows[back], *rd = &m->rows[back + 1];
+    if (row->kind != FE_MIXED && rb->kind == row->kind && rc->kind == row->kind && rd->kind == row->kind) return;
+    row->index_count = fe_cells(m, a, fe_signs(m, up), fe_signs(m, back), fe_signs(m, back + 1), NULL, NULL);
+}
+
+/* Pass 4 for row (y, z): its vertices, then its cells' triangles. */
+static void fe_generate_row(fe_mesher *m, int y, int z) {
+    mesh_builder *b = m->b;
+    const size_t r = fe_row_index(m, y, z), up = r + 1, back = r + (size_t)m->rows_y;
+    const fe_row *row = &m->rows[r];
+    const uint64_t *a = fe_signs(m, r);
+    const int n = b->n[0];
+    const float *v = b->field->values + (size_t)z * b->slice + (size_t)y * (size_t)n;
+    terrain_vertex *out = b->vertices + row->first_vertex;
+    if (row->x_count)
+        for (int w = 0; w < m->data_words; w++)
+            for (uint64_t bits = (a[w] ^ fe_next(a, w)) & m->cell_mask[w]; bits; bits &= bits - 1) {
+                int x = w * 64 + __builtin_ctzll(bits);
+                mesh_make_vertex(b, out++, x, y, z, 0, v[x], v[x + 1]);
+            }
+    const int axis_step[3] = { 0, n, (int)b->slice };
+    const size_t other[3] = { 0, up, back };
+    const uint32_t count[3] = { 0, row->y_count, row->z_count };
+    for (int axis = 1; axis <= 2; axis++) {
+        if (!count[axis]) continue;
+        const uint64_t *o = fe_signs(m, other[axis]);
+        for (int w = 0; w < m->data_words; w++)
+            for (uint64_t bits = (a[w] ^ o[w]) & m->edge_mask[w]; bits; bits &= bits - 1) {
+                int x = w * 64 + __builtin_ctzll(bits);
+                mesh_make_vertex(b, out++, x, y, z, axis, v[x], v[x + axis_step[axis]]);
+            }
+    }
+    if (!row->index_count) return;
+    const fe_row *rb = &m->rows[up], *rc = &m->rows[back], *rd = &m->rows[back + 1];
+    uint32_t counter[8] = { row->first_vertex, rb->first_vertex, rc->first_vertex, rd->first_vertex,
+                            row->first_vertex + row->x_count, rc->first_vertex + rc->x_count,
+                            row->first_vertex + row->x_count + row->y_count,
+                            rb->first_vertex + rb->x_count + rb->y_count };
+    fe_cells(m, a, fe_signs(m, up), fe_signs(m, back), fe_signs(m, back + 1), counter, b->indices + row->first_index);
+}
+
+typedef enum { FE_CLASSIFY, FE_COUNT, FE_GENERATE } fe_pass;
+
+typedef struct fe_slabs {
+    fe_mesher *m;
+    fe_pass pass;
+} fe_slabs;
+
+/* Slices z = lo + begin … lo + end − 1, every row of each. */
+static void fe_run_slabs(void *user, size_t begin, size_t end) {
+    fe_slabs *job = user;
+    fe_mesher *m = job->m;
+    const mesh_builder *b = m->b;
+    for (size_t k = begin; k < end; k++) {
+        int z = b->lo[2] + (int)k;
         for (int y = b->lo[1]; y <= b->hi[1]; y++) {
-            const float *row = v + (size_t)z * b->slice + (size_t)y * b->n[0];
-            for (int x = b->lo[0]; x <= b->hi[0]; x++)
-                if ((row[x] > 0.0f) != inside) return true;
-        }
-    return false;
-}
-
-/* Signs of slice z (1 inside) and the vertices of its crossed x- and y-edges. */
-static void mesh_slice_edges(mesh_builder *b, int z, uint8_t *sign, uint32_t *x_edges, uint32_t *y_edges) {
-    const int nx = b->n[0];
-    const float *v = b->field->values + (size_t)z * b->slice;
-    for (int y = b->lo[1]; y <= b->hi[1]; y++)
-        for (int x = b->lo[0]; x <= b->hi[0]; x++) sign[y * nx + x] = v[y * nx + x] > 0.0f;
-    for (int y = b->lo[1]; y <= b->hi[1]; y++) {
-        for (int x = b->lo[0]; x <= b->hi[0]; x++) {
-            int i = y * nx + x;
-            if (x < b->hi[0] && sign[i] != sign[i + 1]) x_edges[i] = mesh_add_vertex(b, x, y, z, 0, v[i], v[i + 1]);
-            if (y < b->hi[1] && sign[i] != sign[i + nx]) y_edges[i] = mesh_add_vertex(b, x, y, z, 1, v[i], v[i + nx]);
+            if (job->pass == FE_CLASSIFY) fe_classify_row(m, y, z);
+            else if (job->pass == FE_COUNT) fe_count_row(m, y, z);
+            else fe_generate_row(m, y, z);
         }
     }
 }
 
-static void mesh_layer_z_edges(mesh_builder *b, int z, const uint8_t *sign0, const uint8_t *sign1, uint32_t *z_edges) {
-    const int nx = b->n[0];
-    const float *v0 = b->field->values + (size_t)z * b->slice, *v1 = v0 + b->slice;
-    for (int y = b->lo[1]; y <= b->hi[1]; y++)
-        for (int x = b->lo[0]; x <= b->hi[0]; x++) {
-            int i = y * nx + x;
-            if (sign0[i] != sign1[i]) z_edges[i] = mesh_add_vertex(b, x, y, z, 2, v0[i], v1[i]);
-        }
+/* A field this large (cells) is split over the job system's threads, when the desc gives one. */
+#define FE_PARALLEL_CELLS (64 * 64 * 64)
+
+static void fe_pass_run(fe_mesher *m, fe_pass pass, job_system *jobs) {
+    fe_slabs job = { .m = m, .pass = pass };
+    static const char *const names[] = { "terrain.mesh.classify", "terrain.mesh.count", "terrain.mesh.generate" };
+    if (jobs) job_parallel_for(jobs, (size_t)m->rows_z, 0, fe_run_slabs, &job, names[pass]);
+    else fe_run_slabs(&job, 0, (size_t)m->rows_z);
 }
 
-/* The cells between slices z and z + 1. */
-static void mesh_layer_cells(mesh_builder *b, const uint8_t *sign0, const uint8_t *sign1,
-                             const uint32_t *x0, const uint32_t *x1, const uint32_t *y0, const uint32_t *y1,
-                             const uint32_t *zc) {
-    const terrain__mc_case *table = terrain__mc_table();
-    const int nx = b->n[0];
-    /* Edge e of the cell at index i is edge_base[e][i + edge_offset[e]] (see the numbering in
-     * terrain_mesh_tables.c). */
-    const uint32_t *edge_base[12] = { x0, x0, x1, x1, y0, y0, y1, y1, zc, zc, zc, zc };
-    const int edge_offset[12] = { 0, nx, 0, nx, 0, 1, 0, 1, 0, 1, nx, nx + 1 };
-    for (int y = b->lo[1]; y < b->hi[1]; y++) {
-        int i = y * nx + b->lo[0];
-        /* Corner bits of the cell's x = 0 side: y0z0 → bit 0, y1z0 → 2, y0z1 → 4, y1z1 → 6. */
-        unsigned side = sign0[i] | sign0[i + nx] << 2 | sign1[i] << 4 | sign1[i + nx] << 6;
-        for (int x = b->lo[0]; x < b->hi[0]; x++, i++) {
-            unsigned next = sign0[i + 1] | sign0[i + 1 + nx] << 2 | sign1[i + 1] << 4 | sign1[i + 1 + nx] << 6;
-            unsigned config = side | next << 1;
-            side = next;
-            if (config == 0 || config == 0xff) continue;
-            const terrain__mc_case *cell = &table[config];
-            size_t count = (size_t)cell->triangle_count * 3;
-            b->indices = core_grow(b->indices, &b->index_capacity, b->index_count + count, sizeof *b->indices);
-            uint32_t *out = b->indices + b->index_count;
-            const uint8_t *edges = &cell->edges[0][0];
-            for (size_t k = 0; k < count; k++) out[k] = edge_base[edges[k]][i + edge_offset[edges[k]]];
-            b->index_count += count;
+/* The three bit masks along x: bits [from, to] set. */
+static void fe_mask(uint64_t *mask, int words, int from, int to) {
+    for (int w = 0; w < words; w++) {
+        int lo = from - w * 64, hi = to - w * 64;   /* in this word's bits */
+        if (hi < 0 || lo > 63) { mask[w] = 0; continue; }
+        uint64_t upper = hi >= 63 ? ~0ull : (2ull << hi) - 1;
+        uint64_t lower = lo <= 0 ? ~0ull : ~((1ull << lo) - 1);
+        mask[w] = upper & lower;
+    }
+}
+
+/* The output of a big field. With 4 KB pages, first writing a 10 MB array costs 2 500 page
+ * faults, which on the machines here took as long as meshing it (8 MB: 5–9 ms, against 0.4 ms in
+ * huge pages). Where the kernel gives transparent huge pages on request (Linux's default
+ * "madvise" mode), such an array is placed on 2 MB boundaries and asked for in huge pages. */
+#define FE_HUGE_PAGE ((size_t)2 << 20)
+static void *fe_alloc_output(size_t bytes) {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    if (bytes >= 2 * FE_HUGE_PAGE) {
+        void *p = core_alloc_aligned(bytes, FE_HUGE_PAGE);   /* a multiple of 2 MB underneath */
+        size_t whole = (bytes + FE_HUGE_PAGE - 1) & ~(FE_HUGE_PAGE - 1);
+        (void)madvise(p, whole, MADV_HUGEPAGE);   /* a hint: if refused, 4 KB pages as before */
+        return p;
+    }
+#endif
+    return core_alloc(bytes);
+}
+
+/* Runs the four passes; false when the box has no surface (nothing allocated in b), or past
+ * 32-bit indices (logged). */
+static bool fe_mesh(mesh_builder *b, job_system *jobs, bool *too_big) {
+    fe_mesher m = { .b = b, .table = terrain__mc_table() };
+    m.data_words = (b->n[0] + 63) / 64;
+    m.words = m.data_words + 1;
+    m.rows_y = b->hi[1] - b->lo[1] + 1;
+    m.rows_z = b->hi[2] - b->lo[2] + 1;
+    const size_t row_count = (size_t)m.rows_y * (size_t)m.rows_z;
+    const size_t sign_bytes = row_count * (size_t)m.words * sizeof *m.signs;
+    m.signs = core_alloc(sign_bytes);
+    m.edge_mask = core_alloc(2 * (size_t)m.words * sizeof *m.edge_mask);
+    m.cell_mask = m.edge_mask + m.words;
+    fe_mask(m.edge_mask, m.words, b->lo[0], b->hi[0]);
+    fe_mask(m.cell_mask, m.words, b->lo[0], b->hi[0] - 1);
+    m.rows = core_alloc(row_count * sizeof *m.rows);
+    double cells = (double)(b->hi[0] - b->lo[0]) * (m.rows_y - 1) * (m.rows_z - 1);
+    if (cells < FE_PARALLEL_CELLS) jobs = NULL;
+
+    fe_pass_run(&m, FE_CLASSIFY, jobs);
+    bool surface = false;
+    for (size_t r = 0; r < row_count && !surface; r++)
+        surface = m.rows[r].kind == FE_MIXED || m.rows[r].kind != m.rows[0].kind;
+    if (surface) {
+        fe_pass_run(&m, FE_COUNT, jobs);
+        uint64_t vertices = 0, indices = 0;
+        for (size_t r = 0; r < row_count; r++) {
+            fe_row *row = &m.rows[r];
+            row->first_vertex = (uint32_t)vertices, row->first_index = (uint32_t)indices;
+            vertices += (uint64_t)row->x_count + row->y_count + row->z_count;
+            indices += row->index_count;
+            if (vertices > UINT32_MAX - 1 || indices > UINT32_MAX) break;
+        }
+        if (vertices > UINT32_MAX - 1 || indices > UINT32_MAX) {
+            core_error("terrain", "mesh: over 32-bit indices (%" PRIu64 "+ vertices, %" PRIu64 "+ indices)", vertices,
+                       indices);
+            *too_big = true;
+            surface = false;
+        } else {
+            b->vertex_count = b->vertex_capacity = (size_t)vertices;
+            b->index_count = b->index_capacity = (size_t)indices;
+            b->vertices = fe_alloc_output(b->vertex_capacity * sizeof *b->vertices);
+            b->indices = fe_alloc_output(b->index_capacity * sizeof *b->indices);
+            fe_pass_run(&m, FE_GENERATE, jobs);
         }
     }
+    core_free(m.signs, sign_bytes);
+    core_free(m.edge_mask, 2 * (size_t)m.words * sizeof *m.edge_mask);
+    core_free(m.rows, row_count * sizeof *m.rows);
+    return surface;
 }
 
 /* ---- the mesh ------------------------------------------------------------------------------ */
@@ -501,31 +771,8 @@ bool terrain_mesh_build(const terrain_field *field, const terrain_mesh_desc *des
         b.hi[a] = b.n[a] - 1 - desc.apron;
         if (b.hi[a] <= b.lo[a]) return true;    /* no cell left to mesh */
     }
-    if (!mesh_has_surface(&b)) return true;
-
-    /* Caches over whole slices (indexed like the field's samples), two of each for x/y-edges. */
-    size_t bytes = b.slice * sizeof(uint32_t);
-    uint8_t *signs = core_alloc(2 * b.slice);
-    uint32_t *x_edges = core_alloc(2 * bytes), *y_edges = core_alloc(2 * bytes), *z_edges = core_alloc(bytes);
-    mesh_slice_edges(&b, b.lo[2], signs, x_edges, y_edges);
-    for (int z = b.lo[2]; z < b.hi[2]; z++) {
-        int here = (z - b.lo[2]) & 1, next = here ^ 1;
-        uint8_t *sign0 = signs + here * b.slice, *sign1 = signs + next * b.slice;
-        mesh_slice_edges(&b, z + 1, sign1, x_edges + next * b.slice, y_edges + next * b.slice);
-        mesh_layer_z_edges(&b, z, sign0, sign1, z_edges);
-        mesh_layer_cells(&b, sign0, sign1, x_edges + here * b.slice, x_edges + next * b.slice,
-                         y_edges + here * b.slice, y_edges + next * b.slice, z_edges);
-    }
-    core_free(signs, 2 * b.slice);
-    core_free(x_edges, 2 * bytes);
-    core_free(y_edges, 2 * bytes);
-    core_free(z_edges, bytes);
-    if (b.vertex_count > UINT32_MAX - 1 || b.index_count > UINT32_MAX) {
-        core_error("terrain", "mesh: %zu vertices, %zu indices: over 32-bit indices", b.vertex_count, b.index_count);
-        core_free(b.vertices, b.vertex_capacity * sizeof *b.vertices);
-        core_free(b.indices, b.index_capacity * sizeof *b.indices);
-        return false;
-    }
+    bool too_big = false;
+    if (!fe_mesh(&b, desc.jobs, &too_big)) return !too_big;
     mesh_finish(&b, &desc, field->origin, out);
     return true;
 }
