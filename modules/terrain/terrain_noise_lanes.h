@@ -1,0 +1,142 @@
+/* terrain_noise_lanes.h — the 3D column batch for one SIMD width, LANES points per step.
+ *
+ * Not a header of its own: terrain_noise.c includes it once per dispatch path, with
+ *     LANES    4, 8 or 16
+ *     SUFFIX   the path's name, appended to each function's name (sse2, avx2, avx512)
+ *     TARGET   the function attribute that enables the instruction set (empty for SSE2,
+ *              x86-64's baseline)
+ * defined, and the vector types noise_vf##LANES, noise_vi##LANES, noise_vu##LANES declared.
+ *
+ * Written with GCC/Clang vector extensions rather than one set of intrinsics per width: the
+ * same lines become SSE2, AVX2 or AVX-512 code, so the three paths cannot drift apart. Every
+ * float operation is the scalar code's (noise3_in_column in terrain_noise.c), in the same
+ * order, one lane per point: no reassociation, no FMA (TARGET never enables "fma", and the
+ * file is compiled with contraction off), so each lane's result equals terrain__noise3's bit
+ * for bit. Selects and sign flips are integer operations on the floats' bits, as in grad3. */
+
+#define NOISE_PASTE_(a, b) a##b
+#define NOISE_PASTE(a, b) NOISE_PASTE_(a, b)
+#define VF NOISE_PASTE(noise_vf, LANES)
+#define VI NOISE_PASTE(noise_vi, LANES)
+#define VU NOISE_PASTE(noise_vu, LANES)
+#define FN(name) NOISE_PASTE(name##_, SUFFIX)
+#define INLINE static inline __attribute__((always_inline)) TARGET
+
+INLINE VF FN(splat_f)(float s) {
+    VF v;
+    for (int i = 0; i < LANES; i++) v[i] = s;
+    return v;
+}
+
+INLINE VU FN(splat_u)(uint32_t s) {
+    VU v;
+    for (int i = 0; i < LANES; i++) v[i] = s;
+    return v;
+}
+
+/* All-ones where the top bit of m is set: the sign bit spread over the lane. */
+INLINE VU FN(top_bit_mask)(VU m) {
+    return (VU)((VI)m >> 31);
+}
+
+/* mask all ones → b, all zeros → a (select_bits). */
+INLINE VU FN(select)(VU mask, VU a, VU b) {
+    return (a & ~mask) | (b & mask);
+}
+
+/* floor_to_int: truncate, then one less where that rounded up (negative non-integers). */
+INLINE VI FN(floor_to_int)(VF v) {
+    VI t = __builtin_convertvector(v, VI);
+    VI rounded_up = (VI)(v < __builtin_convertvector(t, VF));   /* −1 there, else 0 */
+    return (VI)((VU)t + (VU)rounded_up);
+}
+
+INLINE VF FN(fade)(VF t) {
+    return t * t * t * (t * (t * FN(splat_f)(6.0f) - FN(splat_f)(15.0f)) + FN(splat_f)(10.0f));
+}
+
+INLINE VF FN(lerp)(VF a, VF b, VF t) {
+    return a + t * (b - a);
+}
+
+/* mix32_y with the y product (yi·HASH_Y) already formed. */
+INLINE VU FN(mix_y)(VU column_hash, VU y_product) {
+    VU h = column_hash ^ y_product;
+    h ^= h >> 15;
+    h *= FN(splat_u)(0x2c1b3c6du);
+    h ^= h >> 12;
+    return h;
+}
+
+/* grad3 on the hash's top four bits g = h >> 28, read as bits of h itself:
+ *     g ≥ 8            bit 31 set                      u = y, else x
+ *     g ∈ {12, 14}     bits 31, 30 set, bit 28 clear   v = x, else z
+ *     g < 4            bits 31, 30 clear               v = y
+ *     g & 1, g & 2     bits 28, 29                     shifted up to the sign bit             */
+INLINE VF FN(grad3)(VU h, VF x, VF y, VF z) {
+    VU xb = (VU)x, yb = (VU)y, zb = (VU)z;
+    VU h1 = h << 1, h2 = h << 2, h3 = h << 3;
+    VU sign = FN(splat_u)(0x80000000u);
+    VU u = FN(select)(FN(top_bit_mask)(h), xb, yb);
+    VU v = FN(select)(FN(top_bit_mask)(h & h1 & ~h3), zb, xb);
+    v = FN(select)(FN(top_bit_mask)(h | h1), yb, v);
+    u ^= h3 & sign;
+    v ^= h2 & sign;
+    return (VF)u + (VF)v;
+}
+
+/* LANES points of the column cell c at heights y (noise3_in_column, lane by lane). */
+INLINE VF FN(noise3_lanes)(const column_cell *c, VF y) {
+    VI yi = FN(floor_to_int)(y);
+    VF fy = y - __builtin_convertvector(yi, VF);
+    VF fx = FN(splat_f)(c->fx), fz = FN(splat_f)(c->fz);
+    VF one = FN(splat_f)(1.0f);
+    VF fx1 = fx - one, fy1 = fy - one, fz1 = fz - one;
+    /* (yi + 1)·HASH_Y = yi·HASH_Y + HASH_Y in 32-bit unsigned arithmetic. */
+    VU ky0 = (VU)yi * FN(splat_u)(HASH_Y), ky1 = ky0 + FN(splat_u)(HASH_Y);
+    VU h00 = FN(splat_u)(c->h00), h10 = FN(splat_u)(c->h10), h01 = FN(splat_u)(c->h01), h11 = FN(splat_u)(c->h11);
+    VF n000 = FN(grad3)(FN(mix_y)(h00, ky0), fx, fy, fz);
+    VF n100 = FN(grad3)(FN(mix_y)(h10, ky0), fx1, fy, fz);
+    VF n010 = FN(grad3)(FN(mix_y)(h00, ky1), fx, fy1, fz);
+    VF n110 = FN(grad3)(FN(mix_y)(h10, ky1), fx1, fy1, fz);
+    VF n001 = FN(grad3)(FN(mix_y)(h01, ky0), fx, fy, fz1);
+    VF n101 = FN(grad3)(FN(mix_y)(h11, ky0), fx1, fy, fz1);
+    VF n011 = FN(grad3)(FN(mix_y)(h01, ky1), fx, fy1, fz1);
+    VF n111 = FN(grad3)(FN(mix_y)(h11, ky1), fx1, fy1, fz1);
+    VF v = FN(fade)(fy);
+    VF u = FN(splat_f)(c->u), w = FN(splat_f)(c->w);
+    VF x00 = FN(lerp)(n000, n100, u), x10 = FN(lerp)(n010, n110, u);
+    VF x01 = FN(lerp)(n001, n101, u), x11 = FN(lerp)(n011, n111, u);
+    VF n = FN(lerp)(FN(lerp)(x00, x10, v), FN(lerp)(x01, x11, v), w) * FN(splat_f)(NOISE3_SCALE);
+    /* n > 1 ? 1 : n, then n < −1 ? −1 : n (a NaN passes through both, as in the scalar). */
+    VF minus_one = FN(splat_f)(-1.0f);
+    n = (VF)FN(select)((VU)(n > one), (VU)n, (VU)one);
+    return (VF)FN(select)((VU)(n < minus_one), (VU)n, (VU)minus_one);
+}
+
+/* out[j] = noise at (c's column, y0 + j·dy) for j < count. */
+static TARGET void FN(noise3_column)(const column_cell *c, float y0, float dy, int count, float *out) {
+    VI lane;
+    for (int i = 0; i < LANES; i++) lane[i] = i;
+    VF y0v = FN(splat_f)(y0), dyv = FN(splat_f)(dy);
+    int j = 0;
+    for (; j + LANES <= count; j += LANES) {
+        /* y0 + (float)(first + j)·dy, as noise3_block computes it */
+        VF y = y0v + __builtin_convertvector(lane + j, VF) * dyv;
+        VF n = FN(noise3_lanes)(c, y);
+        memcpy(out + j, &n, sizeof n);
+    }
+    if (j < count) {
+        VF y = y0v + __builtin_convertvector(lane + j, VF) * dyv;
+        VF n = FN(noise3_lanes)(c, y);
+        memcpy(out + j, &n, (size_t)(count - j) * sizeof(float));
+    }
+}
+
+#undef VF
+#undef VI
+#undef VU
+#undef FN
+#undef INLINE
+#undef NOISE_PASTE
+#undef NOISE_PASTE_
