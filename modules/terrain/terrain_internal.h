@@ -55,9 +55,10 @@ float terrain__noise2(uint32_t seed, float x, float z);
 void terrain__noise2_row(uint32_t seed, const float *xs, float scale, float z, int count, float *out);
 /* The column batch: out[j] = terrain__noise3(seed, x, y0 + j·dy, z) for j < count. */
 void terrain__noise3_column(uint32_t seed, float x, float y0, float dy, float z, int count, float *out);
-/* The column batch's code path. AUTO picks, on first use, the widest the CPU runs well (AVX2
- * where present, else SSE2, x86-64's baseline; PORTABLE, plain C, off x86-64). Every path
- * gives terrain__noise3's bits exactly, so forcing one (tests, benchmarks) changes only speed.
+/* The code path of the batches above and terrain__multifractal2_row. AUTO picks, on first use,
+ * the widest the CPU has (AVX-512, else AVX2, else SSE2, x86-64's baseline; PORTABLE, plain C,
+ * off x86-64). Every path gives the scalar functions' bits exactly, so forcing one (tests,
+ * benchmarks) changes only speed.
  * terrain__noise_set_path returns false, changing nothing, for a path this CPU cannot run;
  * terrain__noise_get_path returns the path in use (never AUTO). */
 typedef enum terrain__noise_path {

@@ -190,107 +190,6 @@ static void noise3_column_portable(const column_cell *c, float y0, float dy, int
     }
 }
 
-/* ---- explicit SIMD paths and their dispatch (x86-64) ------------------------------------- */
-
-#if defined(__x86_64__)
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF            /* GCC's -std=c11 already keeps a·b + c two operations */
-#endif
-typedef float noise_vf4 __attribute__((vector_size(16)));
-typedef int32_t noise_vi4 __attribute__((vector_size(16)));
-typedef uint32_t noise_vu4 __attribute__((vector_size(16)));
-typedef float noise_vf8 __attribute__((vector_size(32)));
-typedef int32_t noise_vi8 __attribute__((vector_size(32)));
-typedef uint32_t noise_vu8 __attribute__((vector_size(32)));
-typedef float noise_vf16 __attribute__((vector_size(64)));
-typedef int32_t noise_vi16 __attribute__((vector_size(64)));
-typedef uint32_t noise_vu16 __attribute__((vector_size(64)));
-
-#define LANES 4
-#define SUFFIX sse2
-#define TARGET
-#include "terrain_noise_lanes.h"
-#undef LANES
-#undef SUFFIX
-#undef TARGET
-
-#define LANES 8
-#define SUFFIX avx2
-#define TARGET __attribute__((target("avx2")))
-#include "terrain_noise_lanes.h"
-#undef LANES
-#undef SUFFIX
-#undef TARGET
-
-#define LANES 16
-#define SUFFIX avx512
-#define TARGET __attribute__((target("avx512f")))
-#include "terrain_noise_lanes.h"
-#undef LANES
-#undef SUFFIX
-#undef TARGET
-#endif
-
-bool terrain__noise_path_supported(terrain__noise_path path) {
-    switch (path) {
-    case TERRAIN__NOISE_AUTO:
-    case TERRAIN__NOISE_PORTABLE: return true;
-#if defined(__x86_64__)
-    case TERRAIN__NOISE_SSE2: return true;
-    case TERRAIN__NOISE_AVX2: __builtin_cpu_init(); return __builtin_cpu_supports("avx2");
-    case TERRAIN__NOISE_AVX512: __builtin_cpu_init(); return __builtin_cpu_supports("avx512f");
-#endif
-    default: return false;
-    }
-}
-
-const char *terrain__noise_path_name(terrain__noise_path path) {
-    static const char *const names[TERRAIN__NOISE_PATH_COUNT] = { "auto", "portable", "sse2", "avx2", "avx512" };
-    return path >= 0 && path < TERRAIN__NOISE_PATH_COUNT ? names[path] : "unknown";
-}
-
-/* The widest path the CPU runs well. */
-static terrain__noise_path noise_best_path(void) {
-    if (terrain__noise_path_supported(TERRAIN__NOISE_AVX2)) return TERRAIN__NOISE_AVX2;
-    if (terrain__noise_path_supported(TERRAIN__NOISE_SSE2)) return TERRAIN__NOISE_SSE2;
-    return TERRAIN__NOISE_PORTABLE;
-}
-
-/* 0 (TERRAIN__NOISE_AUTO) until the first batch chooses; every path gives the same bits, so
- * threads that race to choose, or a test that switches paths, change only the speed. */
-static _Atomic int noise_path = TERRAIN__NOISE_AUTO;
-
-static inline terrain__noise_path noise_current_path(void) {
-    int path = atomic_load_explicit(&noise_path, memory_order_relaxed);
-    if (path == TERRAIN__NOISE_AUTO) {
-        path = noise_best_path();
-        atomic_store_explicit(&noise_path, path, memory_order_relaxed);
-    }
-    return (terrain__noise_path)path;
-}
-
-bool terrain__noise_set_path(terrain__noise_path path) {
-    if (!terrain__noise_path_supported(path)) return false;
-    atomic_store_explicit(&noise_path, path == TERRAIN__NOISE_AUTO ? noise_best_path() : path, memory_order_relaxed);
-    return true;
-}
-
-terrain__noise_path terrain__noise_get_path(void) {
-    return noise_current_path();
-}
-
-void terrain__noise3_column(uint32_t seed, float x, float y0, float dy, float z, int count, float *out) {
-    column_cell c = cell_xz(seed, x, z);
-    switch (noise_current_path()) {
-#if defined(__x86_64__)
-    case TERRAIN__NOISE_SSE2: noise3_column_sse2(&c, y0, dy, count, out); return;
-    case TERRAIN__NOISE_AVX2: noise3_column_avx2(&c, y0, dy, count, out); return;
-    case TERRAIN__NOISE_AVX512: noise3_column_avx512(&c, y0, dy, count, out); return;
-#endif
-    default: noise3_column_portable(&c, y0, dy, count, out); return;
-    }
-}
-
 /* Unclamped (raw values stay within ±0.99 after scaling; the multifractal, which normalises its
  * sum anyway, uses this form: a clamp is a branch its vectorised loop cannot take). */
 static inline __attribute__((always_inline)) float noise2_raw(uint32_t seed, float x, float z) {
@@ -318,7 +217,7 @@ static void noise2_block(uint32_t seed, const float *restrict xs, float scale, f
     for (int j = 0; j < NOISE2_BLOCK; j++) out[j] = noise2_raw(seed, xs[j] * scale, z);
 }
 
-void terrain__noise2_row(uint32_t seed, const float *xs, float scale, float z, int count, float *out) {
+static void noise2_row_portable(uint32_t seed, const float *xs, float scale, float z, int count, float *out) {
     int j = 0;
     for (; j + NOISE2_BLOCK <= count; j += NOISE2_BLOCK) noise2_block(seed, xs + j, scale, z, out + j);
     if (j < count) {
@@ -528,10 +427,8 @@ static void mf_block(const mf_octave *octaves, int count, float total, const flo
     for (int j = 0; j < MF_BLOCK; j++) out[j] = sum[j] * inverse_total;
 }
 
-void terrain__multifractal2_row(const terrain__multifractal *mf, const float *xs, float z, int count, float *out) {
-    mf_octave octaves[17];
-    float total;
-    int octave_count = mf_octaves(mf, octaves, &total);
+static void multifractal2_row_portable(const mf_octave *octaves, int octave_count, float total, const float *xs,
+                                       float z, int count, float *out) {
     int j = 0;
     for (; j + MF_BLOCK <= count; j += MF_BLOCK) mf_block(octaves, octave_count, total, xs + j, z, out + j);
     if (j < count) {
@@ -539,5 +436,134 @@ void terrain__multifractal2_row(const terrain__multifractal *mf, const float *xs
         for (int t = 0; t < MF_BLOCK; t++) x_tail[t] = xs[j + (j + t < count ? t : 0)];
         mf_block(octaves, octave_count, total, x_tail, z, tail);
         for (int t = 0; j + t < count; t++) out[j + t] = tail[t];
+    }
+}
+
+/* ---- explicit SIMD paths and their dispatch (x86-64) ------------------------------------- */
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF            /* GCC's -std=c11 already keeps a·b + c two operations */
+#endif
+typedef float noise_vf4 __attribute__((vector_size(16)));
+typedef int32_t noise_vi4 __attribute__((vector_size(16)));
+typedef uint32_t noise_vu4 __attribute__((vector_size(16)));
+typedef float noise_vf8 __attribute__((vector_size(32)));
+typedef int32_t noise_vi8 __attribute__((vector_size(32)));
+typedef uint32_t noise_vu8 __attribute__((vector_size(32)));
+typedef float noise_vf16 __attribute__((vector_size(64)));
+typedef int32_t noise_vi16 __attribute__((vector_size(64)));
+typedef uint32_t noise_vu16 __attribute__((vector_size(64)));
+
+#define LANES 4
+#define SUFFIX sse2
+#define TARGET
+#include "terrain_noise_lanes.h"
+#undef LANES
+#undef SUFFIX
+#undef TARGET
+
+#define LANES 8
+#define SUFFIX avx2
+#define TARGET __attribute__((target("avx2")))
+#include "terrain_noise_lanes.h"
+#undef LANES
+#undef SUFFIX
+#undef TARGET
+
+#define LANES 16
+#define SUFFIX avx512
+#define TARGET __attribute__((target("avx512f")))
+#include "terrain_noise_lanes.h"
+#undef LANES
+#undef SUFFIX
+#undef TARGET
+#endif
+
+bool terrain__noise_path_supported(terrain__noise_path path) {
+    switch (path) {
+    case TERRAIN__NOISE_AUTO:
+    case TERRAIN__NOISE_PORTABLE: return true;
+#if defined(__x86_64__)
+    case TERRAIN__NOISE_SSE2: return true;
+    case TERRAIN__NOISE_AVX2: __builtin_cpu_init(); return __builtin_cpu_supports("avx2");
+    case TERRAIN__NOISE_AVX512: __builtin_cpu_init(); return __builtin_cpu_supports("avx512f");
+#endif
+    default: return false;
+    }
+}
+
+const char *terrain__noise_path_name(terrain__noise_path path) {
+    static const char *const names[TERRAIN__NOISE_PATH_COUNT] = { "auto", "portable", "sse2", "avx2", "avx512" };
+    return path >= 0 && path < TERRAIN__NOISE_PATH_COUNT ? names[path] : "unknown";
+}
+
+/* The widest path the CPU has: each is faster than the narrower ones on the machines measured
+ * (noise.ours.* rows of tools/bench). */
+static terrain__noise_path noise_best_path(void) {
+    if (terrain__noise_path_supported(TERRAIN__NOISE_AVX512)) return TERRAIN__NOISE_AVX512;
+    if (terrain__noise_path_supported(TERRAIN__NOISE_AVX2)) return TERRAIN__NOISE_AVX2;
+    if (terrain__noise_path_supported(TERRAIN__NOISE_SSE2)) return TERRAIN__NOISE_SSE2;
+    return TERRAIN__NOISE_PORTABLE;
+}
+
+/* 0 (TERRAIN__NOISE_AUTO) until the first batch chooses; every path gives the same bits, so
+ * threads that race to choose, or a test that switches paths, change only the speed. */
+static _Atomic int noise_path = TERRAIN__NOISE_AUTO;
+
+static inline terrain__noise_path noise_current_path(void) {
+    int path = atomic_load_explicit(&noise_path, memory_order_relaxed);
+    if (path == TERRAIN__NOISE_AUTO) {
+        path = noise_best_path();
+        atomic_store_explicit(&noise_path, path, memory_order_relaxed);
+    }
+    return (terrain__noise_path)path;
+}
+
+bool terrain__noise_set_path(terrain__noise_path path) {
+    if (!terrain__noise_path_supported(path)) return false;
+    atomic_store_explicit(&noise_path, path == TERRAIN__NOISE_AUTO ? noise_best_path() : path, memory_order_relaxed);
+    return true;
+}
+
+terrain__noise_path terrain__noise_get_path(void) {
+    return noise_current_path();
+}
+
+void terrain__noise3_column(uint32_t seed, float x, float y0, float dy, float z, int count, float *out) {
+    column_cell c = cell_xz(seed, x, z);
+    switch (noise_current_path()) {
+#if defined(__x86_64__)
+    case TERRAIN__NOISE_SSE2: noise3_column_sse2(&c, y0, dy, count, out); return;
+    case TERRAIN__NOISE_AVX2: noise3_column_avx2(&c, y0, dy, count, out); return;
+    case TERRAIN__NOISE_AVX512: noise3_column_avx512(&c, y0, dy, count, out); return;
+#endif
+    default: noise3_column_portable(&c, y0, dy, count, out); return;
+    }
+}
+
+void terrain__noise2_row(uint32_t seed, const float *xs, float scale, float z, int count, float *out) {
+    switch (noise_current_path()) {
+#if defined(__x86_64__)
+    case TERRAIN__NOISE_SSE2: noise2_row_sse2(seed, xs, scale, z, count, out); return;
+    case TERRAIN__NOISE_AVX2: noise2_row_avx2(seed, xs, scale, z, count, out); return;
+    case TERRAIN__NOISE_AVX512: noise2_row_avx512(seed, xs, scale, z, count, out); return;
+#endif
+    default: noise2_row_portable(seed, xs, scale, z, count, out); return;
+    }
+}
+
+void terrain__multifractal2_row(const terrain__multifractal *mf, const float *xs, float z, int count, float *out) {
+    mf_octave octaves[17];
+    float total;
+    int octave_count = mf_octaves(mf, octaves, &total);
+    switch (noise_current_path()) {
+#if defined(__x86_64__)
+    case TERRAIN__NOISE_SSE2: multifractal2_row_sse2(octaves, octave_count, total, xs, z, count, out); return;
+    case TERRAIN__NOISE_AVX2: multifractal2_row_avx2(octaves, octave_count, total, xs, z, count, out); return;
+    case TERRAIN__NOISE_AVX512: multifractal2_row_avx512(octaves, octave_count, total, xs, z, count, out); return;
+#endif
+    default: multifractal2_row_portable(octaves, octave_count, total, xs, z, count, out); return;
     }
 }

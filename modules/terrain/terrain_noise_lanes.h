@@ -44,6 +44,17 @@ INLINE VU FN(select)(VU mask, VU a, VU b) {
     return (a & ~mask) | (b & mask);
 }
 
+/* b where the top bit of m is set, else a. AVX2's blendv reads that bit alone (one instruction
+ * for the sign spread and the three of the select); AVX-512 compiles the generic form into a
+ * shift and one ternary-logic instruction; SSE2 has no blend. */
+INLINE VU FN(select_top)(VU m, VU a, VU b) {
+#if LANES == 8
+    return (VU)_mm256_blendv_ps((__m256)a, (__m256)b, (__m256)m);
+#else
+    return FN(select)(FN(top_bit_mask)(m), a, b);
+#endif
+}
+
 /* floor_to_int: truncate, then one less where that rounded up (negative non-integers). */
 INLINE VI FN(floor_to_int)(VF v) {
     VI t = __builtin_convertvector(v, VI);
@@ -77,9 +88,9 @@ INLINE VF FN(grad3)(VU h, VF x, VF y, VF z) {
     VU xb = (VU)x, yb = (VU)y, zb = (VU)z;
     VU h1 = h << 1, h2 = h << 2, h3 = h << 3;
     VU sign = FN(splat_u)(0x80000000u);
-    VU u = FN(select)(FN(top_bit_mask)(h), xb, yb);
-    VU v = FN(select)(FN(top_bit_mask)(h & h1 & ~h3), zb, xb);
-    v = FN(select)(FN(top_bit_mask)(h | h1), yb, v);
+    VU u = FN(select_top)(h, xb, yb);
+    VU v = FN(select_top)(h & h1 & ~h3, zb, xb);
+    v = FN(select_top)(h | h1, yb, v);
     u ^= h3 & sign;
     v ^= h2 & sign;
     return (VF)u + (VF)v;
@@ -130,6 +141,119 @@ static TARGET void FN(noise3_column)(const column_cell *c, float y0, float dy, i
         VF y = y0v + __builtin_convertvector(lane + j, VF) * dyv;
         VF n = FN(noise3_lanes)(c, y);
         memcpy(out + j, &n, (size_t)(count - j) * sizeof(float));
+    }
+}
+
+/* ---- 2D: the row batch and the multifractal's row ---------------------------------------- */
+
+INLINE VU FN(mix32)(VU h) {
+    h ^= h >> 16;
+    h *= FN(splat_u)(0x7feb352du);
+    h ^= h >> 15;
+    h *= FN(splat_u)(0x846ca68bu);
+    h ^= h >> 16;
+    return h;
+}
+
+/* grad2 on the hash's top three bits g = h >> 29: g ≥ 4 (bit 31) swaps x and z; g & 1 and
+ * g & 2 (bits 29, 30) flip the signs. */
+INLINE VF FN(grad2)(VU h, VF x, VF z) {
+    VU xb = (VU)x, zb = (VU)z;
+    VU sign = FN(splat_u)(0x80000000u);
+    VU u = FN(select_top)(h, xb, zb);
+    VU v = FN(select_top)(h, zb, xb);
+    u ^= (h << 2) & sign;
+    v ^= (h << 1) & sign;
+    return (VF)u + FN(splat_f)(2.0f) * (VF)v;
+}
+
+/* noise2_raw, lane by lane. */
+INLINE VF FN(noise2_raw)(uint32_t seed, VF x, VF z) {
+    VI xi = FN(floor_to_int)(x), zi = FN(floor_to_int)(z);
+    VF fx = x - __builtin_convertvector(xi, VF), fz = z - __builtin_convertvector(zi, VF);
+    VF one = FN(splat_f)(1.0f);
+    /* (xi + 1)·HASH_X = xi·HASH_X + HASH_X, and so for z, in 32-bit unsigned arithmetic. */
+    VU kx0 = (VU)xi * FN(splat_u)(HASH_X), kz0 = (VU)zi * FN(splat_u)(HASH_Y);
+    VU kx1 = kx0 + FN(splat_u)(HASH_X), kz1 = kz0 + FN(splat_u)(HASH_Y);
+    VU seeds = FN(splat_u)(seed);
+    VU hx0 = FN(mix32)(seeds ^ kx0), hx1 = FN(mix32)(seeds ^ kx1);
+    VF fx1 = fx - one, fz1 = fz - one;
+    VF n00 = FN(grad2)(FN(mix_y)(hx0, kz0), fx, fz);
+    VF n10 = FN(grad2)(FN(mix_y)(hx1, kz0), fx1, fz);
+    VF n01 = FN(grad2)(FN(mix_y)(hx0, kz1), fx, fz1);
+    VF n11 = FN(grad2)(FN(mix_y)(hx1, kz1), fx1, fz1);
+    VF u = FN(fade)(fx), w = FN(fade)(fz);
+    return FN(lerp)(FN(lerp)(n00, n10, u), FN(lerp)(n01, n11, u), w) * FN(splat_f)(NOISE2_SCALE);
+}
+
+/* LANES floats from xs[0 … available−1], the last repeated past the end (noise2_row's tail). */
+INLINE VF FN(load_padded)(const float *xs, int available) {
+    if (available >= LANES) {
+        VF v;
+        memcpy(&v, xs, sizeof v);
+        return v;
+    }
+    VF v = FN(splat_f)(xs[0]);
+    memcpy(&v, xs, (size_t)available * sizeof(float));
+    return v;
+}
+
+INLINE void FN(store_partial)(float *out, VF v, int available) {
+    memcpy(out, &v, (size_t)(available < LANES ? available : LANES) * sizeof(float));
+}
+
+/* noise2_row: out[j] = noise2_raw(seed, xs[j]·scale, z). */
+static TARGET void FN(noise2_row)(uint32_t seed, const float *xs, float scale, float z, int count, float *out) {
+    VF scale_v = FN(splat_f)(scale), z_v = FN(splat_f)(z);
+    for (int j = 0; j < count; j += LANES) {
+        VF x = FN(load_padded)(xs + j, count - j) * scale_v;
+        FN(store_partial)(out + j, FN(noise2_raw)(seed, x, z_v), count - j);
+    }
+}
+
+/* inverse_sqrt, lane by lane. */
+INLINE VF FN(inverse_sqrt)(VF v) {
+    VF r = (VF)(FN(splat_u)(0x5f3759dfu) - ((VU)v >> 1));
+    VF half = FN(splat_f)(0.5f), three_halves = FN(splat_f)(1.5f);
+    r = r * (three_halves - half * v * r * r);
+    return r * (three_halves - half * v * r * r);
+}
+
+/* mf_block over the row: each lane carries one point's warp state through the octaves. */
+static TARGET void FN(multifractal2_row)(const mf_octave *octaves, int octave_count, float total, const float *xs,
+                                         float z, int count, float *out) {
+    VF z_v = FN(splat_f)(z);
+    VF e1x = FN(splat_f)(WARP_E1[0]), e1z = FN(splat_f)(WARP_E1[1]);
+    VF e2x = FN(splat_f)(WARP_E2[0]), e2z = FN(splat_f)(WARP_E2[1]);
+    VF e3x = FN(splat_f)(WARP_E3[0]), e3z = FN(splat_f)(WARP_E3[1]);
+    VF tiny = FN(splat_f)(1e-12f);
+    VF inverse_total = FN(splat_f)(total > 0.0f ? 1.0f / total : 0.0f);
+    for (int j = 0; j < count; j += LANES) {
+        VF x = FN(load_padded)(xs + j, count - j);
+        VF sum = FN(splat_f)(0.0f), rho_x = FN(splat_f)(1.0f), rho_z = FN(splat_f)(0.0f);
+        VF t_x = FN(splat_f)(0.0f), t_z = FN(splat_f)(0.0f);
+        for (int k = 0; k < octave_count; k++) {
+            const mf_octave *o = &octaves[k];
+            VF warp = FN(splat_f)(o->warp), cos_b = FN(splat_f)(o->cos_b), sin_b = FN(splat_f)(o->sin_b);
+            VF frequency = FN(splat_f)(o->frequency);
+            /* mf_step, term for term */
+            VF wx = (rho_x * t_x - rho_z * t_z) * warp;
+            VF wz = (rho_z * t_x + rho_x * t_z) * warp;
+            VF px = (cos_b * x - sin_b * z_v + wx) * frequency;
+            VF pz = (sin_b * x + cos_b * z_v + wz) * frequency;
+            VF h = sum + FN(splat_f)(o->amplitude) * FN(noise2_raw)(o->seed, px, pz);
+            VF roughness = FN(splat_f)(o->r0) - h;
+            VF rx = rho_x + e1x * roughness + e2x;
+            VF rz = rho_z + e1z * roughness + e2z;
+            VF length2 = rx * rx + rz * rz;
+            VF inverse = FN(inverse_sqrt)(length2 + tiny);
+            rho_x = rx * inverse;
+            rho_z = rz * inverse;
+            t_x = e3x * h;
+            t_z = e3z * roughness;
+            sum = h;
+        }
+        FN(store_partial)(out + j, sum * inverse_total, count - j);
     }
 }
 
