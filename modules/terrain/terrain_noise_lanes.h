@@ -125,22 +125,133 @@ INLINE VF FN(noise3_lanes)(const column_cell *c, VF y) {
     return (VF)FN(select)((VU)(n < minus_one), (VU)n, (VU)minus_one);
 }
 
+#if LANES >= 8
+/* ---- the column through per-level gradient tables (AVX2, AVX-512) -------------------------
+ *
+ * Along a column only y changes, and a corner's gradient depends on its lattice level alone, so
+ * the hashing and the gradient selection can be done once per level and corner column (four:
+ * x0z0, x1z0, x0z1, x1z1) instead of once per point and corner (eight). grad3's result is
+ * U + V, where at most one of U, V involves y (U = ±y needs g ≥ 8, V = ±y needs g < 4); by
+ * the commutativity of IEEE addition it is, bit for bit,
+ *     c + t,   t = (y_bits & a) ^ s
+ * with, per level: the other term c, a = all ones and s = the y term's sign where one involves
+ * y, else a = 0 and s = V's bits (then c = U). A point reads its level's (c, a, s) with a lane
+ * permute from a window of LANES levels starting at its vector's lowest level. */
+
+enum { FN(TABLE_LEVELS) = 256 };
+
+typedef struct FN(level_tables) {
+    /* [corner column][level − lowest]; LANES spare entries so any window can be loaded whole */
+    uint32_t c[4][FN(TABLE_LEVELS) + LANES], a[4][FN(TABLE_LEVELS) + LANES], s[4][FN(TABLE_LEVELS) + LANES];
+} FN(level_tables);
+
+INLINE VU FN(permute)(VU table, VI index) {
+#if LANES == 8
+    return (VU)_mm256_permutevar8x32_epi32((__m256i)table, (__m256i)index);
+#else
+    return (VU)_mm512_permutexvar_epi32((__m512i)index, (__m512i)table);
+#endif
+}
+
+/* Levels lowest … lowest + level_count − 1 of the cell's four corner columns. */
+INLINE void FN(build_level_tables)(const column_cell *cell, int lowest, int level_count, FN(level_tables) *tables) {
+    uint32_t corner_hash[4] = { cell->h00, cell->h10, cell->h01, cell->h11 };
+    float x_offset[4] = { cell->fx, cell->fx - 1.0f, cell->fx, cell->fx - 1.0f };
+    float z_offset[4] = { cell->fz, cell->fz, cell->fz - 1.0f, cell->fz - 1.0f };
+    VU lane, sign = FN(splat_u)(0x80000000u);
+    for (int i = 0; i < LANES; i++) lane[i] = (uint32_t)i;
+    for (int l = 0; l < level_count; l += LANES) {
+        VU level = FN(splat_u)((uint32_t)lowest + (uint32_t)l) + lane;
+        VU y_product = level * FN(splat_u)(HASH_Y);
+        for (int k = 0; k < 4; k++) {
+            VU h = FN(mix_y)(FN(splat_u)(corner_hash[k]), y_product);
+            VU xb = (VU)FN(splat_f)(x_offset[k]), zb = (VU)FN(splat_f)(z_offset[k]);
+            VU h1 = h << 1, h2 = h << 2, h3 = h << 3;
+            VU u_sign = h3 & sign, v_sign = h2 & sign;
+            VU u_is_y = FN(top_bit_mask)(h);              /* g ≥ 8 */
+            VU v_is_y = ~FN(top_bit_mask)(h | h1);        /* g < 4 */
+            VU u_other = xb ^ u_sign;                        /* U where it is not y */
+            VU v_other = FN(select_top)(h & h1 & ~h3, zb, xb) ^ v_sign;   /* V where it is not y */
+            VU c = FN(select)(u_is_y, u_other, v_other);
+            VU a = u_is_y | v_is_y;
+            VU s = FN(select)(u_is_y, FN(select)(v_is_y, v_other, v_sign), u_sign);
+            memcpy(&tables->c[k][l], &c, sizeof c);
+            memcpy(&tables->a[k][l], &a, sizeof a);
+            memcpy(&tables->s[k][l], &s, sizeof s);
+        }
+    }
+}
+
+/* grad3 of corner column k at the level window[index], offset y. */
+INLINE VF FN(grad3_from_table)(const FN(level_tables) *tables, int k, int window, VI index, VU y_bits) {
+    VU c, a, s;
+    memcpy(&c, &tables->c[k][window], sizeof c);
+    memcpy(&a, &tables->a[k][window], sizeof a);
+    memcpy(&s, &tables->s[k][window], sizeof s);
+    return (VF)FN(permute)(c, index) + (VF)((y_bits & FN(permute)(a, index)) ^ FN(permute)(s, index));
+}
+
+/* noise3_lanes with the corner gradients from the tables; every lane's level yi and yi + 1
+ * lies in window … window + LANES − 1 (relative to the tables' lowest level). */
+INLINE VF FN(noise3_lanes_tables)(const column_cell *c, const FN(level_tables) *tables, int window, VI index, VF fy) {
+    VF one = FN(splat_f)(1.0f);
+    VF fy1 = fy - one;
+    VU fy_bits = (VU)fy, fy1_bits = (VU)fy1;
+    VI index1 = index + 1;
+    VF n000 = FN(grad3_from_table)(tables, 0, window, index, fy_bits);
+    VF n100 = FN(grad3_from_table)(tables, 1, window, index, fy_bits);
+    VF n010 = FN(grad3_from_table)(tables, 0, window, index1, fy1_bits);
+    VF n110 = FN(grad3_from_table)(tables, 1, window, index1, fy1_bits);
+    VF n001 = FN(grad3_from_table)(tables, 2, window, index, fy_bits);
+    VF n101 = FN(grad3_from_table)(tables, 3, window, index, fy_bits);
+    VF n011 = FN(grad3_from_table)(tables, 2, window, index1, fy1_bits);
+    VF n111 = FN(grad3_from_table)(tables, 3, window, index1, fy1_bits);
+    /* from here on as noise3_lanes */
+    VF v = FN(fade)(fy);
+    VF u = FN(splat_f)(c->u), w = FN(splat_f)(c->w);
+    VF x00 = FN(lerp)(n000, n100, u), x10 = FN(lerp)(n010, n110, u);
+    VF x01 = FN(lerp)(n001, n101, u), x11 = FN(lerp)(n011, n111, u);
+    VF n = FN(lerp)(FN(lerp)(x00, x10, v), FN(lerp)(x01, x11, v), w) * FN(splat_f)(NOISE3_SCALE);
+    VF minus_one = FN(splat_f)(-1.0f);
+    n = (VF)FN(select)((VU)(n > one), (VU)n, (VU)one);
+    return (VF)FN(select)((VU)(n < minus_one), (VU)n, (VU)minus_one);
+}
+#endif
+
 /* out[j] = noise at (c's column, y0 + j·dy) for j < count. */
 static TARGET void FN(noise3_column)(const column_cell *c, float y0, float dy, int count, float *out) {
     VI lane;
     for (int i = 0; i < LANES; i++) lane[i] = i;
     VF y0v = FN(splat_f)(y0), dyv = FN(splat_f)(dy);
-    int j = 0;
-    for (; j + LANES <= count; j += LANES) {
+    int vectors = (count + LANES - 1) / LANES;
+#if LANES >= 8
+    /* The levels the column's points (and the last vector's spare lanes) reach: y is monotone
+     * in j, so the first and the last point bound them. Tables pay where levels are no more
+     * than points; beyond TABLE_LEVELS, or for a vector spanning more than its window, the
+     * direct form below. */
+    FN(level_tables) tables;
+    int64_t first_level = floor_to_int(y0 + 0.0f * dy), last_level = floor_to_int(y0 + (float)(vectors * LANES - 1) * dy);
+    int64_t lowest = first_level < last_level ? first_level : last_level;
+    int64_t level_count = (first_level < last_level ? last_level : first_level) + 2 - lowest;
+    bool use_tables = count > 0 && level_count <= FN(TABLE_LEVELS) && level_count <= (int64_t)vectors * LANES;
+    if (use_tables) FN(build_level_tables)(c, (int)lowest, (int)level_count, &tables);
+#endif
+    for (int v = 0; v < vectors; v++) {
+        int j = v * LANES;
         /* y0 + (float)(first + j)·dy, as noise3_block computes it */
         VF y = y0v + __builtin_convertvector(lane + j, VF) * dyv;
-        VF n = FN(noise3_lanes)(c, y);
-        memcpy(out + j, &n, sizeof n);
-    }
-    if (j < count) {
-        VF y = y0v + __builtin_convertvector(lane + j, VF) * dyv;
-        VF n = FN(noise3_lanes)(c, y);
-        memcpy(out + j, &n, (size_t)(count - j) * sizeof(float));
+        VF n;
+#if LANES >= 8
+        VI yi = FN(floor_to_int)(y);
+        int window = yi[0] < yi[LANES - 1] ? yi[0] : yi[LANES - 1];
+        int64_t window_top = (int64_t)(yi[0] < yi[LANES - 1] ? yi[LANES - 1] : yi[0]) + 1;
+        if (use_tables && window_top - window < LANES) {
+            VF fy = y - __builtin_convertvector(yi, VF);
+            n = FN(noise3_lanes_tables)(c, &tables, (int)(window - lowest), (VI)((VU)yi - (uint32_t)window), fy);
+        } else
+#endif
+            n = FN(noise3_lanes)(c, y);
+        memcpy(out + j, &n, (size_t)(count - j < LANES ? count - j : LANES) * sizeof(float));
     }
 }
 
