@@ -6,13 +6,26 @@
  * 32-bit hash of (seed, X, Y, Z) — no permutation table, so there is no period of 256 and no
  * shared state; every octave and every field gets its own seed.
  *
- * Vectorisation: the column batch evaluates points along y at fixed (x, z). The hash parts of
- * x and z are computed once; the inner loop over y is straight-line integer and float
- * arithmetic with selects (no branches, no table lookups), processed in blocks of a fixed
- * NOISE_BLOCK points so that GCC's -O2 cost model ("very cheap": the vector loop must replace
- * the scalar one entirely) vectorises it with SSE2. `gcc -O2 -fopt-info-vec` reports the
- * block loop in noise3_block as vectorised. The scalar function runs the same inline code, so
- * the batch equals it exactly.
+ * Why SIMD, and why it may not change a bit: generation takes all its noise from these batches
+ * (the 3D column, the 2D row, the multifractal's row), and the world's determinism is a
+ * promise: a chunk's bytes depend on (params, coordinate) only, never on the CPU that generated
+ * it or on the thread count. So the batches run on explicit SIMD paths chosen once at run time
+ * (terrain__noise_set_path in terrain_internal.h): SSE2, x86-64's baseline (8 lanes in pairs
+ * of registers); AVX2, 8 lanes; AVX-512, 16 lanes (the widest the CPU has wins); off x86-64
+ * the portable C blocks below. The default build stays portable x86-64 (no -march): the wider
+ * paths are functions compiled with target attributes, reached only after
+ * __builtin_cpu_supports. All paths are one body (terrain_noise_lanes.h, GCC/Clang vector
+ * extensions) whose every float operation is the scalar code's, in the same order, lane by
+ * lane, with no FMA contraction ("fma" is never a target; -std=c11 keeps GCC from contracting,
+ * a pragma keeps Clang): each lane equals terrain__noise3 / noise2_raw /
+ * terrain__multifractal2 bit for bit, which test_terrain_noise.c checks on every path the CPU
+ * runs.
+ *
+ * What is hoisted: the x/z part of a column's hash (once per column, as before); on AVX2 and
+ * AVX-512 also the y part and the choice of gradient, once per lattice level and corner
+ * column rather than once per point and corner, read back with lane permutes (the tables in
+ * terrain_noise_lanes.h). The portable blocks are the earlier form: fixed NOISE_BLOCK loops
+ * with selects instead of branches, which GCC's -O2 vectorises with SSE2 on its own.
  */
 #include "terrain_internal.h"
 
@@ -446,9 +459,6 @@ static void multifractal2_row_portable(const mf_octave *octaves, int octave_coun
 #if defined(__clang__)
 #pragma STDC FP_CONTRACT OFF            /* GCC's -std=c11 already keeps a·b + c two operations */
 #endif
-typedef float noise_vf4 __attribute__((vector_size(16)));
-typedef int32_t noise_vi4 __attribute__((vector_size(16)));
-typedef uint32_t noise_vu4 __attribute__((vector_size(16)));
 typedef float noise_vf8 __attribute__((vector_size(32)));
 typedef int32_t noise_vi8 __attribute__((vector_size(32)));
 typedef uint32_t noise_vu8 __attribute__((vector_size(32)));
@@ -456,10 +466,18 @@ typedef float noise_vf16 __attribute__((vector_size(64)));
 typedef int32_t noise_vi16 __attribute__((vector_size(64)));
 typedef uint32_t noise_vu16 __attribute__((vector_size(64)));
 
-#define LANES 4
+/* SSE2 runs 8 lanes as pairs of 4-lane registers: two independent chains per step hide the
+ * latency of SSE2's long 32-bit multiply (four instructions; pmulld is SSE4.1), which made one
+ * 4-lane chain 18 % slower than the portable blocks. GCC and Clang warn that 32-byte vectors
+ * change the ABI without AVX; it does not matter here, where every such function is inlined
+ * (GCC warns at the end of the file, so the warning is off from here on). */
+#pragma GCC diagnostic ignored "-Wpsabi"
+#define LANES 8
 #define SUFFIX sse2
 #define TARGET
+#define NOISE_ISA_SSE2
 #include "terrain_noise_lanes.h"
+#undef NOISE_ISA_SSE2
 #undef LANES
 #undef SUFFIX
 #undef TARGET
@@ -467,7 +485,9 @@ typedef uint32_t noise_vu16 __attribute__((vector_size(64)));
 #define LANES 8
 #define SUFFIX avx2
 #define TARGET __attribute__((target("avx2")))
+#define NOISE_ISA_AVX2
 #include "terrain_noise_lanes.h"
+#undef NOISE_ISA_AVX2
 #undef LANES
 #undef SUFFIX
 #undef TARGET
@@ -475,7 +495,9 @@ typedef uint32_t noise_vu16 __attribute__((vector_size(64)));
 #define LANES 16
 #define SUFFIX avx512
 #define TARGET __attribute__((target("avx512f")))
+#define NOISE_ISA_AVX512
 #include "terrain_noise_lanes.h"
+#undef NOISE_ISA_AVX512
 #undef LANES
 #undef SUFFIX
 #undef TARGET

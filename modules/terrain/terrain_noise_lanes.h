@@ -1,18 +1,21 @@
-/* terrain_noise_lanes.h — the 3D column batch for one SIMD width, LANES points per step.
+/* terrain_noise_lanes.h — the noise batches for one SIMD path, LANES points per step.
  *
  * Not a header of its own: terrain_noise.c includes it once per dispatch path, with
- *     LANES    4, 8 or 16
+ *     LANES    points per step: 8 (SSE2, as pairs of registers; AVX2) or 16 (AVX-512)
  *     SUFFIX   the path's name, appended to each function's name (sse2, avx2, avx512)
  *     TARGET   the function attribute that enables the instruction set (empty for SSE2,
  *              x86-64's baseline)
+ *     NOISE_ISA_SSE2, NOISE_ISA_AVX2 or NOISE_ISA_AVX512   which one it is
  * defined, and the vector types noise_vf##LANES, noise_vi##LANES, noise_vu##LANES declared.
  *
  * Written with GCC/Clang vector extensions rather than one set of intrinsics per width: the
  * same lines become SSE2, AVX2 or AVX-512 code, so the three paths cannot drift apart. Every
  * float operation is the scalar code's (noise3_in_column in terrain_noise.c), in the same
  * order, one lane per point: no reassociation, no FMA (TARGET never enables "fma", and the
- * file is compiled with contraction off), so each lane's result equals terrain__noise3's bit
- * for bit. Selects and sign flips are integer operations on the floats' bits, as in grad3. */
+ * file is compiled with contraction off), so each lane's result equals the scalar function's
+ * (terrain__noise3, noise2_raw, terrain__multifractal2) bit for bit. Selects and sign flips
+ * are integer operations on the floats' bits, as in grad3. The AVX2 and AVX-512 columns also
+ * take the corner gradients from per-level tables (below), an exact rewriting of grad3. */
 
 #define NOISE_PASTE_(a, b) a##b
 #define NOISE_PASTE(a, b) NOISE_PASTE_(a, b)
@@ -48,7 +51,7 @@ INLINE VU FN(select)(VU mask, VU a, VU b) {
  * for the sign spread and the three of the select); AVX-512 compiles the generic form into a
  * shift and one ternary-logic instruction; SSE2 has no blend. */
 INLINE VU FN(select_top)(VU m, VU a, VU b) {
-#if LANES == 8
+#if defined(NOISE_ISA_AVX2)
     return (VU)_mm256_blendv_ps((__m256)a, (__m256)b, (__m256)m);
 #else
     return FN(select)(FN(top_bit_mask)(m), a, b);
@@ -125,7 +128,7 @@ INLINE VF FN(noise3_lanes)(const column_cell *c, VF y) {
     return (VF)FN(select)((VU)(n < minus_one), (VU)n, (VU)minus_one);
 }
 
-#if LANES >= 8
+#if !defined(NOISE_ISA_SSE2)
 /* ---- the column through per-level gradient tables (AVX2, AVX-512) -------------------------
  *
  * Along a column only y changes, and a corner's gradient depends on its lattice level alone, so
@@ -146,7 +149,7 @@ typedef struct FN(level_tables) {
 } FN(level_tables);
 
 INLINE VU FN(permute)(VU table, VI index) {
-#if LANES == 8
+#if defined(NOISE_ISA_AVX2)
     return (VU)_mm256_permutevar8x32_epi32((__m256i)table, (__m256i)index);
 #else
     return (VU)_mm512_permutexvar_epi32((__m512i)index, (__m512i)table);
@@ -224,7 +227,7 @@ static TARGET void FN(noise3_column)(const column_cell *c, float y0, float dy, i
     for (int i = 0; i < LANES; i++) lane[i] = i;
     VF y0v = FN(splat_f)(y0), dyv = FN(splat_f)(dy);
     int vectors = (count + LANES - 1) / LANES;
-#if LANES >= 8
+#if !defined(NOISE_ISA_SSE2)
     /* The levels the column's points (and the last vector's spare lanes) reach: y is monotone
      * in j, so the first and the last point bound them. Tables pay where levels are no more
      * than points; beyond TABLE_LEVELS, or for a vector spanning more than its window, the
@@ -241,7 +244,7 @@ static TARGET void FN(noise3_column)(const column_cell *c, float y0, float dy, i
         /* y0 + (float)(first + j)·dy, as noise3_block computes it */
         VF y = y0v + __builtin_convertvector(lane + j, VF) * dyv;
         VF n;
-#if LANES >= 8
+#if !defined(NOISE_ISA_SSE2)
         VI yi = FN(floor_to_int)(y);
         int window = yi[0] < yi[LANES - 1] ? yi[0] : yi[LANES - 1];
         int64_t window_top = (int64_t)(yi[0] < yi[LANES - 1] ? yi[LANES - 1] : yi[0]) + 1;

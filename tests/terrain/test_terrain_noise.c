@@ -162,9 +162,10 @@ static void check_rows_bits(uint64_t *state, int count, const char *path) {
 Test(terrain_noise, every_dispatch_path_equals_scalar_bit_for_bit) {
     /* The world must not depend on the CPU that generates it: each path the CPU runs, forced in
      * turn, over many random columns: coordinates near the origin and around ±10⁵ (where a
-     * float's spacing is 1/128), negative y, steps up to a few cells, and counts 0, 1, below,
-     * at and past each lane width (4, 8, 16) and a few lattice seams inside one batch; the same
-     * for the 2D row batch and the multifractal's row, which generation also calls. */
+     * float's spacing is 1/128), negative y, steps from 0 to a few cells (the AVX2/AVX-512
+     * level tables and their direct fallback), counts 0, 1, below, at and past each lane width
+     * (8, 16), lattice seams inside one batch; the same for the 2D row batch and the
+     * multifractal's row, which generation also calls. */
     static const int counts[] = { 0, 1, 2, 3, 4, 5, 7, 8, 9, 15, 16, 17, 23, 31, 33, 48, 63, 64, 65, 80 };
     int count_kinds = (int)(sizeof counts / sizeof counts[0]);
     terrain__noise_path before = terrain__noise_get_path();
