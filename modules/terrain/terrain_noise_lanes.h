@@ -26,13 +26,13 @@
 #define INLINE static inline __attribute__((always_inline)) TARGET
 
 INLINE VF FN(splat_f)(float s) {
-    VF v;
+    VF v = { 0 };   /* filled below; the initialiser keeps -O1 from warning */
     for (int i = 0; i < LANES; i++) v[i] = s;
     return v;
 }
 
 INLINE VU FN(splat_u)(uint32_t s) {
-    VU v;
+    VU v = { 0 };
     for (int i = 0; i < LANES; i++) v[i] = s;
     return v;
 }
@@ -161,7 +161,7 @@ INLINE void FN(build_level_tables)(const column_cell *cell, int lowest, int leve
     uint32_t corner_hash[4] = { cell->h00, cell->h10, cell->h01, cell->h11 };
     float x_offset[4] = { cell->fx, cell->fx - 1.0f, cell->fx, cell->fx - 1.0f };
     float z_offset[4] = { cell->fz, cell->fz, cell->fz - 1.0f, cell->fz - 1.0f };
-    VU lane, sign = FN(splat_u)(0x80000000u);
+    VU lane = { 0 }, sign = FN(splat_u)(0x80000000u);
     for (int i = 0; i < LANES; i++) lane[i] = (uint32_t)i;
     for (int l = 0; l < level_count; l += LANES) {
         VU level = FN(splat_u)((uint32_t)lowest + (uint32_t)l) + lane;
@@ -223,7 +223,7 @@ INLINE VF FN(noise3_lanes_tables)(const column_cell *c, const FN(level_tables) *
 
 /* out[j] = noise at (c's column, y0 + j·dy) for j < count. */
 static TARGET void FN(noise3_column)(const column_cell *c, float y0, float dy, int count, float *out) {
-    VI lane;
+    VI lane = { 0 };
     for (int i = 0; i < LANES; i++) lane[i] = i;
     VF y0v = FN(splat_f)(y0), dyv = FN(splat_f)(dy);
     int vectors = (count + LANES - 1) / LANES;
