@@ -58,6 +58,24 @@ float terrain__noise2(uint32_t seed, float x, float z);
 void terrain__noise2_row(uint32_t seed, const float *xs, float scale, float z, int count, float *out);
 /* The column batch: out[j] = terrain__noise3(seed, x, y0 + j·dy, z) for j < count. */
 void terrain__noise3_column(uint32_t seed, float x, float y0, float dy, float z, int count, float *out);
+/* The code path of the batches above and terrain__multifractal2_row. AUTO picks, on first use,
+ * the widest the CPU has (AVX-512, else AVX2, else SSE2, x86-64's baseline; PORTABLE, plain C,
+ * off x86-64). Every path gives the scalar functions' bits exactly, so forcing one (tests,
+ * benchmarks) changes only speed.
+ * terrain__noise_set_path returns false, changing nothing, for a path this CPU cannot run;
+ * terrain__noise_get_path returns the path in use (never AUTO). */
+typedef enum terrain__noise_path {
+    TERRAIN__NOISE_AUTO,
+    TERRAIN__NOISE_PORTABLE,
+    TERRAIN__NOISE_SSE2,
+    TERRAIN__NOISE_AVX2,
+    TERRAIN__NOISE_AVX512,
+    TERRAIN__NOISE_PATH_COUNT
+} terrain__noise_path;
+bool terrain__noise_path_supported(terrain__noise_path path);
+bool terrain__noise_set_path(terrain__noise_path path);
+terrain__noise_path terrain__noise_get_path(void);
+const char *terrain__noise_path_name(terrain__noise_path path);
 
 /* Rescale-and-add multifractal with domain warping (004 §2.1, §2.2) over a 2D domain measured
  * in wavelengths of the lowest octave. */

@@ -6,6 +6,8 @@
 #include "terrain/terrain_internal.h"
 
 #include <math.h>
+#include <stdio.h>
+#include <string.h>
 
 /* A small deterministic sequence of test points (an LCG: the tests' own, not the noise's). */
 static float next_coordinate(uint64_t *state, float extent) {
@@ -93,6 +95,117 @@ Test(terrain_noise, column_batch_equals_scalar) {
             cr_assert_eq(out[counts[c]], 12345.0f, "wrote past count");
         }
     }
+}
+
+/* One of n choices from the same sequence, so that the choices of one trial do not move in step. */
+static int next_choice(uint64_t *state, int n) {
+    *state = *state * 6364136223846793005ull + 1442695040888963407ull;
+    return (int)((*state >> 33) % (uint64_t)n);
+}
+
+static uint32_t bits_of(float f) {
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    return u;
+}
+
+/* One random column through the path in use, against terrain__noise3 point by point, bit for
+ * bit (-0 and +0 differ here, which == would not see). */
+static void check_column_bits(uint32_t seed, float x, float y0, float dy, float z, int count, const char *path) {
+    enum { MAX_COUNT = 80 };
+    float out[MAX_COUNT + 1];
+    for (int j = 0; j <= MAX_COUNT; j++) out[j] = 12345.0f;
+    terrain__noise3_column(seed, x, y0, dy, z, count, out);
+    for (int j = 0; j < count; j++) {
+        float expected = terrain__noise3(seed, x, y0 + (float)j * dy, z);
+        cr_assert_eq(bits_of(out[j]), bits_of(expected),
+                     "%s path: seed %u, column (%.9g, %.9g), y0 %.9g, dy %.9g, count %d, sample %d: %.9g, scalar %.9g",
+                     path, seed, x, z, y0, dy, count, j, out[j], expected);
+    }
+    cr_assert_eq(out[count], 12345.0f, "%s path wrote past count %d", path, count);
+}
+
+/* A random row through the path in use: the 2D row batch against the portable path's row
+ * (noise2_row is unclamped, so terrain__noise2 is its reference only inside [-1, 1], checked
+ * too), and the multifractal's row against terrain__multifractal2, bit for bit. */
+static void check_rows_bits(uint64_t *state, int count, const char *path) {
+    enum { MAX_COUNT = 80 };
+    float xs[MAX_COUNT], out[MAX_COUNT + 1], portable[MAX_COUNT];
+    float extent = next_choice(state, 4) ? 40.0f : 1e5f, z = next_coordinate(state, extent);
+    float scale = next_choice(state, 3) ? 1.0f : 2.5f;
+    for (int j = 0; j < count; j++) xs[j] = next_coordinate(state, extent);
+    uint32_t seed = (uint32_t)(*state >> 32);
+    out[count] = 12345.0f;
+    terrain__noise2_row(seed, xs, scale, z, count, out);
+    cr_assert_eq(out[count], 12345.0f, "%s path: noise2_row wrote past count %d", path, count);
+    terrain__noise_path path_in_use = terrain__noise_get_path();
+    terrain__noise_set_path(TERRAIN__NOISE_PORTABLE);
+    terrain__noise2_row(seed, xs, scale, z, count, portable);
+    terrain__noise_set_path(path_in_use);
+    for (int j = 0; j < count; j++) {
+        cr_assert_eq(bits_of(out[j]), bits_of(portable[j]), "%s path: noise2_row seed %u at (%.9g·%g, %.9g): %.9g, portable %.9g",
+                     path, seed, xs[j], scale, z, out[j], portable[j]);
+        if (fabsf(out[j]) < 1.0f)
+            cr_assert_eq(bits_of(out[j]), bits_of(terrain__noise2(seed, xs[j] * scale, z)), "%s path: noise2 at %d", path, j);
+    }
+    terrain__multifractal mf = { .seed = seed, .lacunarity = 2.0f, .hurst = 0.85f,
+                                 .octaves = 1.0f + (float)next_choice(state, 12) * 0.7f,
+                                 .warp = next_choice(state, 4) ? 1.0f : 0.0f };
+    out[count] = 12345.0f;
+    terrain__multifractal2_row(&mf, xs, z, count, out);
+    cr_assert_eq(out[count], 12345.0f, "%s path: multifractal2_row wrote past count %d", path, count);
+    for (int j = 0; j < count; j++)
+        cr_assert_eq(bits_of(out[j]), bits_of(terrain__multifractal2(&mf, xs[j], z)),
+                     "%s path: multifractal2_row (%g octaves) at (%.9g, %.9g): %.9g", path, mf.octaves, xs[j], z, out[j]);
+}
+
+Test(terrain_noise, every_dispatch_path_equals_scalar_bit_for_bit) {
+    /* The world must not depend on the CPU that generates it: each path the CPU runs, forced in
+     * turn, over many random columns: coordinates near the origin and around ±10⁵ (where a
+     * float's spacing is 1/128), negative y, steps from 0 to a few cells (the AVX2/AVX-512
+     * level tables and their direct fallback), counts 0, 1, below, at and past each lane width
+     * (8, 16), lattice seams inside one batch; the same for the 2D row batch and the
+     * multifractal's row, which generation also calls. */
+    static const int counts[] = { 0, 1, 2, 3, 4, 5, 7, 8, 9, 15, 16, 17, 23, 31, 33, 48, 63, 64, 65, 80 };
+    int count_kinds = (int)(sizeof counts / sizeof counts[0]);
+    terrain__noise_path before = terrain__noise_get_path();
+    int paths_run = 0;
+    for (int p = TERRAIN__NOISE_PORTABLE; p < TERRAIN__NOISE_PATH_COUNT; p++) {
+        terrain__noise_path path = (terrain__noise_path)p;
+        const char *name = terrain__noise_path_name(path);
+        if (!terrain__noise_path_supported(path)) {
+            fprintf(stderr, "terrain_noise: the %s path is not checked: this CPU cannot run it\n", name);
+            cr_assert_not(terrain__noise_set_path(path), "%s accepted on a CPU without it", name);
+            continue;
+        }
+        cr_assert(terrain__noise_set_path(path), "%s", name);
+        cr_assert_eq(terrain__noise_get_path(), path, "%s", name);
+        paths_run++;
+        uint64_t state = 2024;
+        for (int trial = 0; trial < 3000; trial++) {
+            static const float extents[] = { 1e5f, 300.0f, 4.0f };
+            float extent = extents[next_choice(&state, 3)];
+            float x = next_coordinate(&state, extent), z = next_coordinate(&state, extent);
+            float y0 = next_coordinate(&state, next_choice(&state, 2) ? 1e5f : 60.0f);
+            float dy = fabsf(next_coordinate(&state, next_choice(&state, 5) ? 0.7f : 3.0f));
+            uint32_t seed = (uint32_t)(trial * 2654435761u);
+            check_column_bits(seed, x, y0, dy, z, counts[next_choice(&state, count_kinds)], name);
+        }
+        for (int trial = 0; trial < 1000; trial++) check_rows_bits(&state, counts[next_choice(&state, count_kinds)], name);
+        /* Exactly on lattice planes, and negative steps (a column read downwards). */
+        for (int trial = 0; trial < 200; trial++) {
+            float x = (float)(trial % 7 - 3), z = (float)(trial % 5 - 2) + (trial % 2 ? 0.5f : 0.0f);
+            check_column_bits((uint32_t)trial, x, (float)(trial - 100), trial % 3 ? 0.25f : -0.125f, z,
+                              counts[trial % count_kinds], name);
+        }
+    }
+    cr_assert(terrain__noise_set_path(TERRAIN__NOISE_AUTO));
+    cr_expect_eq(terrain__noise_get_path(), before, "AUTO chooses the path the first batch chose");
+    cr_expect_geq(paths_run, 1);
+#if defined(__x86_64__)
+    cr_expect(terrain__noise_path_supported(TERRAIN__NOISE_SSE2), "SSE2 is x86-64's baseline");
+    cr_expect_geq(paths_run, 2, "portable and SSE2 at least");
+#endif
 }
 
 Test(terrain_noise, fbm_bounded_by_its_amplitudes) {

@@ -14,15 +14,21 @@
  *       (target ≤ 3 MB; paper 002: 6.29 MB; a byte per 1 m voxel: 134 MB).
  *   noise.ours, noise.ours.scalar, noise.stb_perlin   ns per sample of a 4-octave fBm
  *       (lacunarity 2, gain 0.5) over the same 16 384 points (256 columns of 64 samples along y):
- *       ours as the column batch (terrain_noise3_column per octave), ours point by point
- *       (terrain_fbm3), and stb_perlin_fbm_noise3 (Debian libstb-dev), one thread each.
- *   noise.speedup_vs_stb   stb_perlin's time over the column batch's, run by run.
+ *       ours as the column batch (terrain_noise3_column per octave) on the path the run-time
+ *       dispatch chooses (terrain_noise.c: AVX-512 where the CPU has it, else AVX2, else SSE2;
+ *       the run prints which, "(noise.ours: the avx512 path)" on the machine of issue 20), ours
+ *       point by point (terrain_fbm3), and stb_perlin_fbm_noise3 (Debian libstb-dev), one
+ *       thread each. All paths give the same bits.
+ *   noise.ours.sse2, .avx2, .avx512   the column batch forced onto one path (those the CPU
+ *       runs): what the dispatch gains over x86-64's baseline.
+ *   noise.speedup_vs_stb   stb_perlin's time over the column batch's (noise.ours), run by run.
  */
 #include "bench.h"
 
 #include "core/core.h"
 #include "jobs/jobs.h"
 #include "terrain/terrain.h"
+#include "terrain/terrain_internal.h"
 
 #define STB_PERLIN_IMPLEMENTATION
 #include <stb/stb_perlin.h>
@@ -93,8 +99,9 @@ static float column_z(int c) { return (float)(c % 17) * 1.37f - 3.3f; }
 #define COLUMN_Y0 (-2.3f)
 #define COLUMN_DY 0.0625f
 
+/* user: the terrain__noise_path to force, or NULL for the one the dispatch chooses. */
 static double sample_ours_batch(void *user) {
-    (void)user;
+    terrain__noise_set_path(user ? *(const terrain__noise_path *)user : TERRAIN__NOISE_AUTO);
     float sum[NOISE_COLUMN_SAMPLES], octave[NOISE_COLUMN_SAMPLES];
     double check = 0.0;
     uint64_t start = core_time_ns();
@@ -111,6 +118,7 @@ static double sample_ours_batch(void *user) {
         check += sum[c % NOISE_COLUMN_SAMPLES];
     }
     double ns = (double)(core_time_ns() - start) / NOISE_SAMPLES;
+    terrain__noise_set_path(TERRAIN__NOISE_AUTO);
     bench_consume(check);
     return ns;
 }
@@ -142,21 +150,38 @@ static double sample_stb(void *user) {
 
 enum { NOISE_RUNS = 15 };
 
+/* The column batch's paths forced one by one, beside the dispatch's choice (noise.ours). */
+static const struct { terrain__noise_path path; const char *row; } NOISE_PATHS[] = {
+    { TERRAIN__NOISE_SSE2, "noise.ours.sse2" },
+    { TERRAIN__NOISE_AVX2, "noise.ours.avx2" },
+    { TERRAIN__NOISE_AVX512, "noise.ours.avx512" },
+};
+enum { NOISE_PATH_ROWS = sizeof NOISE_PATHS / sizeof NOISE_PATHS[0] };
+
 static void bench_noise(bench_context *ctx) {
     if (!bench_wants(ctx, "noise.")) return;
-    /* Interleaved runs, so a disturbance on the machine hits all three alike. */
-    double ours[NOISE_RUNS], scalar[NOISE_RUNS], stb[NOISE_RUNS], speedup[NOISE_RUNS];
+    /* Interleaved runs, so a disturbance on the machine hits all of them alike. */
+    double ours[NOISE_RUNS], forced[NOISE_PATH_ROWS][NOISE_RUNS], scalar[NOISE_RUNS], stb[NOISE_RUNS],
+        speedup[NOISE_RUNS];
+    bool run_path[NOISE_PATH_ROWS];
+    for (int p = 0; p < NOISE_PATH_ROWS; p++)
+        run_path[p] = terrain__noise_path_supported(NOISE_PATHS[p].path) && bench_wants(ctx, NOISE_PATHS[p].row);
     bench_consume(sample_ours_batch(NULL) + sample_ours_scalar(NULL) + sample_stb(NULL));
     for (int r = 0; r < NOISE_RUNS; r++) {
         ours[r] = sample_ours_batch(NULL);
+        for (int p = 0; p < NOISE_PATH_ROWS; p++)
+            if (run_path[p]) forced[p][r] = sample_ours_batch((void *)&NOISE_PATHS[p].path);
         scalar[r] = sample_ours_scalar(NULL);
         stb[r] = sample_stb(NULL);
         speedup[r] = stb[r] / ours[r];
     }
     if (bench_wants(ctx, "noise.ours")) bench_record(ctx, "noise.ours", "ns", ours, NOISE_RUNS);
+    for (int p = 0; p < NOISE_PATH_ROWS; p++)
+        if (run_path[p]) bench_record(ctx, NOISE_PATHS[p].row, "ns", forced[p], NOISE_RUNS);
     if (bench_wants(ctx, "noise.ours.scalar")) bench_record(ctx, "noise.ours.scalar", "ns", scalar, NOISE_RUNS);
     if (bench_wants(ctx, "noise.stb_perlin")) bench_record(ctx, "noise.stb_perlin", "ns", stb, NOISE_RUNS);
     if (bench_wants(ctx, "noise.speedup_vs_stb")) bench_record(ctx, "noise.speedup_vs_stb", "x", speedup, NOISE_RUNS);
+    printf("  (noise.ours: the %s path)\n", terrain__noise_path_name(terrain__noise_get_path()));
 }
 
 void bench_group_terrain_generate(bench_context *ctx) {
