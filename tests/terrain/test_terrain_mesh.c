@@ -7,8 +7,10 @@
 #include "core/core.h"
 #include "terrain/terrain.h"
 #include "terrain/terrain_internal.h"
+#include "jobs/jobs.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -314,6 +316,148 @@ Test(terrain_mesh, random_noise_fields_are_watertight) {
         terrain_field_free(&f);
     }
     cr_expect_eq(meshes_with_triangles, 60);
+}
+
+/* ---- the edge-based passes against a cell-by-cell walk ------------------------------------ */
+
+/* The mesher works row by row on sign bits (Flying Edges). The reference here walks every cell,
+ * takes its triangles from the case table and places each vertex on its grid edge by the
+ * documented rule ((index + t)·spacing, t = terrain__mesh_edge_t), with nothing shared with the
+ * mesher's passes. The two meshes must hold the same triangles (as position triples, each turned
+ * to start at its smallest corner so the winding counts) and one vertex per crossed edge. */
+typedef struct ref_triangle { float p[9]; } ref_triangle;
+
+static int compare_triangles(const void *a, const void *b) { return memcmp(a, b, sizeof(ref_triangle)); }
+
+static void canonical_triangle(const float *p0, const float *p1, const float *p2, ref_triangle *out) {
+    const float *p[3] = { p0, p1, p2 };
+    int first = 0;
+    for (int k = 1; k < 3; k++)
+        if (memcmp(p[k], p[first], 3 * sizeof(float)) < 0) first = k;
+    for (int k = 0; k < 3; k++) memcpy(out->p + 3 * k, p[(first + k) % 3], 3 * sizeof(float));
+}
+
+/* The reference's triangles (sorted) and crossed-edge count, for the box apron … n − 1 − apron. */
+static ref_triangle *reference_triangles(const terrain_field *f, int apron, size_t *triangle_count, size_t *edges) {
+    const int n[3] = { f->nx, f->ny, f->nz };
+    const terrain__mc_case *table = terrain__mc_table();
+    size_t capacity = 1024, count = 0;
+    ref_triangle *out = malloc(capacity * sizeof *out);
+    #define REF_VALUE(x, y, z) f->values[((size_t)(z) * n[1] + (y)) * n[0] + (x)]
+    for (int z = apron; z < n[2] - 1 - apron; z++)
+        for (int y = apron; y < n[1] - 1 - apron; y++)
+            for (int x = apron; x < n[0] - 1 - apron; x++) {
+                unsigned config = 0;
+                for (int c = 0; c < 8; c++) config |= (unsigned)(REF_VALUE(x + (c & 1), y + (c >> 1 & 1), z + (c >> 2)) > 0.0f) << c;
+                const terrain__mc_case *cell = &table[config];
+                for (int t = 0; t < cell->triangle_count; t++) {
+                    float p[3][3];
+                    for (int k = 0; k < 3; k++) {
+                        int e = cell->edges[t][k], c0 = terrain__mc_edge_corners[e][0], axis = e / 4;
+                        int at[3] = { x + (c0 & 1), y + (c0 >> 1 & 1), z + (c0 >> 2) };
+                        float f0 = REF_VALUE(at[0], at[1], at[2]);
+                        float f1 = REF_VALUE(at[0] + (axis == 0), at[1] + (axis == 1), at[2] + (axis == 2));
+                        for (int a = 0; a < 3; a++) p[k][a] = (float)at[a] * f->spacing;
+                        p[k][axis] = ((float)at[axis] + terrain__mesh_edge_t(f0, f1)) * f->spacing;
+                    }
+                    if (count == capacity) out = realloc(out, (capacity *= 2) * sizeof *out);
+                    canonical_triangle(p[0], p[1], p[2], &out[count++]);
+                }
+            }
+    /* Crossed edges inside the box: lo … hi samples, edges lo … hi − 1 along theirs (none when
+     * an axis has no cell: such a field meshes to nothing). */
+    *edges = 0;
+    bool cells = n[0] - 1 - 2 * apron > 0 && n[1] - 1 - 2 * apron > 0 && n[2] - 1 - 2 * apron > 0;
+    for (int z = apron; cells && z <= n[2] - 1 - apron; z++)
+        for (int y = apron; y <= n[1] - 1 - apron; y++)
+            for (int x = apron; x <= n[0] - 1 - apron; x++) {
+                bool inside = REF_VALUE(x, y, z) > 0.0f;
+                if (x < n[0] - 1 - apron && (REF_VALUE(x + 1, y, z) > 0.0f) != inside) (*edges)++;
+                if (y < n[1] - 1 - apron && (REF_VALUE(x, y + 1, z) > 0.0f) != inside) (*edges)++;
+                if (z < n[2] - 1 - apron && (REF_VALUE(x, y, z + 1) > 0.0f) != inside) (*edges)++;
+            }
+    #undef REF_VALUE
+    qsort(out, count, sizeof *out, compare_triangles);
+    *triangle_count = count;
+    return out;
+}
+
+static void expect_mesh_matches_reference(const terrain_field *f, int apron, const char *what) {
+    size_t count, edges;
+    ref_triangle *expected = reference_triangles(f, apron, &count, &edges);
+    terrain_mesh mesh;
+    cr_assert(terrain_mesh_build(f, &(terrain_mesh_desc){ .apron = apron, .no_optimize = true }, &mesh));
+    cr_expect_eq(mesh.index_count, count * 3, "%s apron %d: %u indices, the walk %zu", what, apron, mesh.index_count, count * 3);
+    cr_expect_eq(mesh.vertex_count, edges, "%s apron %d: %u vertices, %zu crossed edges", what, apron, mesh.vertex_count, edges);
+    if (mesh.index_count == count * 3) {
+        ref_triangle *got = malloc((count ? count : 1) * sizeof *got);
+        for (size_t t = 0; t < count; t++)
+            canonical_triangle(mesh.vertices[mesh.indices[3 * t]].position, mesh.vertices[mesh.indices[3 * t + 1]].position,
+                               mesh.vertices[mesh.indices[3 * t + 2]].position, &got[t]);
+        qsort(got, count, sizeof *got, compare_triangles);
+        size_t differ = 0;
+        for (size_t t = 0; t < count; t++) differ += memcmp(&got[t], &expected[t], sizeof *got) != 0;
+        cr_expect_eq(differ, 0, "%s apron %d: %zu of %zu triangles differ from the cell-by-cell walk", what, apron, differ, count);
+        free(got);
+    }
+    terrain_mesh_free(&mesh);
+    free(expected);
+}
+
+Test(terrain_mesh, row_passes_equal_a_cell_by_cell_walk) {
+    /* Rows narrower and wider than a 64-bit word and straddling one (63 … 130 samples), noise
+     * with exact zeros, and whole rows of one sign beside rows of the other (the passes skip
+     * rows whose signs agree with their neighbours': planes test that shortcut's edges). */
+    const int sizes[][3] = { { 2, 2, 2 }, { 5, 4, 3 }, { 35, 35, 35 }, { 63, 6, 5 }, { 64, 5, 6 },
+                             { 65, 7, 4 }, { 66, 5, 5 }, { 128, 4, 4 }, { 130, 6, 5 } };
+    uint32_t state = 12345;
+    for (size_t s = 0; s < CORE_COUNTOF(sizes); s++)
+        for (int kind = 0; kind < 3; kind++) {
+            terrain_field f = { .nx = sizes[s][0], .ny = sizes[s][1], .nz = sizes[s][2], .spacing = 0.5f };
+            f.values = core_alloc((size_t)f.nx * f.ny * f.nz * sizeof *f.values);
+            for (int z = 0; z < f.nz; z++)
+                for (int y = 0; y < f.ny; y++)
+                    for (int x = 0; x < f.nx; x++) {
+                        state = state * 1664525u + 1013904223u;
+                        float noise = (float)(state >> 8) / 16777216.0f - 0.5f;
+                        float value = kind == 0 ? noise
+                                    : kind == 1 ? roundf(noise * 2.0f) / 2.0f                /* many zeros */
+                                                : (float)(y % 3 == 1) - 0.5f + (x == 40 && z == 2 ? 1.0f : 0.0f);
+                        f.values[((size_t)z * f.ny + y) * f.nx + x] = value;
+                    }
+            char what[64];
+            snprintf(what, sizeof what, "%d × %d × %d kind %d", f.nx, f.ny, f.nz, kind);
+            for (int apron = 0; apron <= 1; apron++) expect_mesh_matches_reference(&f, apron, what);
+            terrain_field_free(&f);
+        }
+}
+
+Test(terrain_mesh, big_fields_mesh_the_same_on_every_thread_count) {
+    /* 71³ samples: past the size the mesher splits over threads. Same bytes with 1, 2 and 3
+     * threads and without a job system. */
+    sphere s = { { 35.2, 33.7, 36.1 }, 30.3 };
+    terrain_field f = field_make(71, 71, 71, sphere_fn, &s);
+    terrain_mesh alone;
+    cr_assert(terrain_mesh_build(&f, &(terrain_mesh_desc){ .apron = 1, .no_optimize = true }, &alone));
+    cr_assert_gt(alone.index_count, 0);
+    for (int threads = 1; threads <= 3; threads++) {
+        job_system *jobs = job_system_create(&(job_system_desc){ .threads = threads });
+        terrain_mesh mesh;
+        cr_assert(terrain_mesh_build(&f, &(terrain_mesh_desc){ .apron = 1, .no_optimize = true, .jobs = jobs }, &mesh));
+        cr_expect_eq(mesh.vertex_count, alone.vertex_count, "%d threads", threads);
+        cr_expect_eq(mesh.index_count, alone.index_count, "%d threads", threads);
+        if (mesh.vertex_count == alone.vertex_count && mesh.index_count == alone.index_count) {
+            cr_expect(!memcmp(mesh.vertices, alone.vertices, mesh.vertex_count * sizeof *mesh.vertices), "%d threads", threads);
+            cr_expect(!memcmp(mesh.indices, alone.indices, mesh.index_count * sizeof *mesh.indices), "%d threads", threads);
+        }
+        terrain_mesh_free(&mesh);
+        job_system_destroy(jobs);
+    }
+    mesh_topology t = mesh_check(&alone);
+    cr_expect(t.watertight);
+    cr_expect_eq(t.euler, 2);
+    terrain_mesh_free(&alone);
+    terrain_field_free(&f);
 }
 
 /* ---- empty, full, apron --------------------------------------------------------------------- */
