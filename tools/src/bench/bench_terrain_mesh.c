@@ -7,13 +7,25 @@
  *                                generation is done before timing (the chunks and their
  *                                neighbours are cached first). Target ≤ 2 ms.
  *   terrain.field.chunk32, terrain.mesh.chunk32   the two halves of the row above, same runs.
+ *   terrain.mesh.chunk32.isosurface   the meshing half with no world (no weights, occlusion or
+ *                                reordering): the mesher's own part, same runs.
  *   terrain.mesh.chunk32.no_ao   the meshing half again on the same fields without ambient
  *                                occlusion (terrain_mesh_desc.no_occlusion), same runs: the
  *                                occlusion's cost is the difference.
  *   terrain.mesh.256             ms to mesh a 256³-sample field (a generated region across the
- *                                surface, sampled beforehand, read from memory), same options.
- *   terrain.mesh.*.ns_per_cell   both meshing rows per cell, and their ratio: how meshing scales
- *                                from a chunk to a large grid (cache effects, skipped cells).
+ *                                surface, sampled beforehand, read from memory) on every core
+ *                                (--threads): the isosurface alone, positions, normals and
+ *                                triangles, no weights, occlusion or reordering, every cell (no
+ *                                apron): what VTK's vtkFlyingEdges3D makes from the same file.
+ *   terrain.mesh.256.one_core    the same on the calling thread alone.
+ *   terrain.mesh.256.vtk_flying_edges, terrain.mesh.256.vs_vtk   the peer on the same field in
+ *                                the same run (tools/peers/vtk_flying_edges.py: vtkFlyingEdges3D
+ *                                with normals, the same thread count; Debian's python3-vtk9), and
+ *                                ours over its, run by run. Left out when VTK is not installed.
+ *   terrain.mesh.256.full        ms for the game's options on that field, one core: weights,
+ *                                occlusion and vertex-cache order (this row was terrain.mesh.256
+ *                                before the isosurface alone was).
+ *   terrain.mesh.*.ns_per_cell   the chunk's meshing half and the one-core 256 row per cell.
  *   terrain.mesh_lod1.chunk32, terrain.mesh_lod2.chunk32   ms for terrain_mesh_chunk of one
  *                                32³-cell chunk at level 1 / 2 (cells 2 / 4 m) with all 26
  *                                neighbours finer, the worst case for transition cells: coarse
@@ -24,18 +36,19 @@
  *                                surfaces the mesh phase finds beside each mesh (32² columns read,
  *                                grouped by height). Mean over 8 such chunks, generated first.
  *
- * Peer: scikit-image's marching_cubes or VTK's vtkFlyingEdges3D would be the natural peer on the
- * same field, but neither is in Debian 12's default install here (`python3 -c "import skimage"`
- * and `import vtk` both fail), so there is no peer row; terrain_export writes the field as
- * PREFIX.raw/.json for running one by hand where it is installed.
+ * The peer needs /usr/bin/python3 with VTK; the field goes to a file in $TMPDIR (or /tmp) for it.
  */
 #include "bench.h"
 
 #include "core/core.h"
+#include "jobs/jobs.h"
 #include "terrain/terrain.h"
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
 
 #define CHUNK_CELLS 32
 #define CHUNK_APRON 1
@@ -46,13 +59,13 @@ typedef struct mesh_bench {
     terrain_world *world;
     int64_t chunks[CHUNK_COUNT][3];
     /* Per-run halves of the chunk row, recorded as rows of their own afterwards. */
-    double field_ms[64], mesh_ms[64], mesh_no_ao_ms[64];
+    double field_ms[64], mesh_ms[64], mesh_no_ao_ms[64], mesh_iso_ms[64];
     int runs_seen;
     double cells_meshed;            /* per chunk, for ns/cell */
     uint64_t triangles;
     terrain_field big;
-    double big_ms[16];
-    int big_runs_seen;
+    job_system *jobs;               /* the 256 rows' threads; NULL = one core */
+    bool full;                      /* the game's options (weights, occlusion, reordering) */
 } mesh_bench;
 
 static int64_t bench_floor_div(int64_t a, int64_t b) {
@@ -77,7 +90,7 @@ static void pick_chunks(mesh_bench *b) {
 
 static double sample_field_mesh_chunk(void *user) {
     mesh_bench *b = user;
-    double field_total = 0.0, mesh_total = 0.0, no_ao_total = 0.0;
+    double field_total = 0.0, mesh_total = 0.0, no_ao_total = 0.0, iso_total = 0.0;
     uint64_t triangles = 0;
     for (int c = 0; c < CHUNK_COUNT; c++) {
         const int64_t *chunk = b->chunks[c];
@@ -101,6 +114,11 @@ static double sample_field_mesh_chunk(void *user) {
                            &mesh);
         no_ao_total += core_ns_to_ms(core_time_ns() - t3);
         terrain_mesh_free(&mesh);
+        /* And the isosurface alone: no weights, occlusion or reordering. */
+        uint64_t t4 = core_time_ns();
+        terrain_mesh_build(&field, &(terrain_mesh_desc){ .apron = CHUNK_APRON, .no_optimize = true }, &mesh);
+        iso_total += core_ns_to_ms(core_time_ns() - t4);
+        terrain_mesh_free(&mesh);
         terrain_field_free(&field);
     }
     /* The harness calls once to warm up, then `runs` times: keep the timed runs' halves. */
@@ -108,6 +126,7 @@ static double sample_field_mesh_chunk(void *user) {
         b->field_ms[b->runs_seen - 1] = field_total / CHUNK_COUNT;
         b->mesh_ms[b->runs_seen - 1] = mesh_total / CHUNK_COUNT;
         b->mesh_no_ao_ms[b->runs_seen - 1] = no_ao_total / CHUNK_COUNT;
+        b->mesh_iso_ms[b->runs_seen - 1] = iso_total / CHUNK_COUNT;
     }
     b->runs_seen++;
     b->triangles = triangles / CHUNK_COUNT;
@@ -117,25 +136,55 @@ static double sample_field_mesh_chunk(void *user) {
 
 static double sample_mesh_big(void *user) {
     mesh_bench *b = user;
+    terrain_mesh_desc desc = { .no_optimize = true, .jobs = b->jobs };
+    if (b->full) desc = (terrain_mesh_desc){ .world = b->world };
     uint64_t t0 = core_time_ns();
     terrain_mesh mesh;
-    terrain_mesh_build(&b->big, &(terrain_mesh_desc){ .world = b->world }, &mesh);
+    terrain_mesh_build(&b->big, &desc, &mesh);
     double ms = core_ns_to_ms(core_time_ns() - t0);
     b->triangles = mesh.index_count / 3;
     bench_consume((double)mesh.index_count);
     terrain_mesh_free(&mesh);
-    if (b->big_runs_seen > 0 && b->big_runs_seen <= (int)CORE_COUNTOF(b->big_ms)) b->big_ms[b->big_runs_seen - 1] = ms;
-    b->big_runs_seen++;
     return ms;
 }
 
-static double median(double *values, int count) {
-    for (int i = 1; i < count; i++)   /* insertion sort: a handful of values */
-        for (int j = i; j > 0 && values[j - 1] > values[j]; j--) {
-            double t = values[j];
-            values[j] = values[j - 1], values[j - 1] = t;
+/* VTK's vtkFlyingEdges3D on the same field, `runs` times (ms each into `ms`); 0 when the peer
+ * cannot run (no python3 with VTK). */
+static int run_vtk_peer(const terrain_field *field, int threads, int runs, double *ms, uint64_t *triangles) {
+    if (access("/usr/bin/python3", X_OK) != 0 || access("tools/peers/vtk_flying_edges.py", R_OK) != 0) return 0;
+    const char *tmp = getenv("TMPDIR");
+    char prefix[512], command[1200], error[256];
+    snprintf(prefix, sizeof prefix, "%s/bench_mesh_256_%ld", tmp && *tmp ? tmp : "/tmp", (long)getpid());
+    if (!terrain_field_write(field, prefix, error, sizeof error)) {
+        fprintf(stderr, "bench: the VTK peer's field: %s\n", error);
+        return 0;
+    }
+    snprintf(command, sizeof command, "/usr/bin/python3 tools/peers/vtk_flying_edges.py '%s.json' %d %d 2>/dev/null", prefix,
+             threads, runs);
+    FILE *out = popen(command, "r");
+    int count = 0;
+    char line[4096];
+    if (out && fgets(line, sizeof line, out)) {
+        /* {"ms": [a, b, ...], "triangles": T, ...}: read the list and the count by hand. */
+        const char *at = strstr(line, "\"ms\": [");
+        for (at = at ? at + 7 : NULL; at && count < runs; count++) {
+            char *end;
+            ms[count] = strtod(at, &end);
+            if (end == at) break;
+            at = strchr(end, ',');
+            at = at && at < strchr(end, ']') ? at + 1 : NULL;
+            if (!at) { count++; break; }
         }
-    return count % 2 ? values[count / 2] : 0.5 * (values[count / 2 - 1] + values[count / 2]);
+        const char *key = "\"triangles\": ", *t = strstr(line, key);
+        *triangles = t ? strtoull(t + strlen(key), NULL, 10) : 0;
+    }
+    if (out) pclose(out);
+    for (const char *ext = ".json"; ext; ext = ext[1] == 'j' ? ".raw" : NULL) {
+        char path[600];
+        snprintf(path, sizeof path, "%s%s", prefix, ext);
+        remove(path);
+    }
+    return count;
 }
 
 /* ---- level of detail ---------------------------------------------------------------------- */
@@ -247,8 +296,7 @@ static void bench_terrain_water_planes(bench_context *ctx) {
 void bench_group_terrain_mesh(bench_context *ctx) {
     bench_terrain_water_planes(ctx);
     bool want_big = bench_wants(ctx, "terrain.mesh.256");
-    /* The 256 row's per-cell ratio needs the chunk's meshing time. */
-    bool want_chunk = want_big || bench_wants(ctx, "terrain.field_mesh.chunk32") ||
+    bool want_chunk = bench_wants(ctx, "terrain.field_mesh.chunk32") ||
                       bench_wants(ctx, "terrain.field.chunk32") || bench_wants(ctx, "terrain.mesh.chunk32");
     if (!want_chunk && !want_big) {
         bench_terrain_mesh_lod(ctx);
@@ -258,12 +306,11 @@ void bench_group_terrain_mesh(bench_context *ctx) {
     b->world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(42) });
     pick_chunks(b);
     const double chunk_cells = (double)CHUNK_CELLS * CHUNK_CELLS * CHUNK_CELLS;
-    double chunk_mesh_ms = NAN;
 
     if (want_chunk) {
         const int runs = 15;
         bench_run(ctx, "terrain.field_mesh.chunk32", "ms", runs, sample_field_mesh_chunk, b);
-        if (b->runs_seen == 0)   /* that row is filtered out, but the halves or the 256 row want it */
+        if (b->runs_seen == 0)   /* that row is filtered out, but the halves want it */
             for (int i = 0; i <= runs; i++) sample_field_mesh_chunk(b);
         int recorded = CORE_MIN(b->runs_seen - 1, (int)CORE_COUNTOF(b->field_ms));
         if (recorded > 0) {
@@ -273,7 +320,7 @@ void bench_group_terrain_mesh(bench_context *ctx) {
             for (int i = 0; i < recorded; i++) per_cell[i] = b->mesh_ms[i] * 1e6 / chunk_cells;
             bench_record(ctx, "terrain.mesh.chunk32.ns_per_cell", "ns", per_cell, recorded);
             bench_record(ctx, "terrain.mesh.chunk32.no_ao", "ms", b->mesh_no_ao_ms, recorded);
-            chunk_mesh_ms = median(b->mesh_ms, recorded);
+            bench_record(ctx, "terrain.mesh.chunk32.isosurface", "ms", b->mesh_iso_ms, recorded);
         }
         printf("  (chunk32: %llu triangles per chunk on average)\n", (unsigned long long)b->triangles);
     }
@@ -284,20 +331,30 @@ void bench_group_terrain_mesh(bench_context *ctx) {
         terrain_field_sample(b->world, &(terrain_field_desc){ .first = { -64, ground - BIG_SAMPLES / 2, -64 },
                                                               .size = { BIG_SAMPLES, BIG_SAMPLES, BIG_SAMPLES } },
                              &b->big);
-        const int runs = 5;
-        bench_run(ctx, "terrain.mesh.256", "ms", runs, sample_mesh_big, b);
-        printf("  (256: %llu triangles)\n", (unsigned long long)b->triangles);
-        /* Per cell, beside the chunk's meshing half, from the same runs. */
-        int recorded = CORE_MIN(b->big_runs_seen - 1, (int)CORE_COUNTOF(b->big_ms));
-        double per_cell[16], ratio[16];
-        double big_cells = pow(BIG_SAMPLES - 1, 3);
-        for (int i = 0; i < recorded; i++) {
-            per_cell[i] = b->big_ms[i] * 1e6 / big_cells;
-            ratio[i] = per_cell[i] / (chunk_mesh_ms * 1e6 / chunk_cells);
+        enum { RUNS = 7 };
+        b->jobs = job_system_create(&(job_system_desc){ .threads = bench_threads(ctx) });
+        const int threads = job_thread_count(b->jobs);
+        double ours[RUNS + 1], peer[RUNS], ratio[RUNS], one[RUNS + 1];
+        for (int r = 0; r <= RUNS; r++) ours[r] = sample_mesh_big(b);   /* the first warms up */
+        bench_record(ctx, "terrain.mesh.256", "ms", ours + 1, RUNS);
+        printf("  (256: %llu triangles, %d threads)\n", (unsigned long long)b->triangles, threads);
+        uint64_t peer_triangles = 0;
+        int peer_runs = run_vtk_peer(&b->big, threads, RUNS, peer, &peer_triangles);
+        if (peer_runs > 0) {
+            for (int r = 0; r < peer_runs; r++) ratio[r] = ours[1 + r] / peer[r];
+            bench_record(ctx, "terrain.mesh.256.vtk_flying_edges", "ms", peer, peer_runs);
+            bench_record(ctx, "terrain.mesh.256.vs_vtk", "x", ratio, peer_runs);
+            printf("  (vtkFlyingEdges3D: %llu triangles)\n", (unsigned long long)peer_triangles);
         }
-        if (recorded > 0) bench_record(ctx, "terrain.mesh.256.ns_per_cell", "ns", per_cell, recorded);
-        if (recorded > 0 && !isnan(chunk_mesh_ms))
-            bench_record(ctx, "terrain.mesh.256.per_cell_vs_chunk32", "x", ratio, recorded);
+        job_system_destroy(b->jobs);
+        b->jobs = NULL;
+        for (int r = 0; r <= RUNS; r++) one[r] = sample_mesh_big(b);
+        bench_record(ctx, "terrain.mesh.256.one_core", "ms", one + 1, RUNS);
+        double per_cell[RUNS];
+        for (int i = 0; i < RUNS; i++) per_cell[i] = one[1 + i] * 1e6 / pow(BIG_SAMPLES - 1, 3);
+        bench_record(ctx, "terrain.mesh.256.ns_per_cell", "ns", per_cell, RUNS);
+        b->full = true;
+        bench_run(ctx, "terrain.mesh.256.full", "ms", 3, sample_mesh_big, b);
         terrain_field_free(&b->big);
     }
     terrain_world_destroy(b->world);
