@@ -62,7 +62,8 @@ struct game_app {
     uint64_t start_ns, last_ns;
     double frame_seconds;
     double *cpu_ms, *engine_ms, *thread_ms; /* per frame past loading */
-    size_t cpu_count, cpu_capacity, engine_capacity, thread_capacity;
+    double *triangles;                      /* drawn per frame past loading (gfx_stats) */
+    size_t cpu_count, cpu_capacity, engine_capacity, thread_capacity, triangles_capacity;
     int eye_in_solid, waiting;
     double grass_ms_sum, grass_ms_max;     /* past loading */
     /* pictures at the walk's `shot` waypoints (walk.h): held frames, and each picture at half
@@ -506,6 +507,7 @@ void game_app_destroy(game_app *app) {
     core_free(app->cpu_ms, app->cpu_capacity * sizeof *app->cpu_ms);
     core_free(app->engine_ms, app->engine_capacity * sizeof *app->engine_ms);
     core_free(app->thread_ms, app->thread_capacity * sizeof *app->thread_ms);
+    core_free(app->triangles, app->triangles_capacity * sizeof *app->triangles);
     core_free(app, sizeof *app);
 }
 
@@ -646,7 +648,9 @@ static uint64_t app_thread_cpu_ns(void) {
     return (uint64_t)t.tv_sec * 1000000000ull + (uint64_t)t.tv_nsec;
 }
 
-static void app_record_cpu(game_app *app, double cpu_ms, double engine_ms, double thread_ms) {
+static void app_record_cpu(game_app *app, double cpu_ms, double engine_ms, double thread_ms, double triangles) {
+    app->triangles = core_grow(app->triangles, &app->triangles_capacity, app->cpu_count + 1, sizeof *app->triangles);
+    app->triangles[app->cpu_count] = triangles;
     app->cpu_ms = core_grow(app->cpu_ms, &app->cpu_capacity, app->cpu_count + 1, sizeof *app->cpu_ms);
     app->engine_ms = core_grow(app->engine_ms, &app->engine_capacity, app->cpu_count + 1, sizeof *app->engine_ms);
     app->thread_ms = core_grow(app->thread_ms, &app->thread_capacity, app->cpu_count + 1, sizeof *app->thread_ms);
@@ -1027,7 +1031,7 @@ bool game_app_frame(game_app *app) {
         if (app_loaded(app)) app_finish_loading(app);
     } else {
         app->frames++;
-        app_record_cpu(app, cpu_ms, engine_ms, thread_ms);
+        app_record_cpu(app, cpu_ms, engine_ms, thread_ms, (double)gfx_stats(app->gfx).triangles);
         double grass_ms = app->grass ? grass_stats_get(app->grass).cpu_ms : 0.0;
         app->grass_ms_sum += grass_ms;
         app->grass_ms_max = fmax(app->grass_ms_max, grass_ms);
@@ -1074,6 +1078,9 @@ game_app_stats game_app_stats_get(const game_app *app) {
     qsort(sorted, app->cpu_count, sizeof *sorted, compare_doubles);
     s.thread_ms_p50 = trace_percentile(sorted, app->cpu_count, 50);
     s.thread_ms_p99 = trace_percentile(sorted, app->cpu_count, 99);
+    if (app->cpu_count) memcpy(sorted, app->triangles, app->cpu_count * sizeof *sorted);
+    qsort(sorted, app->cpu_count, sizeof *sorted, compare_doubles);
+    s.triangles_p50 = trace_percentile(sorted, app->cpu_count, 50);
     core_free(sorted, (app->cpu_count ? app->cpu_count : 1) * sizeof *sorted);
     s.stream = terrain_ecs_stream_stats(app->terrain);
     s.edits = terrain_ecs_edit_stats(app->terrain);

@@ -203,6 +203,9 @@ typedef struct game_app_stats {
     /* The same less the draw calls (terrain_ecs_draw and the HUD): input, player, every phase
      * and the uploads. On llvmpipe the draw calls include the vertex shading a GPU does. */
     double engine_ms_p50, engine_ms_p99;
+    /* Triangles drawn a frame (gfx_stats: every module's draws, the grass's GPU-generated ones
+     * not included), the median over the frames past loading. */
+    double triangles_p50;
     int hitches;                      /* frames past loading whose CPU time exceeded 33 ms */
     terrain_stream_stats stream;
     terrain_edit_stats edits;

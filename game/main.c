@@ -194,6 +194,7 @@ static void print_results(const game_app_stats *s, bool walked) {
            "p99 %.2f ms\n", s->cpu_ms_p50, s->cpu_ms_p99, s->cpu_ms_max, s->hitches, s->engine_ms_p50, s->engine_ms_p99);
     printf("world: main thread's own CPU p50 %.2f ms, p99 %.2f ms (the driver's waits left out)\n", s->thread_ms_p50,
            s->thread_ms_p99);
+    printf("world: %.0f triangles drawn a frame (median; the grass's, made on the GPU, not counted)\n", s->triangles_p50);
     printf("world: chunks %d wanted, %d ready, %d kept; %llu meshed, %llu empty, %llu cancelled, %llu evicted\n",
            s->stream.mesh_chunks_wanted, s->stream.mesh_chunks_ready, s->stream.mesh_chunks_kept,
            (unsigned long long)s->stream.chunks_meshed, (unsigned long long)s->stream.chunks_skipped_empty,

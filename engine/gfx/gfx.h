@@ -87,6 +87,17 @@ void gfx_frame_begin(gfx_context *gfx);
 void gfx_frame_end(gfx_context *gfx);
 uint64_t gfx_frame_index(const gfx_context *gfx);
 
+/* What the last finished frame drew, counted in gfx_draw; gfx_frame_end also records them as the
+ * trace counters gfx.draw_calls, gfx.triangles and gfx.indirect_draws. Triangles are those of
+ * GL_TRIANGLES draws times their instances; an indirect draw's count lives on the GPU, so it is
+ * counted in indirect_draws and not in triangles (the grass's patches, for one). */
+typedef struct gfx_frame_stats {
+    uint32_t draw_calls;
+    uint64_t triangles;
+    uint32_t indirect_draws;
+} gfx_frame_stats;
+gfx_frame_stats gfx_stats(const gfx_context *gfx);
+
 /* Reads the default framebuffer into `rgba` (width × height × 4 bytes, top row first). */
 void gfx_read_pixels(gfx_context *gfx, uint8_t *rgba);
 /* Writes the default framebuffer as a PNG (stb_image_write). False, with a message, on failure. */

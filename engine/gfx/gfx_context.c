@@ -125,7 +125,14 @@ void gfx_frame_end(gfx_context *gfx) {
         glFinish();
     }
     gfx->frame_index++;
+    gfx->last_frame = gfx__frame_counts;
+    gfx__frame_counts = (gfx_frame_stats){ 0 };
+    trace_counter("gfx.draw_calls", gfx->last_frame.draw_calls);
+    trace_counter("gfx.triangles", (double)gfx->last_frame.triangles);
+    trace_counter("gfx.indirect_draws", gfx->last_frame.indirect_draws);
 }
+
+gfx_frame_stats gfx_stats(const gfx_context *gfx) { return gfx->last_frame; }
 
 void gfx_read_pixels(gfx_context *gfx, uint8_t *rgba) {
     TRACE_ZONE("gfx_read_pixels");

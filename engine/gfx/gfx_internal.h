@@ -20,6 +20,10 @@ typedef struct gfx_timer_frame {
 
 typedef struct gfx_program_entry gfx_program_entry;   /* gfx_shader.c */
 
+/* What gfx_draw has drawn since the last gfx_frame_end (gfx_resources.c; OpenGL is used from
+ * the main thread only, so plain counters). */
+extern gfx_frame_stats gfx__frame_counts;
+
 struct gfx_context {
     gfx_backend backend;
     void *window;                  /* GLFWwindow * */
@@ -30,6 +34,7 @@ struct gfx_context {
     bool fullscreen;
     int windowed_x, windowed_y, windowed_width, windowed_height;
     uint64_t frame_index;
+    gfx_frame_stats last_frame;    /* counted by gfx_draw (gfx__frame_counts) */
 
     /* GPU timing (gfx_timer.c) */
     gfx_timer_frame timer_frames[GFX_TIMER_FRAMES];

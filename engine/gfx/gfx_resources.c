@@ -202,9 +202,14 @@ void gfx_framebuffer_destroy(gfx_framebuffer *framebuffer) {
 
 /* ---- draws ---- */
 
+gfx_frame_stats gfx__frame_counts;
+
 void gfx_draw(const gfx_draw_desc *desc) {
     GLenum primitive = desc->primitive ? desc->primitive : GL_TRIANGLES;
     GLsizei instances = desc->instances ? (GLsizei)desc->instances : 1;
+    gfx__frame_counts.draw_calls++;
+    if (desc->indirect.id) gfx__frame_counts.indirect_draws++;
+    else if (primitive == GL_TRIANGLES) gfx__frame_counts.triangles += (uint64_t)(desc->count / 3) * (uint64_t)instances;
     glBindVertexArray(desc->vertex_array.id);
     GLenum index_type = desc->index_type == GFX_INDEX_U16 ? GL_UNSIGNED_SHORT : GL_UNSIGNED_INT;
     size_t index_size = desc->index_type == GFX_INDEX_U16 ? 2 : 4;

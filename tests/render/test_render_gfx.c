@@ -166,6 +166,27 @@ Test(render_gfx, indirect_draw_takes_its_counts_from_the_buffer) {
     gfx_destroy(gfx);
 }
 
+Test(render_gfx, frame_stats_count_the_draws_and_their_triangles) {
+    /* A quad is 2 triangles: 1 + 4 instances drawn directly make 10, and the indirect draw's
+     * triangles are on the GPU, so it counts as an indirect draw only. */
+    gfx_context *gfx = render_offscreen(32, 32);
+    gfx_program program = red_program(gfx);
+    gfx_frame_begin(gfx);
+    draw_quads(gfx, program, false, 1);
+    draw_quads(gfx, program, false, 4);
+    draw_quads(gfx, program, true, 3);
+    gfx_frame_end(gfx);
+    gfx_frame_stats s = gfx_stats(gfx);
+    cr_expect_eq(s.draw_calls, 3);
+    cr_expect_eq(s.triangles, 10);
+    cr_expect_eq(s.indirect_draws, 1);
+    gfx_frame_begin(gfx);   /* an empty frame resets them */
+    gfx_frame_end(gfx);
+    s = gfx_stats(gfx);
+    cr_expect_eq(s.draw_calls + s.triangles + s.indirect_draws, 0);
+    gfx_destroy(gfx);
+}
+
 Test(render_gfx, texture_round_trip) {
     gfx_context *gfx = render_offscreen(32, 32);
     float texels[4 * 4];

@@ -26,6 +26,8 @@
  *                                     inside them on this thread; a GPU would not)
  *   world.walk.thread_cpu.p50 / .p99  the main thread's own CPU time over the cpu_frame span
  *                                     (CLOCK_THREAD_CPUTIME_ID): the work, without the waits
+ *   world.walk.triangles              triangles drawn a frame, the median (gfx_stats: every draw
+ *                                     but the grass's GPU-generated ones)
  *   world.walk.hitches                frames over 33 ms
  *   world.walk.memory                 peak process RSS, MB (driver memory included)
  *   world.walk.terrain_memory         peak terrain stacks + meshes, MB
@@ -91,6 +93,7 @@ void bench_group_world(bench_context *ctx) {
     bench_record(ctx, "world.walk.engine_frame.p99", "ms", rows[3], 1);
     bench_record(ctx, "world.walk.thread_cpu.p50", "ms", (double[]){ s.thread_ms_p50 }, 1);
     bench_record(ctx, "world.walk.thread_cpu.p99", "ms", (double[]){ s.thread_ms_p99 }, 1);
+    bench_record(ctx, "world.walk.triangles", "triangles", (double[]){ s.triangles_p50 }, 1);
     bench_record(ctx, "world.walk.hitches", "frames", rows[4], 1);
     bench_record(ctx, "world.walk.memory", "MB", rows[5], 1);
     bench_record(ctx, "world.walk.terrain_memory", "MB", rows[6], 1);
