@@ -143,3 +143,8 @@ int main(int argc, char **argv) {
     trace_stop();
     return 0;
 }
+
+/* Expected output:
+ * Run: --frames 30 --threads 2 --trace $TMP/run.json
+ * ^ecs_systems: 30 frames, [0-9.]+ ms per frame on 2 threads; [1-9][0-9]* particles alive, [1-9][0-9]* born, the highest at [0-9.]+ m$
+ */

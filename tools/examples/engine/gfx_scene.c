@@ -140,3 +140,8 @@ int main(int argc, char **argv) {
     trace_stop();
     return rc < 0 ? 0 : rc;
 }
+
+/* Expected output:
+ * Run: --headless --size 160x90 --frames 10 --screenshot $TMP/scene.png --trace $TMP/scene.json
+ * ^gfx_scene: 10 frames in [0-9.]+ s \([0-9.]+ ms a frame\), offscreen 160x90, camera at \(
+ */

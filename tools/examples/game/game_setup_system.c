@@ -87,3 +87,8 @@ int main(int argc, char **argv) {
     trace_stop();
     return 0;
 }
+
+/* Expected output:
+ * Run: --headless --size 64x48 --radius 1 --levels 1 --frames 30 --day 1
+ * ^game_setup_system: 30 frames, the sun at 73 degrees over the horizon$
+ */

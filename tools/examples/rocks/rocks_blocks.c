@@ -111,3 +111,8 @@ int main(int argc, char **argv) {
     trace_stop();
     return status;
 }
+
+/* Expected output:
+ * Run: --headless --size 96x64 --frames 2 --type columnar --screenshot $TMP/blocks.png
+ * ^rocks_blocks: columnar tile: [1-9][0-9]* blocks from [1-9][0-9]* points and [0-9]+ fractures in [0-9.]+ s; [1-9][0-9]* mesh chunks, [1-9][0-9]* triangles$
+ */

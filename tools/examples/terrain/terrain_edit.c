@@ -135,3 +135,11 @@ int main(int argc, char **argv) {
     trace_stop();
     return reopened && reloaded == edited ? 0 : 1;
 }
+
+/* Expected output:
+ * Run: --threads 2 --world $TMP/terrain_edit
+ * ^ground at \([0-9.-]+, [0-9.-]+, [0-9.-]+\), 
+ * ^crater: [1-9][0-9]* chunk\(s\), tunnel: [1-9][0-9]*, sand: [1-9][0-9]*; 
+ * ^stabilized in [0-9]+ iterations; the tunnel.s axis at x = 20 is air$
+ * ^saved [1-9][0-9]* chunk\(s\) to [^ ]+world\.db; reloaded: the same bytes$
+ */

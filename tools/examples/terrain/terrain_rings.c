@@ -141,3 +141,8 @@ int main(int argc, char **argv) {
     trace_stop();
     return rc < 0 ? 0 : rc;
 }
+
+/* Expected output:
+ * Run: --headless --size 96x64 --radius 1 --rings 1 --frames 2 --seed 3 --screenshot $TMP/terrain.png
+ * ^terrain_rings: 16 chunks, [0-9]+ mesh chunks \([0-9]+ drawn\), [1-9][0-9]* triangles, 2 frames$
+ */

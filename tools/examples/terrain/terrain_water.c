@@ -110,3 +110,8 @@ int main(int argc, char **argv) {
     trace_stop();
     return status;
 }
+
+/* Expected output:
+ * Run: --headless --size 96x64 --frames 4 --water low --screenshot $TMP/water.png
+ * ^terrain_water: water low, [1-9][0-9]* planes drawn in the last frame, [0-9.]+ ms CPU$
+ */

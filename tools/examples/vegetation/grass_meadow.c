@@ -101,3 +101,8 @@ int main(int argc, char **argv) {
     trace_stop();
     return status;
 }
+
+/* Expected output:
+ * Run: --headless --size 96x64 --frames 4 --grass low --screenshot $TMP/grass.png
+ * ^grass_meadow: [1-9][0-9]* patches, [1-9][0-9]* tufts placed, [1-9][0-9]* drawn in the last frame, [0-9.]+ ms CPU$
+ */
