@@ -106,6 +106,6 @@ int main(int argc, char **argv) {
 }
 
 /* Expected output:
- * Run: skip: its tile set takes over a minute in the debug build (tests/rocks and tests/render cover it)
+ * Run: skip: its tile set takes over a minute in the debug build; tests/rocks and tests/render cover it
  * ^rocks_pile: [1-9][0-9]* rock shapes in [0-9.]+ s; [1-9][0-9]* rocks placed in [1-9][0-9]* chunks, [0-9]+ drawn with [0-9]+ commands$
  */
