@@ -123,7 +123,6 @@ program("test_threads", { files = { "tests/engine/test_shim.c", "tests/engine/te
 program("bench", { files = { "tools/src/bench/**.c", "tools/src/bench/**.h" },
                    buildoptions = { "-fopenmp" }, linkoptions = { "-fopenmp" } })
 program("trace_report", { files = { "tools/src/trace_report.c" } })
-program("hello_systems", { files = { "tools/examples/hello_systems.c" } })
 program("hidreplay", { files = { "tools/src/hidreplay.c" } })
 program("test_terrain", { files = { "tests/terrain/**.c", "tests/terrain/**.h" }, links = { "criterion" } })
 program("terrain_export", { files = { "tools/src/terrain_export.c" } })
@@ -133,13 +132,12 @@ program("rocks_export", { files = { "tools/src/rocks_export.c" } })
 -- Render tests: OSMesa scenes checked by image properties and a golden PNG; a window test when
 -- there is a display (tools/test starts Xvfb for it).
 program("test_render", { files = { "tests/render/**.c", "tests/render/**.h" }, links = { "criterion" } })
-program("hello_scene", { files = { "tools/examples/hello_scene.c" } })
-program("hello_terrain", { files = { "tools/examples/hello_terrain.c" } })
-program("hello_edit", { files = { "tools/examples/hello_edit.c" } })
-program("hello_grass", { files = { "tools/examples/hello_grass.c" } })
-program("hello_water", { files = { "tools/examples/hello_water.c" } })
-program("hello_rocks", { files = { "tools/examples/hello_rocks.c" } })
-program("hello_blocks", { files = { "tools/examples/hello_blocks.c" } })
-program("hello_game_system", { files = { "tools/examples/hello_game_system.c" } })
 program("world", { files = { "game/main.c" } })
+-- Examples: every tools/examples/AREA/MODULE_FEATURE.c is a program of that name, built with
+-- warnings as errors (tools/examples/README.md). TEMPLATE.c builds too, so it stays correct.
+local examples = os.matchfiles("tools/examples/**.c")
+table.sort(examples)
+for _, path in ipairs(examples) do
+  program(path:match("([^/]+)%.c$"), { files = { path }, buildoptions = { "-Werror" } })
+end
 program("test_game", { files = { "tests/game/**.c", "tests/game/**.h" }, links = { "criterion" } })

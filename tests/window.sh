@@ -43,9 +43,9 @@ scene_keys() {
   xdotool keydown d; sleep 0.2; xdotool keyup d
   xdotool key Escape
 }
-in_window hello_scene 20 scene_keys "$tmp/record.out" "$bin/hello_scene" --size 160x90 --record "$tmp/walk.rec"
+in_window gfx_scene 20 scene_keys "$tmp/record.out" "$bin/gfx_scene" --size 160x90 --record "$tmp/walk.rec"
 recorded=$?
-"$bin/hello_scene" --headless --size 160x90 --replay "$tmp/walk.rec" >"$tmp/replay.out" 2>&1
+"$bin/gfx_scene" --headless --size 160x90 --replay "$tmp/walk.rec" >"$tmp/replay.out" 2>&1
 replayed=$?
 camera() { grep -o 'camera at ([^)]*)' "$1"; }
 if [[ $recorded -eq 0 && $replayed -eq 0 && -n $(camera "$tmp/record.out") &&

@@ -157,7 +157,7 @@ float rocks_block_tile_field(const rocks_block_tile *tile, const double p[3], ro
 /* Raises a terrain field's samples to the tile's replication: f̃ = max(f, t) with t clamped to
  * [−1, 1] as the terrain's field is. Each block copy that reaches the field's box is asked for
  * presence once, then evaluated at the samples inside its bounds. Meant for a world's amplify
- * hook (terrain_world_desc.amplify): see hello_blocks. */
+ * hook (terrain_world_desc.amplify): see tools/examples/rocks/rocks_blocks.c. */
 void rocks_block_tile_amplify(const rocks_block_tile *tile, terrain_field *field, rocks_block_presence_fn present,
                               void *user);
 

@@ -1,8 +1,8 @@
-/* hello_grass — a meadow: rolling soil made by hand, its chunks meshed by the terrain module, and
+/* grass_meadow — a meadow: rolling soil made by hand, its chunks meshed by the terrain module, and
  * grass grown over them on the GPU by the vegetation module, seen from a camera that walks a
  * slow circle through it (the grass bends away from its feet).
  *
- *   hello_grass [--grass off|low|high] [--size WxH] [--headless] [--frames N] [--screenshot FILE]
+ *   grass_meadow [--grass off|low|high] [--size WxH] [--headless] [--frames N] [--screenshot FILE]
  *               [--threads N] [--trace FILE]
  */
 #include "core/core.h"
@@ -41,7 +41,7 @@ int main(int argc, char **argv) {
         { "frames", CORE_OPTION_INT, &frames, "N", "stop after N frames (0 = when closed)", 0, 100000000 },
         { "screenshot", CORE_OPTION_STRING, &screenshot, "FILE", "write the last frame as a PNG" },
     };
-    core_cli cli = { .program = "hello_grass", .summary = "grass grown on the GPU over a meadow",
+    core_cli cli = { .program = "grass_meadow", .summary = "grass grown on the GPU over a meadow",
                      .options = options, .option_count = CORE_COUNTOF(options) };
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
@@ -50,7 +50,7 @@ int main(int argc, char **argv) {
     const char *bad = size && !gfx_parse_size(size, &width, &height) ? "size"
                       : !grass_parse_quality(quality, &grass_level)   ? "grass" : NULL;
     if (bad) {
-        fprintf(stderr, "hello_grass: bad value for '--%s'\n", bad);
+        fprintf(stderr, "grass_meadow: bad value for '--%s'\n", bad);
         core_cli_print_usage(&cli, stderr);
         return 2;
     }
@@ -58,7 +58,7 @@ int main(int argc, char **argv) {
     trace_thread_name("main");
 
     /* The terrain: 5 × 5 chunks of 32 m around the origin, meshed as entities. */
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "hello_grass", .headless = headless });
+    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "grass_meadow", .headless = headless });
     if (!gfx) return 1;
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = common.threads });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
@@ -89,7 +89,7 @@ int main(int argc, char **argv) {
         gfx_frame_end(gfx);
     }
     grass_stats stats = grass_stats_get(grass);
-    printf("hello_grass: %d patches, %llu tufts placed, %llu drawn in the last frame, %.2f ms CPU\n", stats.patches,
+    printf("grass_meadow: %d patches, %llu tufts placed, %llu drawn in the last frame, %.2f ms CPU\n", stats.patches,
            (unsigned long long)stats.tufts, (unsigned long long)grass_visible_tufts(grass), stats.cpu_ms);
     grass_destroy(grass);
     terrain_renderer_destroy(renderer);
@@ -101,3 +101,8 @@ int main(int argc, char **argv) {
     trace_stop();
     return status;
 }
+
+/* Expected output:
+ * Run: --headless --size 96x64 --frames 4 --grass low --screenshot $TMP/grass.png
+ * ^grass_meadow: [1-9][0-9]* patches, [1-9][0-9]* tufts placed, [1-9][0-9]* drawn in the last frame, [0-9.]+ ms CPU$
+ */

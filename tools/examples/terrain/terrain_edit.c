@@ -1,8 +1,8 @@
-/* hello_edit — terrain editing in one short program, no window: pick a point on the ground, carve
+/* terrain_edit — terrain editing in one short program, no window: pick a point on the ground, carve
  * a tunnel and a crater, drop sand, let it slide to its angle of repose, save the edits in a world
  * folder (one transaction), and see them come back in a fresh world.
  *
- *   hello_edit [--seed S] [--world DIR] [--threads N] [--trace FILE]
+ *   terrain_edit [--seed S] [--world DIR] [--threads N] [--trace FILE]
  *
  * The steps are the ones a game takes (game/tools.c does the same from the mouse): aim with
  * terrain_raycast, apply with terrain_world_edit, stabilize the chunks that changed, keep an edit
@@ -56,15 +56,15 @@ static int settle(terrain_world *world, job_system *jobs, int64_t cx, int64_t cz
 int main(int argc, char **argv) {
     core_common_args common = { 0 };
     int seed = 7;
-    const char *dir = "out/hello_edit";
+    const char *dir = "out/terrain_edit";
     core_option options[] = {
         CORE_COMMON_OPTIONS(common),
         { .name = "seed", .kind = CORE_OPTION_INT, .value = &seed, .min = 0, .max = 2147483647, .metavar = "S",
           .help = "world seed (default 7)" },
         { .name = "world", .kind = CORE_OPTION_STRING, .value = &dir, .metavar = "DIR",
-          .help = "where the edits are saved (default out/hello_edit)" },
+          .help = "where the edits are saved (default out/terrain_edit)" },
     };
-    core_cli cli = { .program = "hello_edit", .summary = "Carve, deposit, stabilize, save and reload terrain edits.",
+    core_cli cli = { .program = "terrain_edit", .summary = "Carve, deposit, stabilize, save and reload terrain edits.",
                      .options = options, .option_count = (int)CORE_COUNTOF(options) };
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
@@ -80,7 +80,7 @@ int main(int argc, char **argv) {
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log,
                                                                        .seed = (uint64_t)seed }, &report);
     if (!store) {
-        fprintf(stderr, "hello_edit: %s\n", report.error);
+        fprintf(stderr, "terrain_edit: %s\n", report.error);
         return 1;
     }
     if (report.notice[0]) printf("%s\n", report.notice);
@@ -90,7 +90,7 @@ int main(int argc, char **argv) {
     /* Aim: straight down onto the ground at (16, 16). */
     terrain_ray_hit hit;
     if (!terrain_raycast(world, (const double[3]){ 16.5, 400, 16.5 }, (const float[3]){ 0, -1, 0 }, 1000, &hit)) {
-        fprintf(stderr, "hello_edit: no ground under (16, 16)\n");
+        fprintf(stderr, "terrain_edit: no ground under (16, 16)\n");
         return 1;
     }
     printf("ground at (%.1f, %.2f, %.1f), %s\n", hit.position[0], hit.position[1], hit.position[2],
@@ -115,7 +115,7 @@ int main(int argc, char **argv) {
     bool saved = terrain_store_save(store, error, sizeof error);
     terrain_store_destroy(store);
     if (!saved) {
-        fprintf(stderr, "hello_edit: %s\n", error);
+        fprintf(stderr, "terrain_edit: %s\n", error);
         return 1;
     }
     uint64_t edited = terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 }));
@@ -135,3 +135,11 @@ int main(int argc, char **argv) {
     trace_stop();
     return reopened && reloaded == edited ? 0 : 1;
 }
+
+/* Expected output:
+ * Run: --threads 2 --world $TMP/terrain_edit
+ * ^ground at \([0-9.-]+, [0-9.-]+, [0-9.-]+\), 
+ * ^crater: [1-9][0-9]* chunk\(s\), tunnel: [1-9][0-9]*, sand: [1-9][0-9]*; 
+ * ^stabilized in [0-9]+ iterations; the tunnel.s axis at x = 20 is air$
+ * ^saved [1-9][0-9]* chunk\(s\) to [^ ]+world\.db; reloaded: the same bytes$
+ */

@@ -1,7 +1,7 @@
-/* hello_systems — the engine in one short program: components, systems in phases, parallel
+/* ecs_systems — the engine in one short program: components, systems in phases, parallel
  * and main-thread systems, deferred spawning, and a trace of every frame.
  *
- *   hello_systems [--frames N] [--particles N] [--threads N] [--trace FILE]
+ *   ecs_systems [--frames N] [--particles N] [--threads N] [--trace FILE]
  *
  * Particles are born at a fountain, fly under gravity, bounce on the ground and die of old age.
  * tools/play runs it with a trace and prints the trace report.
@@ -102,7 +102,7 @@ int main(int argc, char **argv) {
         { .name = "particles", .kind = CORE_OPTION_INT, .value = &particles, .min = 1, .max = 10000000,
           .metavar = "N", .help = "particles alive at once (default 100000)" },
     };
-    core_cli cli = { .program = "hello_systems", .summary = "A particle fountain on the ECS and job system.",
+    core_cli cli = { .program = "ecs_systems", .summary = "A particle fountain on the ECS and job system.",
                      .options = options, .option_count = (int)CORE_COUNTOF(options) };
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
@@ -135,7 +135,7 @@ int main(int argc, char **argv) {
     }
     double ms = core_ns_to_ms(core_time_ns() - start);
 
-    printf("hello_systems: %d frames, %.3f ms per frame on %d threads; %d particles alive, "
+    printf("ecs_systems: %d frames, %.3f ms per frame on %d threads; %d particles alive, "
            "%llu born, the highest at %.1f m\n", frames, ms / frames, job_thread_count(jobs),
            ecs_entity_count(world), (unsigned long long)d.spawned, d.highest);
     ecs_world_destroy(world);
@@ -143,3 +143,8 @@ int main(int argc, char **argv) {
     trace_stop();
     return 0;
 }
+
+/* Expected output:
+ * Run: --frames 30 --threads 2 --trace $TMP/run.json
+ * ^ecs_systems: 30 frames, [0-9.]+ ms per frame on 2 threads; [1-9][0-9]* particles alive, [1-9][0-9]* born, the highest at [0-9.]+ m$
+ */

@@ -1,4 +1,4 @@
-/* hello_game_system — the walkable world with a system of its own: the sun crosses the sky.
+/* game_setup_system — the walkable world with a system of its own: the sun crosses the sky.
  *
  * A game extends the world through game_app_desc.setup, without touching the engine or the game
  * loop: setup runs once the game's systems exist. Here it gives the camera's entity a component,
@@ -6,7 +6,7 @@
  * resource), so the light and the sky change as the player walks. The developer's part is the 19
  * lines between the two rules; the rest is the usual command line.
  *
- *   hello_game_system [--seed N] [--day SECONDS] [--radius R] [--levels N] [--size WxH] [--headless]
+ *   game_setup_system [--seed N] [--day SECONDS] [--radius R] [--levels N] [--size WxH] [--headless]
  *                     [--frames N] [--screenshot FILE] [--threads N] [--trace FILE]
  */
 #include "core/core.h"
@@ -60,13 +60,13 @@ int main(int argc, char **argv) {
         { "frames", CORE_OPTION_INT, &frames, "N", "stop after N frames past loading (0 = when closed)", 0, 100000000 },
         { "screenshot", CORE_OPTION_STRING, &screenshot, "FILE", "write the last frame as a PNG" },
     };
-    core_cli cli = { .program = "hello_game_system", .summary = "the walkable world with a sun that crosses the sky, a system of its own",
+    core_cli cli = { .program = "game_setup_system", .summary = "the walkable world with a sun that crosses the sky, a system of its own",
                      .options = options, .option_count = CORE_COUNTOF(options) };
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
     int width = 1280, height = 720;
     if (size && !gfx_parse_size(size, &width, &height)) {
-        fprintf(stderr, "hello_game_system: bad value for '--size'\n");
+        fprintf(stderr, "game_setup_system: bad value for '--size'\n");
         core_cli_print_usage(&cli, stderr);
         return 2;
     }
@@ -81,9 +81,14 @@ int main(int argc, char **argv) {
     while (game_app_frame(app)) {}
     game_app_stats stats = game_app_stats_get(app);
     const GameCamera *camera = ecs_get(game_app_ecs(app), game_app_camera(app), game_app_ids(app)->camera);
-    printf("hello_game_system: %d frames, the sun at %.0f degrees over the horizon\n", stats.frames,
+    printf("game_setup_system: %d frames, the sun at %.0f degrees over the horizon\n", stats.frames,
            asin(camera->view.sun_direction[1] / sqrt(1.0 + 0.09)) * 180.0 / 3.14159265358979);
     game_app_destroy(app);
     trace_stop();
     return 0;
 }
+
+/* Expected output:
+ * Run: --headless --size 64x48 --radius 1 --levels 1 --frames 30 --day 1
+ * ^game_setup_system: 30 frames, the sun at 73 degrees over the horizon$
+ */

@@ -1,7 +1,7 @@
-/* hello_scene — the platform in one short program: a window (or OSMesa offscreen), shaders from
+/* gfx_scene — the platform in one short program: a window (or OSMesa offscreen), shaders from
  * shaders/, keyboard, mouse and gamepads through input actions, screenshots and a trace.
  *
- *   hello_scene [--size WxH] [--headless] [--frames N] [--screenshot FILE] [--bindings FILE]
+ *   gfx_scene [--size WxH] [--headless] [--frames N] [--screenshot FILE] [--bindings FILE]
  *               [--record FILE] [--replay FILE] [--no-vsync] [--fullscreen] [--trace FILE]
  *
  * Fly around the reference scene: WASD or the left stick to move, the mouse (click to capture
@@ -37,14 +37,14 @@ static int parse_options(int argc, char **argv, options *o, int *width, int *hei
         { "no-vsync", CORE_OPTION_FLAG, &o->no_vsync, NULL, "do not wait for the display's refresh" },
         { "fullscreen", CORE_OPTION_FLAG, &o->fullscreen, NULL, "start fullscreen" },
     };
-    core_cli cli = { .program = "hello_scene", .summary = "fly around the reference scene",
+    core_cli cli = { .program = "gfx_scene", .summary = "fly around the reference scene",
                      .options = list, .option_count = CORE_COUNTOF(list) };
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
     *width = 1280;
     *height = 720;
     if (o->size && !gfx_parse_size(o->size, width, height)) {
-        fprintf(stderr, "hello_scene: bad value for '--size': '%s' is not WxH (16 to 16384 each)\n", o->size);
+        fprintf(stderr, "gfx_scene: bad value for '--size': '%s' is not WxH (16 to 16384 each)\n", o->size);
         core_cli_print_usage(&cli, stderr);
         return 2;
     }
@@ -84,7 +84,7 @@ int main(int argc, char **argv) {
     if (o.common.trace_path && !trace_start(o.common.trace_path)) return 2;
     trace_thread_name("main");
 
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "hello_scene",
+    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "gfx_scene",
                                                .headless = o.headless, .no_vsync = o.no_vsync,
                                                .fullscreen = o.fullscreen });
     if (!gfx) return 1;
@@ -128,7 +128,7 @@ int main(int argc, char **argv) {
         gfx_frame_end(gfx);
     }
     double seconds = (core_time_ns() - start) * 1e-9;
-    printf("hello_scene: %llu frames in %.2f s (%.2f ms a frame), %s %dx%d, camera at (%.4f, %.4f, %.4f)\n",
+    printf("gfx_scene: %llu frames in %.2f s (%.2f ms a frame), %s %dx%d, camera at (%.4f, %.4f, %.4f)\n",
            (unsigned long long)gfx_frame_index(gfx), seconds,
            gfx_frame_index(gfx) ? seconds * 1e3 / (double)gfx_frame_index(gfx) : 0.0,
            windowed ? "window" : "offscreen", width, height, camera.position[0], camera.position[1],
@@ -140,3 +140,8 @@ int main(int argc, char **argv) {
     trace_stop();
     return rc < 0 ? 0 : rc;
 }
+
+/* Expected output:
+ * Run: --headless --size 160x90 --frames 10 --screenshot $TMP/scene.png --trace $TMP/scene.json
+ * ^gfx_scene: 10 frames in [0-9.]+ s \([0-9.]+ ms a frame\), offscreen 160x90, camera at \(
+ */

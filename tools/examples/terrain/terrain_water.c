@@ -1,8 +1,8 @@
-/* hello_water — a lake: a round basin made by hand and filled with a water layer up to 8 m, its
+/* terrain_water — a lake: a round basin made by hand and filled with a water layer up to 8 m, its
  * chunks meshed by the terrain module and its surface drawn by terrain_water, seen from a camera
  * that circles the shore.
  *
- *   hello_water [--water off|low|high] [--size WxH] [--headless] [--frames N] [--screenshot FILE]
+ *   terrain_water [--water off|low|high] [--size WxH] [--headless] [--frames N] [--screenshot FILE]
  *               [--threads N] [--trace FILE]
  */
 #include "core/core.h"
@@ -49,7 +49,7 @@ int main(int argc, char **argv) {
         { "frames", CORE_OPTION_INT, &frames, "N", "stop after N frames (0 = when closed)", 0, 100000000 },
         { "screenshot", CORE_OPTION_STRING, &screenshot, "FILE", "write the last frame as a PNG" },
     };
-    core_cli cli = { .program = "hello_water", .summary = "a lake drawn by terrain_water",
+    core_cli cli = { .program = "terrain_water", .summary = "a lake drawn by terrain_water",
                      .options = options, .option_count = CORE_COUNTOF(options) };
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
@@ -58,7 +58,7 @@ int main(int argc, char **argv) {
     const char *bad = size && !gfx_parse_size(size, &width, &height)    ? "size"
                       : !terrain_water_parse_quality(quality, &water_level) ? "water" : NULL;
     if (bad) {
-        fprintf(stderr, "hello_water: bad value for '--%s'\n", bad);
+        fprintf(stderr, "terrain_water: bad value for '--%s'\n", bad);
         core_cli_print_usage(&cli, stderr);
         return 2;
     }
@@ -66,7 +66,7 @@ int main(int argc, char **argv) {
     trace_thread_name("main");
 
     /* The terrain: 5 × 5 chunks of 32 m around the origin, meshed as entities. */
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "hello_water", .headless = headless });
+    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "terrain_water", .headless = headless });
     if (!gfx) return 1;
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = common.threads });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
@@ -98,7 +98,7 @@ int main(int argc, char **argv) {
         gfx_frame_end(gfx);
     }
     terrain_water_stats stats = terrain_water_stats_get(water);
-    printf("hello_water: water %s, %d planes drawn in the last frame, %.2f ms CPU\n",
+    printf("terrain_water: water %s, %d planes drawn in the last frame, %.2f ms CPU\n",
            terrain_water_quality_name(water_level), stats.planes_drawn, stats.cpu_ms);
     terrain_water_destroy(water);
     terrain_renderer_destroy(renderer);
@@ -110,3 +110,8 @@ int main(int argc, char **argv) {
     trace_stop();
     return status;
 }
+
+/* Expected output:
+ * Run: --headless --size 96x64 --frames 4 --water low --screenshot $TMP/water.png
+ * ^terrain_water: water low, [1-9][0-9]* planes drawn in the last frame, [0-9.]+ ms CPU$
+ */

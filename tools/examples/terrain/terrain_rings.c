@@ -1,9 +1,9 @@
-/* hello_terrain — the terrain module in one short program: column chunks and mesh chunks as
+/* terrain_rings — the terrain module in one short program: column chunks and mesh chunks as
  * entities, generated and meshed in parallel by the generate and mesh phases, culled, and drawn
  * with triplanar materials while the camera circles the start. The walkable, streaming world
  * is game/ (the world program); this shows the module alone.
  *
- *   hello_terrain [--seed S] [--radius R] [--rings N] [--size WxH] [--headless] [--frames N]
+ *   terrain_rings [--seed S] [--radius R] [--rings N] [--size WxH] [--headless] [--frames N]
  *                 [--screenshot FILE] [--threads N] [--trace FILE]
  *
  * Full detail covers 2R × 2R chunks of 32 m around the start; each of N rings beyond it is meshed
@@ -40,7 +40,7 @@ static int parse(int argc, char **argv, options *o, int *width, int *height) {
         { "frames", CORE_OPTION_INT, &o->frames, "N", "stop after N frames (0 = when closed)", 0, 100000000 },
         { "screenshot", CORE_OPTION_STRING, &o->screenshot, "FILE", "write the last frame as a PNG" },
     };
-    core_cli cli = { .program = "hello_terrain", .summary = "generate, mesh and draw terrain",
+    core_cli cli = { .program = "terrain_rings", .summary = "generate, mesh and draw terrain",
                      .options = list, .option_count = CORE_COUNTOF(list) };
     o->seed = 1;
     o->radius = 2;
@@ -50,7 +50,7 @@ static int parse(int argc, char **argv, options *o, int *width, int *height) {
     *width = 1280;
     *height = 720;
     if (o->size && !gfx_parse_size(o->size, width, height)) {
-        fprintf(stderr, "hello_terrain: bad value for '--size': '%s' is not WxH (16 to 16384 each)\n", o->size);
+        fprintf(stderr, "terrain_rings: bad value for '--size': '%s' is not WxH (16 to 16384 each)\n", o->size);
         core_cli_print_usage(&cli, stderr);
         return 2;
     }
@@ -77,7 +77,7 @@ int main(int argc, char **argv) {
     if (rc >= 0) return rc;
     if (o.common.trace_path && !trace_start(o.common.trace_path)) return 2;
     trace_thread_name("main");
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "hello_terrain (loading)",
+    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "terrain_rings (loading)",
                                                .headless = o.headless });
     if (!gfx) return 1;
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = o.common.threads });
@@ -124,10 +124,10 @@ int main(int argc, char **argv) {
         if (o.screenshot && frames && frame + 1 == frames && !gfx_screenshot(gfx, o.screenshot)) rc = 1;
         gfx_frame_end(gfx);
         trace_frame_end();
-        if (frame == 0) gfx_window_set_title(gfx, "hello_terrain");   /* the first frame is meshed */
+        if (frame == 0) gfx_window_set_title(gfx, "terrain_rings");   /* the first frame is meshed */
     }
     terrain_ecs_stats stats = terrain_ecs_stats_get(te);
-    printf("hello_terrain: %d chunks, %d mesh chunks (%d drawn), %llu triangles, %llu frames\n", stats.chunks,
+    printf("terrain_rings: %d chunks, %d mesh chunks (%d drawn), %llu triangles, %llu frames\n", stats.chunks,
            stats.mesh_chunks, stats.mesh_chunks_uploaded, (unsigned long long)stats.triangles,
            (unsigned long long)gfx_frame_index(gfx));
     input_destroy(input);
@@ -141,3 +141,8 @@ int main(int argc, char **argv) {
     trace_stop();
     return rc < 0 ? 0 : rc;
 }
+
+/* Expected output:
+ * Run: --headless --size 96x64 --radius 1 --rings 1 --frames 2 --seed 3 --screenshot $TMP/terrain.png
+ * ^terrain_rings: 16 chunks, [0-9]+ mesh chunks \([0-9]+ drawn\), [1-9][0-9]* triangles, 2 frames$
+ */

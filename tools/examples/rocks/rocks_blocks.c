@@ -1,9 +1,9 @@
-/* hello_blocks — a cliff of fractured rock (paper 003): a 16 m wall of bedrock made by hand, a
+/* rocks_blocks — a cliff of fractured rock (paper 003): a 16 m wall of bedrock made by hand, a
  * block tile of the type asked for, and the world's amplify hook raising the field to
  * f̃ = max(f, t) wherever a block straddles a steep wall (003 §5). The terrain's own systems
  * then mesh, light and draw the blocks like any terrain; the camera swings along the wall.
  *
- *   hello_blocks [--type equidimensional|rhombohedral|polyhedral|tabular|columnar]
+ *   rocks_blocks [--type equidimensional|rhombohedral|polyhedral|tabular|columnar]
  *                [--size WxH] [--headless] [--frames N] [--screenshot FILE] [--threads N]
  *                [--trace FILE]
  */
@@ -51,7 +51,7 @@ int main(int argc, char **argv) {
         { "frames", CORE_OPTION_INT, &frames, "N", "stop after N frames (0 = when closed)", 0, 100000000 },
         { "screenshot", CORE_OPTION_STRING, &screenshot, "FILE", "write the last frame as a PNG" },
     };
-    core_cli cli = { .program = "hello_blocks", .summary = "fractured rock blocks on a cliff",
+    core_cli cli = { .program = "rocks_blocks", .summary = "fractured rock blocks on a cliff",
                      .options = options, .option_count = CORE_COUNTOF(options) };
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
@@ -59,7 +59,7 @@ int main(int argc, char **argv) {
     int width = 1280, height = 720;
     bool bad_type = type_name && !rocks_parse_block_type(type_name, &type);
     if (bad_type || (size && !gfx_parse_size(size, &width, &height))) {
-        fprintf(stderr, "hello_blocks: bad value for '%s'\n", bad_type ? "--type" : "--size");
+        fprintf(stderr, "rocks_blocks: bad value for '%s'\n", bad_type ? "--type" : "--size");
         core_cli_print_usage(&cli, stderr);
         return 2;
     }
@@ -71,7 +71,7 @@ int main(int argc, char **argv) {
      * show between the blocks */
     cliff_blocks cliff = { .tile = rocks_block_tile_create(&(rocks_block_tile_desc){ .type = type, .joint = 0.6f }) };
     if (!cliff.tile) return 1;
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "hello_blocks", .headless = headless });
+    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "rocks_blocks", .headless = headless });
     if (!gfx) return 1;
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = common.threads });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
@@ -98,7 +98,7 @@ int main(int argc, char **argv) {
         gfx_frame_end(gfx);
     }
     terrain_ecs_stats stats = terrain_ecs_stats_get(terrain);
-    printf("hello_blocks: %s tile: %u blocks from %u points and %u fractures in %.2f s; %d mesh chunks, %llu triangles\n",
+    printf("rocks_blocks: %s tile: %u blocks from %u points and %u fractures in %.2f s; %d mesh chunks, %llu triangles\n",
            rocks_block_type_name(type), cliff.tile->block_count, cliff.tile->sample_count, cliff.tile->disc_count,
            cliff.tile->build_seconds, stats.mesh_chunks_uploaded, (unsigned long long)stats.triangles);
     terrain_renderer_destroy(renderer);
@@ -111,3 +111,8 @@ int main(int argc, char **argv) {
     trace_stop();
     return status;
 }
+
+/* Expected output:
+ * Run: --headless --size 96x64 --frames 2 --type columnar --screenshot $TMP/blocks.png
+ * ^rocks_blocks: columnar tile: [1-9][0-9]* blocks from [1-9][0-9]* points and [0-9]+ fractures in [0-9.]+ s; [1-9][0-9]* mesh chunks, [1-9][0-9]* triangles$
+ */
