@@ -270,11 +270,14 @@ expect "rocks_export: the region's JSON" 0 '"count":[1-9][0-9]*,"rocks":' -- cat
 p=$bin/terrain_mesh
 expect "terrain_mesh: no file" 2 "missing" -- "$p"
 expect "terrain_mesh: the exported field" 0 \
-  '^\{"vertices":[1-9][0-9]*,"triangles":[1-9][0-9]*,"area":[0-9.e+]+,"ms":[0-9.e+-]+\}$' -- "$p" "$tmp/region.json"
+  '^\{"vertices":[1-9][0-9]*,"triangles":[1-9][0-9]*,"area":[0-9.e+]+,"ms":[0-9.e+-]+,"threads":[1-9][0-9]*\}$' -- "$p" "$tmp/region.json"
 # The same mesh as the export's PLY: same face count.
 faces=$(head -c 400 "$tmp/region.ply" | grep -a -m1 '^element face' | cut -d' ' -f3)
 expect "terrain_mesh: as many triangles as the export" 0 "\"triangles\":$faces," -- "$p" "$tmp/region.json"
 expect "terrain_mesh: by prefix and .raw too" 0 "\"triangles\":$faces," -- "$p" "$tmp/region.raw"
+expect "terrain_mesh: --repeat on two threads, the same mesh" 0 "\"triangles\":$faces,.*\"threads\":2\}" -- \
+  "$p" "$tmp/region.json" --repeat 3 --threads 2
+expect "terrain_mesh: --repeat 0" 2 "bad value for '--repeat'" -- "$p" "$tmp/region.json" --repeat 0
 expect "terrain_mesh: missing file" 1 "cannot open $tmp/absent.json" -- "$p" "$tmp/absent.json"
 cp "$tmp/region.json" "$tmp/short.json"
 head -c 409596 "$tmp/region.raw" >"$tmp/short.raw"
