@@ -751,7 +751,8 @@ void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double
 typedef struct terrain_stream_desc {
     int half_width;                   /* level-0 mesh chunks each way from the viewer; 0 = 2, or
                                          with pixel_error terrain_rings_half_width(levels, K) */
-    int levels;                       /* rings of detail (level 0 included); 0 = 3 */
+    int levels;                       /* rings of detail (level 0 included); 0 = 3, or 2 when
+                                         half_width is derived */
     float pixel_error;                /* screen-space error target τ in pixels ("detail from a
                                          screen-space error"); 0 = none: the fixed rings above.
                                          Only a half_width of 0 is derived; levels stay as given */

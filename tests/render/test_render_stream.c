@@ -114,6 +114,13 @@ Test(render_stream, pixel_error_zero_keeps_the_fixed_rings_and_a_target_derives_
     cr_assert(streamed_settle(&sse, eye, 1, 4000) > 0, "streaming never settled after the resize");
     cr_expect_eq(terrain_ecs_stream_stats(sse.te).mesh_chunks_wanted, 64 * 4 + (64 - 16) * 2);
     streamed_close(&sse);
+
+    /* Levels left 0 with a target are 2; 720 px, 2 px (K = 311.8): 32w − 32 ≥ 24.9 and
+     * 64w − 32 ≥ 155.9 → 2.94 → 4. */
+    streamed derived = streamed_open(1, &(terrain_stream_desc){ .pixel_error = 2.0f, .viewport_height = 720 });
+    cr_expect_eq(terrain_ecs_stream_desc(derived.te).levels, 2);
+    cr_expect_eq(terrain_ecs_stream_desc(derived.te).half_width, 4);
+    streamed_close(&derived);
 }
 
 Test(render_stream, rings_at_the_origin_equal_the_static_rings) {
