@@ -511,13 +511,13 @@ void terrain_renderer_draw_shadows(terrain_renderer *renderer, const terrain_vie
  * Streaming (terrain_stream_desc.pixel_error) and the clipmap (terrain_clipmap_desc.pixel_error)
  * derive their extents from K and the errors below instead of fixed numbers:
  *     double k = terrain_screen_error_scale(720, 0, 1.0f);   // 623.5: 720 px, 60°, 1 px
- *     int w = terrain_rings_half_width(3, k);                 // 6 (README, Streaming)
+ *     int w = terrain_rings_half_width(3, k);                 // 12 (README)
  * The errors are mean distances between a level's surface and the finest one, measured on
  * generated terrain (README, "Detail from a screen-space error"). */
 #define TERRAIN_SCREEN_DEFAULT_HEIGHT 720 /* viewport_height 0 means this */
-#define TERRAIN_GROUND_ERROR 0.5f         /* metres between the clipmap's ground G and the stacks'
-                                             top (median, README "Against the stacks"): the
-                                             volumetric rings reach at least this error's distance */
+#define TERRAIN_GROUND_ERROR 2.0f         /* metres between the clipmap's ground G and the stacks'
+                                             top, 90th percentile (README): the volumetric rings
+                                             reach at least this error's distance */
 /* K above, in pixels per metre of error per metre of distance; 0 when pixel_error ≤ 0.
  * viewport_height 0 = TERRAIN_SCREEN_DEFAULT_HEIGHT, fov_y 0 = 60° (terrain_view's default). */
 double terrain_screen_error_scale(int viewport_height, float fov_y, float pixel_error);
@@ -751,8 +751,7 @@ void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double
 typedef struct terrain_stream_desc {
     int half_width;                   /* level-0 mesh chunks each way from the viewer; 0 = 2, or
                                          with pixel_error terrain_rings_half_width(levels, K) */
-    int levels;                       /* rings of detail (level 0 included); 0 = 3, or 2 when
-                                         half_width is derived */
+    int levels;                       /* rings of detail (level 0 included); 0 = 3 */
     float pixel_error;                /* screen-space error target τ in pixels ("detail from a
                                          screen-space error"); 0 = none: the fixed rings above.
                                          Only a half_width of 0 is derived; levels stay as given */

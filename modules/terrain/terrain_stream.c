@@ -706,11 +706,7 @@ void terrain_ecs_set_clipmap(terrain_ecs *te, terrain_clipmap *clipmap) {
 static terrain_stream_desc stream_defaults(const terrain_ecs *te, const terrain_stream_desc *desc) {
     terrain_stream_desc d = desc ? *desc : (terrain_stream_desc){ 0 };
     if (!(d.pixel_error > 0.0f)) d.pixel_error = 0.0f;
-    /* Derived rings have 2 levels unless told: every level more moves the rings' shared centre
-     * up to 16·2^(levels−1) m further off the viewer (the snapping), which costs more chunks
-     * than its coarser ring saves at the resolutions we run (README, "Detail from a screen-space
-     * error": 112 chunk columns for 2 levels at 720 px and 2 px, 160 for 3). */
-    if (d.levels <= 0) d.levels = d.pixel_error > 0.0f && d.half_width <= 0 ? 2 : 3;
+    if (d.levels <= 0) d.levels = 3;
     if (d.levels > 12) d.levels = 12;
     /* Detail from a screen-space error: the narrowest rings whose every level starts where its
      * error is under the target (terrain_screen_error.c). */

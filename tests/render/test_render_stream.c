@@ -90,8 +90,8 @@ static int streamed_wanted_now(streamed *s, const double (*eyes)[3], int count) 
 
 /* pixel_error 0 is today's fixed rings exactly; with a target the half width is derived
  * (terrain_rings_half_width, worked by hand in test_terrain_screen_error.c) and follows the
- * screen. Two levels at 720 px, 60°, 1 px: K = 623.5, w = 6 (32w − 32 ≥ 0.08K and 64w − 32 ≥
- * 0.5K → 5.37 → 6); at 360 px K = 311.8: 2.94 → 4. Wanted: (2w)² · 4 layers + ((2w)² − w²) · 2. */
+ * screen. Two levels at 720 px, 60°, 4 px: K = 155.9, w = 6 (32w − 32 ≥ 0.08K and 64w − 32 ≥
+ * 2K → 5.37 → 6); at 360 px K = 77.9: 2.94 → 4. Wanted: (2w)² · 4 layers + ((2w)² − w²) · 2. */
 Test(render_stream, pixel_error_zero_keeps_the_fixed_rings_and_a_target_derives_them) {
     const double eye[1][3] = { { 10, 5, 10 } };
     streamed fixed = streamed_open(2, &(terrain_stream_desc){ .levels = 2, .y_min = -40, .y_max = 40 });
@@ -104,7 +104,7 @@ Test(render_stream, pixel_error_zero_keeps_the_fixed_rings_and_a_target_derives_
     cr_expect_eq(streamed_wanted_now(&fixed, eye, 1), 16 * 4 + (16 - 4) * 2);
     streamed_close(&fixed);
 
-    streamed sse = streamed_open(2, &(terrain_stream_desc){ .levels = 2, .y_min = -40, .y_max = 40, .pixel_error = 1.0f,
+    streamed sse = streamed_open(2, &(terrain_stream_desc){ .levels = 2, .y_min = -40, .y_max = 40, .pixel_error = 4.0f,
                                                             .viewport_height = 720 });
     cr_expect_eq(terrain_ecs_stream_desc(sse.te).half_width, 6);
     cr_expect_eq(streamed_wanted_now(&sse, eye, 1), 144 * 4 + (144 - 36) * 2);
@@ -115,11 +115,11 @@ Test(render_stream, pixel_error_zero_keeps_the_fixed_rings_and_a_target_derives_
     cr_expect_eq(terrain_ecs_stream_stats(sse.te).mesh_chunks_wanted, 64 * 4 + (64 - 16) * 2);
     streamed_close(&sse);
 
-    /* Levels left 0 with a target are 2; 720 px, 2 px (K = 311.8): 32w − 32 ≥ 24.9 and
-     * 64w − 32 ≥ 155.9 → 2.94 → 4. */
+    /* Levels left 0 stay 3; 720 px, 2 px (K = 311.8): 32w − 64 ≥ 24.9, 64w − 64 ≥ 99.8 and
+     * 128w − 64 ≥ 623.5 → 5.37 → 6. */
     streamed derived = streamed_open(1, &(terrain_stream_desc){ .pixel_error = 2.0f, .viewport_height = 720 });
-    cr_expect_eq(terrain_ecs_stream_desc(derived.te).levels, 2);
-    cr_expect_eq(terrain_ecs_stream_desc(derived.te).half_width, 4);
+    cr_expect_eq(terrain_ecs_stream_desc(derived.te).levels, 3);
+    cr_expect_eq(terrain_ecs_stream_desc(derived.te).half_width, 6);
     streamed_close(&derived);
 }
 

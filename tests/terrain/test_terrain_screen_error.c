@@ -30,10 +30,6 @@ Test(terrain_screen_error, level_errors_grow_with_the_cell) {
     cr_assert_float_eq(terrain_chunk_level_error(4), 2.0, 1e-9);
     for (int level = 1; level < 10; level++) cr_assert_gt(terrain_chunk_level_error(level), terrain_chunk_level_error(level - 1));
     cr_assert_float_eq(terrain_clipmap_spacing_error(4.0), 1.0, 1e-9);
-    /* The natural count of chunk levels: those finer than the clipmap's ground (0.5 m) — 0, 1, 2
-     * — is the default 3. */
-    cr_assert_lt(terrain_chunk_level_error(2), TERRAIN_GROUND_ERROR);
-    cr_assert_gt(terrain_chunk_level_error(3), TERRAIN_GROUND_ERROR);
 }
 
 /* Level L's area reaches w·32·2^L m from a centre up to half a coarsest chunk (16·2^(levels−1))
@@ -48,16 +44,16 @@ Test(terrain_screen_error, clearance_takes_off_the_snapping) {
 /* 720 px, 60°, 1 px, 3 levels (K = 623.54), by hand:
  *   level 1 from ε₁·K = 0.08·623.54 = 49.9 m:   32w − 64 ≥ 49.9   → w ≥ 3.56
  *   level 2 from ε₂·K = 0.32·623.54 = 199.5 m:  64w − 64 ≥ 199.5  → w ≥ 4.12
- *   clipmap from 0.5·623.54 = 311.8 m:         128w − 64 ≥ 311.8 → w ≥ 2.94
- * so w = 5, made even (rings align with coarser chunks): 6.
- * 360 px (K = 311.77): 2.78, 2.56, 1.72 → 3 → 4. 2 levels at 720 px: 32w − 32 ≥ 49.9 → 2.56;
- * 64w − 32 ≥ 311.8 → 5.37 → 6. One level: 32w − 16 ≥ 311.8 → 10.24 → 11 (any w). */
+ *   clipmap from 2·623.54 = 1247.1 m:          128w − 64 ≥ 1247.1 → w ≥ 10.24
+ * so w = 11, made even (rings align with coarser chunks): 12.
+ * 360 px (K = 311.77): 2.78, 2.56, 5.37 → 6. 2 levels at 720 px: 32w − 32 ≥ 49.9 → 2.56;
+ * 64w − 32 ≥ 1247.1 → 19.99 → 20. One level: 32w − 16 ≥ 1247.1 → 39.47 → 40 (any w). */
 Test(terrain_screen_error, half_width_worked_by_hand) {
     double k720 = terrain_screen_error_scale(720, 0.0f, 1.0f), k360 = terrain_screen_error_scale(360, 0.0f, 1.0f);
-    cr_assert_eq(terrain_rings_half_width(3, k720), 6);
-    cr_assert_eq(terrain_rings_half_width(3, k360), 4);
-    cr_assert_eq(terrain_rings_half_width(2, k720), 6);
-    cr_assert_eq(terrain_rings_half_width(1, k720), 11);
+    cr_assert_eq(terrain_rings_half_width(3, k720), 12);
+    cr_assert_eq(terrain_rings_half_width(3, k360), 6);
+    cr_assert_eq(terrain_rings_half_width(2, k720), 20);
+    cr_assert_eq(terrain_rings_half_width(1, k720), 40);
     /* A tiny scale still keeps the smallest rings the layout allows. */
     cr_assert_eq(terrain_rings_half_width(1, 1e-6), 1);
     cr_assert_eq(terrain_rings_half_width(3, 1e-6), 4);   /* w = 2 leaves 0 m before level 1 */
@@ -109,16 +105,20 @@ static terrain_clipmap_stats clipmap_for(float pixel_error, int height, float in
     return stats;
 }
 
-/* 720 px, 1 px, rings reaching 704 m (w = 6, 3 levels: 128·6 − 64), by hand:
+/* 720 px, 1 px, rings reaching 1472 m (w = 12, 3 levels: 128·12 − 64), by hand:
  *   cells ≥ 4·(K/4 + 2) = 623.54 + 8 = 631.5 → 640 (a multiple of 16)
- *   finest spacing: ε(s)·K = s/4·623.54 ≤ 704 → s ≤ 4.52 → 4 m
- *   levels: 640/2 · 4 · 2^(L−1) = 1280 · 2^(L−1) ≥ 8192 → 2^(L−1) ≥ 6.4 → L = 4
+ *   finest spacing: ε(s)·K = s/4·623.54 ≤ 1472 → s ≤ 9.44 → 8 m
+ *   levels: 640/2 · 8 · 2^(L−1) = 2560 · 2^(L−1) ≥ 8192 → 2^(L−1) ≥ 3.2 → L = 3
+ * With rings reaching 704 m: s ≤ 4.52 → 4 m, 1280 · 2^(L−1) ≥ 8192 → L = 4.
  * pixel_error 0 is today's 6 levels of 128 cells from 4 m. */
 Test(terrain_screen_error, clipmap_derived_by_hand_and_zero_is_the_fixed_default) {
-    terrain_clipmap_stats s = clipmap_for(1.0f, 720, 704.0f);
+    terrain_clipmap_stats s = clipmap_for(1.0f, 720, 1472.0f);
     cr_assert_eq(s.cells, 640);
-    cr_assert_eq(s.finest_spacing, 4.0f);
-    cr_assert_eq(s.levels, 4);
+    cr_assert_eq(s.finest_spacing, 8.0f);
+    cr_assert_eq(s.levels, 3);
+    terrain_clipmap_stats nearer = clipmap_for(1.0f, 720, 704.0f);
+    cr_assert_eq(nearer.finest_spacing, 4.0f);
+    cr_assert_eq(nearer.levels, 4);
     terrain_clipmap_stats fixed = clipmap_for(0.0f, 720, 704.0f);
     cr_assert_eq(fixed.cells, 128);
     cr_assert_eq(fixed.finest_spacing, 4.0f);
@@ -159,16 +159,17 @@ Test(terrain_screen_error, every_clipmap_level_starts_where_its_error_is_under_t
 
 Test(terrain_screen_error, clipmap_set_screen_derives_again_and_keeps_fixed_ones) {
     terrain_clipmap *c = terrain_clipmap_create(&(terrain_clipmap_desc){ .pixel_error = 1.0f, .viewport_height = 720,
-                                                                          .inner_distance = 704.0f,
+                                                                          .inner_distance = 1472.0f,
                                                                           .generation = terrain_generation_defaults(1) });
     terrain_clipmap_update(c, (double[3]){ 10, 50, 20 });
-    cr_assert_not(terrain_clipmap_set_screen(c, 720, 0.0f, 704.0f), "the same screen changes nothing");
-    /* 360 px: K = 311.77, cells ≥ 311.77 + 8 → 320; s ≤ 448 / 77.9 = 5.7 → 4 m; 160·4·2^(L−1) ≥ 8192 → 5. */
-    cr_assert(terrain_clipmap_set_screen(c, 360, 0.0f, 448.0f));
+    cr_assert_not(terrain_clipmap_set_screen(c, 720, 0.0f, 1472.0f), "the same screen changes nothing");
+    /* 360 px, rings of 704 m: K = 311.77, cells ≥ 311.77 + 8 → 320; s ≤ 704 / 77.9 = 9.03 → 8 m;
+     * 160·8·2^(L−1) ≥ 8192 → 4. */
+    cr_assert(terrain_clipmap_set_screen(c, 360, 0.0f, 704.0f));
     terrain_clipmap_stats s = terrain_clipmap_stats_get(c);
     cr_assert_eq(s.cells, 320);
-    cr_assert_eq(s.finest_spacing, 4.0f);
-    cr_assert_eq(s.levels, 5);
+    cr_assert_eq(s.finest_spacing, 8.0f);
+    cr_assert_eq(s.levels, 4);
     cr_assert(isnan(terrain_clipmap_height(c, 10, 20)), "made anew: no heights until the next update");
     cr_assert_gt(terrain_clipmap_update(c, (double[3]){ 10, 50, 20 }), 0);
     cr_assert(!isnan(terrain_clipmap_height(c, 10, 20)));
