@@ -35,8 +35,8 @@
 
 /* The default screen-space error target, pixels (README; the pictures and triangle counts it was
  * chosen by are in modules/terrain/README.md, "Detail from a screen-space error"). */
-#define APP_PIXEL_ERROR 2.0
-#define APP_PIXEL_ERROR_TEXT "2"
+#define APP_PIXEL_ERROR 3.0
+#define APP_PIXEL_ERROR_TEXT "3"
 
 typedef struct options {
     core_common_args common;
