@@ -59,6 +59,8 @@ struct game_app {
     uint64_t hud_note_ns;                  /* when it was set */
     uint64_t play_start_ns;                /* when loading ended: the hint's clock */
     int frames, loading_frames;
+    int screen_height;                     /* framebuffer height and fov the detail was derived */
+    float screen_fov_y;                    /* for (app_screen_changed); 0 = not yet */
     uint64_t start_ns, last_ns;
     double frame_seconds;
     double *cpu_ms, *engine_ms, *thread_ms; /* per frame past loading */
@@ -263,7 +265,12 @@ static bool app_open_terrain(game_app *app) {
                                                              .amplify_user = app->cliffs });
     app->ecs = ecs_world_create(&(ecs_world_desc){ .jobs = app->jobs });
     app->terrain = terrain_ecs_create(app->ecs, app->world);
-    terrain_ecs_stream(app->terrain, &app->desc.stream);
+    terrain_stream_desc stream = app->desc.stream;
+    if (app->desc.pixel_error > 0 && stream.half_width <= 0 && stream.levels <= 0) {
+        stream.pixel_error = app->desc.pixel_error;
+        stream.viewport_height = app->desc.height;   /* the view's fov: app_screen_changed */
+    }
+    terrain_ecs_stream(app->terrain, &stream);
     app_create_entities(app);
     return true;
 }
@@ -455,8 +462,11 @@ game_app *game_app_create(const game_app_desc *desc) {
         .shadows = d->shadows, .sky_apart = true });
     if (!app->renderer || !app_open_input(app) || !(app->hud = gfx_text_create(app->gfx))) goto fail;
     if (!d->no_clipmap) {
+        terrain_stream_desc rings = terrain_ecs_stream_desc(app->terrain);
         app->clipmap = terrain_clipmap_create(&(terrain_clipmap_desc){
-            .generation = *terrain_world_generation(app->world), .jobs = app->jobs });
+            .generation = *terrain_world_generation(app->world), .jobs = app->jobs,
+            .pixel_error = d->pixel_error, .viewport_height = d->height,
+            .inner_distance = (float)terrain_rings_clearance(rings.half_width, rings.levels, rings.levels - 1) });
         terrain_ecs_set_clipmap(app->terrain, app->clipmap);
         terrain_renderer_set_clipmap(app->renderer, app->clipmap);
         app_view(app)->far_distance = 6000.0f;
@@ -1010,8 +1020,26 @@ static void app_add_systems(game_app *app) {
         .user = app, .main_thread = true, .writes = { ids->gfx, ids->player }, .reads = { ids->camera, ids->terrain_ecs } });
 }
 
+/* Detail from a screen-space error follows the framebuffer's height and the view's field of
+ * view: the rings and the clipmap are derived again when either changes (a resized window). */
+static void app_screen_changed(game_app *app) {
+    if (!(app->desc.pixel_error > 0)) return;
+    int width, height;
+    gfx_size(app->gfx, &width, &height);
+    float fov_y = app_view(app)->fov_y;
+    if (height <= 0 || (height == app->screen_height && fov_y == app->screen_fov_y)) return;
+    app->screen_height = height;
+    app->screen_fov_y = fov_y;
+    terrain_ecs_stream_set_screen(app->terrain, height, fov_y);
+    terrain_stream_desc rings = terrain_ecs_stream_desc(app->terrain);
+    if (app->clipmap)
+        terrain_clipmap_set_screen(app->clipmap, height, fov_y,
+                                   (float)terrain_rings_clearance(rings.half_width, rings.levels, rings.levels - 1));
+}
+
 bool game_app_frame(game_app *app) {
     if (app->over) return false;
+    app_screen_changed(app);                   /* before the frame's systems use the clipmap */
     trace_frame_begin();
     uint64_t now = core_time_ns(), thread_start = app_thread_cpu_ns();
     app->frame_seconds = (double)(now - app->last_ns) * 1e-9;

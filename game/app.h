@@ -131,6 +131,12 @@ typedef struct game_app_desc {
     terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);
     void *generate_user;
     terrain_stream_desc stream;       /* view distance and budgets; zero = defaults */
+    float pixel_error;                /* screen-space error target in pixels for the far terrain
+                                         and, when stream leaves half_width and levels 0, the
+                                         rings (terrain.h, "detail from a screen-space error"),
+                                         at the framebuffer's height and the view's field of
+                                         view, derived again when the window resizes; 0 = the
+                                         fixed rings and clipmap */
     bool no_clipmap;                  /* only the volumetric chunks (no far terrain) */
     bool no_hud;
     grass_quality grass;              /* grass patches (vegetation.h); 0 = low */

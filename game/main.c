@@ -1,7 +1,8 @@
 /* world — the walkable infinite world (game/app.h) on the command line.
  *
  *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT | --tour] [--record FILE]
- *         [--replay FILE] [--bindings FILE] [--gamepad-mappings FILE] [--screenshot FILE] [--radius R] [--levels N]
+ *         [--replay FILE] [--bindings FILE] [--gamepad-mappings FILE] [--screenshot FILE] [--pixel-error P]
+ *         [--radius R] [--levels N]
  *         [--memory MB] [--grass off|low|high] [--water off|low|high] [--shadows off|low|high]
  *         [--detail on|off] [--rocks on|off] [--threads N]
  *         [--trace FILE [--trace-frames N]] [--world DIR] [--at X,Y,Z] [--look YAW,PITCH]
@@ -32,11 +33,17 @@
 #include <string.h>
 #include <sys/stat.h>
 
+/* The default screen-space error target, pixels (README; the pictures and triangle counts it was
+ * chosen by are in modules/terrain/README.md, "Detail from a screen-space error"). */
+#define APP_PIXEL_ERROR 3.0
+#define APP_PIXEL_ERROR_TEXT "3"
+
 typedef struct options {
     core_common_args common;
     const char *size, *screenshot, *walk, *record, *replay, *bindings, *gamepad_mappings, *world, *grass, *water, *shadows, *detail, *at,
         *look, *rocks, *cliffs;
     int seed, frames, radius, levels, memory_mb, trace_frames;
+    double pixel_error;
     bool headless, tour, no_head_bob, no_ao;
 } options;
 
@@ -94,7 +101,11 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "gamepad-mappings", CORE_OPTION_STRING, &o->gamepad_mappings, "FILE",
           "SDL game controller database lines for pads read through GLFW (bad lines are reported and skipped)" },
         { "screenshot", CORE_OPTION_STRING, &o->screenshot, "FILE", "write the last frame as a PNG" },
-        { "radius", CORE_OPTION_INT, &o->radius, "R", "full-detail chunks of 32 m each way (default 2)", 1, 32 },
+        { "pixel-error", CORE_OPTION_DOUBLE, &o->pixel_error, "P", "detail by screen-space error: rings and far "
+          "terrain fine enough for P pixels at the window's size (default " APP_PIXEL_ERROR_TEXT "; 0 = fixed "
+          "rings of 2, 3 levels, and the fixed far terrain)", 0, 0, 0.0, 64.0 },
+        { "radius", CORE_OPTION_INT, &o->radius, "R", "full-detail chunks of 32 m each way (default: from "
+          "--pixel-error; with --radius or --levels the rings are fixed, radius 2)", 1, 32 },
         { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
         { "grass", CORE_OPTION_STRING, &o->grass, "off|low|high", "grass patches (default low)" },
         { "water", CORE_OPTION_STRING, &o->water, "off|low|high", "the sea and lakes (default low)" },
@@ -111,6 +122,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
     core_cli cli = { .program = "world", .summary = "walk an endless generated world",
                      .options = list, .option_count = CORE_COUNTOF(list) };
     o->seed = -1;
+    o->pixel_error = APP_PIXEL_ERROR;
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
     /* No --seed: the world folder's, else 1. */
@@ -254,6 +266,7 @@ int main(int argc, char **argv) {
     desc.world_dir = o.world;
     desc.stream = (terrain_stream_desc){ .half_width = o.radius, .levels = o.levels,
                                          .memory_budget = (size_t)o.memory_mb << 20 };
+    desc.pixel_error = (float)o.pixel_error;
     game_app *app = game_app_create(&desc);
     if (!app) {
         game_walk_free(&walk);

@@ -351,6 +351,9 @@ expect "world: bad --gamepad-mappings line skipped" 0 "pads.txt:2: unknown outpu
   --water off --gamepad-mappings "$tmp/pads.txt"
 expect "world: --help lists --gamepad-mappings" 0 "--gamepad-mappings FILE" -- "$bin/world" --help
 expect "world: bad --memory" 2 "bad value for '--memory'" -- "$bin/world" --memory 1
+expect "world: negative --pixel-error" 2 "bad value for '--pixel-error': '-1' is out of range" -- "$bin/world" --pixel-error -1
+expect "world: --pixel-error not a number" 2 "bad value for '--pixel-error': 'x' is not a number" -- "$bin/world" --pixel-error x
+expect "world: --help lists --pixel-error" 0 "--pixel-error P +detail by screen-space error" -- "$bin/world" --help
 expect "world: --trace-frames without --trace" 2 "'--trace-frames' needs '--trace FILE'" -- "$bin/world" --trace-frames 5
 expect "world: negative --trace-frames" 2 "bad value for '--trace-frames'" -- "$bin/world" --trace-frames -1 --trace "$tmp/ring.json"
 # --at X,Y,Z and --look YAW,PITCH: each malformed form named, with the usage; a view asked for is

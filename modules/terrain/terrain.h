@@ -501,6 +501,41 @@ void terrain_renderer_draw_sky(terrain_renderer *renderer, const terrain_view *v
 void terrain_renderer_draw_shadows(terrain_renderer *renderer, const terrain_view *view,
                                    const terrain_gpu_mesh *casters, int caster_count);
 
+/* ---- detail from a screen-space error ---------------------------------------------------
+ *
+ * A surface that is off by ε metres, seen from d metres away across the view direction, is off
+ * by ε·H / (2·d·tan(θ/2)) pixels on a viewport H pixels tall with a vertical field of view θ (the
+ * perspective projection's scale at the centre of the view). With a pixel error target τ a
+ * level of detail whose geometric error is ε is therefore good enough beyond
+ *     d = ε·K,   K = H / (2·τ·tan(θ/2))            (terrain_screen_error_scale)
+ * Streaming (terrain_stream_desc.pixel_error) and the clipmap (terrain_clipmap_desc.pixel_error)
+ * derive their extents from K and the errors below instead of fixed numbers:
+ *     double k = terrain_screen_error_scale(720, 0, 1.0f);   // 623.5: 720 px, 60°, 1 px
+ *     int w = terrain_rings_half_width(3, k);                 // 12 (README)
+ * The errors are mean distances between a level's surface and the finest one, measured on
+ * generated terrain (README, "Detail from a screen-space error"). */
+#define TERRAIN_SCREEN_DEFAULT_HEIGHT 720 /* viewport_height 0 means this */
+#define TERRAIN_GROUND_ERROR 2.0f         /* metres between the clipmap's ground G and the stacks'
+                                             top, 90th percentile (README): the volumetric rings
+                                             reach at least this error's distance */
+/* K above, in pixels per metre of error per metre of distance; 0 when pixel_error ≤ 0.
+ * viewport_height 0 = TERRAIN_SCREEN_DEFAULT_HEIGHT, fov_y 0 = 60° (terrain_view's default). */
+double terrain_screen_error_scale(int viewport_height, float fov_y, float pixel_error);
+/* ε of a mesh-chunk level (cells 2^L m): h²/50 m below h = 6.25 m, h/8 above (see the README). */
+double terrain_chunk_level_error(int level);
+/* ε of a clipmap level of `spacing` metres: spacing/4 (mean vertical error of G at that spacing,
+ * its triangles, against G at 1 m). */
+double terrain_clipmap_spacing_error(double spacing);
+/* The metres from a viewer to the outer border of level `level`'s area at least, wherever the
+ * viewer stands within its snapped centre (rings of `levels` levels, half_width w): the area
+ * reaches w·32·2^L m from a centre that is up to half a coarsest chunk (16·2^(levels−1) m) from
+ * the viewer along each axis. level = levels − 1 is the rings' reach, where the clipmap starts. */
+double terrain_rings_clearance(int half_width, int levels, int level);
+/* The smallest half_width (even when levels > 1, at most 64) whose rings meet scale K: every
+ * level L + 1 starts at least ε(L + 1)·K from the viewer, and the clipmap at least
+ * TERRAIN_GROUND_ERROR·K. */
+int terrain_rings_half_width(int levels, double scale);
+
 /* ---- far terrain: geometry clipmaps (002 §3.2, §3.5) ---- */
 
 /* The terrain beyond the volumetric chunks, out to many kilometres: nested square grids of
@@ -552,6 +587,18 @@ typedef struct terrain_clipmap_desc {
                                          0 = below the generator's caves (156 m by default) */
     terrain_generation_params generation;  /* copied; the world whose ground is drawn */
     job_system *jobs;                 /* computes new heights in parallel; NULL = the caller */
+    /* Detail from a screen-space error (above): with pixel_error > 0 the fields left 0 among
+     * cells, finest_spacing and levels are derived from K = terrain_screen_error_scale(
+     * viewport_height, fov_y, pixel_error): cells ≥ 4·(ε(s)/s·K + 2) (level L is drawn from
+     * cells·s_L/4 out, less the camera's 2·s_L offset, and needs ε(s_L)·K), finest_spacing the
+     * largest power of two (1 … 32 m) with ε(s)·K ≤ inner_distance, levels the fewest whose
+     * outermost reaches 8192 m from its centre (as far as the defaults). */
+    float pixel_error;                /* pixels; 0 = the fixed defaults */
+    int viewport_height;              /* pixels; 0 = 720 */
+    float fov_y;                      /* radians; 0 = 60° */
+    float inner_distance;             /* metres from the camera that the volumetric rings cover
+                                         surely (terrain_rings_clearance of their outermost level);
+                                         0 = none, the finest spacing is then 1 m */
 } terrain_clipmap_desc;
 
 typedef struct terrain_clipmap_stats {
@@ -571,6 +618,11 @@ typedef struct terrain_clipmap_stats {
 terrain_clipmap *terrain_clipmap_create(const terrain_clipmap_desc *desc);
 /* Frees the CPU data and, if terrain_clipmap_upload made any, the GL objects: main thread. */
 void terrain_clipmap_destroy(terrain_clipmap *clipmap);
+/* A new viewport height, field of view and inner distance for a desc with pixel_error (a resized
+ * window, rings derived again): when the derived cells, finest spacing or levels change, the
+ * levels are made anew (heights recomputed on the next update, GL objects remade on the next
+ * upload: main thread, not while the clipmap is drawn); holes are kept. True when they changed. */
+bool terrain_clipmap_set_screen(terrain_clipmap *clipmap, int viewport_height, float fov_y, float inner_distance);
 /* Recentres the levels on the camera (world metres) and computes the heights that came into
  * them (all of them the first time or after a jump); returns how many. */
 uint64_t terrain_clipmap_update(terrain_clipmap *clipmap, const double camera[3]);
@@ -697,8 +749,15 @@ void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double
  * waits for them. A mesh chunk whose samples cannot reach any interface of its column chunks
  * (terrain_stacks_interface_range) is empty without being sampled. */
 typedef struct terrain_stream_desc {
-    int half_width;                   /* level-0 mesh chunks each way from the viewer; 0 = 2 */
+    int half_width;                   /* level-0 mesh chunks each way from the viewer; 0 = 2, or
+                                         with pixel_error terrain_rings_half_width(levels, K) */
     int levels;                       /* rings of detail (level 0 included); 0 = 3 */
+    float pixel_error;                /* screen-space error target τ in pixels ("detail from a
+                                         screen-space error"); 0 = none: the fixed rings above.
+                                         Only a half_width of 0 is derived; levels stay as given */
+    int viewport_height;              /* pixels, for pixel_error; 0 = 720. The window's size
+                                         changes: terrain_ecs_stream_set_screen */
+    float fov_y;                      /* radians, for pixel_error; 0 = 60° */
     double y_min, y_max;              /* metres the mesh layers cover; equal = the generation
                                          parameters' relief ± 48 m (base ± relief ± 48) */
     int collision_radius;             /* column chunks each way kept generated; 0 = 2 */
@@ -711,6 +770,12 @@ typedef struct terrain_stream_desc {
 
 /* Turns streaming on (call once, before the first frame; spawned areas stay as they are). */
 void terrain_ecs_stream(terrain_ecs *te, const terrain_stream_desc *desc);
+/* A new viewport height and field of view (a resized window) for a desc with pixel_error: the
+ * half width is derived again and, if it changed, the rings are laid out anew on the next frame
+ * (what left them stays drawn until replaced, as when walking). No effect without pixel_error. */
+void terrain_ecs_stream_set_screen(terrain_ecs *te, int viewport_height, float fov_y);
+/* The desc streaming runs with: defaults filled in, half_width derived (terrain_ecs_stream). */
+terrain_stream_desc terrain_ecs_stream_desc(terrain_ecs *te);
 /* Where the viewers' eyes are (world metres; copied; at most TERRAIN_MAX_VIEWERS). */
 void terrain_ecs_set_viewers(terrain_ecs *te, const double (*eyes)[3], int count);
 /* Whether every column chunk the field reads inside [min, max] (plus the kernel) is generated:

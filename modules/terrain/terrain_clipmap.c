@@ -97,6 +97,7 @@ typedef struct row_task {
 
 struct terrain_clipmap {
     terrain_clipmap_desc desc;      /* with the defaults filled in */
+    terrain_clipmap_desc asked;     /* as given (terrain_clipmap_set_screen derives again) */
     int level_count, cells, size;   /* size = T = cells + 4 */
     clipmap_level levels[TERRAIN_CLIPMAP_MAX_LEVELS];
     bool has_camera;
@@ -130,8 +131,37 @@ static int floor_mod(int64_t a, int m) {
 
 /* ---- creation: defaults, block cuts, the shared index buffer ---- */
 
+/* Detail from a screen-space error (terrain.h; terrain_screen_error.c): the fields left 0 among
+ * cells, finest_spacing and levels, from K. Level L (spacing s_L) is drawn from n·s_L/4 out,
+ * where the finer level ends, and the camera may be up to s_0·(2^{L+1} − 1) < 2·s_L from its
+ * centre: it needs n·s_L/4 − 2·s_L ≥ ε(s_L)·K, so n ≥ 4·(K·ε(s)/s + 2) — the same for every
+ * level, since ε is proportional to s; the finest spacing only has to hold from where the
+ * volumetric rings end. */
+static void clipmap_derive(terrain_clipmap_desc *d) {
+    double scale = terrain_screen_error_scale(d->viewport_height, d->fov_y, d->pixel_error);
+    if (scale <= 0.0) return;
+    if (d->cells == 0) {
+        double cells = 4.0 * (scale * terrain_clipmap_spacing_error(1.0) + 2.0);
+        d->cells = cells >= 1024.0 ? 1024 : CORE_MAX(16, 16 * (int)ceil(cells / 16.0));
+    }
+    if (!(d->finest_spacing > 0.0f)) {
+        float spacing = 1.0f;
+        while (spacing < 32.0f && terrain_clipmap_spacing_error(2.0 * spacing) * scale <= (double)d->inner_distance)
+            spacing *= 2.0f;
+        d->finest_spacing = spacing;
+    }
+    if (d->levels == 0) {
+        int cells = CORE_MAX(16, CORE_MIN(d->cells, 1024));
+        d->levels = 1;
+        while (d->levels < TERRAIN_CLIPMAP_MAX_LEVELS && 0.5 * cells * ldexp((double)d->finest_spacing, d->levels - 1) < 8192.0)
+            d->levels++;
+    }
+}
+
 static terrain_clipmap_desc clipmap_defaults(const terrain_clipmap_desc *in) {
     terrain_clipmap_desc d = *in;
+    if (!(d.pixel_error > 0.0f)) d.pixel_error = 0.0f;
+    clipmap_derive(&d);
     if (d.levels == 0) d.levels = 6;
     if (d.levels < 1 || d.levels > TERRAIN_CLIPMAP_MAX_LEVELS) {
         core_warn("terrain", "clipmap: %d levels is out of range 1…%d; clamped", d.levels, TERRAIN_CLIPMAP_MAX_LEVELS);
@@ -202,9 +232,9 @@ static void build_blocks(terrain_clipmap *c) {
     c->indices = core_realloc(c->indices, capacity * sizeof *c->indices, c->index_count * sizeof *c->indices);
 }
 
-terrain_clipmap *terrain_clipmap_create(const terrain_clipmap_desc *desc) {
-    terrain_clipmap *c = core_calloc(1, sizeof *c);
-    c->desc = clipmap_defaults(desc ? desc : &(terrain_clipmap_desc){ 0 });
+static void clipmap_init(terrain_clipmap *c, const terrain_clipmap_desc *desc) {
+    c->asked = *desc;
+    c->desc = clipmap_defaults(desc);
     c->level_count = c->desc.levels;
     c->cells = c->desc.cells;
     c->size = c->cells + 4;
@@ -221,11 +251,16 @@ terrain_clipmap *terrain_clipmap_create(const terrain_clipmap_desc *desc) {
     build_blocks(c);
     c->stats = (terrain_clipmap_stats){ .levels = c->level_count, .cells = c->cells,
                                         .finest_spacing = c->desc.finest_spacing };
+}
+
+terrain_clipmap *terrain_clipmap_create(const terrain_clipmap_desc *desc) {
+    terrain_clipmap *c = core_calloc(1, sizeof *c);
+    clipmap_init(c, desc ? desc : &(terrain_clipmap_desc){ 0 });
     return c;
 }
 
-void terrain_clipmap_destroy(terrain_clipmap *c) {
-    if (!c) return;
+/* Everything clipmap_init made and what the updates and uploads added, GL objects included. */
+static void clipmap_fini(terrain_clipmap *c) {
     if (c->texture) glDeleteTextures(1, &c->texture);
     if (c->index_buffer) glDeleteBuffers(1, &c->index_buffer);
     if (c->vertex_array) glDeleteVertexArrays(1, &c->vertex_array);
@@ -240,7 +275,39 @@ void terrain_clipmap_destroy(terrain_clipmap *c) {
     if (c->upload_flags) core_free(c->upload_flags, (size_t)c->size);
     if (c->upload_texels) core_free(c->upload_texels, texels * sizeof *c->upload_texels);
     if (c->tasks) core_free(c->tasks, c->task_capacity * sizeof *c->tasks);
+}
+
+void terrain_clipmap_destroy(terrain_clipmap *c) {
+    if (!c) return;
+    clipmap_fini(c);
     core_free(c, sizeof *c);
+}
+
+bool terrain_clipmap_set_screen(terrain_clipmap *c, int viewport_height, float fov_y, float inner_distance) {
+    if (!(c->asked.pixel_error > 0.0f)) return false;
+    terrain_clipmap_desc asked = c->asked;
+    asked.viewport_height = viewport_height;
+    asked.fov_y = fov_y;
+    asked.inner_distance = inner_distance;
+    terrain_clipmap_desc d = clipmap_defaults(&asked);
+    c->asked = asked;
+    if (d.cells == c->desc.cells && d.finest_spacing == c->desc.finest_spacing && d.levels == c->desc.levels &&
+        d.hole_band == c->desc.hole_band) {
+        c->desc = d;
+        return false;
+    }
+    /* Made anew: the holes stay, the heights come with the next update, GL with the next upload. */
+    int hole_count = c->hole_count;
+    double hole_min[TERRAIN_CLIPMAP_MAX_HOLES][2], hole_max[TERRAIN_CLIPMAP_MAX_HOLES][2];
+    memcpy(hole_min, c->hole_min, sizeof hole_min);
+    memcpy(hole_max, c->hole_max, sizeof hole_max);
+    clipmap_fini(c);
+    memset(c, 0, sizeof *c);
+    clipmap_init(c, &asked);
+    c->hole_count = hole_count;
+    memcpy(c->hole_min, hole_min, sizeof hole_min);
+    memcpy(c->hole_max, hole_max, sizeof hole_max);
+    return true;
 }
 
 /* ---- placement ---- */

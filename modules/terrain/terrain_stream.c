@@ -74,6 +74,7 @@ typedef struct stream_map {
 
 struct terrain__streamer {
     terrain_stream_desc desc;              /* defaults filled in */
+    terrain_stream_desc asked;             /* as given: half_width 0 with pixel_error is derived */
     double viewers[TERRAIN_MAX_VIEWERS][3];
     int viewer_count;
     int64_t centres[TERRAIN_MAX_VIEWERS][2];   /* rings' centres, in coarsest chunks */
@@ -704,9 +705,14 @@ void terrain_ecs_set_clipmap(terrain_ecs *te, terrain_clipmap *clipmap) {
 
 static terrain_stream_desc stream_defaults(const terrain_ecs *te, const terrain_stream_desc *desc) {
     terrain_stream_desc d = desc ? *desc : (terrain_stream_desc){ 0 };
-    if (d.half_width <= 0) d.half_width = 2;
+    if (!(d.pixel_error > 0.0f)) d.pixel_error = 0.0f;
     if (d.levels <= 0) d.levels = 3;
     if (d.levels > 12) d.levels = 12;
+    /* Detail from a screen-space error: the narrowest rings whose every level starts where its
+     * error is under the target (terrain_screen_error.c). */
+    if (d.half_width <= 0 && d.pixel_error > 0.0f)
+        d.half_width = terrain_rings_half_width(d.levels, terrain_screen_error_scale(d.viewport_height, d.fov_y, d.pixel_error));
+    if (d.half_width <= 0) d.half_width = 2;
     if (d.levels > 1 && d.half_width % 2) d.half_width++;   /* rings align with coarser chunks */
     if (!(d.y_max > d.y_min)) {
         /* The relief's range with a margin for overhangs, as the generator shapes it. */
@@ -728,6 +734,7 @@ void terrain_ecs_stream(terrain_ecs *te, const terrain_stream_desc *desc) {
     if (te->stream) return;
     terrain__streamer *s = core_calloc(1, sizeof *s);
     te->stream = s;
+    s->asked = desc ? *desc : (terrain_stream_desc){ 0 };
     s->desc = stream_defaults(te, desc);
     double top = (double)TERRAIN_MESH_CELLS * (double)(1 << (s->desc.levels - 1));
     double y_min = floor(s->desc.y_min / top) * top, y_max = ceil(s->desc.y_max / top) * top;
@@ -750,6 +757,25 @@ void terrain_ecs_stream(terrain_ecs *te, const terrain_stream_desc *desc) {
         .reads = { self }, .writes = { clipmap }, .fn = terrain_clipmap_lod_system, .user = te, .main_thread = true });
     ecs_system_add(ecs, &(ecs_system_desc){ .name = "terrain_clipmap_cull", .phase = "cull",
         .reads = { self }, .writes = { clipmap }, .fn = terrain_clipmap_cull_system, .user = te });
+}
+
+void terrain_ecs_stream_set_screen(terrain_ecs *te, int viewport_height, float fov_y) {
+    terrain__streamer *s = te->stream;
+    if (!s || !(s->asked.pixel_error > 0.0f)) return;
+    s->asked.viewport_height = viewport_height;
+    s->asked.fov_y = fov_y;
+    terrain_stream_desc d = stream_defaults(te, &s->asked);
+    s->desc.viewport_height = d.viewport_height;
+    s->desc.fov_y = d.fov_y;
+    if (d.half_width == s->desc.half_width) return;
+    /* Same levels, so the layers per level stand; the next stream phase lays the rings out
+     * anew, and what left them is kept, hidden and evicted as when the viewers move. */
+    s->desc.half_width = d.half_width;
+    s->laid_out = false;
+}
+
+terrain_stream_desc terrain_ecs_stream_desc(terrain_ecs *te) {
+    return te->stream ? te->stream->desc : (terrain_stream_desc){ 0 };
 }
 
 void terrain_ecs_set_viewers(terrain_ecs *te, const double (*eyes)[3], int count) {

@@ -81,6 +81,48 @@ Test(render_stream, one_viewer_wants_the_rings_and_all_become_ready) {
 
 /* The streamed rings around the origin are the static rings: the same chunks, masks and
  * meshes, hence the same triangles. */
+/* Wanted chunks after the first stream phase (the layout), before anything is meshed. */
+static int streamed_wanted_now(streamed *s, const double (*eyes)[3], int count) {
+    terrain_ecs_set_viewers(s->te, eyes, count);
+    ecs_progress(s->ecs, DT);
+    return terrain_ecs_stream_stats(s->te).mesh_chunks_wanted;
+}
+
+/* pixel_error 0 is today's fixed rings exactly; with a target the half width is derived
+ * (terrain_rings_half_width, worked by hand in test_terrain_screen_error.c) and follows the
+ * screen. Two levels at 720 px, 60°, 4 px: K = 155.9, w = 6 (32w − 32 ≥ 0.08K and 64w − 32 ≥
+ * 2K → 5.37 → 6); at 360 px K = 77.9: 2.94 → 4. Wanted: (2w)² · 4 layers + ((2w)² − w²) · 2. */
+Test(render_stream, pixel_error_zero_keeps_the_fixed_rings_and_a_target_derives_them) {
+    const double eye[1][3] = { { 10, 5, 10 } };
+    streamed fixed = streamed_open(2, &(terrain_stream_desc){ .levels = 2, .y_min = -40, .y_max = 40 });
+    terrain_stream_desc d = terrain_ecs_stream_desc(fixed.te);
+    cr_expect_eq(d.half_width, 2);
+    cr_expect_eq(d.pixel_error, 0.0f);
+    cr_expect_eq(streamed_wanted_now(&fixed, eye, 1), 16 * 4 + (16 - 4) * 2);
+    terrain_ecs_stream_set_screen(fixed.te, 2160, 0.0f);          /* no target: nothing moves */
+    cr_expect_eq(terrain_ecs_stream_desc(fixed.te).half_width, 2);
+    cr_expect_eq(streamed_wanted_now(&fixed, eye, 1), 16 * 4 + (16 - 4) * 2);
+    streamed_close(&fixed);
+
+    streamed sse = streamed_open(2, &(terrain_stream_desc){ .levels = 2, .y_min = -40, .y_max = 40, .pixel_error = 4.0f,
+                                                            .viewport_height = 720 });
+    cr_expect_eq(terrain_ecs_stream_desc(sse.te).half_width, 6);
+    cr_expect_eq(streamed_wanted_now(&sse, eye, 1), 144 * 4 + (144 - 36) * 2);
+    terrain_ecs_stream_set_screen(sse.te, 360, 0.0f);
+    cr_expect_eq(terrain_ecs_stream_desc(sse.te).half_width, 4);
+    cr_expect_eq(streamed_wanted_now(&sse, eye, 1), 64 * 4 + (64 - 16) * 2, "laid out anew for the new screen");
+    cr_assert(streamed_settle(&sse, eye, 1, 4000) > 0, "streaming never settled after the resize");
+    cr_expect_eq(terrain_ecs_stream_stats(sse.te).mesh_chunks_wanted, 64 * 4 + (64 - 16) * 2);
+    streamed_close(&sse);
+
+    /* Levels left 0 stay 3; 720 px, 2 px (K = 311.8): 32w − 64 ≥ 24.9, 64w − 64 ≥ 99.8 and
+     * 128w − 64 ≥ 623.5 → 5.37 → 6. */
+    streamed derived = streamed_open(1, &(terrain_stream_desc){ .pixel_error = 2.0f, .viewport_height = 720 });
+    cr_expect_eq(terrain_ecs_stream_desc(derived.te).levels, 3);
+    cr_expect_eq(terrain_ecs_stream_desc(derived.te).half_width, 6);
+    streamed_close(&derived);
+}
+
 Test(render_stream, rings_at_the_origin_equal_the_static_rings) {
     streamed s = streamed_open(2, &small_rings);
     const double eye[1][3] = { { 1, 5, 1 } };
