@@ -40,7 +40,7 @@ static void expect_error_text(const char *text, int line, int column, const char
 
 /* ---- valid documents -------------------------------------------------------------------- */
 
-Test(json, scalars) {
+Test(core_json, scalars) {
     core_arena arena = { 0 };
     core_json_value *v = parse_ok(&arena, "true");
     cr_expect_eq(v->type, CORE_JSON_BOOL);
@@ -57,7 +57,7 @@ Test(json, scalars) {
     core_arena_release(&arena);
 }
 
-Test(json, numbers) {
+Test(core_json, numbers) {
     core_arena arena = { 0 };
     /* -0.5e2 = -0.5 · 100 = -50; 1E+2 = 100; 25e-2 = 0.25; all exact in binary. */
     struct { const char *text; double value; } cases[] = {
@@ -74,7 +74,7 @@ Test(json, numbers) {
     core_arena_release(&arena);
 }
 
-Test(json, objects_and_arrays) {
+Test(core_json, objects_and_arrays) {
     core_arena arena = { 0 };
     core_json_value *root = parse_ok(&arena, "{\"a\": [1, 2, {\"b\": null}], \"c\": \"x\", \"e\": {}, \"f\": []}");
     cr_assert_eq(root->type, CORE_JSON_OBJECT);
@@ -101,7 +101,7 @@ Test(json, objects_and_arrays) {
     core_arena_release(&arena);
 }
 
-Test(json, duplicate_keys_last_wins) {
+Test(core_json, duplicate_keys_last_wins) {
     core_arena arena = { 0 };
     core_json_value *root = parse_ok(&arena, "{\"k\": 1, \"k\": 2}");
     cr_expect_eq(root->object.count, 2);
@@ -109,7 +109,7 @@ Test(json, duplicate_keys_last_wins) {
     core_arena_release(&arena);
 }
 
-Test(json, helpers_fall_back_on_other_types) {
+Test(core_json, helpers_fall_back_on_other_types) {
     core_arena arena = { 0 };
     core_json_value *root = parse_ok(&arena, "{\"n\": 3.5, \"s\": \"hi\"}");
     cr_expect(core_json_number_or(core_json_get(root, "n"), -1) == 3.5);
@@ -122,7 +122,7 @@ Test(json, helpers_fall_back_on_other_types) {
     core_arena_release(&arena);
 }
 
-Test(json, string_escapes) {
+Test(core_json, string_escapes) {
     core_arena arena = { 0 };
     /* The eight two-character escapes, each one byte once decoded. */
     core_json_value *v = parse_ok(&arena, "\"\\\"\\\\\\/\\b\\f\\n\\r\\t\"");
@@ -149,14 +149,14 @@ Test(json, string_escapes) {
     core_arena_release(&arena);
 }
 
-Test(json, byte_order_mark_is_skipped) {
+Test(core_json, byte_order_mark_is_skipped) {
     core_arena arena = { 0 };
     core_json_value *v = parse_ok(&arena, "\xef\xbb\xbf[1]");
     cr_expect_eq(v->array.count, 1);
     core_arena_release(&arena);
 }
 
-Test(json, size_bounds_the_input) {
+Test(core_json, size_bounds_the_input) {
     core_arena arena = { 0 };
     core_json_value *v;
     core_json_error error;
@@ -176,7 +176,7 @@ Test(json, size_bounds_the_input) {
     core_arena_release(&arena);
 }
 
-Test(json, nesting_up_to_the_limit) {
+Test(core_json, nesting_up_to_the_limit) {
     /* 256 '[' then 256 ']' is exactly the limit. */
     char text[2 * CORE_JSON_MAX_DEPTH + 1];
     memset(text, '[', CORE_JSON_MAX_DEPTH);
@@ -190,7 +190,7 @@ Test(json, nesting_up_to_the_limit) {
     core_arena_release(&arena);
 }
 
-Test(json, nesting_past_the_limit_fails_without_recursing_further) {
+Test(core_json, nesting_past_the_limit_fails_without_recursing_further) {
     /* The 257th '[' (offset 256, column 257) is one level too deep. */
     size_t size = 100000;
     char *text = malloc(size);
@@ -207,7 +207,7 @@ Test(json, nesting_past_the_limit_fails_without_recursing_further) {
 
 /* ---- errors ----------------------------------------------------------------------------- */
 
-Test(json, errors_name_line_and_column) {
+Test(core_json, errors_name_line_and_column) {
     /* {"a" 1}: '{'=1 '"'=2 'a'=3 '"'=4 ' '=5 '1'=6. */
     expect_error_text("{\"a\" 1}", 1, 6, "expected ':' after object key");
     /* Line 3 is `    "dur" 12`: four spaces, "dur" at 5–9, a space at 10, '1' at 11. */
@@ -217,7 +217,7 @@ Test(json, errors_name_line_and_column) {
     expect_error_text("", 1, 1, "expected a value, found end of input");
 }
 
-Test(json, errors_in_containers) {
+Test(core_json, errors_in_containers) {
     expect_error_text("[1, 2,]", 1, 7, "trailing ',' before ']'");
     expect_error_text("[1 2]", 1, 4, "expected ',' or ']' in array");
     expect_error_text("{\"a\":1,}", 1, 8, "trailing ',' before '}'");
@@ -230,7 +230,7 @@ Test(json, errors_in_containers) {
     expect_error_text("\x01", 1, 1, "expected a value, found byte 0x01");
 }
 
-Test(json, errors_in_numbers_and_literals) {
+Test(core_json, errors_in_numbers_and_literals) {
     expect_error_text("01", 1, 1, "leading zeros are not allowed in numbers");
     expect_error_text("-", 1, 2, "expected a digit");
     expect_error_text("-x", 1, 2, "expected a digit");
@@ -247,7 +247,7 @@ Test(json, errors_in_numbers_and_literals) {
     expect_error_text("truex", 1, 5, "unexpected text after the JSON value");
 }
 
-Test(json, errors_in_strings) {
+Test(core_json, errors_in_strings) {
     expect_error_text("\"abc", 1, 1, "unterminated string");
     expect_error_text("\"abc\\\"", 1, 1, "unterminated string"); /* the last quote is escaped */
     expect_error_text("\"a\\qb\"", 1, 3, "invalid escape '\\' followed by 'q'");
@@ -265,7 +265,7 @@ Test(json, errors_in_strings) {
     expect_error_text("\"\xe2\x82\"", 1, 2, "invalid UTF-8 in string");         /* cut short */
 }
 
-Test(json, columns_count_characters_not_bytes) {
+Test(core_json, columns_count_characters_not_bytes) {
     /* ["é" x]: '['=1 '"'=2 'é'=3 (two bytes) '"'=4 ' '=5 'x'=6; bytes would say 7. */
     expect_error_text("[\"\xc3\xa9\" x]", 1, 6, "expected ',' or ']' in array");
 }
@@ -281,7 +281,7 @@ static char *write_to_string(const char *s) {
     return buffer;
 }
 
-Test(json, writer_escapes) {
+Test(core_json, writer_escapes) {
     char *text = write_to_string("a\"b\\c\n\t\x01 caf\xc3\xa9");
     cr_expect_str_eq(text, "\"a\\\"b\\\\c\\n\\t\\u0001 caf\xc3\xa9\"");
     free(text);
@@ -290,14 +290,14 @@ Test(json, writer_escapes) {
     free(text);
 }
 
-Test(json, writer_replaces_invalid_utf8) {
+Test(core_json, writer_replaces_invalid_utf8) {
     /* 0xFF can start no sequence; C3 followed by 'x' is cut short. */
     char *text = write_to_string("a\xff" "b\xc3x");
     cr_expect_str_eq(text, "\"a\\ufffdb\\ufffdx\"");
     free(text);
 }
 
-Test(json, writer_output_parses_back) {
+Test(core_json, writer_output_parses_back) {
     const char *original = "quote \" backslash \\ tab \t bell \x07 \xe2\x82\xac end";
     char *text = write_to_string(original);
     core_arena arena = { 0 };

@@ -77,7 +77,7 @@ static void place(game_player *pl, double x, double y, double z) {
 
 /* ---- flat ground ------------------------------------------------------------------------------ */
 
-Test(player, spawns_standing_on_flat_ground) {
+Test(game_player, spawns_standing_on_flat_ground) {
     hand_world hand = { .kind = FLAT, .ground = 10 };
     terrain_world *world = hand_world_create(&hand);
     game_player pl;
@@ -118,11 +118,11 @@ static void fall_and_rest(float dt) {
     terrain_world_destroy(world);
 }
 
-Test(player, falls_10m_and_lands_without_tunnelling_at_60hz) { fall_and_rest(1.0f / 60.0f); }
-Test(player, falls_10m_and_lands_without_tunnelling_at_20hz) { fall_and_rest(1.0f / 20.0f); }
-Test(player, falls_10m_and_lands_without_tunnelling_at_240hz) { fall_and_rest(1.0f / 240.0f); }
+Test(game_player, falls_10m_and_lands_without_tunnelling_at_60hz) { fall_and_rest(1.0f / 60.0f); }
+Test(game_player, falls_10m_and_lands_without_tunnelling_at_20hz) { fall_and_rest(1.0f / 20.0f); }
+Test(game_player, falls_10m_and_lands_without_tunnelling_at_240hz) { fall_and_rest(1.0f / 240.0f); }
 
-Test(player, falls_at_terminal_speed_onto_ground_without_tunnelling) {
+Test(game_player, falls_at_terminal_speed_onto_ground_without_tunnelling) {
     hand_world hand = { .kind = FLAT, .ground = 10 };
     terrain_world *world = hand_world_create(&hand);
     game_player pl;
@@ -139,7 +139,7 @@ Test(player, falls_at_terminal_speed_onto_ground_without_tunnelling) {
 
 /* ---- walls ------------------------------------------------------------------------------------ */
 
-Test(player, flying_into_a_wall_stops_at_radius_from_it) {
+Test(game_player, flying_into_a_wall_stops_at_radius_from_it) {
     hand_world hand = { .kind = WALL, .ground = 0, .edge = 10 };
     terrain_world *world = hand_world_create(&hand);
     game_player pl;
@@ -151,7 +151,7 @@ Test(player, flying_into_a_wall_stops_at_radius_from_it) {
     terrain_world_destroy(world);
 }
 
-Test(player, walking_into_a_wall_stops_at_radius_or_at_its_fillet) {
+Test(game_player, walking_into_a_wall_stops_at_radius_or_at_its_fillet) {
     hand_world hand = { .kind = WALL, .ground = 0, .edge = 10 };
     terrain_world *world = hand_world_create(&hand);
     game_player pl;
@@ -174,7 +174,7 @@ Test(player, walking_into_a_wall_stops_at_radius_or_at_its_fillet) {
     terrain_world_destroy(world);
 }
 
-Test(player, sliding_along_a_wall_keeps_the_tangential_speed) {
+Test(game_player, sliding_along_a_wall_keeps_the_tangential_speed) {
     hand_world hand = { .kind = WALL, .ground = 0, .edge = 10 };
     terrain_world *world = hand_world_create(&hand);
     game_player pl;
@@ -192,7 +192,7 @@ Test(player, sliding_along_a_wall_keeps_the_tangential_speed) {
 /* ---- steps ------------------------------------------------------------------------------------ */
 
 /* 0.3125 m: layer thicknesses are multiples of 1/32 m, so "0.3 m" would be built as this anyway */
-Test(player, climbs_a_0_3m_step) {
+Test(game_player, climbs_a_0_3m_step) {
     hand_world hand = { .kind = STEP, .ground = 0, .edge = 10, .rise = 0.3125 };
     terrain_world *world = hand_world_create(&hand);
     game_player pl;
@@ -204,7 +204,7 @@ Test(player, climbs_a_0_3m_step) {
     terrain_world_destroy(world);
 }
 
-Test(player, a_2m_step_is_not_walked_up_but_a_jump_clears_it) {
+Test(game_player, a_2m_step_is_not_walked_up_but_a_jump_clears_it) {
     hand_world hand = { .kind = STEP, .ground = 0, .edge = 10, .rise = 2.0 };
     terrain_world *world = hand_world_create(&hand);
     game_player pl;
@@ -224,7 +224,7 @@ Test(player, a_2m_step_is_not_walked_up_but_a_jump_clears_it) {
 
 /* ---- tunnels and arches ----------------------------------------------------------------------- */
 
-Test(player, walks_in_under_an_arch) {
+Test(game_player, walks_in_under_an_arch) {
     hand_world hand = { .kind = TUNNEL, .ground = 0, .edge = 10, .rise = 3.0 };
     terrain_world *world = hand_world_create(&hand);
     game_player pl;
@@ -237,7 +237,7 @@ Test(player, walks_in_under_an_arch) {
     terrain_world_destroy(world);
 }
 
-Test(player, a_jump_under_a_low_ceiling_does_not_pass_through_it) {
+Test(game_player, a_jump_under_a_low_ceiling_does_not_pass_through_it) {
     hand_world hand = { .kind = TUNNEL, .ground = 0, .edge = 0, .rise = 2.5 };
     terrain_world *world = hand_world_create(&hand);
     game_player pl;
@@ -260,7 +260,7 @@ Test(player, a_jump_under_a_low_ceiling_does_not_pass_through_it) {
  * (y = 0.5 + 1/t with t = (x − 9)/2 the kernel's fraction under the roof), so a standing player
  * gets a little way in (to where the underside is 1.8 m + r: x ≈ 10.3 … 10.6) but not under the
  * flat 1.5 m part. */
-Test(player, crouches_through_a_1_5m_tunnel_and_stands_only_outside) {
+Test(game_player, crouches_through_a_1_5m_tunnel_and_stands_only_outside) {
     hand_world hand = { .kind = TUNNEL, .ground = 0, .edge = 10, .rise = 1.5 };
     terrain_world *world = hand_world_create(&hand);
     game_player pl;
@@ -289,7 +289,7 @@ Test(player, crouches_through_a_1_5m_tunnel_and_stands_only_outside) {
 
 /* ---- fly mode --------------------------------------------------------------------------------- */
 
-Test(player, fly_toggles_and_moves_along_the_view) {
+Test(game_player, fly_toggles_and_moves_along_the_view) {
     hand_world hand = { .kind = FLAT, .ground = 0 };
     terrain_world *world = hand_world_create(&hand);
     game_player pl;
@@ -320,7 +320,7 @@ Test(player, fly_toggles_and_moves_along_the_view) {
  * 1, 2, … 8 m/s over eight frames, then 8: in a second (1 + … + 8 + 52·8) / 60 = 452/60 m. Let go,
  * it slows by 1 m/s a frame: 7, 6, … 0, another 28/60 m. In the air the input steers at
  * air_accel 12 m/s²: pushing back for 0.2 s takes 2.4 m/s off the 8. */
-Test(player, starts_and_stops_ease_and_the_air_steers_a_little) {
+Test(game_player, starts_and_stops_ease_and_the_air_steers_a_little) {
     hand_world hand = { .kind = FLAT, .ground = 0 };
     terrain_world *world = hand_world_create(&hand);
     game_player pl;
@@ -353,7 +353,7 @@ static bool ready_below_x(void *user, const double min[3], const double max[3]) 
     return max[0] <= *(const double *)user;
 }
 
-Test(player, waits_at_the_edge_of_unready_terrain_and_never_falls) {
+Test(game_player, waits_at_the_edge_of_unready_terrain_and_never_falls) {
     hand_world hand = { .kind = FLAT, .ground = 0 };
     terrain_world *world = hand_world_create(&hand);
     double limit = 20.0;
@@ -423,7 +423,7 @@ static bool same_state(const game_player *a, const game_player *b) {
 
 static double trajectory_a[600][3], trajectory_b[600][3], trajectory_far[600][3];
 
-Test(player, deterministic_and_the_same_100km_out) {
+Test(game_player, deterministic_and_the_same_100km_out) {
     game_player a, b, far;
     run_script(0, trajectory_a, &a);
     run_script(0, trajectory_b, &b);
@@ -440,7 +440,7 @@ Test(player, deterministic_and_the_same_100km_out) {
 
 /* ---- generated terrain ------------------------------------------------------------------------ */
 
-Test(player, walks_generated_terrain_with_eye_in_air_and_feet_on_the_surface) {
+Test(game_player, walks_generated_terrain_with_eye_in_air_and_feet_on_the_surface) {
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(42) });
     game_player pl;
     game_player_init(&pl, NULL);
@@ -473,7 +473,7 @@ Test(player, walks_generated_terrain_with_eye_in_air_and_feet_on_the_surface) {
  * flat ground, whose skyline is the eye's drop over the farthest sample, atan2(−eye, 96). Of
  * those ties the smallest turn from the preferred yaw (+x, into the wall) is a quarter turn, to
  * yaw 0 (−z) or π (+z, the first of the two in the search), rather than a half turn to −x. */
-Test(player, the_most_open_view_turns_away_from_a_wall_by_the_smallest_turn) {
+Test(game_player, the_most_open_view_turns_away_from_a_wall_by_the_smallest_turn) {
     hand_world hand = { .kind = WALL, .edge = 10.0 };
     terrain_world *world = hand_world_create(&hand);
     game_player pl;

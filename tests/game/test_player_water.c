@@ -112,7 +112,7 @@ static double steady_distance(double depth, bool sprint) {
     return distance;
 }
 
-Test(player_water, wading_half_a_metre_deep_is_slower_by_the_stated_rule_and_never_a_sprint) {
+Test(game_player_water, wading_half_a_metre_deep_is_slower_by_the_stated_rule_and_never_a_sprint) {
     double dry = steady_distance(0.0, false), wet = steady_distance(0.5, false);
     cr_expect_float_eq(dry, 9.0, 0.01, "dry: %.4f m in 2 s", dry);
     cr_expect_float_eq(wet, 7.125, 0.01, "wading: %.4f m in 2 s", wet);
@@ -130,7 +130,7 @@ Test(player_water, wading_half_a_metre_deep_is_slower_by_the_stated_rule_and_nev
     cr_expect_eq(game_player_wade_share(&params, 0.0f), 1.0f);
 }
 
-Test(player_water, a_wader_still_jumps) {
+Test(game_player_water, a_wader_still_jumps) {
     water_world w = { .kind = SHALLOWS, .depth = 0.5 };
     terrain_world *world = water_world_create(&w);
     game_player pl;
@@ -153,7 +153,7 @@ Test(player_water, a_wader_still_jumps) {
 
 /* ---- swimming --------------------------------------------------------------------------------- */
 
-Test(player_water, walking_into_the_sea_from_a_beach_ends_up_swimming_at_the_surface) {
+Test(game_player_water, walking_into_the_sea_from_a_beach_ends_up_swimming_at_the_surface) {
     water_world w = { .kind = BEACH };
     terrain_world *world = water_world_create(&w);
     game_player pl;
@@ -190,7 +190,7 @@ Test(player_water, walking_into_the_sea_from_a_beach_ends_up_swimming_at_the_sur
     terrain_world_destroy(world);
 }
 
-Test(player_water, spawned_with_no_land_near_it_floats_at_the_surface) {
+Test(game_player_water, spawned_with_no_land_near_it_floats_at_the_surface) {
     water_world w = { .kind = DEEP };
     terrain_world *world = water_world_create(&w);
     game_player pl;
@@ -217,7 +217,7 @@ static double dive_and_come_up(game_player *pl, terrain_world *world, input_acti
     return lowest;
 }
 
-Test(player_water, diving_goes_down_and_letting_go_comes_back_up) {
+Test(game_player_water, diving_goes_down_and_letting_go_comes_back_up) {
     water_world w = { .kind = DEEP };
     terrain_world *world = water_world_create(&w);
     game_player pl;
@@ -247,7 +247,7 @@ Test(player_water, diving_goes_down_and_letting_go_comes_back_up) {
 
 /* Let go 3 m under the float height: back up, settled, and never above it, at any frame rate
  * (the spring is solved exactly over each step, not integrated). */
-Test(player_water, the_float_settles_without_overshoot_at_20_60_and_144_hz) {
+Test(game_player_water, the_float_settles_without_overshoot_at_20_60_and_144_hz) {
     water_world w = { .kind = DEEP };
     terrain_world *world = water_world_create(&w);
     const float rates[] = { 20.0f, 60.0f, 144.0f };
@@ -268,7 +268,7 @@ Test(player_water, the_float_settles_without_overshoot_at_20_60_and_144_hz) {
     terrain_world_destroy(world);
 }
 
-Test(player_water, flying_ignores_the_water) {
+Test(game_player_water, flying_ignores_the_water) {
     water_world w = { .kind = DEEP };
     terrain_world *world = water_world_create(&w);
     game_player pl;
@@ -295,7 +295,7 @@ static game_player swim_at_shore(double rise, double seconds) {
     return pl;
 }
 
-Test(player_water, a_swimmer_climbs_out_onto_a_shore_a_metre_up_but_not_up_a_cliff) {
+Test(game_player_water, a_swimmer_climbs_out_onto_a_shore_a_metre_up_but_not_up_a_cliff) {
     /* Heights are whole 1/32 m quanta, and ground whose height has a fraction over 1 − r = 0.65
      * reads 0.08 m low (the probe's grid cell above it holds f's saturation at −1: a gradient of
      * 0.75), which this test does not measure. */
@@ -315,7 +315,7 @@ Test(player_water, a_swimmer_climbs_out_onto_a_shore_a_metre_up_but_not_up_a_cli
     cr_expect_float_eq(eye_y(&pl), EYE_AFLOAT, 0.05, "eye at %.3f under the cliff", eye_y(&pl));
 }
 
-Test(player_water, walking_out_of_the_sea_up_a_beach_stops_swimming) {
+Test(game_player_water, walking_out_of_the_sea_up_a_beach_stops_swimming) {
     water_world w = { .kind = BEACH };
     terrain_world *world = water_world_create(&w);
     game_player pl;
@@ -336,7 +336,7 @@ Test(player_water, walking_out_of_the_sea_up_a_beach_stops_swimming) {
 
 /* ---- a scripted walk across a lake --------------------------------------------------------- */
 
-Test(player_water, a_walk_across_a_lake_swims_it_and_is_not_stuck) {
+Test(game_player_water, a_walk_across_a_lake_swims_it_and_is_not_stuck) {
     water_world w = { .kind = LAKE };
     terrain_world *world = water_world_create(&w);
     game_walk walk;

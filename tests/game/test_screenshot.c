@@ -23,7 +23,7 @@ static long file_size(const char *path) {
     return stat(path, &st) == 0 ? (long)st.st_size : -1;
 }
 
-Test(screenshot, names_are_dated_and_made_in_a_new_folder) {
+Test(game_screenshot, names_are_dated_and_made_in_a_new_folder) {
     char dir[64], folder[96], path[256], want[256];
     make_dir(dir);
     snprintf(folder, sizeof folder, "%s/screenshots", dir);   /* does not exist yet */
@@ -36,7 +36,7 @@ Test(screenshot, names_are_dated_and_made_in_a_new_folder) {
     rmdir(dir);
 }
 
-Test(screenshot, a_screenshot_never_replaces_an_existing_file) {
+Test(game_screenshot, a_screenshot_never_replaces_an_existing_file) {
     char dir[64], path[256], want[256], first[256];
     make_dir(dir);
     /* A picture already there under the first name: it must survive, byte for byte. */
@@ -61,7 +61,7 @@ Test(screenshot, a_screenshot_never_replaces_an_existing_file) {
     rmdir(dir);
 }
 
-Test(screenshot, a_folder_that_is_a_file_is_an_error) {
+Test(game_screenshot, a_folder_that_is_a_file_is_an_error) {
     char dir[64], file[96], path[256];
     make_dir(dir);
     snprintf(file, sizeof file, "%s/screenshots", dir);

@@ -11,7 +11,7 @@
 static const terrain_ray_hit hit = { .position = { 10, 20, -30 }, .normal = { 0, 1, 0 }, .distance = 5 };
 static const float forward[3] = { 0.6f, -0.8f, 0.0f };
 
-Test(tools, sculpt_adds_with_the_primary_and_carves_with_the_alternative) {
+Test(game_tools, sculpt_adds_with_the_primary_and_carves_with_the_alternative) {
     double points[2][3];
     terrain_edit add = game_tools_edit(GAME_TOOL_SCULPT, false, 0, &hit, forward, points);
     terrain_edit carve = game_tools_edit(GAME_TOOL_SCULPT, true, 4, &hit, forward, points);
@@ -24,7 +24,7 @@ Test(tools, sculpt_adds_with_the_primary_and_carves_with_the_alternative) {
     cr_expect_eq(carve.sculpt.radius, 4.0f, "the radius given");
 }
 
-Test(tools, a_tunnel_starts_a_metre_before_the_surface_and_runs_along_the_view) {
+Test(game_tools, a_tunnel_starts_a_metre_before_the_surface_and_runs_along_the_view) {
     double points[2][3];
     terrain_edit long_one = game_tools_edit(GAME_TOOL_TUNNEL, false, 2, &hit, forward, points);
     cr_expect_eq(long_one.tool, TERRAIN_EDIT_SWEEP);
@@ -41,7 +41,7 @@ Test(tools, a_tunnel_starts_a_metre_before_the_surface_and_runs_along_the_view) 
     cr_expect_float_eq(length, 5.0, 1e-6, "the doorway: 1 m before, 4 m in");
 }
 
-Test(tools, sand_drops_sand_or_rocks_and_erode_wears_or_collapses) {
+Test(game_tools, sand_drops_sand_or_rocks_and_erode_wears_or_collapses) {
     double points[2][3];
     terrain_edit sand = game_tools_edit(GAME_TOOL_SAND, false, 0, &hit, forward, points);
     terrain_edit rocks = game_tools_edit(GAME_TOOL_SAND, true, 0, &hit, forward, points);
@@ -72,7 +72,7 @@ static terrain_stacks *flat_chunk(void *user, terrain_chunk_coord coord) {
 
 /* Looking straight down from 5 m over flat ground: the tool aims at the ground 5 m below; Tab
  * cycles the tools; a press strokes at once, a held button again every GAME_TOOLS_REPEAT s. */
-Test(tools, update_aims_switches_and_repeats_while_held) {
+Test(game_tools, update_aims_switches_and_repeats_while_held) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 1 });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = flat_chunk });

@@ -24,7 +24,7 @@ static bool parse(const char *text, game_walk *walk, char *error) {
     return game_walk_parse_text(text, strlen(text), "t.walk", walk, error, 256);
 }
 
-Test(walk_parse, straight) {
+Test(game_walk_parse, straight) {
     game_walk walk;
     char error[256] = "";
     cr_assert(game_walk_parse("straight:2000", &walk, error, sizeof error), "%s", error);
@@ -49,7 +49,7 @@ typedef struct bad_case {
 
 static const char RANGE[] = ": the distance must be more than 0 and at most 100000 m";
 
-Test(walk_parse, bad_straight_values_name_the_problem) {
+Test(game_walk_parse, bad_straight_values_name_the_problem) {
     char range[8][96];
     const char *out_of_range[] = { "straight:0", "straight:-5", "straight:100000.5", "straight:1e999", "straight:-0" };
     for (int i = 0; i < 5; i++) snprintf(range[i], sizeof range[i], "%s%s", out_of_range[i], RANGE);
@@ -82,7 +82,7 @@ Test(walk_parse, bad_straight_values_name_the_problem) {
     cr_expect_not(game_walk_parse(NULL, &walk, NULL, 0), "NULL spec, no error buffer");
 }
 
-Test(walk_parse, file_with_comments_blank_lines_crlf_and_words) {
+Test(game_walk_parse, file_with_comments_blank_lines_crlf_and_words) {
     const char text[] = "\xef\xbb\xbf# a test walk\r\n"
                         "\r\n"
                         "relative   # offsets from the start\r\n"
@@ -114,7 +114,7 @@ Test(walk_parse, file_with_comments_blank_lines_crlf_and_words) {
 }
 
 /* Every error with the number of the line it is on: good, blank and comment lines come first. */
-Test(walk_parse, every_error_names_its_line) {
+Test(game_walk_parse, every_error_names_its_line) {
     const bad_case cases[] = {
         { "1 2\n\n# c\nfoo 3\n",
           "t.walk:4: unknown directive 'foo' (a line is X Z [words], relative, ahead, radius R or fly-over)" },
@@ -184,7 +184,7 @@ static char *temporary_file(const char *text, size_t size) {
     return path;
 }
 
-Test(walk_parse, files_by_path) {
+Test(game_walk_parse, files_by_path) {
     game_walk walk;
     char error[512] = "", expected[512];
     cr_expect_not(game_walk_parse("/nonexistent/dir/lap.walk", &walk, error, sizeof error));
@@ -233,7 +233,7 @@ static char *many_waypoints(int n, size_t *size) {
     return text;
 }
 
-Test(walk_parse, limits) {
+Test(game_walk_parse, limits) {
     game_walk walk;
     char error[256] = "";
     size_t size;
@@ -396,9 +396,9 @@ static void walk_square(float dt) {
     terrain_world_destroy(world);
 }
 
-Test(walker, walks_a_square_on_flat_ground_at_60hz) { walk_square(1.0f / 60.0f); }
-Test(walker, walks_a_square_on_flat_ground_at_30hz) { walk_square(1.0f / 30.0f); }
-Test(walker, walks_a_square_on_flat_ground_at_144hz) { walk_square(1.0f / 144.0f); }
+Test(game_walker, walks_a_square_on_flat_ground_at_60hz) { walk_square(1.0f / 60.0f); }
+Test(game_walker, walks_a_square_on_flat_ground_at_30hz) { walk_square(1.0f / 30.0f); }
+Test(game_walker, walks_a_square_on_flat_ground_at_144hz) { walk_square(1.0f / 144.0f); }
 
 static double trajectory_a[MAX_FRAMES][3], trajectory_b[MAX_FRAMES][3];
 
@@ -419,7 +419,7 @@ static void walk_everything(int64_t shift_chunks, double (*trajectory)[3], game_
     terrain_world_destroy(world);
 }
 
-Test(walker, deterministic_bit_for_bit) {
+Test(game_walker, deterministic_bit_for_bit) {
     game_player a, b;
     game_walker wa, wb;
     walk_run ra, rb;
@@ -445,7 +445,7 @@ Test(walker, deterministic_bit_for_bit) {
  * differences it steers by are exact in double there (both operands are within a factor of two, or
  * are integers plus floats with at most 17 + 24 significant bits together), so the walker's inputs
  * to the player are the same; the player itself keeps to 1e-6 m 100 km out (test_player.c). */
-Test(walker, the_same_relative_walk_100km_out) {
+Test(game_walker, the_same_relative_walk_100km_out) {
     game_player a, far;
     game_walker wa, wfar;
     walk_run ra, rfar;
@@ -462,7 +462,7 @@ Test(walker, the_same_relative_walk_100km_out) {
     cr_expect_float_eq(wa.from_start, wfar.from_start, 1e-6);
 }
 
-Test(walker, jumps_a_low_wall) {
+Test(game_walker, jumps_a_low_wall) {
     hand_world hand = { .kind = LOW_WALL };
     terrain_world *world = hand_world_create(&hand);
     game_walk walk = parsed("20 0.5\n");
@@ -479,7 +479,7 @@ Test(walker, jumps_a_low_wall) {
     terrain_world_destroy(world);
 }
 
-Test(walker, goes_round_a_short_tall_wall) {
+Test(game_walker, goes_round_a_short_tall_wall) {
     hand_world hand = { .kind = SHORT_TALL_WALL };
     terrain_world *world = hand_world_create(&hand);
     game_walk walk = parsed("20 0.5\n");
@@ -498,7 +498,7 @@ Test(walker, goes_round_a_short_tall_wall) {
 
 /* The waypoint is inside a box of 20 m walls, 20.6 m away: the leg's limit is 2·20.6/8 + 5 s, and
  * the walk must end there, stuck, not run on. */
-Test(walker, an_unreachable_waypoint_ends_stuck_at_the_time_limit) {
+Test(game_walker, an_unreachable_waypoint_ends_stuck_at_the_time_limit) {
     hand_world hand = { .kind = BOX };
     terrain_world *world = hand_world_create(&hand);
     game_walk walk = parsed("25 0\n");
@@ -523,7 +523,7 @@ Test(walker, an_unreachable_waypoint_ends_stuck_at_the_time_limit) {
 
 /* The same box with `fly-over`: sidestepping one way fails, so the leg flies, climbs the 20 m
  * walls and reaches the waypoint inside instead of ending stuck. */
-Test(walker, fly_over_clears_what_it_cannot_walk_round) {
+Test(game_walker, fly_over_clears_what_it_cannot_walk_round) {
     hand_world hand = { .kind = BOX };
     terrain_world *world = hand_world_create(&hand);
     game_walk walk = parsed("fly-over\n25 0\n");
@@ -547,7 +547,7 @@ Test(walker, fly_over_clears_what_it_cannot_walk_round) {
  * easing (120 m/s²: 9.6 m to stop): the walker lets go early, horizontally and vertically, so
  * the player stops over the waypoint instead of overshooting and circling it until the leg runs
  * out of time (which the tour did before the walker knew about braking). */
-Test(walker, a_fast_climb_stops_at_its_height) {
+Test(game_walker, a_fast_climb_stops_at_its_height) {
     hand_world hand = { .kind = FLAT };
     terrain_world *world = hand_world_create(&hand);
     game_walk walk = parsed("relative\nradius 3\n0 -10 fly y=120\n");   /* 10 m ahead, as the tour */
@@ -564,7 +564,7 @@ Test(walker, a_fast_climb_stops_at_its_height) {
 }
 
 /* A `shot` waypoint: the walker holds still (no input, no time) until resumed, then goes on. */
-Test(walker, a_shot_holds_until_resumed) {
+Test(game_walker, a_shot_holds_until_resumed) {
     hand_world hand = { .kind = FLAT };
     terrain_world *world = hand_world_create(&hand);
     game_walk walk = parsed("ahead\n0 10 shot\n0 20\n");
@@ -603,7 +603,7 @@ Test(walker, a_shot_holds_until_resumed) {
     terrain_world_destroy(world);
 }
 
-Test(walker, straight_walks_ahead_of_the_start) {
+Test(game_walker, straight_walks_ahead_of_the_start) {
     hand_world hand = { .kind = FLAT };
     terrain_world *world = hand_world_create(&hand);
     game_walk walk;
@@ -637,7 +637,7 @@ Test(walker, straight_walks_ahead_of_the_start) {
     terrain_world_destroy(world);
 }
 
-Test(walker, waiting_frames_do_not_count_against_the_limit) {
+Test(game_walker, waiting_frames_do_not_count_against_the_limit) {
     game_walk walk = parsed("100 0\n");
     game_player pl;
     place(&pl, 0.5, 0.5, 0.0f);
@@ -654,7 +654,7 @@ Test(walker, waiting_frames_do_not_count_against_the_limit) {
     game_walk_free(&walk);
 }
 
-Test(walker, an_empty_walk_is_done_at_once) {
+Test(game_walker, an_empty_walk_is_done_at_once) {
     game_walk walk = { 0 };
     game_player pl;
     place(&pl, 0.5, 0.5, 0.0f);

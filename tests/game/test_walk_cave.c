@@ -49,7 +49,7 @@ static terrain_world *cave_world_create(cave_world *cw) {
 
 static const double PI = 3.14159265358979323846;
 
-Test(walk_cave, a_tunnel_is_seen_from_open_ground_along_its_axis_with_sky_above_it) {
+Test(game_walk_cave, a_tunnel_is_seen_from_open_ground_along_its_axis_with_sky_above_it) {
     cave_world cw = { .tunnel = true, .sea_level = 0.0f };
     terrain_world *world = cave_world_create(&cw);
     game_cave_view v;
@@ -80,7 +80,7 @@ Test(walk_cave, a_tunnel_is_seen_from_open_ground_along_its_axis_with_sky_above_
     terrain_world_destroy(world);
 }
 
-Test(walk_cave, no_roof_no_cave_and_under_the_sea_is_water) {
+Test(game_walk_cave, no_roof_no_cave_and_under_the_sea_is_water) {
     cave_world flat = { .tunnel = false, .sea_level = 0.0f };
     terrain_world *world = cave_world_create(&flat);
     game_cave_view v;
@@ -106,7 +106,7 @@ static void place(game_player *pl, double x, double z) {
     pl->on_ground = true;
 }
 
-Test(walk_cave, a_cave_line_becomes_a_flight_to_the_view_and_a_picture_facing_the_mouth) {
+Test(game_walk_cave, a_cave_line_becomes_a_flight_to_the_view_and_a_picture_facing_the_mouth) {
     cave_world cw = { .tunnel = true, .sea_level = 0.0f };
     terrain_world *world = cave_world_create(&cw);
     game_walk walk = parsed("relative\n0 -4\ncave 60 shot\n0 -10\n");
@@ -142,7 +142,7 @@ Test(walk_cave, a_cave_line_becomes_a_flight_to_the_view_and_a_picture_facing_th
     terrain_world_destroy(world);
 }
 
-Test(walk_cave, a_cave_line_with_nothing_to_find_is_dropped_and_an_unresolved_one_is_skipped) {
+Test(game_walk_cave, a_cave_line_with_nothing_to_find_is_dropped_and_an_unresolved_one_is_skipped) {
     cave_world flat = { .tunnel = false, .sea_level = 0.0f };
     terrain_world *world = cave_world_create(&flat);
     game_walk walk = parsed("relative\n0 -4\ncave 30 shot\n0 -8\n");
@@ -168,7 +168,7 @@ Test(walk_cave, a_cave_line_with_nothing_to_find_is_dropped_and_an_unresolved_on
     terrain_world_destroy(world);
 }
 
-Test(walk_cave, look_and_cave_words_parse_and_their_errors_name_the_problem) {
+Test(game_walk_cave, look_and_cave_words_parse_and_their_errors_name_the_problem) {
     game_walk walk = parsed("1 2 shot look=-90,12.5\ncave 40\n");
     cr_expect(walk.points[0].has_look && walk.points[0].look_yaw == 270.0f && walk.points[0].look_pitch == 12.5f);
     cr_expect(walk.points[1].cave_radius == 40.0f && !walk.points[1].shot);

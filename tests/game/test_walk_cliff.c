@@ -49,7 +49,7 @@ static terrain_world *cliff_world_create(cliff_kind *kind) {
     return terrain_world_create(&(terrain_world_desc){ .generate = cliff_generate, .generate_user = kind });
 }
 
-Test(walk_cliff, a_wall_is_seen_from_where_its_top_leaves_sky_above_it) {
+Test(game_walk_cliff, a_wall_is_seen_from_where_its_top_leaves_sky_above_it) {
     cliff_kind kind = WALL;
     terrain_world *world = cliff_world_create(&kind);
     game_cliff_view v;
@@ -68,7 +68,7 @@ Test(walk_cliff, a_wall_is_seen_from_where_its_top_leaves_sky_above_it) {
     terrain_world_destroy(world);
 }
 
-Test(walk_cliff, no_wall_a_sand_wall_a_ramp_or_a_drowned_foot_is_no_cliff) {
+Test(game_walk_cliff, no_wall_a_sand_wall_a_ramp_or_a_drowned_foot_is_no_cliff) {
     cliff_kind kinds[] = { FLAT, SAND_WALL, RAMP, DROWNED };
     for (int k = 0; k < 4; k++) {
         terrain_world *world = cliff_world_create(&kinds[k]);
@@ -86,7 +86,7 @@ static game_walk parsed(const char *text) {
     return walk;
 }
 
-Test(walk_cliff, a_cliff_line_becomes_a_flight_facing_the_wall) {
+Test(game_walk_cliff, a_cliff_line_becomes_a_flight_facing_the_wall) {
     cliff_kind kind = WALL;
     terrain_world *world = cliff_world_create(&kind);
     game_walk walk = parsed("relative\n0 -4\ncliff 60 shot\n0 -10\n");

@@ -82,7 +82,7 @@ static void expect_a_view_of_the_pile(terrain_world *world, const game_rocks_vie
     cr_expect_lt(v->pitch, 0.0f);
 }
 
-Test(walk_rocks, the_view_looks_down_at_the_cone_from_the_lit_side) {
+Test(game_walk_rocks, the_view_looks_down_at_the_cone_from_the_lit_side) {
     rocks_kind kind = CONE;
     terrain_world *world = rocks_world_create(&kind);
     game_rocks_view v;
@@ -108,7 +108,7 @@ Test(walk_rocks, the_view_looks_down_at_the_cone_from_the_lit_side) {
     terrain_world_destroy(world);
 }
 
-Test(walk_rocks, a_wall_on_the_lit_side_moves_the_eye_to_the_next_lit_direction) {
+Test(game_walk_rocks, a_wall_on_the_lit_side_moves_the_eye_to_the_next_lit_direction) {
     rocks_kind kind = CONE_WALL;
     terrain_world *world = rocks_world_create(&kind);
     game_rocks_view v;
@@ -122,7 +122,7 @@ Test(walk_rocks, a_wall_on_the_lit_side_moves_the_eye_to_the_next_lit_direction)
     terrain_world_destroy(world);
 }
 
-Test(walk_rocks, no_rocks_a_thin_sheet_one_column_or_drowned_rocks_are_no_pile) {
+Test(game_walk_rocks, no_rocks_a_thin_sheet_one_column_or_drowned_rocks_are_no_pile) {
     rocks_kind kinds[] = { FLAT, THIN, ONE_COLUMN, DROWNED };
     for (int k = 0; k < 4; k++) {
         terrain_world *world = rocks_world_create(&kinds[k]);
@@ -147,7 +147,7 @@ static void place(game_player *pl, double x, double z) {
     pl->on_ground = true;
 }
 
-Test(walk_rocks, a_rocks_line_becomes_a_flight_to_the_view_and_a_picture_of_the_pile) {
+Test(game_walk_rocks, a_rocks_line_becomes_a_flight_to_the_view_and_a_picture_of_the_pile) {
     rocks_kind kind = CONE;
     terrain_world *world = rocks_world_create(&kind);
     game_walk walk = parsed("relative\n0 -4\nrocks 60 shot\n0 -10\n");
@@ -192,7 +192,7 @@ Test(walk_rocks, a_rocks_line_becomes_a_flight_to_the_view_and_a_picture_of_the_
     terrain_world_destroy(world);
 }
 
-Test(walk_rocks, rocks_lines_parse_and_their_errors_name_the_problem) {
+Test(game_walk_rocks, rocks_lines_parse_and_their_errors_name_the_problem) {
     game_walk walk = parsed("rocks 40\nrocks 12.5 shot\nshore 30\n");
     cr_expect(walk.points[0].rocks_radius == 40.0f && !walk.points[0].shot && walk.points[0].shore_radius == 0.0f);
     cr_expect(walk.points[1].rocks_radius == 12.5f && walk.points[1].shot && walk.points[1].cave_radius == 0.0f);
@@ -216,7 +216,7 @@ Test(walk_rocks, rocks_lines_parse_and_their_errors_name_the_problem) {
 
 /* The tour's stops in order: the spawn and 50 m on, a cave, a shore, a pile of rocks, the view
  * from 120 m up; six pictures, which fill the contact sheet's 3 × 2. */
-Test(walk_rocks, the_tour_parses_with_its_rocks_stop) {
+Test(game_walk_rocks, the_tour_parses_with_its_rocks_stop) {
     game_walk walk = parsed(game_walk_tour);
     cr_assert_eq(walk.count, 6);
     int shots = 0;

@@ -43,7 +43,7 @@ static terrain_world *shore_world_create(shore_kind *kind) {
     return terrain_world_create(&(terrain_world_desc){ .generate = shore_generate, .generate_user = kind });
 }
 
-Test(walk_shore, the_nearest_shore_looks_out_over_the_sea) {
+Test(game_walk_shore, the_nearest_shore_looks_out_over_the_sea) {
     shore_kind kind = SEA;
     terrain_world *world = shore_world_create(&kind);
     game_shore_view v;
@@ -66,7 +66,7 @@ Test(walk_shore, the_nearest_shore_looks_out_over_the_sea) {
     terrain_world_destroy(world);
 }
 
-Test(walk_shore, no_water_a_pond_or_a_cliff_is_no_shore_view) {
+Test(game_walk_shore, no_water_a_pond_or_a_cliff_is_no_shore_view) {
     game_shore_view v;
     shore_kind kinds[] = { DRY, POND, CLIFF };
     for (int k = 0; k < 3; k++) {
@@ -91,7 +91,7 @@ static void place(game_player *pl, double x, double z) {
     pl->on_ground = true;
 }
 
-Test(walk_shore, a_shore_line_becomes_a_flight_to_the_view_and_a_picture_over_the_water) {
+Test(game_walk_shore, a_shore_line_becomes_a_flight_to_the_view_and_a_picture_over_the_water) {
     shore_kind kind = SEA;
     terrain_world *world = shore_world_create(&kind);
     game_walk walk = parsed("relative\n0 -4\nshore 60 shot\n0 -10\n");
@@ -133,7 +133,7 @@ Test(walk_shore, a_shore_line_becomes_a_flight_to_the_view_and_a_picture_over_th
     terrain_world_destroy(world);
 }
 
-Test(walk_shore, shore_lines_parse_and_their_errors_name_the_problem) {
+Test(game_walk_shore, shore_lines_parse_and_their_errors_name_the_problem) {
     game_walk walk = parsed("shore 40\nshore 12.5 shot\ncave 30\n");
     cr_expect(walk.points[0].shore_radius == 40.0f && !walk.points[0].shot && walk.points[0].cave_radius == 0.0f);
     cr_expect(walk.points[1].shore_radius == 12.5f && walk.points[1].shot);

@@ -120,7 +120,7 @@ static terrain_edit_log *load_new(const char *dir, uint64_t key, terrain_edit_lo
 
 /* ---- names, keys, the stacks helpers ---------------------------------------------------- */
 
-Test(edit_log, tool_names) {
+Test(terrain_edit_log, tool_names) {
     cr_expect_str_eq(terrain_edit_tool_name(TERRAIN_EDIT_SET), "set");
     cr_expect_str_eq(terrain_edit_tool_name(TERRAIN_EDIT_SCULPT_ADD), "sculpt_add");
     cr_expect_str_eq(terrain_edit_tool_name(TERRAIN_EDIT_SCULPT_CARVE), "sculpt_carve");
@@ -134,7 +134,7 @@ Test(edit_log, tool_names) {
     cr_expect_str_eq(terrain_edit_tool_name((terrain_edit_tool)-1), "unknown");
 }
 
-Test(edit_log, generation_key_covers_every_parameter) {
+Test(terrain_edit_log, generation_key_covers_every_parameter) {
     terrain_generation_params a = terrain_generation_defaults(42), b = terrain_generation_defaults(42);
     cr_expect_eq(terrain_generation_key(&a), terrain_generation_key(&b), "equal parameters, equal keys");
     b.seed = 43;
@@ -174,7 +174,7 @@ Test(edit_log, generation_key_covers_every_parameter) {
     cr_expect_eq(terrain_generation_key(&plus), terrain_generation_key(&minus));
 }
 
-Test(edit_log, crc32_is_zlibs) {
+Test(terrain_edit_log, crc32_is_zlibs) {
     /* The standard check value of CRC-32/ISO-HDLC (zlib.crc32(b"123456789")). */
     cr_expect_eq(terrain__crc32(0, "123456789", 9), 0xcbf43926u);
     cr_expect_eq(terrain__crc32(0, "", 0), 0u);
@@ -183,7 +183,7 @@ Test(edit_log, crc32_is_zlibs) {
 
 /* A column of one layer of q quanta packs as the rules of terrain_internal.h say: 1 word up to
  * 4095, 2 up to 65 535, longer ones split into 65 535-quanta entries. */
-Test(edit_log, layer_words_match_the_packing) {
+Test(terrain_edit_log, layer_words_match_the_packing) {
     const uint32_t quanta[] = { 1, 4095, 4096, 65535, 65536, 65535 + 4096, 131070, 1000000 };
     const uint32_t words[] = { 1, 1, 2, 2, 3, 4, 4, 2 * 15 + 2 };   /* 1e6 = 15·65535 + 16975 */
     for (size_t n = 0; n < CORE_COUNTOF(quanta); n++) {
@@ -205,7 +205,7 @@ Test(edit_log, layer_words_match_the_packing) {
 }
 
 /* Beyond 2^24 quanta a float cannot carry every thickness; the quanta push stays exact. */
-Test(edit_log, quanta_push_is_exact_beyond_float_precision) {
+Test(terrain_edit_log, quanta_push_is_exact_beyond_float_precision) {
     terrain_stacks_builder *b = terrain_stacks_builder_create();
     const uint32_t tall = (1u << 25) + 1;          /* not a float */
     for (int c = 0; c < N * N; c++) {
@@ -231,7 +231,7 @@ Test(edit_log, quanta_push_is_exact_beyond_float_precision) {
 
 /* ---- record, replay, compact ------------------------------------------------------------ */
 
-Test(edit_log, record_then_replay_gives_the_edited_bytes) {
+Test(terrain_edit_log, record_then_replay_gives_the_edited_bytes) {
     terrain_chunk_coord coord = { 2, -1 };
     terrain_stacks *g = generated(coord), *a = edited(g, coord, 1, 40);
     terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
@@ -249,7 +249,7 @@ Test(edit_log, record_then_replay_gives_the_edited_bytes) {
     terrain_stacks_destroy(g);
 }
 
-Test(edit_log, later_entries_override_earlier_columns) {
+Test(terrain_edit_log, later_entries_override_earlier_columns) {
     terrain_chunk_coord coord = { -3, 5 };
     terrain_stacks *g = generated(coord), *a = edited(g, coord, 2, 40), *b = edited(a, coord, 3, 60);
     terrain_stacks *c = edited(b, coord, 2, 20);   /* the first 20 of a's columns, set again alike */
@@ -271,7 +271,7 @@ Test(edit_log, later_entries_override_earlier_columns) {
     terrain_stacks_destroy(g);
 }
 
-Test(edit_log, equal_stacks_record_nothing) {
+Test(terrain_edit_log, equal_stacks_record_nothing) {
     terrain_chunk_coord coord = { 0, 0 };
     terrain_stacks *g = generated(coord), *same = edited(g, coord, 9, 0);   /* loaded, written back */
     cr_assert(same_bytes(g, same));
@@ -312,7 +312,7 @@ static terrain_stacks *with_column(const terrain_stacks *base, int column, uint3
 /* Columns no file could hold (65 536 layers; 2^26 quanta, where columns regions stop too) are
  * refused whole; one layer less, one quantum less, they are recorded. The last column of a row
  * may be that long in stacks. */
-Test(edit_log, record_refuses_columns_no_file_could_hold) {
+Test(terrain_edit_log, record_refuses_columns_no_file_could_hold) {
     terrain_chunk_coord coord = { 0, 0 };
     terrain_stacks *g = generated(coord);
     terrain_stacks *many = with_column(g, N - 1, 65536, 1), *tall = with_column(g, 40, 1, 1u << 26);
@@ -340,7 +340,7 @@ Test(edit_log, record_refuses_columns_no_file_could_hold) {
     for (size_t n = 0; n < CORE_COUNTOF(stacks); n++) terrain_stacks_destroy(stacks[n]);
 }
 
-Test(edit_log, compact_folds_to_one_entry_with_the_same_replay) {
+Test(terrain_edit_log, compact_folds_to_one_entry_with_the_same_replay) {
     terrain_chunk_coord one = { 1, 1 }, two = { 4, -2 };
     terrain_stacks *g1 = generated(one), *g2 = generated(two);
     terrain_stacks *s[4] = { g1, NULL, NULL, NULL };
@@ -406,7 +406,7 @@ static void fixture_free(world_fixture *w) {
     remove_tree(w->dir);
 }
 
-Test(edit_log, save_then_load_replays_the_same_bytes) {
+Test(terrain_edit_log, save_then_load_replays_the_same_bytes) {
     world_fixture w;
     fixture_make(&w);
     char error[512], path[512];
@@ -440,7 +440,7 @@ static bool rewritten(const char *path) {
     return info.st_mtime != 946684800;
 }
 
-Test(edit_log, save_writes_only_chunks_changed_since) {
+Test(terrain_edit_log, save_writes_only_chunks_changed_since) {
     world_fixture w;
     fixture_make(&w);
     char error[512], path[3][512];
@@ -476,7 +476,7 @@ Test(edit_log, save_writes_only_chunks_changed_since) {
     fixture_free(&w);
 }
 
-Test(edit_log, save_failure_keeps_chunks_for_the_next_save) {
+Test(terrain_edit_log, save_failure_keeps_chunks_for_the_next_save) {
     world_fixture w;
     fixture_make(&w);
     char error[512], blocker[512], path[512];
@@ -504,7 +504,7 @@ Test(edit_log, save_failure_keeps_chunks_for_the_next_save) {
     fixture_free(&w);
 }
 
-Test(edit_log, missing_folder_is_an_empty_world_and_a_file_is_refused) {
+Test(terrain_edit_log, missing_folder_is_an_empty_world_and_a_file_is_refused) {
     char dir[128], path[512];
     make_temp_dir(dir, sizeof dir);
     terrain_edit_log_load_result result;
@@ -523,7 +523,7 @@ Test(edit_log, missing_folder_is_an_empty_world_and_a_file_is_refused) {
     remove_tree(dir);
 }
 
-Test(edit_log, load_ignores_other_files_and_removes_temporaries) {
+Test(terrain_edit_log, load_ignores_other_files_and_removes_temporaries) {
     world_fixture w;
     fixture_make(&w);
     char error[512], path[512];
@@ -548,7 +548,7 @@ Test(edit_log, load_ignores_other_files_and_removes_temporaries) {
 
 /* The file of an entry is what the format says: header, then per changed column 4 bytes and 5
  * per layer, then the CRC; the size follows from the columns that changed alone. */
-Test(edit_log, file_size_and_header_follow_the_format) {
+Test(terrain_edit_log, file_size_and_header_follow_the_format) {
     terrain_chunk_coord coord = { -5, 3 };
     terrain_stacks *g = generated(coord), *a = edited(g, coord, 5, 40);
     bool changed[N * N];
@@ -587,7 +587,7 @@ Test(edit_log, file_size_and_header_follow_the_format) {
 }
 
 /* File names and headers carry any coordinate (the log does not care what the stacks are). */
-Test(edit_log, extreme_coordinates_round_trip) {
+Test(terrain_edit_log, extreme_coordinates_round_trip) {
     const terrain_chunk_coord coord = { INT64_MIN, INT64_MAX };
     terrain_stacks *g = generated((terrain_chunk_coord){ 0, 0 }), *a = edited(g, (terrain_chunk_coord){ 0, 0 }, 8, 10);
     terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
@@ -636,7 +636,7 @@ static void put_crc(bytes_out *o) { put(o, terrain__crc32(0, o->data, o->size), 
 
 /* One entry setting column (5, 0) to bedrock 100, sand 7, water 3 quanta and column (31, 31) to
  * nothing; the expected stacks built from the generated ones with the public builder. */
-Test(edit_log, a_file_written_by_hand_replays_as_described) {
+Test(terrain_edit_log, a_file_written_by_hand_replays_as_described) {
     terrain_chunk_coord coord = { 7, 7 };
     terrain_stacks *g = generated(coord);
     bytes_out o = { 0 };
@@ -706,7 +706,7 @@ static bytes_out bad_file(const bad_case *c) {
     return o;
 }
 
-Test(edit_log, content_we_never_write_is_refused) {
+Test(terrain_edit_log, content_we_never_write_is_refused) {
     const bad_case cases[] = {
         { "unknown tool", 0, 1, { 0 }, { 0 }, { 0 }, { 0 }, 0, 0 },
         { "unknown tool", 9, 1, { 0 }, { 0 }, { 0 }, { 0 }, 0, 0 },
@@ -747,7 +747,7 @@ Test(edit_log, content_we_never_write_is_refused) {
 
 /* 31 columns of row 0 with 2 200 one-quantum layers each: 68 200 words before the row's last
  * column, past the stacks' 16-bit offsets. Valid as a file; replay skips the entry, no crash. */
-Test(edit_log, an_entry_too_big_for_stacks_is_skipped_on_replay) {
+Test(terrain_edit_log, an_entry_too_big_for_stacks_is_skipped_on_replay) {
     terrain_chunk_coord coord = { 0, 0 };
     terrain_stacks *g = generated(coord);
     bytes_out o = { 0 };
@@ -778,7 +778,7 @@ static uint8_t *fixture_file(world_fixture *w, size_t *size) {
     return read_all(path, size);
 }
 
-Test(edit_log, every_flipped_bit_and_every_truncation_is_refused) {
+Test(terrain_edit_log, every_flipped_bit_and_every_truncation_is_refused) {
     world_fixture w;
     fixture_make(&w);
     size_t size;
@@ -834,7 +834,7 @@ static void expect_rejected(world_fixture *w, const uint8_t *bytes, size_t size,
     terrain_edit_log_destroy(log);
 }
 
-Test(edit_log, damaged_files_are_reported_renamed_and_skipped) {
+Test(terrain_edit_log, damaged_files_are_reported_renamed_and_skipped) {
     world_fixture w;
     fixture_make(&w);
     size_t size;
@@ -902,7 +902,7 @@ static _Noreturn void save_forever(terrain_edit_log *log, terrain_chunk_coord co
     _exit(0);
 }
 
-Test(edit_log, a_saver_killed_at_any_moment_leaves_state_a_or_b, .timeout = 120) {
+Test(terrain_edit_log, a_saver_killed_at_any_moment_leaves_state_a_or_b, .timeout = 120) {
     terrain_chunk_coord coord = { 3, -4 };
     terrain_stacks *g = generated(coord), *a = edited(g, coord, 31, 40), *b = edited(a, coord, 32, 40);
     char dir[128];

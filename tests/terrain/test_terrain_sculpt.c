@@ -136,7 +136,7 @@ static double falloff(double r, double radius) {
 
 /* ---- the field from the region's columns ---------------------------------------------------- */
 
-Test(sculpt, region_field_equals_terrain_field_at_on_generated_chunks) {
+Test(terrain_sculpt, region_field_equals_terrain_field_at_on_generated_chunks) {
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(42) });
     terrain_columns *c = load_region(world, -1, -1, 3, 3);
     terrain__region_field field;
@@ -224,12 +224,12 @@ static void expect_flat_sculpt(bool carve) {
     terrain_world_destroy(world);
 }
 
-Test(sculpt, add_on_flat_ground_raises_it_to_the_root_of_fe) { expect_flat_sculpt(false); }
+Test(terrain_sculpt, add_on_flat_ground_raises_it_to_the_root_of_fe) { expect_flat_sculpt(false); }
 
-Test(sculpt, carve_on_flat_ground_lowers_it_to_the_root_of_fe) { expect_flat_sculpt(true); }
+Test(terrain_sculpt, carve_on_flat_ground_lowers_it_to_the_root_of_fe) { expect_flat_sculpt(true); }
 
 /* Added material fills only what the field calls air: sand under the ball stays sand. */
-Test(sculpt, add_keeps_the_sand_it_covers_and_carve_removes_it) {
+Test(terrain_sculpt, add_keeps_the_sand_it_covers_and_carve_removes_it) {
     hand_world hand = { .ground = 0.0, .sand = 1.0 };
     terrain_world *world = hand_world_create(&hand);
     terrain_columns *c = load_region(world, 0, 0, 3, 3);
@@ -276,9 +276,9 @@ static void expect_no_gap(double bump_top, bool carve) {
     terrain_world_destroy(world);
 }
 
-Test(sculpt, carving_a_crest_takes_the_bedrock_above_the_field_zero_too) { expect_no_gap(0.75, true); }
+Test(terrain_sculpt, carving_a_crest_takes_the_bedrock_above_the_field_zero_too) { expect_no_gap(0.75, true); }
 
-Test(sculpt, adding_over_a_pit_fills_the_air_below_the_field_zero_too) { expect_no_gap(-0.75, false); }
+Test(terrain_sculpt, adding_over_a_pit_fills_the_air_below_the_field_zero_too) { expect_no_gap(-0.75, false); }
 
 /* Add, then carve at the same target. Both worked out by hand: the add's tops a(ρ) are the roots
  * above (as in the test before), rounded to the quantum as quanta are classified by their centres.
@@ -300,7 +300,7 @@ static double carve_fe(const void *user, double y) {
     return k->abar - y - falloff(sqrt(k->x * k->x + k->z * k->z + dy * dy), k->radius);
 }
 
-Test(sculpt, add_then_carve_at_the_same_target_returns_nearly_the_original) {
+Test(terrain_sculpt, add_then_carve_at_the_same_target_returns_nearly_the_original) {
     hand_world hand = { .ground = 0.0 };
     terrain_world *world = hand_world_create(&hand);
     terrain_columns *c = load_region(world, 0, 0, 3, 3);
@@ -374,7 +374,7 @@ static void ground_below(terrain_world *world, double x, double z, double target
     memcpy(target, hit.position, sizeof hit.position);
 }
 
-Test(sculpt, columns_beyond_the_ball_stay_byte_identical_and_changed_chunks_hold_the_changes) {
+Test(terrain_sculpt, columns_beyond_the_ball_stay_byte_identical_and_changed_chunks_hold_the_changes) {
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(42) });
     for (int pass = 0; pass < 2; pass++) {
         terrain_columns *c = load_region(world, 0, 0, 3, 3);
@@ -426,7 +426,7 @@ Test(sculpt, columns_beyond_the_ball_stay_byte_identical_and_changed_chunks_hold
     terrain_world_destroy(world);
 }
 
-Test(sculpt, the_same_edits_on_two_fresh_regions_give_the_same_columns) {
+Test(terrain_sculpt, the_same_edits_on_two_fresh_regions_give_the_same_columns) {
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(42) });
     double target[3], second[3];
     ground_below(world, 40.7, 52.2, target);
@@ -508,7 +508,7 @@ static bool air_path(const terrain_columns *c, const double lo[3], const double 
     return found;
 }
 
-Test(sculpt, a_swept_tunnel_through_a_hill_connects_its_ends_and_carves_exactly_its_radius) {
+Test(terrain_sculpt, a_swept_tunnel_through_a_hill_connects_its_ends_and_carves_exactly_its_radius) {
     hand_world hand = { .ground = 40.0 };
     terrain_world *world = hand_world_create(&hand);
     terrain_columns *c = load_region(world, 0, 0, 4, 2);
@@ -553,7 +553,7 @@ Test(sculpt, a_swept_tunnel_through_a_hill_connects_its_ends_and_carves_exactly_
     terrain_world_destroy(world);
 }
 
-Test(sculpt, a_branching_graph_carves_every_arm) {
+Test(terrain_sculpt, a_branching_graph_carves_every_arm) {
     hand_world hand = { .ground = 40.0 };
     terrain_world *world = hand_world_create(&hand);
     terrain_columns *c = load_region(world, 0, 0, 3, 3);
@@ -586,7 +586,7 @@ Test(sculpt, a_branching_graph_carves_every_arm) {
 
 /* The contract to the quantum: a quantum whose centre lies inside the volume is air, one whose
  * centre lies outside keeps its material. */
-Test(sculpt, one_point_sweeps_a_ball_exactly_to_the_quantum) {
+Test(terrain_sculpt, one_point_sweeps_a_ball_exactly_to_the_quantum) {
     hand_world hand = { .ground = 40.0 };
     terrain_world *world = hand_world_create(&hand);
     terrain_columns *c = load_region(world, 0, 0, 2, 2);
@@ -617,7 +617,7 @@ Test(sculpt, one_point_sweeps_a_ball_exactly_to_the_quantum) {
     terrain_world_destroy(world);
 }
 
-Test(sculpt, a_sweep_leaves_granular_material_above_it) {
+Test(terrain_sculpt, a_sweep_leaves_granular_material_above_it) {
     hand_world hand = { .ground = 10.0, .sand = 3.0 };
     terrain_world *world = hand_world_create(&hand);
     terrain_columns *c = load_region(world, 0, 0, 2, 1);
@@ -636,7 +636,7 @@ Test(sculpt, a_sweep_leaves_granular_material_above_it) {
 
 /* ---- picking ------------------------------------------------------------------------------- */
 
-Test(sculpt, raycast_hits_flat_ground_where_the_plane_says) {
+Test(terrain_sculpt, raycast_hits_flat_ground_where_the_plane_says) {
     hand_world hand = { .ground = 0.0 };
     terrain_world *world = hand_world_create(&hand);
     terrain_ray_hit hit;
@@ -664,7 +664,7 @@ Test(sculpt, raycast_hits_flat_ground_where_the_plane_says) {
     terrain_world_destroy(world);
 }
 
-Test(sculpt, raycast_hits_the_wall_of_a_step) {
+Test(terrain_sculpt, raycast_hits_the_wall_of_a_step) {
     /* Ground at 0, and at 10 from x = 40 on: a wall facing −x between y = 0 and 10. */
     hand_world hand = { .ground = 0.0, .step = true, .step_x = 40, .step_ground = 10.0 };
     terrain_world *world = hand_world_create(&hand);
@@ -682,7 +682,7 @@ Test(sculpt, raycast_hits_the_wall_of_a_step) {
 
 /* ---- bad input ------------------------------------------------------------------------------ */
 
-Test(sculpt, bad_parameters_are_refused_and_change_nothing) {
+Test(terrain_sculpt, bad_parameters_are_refused_and_change_nothing) {
     core_log_level level = core_log_get_level();
     core_log_set_level(CORE_LOG_OFF);            /* each refusal logs a message */
     hand_world hand = { .ground = 0.0 };

@@ -136,7 +136,7 @@ static void save_state_a(const char *dir, const corner_states *s) {
 
 /* ---- round trips ---------------------------------------------------------------------------- */
 
-Test(store, a_new_world_saves_and_comes_back_byte_for_byte) {
+Test(terrain_store, a_new_world_saves_and_comes_back_byte_for_byte) {
     corner_states s;
     corner_states_make(&s);
     char dir[128], nested[160];
@@ -166,7 +166,7 @@ Test(store, a_new_world_saves_and_comes_back_byte_for_byte) {
     corner_states_free(&s);
 }
 
-Test(store, named_values_are_saved_with_the_edits) {
+Test(terrain_store, named_values_are_saved_with_the_edits) {
     char dir[128];
     make_temp_dir(dir, sizeof dir);
     terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
@@ -203,7 +203,7 @@ Test(store, named_values_are_saved_with_the_edits) {
     remove_tree(dir);
 }
 
-Test(store, saves_in_the_background_keep_what_changed_meanwhile) {
+Test(terrain_store, saves_in_the_background_keep_what_changed_meanwhile) {
     corner_states s;
     corner_states_make(&s);
     char dir[128];
@@ -284,7 +284,7 @@ static uint64_t time_one_save(const char *dir, const corner_states *s) {
 /* Kills land in the child's open (none of its saves done), between saves and inside them: each
  * round lets 0 to 3 saves finish (the child reports each on a pipe), then kills after a random
  * pause of up to one and a half saves. */
-Test(store, a_saver_killed_at_any_moment_leaves_the_world_before_or_after_never_torn, .timeout = 300) {
+Test(terrain_store, a_saver_killed_at_any_moment_leaves_the_world_before_or_after_never_torn, .timeout = 300) {
     corner_states s;
     corner_states_make(&s);
     char dir[128];
@@ -342,7 +342,7 @@ Test(store, a_saver_killed_at_any_moment_leaves_the_world_before_or_after_never_
 
 /* ---- the old layout ------------------------------------------------------------------------- */
 
-Test(store, an_old_folder_is_imported_once_with_the_same_bytes_as_loading_it) {
+Test(terrain_store, an_old_folder_is_imported_once_with_the_same_bytes_as_loading_it) {
     corner_states s;
     corner_states_make(&s);
     char dir[128], path[256];
@@ -471,7 +471,7 @@ static void replace_database(const char *dir, const uint8_t *bytes, size_t size)
     write_all(path, bytes, size);
 }
 
-Test(store, a_file_that_is_not_sqlite_is_set_aside) {
+Test(terrain_store, a_file_that_is_not_sqlite_is_set_aside) {
     char dir[128];
     make_temp_dir(dir, sizeof dir);
     const char text[] = "seed 3\nthis is not a database, but it has a few lines of text in it.\n";
@@ -480,7 +480,7 @@ Test(store, a_file_that_is_not_sqlite_is_set_aside) {
     remove_tree(dir);
 }
 
-Test(store, a_truncated_database_is_set_aside) {
+Test(terrain_store, a_truncated_database_is_set_aside) {
     corner_states s;
     corner_states_make(&s);
     char dir[128];
@@ -496,7 +496,7 @@ Test(store, a_truncated_database_is_set_aside) {
     corner_states_free(&s);
 }
 
-Test(store, flipped_pages_are_set_aside) {
+Test(terrain_store, flipped_pages_are_set_aside) {
     corner_states s;
     corner_states_make(&s);
     size_t size;
@@ -524,7 +524,7 @@ Test(store, flipped_pages_are_set_aside) {
     corner_states_free(&s);
 }
 
-Test(store, a_flipped_byte_inside_a_chunk_is_caught_by_its_checksum) {
+Test(terrain_store, a_flipped_byte_inside_a_chunk_is_caught_by_its_checksum) {
     corner_states s;
     corner_states_make(&s);
     char dir[128], path[256];
@@ -547,7 +547,7 @@ Test(store, a_flipped_byte_inside_a_chunk_is_caught_by_its_checksum) {
     corner_states_free(&s);
 }
 
-Test(store, a_foreign_sqlite_database_is_set_aside) {
+Test(terrain_store, a_foreign_sqlite_database_is_set_aside) {
     char dir[128], path[256];
     make_temp_dir(dir, sizeof dir);
     db_path(path, sizeof path, dir);
@@ -563,7 +563,7 @@ Test(store, a_foreign_sqlite_database_is_set_aside) {
     remove_tree(dir);
 }
 
-Test(store, another_worlds_database_is_refused_and_left_alone) {
+Test(terrain_store, another_worlds_database_is_refused_and_left_alone) {
     corner_states s;
     corner_states_make(&s);
     char dir[128], path[256];
@@ -590,7 +590,7 @@ Test(store, another_worlds_database_is_refused_and_left_alone) {
     corner_states_free(&s);
 }
 
-Test(store, a_second_process_is_refused_and_the_first_goes_on_saving) {
+Test(terrain_store, a_second_process_is_refused_and_the_first_goes_on_saving) {
     corner_states s;
     corner_states_make(&s);
     char dir[128];
@@ -642,7 +642,7 @@ Test(store, a_second_process_is_refused_and_the_first_goes_on_saving) {
     corner_states_free(&s);
 }
 
-Test(store, bad_calls_are_refused_with_a_reason) {
+Test(terrain_store, bad_calls_are_refused_with_a_reason) {
     terrain_store_report report;
     cr_expect_null(terrain_store_create(NULL, &report));
     cr_expect(strstr(report.error, "desc"), "%s", report.error);

@@ -50,7 +50,7 @@ static uint32_t bits(int first, int last) {
     return mask;
 }
 
-Test(water_planes, a_sea_and_a_lake_give_exactly_their_planes_and_masks) {
+Test(terrain_water_planes, a_sea_and_a_lake_give_exactly_their_planes_and_masks) {
     terrain_world *world = sea_and_lake_world();
     terrain_water_plane planes[TERRAIN_WATER_PLANES_MAX];
     int n = terrain_water_planes_find(world, 0, 0, 0, 0, planes, TERRAIN_WATER_PLANES_MAX);
@@ -68,7 +68,7 @@ Test(water_planes, a_sea_and_a_lake_give_exactly_their_planes_and_masks) {
     terrain_world_destroy(world);
 }
 
-Test(water_planes, coarser_cells_read_the_column_at_their_centre) {
+Test(terrain_water_planes, coarser_cells_read_the_column_at_their_centre) {
     terrain_world *world = sea_and_lake_world();
     terrain_water_plane planes[TERRAIN_WATER_PLANES_MAX];
     /* Level 1: cells of 2 m, cell i reads column 2i + 1. Sea columns x < 16, z < 32: cells
@@ -84,7 +84,7 @@ Test(water_planes, coarser_cells_read_the_column_at_their_centre) {
     terrain_world_destroy(world);
 }
 
-Test(water_planes, no_water_or_water_outside_the_y_range_gives_none) {
+Test(terrain_water_planes, no_water_or_water_outside_the_y_range_gives_none) {
     terrain_world *world = sea_and_lake_world();
     terrain_water_plane planes[TERRAIN_WATER_PLANES_MAX];
     cr_expect_eq(terrain_water_planes_find(world, 1, 0, 0, 0, planes, TERRAIN_WATER_PLANES_MAX), 0, "dry land");
@@ -95,7 +95,7 @@ Test(water_planes, no_water_or_water_outside_the_y_range_gives_none) {
     terrain_world_destroy(world);
 }
 
-Test(water_planes, more_surfaces_than_fit_keep_the_largest_then_the_highest) {
+Test(terrain_water_planes, more_surfaces_than_fit_keep_the_largest_then_the_highest) {
     terrain_world *world = sea_and_lake_world();
     terrain_water_plane planes[TERRAIN_WATER_PLANES_MAX + 2];
     /* Eight strips of 4 × 32 cells each: a tie, so the highest four, highest first. */
@@ -110,7 +110,7 @@ Test(water_planes, more_surfaces_than_fit_keep_the_largest_then_the_highest) {
     terrain_world_destroy(world);
 }
 
-Test(water_planes, a_bad_request_is_an_error_not_a_crash) {
+Test(terrain_water_planes, a_bad_request_is_an_error_not_a_crash) {
     terrain_world *world = sea_and_lake_world();
     terrain_water_plane planes[TERRAIN_WATER_PLANES_MAX];
     core_log_level level = core_log_get_level();
@@ -178,7 +178,7 @@ static int count_water(water_ecs *w, WaterPlane *first) {
     return count;
 }
 
-Test(water_planes, the_component_comes_with_the_upload_follows_an_edit_and_goes_when_drained) {
+Test(terrain_water_planes, the_component_comes_with_the_upload_follows_an_edit_and_goes_when_drained) {
     water_ecs w = water_ecs_open();
     cr_assert_neq(w.water, 0, "terrain_ecs_create registers WaterPlane");
     terrain_ecs_spawn_area(w.te, 0, 0, 0, 0, 0);   /* one column chunk, mesh layer 0 */
@@ -211,7 +211,7 @@ Test(water_planes, the_component_comes_with_the_upload_follows_an_edit_and_goes_
     water_ecs_close(&w);
 }
 
-Test(water_planes, streamed_chunks_get_the_component_and_lose_it_when_evicted) {
+Test(terrain_water_planes, streamed_chunks_get_the_component_and_lose_it_when_evicted) {
     water_ecs w = water_ecs_open();
     terrain_ecs_stream(w.te, &(terrain_stream_desc){ .half_width = 2, .levels = 2, .y_min = -20, .y_max = 20,
                                                      .memory_budget = 1 });   /* evict whatever is hidden */
@@ -277,7 +277,7 @@ static int carve_ball(terrain_world *world, double x, double y, double z) {
                               changed, 16);
 }
 
-Test(water_sea, a_pit_carved_below_sea_level_on_a_beach_fills_exactly_to_sea_level) {
+Test(terrain_water_sea, a_pit_carved_below_sea_level_on_a_beach_fills_exactly_to_sea_level) {
     terrain_world *world = beach_world(NULL);
     cr_assert_gt(carve_ball(world, 24, 1, 16), 0);
     /* Column (24 + a, 16 + b) loses sqrt(3.2² − a² − b²) m under the beach at 1 m: below the sea
@@ -304,7 +304,7 @@ Test(water_sea, a_pit_carved_below_sea_level_on_a_beach_fills_exactly_to_sea_lev
     terrain_world_destroy(world);
 }
 
-Test(water_sea, a_pit_carved_above_sea_level_stays_dry) {
+Test(terrain_water_sea, a_pit_carved_above_sea_level_stays_dry) {
     terrain_world *world = beach_world(NULL);
     cr_assert_gt(carve_ball(world, 48, 10, 16), 0);
     cr_expect_lt(terrain_world_top(world, 48.5, 16.5), 7.0f, "the pit is there");
@@ -314,7 +314,7 @@ Test(water_sea, a_pit_carved_above_sea_level_stays_dry) {
     terrain_world_destroy(world);
 }
 
-Test(water_sea, a_world_without_a_sea_keeps_its_pits_dry) {
+Test(terrain_water_sea, a_world_without_a_sea_keeps_its_pits_dry) {
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = beach_chunk });
     cr_assert_gt(carve_ball(world, 24, 1, 16), 0);
     cr_expect_lt(terrain_world_top(world, 24.5, 16.5), -1.0f);
@@ -322,7 +322,7 @@ Test(water_sea, a_world_without_a_sea_keeps_its_pits_dry) {
     terrain_world_destroy(world);
 }
 
-Test(water_sea, replaying_the_edit_log_gives_the_flooded_bytes) {
+Test(terrain_water_sea, replaying_the_edit_log_gives_the_flooded_bytes) {
     terrain_edit_log *log = terrain_edit_log_create(1234);
     terrain_world *world = beach_world(log);
     cr_assert_gt(carve_ball(world, 30, 1, 16), 0);          /* across the chunk border at x = 32 */
@@ -351,7 +351,7 @@ static void expect_sea_level_kept(terrain_world *world) {
     cr_expect_gt(wet, 0);
 }
 
-Test(water_sea, a_deposit_into_the_sea_keeps_the_surface_at_sea_level) {
+Test(terrain_water_sea, a_deposit_into_the_sea_keeps_the_surface_at_sea_level) {
     terrain_world *world = beach_world(NULL);
     terrain_chunk_coord changed[16];
     /* 60 m³ on a radius of 2.5 m: the pile rises well above the sea at its centre. */
@@ -364,7 +364,7 @@ Test(water_sea, a_deposit_into_the_sea_keeps_the_surface_at_sea_level) {
     terrain_world_destroy(world);
 }
 
-Test(water_sea, sand_that_slides_into_the_sea_keeps_the_surface_at_sea_level) {
+Test(terrain_water_sea, sand_that_slides_into_the_sea_keeps_the_surface_at_sea_level) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
     terrain_world *world = beach_world(NULL);
@@ -442,7 +442,7 @@ static terrain_world *seed_1_world(void) {
     return terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(1), .max_chunks = 512 });
 }
 
-Test(water_lakes, seed_1_has_lakes_within_a_quarter_square_kilometre) {
+Test(terrain_water_lakes, seed_1_has_lakes_within_a_quarter_square_kilometre) {
     terrain_world *world = seed_1_world();
     lake_found lakes[LAKES_MAX];
     int count = find_lakes(world, terrain_world_generation(world)->sea_level, lake_square, lakes);
@@ -455,7 +455,7 @@ Test(water_lakes, seed_1_has_lakes_within_a_quarter_square_kilometre) {
 /* Every lake column's 8 neighbours hold water at its level or ground at or above it: the water
  * is held, with no step in its surface. Checked over every column within 140 m of a column of
  * the lake (its water circle is at most 2·(56 + 12) m across). */
-Test(water_lakes, every_lake_column_is_held_by_its_neighbours) {
+Test(terrain_water_lakes, every_lake_column_is_held_by_its_neighbours) {
     terrain_world *world = seed_1_world();
     float sea = terrain_world_generation(world)->sea_level;
     lake_found lakes[LAKES_MAX];
@@ -490,7 +490,7 @@ Test(water_lakes, every_lake_column_is_held_by_its_neighbours) {
  * to), and every column the row puts in the lake with ground a quantum or more under the level
  * holds that water. The clipmap's own grids (4 and 8 m) give the same level as the columns' 1 m
  * grid, and grids coarser than 8 m (no basins) no lake. */
-Test(water_lakes, the_far_terrains_lake_levels_are_the_chunks_water) {
+Test(terrain_water_lakes, the_far_terrains_lake_levels_are_the_chunks_water) {
     terrain_world *world = seed_1_world();
     const terrain_generation_params *p = terrain_world_generation(world);
     float sea = p->sea_level;
@@ -556,7 +556,7 @@ static void lake_generate_range(void *user, size_t begin, size_t end) {
     }
 }
 
-Test(water_lakes, lake_chunks_are_the_same_on_any_thread_count_and_order) {
+Test(terrain_water_lakes, lake_chunks_are_the_same_on_any_thread_count_and_order) {
     terrain_world *world = seed_1_world();
     lake_found lakes[LAKES_MAX];
     cr_assert_gt(find_lakes(world, terrain_world_generation(world)->sea_level, lake_corner, lakes), 0);
@@ -600,7 +600,7 @@ static ecs_entity mesh_chunk_holding(water_ecs *w, ecs_component mesh_chunk, siz
 /* Destroying the entity, removing the component and terrain_ecs_destroy each free the chunk's
  * mesh and water once (core_memory_in_use drops by exactly what it held), and nothing counted
  * is left once everything is closed. */
-Test(water_planes, a_mesh_chunk_frees_what_it_holds_through_its_hook) {
+Test(terrain_water_planes, a_mesh_chunk_frees_what_it_holds_through_its_hook) {
     water_ecs warm = water_ecs_open();   /* what lives as long as the process is made now */
     water_ecs_close(&warm);
     size_t at_start = core_memory_in_use();

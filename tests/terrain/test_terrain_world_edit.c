@@ -54,7 +54,7 @@ static bool coords_contain(const terrain_chunk_coord *list, int n, int64_t x, in
     return false;
 }
 
-Test(world_edit, deposit_across_chunk_corner_adds_exactly_its_volume_to_the_chunks_it_covers) {
+Test(terrain_world_edit, deposit_across_chunk_corner_adds_exactly_its_volume_to_the_chunks_it_covers) {
     terrain_world *w = flat_world(NULL);
     int64_t sand_before = world_quanta(w, -2, 1, -2, 1, TERRAIN_SAND);
     cr_assert_eq(sand_before, 0);
@@ -88,7 +88,7 @@ Test(world_edit, deposit_across_chunk_corner_adds_exactly_its_volume_to_the_chun
     terrain_world_destroy(w);
 }
 
-Test(world_edit, a_bad_edit_changes_nothing) {
+Test(terrain_world_edit, a_bad_edit_changes_nothing) {
     terrain_world *w = flat_world(NULL);
     terrain_chunk_coord changed[4];
     cr_expect_eq(terrain_world_edit(w, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
@@ -107,7 +107,7 @@ Test(world_edit, a_bad_edit_changes_nothing) {
     terrain_world_destroy(w);
 }
 
-Test(world_edit, old_stacks_stay_readable_until_the_next_trim) {
+Test(terrain_world_edit, old_stacks_stay_readable_until_the_next_trim) {
     terrain_world *w = flat_world(NULL);
     terrain_chunk_coord c = { 3, -2 };
     const terrain_stacks *before = terrain_world_stacks(w, c);
@@ -127,7 +127,7 @@ Test(world_edit, old_stacks_stay_readable_until_the_next_trim) {
     terrain_world_destroy(w);
 }
 
-Test(world_edit, without_a_log_an_edited_chunk_is_never_evicted) {
+Test(terrain_world_edit, without_a_log_an_edited_chunk_is_never_evicted) {
     terrain_world *w = flat_world(NULL);
     terrain_world_set_max_chunks(w, 1);
     terrain_world_edit(w, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
@@ -141,7 +141,7 @@ Test(world_edit, without_a_log_an_edited_chunk_is_never_evicted) {
     terrain_world_destroy(w);
 }
 
-Test(world_edit, with_a_log_an_evicted_chunk_comes_back_byte_for_byte) {
+Test(terrain_world_edit, with_a_log_an_evicted_chunk_comes_back_byte_for_byte) {
     terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&(terrain_generation_params){ 0 }));
     terrain_world *w = flat_world(log);
     terrain_world_set_max_chunks(w, 1);
@@ -167,7 +167,7 @@ Test(world_edit, with_a_log_an_evicted_chunk_comes_back_byte_for_byte) {
     terrain_edit_log_destroy(log);
 }
 
-Test(world_edit, sculpt_through_the_world_raises_the_ground_under_the_target) {
+Test(terrain_world_edit, sculpt_through_the_world_raises_the_ground_under_the_target) {
     terrain_world *w = flat_world(NULL);
     terrain_chunk_coord changed[16];
     int n = terrain_world_edit(w, &(terrain_edit){ .tool = TERRAIN_EDIT_SCULPT_ADD,
@@ -186,7 +186,7 @@ Test(world_edit, sculpt_through_the_world_raises_the_ground_under_the_target) {
     terrain_world_destroy(w);
 }
 
-Test(world_edit, a_sweep_across_chunks_changes_the_chunks_on_its_way) {
+Test(terrain_world_edit, a_sweep_across_chunks_changes_the_chunks_on_its_way) {
     terrain_world *w = flat_world(NULL);
     double points[2][3] = { { 4, -10, 4 }, { 60, -10, 4 } };
     terrain_chunk_coord changed[16];
