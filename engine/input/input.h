@@ -219,4 +219,15 @@ int input_gamepad_count(const input_system *input);
 /* Mouse capture for looking around (hides the cursor; raw motion where the platform has it). */
 void input_capture_mouse(input_system *input, bool captured);
 
+/* Events from a source of your own (a test, a script, a network peer, an on-screen pad): queued
+ * for the next input_update exactly as a device's would be, then bound to actions, recorded and
+ * replayed like them; ignored while a replay runs. Keys are GLFW key codes (GLFW_KEY_SPACE …),
+ * buttons GLFW mouse buttons; out-of-range codes and non-finite motion are dropped. A gamepad
+ * state is taken before the dead zone, as a decoder gives it; NULL unplugs that slot. */
+void input_feed_key(input_system *input, int key, bool down);
+void input_feed_mouse_button(input_system *input, int button, bool down);
+void input_feed_mouse_motion(input_system *input, float dx, float dy);
+void input_feed_scroll(input_system *input, float dx, float dy);
+void input_feed_gamepad(input_system *input, int slot, const input_gamepad_state *state);
+
 #endif

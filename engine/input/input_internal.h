@@ -3,7 +3,7 @@
  *
  * The input system is built around one device-independent seam: everything a device does becomes
  * an input_event in a per-frame list (GLFW callbacks, the gamepad thread, the replay reader and the
- * tests' input__inject_* all append to it), and input__state_* turn that list plus the held state
+ * tests' input_feed_* all append to it), and input__state_* turn that list plus the held state
  * into the frame's input_actions. Recording writes the list; replaying reads it back and runs the
  * same code, so a replay is bit for bit the recorded run.
  */
@@ -370,13 +370,6 @@ bool input__record_decode_frame(const uint8_t *payload, size_t size, input_frame
 
 /* ---- test seams (input_system.c) ------------------------------------------------------------ */
 
-/* Queue a raw event for the next input_update, as a device would. Ignored while replaying. */
-void input__inject_key(input_system *input, int key, bool down);
-void input__inject_mouse_button(input_system *input, int button, bool down);
-void input__inject_mouse_motion(input_system *input, float dx, float dy);
-void input__inject_scroll(input_system *input, float dx, float dy);
-/* state NULL: the pad in that slot is unplugged. */
-void input__inject_gamepad(input_system *input, int slot, const input_gamepad_state *state);
 /* The shared slots the gamepad thread publishes into (exists with or without the thread). */
 input_pads_shared *input__pads(input_system *input);
 bool input__mouse_captured(const input_system *input);

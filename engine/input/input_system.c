@@ -3,7 +3,7 @@
  *
  * Each frame input_update gathers raw events into one list — GLFW's callbacks append to it during
  * glfwPollEvents, the gamepad slots the hidapi thread published are turned into snapshot events,
- * and the tests' input__inject_* append to it between frames — or, when replaying, takes the
+ * and input_feed_* (tests, scripts, the examples) append to it between frames — or, when replaying, takes the
  * recorded list instead. input_actions.c turns the list into the frame's actions; the recorder
  * writes list, dt and actions; a replay compares what it recomputed with what was recorded.
  *
@@ -74,27 +74,27 @@ static void input_push(input_system *in, const input_event *e) {
     in->events[in->event_count++] = *e;
 }
 
-void input__inject_key(input_system *in, int key, bool down) {
+void input_feed_key(input_system *in, int key, bool down) {
     if (key < 0 || key >= INPUT_KEY_COUNT) return;
     input_push(in, &(input_event){ .kind = INPUT_EVENT_KEY, .code = (uint16_t)key, .down = down });
 }
 
-void input__inject_mouse_button(input_system *in, int button, bool down) {
+void input_feed_mouse_button(input_system *in, int button, bool down) {
     if (button < 0 || button >= INPUT_MOUSE_BUTTON_COUNT) return;
     input_push(in, &(input_event){ .kind = INPUT_EVENT_MOUSE_BUTTON, .code = (uint16_t)button, .down = down });
 }
 
-void input__inject_mouse_motion(input_system *in, float dx, float dy) {
+void input_feed_mouse_motion(input_system *in, float dx, float dy) {
     if (!isfinite(dx) || !isfinite(dy)) return;
     input_push(in, &(input_event){ .kind = INPUT_EVENT_MOUSE_MOTION, .x = dx, .y = dy });
 }
 
-void input__inject_scroll(input_system *in, float dx, float dy) {
+void input_feed_scroll(input_system *in, float dx, float dy) {
     if (!isfinite(dx) || !isfinite(dy)) return;
     input_push(in, &(input_event){ .kind = INPUT_EVENT_SCROLL, .x = dx, .y = dy });
 }
 
-void input__inject_gamepad(input_system *in, int slot, const input_gamepad_state *state) {
+void input_feed_gamepad(input_system *in, int slot, const input_gamepad_state *state) {
     if (slot < 0 || slot >= INPUT_MAX_GAMEPADS) return;
     if (state) input_push(in, &(input_event){ .kind = INPUT_EVENT_GAMEPAD, .code = (uint16_t)slot, .pad = *state });
     else input_push(in, &(input_event){ .kind = INPUT_EVENT_GAMEPAD_GONE, .code = (uint16_t)slot });
@@ -111,24 +111,24 @@ bool input__replay_failed(const input_system *in) { return in->replayer && input
 static void input_key_callback(GLFWwindow *window, int key, int scancode, int action, int mods) {
     (void)scancode, (void)mods;
     if (action == GLFW_REPEAT) return;
-    input__inject_key(glfwGetWindowUserPointer(window), key, action == GLFW_PRESS);
+    input_feed_key(glfwGetWindowUserPointer(window), key, action == GLFW_PRESS);
 }
 
 static void input_mouse_button_callback(GLFWwindow *window, int button, int action, int mods) {
     (void)mods;
-    input__inject_mouse_button(glfwGetWindowUserPointer(window), button, action == GLFW_PRESS);
+    input_feed_mouse_button(glfwGetWindowUserPointer(window), button, action == GLFW_PRESS);
 }
 
 static void input_cursor_callback(GLFWwindow *window, double x, double y) {
     input_system *in = glfwGetWindowUserPointer(window);
-    if (in->have_cursor) input__inject_mouse_motion(in, (float)(x - in->cursor_x), (float)(y - in->cursor_y));
+    if (in->have_cursor) input_feed_mouse_motion(in, (float)(x - in->cursor_x), (float)(y - in->cursor_y));
     in->cursor_x = x;
     in->cursor_y = y;
     in->have_cursor = true;
 }
 
 static void input_scroll_callback(GLFWwindow *window, double x, double y) {
-    input__inject_scroll(glfwGetWindowUserPointer(window), (float)x, (float)y);
+    input_feed_scroll(glfwGetWindowUserPointer(window), (float)x, (float)y);
 }
 
 static void input_glfw_attach(input_system *in) {
@@ -178,7 +178,7 @@ static void input_gather_gamepads(input_system *in) {
     for (int i = 0; i < INPUT_MAX_GAMEPADS; i++) {
         input_pad_slot *slot = &slots[i];
         if (in->pad_connected[i] && (!slot->connected || slot->generation != in->pad_generation[i])) {
-            input__inject_gamepad(in, i, NULL);
+            input_feed_gamepad(in, i, NULL);
             in->pad_connected[i] = false;
         }
         if (!slot->connected) continue;
@@ -187,9 +187,9 @@ static void input_gather_gamepads(input_system *in) {
         if (taps) {
             input_gamepad_state tapped = slot->state;
             tapped.buttons |= taps;
-            input__inject_gamepad(in, i, &tapped);
+            input_feed_gamepad(in, i, &tapped);
         }
-        if (!in->pad_connected[i] || changed || taps) input__inject_gamepad(in, i, &slot->state);
+        if (!in->pad_connected[i] || changed || taps) input_feed_gamepad(in, i, &slot->state);
         in->pad_connected[i] = true;
         in->pad_generation[i] = slot->generation;
         in->pad_taken[i] = slot->state;

@@ -27,13 +27,13 @@ static const input_actions *frame(input_system *in, float dt) {
 
 static const input_actions *step(input_system *in) { return frame(in, 1.0f / 60.0f); }
 
-static void key_tap(input_system *in, int key, bool down) { input__inject_key(in, key, down); }
+static void key_tap(input_system *in, int key, bool down) { input_feed_key(in, key, down); }
 
 /* Captures the mouse the way a player does: a click (button 1) while the cursor is free. */
 static void capture_by_click(input_system *in) {
-    input__inject_mouse_button(in, GLFW_MOUSE_BUTTON_1, true);
+    input_feed_mouse_button(in, GLFW_MOUSE_BUTTON_1, true);
     step(in);
-    input__inject_mouse_button(in, GLFW_MOUSE_BUTTON_1, false);
+    input_feed_mouse_button(in, GLFW_MOUSE_BUTTON_1, false);
     step(in);
     cr_assert(input__mouse_captured(in));
 }
@@ -174,22 +174,22 @@ Test(input_actions, opposite_keys_cancel_and_same_direction_does_not_add) {
 Test(input_actions, left_stick_moves_after_the_dead_zone) {
     input_system *in = make();
     /* Inside the radius 0.15: nothing. */
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .lx = 0.1f, .ly = -0.1f });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .lx = 0.1f, .ly = -0.1f });
     const input_actions *a = step(in);
     cr_expect_eq(a->move_x, 0.0f);
     cr_expect_eq(a->move_y, 0.0f);
     /* r = 0.5 to the right: (0.5 − 0.15) / (1 − 0.15) = 0.41176471 */
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .lx = 0.5f });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .lx = 0.5f });
     a = step(in);
     cr_expect_float_eq(a->move_x, 0.41176471f, 1e-6f);
     cr_expect_eq(a->move_y, 0.0f);
     /* Stick pushed up (y is down positive on the pad) walks forward. */
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .ly = -0.5f });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .ly = -0.5f });
     a = step(in);
     cr_expect_eq(a->move_x, 0.0f);
     cr_expect_float_eq(a->move_y, 0.41176471f, 1e-6f);
     /* Full deflection on a diagonal (0.6, −0.8), r = 1: unchanged by the dead zone. */
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .lx = 0.6f, .ly = -0.8f });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .lx = 0.6f, .ly = -0.8f });
     a = step(in);
     cr_expect_float_eq(a->move_x, 0.6f, 1e-6f);
     cr_expect_float_eq(a->move_y, 0.8f, 1e-6f);
@@ -200,11 +200,11 @@ Test(input_actions, dead_zone_from_the_desc) {
     const input_actions *a;
     input_system *in = input_create(&(input_desc){ .no_gamepads = true, .dead_zone = 0.3f });
     cr_assert_not_null(in);
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .lx = -0.5f });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .lx = -0.5f });
     /* (0.5 − 0.3) / 0.7 = 0.28571429, to the left */
     a = step(in);
     cr_expect_float_eq(a->move_x, -0.28571429f, 1e-6f);
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .lx = -0.25f });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .lx = -0.25f });
     a = step(in);
     cr_expect_eq(a->move_x, 0.0f);
     input_destroy(in);
@@ -214,7 +214,7 @@ Test(input_actions, stick_and_keys_take_the_larger_push) {
     const input_actions *a;
     input_system *in = make();
     key_tap(in, GLFW_KEY_D, true);
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .lx = 0.5f });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .lx = 0.5f });
     a = step(in);
     cr_expect_eq(a->move_x, 1.0f);
     input_destroy(in);
@@ -224,19 +224,19 @@ Test(input_actions, stick_and_keys_take_the_larger_push) {
 
 Test(input_actions, mouse_motion_turns_the_view_only_while_captured) {
     input_system *in = make();
-    input__inject_mouse_motion(in, 10.0f, 5.0f);
+    input_feed_mouse_motion(in, 10.0f, 5.0f);
     const input_actions *a = step(in);
     cr_expect_eq(a->look_x, 0.0f);
     cr_expect_eq(a->look_y, 0.0f);
     capture_by_click(in);
     /* 10 + 30 counts right, 8 up (screen y is down): 40 × 0.0025 = 0.1 rad, 8 × 0.0025 = 0.02 rad up. */
-    input__inject_mouse_motion(in, 10.0f, -3.0f);
-    input__inject_mouse_motion(in, 30.0f, -5.0f);
+    input_feed_mouse_motion(in, 10.0f, -3.0f);
+    input_feed_mouse_motion(in, 30.0f, -5.0f);
     a = step(in);
     cr_expect_float_eq(a->look_x, 0.1f, 1e-7f);
     cr_expect_float_eq(a->look_y, 0.02f, 1e-7f);
     /* Left and down. */
-    input__inject_mouse_motion(in, -4.0f, 12.0f);
+    input_feed_mouse_motion(in, -4.0f, 12.0f);
     a = step(in);
     cr_expect_float_eq(a->look_x, -0.01f, 1e-7f);
     cr_expect_float_eq(a->look_y, -0.03f, 1e-7f);
@@ -250,7 +250,7 @@ Test(input_actions, mouse_motion_turns_the_view_only_while_captured) {
 Test(input_actions, right_stick_turns_by_speed_times_dt) {
     input_system *in = make();
     /* Full right: 1 × 3 rad/s × 0.02 s = 0.06 rad. */
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .rx = 1.0f });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .rx = 1.0f });
     const input_actions *a = frame(in, 0.02f);
     cr_expect_float_eq(a->look_x, 0.06f, 1e-6f);
     cr_expect_eq(a->look_y, 0.0f);
@@ -258,17 +258,17 @@ Test(input_actions, right_stick_turns_by_speed_times_dt) {
     a = frame(in, 0.5f);
     cr_expect_float_eq(a->look_x, 1.5f, 1e-6f);
     /* Pushed up (ry = −1: the pad's y is down positive) looks up: look_y positive. */
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .ry = -1.0f });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .ry = -1.0f });
     a = frame(in, 0.02f);
     cr_expect_eq(a->look_x, 0.0f);
     cr_expect_float_eq(a->look_y, 0.06f, 1e-6f);
     /* (0.6, −0.8), r = 1: 0.6 × 0.06 = 0.036 right, 0.8 × 0.06 = 0.048 up. */
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .rx = 0.6f, .ry = -0.8f });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .rx = 0.6f, .ry = -0.8f });
     a = frame(in, 0.02f);
     cr_expect_float_eq(a->look_x, 0.036f, 1e-6f);
     cr_expect_float_eq(a->look_y, 0.048f, 1e-6f);
     /* Inside the dead zone. */
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .rx = 0.1f, .ry = 0.1f });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .rx = 0.1f, .ry = 0.1f });
     a = frame(in, 0.02f);
     cr_expect_eq(a->look_x, 0.0f);
     cr_expect_eq(a->look_y, 0.0f);
@@ -283,10 +283,10 @@ Test(input_actions, invert_y_flips_mouse_and_stick) {
     input_bindings_destroy(b);
     cr_assert_not_null(in);
     capture_by_click(in);
-    input__inject_mouse_motion(in, 0.0f, -10.0f); /* mouse up: 10 × 0.01 = 0.1, inverted */
+    input_feed_mouse_motion(in, 0.0f, -10.0f); /* mouse up: 10 × 0.01 = 0.1, inverted */
     a = step(in);
     cr_expect_float_eq(a->look_y, -0.1f, 1e-7f);
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .ry = -1.0f }); /* 2 × 0.25 = 0.5, inverted */
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .ry = -1.0f }); /* 2 × 0.25 = 0.5, inverted */
     a = frame(in, 0.25f);
     cr_expect_float_eq(a->look_y, -0.5f, 1e-6f);
     input_destroy(in);
@@ -309,24 +309,24 @@ Test(input_actions, keys_bound_to_look_turn_like_a_full_stick) {
 
 Test(input_actions, the_capturing_click_does_not_use_the_tool) {
     input_system *in = make();
-    input__inject_mouse_button(in, GLFW_MOUSE_BUTTON_1, true);
+    input_feed_mouse_button(in, GLFW_MOUSE_BUTTON_1, true);
     const input_actions *a = step(in);
     cr_expect_eq(a->pressed, BIT(CAPTURE_MOUSE));
     cr_expect_eq(a->down, BIT(CAPTURE_MOUSE));
     cr_expect(input__mouse_captured(in));
     a = step(in); /* still held: still the capture click, the tool stays up */
     cr_expect_eq(a->down, BIT(CAPTURE_MOUSE));
-    input__inject_mouse_button(in, GLFW_MOUSE_BUTTON_1, false);
+    input_feed_mouse_button(in, GLFW_MOUSE_BUTTON_1, false);
     a = step(in);
     cr_expect_eq(a->released, BIT(CAPTURE_MOUSE));
     cr_expect_eq(a->down, 0u);
     /* Captured now: button 1 is the tool, button 2 the second tool use. */
-    input__inject_mouse_button(in, GLFW_MOUSE_BUTTON_1, true);
-    input__inject_mouse_button(in, GLFW_MOUSE_BUTTON_2, true);
+    input_feed_mouse_button(in, GLFW_MOUSE_BUTTON_1, true);
+    input_feed_mouse_button(in, GLFW_MOUSE_BUTTON_2, true);
     a = step(in);
     cr_expect_eq(a->pressed, BIT(TOOL) | BIT(TOOL_ALT));
-    input__inject_mouse_button(in, GLFW_MOUSE_BUTTON_1, false);
-    input__inject_mouse_button(in, GLFW_MOUSE_BUTTON_2, false);
+    input_feed_mouse_button(in, GLFW_MOUSE_BUTTON_1, false);
+    input_feed_mouse_button(in, GLFW_MOUSE_BUTTON_2, false);
     a = step(in);
     cr_expect_eq(a->released, BIT(TOOL) | BIT(TOOL_ALT));
     input_destroy(in);
@@ -355,12 +355,12 @@ Test(input_actions, capture_mouse_call_applies_at_the_next_update) {
     const input_actions *a;
     input_system *in = make();
     input_capture_mouse(in, true);
-    input__inject_mouse_motion(in, 4.0f, 0.0f);
+    input_feed_mouse_motion(in, 4.0f, 0.0f);
     a = step(in);
     cr_expect_float_eq(a->look_x, 0.01f, 1e-7f);
     cr_expect(input__mouse_captured(in));
     input_capture_mouse(in, false);
-    input__inject_mouse_motion(in, 4.0f, 0.0f);
+    input_feed_mouse_motion(in, 4.0f, 0.0f);
     a = step(in);
     cr_expect_eq(a->look_x, 0.0f);
     cr_expect_not(input__mouse_captured(in));
@@ -384,11 +384,11 @@ Test(input_actions, gamepad_buttons_and_triggers) {
         { { .buttons = 1u << INPUT_BUTTON_WEST }, 0 }, /* unbound by default */
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
-        input__inject_gamepad(in, 0, &cases[i].pad);
+        input_feed_gamepad(in, 0, &cases[i].pad);
         const input_actions *a = step(in);
         cr_expect_eq(a->down, cases[i].bits, "case %zu", i);
         cr_expect_eq(a->pressed, cases[i].bits, "case %zu", i);
-        input__inject_gamepad(in, 0, &(input_gamepad_state){ 0 });
+        input_feed_gamepad(in, 0, &(input_gamepad_state){ 0 });
         a = step(in);
         cr_expect_eq(a->released, cases[i].bits, "case %zu", i);
     }
@@ -397,12 +397,12 @@ Test(input_actions, gamepad_buttons_and_triggers) {
 
 Test(input_actions, unplugging_a_pad_releases_what_it_held) {
     input_system *in = make();
-    input__inject_gamepad(in, 2, &(input_gamepad_state){ .buttons = 1u << INPUT_BUTTON_SOUTH, .lx = 1.0f });
+    input_feed_gamepad(in, 2, &(input_gamepad_state){ .buttons = 1u << INPUT_BUTTON_SOUTH, .lx = 1.0f });
     const input_actions *a = step(in);
     cr_expect_eq(a->down, BIT(JUMP));
     cr_expect_eq(a->move_x, 1.0f);
     cr_expect_eq(input_gamepad_count(in), 1);
-    input__inject_gamepad(in, 2, NULL);
+    input_feed_gamepad(in, 2, NULL);
     a = step(in);
     cr_expect_eq(a->released, BIT(JUMP));
     cr_expect_eq(a->move_x, 0.0f);
@@ -415,8 +415,8 @@ Test(input_actions, first_pad_after_dead_zone_and_count) {
     input_gamepad_state zero = input_gamepad(in);
     cr_expect_eq(zero.lx, 0.0f);
     cr_expect_eq(zero.buttons, 0u);
-    input__inject_gamepad(in, 3, &(input_gamepad_state){ .lx = 1.0f });
-    input__inject_gamepad(in, 1, &(input_gamepad_state){ .lx = 0.1f, .ly = 0.575f, .rt = 0.25f, .buttons = 5 });
+    input_feed_gamepad(in, 3, &(input_gamepad_state){ .lx = 1.0f });
+    input_feed_gamepad(in, 1, &(input_gamepad_state){ .lx = 0.1f, .ly = 0.575f, .rt = 0.25f, .buttons = 5 });
     step(in);
     cr_expect_eq(input_gamepad_count(in), 2);
     input_gamepad_state pad = input_gamepad(in); /* slot 1 comes first */
@@ -432,14 +432,14 @@ Test(input_actions, first_pad_after_dead_zone_and_count) {
 Test(input_actions, two_pads_combine) {
     const input_actions *a;
     input_system *in = make();
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .buttons = 1u << INPUT_BUTTON_SOUTH });
-    input__inject_gamepad(in, 1, &(input_gamepad_state){ .buttons = 1u << INPUT_BUTTON_SOUTH });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .buttons = 1u << INPUT_BUTTON_SOUTH });
+    input_feed_gamepad(in, 1, &(input_gamepad_state){ .buttons = 1u << INPUT_BUTTON_SOUTH });
     a = step(in);
     cr_expect_eq(a->pressed, BIT(JUMP));
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ 0 });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ 0 });
     a = step(in);
     cr_expect_eq(a->released, 0u, "the other pad still holds jump");
-    input__inject_gamepad(in, 1, &(input_gamepad_state){ 0 });
+    input_feed_gamepad(in, 1, &(input_gamepad_state){ 0 });
     a = step(in);
     cr_expect_eq(a->released, BIT(JUMP));
     input_destroy(in);
@@ -490,7 +490,7 @@ Test(input_actions, action_names_round_trip) {
 
 Test(input_actions, bad_dt_counts_as_zero) {
     input_system *in = make();
-    input__inject_gamepad(in, 0, &(input_gamepad_state){ .rx = 1.0f });
+    input_feed_gamepad(in, 0, &(input_gamepad_state){ .rx = 1.0f });
     const input_actions *a = frame(in, NAN);
     cr_expect_eq(a->look_x, 0.0f);
     cr_expect_eq(input_frame_dt(in), 0.0f);

@@ -102,10 +102,10 @@ Test(input_bindings, a_line_replaces_the_defaults_of_its_action) {
     /* Through the input system: space no longer jumps, j does. */
     input_system *in = input_create(&(input_desc){ .no_gamepads = true, .bindings = b });
     input_bindings_destroy(b);
-    input__inject_key(in, GLFW_KEY_SPACE, true);
+    input_feed_key(in, GLFW_KEY_SPACE, true);
     cr_assert(input_update(in, 0.016f));
     cr_expect_eq(input_actions_get(in)->down, 0u);
-    input__inject_key(in, GLFW_KEY_J, true);
+    input_feed_key(in, GLFW_KEY_J, true);
     cr_assert(input_update(in, 0.016f));
     cr_expect_eq(input_actions_get(in)->pressed, INPUT_ACTION_BIT(INPUT_ACTION_JUMP));
     input_destroy(in);

@@ -57,7 +57,7 @@ Test(input_mappings, hand_built_line_maps_a_raw_joystick_to_the_pad) {
      * stick fully right turns 3 rad/s · 0.1 s = 0.3 rad. */
     input_system *in = input_create(&(input_desc){ .no_gamepads = true });
     cr_assert_not_null(in);
-    input__inject_gamepad(in, 0, &s);
+    input_feed_gamepad(in, 0, &s);
     cr_assert(input_update(in, 0.1f));
     const input_actions *a = input_actions_get(in);
     cr_expect_eq(a->down, BIT(JUMP) | BIT(TOOL));

@@ -97,26 +97,26 @@ static float script_frame(script *s, input_system *in) {
         case 0: case 1: case 2: case 3: {
             int key = keys[(r >> 8) % (sizeof keys / sizeof keys[0])];
             s->keys[key] = !s->keys[key];
-            input__inject_key(in, key, s->keys[key]);
+            input_feed_key(in, key, s->keys[key]);
             break;
         }
         case 4: {
             int button = (int)((r >> 8) % 3);
             s->buttons[button] = !s->buttons[button];
-            input__inject_mouse_button(in, button, s->buttons[button]);
+            input_feed_mouse_button(in, button, s->buttons[button]);
             break;
         }
-        case 5: input__inject_mouse_motion(in, 20.0f * unit(&s->rng), 20.0f * unit(&s->rng)); break;
+        case 5: input_feed_mouse_motion(in, 20.0f * unit(&s->rng), 20.0f * unit(&s->rng)); break;
         case 6: {
             input_gamepad_state pad = { .lx = unit(&s->rng), .ly = unit(&s->rng), .rx = unit(&s->rng),
                                         .ry = unit(&s->rng), .lt = 0.5f + 0.5f * unit(&s->rng),
                                         .rt = 0.5f + 0.5f * unit(&s->rng),
                                         .buttons = (uint32_t)(next(&s->rng) & 0x1ffff) };
-            input__inject_gamepad(in, (int)((r >> 8) % 2), &pad);
+            input_feed_gamepad(in, (int)((r >> 8) % 2), &pad);
             break;
         }
-        case 7: input__inject_gamepad(in, (int)((r >> 8) % 2), NULL); break;
-        case 8: input__inject_scroll(in, unit(&s->rng), unit(&s->rng)); break;
+        case 7: input_feed_gamepad(in, (int)((r >> 8) % 2), NULL); break;
+        case 8: input_feed_scroll(in, unit(&s->rng), unit(&s->rng)); break;
         default: input_capture_mouse(in, (r >> 8) & 1); break;
         }
     }
@@ -189,7 +189,7 @@ Test(input_record, replay_reproduces_every_frame_bit_for_bit) {
     cr_assert_not_null(in);
     cr_expect_not(input__gamepad_thread_running(in));
     for (int f = 0; f < FRAMES; f++) {
-        input__inject_key(in, GLFW_KEY_W, true); /* ignored while replaying */
+        input_feed_key(in, GLFW_KEY_W, true); /* ignored while replaying */
         cr_assert(input_update(in, 123.0f), "frame %d", f);
         cr_expect(same_bits(input_actions_get(in), &recorded[f]), "frame %d differs", f);
         float dt = input_frame_dt(in);

@@ -24,11 +24,11 @@ static void fuzz_drive(const input_bindings *bindings, const unsigned char *byte
     input_system *in = input_create(&(input_desc){ .no_gamepads = true, .bindings = bindings });
     if (!in) __builtin_trap();
     for (size_t i = 0; i + 1 < size && i < 64; i += 2) {
-        input__inject_key(in, bytes[i] + 256 * (bytes[i + 1] & 1), bytes[i + 1] & 2);
-        input__inject_mouse_button(in, bytes[i] & 7, bytes[i + 1] & 4);
-        if (bytes[i + 1] & 8) input__inject_mouse_motion(in, (float)(int8_t)bytes[i], (float)(int8_t)bytes[i + 1]);
+        input_feed_key(in, bytes[i] + 256 * (bytes[i + 1] & 1), bytes[i + 1] & 2);
+        input_feed_mouse_button(in, bytes[i] & 7, bytes[i + 1] & 4);
+        if (bytes[i + 1] & 8) input_feed_mouse_motion(in, (float)(int8_t)bytes[i], (float)(int8_t)bytes[i + 1]);
         if (bytes[i + 1] & 16)
-            input__inject_gamepad(in, bytes[i] & 7,
+            input_feed_gamepad(in, bytes[i] & 7,
                                   &(input_gamepad_state){ .lx = (float)(int8_t)bytes[i] / 127.0f,
                                                           .ry = (float)(int8_t)bytes[i + 1] / 127.0f,
                                                           .rt = (float)bytes[i] / 255.0f,

@@ -6,7 +6,10 @@
  *   2. an input system made with them and no devices (.no_gamepads, no window): what a frame's
  *      actions are when nothing is pressed;
  *   3. a report decoder fed a scripted sequence of DualShock 4 reports (the bytes hid_read gives),
- *      one of them a byte short: each decoded state printed, the bad one named and skipped.
+ *      one of them a byte short: each decoded state printed, the bad one named and skipped;
+ *   4. the last decoded state and a key fed to the input system (input_feed_gamepad,
+ *      input_feed_key: what a test, a script or a network peer does): the actions they make
+ *      through the bindings of 1.
  *
  *   input_bindings [--threads N] [--trace FILE]
  *
@@ -14,6 +17,8 @@
  */
 #include "core/core.h"
 #include "input/input.h"
+
+#include <GLFW/glfw3.h>   /* key codes for input_feed_key */
 #include "trace/trace.h"
 
 #include <stdint.h>
@@ -67,7 +72,6 @@ int main(int argc, char **argv) {
     const input_actions *actions = input_actions_get(input);
     printf("input_bindings: no device, actions down: %s, move (%.1f, %.1f)\n",
            action_names(actions->down, names, sizeof names), actions->move_x, actions->move_y);
-    input_destroy(input);
 
     /* 3. A DualShock 4 (054c:09cc) over Bluetooth, reduced reports of 10 bytes: report id 1,
      * sticks lx ly rx ry (0 … 255, 128 centred), the face buttons over the d-pad (8 = released;
@@ -96,6 +100,16 @@ int main(int argc, char **argv) {
     printf("input_bindings: %llu reports decoded, %llu too short\n", (unsigned long long)stats.decoded,
            (unsigned long long)stats.short_reports);
     input_decoder_destroy(pad);
+
+    /* 4. The last good state (stick up, circle = east, r2) as pad 0, and the C key, fed to the
+     *    input system: the next frame's actions come from them through the bindings of 1. */
+    input_feed_gamepad(input, 0, &state);
+    input_feed_key(input, GLFW_KEY_C, true);
+    input_update(input, 1.0f / 60.0f);
+    actions = input_actions_get(input);
+    printf("input_bindings: fed pad and key, actions down: %s, move (%.1f, %.1f)\n",
+           action_names(actions->down, names, sizeof names), actions->move_x, actions->move_y);
+    input_destroy(input);
     trace_stop();
     return 0;
 }
@@ -109,4 +123,5 @@ int main(int argc, char **argv) {
  * ^input_bindings: report 3: stick \(0\.00, -1\.00\), r2 1\.0, buttons east$
  * ^input_bindings: report 4: report too short: 9 bytes, need 10$
  * ^input_bindings: 3 reports decoded, 1 too short$
+ * ^input_bindings: fed pad and key, actions down: jump crouch tool, move \(0\.0, 1\.0\)$
  */
