@@ -463,6 +463,18 @@ static inline const uint64_t *fe_signs(const fe_mesher *m, size_t row) { return 
 /* Bit x of the result is bit x + 1 of the row. */
 static inline uint64_t fe_next(const uint64_t *row, int w) { return (row[w] >> 1) | (row[w + 1] << 63); }
 
+/* Word w of the crossed edges row a owns: its x-edges (other NULL; cells lo … hi − 1), or its
+ * edges to row `other` (samples lo … hi). */
+static inline uint64_t fe_crossed(const fe_mesher *m, const uint64_t *a, const uint64_t *other, int w) {
+    return other ? (a[w] ^ other[w]) & m->edge_mask[w] : (a[w] ^ fe_next(a, w)) & m->cell_mask[w];
+}
+
+static uint32_t fe_count_crossed(const fe_mesher *m, const uint64_t *a, const uint64_t *other) {
+    int crossed = 0;
+    for (int w = 0; w < m->data_words; w++) crossed += fe_count_bits(fe_crossed(m, a, other, w));
+    return (uint32_t)crossed;
+}
+
 /* Pass 1 for row (y, z). */
 static void fe_classify_row(fe_mesher *m, int y, int z) {
     const mesh_builder *b = m->b;
@@ -487,24 +499,19 @@ static void fe_classify_row(fe_mesher *m, int y, int z) {
     }
     s[m->data_words] = 0;
     bool some_inside = false, some_outside = false;
-    int crossed = 0;
     for (int w = 0; w < m->data_words; w++) {
         uint64_t inside = s[w] & m->edge_mask[w];
         some_inside |= inside != 0;
         some_outside |= inside != m->edge_mask[w];
-        crossed += fe_count_bits((s[w] ^ fe_next(s, w)) & m->cell_mask[w]);
     }
-    m->rows[r].x_count = (uint32_t)crossed;
+    m->rows[r].x_count = fe_count_crossed(m, s, NULL);
     m->rows[r].kind = some_inside && some_outside ? FE_MIXED : some_inside ? FE_INSIDE : FE_OUTSIDE;
 }
 
-/* Crossed edges between two rows (their samples lo … hi differ). */
+/* Crossed edges between two rows (their samples lo … hi differ); none when both are uniform alike. */
 static uint32_t fe_count_between(const fe_mesher *m, const fe_row *ra, const uint64_t *a, const fe_row *rb,
                                  const uint64_t *b) {
-    if (ra->kind == rb->kind && ra->kind != FE_MIXED) return 0;
-    int crossed = 0;
-    for (int w = 0; w < m->data_words; w++) crossed += fe_count_bits((a[w] ^ b[w]) & m->edge_mask[w]);
-    return (uint32_t)crossed;
+    return ra->kind == rb->kind && ra->kind != FE_MIXED ? 0 : fe_count_crossed(m, a, b);
 }
 
 /* The cells between rows a = (y, z), b = (y + 1, z), c = (y, z + 1), d = (y + 1, z + 1): with
@@ -577,20 +584,13 @@ static void fe_generate_row(fe_mesher *m, int y, int z) {
     const int n = b->n[0];
     const float *v = b->field->values + (size_t)z * b->slice + (size_t)y * (size_t)n;
     terrain_vertex *out = b->vertices + row->first_vertex;
-    if (row->x_count)
-        for (int w = 0; w < m->data_words; w++)
-            for (uint64_t bits = (a[w] ^ fe_next(a, w)) & m->cell_mask[w]; bits; bits &= bits - 1) {
-                int x = w * 64 + __builtin_ctzll(bits);
-                mesh_make_vertex(b, out++, x, y, z, 0, v[x], v[x + 1]);
-            }
-    const int axis_step[3] = { 0, n, (int)b->slice };
-    const size_t other[3] = { 0, up, back };
-    const uint32_t count[3] = { 0, row->y_count, row->z_count };
-    for (int axis = 1; axis <= 2; axis++) {
+    const size_t axis_step[3] = { 1, (size_t)n, b->slice };
+    const uint32_t count[3] = { row->x_count, row->y_count, row->z_count };
+    for (int axis = 0; axis < 3; axis++) {   /* x-, then y-, then z-edges, as first_vertex counts them */
         if (!count[axis]) continue;
-        const uint64_t *o = fe_signs(m, other[axis]);
+        const uint64_t *other = axis == 0 ? NULL : fe_signs(m, axis == 1 ? up : back);
         for (int w = 0; w < m->data_words; w++)
-            for (uint64_t bits = (a[w] ^ o[w]) & m->edge_mask[w]; bits; bits &= bits - 1) {
+            for (uint64_t bits = fe_crossed(m, a, other, w); bits; bits &= bits - 1) {
                 int x = w * 64 + __builtin_ctzll(bits);
                 mesh_make_vertex(b, out++, x, y, z, axis, v[x], v[x + axis_step[axis]]);
             }
@@ -636,7 +636,7 @@ static void fe_pass_run(fe_mesher *m, fe_pass pass, job_system *jobs) {
     else fe_run_slabs(&job, 0, (size_t)m->rows_z);
 }
 
-/* The three bit masks along x: bits [from, to] set. */
+/* A mask along x: bits [from, to] set. */
 static void fe_mask(uint64_t *mask, int words, int from, int to) {
     for (int w = 0; w < words; w++) {
         int lo = from - w * 64, hi = to - w * 64;   /* in this word's bits */

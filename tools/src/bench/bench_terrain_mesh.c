@@ -164,19 +164,17 @@ static int run_vtk_peer(const terrain_field *field, int threads, int runs, doubl
     FILE *out = popen(command, "r");
     int count = 0;
     char line[4096];
-    if (out && fgets(line, sizeof line, out)) {
-        /* {"ms": [a, b, ...], "triangles": T, ...}: read the list and the count by hand. */
-        const char *at = strstr(line, "\"ms\": [");
-        for (at = at ? at + 7 : NULL; at && count < runs; count++) {
-            char *end;
-            ms[count] = strtod(at, &end);
-            if (end == at) break;
-            at = strchr(end, ',');
-            at = at && at < strchr(end, ']') ? at + 1 : NULL;
-            if (!at) { count++; break; }
+    if (out && fgets(line, sizeof line, out)) {   /* {"ms": [...], "triangles": T, ...} */
+        core_arena arena = { 0 };
+        core_json_value *root;
+        if (core_json_parse(line, strlen(line), &arena, &root, NULL)) {
+            const core_json_value *times = core_json_get(root, "ms");
+            if (times && times->type == CORE_JSON_ARRAY)
+                for (size_t i = 0; i < times->array.count && count < runs; i++)
+                    ms[count++] = core_json_number_or(&times->array.items[i], NAN);
+            *triangles = (uint64_t)core_json_number_or(core_json_get(root, "triangles"), 0.0);
         }
-        const char *key = "\"triangles\": ", *t = strstr(line, key);
-        *triangles = t ? strtoull(t + strlen(key), NULL, 10) : 0;
+        core_arena_release(&arena);
     }
     if (out) pclose(out);
     for (const char *ext = ".json"; ext; ext = ext[1] == 'j' ? ".raw" : NULL) {
