@@ -1076,6 +1076,12 @@ static int compare_doubles(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
+/* `count` per-frame values into `sorted`, ascending (for trace_percentile). */
+static void app_sorted(const double *values, size_t count, double *sorted) {
+    if (count) memcpy(sorted, values, count * sizeof *sorted);
+    qsort(sorted, count, sizeof *sorted, compare_doubles);
+}
+
 
 game_app_stats game_app_stats_get(const game_app *app) {
     game_app_stats s = { .frames = app->frames, .loading_frames = app->loading_frames,
@@ -1091,25 +1097,22 @@ game_app_stats game_app_stats_get(const game_app *app) {
         s.walk_done = app->walker.done;
         s.walk_stuck = app->walker.stuck;
     }
-    double *sorted = core_alloc((app->cpu_count ? app->cpu_count : 1) * sizeof *sorted);
-    if (app->cpu_count) memcpy(sorted, app->cpu_ms, app->cpu_count * sizeof *sorted);
-    qsort(sorted, app->cpu_count, sizeof *sorted, compare_doubles);
-    s.cpu_ms_p50 = trace_percentile(sorted, app->cpu_count, 50);
-    s.cpu_ms_p99 = trace_percentile(sorted, app->cpu_count, 99);
-    s.cpu_ms_max = app->cpu_count ? sorted[app->cpu_count - 1] : 0.0;
-    for (size_t i = 0; i < app->cpu_count; i++) s.hitches += app->cpu_ms[i] > APP_HITCH_MS;
-    if (app->cpu_count) memcpy(sorted, app->engine_ms, app->cpu_count * sizeof *sorted);
-    qsort(sorted, app->cpu_count, sizeof *sorted, compare_doubles);
-    s.engine_ms_p50 = trace_percentile(sorted, app->cpu_count, 50);
-    s.engine_ms_p99 = trace_percentile(sorted, app->cpu_count, 99);
-    if (app->cpu_count) memcpy(sorted, app->thread_ms, app->cpu_count * sizeof *sorted);
-    qsort(sorted, app->cpu_count, sizeof *sorted, compare_doubles);
-    s.thread_ms_p50 = trace_percentile(sorted, app->cpu_count, 50);
-    s.thread_ms_p99 = trace_percentile(sorted, app->cpu_count, 99);
-    if (app->cpu_count) memcpy(sorted, app->triangles, app->cpu_count * sizeof *sorted);
-    qsort(sorted, app->cpu_count, sizeof *sorted, compare_doubles);
-    s.triangles_p50 = trace_percentile(sorted, app->cpu_count, 50);
-    core_free(sorted, (app->cpu_count ? app->cpu_count : 1) * sizeof *sorted);
+    const size_t n = app->cpu_count;
+    double *sorted = core_alloc((n ? n : 1) * sizeof *sorted);
+    app_sorted(app->cpu_ms, n, sorted);
+    s.cpu_ms_p50 = trace_percentile(sorted, n, 50);
+    s.cpu_ms_p99 = trace_percentile(sorted, n, 99);
+    s.cpu_ms_max = n ? sorted[n - 1] : 0.0;
+    for (size_t i = 0; i < n; i++) s.hitches += app->cpu_ms[i] > APP_HITCH_MS;
+    app_sorted(app->engine_ms, n, sorted);
+    s.engine_ms_p50 = trace_percentile(sorted, n, 50);
+    s.engine_ms_p99 = trace_percentile(sorted, n, 99);
+    app_sorted(app->thread_ms, n, sorted);
+    s.thread_ms_p50 = trace_percentile(sorted, n, 50);
+    s.thread_ms_p99 = trace_percentile(sorted, n, 99);
+    app_sorted(app->triangles, n, sorted);
+    s.triangles_p50 = trace_percentile(sorted, n, 50);
+    core_free(sorted, (n ? n : 1) * sizeof *sorted);
     s.stream = terrain_ecs_stream_stats(app->terrain);
     s.edits = terrain_ecs_edit_stats(app->terrain);
     s.strokes = app->tools.strokes;

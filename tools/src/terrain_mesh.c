@@ -4,8 +4,8 @@
  *
  * Reads PREFIX.json + PREFIX.raw (terrain.h's field file format; terrain_export writes it) and
  * prints one JSON line: {"vertices":V,"triangles":T,"area":A,"ms":M,"threads":N}, where ms is
- * the meshing time alone (not the reading), the median of --repeat runs (default 1). Meshing
- * uses every core (--threads 0, the default) for fields of 64³ cells and more, as VTK's
+ * the meshing time alone (not the reading), the median (nearest rank) of --repeat runs
+ * (default 1). Meshing uses every core (--threads 0, the default) for fields of 64³ cells and more, as VTK's
  * vtkFlyingEdges3D does; tools/peers/vtk_flying_edges.py runs that peer on the same file.
  * Weights are all bedrock (no world). A bad command line exits 2; a file that cannot be read or
  * is not a valid field gets a message naming the problem and exits 1.
@@ -17,7 +17,13 @@
 
 #include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+
+static int compare_ms(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
 
 int main(int argc, char **argv) {
     int apron = 0;
@@ -73,23 +79,20 @@ int main(int argc, char **argv) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = common.threads });
     const terrain_mesh_desc desc = { .apron = apron, .no_optimize = no_optimize, .jobs = jobs };
     double times[1000];
+    int runs = 0;
     bool meshed = true;
-    for (int run = 0; run < repeat && meshed; run++) {
+    while (runs < repeat && meshed) {
         terrain_mesh_free(&mesh);
         trace_zone_begin("mesh");
         uint64_t start = core_time_ns();
         meshed = terrain_mesh_build(&field, &desc, &mesh);
-        times[run] = core_ns_to_ms(core_time_ns() - start);
+        times[runs++] = core_ns_to_ms(core_time_ns() - start);
         trace_zone_end();
     }
     int threads = job_thread_count(jobs);
     job_system_destroy(jobs);
-    for (int i = 1; i < repeat; i++)   /* insertion sort for the median */
-        for (int j = i; j > 0 && times[j - 1] > times[j]; j--) {
-            double t = times[j];
-            times[j] = times[j - 1], times[j - 1] = t;
-        }
-    double ms = repeat % 2 ? times[repeat / 2] : 0.5 * (times[repeat / 2 - 1] + times[repeat / 2]);
+    qsort(times, (size_t)runs, sizeof *times, compare_ms);
+    double ms = trace_percentile(times, (size_t)runs, 50);
     if (!meshed) {
         fprintf(stderr, "terrain_mesh: %s: cannot mesh this field\n", positional[0]);
         goto done;
