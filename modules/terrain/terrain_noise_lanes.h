@@ -99,6 +99,21 @@ INLINE VF FN(grad3)(VU h, VF x, VF y, VF z) {
     return (VF)u + (VF)v;
 }
 
+/* The eight corners' values blended as noise3_in_column does (u and w from the column cell,
+ * v = fade(fy)), scaled, then n > 1 ? 1 : n and n < −1 ? −1 : n (a NaN passes through both, as
+ * in the scalar). */
+INLINE VF FN(blend_corners)(const column_cell *c, VF fy, VF n000, VF n100, VF n010, VF n110, VF n001, VF n101,
+                            VF n011, VF n111) {
+    VF one = FN(splat_f)(1.0f), minus_one = FN(splat_f)(-1.0f);
+    VF v = FN(fade)(fy);
+    VF u = FN(splat_f)(c->u), w = FN(splat_f)(c->w);
+    VF x00 = FN(lerp)(n000, n100, u), x10 = FN(lerp)(n010, n110, u);
+    VF x01 = FN(lerp)(n001, n101, u), x11 = FN(lerp)(n011, n111, u);
+    VF n = FN(lerp)(FN(lerp)(x00, x10, v), FN(lerp)(x01, x11, v), w) * FN(splat_f)(NOISE3_SCALE);
+    n = (VF)FN(select)((VU)(n > one), (VU)n, (VU)one);
+    return (VF)FN(select)((VU)(n < minus_one), (VU)n, (VU)minus_one);
+}
+
 /* LANES points of the column cell c at heights y (noise3_in_column, lane by lane). */
 INLINE VF FN(noise3_lanes)(const column_cell *c, VF y) {
     VI yi = FN(floor_to_int)(y);
@@ -117,15 +132,7 @@ INLINE VF FN(noise3_lanes)(const column_cell *c, VF y) {
     VF n101 = FN(grad3)(FN(mix_y)(h11, ky0), fx1, fy, fz1);
     VF n011 = FN(grad3)(FN(mix_y)(h01, ky1), fx, fy1, fz1);
     VF n111 = FN(grad3)(FN(mix_y)(h11, ky1), fx1, fy1, fz1);
-    VF v = FN(fade)(fy);
-    VF u = FN(splat_f)(c->u), w = FN(splat_f)(c->w);
-    VF x00 = FN(lerp)(n000, n100, u), x10 = FN(lerp)(n010, n110, u);
-    VF x01 = FN(lerp)(n001, n101, u), x11 = FN(lerp)(n011, n111, u);
-    VF n = FN(lerp)(FN(lerp)(x00, x10, v), FN(lerp)(x01, x11, v), w) * FN(splat_f)(NOISE3_SCALE);
-    /* n > 1 ? 1 : n, then n < −1 ? −1 : n (a NaN passes through both, as in the scalar). */
-    VF minus_one = FN(splat_f)(-1.0f);
-    n = (VF)FN(select)((VU)(n > one), (VU)n, (VU)one);
-    return (VF)FN(select)((VU)(n < minus_one), (VU)n, (VU)minus_one);
+    return FN(blend_corners)(c, fy, n000, n100, n010, n110, n001, n101, n011, n111);
 }
 
 #if !defined(NOISE_ISA_SSE2)
@@ -209,15 +216,7 @@ INLINE VF FN(noise3_lanes_tables)(const column_cell *c, const FN(level_tables) *
     VF n101 = FN(grad3_from_table)(tables, 3, window, index, fy_bits);
     VF n011 = FN(grad3_from_table)(tables, 2, window, index1, fy1_bits);
     VF n111 = FN(grad3_from_table)(tables, 3, window, index1, fy1_bits);
-    /* from here on as noise3_lanes */
-    VF v = FN(fade)(fy);
-    VF u = FN(splat_f)(c->u), w = FN(splat_f)(c->w);
-    VF x00 = FN(lerp)(n000, n100, u), x10 = FN(lerp)(n010, n110, u);
-    VF x01 = FN(lerp)(n001, n101, u), x11 = FN(lerp)(n011, n111, u);
-    VF n = FN(lerp)(FN(lerp)(x00, x10, v), FN(lerp)(x01, x11, v), w) * FN(splat_f)(NOISE3_SCALE);
-    VF minus_one = FN(splat_f)(-1.0f);
-    n = (VF)FN(select)((VU)(n > one), (VU)n, (VU)one);
-    return (VF)FN(select)((VU)(n < minus_one), (VU)n, (VU)minus_one);
+    return FN(blend_corners)(c, fy, n000, n100, n010, n110, n001, n101, n011, n111);
 }
 #endif
 
