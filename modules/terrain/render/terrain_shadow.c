@@ -16,8 +16,8 @@
  * along its normal by about a texel of its cascade (shadow.glsl), and the casters are drawn with
  * a slope-scaled polygon offset; both are small enough that a wall's shadow still meets its foot.
  */
-#include "terrain.h"
-#include "terrain_internal.h"
+#include "terrain/terrain.h"
+#include "terrain/terrain_internal.h"
 
 #include "core/core.h"
 #include "gfx/gfx.h"
