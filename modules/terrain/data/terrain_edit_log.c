@@ -44,7 +44,7 @@
  * the stacks after). `io_lock` serialises saves and loads, which write and read files outside
  * `lock`, so that replays on workers never wait for a disk.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/data/terrain_data_internal.h"
 
 #include "core/core.h"
 

@@ -29,7 +29,7 @@
  * the same few floating-point operations on the same integers for every sample, so two adjacent
  * chunks agree exactly on the samples they share.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/data/terrain_data_internal.h"
 
 #include "core/core.h"
 

@@ -5,7 +5,7 @@
  * is allocated, and every value's finiteness. Errors name the file and what was wrong. Writing
  * goes to a temporary beside the target, renamed over it once complete.
  */
-#include "terrain/terrain.h"
+#include "terrain/data/terrain_data.h"
 
 #include "core/core.h"
 

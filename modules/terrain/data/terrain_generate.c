@@ -114,7 +114,7 @@
  * at their shared border up to float rounding (a lattice node's y is y₀ + j·dy from each
  * chunk's own y₀), which keeps columns continuous across chunk borders.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/data/terrain_data_internal.h"
 
 #include "core/core.h"
 

@@ -26,7 +26,7 @@
  * the cells across those two faces carry the edge, once in each direction. So every mesh edge
  * has two triangles, in opposite directions. Cells without split edges keep the case table.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/data/terrain_data_internal.h"
 
 #include "core/core.h"
 

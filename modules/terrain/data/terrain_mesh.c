@@ -37,7 +37,7 @@
  * whose meshed samples all have one sign costs one pass over them and no output.
  */
 #define _DEFAULT_SOURCE   /* madvise's MADV_HUGEPAGE */
-#include "terrain/terrain_internal.h"
+#include "terrain/data/terrain_data_internal.h"
 
 #include "core/core.h"
 

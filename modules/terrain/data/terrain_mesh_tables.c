@@ -25,7 +25,7 @@
  * geometry is least skinny (the largest smallest angle, on the edges' midpoints), which is the
  * fan the hand-written tables use for the simple cases.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/data/terrain_data_internal.h"
 
 #include <math.h>
 #include <pthread.h>

@@ -27,7 +27,7 @@
  * terrain_noise_lanes.h). The portable blocks are the earlier form: fixed NOISE_BLOCK loops
  * with selects instead of branches, which GCC's -O2 vectorises with SSE2 on its own.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/data/terrain_data_internal.h"
 
 #include "core/core.h"
 

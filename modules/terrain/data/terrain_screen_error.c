@@ -24,7 +24,7 @@
  * Means, not maxima: the maxima are single terrace risers and thin spurs (a 2 m feature a
  * 4 m cell cannot hold) that a maximum-based target would pay for everywhere.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/data/terrain_data_internal.h"
 
 #include <math.h>
 

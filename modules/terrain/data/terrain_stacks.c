@@ -10,7 +10,7 @@
  * water (1), plus 2 per cave or overhang: 8–10 bytes with its index, against 512 bytes for a
  * byte voxel per metre of a 512 m column.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/data/terrain_data_internal.h"
 
 #include "core/core.h"
 

@@ -32,7 +32,7 @@
  * save thread. The save thread starts on the first terrain_store_save_async and sleeps on
  * `wake` otherwise.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/data/terrain_data_internal.h"
 
 #include "core/core.h"
 #include "trace/trace.h"

@@ -14,7 +14,7 @@
  * Cost: one walk over each sampled column's layer words (3–4 words typically) and a cached
  * chunk pointer; bench row terrain.water_planes.chunk32.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/data/terrain_data_internal.h"
 
 #include "core/core.h"
 

@@ -10,7 +10,7 @@
  * terrain_world_trim evicts, at a point the owner chooses (once a frame, when no job reads
  * stacks); see terrain.h.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/data/terrain_data_internal.h"
 
 #include "core/core.h"
 

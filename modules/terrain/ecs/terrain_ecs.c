@@ -1,6 +1,6 @@
 /* terrain_ecs.c — the terrain as entities: column chunks generated in the generate phase, mesh
  * chunks meshed in the mesh phase (both in parallel on the job system), uploaded in draw. */
-#include "terrain/terrain_internal.h"
+#include "terrain/ecs/terrain_ecs_internal.h"
 
 #include "core/core.h"
 #include "ecs/ecs.h"

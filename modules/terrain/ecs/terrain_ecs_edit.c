@@ -12,7 +12,7 @@
  * Regions always equal the world at the end of the phase (every change is committed), so an
  * edit of a chunk under stabilization simply reloads that chunk's region.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/ecs/terrain_ecs_internal.h"
 
 #include "core/core.h"
 #include "ecs/ecs.h"

@@ -17,7 +17,7 @@
  *             are nearest (and in view) first
  *   draw      uploads within the budget, then queued GPU frees (terrain_ecs.c)
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/ecs/terrain_ecs_internal.h"
 
 #include "core/core.h"
 #include "ecs/ecs.h"

@@ -1,8 +1,8 @@
 /* terrain_water.c — drawing water surfaces: the sea out to the horizon and the lakes of the
  * WaterPlane components, over the opaque frame (002 §3.4, 004 §4.3). terrain.h's "drawing
  * water" says what each quality does; water.frag holds the optics. Main thread only. */
-#include "terrain/terrain.h"
-#include "terrain/terrain_internal.h"
+#include "terrain/ecs/terrain_ecs.h"
+#include "terrain/ecs/terrain_ecs_internal.h"
 
 #include "core/core.h"
 #include "ecs/ecs.h"

@@ -21,7 +21,7 @@
  * bedrock inside the ball of radius R around (x, y, z) into granular material; sorting then
  * drops it, and what lay on it, to the next stable layer below.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/edit/terrain_edit_internal.h"
 
 #include "core/core.h"
 

@@ -19,7 +19,7 @@
  * order (a run between stable layers not sorted sand, rocks, water, air; or lower layers that do
  * not end on a stable one) is flagged unsorted; stabilization sorts it before moving anything.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/edit/terrain_edit_internal.h"
 
 #include "core/core.h"
 

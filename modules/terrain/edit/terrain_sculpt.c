@@ -46,7 +46,7 @@
  * Picking marches terrain_field_at along the ray in steps of at most half a metre and bisects the
  * first crossing into the solid.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/edit/terrain_edit_internal.h"
 
 #include "core/core.h"
 

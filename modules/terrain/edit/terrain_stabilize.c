@@ -47,7 +47,7 @@
  * changed, so nothing is cleared between passes, and a per-row span bounds the scan. Skipping
  * changes no result: a skipped column would have computed nothing.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/edit/terrain_edit_internal.h"
 
 #include "core/core.h"
 #include "jobs/jobs.h"

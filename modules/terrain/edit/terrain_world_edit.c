@@ -7,7 +7,7 @@
  * column) beyond the columns they rewrite, and the tools want two columns of slack
  * (terrain_sculpt's rule).
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/edit/terrain_edit_internal.h"
 
 #include "core/core.h"
 

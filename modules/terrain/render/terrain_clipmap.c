@@ -60,7 +60,7 @@
  * along the shared edge (each is 0 deep there). The exact distance to the union's border would
  * close that too, at the cost of a loop over every pair in the vertex shader.
  */
-#include "terrain/terrain_internal.h"
+#include "terrain/render/terrain_render_internal.h"
 
 #include "core/core.h"
 #include "gfx/gfx.h"

@@ -1,8 +1,8 @@
 /* terrain_render.c — drawing terrain meshes: triplanar materials (000 §6) with normal maps, a
  * detail layer near the camera and macro variation (textures made in terrain_textures.c), height
  * and slope tint (002 §4.1), camera-relative transforms. Main thread only. */
-#include "terrain/terrain.h"
-#include "terrain/terrain_internal.h"
+#include "terrain/render/terrain_render.h"
+#include "terrain/render/terrain_render_internal.h"
 
 #include "core/core.h"
 #include "gfx/gfx.h"

@@ -16,8 +16,8 @@
  * along its normal by about a texel of its cascade (shadow.glsl), and the casters are drawn with
  * a slope-scaled polygon offset; both are small enough that a wall's shadow still meets its foot.
  */
-#include "terrain/terrain.h"
-#include "terrain/terrain_internal.h"
+#include "terrain/render/terrain_render.h"
+#include "terrain/render/terrain_render_internal.h"
 
 #include "core/core.h"
 #include "gfx/gfx.h"

@@ -3,7 +3,7 @@
  * own normal map, and one macro layer (200 m) that varies brightness, hue and the scale blend so
  * that hillsides show no grid of repeats. Layouts in terrain_internal.h; the shader side is
  * shaders/terrain.frag. */
-#include "terrain/terrain_internal.h"
+#include "terrain/render/terrain_render_internal.h"
 
 #include "core/core.h"
 #include "trace/trace.h"

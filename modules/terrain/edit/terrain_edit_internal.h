@@ -1,0 +1,172 @@
+/* terrain_edit_internal.h — the private declarations of the terrain's editing area
+ * (modules/terrain/edit/): the column region's layout, the stabilizer's bookkeeping, the
+ * sculptor's snapshot of the field. The public API is edit/terrain_edit.h.
+ *
+ * Sections are owned by whoever wrote them; add new declarations in a section of your own.
+ */
+#ifndef TERRAIN_EDIT_INTERNAL_H
+#define TERRAIN_EDIT_INTERNAL_H
+
+#include "terrain/edit/terrain_edit.h"
+#include "terrain/data/terrain_data_internal.h"
+
+#include "core/core.h"
+
+#include <stdint.h>
+
+/* ==== editing: columns, stabilization, brushes (terrain_columns.c, terrain_stabilize.c,
+ * terrain_brush.c) ============================================================================ */
+
+/* A layer in quanta, as a terrain_columns region keeps it. */
+typedef struct terrain__clayer {
+    uint32_t material;
+    int32_t quanta;
+} terrain__clayer;
+
+/* Column flags (terrain_columns.flags). */
+#define TERRAIN__COLUMN_UNSORTED 1u   /* layers not in 000 §3.4's order: stabilize sorts them first */
+#define TERRAIN__COLUMN_EDITED 2u     /* content changed since terrain_columns_changed_chunks cleared */
+
+/* Heights in the halo of a region side with no neighbour: so high that nothing flows there and
+ * no excess points that way (a wall). Real columns stay below TERRAIN__COLUMN_MAX_QUANTA
+ * (data/terrain_data_internal.h). */
+#define TERRAIN__WALL_HEIGHT (1 << 30)
+#define TERRAIN__MAX_SIDE 4096
+#define TERRAIN__MAX_REGION_COLUMNS (1 << 22)
+#define TERRAIN__FLOW_MAX 65535       /* the largest step, in quanta (2 048 m) */
+
+/* A span of columns [lo, hi] of one row and the last pass that widened it. */
+typedef struct terrain__span {
+    int32_t lo, hi;
+    uint32_t clock;
+} terrain__span;
+
+/* The eight neighbour directions, (dx, dz) with d and 7 − d opposite. */
+extern const int8_t terrain__dir[8][2];
+
+/* Stabilization runs in passes, one per colour of a 3 × 3 pattern of columns (terrain_stabilize.c);
+ * nine passes look at every column once. Clocks count passes and start here, so that "changed in
+ * the last nine passes" never wraps below zero. */
+#define TERRAIN__COLOURS 9
+#define TERRAIN__CLOCK_START 16u
+
+/* The mutable region (terrain.h: terrain_columns). Each column is its lower layers (everything
+ * up to and including the highest stable layer: bedrock or a custom material) in a pool, and
+ * on top the pile that stabilization moves: sand, rocks, water (000 §3.4's order, air above).
+ * The pile is kept as heights in quanta above TERRAIN_FLOOR_Y, in arrays with a one-column halo
+ * (cell (i, k) is (k + 1)·pitch + i + 1) so the 3 × 3 stencil never tests for borders; the halo
+ * holds walls, or copies of the neighbouring region's columns. */
+struct terrain_columns {
+    int64_t x0, z0;                   /* world column index of column (0, 0) */
+    int width, depth, pitch;          /* pitch = width + 2 */
+    size_t cells;                     /* (width + 2)·(depth + 2) */
+    /* Padded (halo included). */
+    int32_t *base;                    /* top of the lower layers: where the pile starts */
+    int32_t *sand_top;                /* base + sand */
+    int32_t *ground;                  /* sand_top + rocks: the surface rocks flow on */
+    uint32_t *changed;                /* the pass that last changed the column (edits: clock) */
+    int32_t *gift_sand, *gift_rocks;  /* halo only: given to the neighbour region this pass */
+    terrain__span *changed_span;      /* per row, halo rows too (row k at k + 1) */
+    uint32_t clock;                   /* passes run */
+    uint32_t last_change;             /* the highest `changed` stamp written */
+    /* Per row, written by the job of the row during a pass: */
+    int64_t *row_moved;               /* quanta its columns gave */
+    uint8_t *row_gifts;               /* whether some of it went into the halo */
+    /* Unpadded (index k·width + i). */
+    int32_t *water;                   /* above the pile */
+    uint32_t *lower_start;
+    uint16_t *lower_count, *lower_capacity;
+    uint8_t *flags;
+    terrain__clayer *pool;
+    size_t pool_count, pool_capacity, pool_garbage;
+    size_t unsorted;                  /* columns flagged TERRAIN__COLUMN_UNSORTED */
+    /* Set by the stabilizer for the duration of a call. */
+    struct terrain_columns *neighbour[8];      /* by direction (terrain__dir); NULL = edge */
+    uint8_t edge_sides;                        /* bit d: no neighbour in direction d */
+    bool near_edge;                            /* this pass looks at columns by the border */
+};
+
+/* Whether a change stamped `stamp` still matters to pass `pass`: the columns around it have not
+ * all been looked at since (one pass per colour). */
+static inline bool terrain__recent(uint32_t stamp, uint32_t pass) {
+    return stamp + TERRAIN__COLOURS >= pass;
+}
+
+/* Widens a row's span by column i changed at pass `clock`; a span whose changes no longer matter
+ * starts afresh. */
+static inline void terrain__span_extend(terrain__span *span, int i, uint32_t clock) {
+    if (!terrain__recent(span->clock, clock)) {
+        *span = (terrain__span){ i, i, clock };
+        return;
+    }
+    if (i < span->lo) span->lo = i;
+    if (i > span->hi) span->hi = i;
+    if (clock > span->clock) span->clock = clock;
+}
+
+static inline size_t terrain__cell(const terrain_columns *c, int i, int k) {
+    return (size_t)(k + 1) * (size_t)c->pitch + (size_t)(i + 1);
+}
+
+/* Whether a material holds up what lies on it and never moves (000 §3.4: bedrock is "always
+ * considered as stable"; custom materials are treated alike). */
+static inline bool terrain__stable_material(uint32_t material) {
+    return material == TERRAIN_BEDROCK || material >= TERRAIN_MATERIAL_BUILTIN_COUNT;
+}
+
+/* Column (i, k)'s layers bottom-up, adjacent equal materials merged, into *scratch (grown with
+ * core_grow); returns the count. */
+int terrain__columns_layers(const terrain_columns *c, int i, int k, terrain__clayer **scratch, size_t *capacity);
+/* Replaces column (i, k) by `layers` (bottom-up, quanta > 0, adjacent equal materials may
+ * repeat): splits off the pile and flags the column unsorted when it is not in order. Does not
+ * mark it changed. */
+void terrain__columns_store(terrain_columns *c, int i, int k, const terrain__clayer *layers, int count);
+/* Marks column (i, k) changed now: it and its neighbours are looked at by the next nine passes,
+ * and its chunk is reported by terrain_columns_changed_chunks. */
+void terrain__columns_touch(terrain_columns *c, int i, int k);
+/* Sorts column (i, k)'s runs (000 §3.4, Figure 6); touches it when that changed anything. */
+void terrain__columns_sort(terrain_columns *c, int i, int k, terrain__clayer **scratch, size_t *capacity);
+/* Moves the region's clock forward to `clock`; changes the old clock's next nine passes would
+ * still have looked at become changes at the new one. */
+void terrain__columns_set_clock(terrain_columns *c, uint32_t clock);
+
+/* ==== end of the editing section ========================================================== */
+
+/* ==== sculpting, sweeping, picking (terrain_sculpt.c) ===================================== */
+
+/* The field of 000 §3.3 with σ = one column, computed from a terrain_columns region's own
+ * columns: a snapshot of the solid (sand and bedrock) runs of the region's columns
+ * [i0, i1) × [k0, k1), so that an edit computes f from the state before it wrote anything.
+ * Columns outside the window count as empty (only the implicit bedrock below the floor). */
+typedef struct terrain__region_field {
+    int64_t x0, z0;                   /* world column index of window column (0, 0) */
+    int width, depth;
+    uint32_t *first;                  /* per column (k·width + i): its first run; first[n + 1] ends it */
+    int32_t (*runs)[2];               /* solid runs [bottom, top) in quanta above the floor, bottom-up */
+    size_t run_capacity;
+} terrain__region_field;
+
+/* Snapshots the window (clipped to the region); free with terrain__region_field_free. */
+void terrain__region_field_init(terrain__region_field *field, const terrain_columns *columns, int i0, int k0, int i1,
+                                int k1);
+void terrain__region_field_free(terrain__region_field *field);
+/* f at the world point (x, y, z): what terrain_field_at(world, x, y, z, 0) gives for a world
+ * holding the same columns (to float rounding). */
+double terrain__region_field_at(const terrain__region_field *field, double x, double y, double z);
+
+/* ==== end of the sculpting section ======================================================== */
+
+/* ==== edits in the world: the regions' side (terrain_columns.c) ========================== */
+
+/* The sea after edits: terrain__world_sea (data/terrain_data_internal.h) gives the level. */
+/* Applies that rule to every column of the region changed since terrain_columns_changed_chunks
+ * last cleared (TERRAIN__COLUMN_EDITED); returns how many it changed (terrain_columns.c). */
+int terrain__columns_flood(terrain_columns *columns, int32_t sea_quanta);
+/* Displacement by stabilization: in the chunk's changed columns, the water on the pile reaches no
+ * higher than the water surface the column had in `before` (the chunk as last committed): sand
+ * and rocks that slid under water push it out rather than lift it. Returns the columns capped. */
+int terrain__columns_cap_water(terrain_columns *columns, terrain_chunk_coord coord, const terrain_stacks *before);
+
+/* ==== end of the edits-in-the-world section ================================================ */
+
+#endif
