@@ -69,7 +69,8 @@ project "game"
   files { "game/**.c", "game/**.h" }
   excludes { "game/main.c" }
 
--- Modules: one library each, built on the engine (modules/NAME/**.c).
+-- Modules: one library each, built on the engine (modules/NAME/**.c: area folders too, such as
+-- modules/terrain/data/; object names stay unique because every file carries its module prefix).
 project "terrain"
   kind "StaticLib"
   files { "modules/terrain/**.c", "modules/terrain/**.h" }
@@ -89,7 +90,7 @@ project "glad"
   buildoptions { "-w" }
 
 -- What the engine's platform layer (engine/gfx, engine/input) and the world database
--- (modules/terrain/terrain_store.c) link against.
+-- (modules/terrain/data/terrain_store.c) link against.
 local platform_libs = { "glfw", "OSMesa", "hidapi-hidraw", "stb", "meshoptimizer", "sqlite3", "dl" }
 
 -- A program linked against the engine. `extra` may set files, links and build options.

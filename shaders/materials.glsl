@@ -1,5 +1,5 @@
 // materials.glsl — what terrain.frag and clipmap.frag share about the material textures
-// (made in modules/terrain/terrain_textures.c; layouts in terrain_internal.h).
+// (made in modules/terrain/render/terrain_textures.c; layouts in terrain_render_internal.h).
 
 uniform sampler2DArray u_materials;   // per material, 8 m a repeat: R shade, GB normal x, y
 uniform sampler2DArray u_detail;      // per material, 1 m: R albedo multiplier / 2, GB normal;

@@ -1,5 +1,5 @@
 /* fuzz_edit_log — libFuzzer target for the edit log's file reader (terrain_edit_log_parse,
- * modules/terrain/terrain_edit_log.c) and the replay of what it accepted.
+ * modules/terrain/data/terrain_edit_log.c) and the replay of what it accepted.
  *
  *   tests/fuzz/run.sh 60 fuzz_edit_log
  * Seeds: tests/fuzz/corpus/fuzz_edit_log/, files saved by terrain_edit_log_save for the world of

@@ -1,5 +1,5 @@
 /* fuzz_field_header — libFuzzer target for the field file header parser
- * (terrain_field_header_parse, modules/terrain/terrain_field_file.c).
+ * (terrain_field_header_parse, modules/terrain/data/terrain_field_file.c).
  *
  *   tests/fuzz/run.sh 20     (builds every target with the engine's sources, runs each 20 s)
  * Seeds: tests/fuzz/corpus/fuzz_field_header/ (a valid header, a negative origin, missing and

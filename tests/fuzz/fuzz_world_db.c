@@ -1,5 +1,5 @@
 /* fuzz_world_db — libFuzzer target for opening a world folder's database (terrain_store_create,
- * modules/terrain/terrain_store.c): each input is written as DIR/world.db and opened.
+ * modules/terrain/data/terrain_store.c): each input is written as DIR/world.db and opened.
  *
  *   tests/fuzz/run.sh 60 fuzz_world_db
  * Seeds: tests/fuzz/corpus/fuzz_world_db/, databases saved by terrain_store_save for the world

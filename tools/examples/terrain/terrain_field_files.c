@@ -1,5 +1,5 @@
-/* terrain_field_files — the implicit field and its files (modules/terrain/terrain.h, "the
- * implicit field", "meshes", "field and mesh files"):
+/* terrain_field_files — the implicit field and its files (modules/terrain/data/terrain_data.h,
+ * "the implicit field", "meshes", "field and mesh files"):
  *
  *   1. sample the field f of a generated world over a box (f > 0 solid, f < 0 air);
  *   2. write it as PREFIX.json + PREFIX.raw (terrain_field_write), read it back

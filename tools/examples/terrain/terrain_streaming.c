@@ -1,4 +1,4 @@
-/* terrain_streaming — chunks that follow a viewer (modules/terrain/terrain.h, "streaming"):
+/* terrain_streaming — chunks that follow a viewer (modules/terrain/ecs/terrain_ecs.h, "streaming"):
  *
  * terrain_ecs_stream turns the terrain's ECS systems from a fixed area into rings of mesh
  * chunks around each viewer; generation and meshing run as background jobs that span frames,

@@ -1,4 +1,4 @@
-/* bench_shadows.c — the sun's cascaded shadow map (modules/terrain/terrain_shadow.c) through
+/* bench_shadows.c — the sun's cascaded shadow map (modules/terrain/render/terrain_shadow.c) through
  * OSMesa's llvmpipe, where the "GPU" is these same two cores.
  *
  * Rows:
