@@ -639,6 +639,7 @@ int terrain_store_read_seed(const char *dir, uint64_t *seed, char *error, size_t
  *
  * What edits go through (edit/terrain_edit.h: terrain_world_edit; ecs/terrain_ecs.h: the
  * stabilize phase), and what the streamer remeshes from. */
+
 /* Replaces the chunk's stacks by `stacks` (taken over) and records the difference in the log,
  * tagged `tool`. The old stacks stay valid for readers until the next terrain_world_trim (and
  * for terrain_world_read_begin readers until they end), like evicted ones. The chunk is

@@ -298,7 +298,8 @@ bool terrain_raycast(terrain_world *world, const double origin[3], const float d
 /* ---- edits in the world ----
  *
  * With terrain_world_desc.edits set, the world replays a chunk's log whenever it generates the
- * chunk, and terrain_world_commit records what changes. A tool applied to the world:
+ * chunk, and terrain_world_commit (data/terrain_data.h, "commits") records what changes. A tool
+ * applied to the world:
  *
  *     terrain_chunk_coord changed[16];
  *     int n = terrain_world_edit(world, &(terrain_edit){ .tool = TERRAIN_EDIT_SCULPT_CARVE,
