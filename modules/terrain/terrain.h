@@ -1352,7 +1352,10 @@ typedef struct terrain_world_change {
  * nothing is not one); returns how many (writes at most `capacity`; the rest stay for the next
  * call). The streamer remeshes the mesh chunks that read them. */
 int terrain_world_take_changes(terrain_world *world, terrain_world_change *out, int capacity);
-/* How many commits the chunk has had in this world (0 = as generated or replayed). */
+/* A version that changes with every commit of the chunk: the world's commit count at the
+ * chunk's last commit (0 = never committed in this world: as generated, or replayed from a log
+ * it was opened with). It survives the chunk's eviction and regeneration, so a cache keyed on it
+ * stays right. */
 uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord coord);
 
 /* ---- editing in the ECS ----
