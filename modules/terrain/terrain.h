@@ -28,7 +28,7 @@
  *     #include "terrain/terrain.h"
  *     terrain_world *world = terrain_world_create(&(terrain_world_desc){
  *         .generation = terrain_generation_defaults(42) });              // data/
- *     terrain_ecs *te = terrain_ecs_create(ecs, world);                  // ecs/
+ *     terrain_ecs *te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });   // ecs/
  *     terrain_ecs_spawn_rings(te, 2, 3, -64, 160);
  *     each frame:  ecs_progress(ecs, dt);  terrain_ecs_draw(te, renderer, &view);   // render/
  *

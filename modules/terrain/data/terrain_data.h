@@ -111,7 +111,7 @@ uint64_t terrain_stacks_hash(const terrain_stacks *stacks);  /* of the logical c
 
 /* ---- generation (002 §3.1.3, 004 §2) ------------------------------------------------------ */
 
-typedef struct terrain_generation_params {
+typedef struct terrain_generation_desc {
     uint64_t seed;
     float sea_level;                  /* water fills air below this height */
     /* Macro relief: rescale-and-add multifractal with domain warping (004 §2). */
@@ -149,13 +149,13 @@ typedef struct terrain_generation_params {
     float scree_depth;                /* metres of scree on slopes too steep for sand; 0 = 1 */
     float scree_min_slope;            /* tan of the gentlest slope with scree; 0 = 0.58 (30°) */
     float lake_rocks_depth;           /* metres of stones near a lake's waterline; 0 = 0.8 */
-} terrain_generation_params;
+} terrain_generation_desc;
 
 /* Parameters that make a varied, good-looking world for this seed. */
-terrain_generation_params terrain_generation_defaults(uint64_t seed);
+terrain_generation_desc terrain_generation_defaults(uint64_t seed);
 
 /* The stacks of one chunk; depends only on (params, coord). Free with terrain_stacks_destroy. */
-terrain_stacks *terrain_generate_chunk(const terrain_generation_params *params, terrain_chunk_coord coord);
+terrain_stacks *terrain_generate_chunk(const terrain_generation_desc *params, terrain_chunk_coord coord);
 
 /* ---- noise -------------------------------------------------------------------------------- */
 
@@ -178,7 +178,7 @@ typedef struct terrain_world terrain_world;
 typedef struct terrain_field terrain_field;         /* the field's samples, below */
 
 typedef struct terrain_world_desc {
-    terrain_generation_params generation;
+    terrain_generation_desc generation;
     size_t max_chunks;                /* cached chunks kept (least recently used go); 0 = 4096 */
     terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);  /* NULL = generation */
     void *generate_user;              /* passed to generate */
@@ -227,7 +227,7 @@ size_t terrain_world_bytes(terrain_world *world);         /* bytes of the stacks
 bool terrain_world_has(terrain_world *world, terrain_chunk_coord coord);
 /* Changes terrain_world_desc.max_chunks (0 = 4096); the next trim applies it. */
 void terrain_world_set_max_chunks(terrain_world *world, size_t max_chunks);
-const terrain_generation_params *terrain_world_generation(const terrain_world *world);
+const terrain_generation_desc *terrain_world_generation(const terrain_world *world);
 /* Whether the world has a sea at generation.sea_level (terrain_world_desc.sea): generated worlds
  * always, hand-made ones when asked. The water renderer draws it; edits let it in. */
 bool terrain_world_has_sea(const terrain_world *world);
@@ -446,7 +446,7 @@ int terrain_rings_half_width(int levels, double scale);
  * (terrain_world_desc.edits, terrain_world_commit). A world folder keeps the log in one
  * database with terrain_store (below), whose every save is one transaction:
  *
- *     terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
+ *     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
  *     terrain_store *store = terrain_store_create(&(terrain_store_desc){
  *         .dir = "saves/world1", .edits = log, .seed = params.seed }, &report);
  *     ... edits ...
@@ -487,10 +487,14 @@ const char *terrain_edit_tool_name(terrain_edit_tool tool);
  * (EDIT_GENERATOR_REVISION in terrain_edit_log.c): a change to what terrain_generate_chunk makes
  * of the same parameters must bump it, so that old logs are refused, not replayed over other
  * ground. */
-uint64_t terrain_generation_key(const terrain_generation_params *params);
+uint64_t terrain_generation_key(const terrain_generation_desc *params);
 
 typedef struct terrain_edit_log terrain_edit_log;
-terrain_edit_log *terrain_edit_log_create(uint64_t world_key);
+typedef struct terrain_edit_log_desc {
+    uint64_t world_key;               /* terrain_generation_key of the world the edits apply to
+                                         (required: 0 is a key like any other, so pass it) */
+} terrain_edit_log_desc;
+terrain_edit_log *terrain_edit_log_create(const terrain_edit_log_desc *desc);
 void terrain_edit_log_destroy(terrain_edit_log *log);
 
 /* Appends an entry for `coord`: the columns where `after` differs from `before` (nothing when
@@ -547,7 +551,7 @@ bool terrain_edit_log_parse(terrain_edit_log *log, const void *bytes, size_t siz
  * that changed in one transaction, so a crash at any moment (kill -9, power loss) leaves the
  * world as it was before the save or as it is after it, never some chunks of each.
  *
- *     terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
+ *     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
  *     terrain_store_report report;
  *     terrain_store *store = terrain_store_create(&(terrain_store_desc){
  *         .dir = "saves/world1", .edits = log, .seed = params.seed }, &report);
@@ -658,7 +662,10 @@ typedef struct terrain_world_change {
  * nothing is not one); returns how many (writes at most `capacity`; the rest stay for the next
  * call). The streamer remeshes the mesh chunks that read them. */
 int terrain_world_take_changes(terrain_world *world, terrain_world_change *out, int capacity);
-/* How many commits the chunk has had in this world (0 = as generated or replayed). */
+/* A version that changes with every commit of the chunk: the world's commit count at the
+ * chunk's last commit (0 = never committed in this world: as generated, or replayed from a log
+ * it was opened with). It survives the chunk's eviction and regeneration, so a cache keyed on it
+ * stays right. */
 uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord coord);
 
 /* ---- water planes (002 §3.4, 004 §4.3) ---------------------------------------------------

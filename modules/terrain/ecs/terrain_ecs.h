@@ -4,7 +4,7 @@
  * frame; water drawn over the frame. Built on data/, edit/ and render/; terrain/terrain.h
  * includes it.
  *
- *     terrain_ecs *te = terrain_ecs_create(ecs, world);
+ *     terrain_ecs *te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });
  *     terrain_ecs_stream(te, &(terrain_stream_desc){ .levels = 3 });
  *     each frame:
  *         terrain_ecs_set_viewers(te, &eye, 1);
@@ -68,14 +68,19 @@ typedef struct TerrainMeshChunk {
 } TerrainMeshChunk;
 
 typedef struct terrain_ecs terrain_ecs;
-typedef struct terrain_ecs_stats {
+typedef struct terrain_ecs_stats_info {
     int chunks, chunks_generated;
     int mesh_chunks, mesh_chunks_waiting, mesh_chunks_uploaded;
     uint64_t triangles;
-} terrain_ecs_stats;
+} terrain_ecs_stats_info;
 
-/* Registers the components and systems on `ecs`; `terrain` is not owned. */
-terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain);
+typedef struct terrain_ecs_desc {
+    ecs_world *ecs;                   /* required: the world the components and systems go on */
+    terrain_world *terrain;           /* required: the stacks they read and write (not owned) */
+} terrain_ecs_desc;
+/* Registers the components and systems on desc->ecs; NULL (message logged) without .ecs or
+ * .terrain. */
+terrain_ecs *terrain_ecs_create(const terrain_ecs_desc *desc);
 /* Destroys the mesh-chunk entities; TerrainMeshChunk's on_remove hook frees their meshes (GPU
  * ones too: call on the main thread, with the context), as it does for any other removal. */
 void terrain_ecs_destroy(terrain_ecs *te);
@@ -150,7 +155,7 @@ bool terrain_ecs_region_ready(terrain_ecs *te, const double min[3], const double
  * names it in its reads (stats, region checks) or writes (edits, viewers, the view). */
 ecs_component terrain_ecs_resource(const terrain_ecs *te);
 
-typedef struct terrain_stream_stats {
+typedef struct terrain_ecs_stream_stats_info {
     int mesh_chunks_wanted;           /* in the viewers' rings */
     int mesh_chunks_ready;            /* of those, drawn or empty */
     int mesh_chunks_kept;             /* out of range, kept while memory allows */
@@ -160,8 +165,8 @@ typedef struct terrain_stream_stats {
     size_t stacks_bytes;              /* of resident_bytes: the column chunks' stacks cached */
     size_t cpu_mesh_bytes;            /* meshes made and not uploaded yet */
     size_t gpu_mesh_bytes;            /* meshes uploaded (their vertex and index buffers) */
-} terrain_stream_stats;
-terrain_stream_stats terrain_ecs_stream_stats(terrain_ecs *te);
+} terrain_ecs_stream_stats_info;
+terrain_ecs_stream_stats_info terrain_ecs_stream_stats(terrain_ecs *te);
 /* Far terrain (after terrain_ecs_stream; the clipmap is not owned): the lod phase
  * ("terrain_clipmap") re-centres it on viewer 0 and sinks it under the squares every viewer's
  * rings cover (one hole each, duplicates dropped; terrain_clipmap_set_holes) once all their
@@ -175,7 +180,7 @@ void terrain_ecs_set_clipmap(terrain_ecs *te, terrain_clipmap *clipmap);
 void terrain_ecs_set_view(terrain_ecs *te, const terrain_view *view);
 /* Draws the uploaded chunks the cull phase found visible. */
 void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view);
-terrain_ecs_stats terrain_ecs_stats_get(terrain_ecs *te);
+terrain_ecs_stats_info terrain_ecs_stats(terrain_ecs *te);
 
 /* ---- editing in the ECS ----
  *
@@ -190,27 +195,27 @@ terrain_ecs_stats terrain_ecs_stats_get(terrain_ecs *te);
  * mesh chunk that reads a changed chunk is meshed again — streamed ones at once, as the frame's
  * own jobs, and uploaded whatever the upload budget — so a stroke is drawn in the frame its
  * edit is applied. Changes committed to the world by other code are remeshed the same way. */
-typedef struct terrain_edit_settings {
-    terrain_stabilize_params stabilize;   /* angles, step, tolerance; budget_ns per frame (0 with
+typedef struct terrain_editing_desc {
+    terrain_stabilize_desc stabilize;   /* angles, step, tolerance; budget_ns per frame (0 with
                                              max_iterations 0 = 2 ms); the edge is always WAKE */
     int max_regions;                      /* chunks stabilized at once; 0 = 256 (beyond, the
                                              border holds like a wall, with a warning) */
-} terrain_edit_settings;
+} terrain_editing_desc;
 
-typedef struct terrain_edit_stats {
+typedef struct terrain_ecs_edit_stats_info {
     int queued;                           /* edits waiting for the next stabilize phase */
     int stabilizing_chunks;               /* chunks not yet stable */
     uint64_t edits_applied, edits_refused;
     uint64_t iterations;                  /* of stabilization, in all */
     uint64_t chunks_committed;            /* by stabilization */
     double last_frame_ms;                 /* the stabilize phase's cost, the last frame it had work */
-} terrain_edit_stats;
+} terrain_ecs_edit_stats_info;
 
 /* Queues the edit (copied, sweep arrays too); false (message logged) for a tool that is not a
  * brush or a sweep without points. */
 bool terrain_ecs_edit(terrain_ecs *te, const terrain_edit *edit);
-void terrain_ecs_set_edit_settings(terrain_ecs *te, const terrain_edit_settings *settings);
-terrain_edit_stats terrain_ecs_edit_stats(terrain_ecs *te);
+void terrain_ecs_set_editing(terrain_ecs *te, const terrain_editing_desc *settings);
+terrain_ecs_edit_stats_info terrain_ecs_edit_stats(terrain_ecs *te);
 
 /* ---- drawing water (terrain_water.c; 002 §3.4, 004 §4.3) ----------------------------------
  *
@@ -224,7 +229,7 @@ terrain_edit_stats terrain_ecs_edit_stats(terrain_ecs *te);
  *         terrain_ecs_draw(te, renderer, &view);       // ground, far terrain, sky
  *         grass_draw(grass, &view);                    // everything opaque first
  *         terrain_water_draw(water, te, renderer, &view);
- *     terrain_water_destroy(water);                    // main thread, before gfx_destroy
+ *     terrain_water_destroy(water);                    // main thread, before gfx_context_destroy
  *
  * Low (the default: no extra scene pass, for llvmpipe): the opaque frame's colour and depth are
  * copied to textures, and each surface samples them. Refraction is the copy at a position
@@ -283,12 +288,12 @@ bool terrain_water_set_quality(terrain_water *water, terrain_water_quality quali
  * quality's meshes; NULL = the sea alone, its passes with the far terrain and sky only. */
 void terrain_water_draw(terrain_water *water, terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view);
 
-typedef struct terrain_water_stats {
+typedef struct terrain_water_stats_info {
     int planes_drawn;                 /* surfaces the last draw drew (the sea counts one) */
     bool under_water;                 /* the last draw's camera was below a surface */
     double cpu_ms;                    /* CPU ms of the last draw; on llvmpipe its GPU work too,
                                          and the frame's before it (the copy waits for it) */
-} terrain_water_stats;
-terrain_water_stats terrain_water_stats_get(const terrain_water *water);
+} terrain_water_stats_info;
+terrain_water_stats_info terrain_water_stats(const terrain_water *water);
 
 #endif

@@ -39,7 +39,7 @@
  *     terrain_deposit(region, &(terrain_deposit_desc){ .x = 32, .z = 32, .radius = 8,
  *                                                      .volume = 500 }, NULL);    // sand
  *     terrain_stabilize_result result;
- *     terrain_stabilize_region(region, &(terrain_stabilize_params){ .budget_ns = 2000000 },
+ *     terrain_stabilize_region(region, &(terrain_stabilize_desc){ .budget_ns = 2000000 },
  *                              jobs, &result);                   // again next frame until
  *                                                                // result.converged
  *     terrain_chunk_coord changed[4];
@@ -120,7 +120,7 @@ typedef enum terrain_stabilize_edge {
                                          again (at the world's end, call with WALL instead) */
 } terrain_stabilize_edge;
 
-typedef struct terrain_stabilize_params {
+typedef struct terrain_stabilize_desc {
     float sand_angle;                 /* degrees of repose, 0 < angle < 90; 0 = 33 (000: 30–35) */
     float rocks_angle;                /* 0 = 42 (000: 40–45) */
     float step;                       /* metres a column gives away per material and look at most
@@ -135,7 +135,7 @@ typedef struct terrain_stabilize_params {
                                          its edit log, budget in iterations: where a time budget
                                          stops depends on the machine */
     terrain_stabilize_edge edge;
-} terrain_stabilize_params;
+} terrain_stabilize_desc;
 
 #define TERRAIN_STABILIZE_MAX_WOKEN 32
 
@@ -152,14 +152,14 @@ typedef struct terrain_stabilize_result {
 
 /* Stabilizes the region (its border is the edge). jobs may be NULL (one thread); the result is
  * the same for any thread count. False (message logged, nothing changed) for bad parameters. */
-bool terrain_stabilize_region(terrain_columns *columns, const terrain_stabilize_params *params, job_system *jobs,
+bool terrain_stabilize_region(terrain_columns *columns, const terrain_stabilize_desc *params, job_system *jobs,
                               terrain_stabilize_result *result);
 /* Stabilizes regions side by side as one: material flows across their borders, and the outcome
  * equals that of a single region covering them all (same iterations, same bytes). The regions
  * must have one size and lie on the grid of that size (origins multiples of it apart), e.g. one
  * per chunk; the edge is where no region continues. False (message logged) for bad parameters,
  * unequal sizes, misaligned or repeated regions. */
-bool terrain_stabilize_regions(terrain_columns *const *regions, int count, const terrain_stabilize_params *params,
+bool terrain_stabilize_regions(terrain_columns *const *regions, int count, const terrain_stabilize_desc *params,
                                job_system *jobs, terrain_stabilize_result *result);
 
 /* ---- brushes (000 §4.3, §4.4) ---- */

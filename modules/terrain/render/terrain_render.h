@@ -179,7 +179,7 @@ typedef struct terrain_clipmap_desc {
                                          sinks (the pit's wall); 0 = 2·finest_spacing */
     float hole_depth;                 /* how deep it sinks (the pit's floor below the ground);
                                          0 = below the generator's caves (156 m by default) */
-    terrain_generation_params generation;  /* copied; the world whose ground is drawn */
+    terrain_generation_desc generation;  /* copied; the world whose ground is drawn */
     job_system *jobs;                 /* computes new heights in parallel; NULL = the caller */
     /* Detail from a screen-space error (data/terrain_data.h): with pixel_error > 0 the fields
      * left 0 among cells, finest_spacing and levels are derived from K = terrain_screen_error_scale(
@@ -195,7 +195,7 @@ typedef struct terrain_clipmap_desc {
                                          0 = none, the finest spacing is then 1 m */
 } terrain_clipmap_desc;
 
-typedef struct terrain_clipmap_stats {
+typedef struct terrain_clipmap_stats_info {
     int levels, cells;
     float finest_spacing;
     double reach;                     /* metres the outermost level reaches at least from the
@@ -205,7 +205,7 @@ typedef struct terrain_clipmap_stats {
     uint64_t triangles_visible;       /* in those blocks */
     int blocks_drawn;                 /* by the last draw */
     uint64_t triangles;               /* drawn by the last draw */
-} terrain_clipmap_stats;
+} terrain_clipmap_stats_info;
 
 /* CPU only (no GL): the heights are computed on the first update. NULL never (bad fields are
  * clamped to their range, with a warning). */
@@ -245,7 +245,7 @@ void terrain_clipmap_upload(terrain_clipmap *clipmap);
  * for the camera of the last update; the hole's sinking not included); NAN outside every level
  * or before the first update. */
 float terrain_clipmap_height(const terrain_clipmap *clipmap, double x, double z);
-terrain_clipmap_stats terrain_clipmap_stats_get(const terrain_clipmap *clipmap);
+terrain_clipmap_stats_info terrain_clipmap_stats(const terrain_clipmap *clipmap);
 
 /* terrain_renderer_draw draws the clipmap after the meshes and before the sky (NULL = none);
  * the clipmap is not owned and must outlive its use here. */
