@@ -473,7 +473,7 @@ static bool import_old_layout(terrain_store *s, terrain_store_report *r) {
         goto done;
     }
     if (!marker[0]) {
-        terrain_edit_log *staging = terrain_edit_log_create(terrain__edit_log_key(s->edits));
+        terrain_edit_log *staging = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain__edit_log_key(s->edits) });
         terrain_edit_log_load_result loaded;
         terrain_edit_log_load(staging, s->dir, &loaded);
         /* Every chunk read is clean in the staging log: written as "all", marked by the import. */
@@ -530,7 +530,7 @@ static bool desc_valid(const terrain_store_desc *desc, terrain_store_report *r) 
 /* Opens the database, setting a damaged one aside once; false with r->error. */
 static bool store_open(terrain_store *s, uint64_t seed, terrain_store_report *r) {
     for (int attempt = 0; attempt < 2; attempt++) {
-        opening o = { .store = s, .report = r, .staging = terrain_edit_log_create(terrain__edit_log_key(s->edits)) };
+        opening o = { .store = s, .report = r, .staging = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain__edit_log_key(s->edits) }) };
         open_outcome outcome = open_db(&o, seed);
         if (outcome == OPEN_OK) terrain__edit_log_take(s->edits, o.staging);
         terrain_edit_log_destroy(o.staging);

@@ -33,7 +33,7 @@ struct world_entry {
 
 struct terrain_world {
     pthread_mutex_t lock;
-    terrain_generation_params generation;
+    terrain_generation_desc generation;
     terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);
     void *generate_user;
     terrain_edit_log *edits;              /* replayed over generated chunks, or NULL */
@@ -320,7 +320,7 @@ bool terrain_world_has(terrain_world *world, terrain_chunk_coord coord) {
     return has;
 }
 
-const terrain_generation_params *terrain_world_generation(const terrain_world *world) { return &world->generation; }
+const terrain_generation_desc *terrain_world_generation(const terrain_world *world) { return &world->generation; }
 
 bool terrain__world_sea(const terrain_world *world, int32_t *sea_quanta) {
     double quanta = ((double)world->generation.sea_level - TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE;

@@ -115,7 +115,7 @@ Test(job_system, million_jobs_with_random_dependencies, .timeout = 240) {
     }
     cr_expect_eq(wrong_runs, 0, "%d jobs did not run exactly once", wrong_runs);
     cr_expect_eq(wrong_order, 0, "%d jobs ran before a dependency", wrong_order);
-    job_stats stats = job_system_stats(jobs);
+    job_system_stats_info stats = job_system_stats(jobs);
     cr_expect_eq(stats.submitted, (uint64_t)STRESS_JOBS);
     cr_expect_eq(stats.completed, (uint64_t)STRESS_JOBS);
     job_system_destroy(jobs);

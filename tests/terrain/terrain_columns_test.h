@@ -71,7 +71,7 @@ static inline uint64_t region_hash(const terrain_columns *c) {
     return h;
 }
 
-static inline terrain_stabilize_result stabilize(terrain_columns *c, const terrain_stabilize_params *params, job_system *jobs) {
+static inline terrain_stabilize_result stabilize(terrain_columns *c, const terrain_stabilize_desc *params, job_system *jobs) {
     terrain_stabilize_result result;
     cr_assert(terrain_stabilize_region(c, params, jobs, &result));
     return result;
@@ -79,7 +79,7 @@ static inline terrain_stabilize_result stabilize(terrain_columns *c, const terra
 
 static inline void load_generated(terrain_columns *c, uint64_t seed) {
     /* Generated chunks: bedrock, caves, sand on gentle slopes, water below the sea. */
-    terrain_generation_params params = terrain_generation_defaults(seed);
+    terrain_generation_desc params = terrain_generation_defaults(seed);
     terrain_columns_desc e = terrain_columns_extent(c);
     for (int64_t cz = e.z / TERRAIN_CHUNK_COLUMNS; cz < (e.z + e.depth) / TERRAIN_CHUNK_COLUMNS; cz++)
         for (int64_t cx = e.x / TERRAIN_CHUNK_COLUMNS; cx < (e.x + e.width) / TERRAIN_CHUNK_COLUMNS; cx++) {

@@ -48,11 +48,11 @@ Test(terrain_brush, random_deposits_and_erosions_conserve_every_material) {
         expect_same_mass(m, mass_of(c));
         if (n % 4 == 3) {
             /* In steps, with a budget of a few iterations: stopping anywhere conserves mass too. */
-            stabilize(c, &(terrain_stabilize_params){ .max_iterations = 3 }, NULL);
+            stabilize(c, &(terrain_stabilize_desc){ .max_iterations = 3 }, NULL);
             expect_same_mass(m, mass_of(c));
         }
     }
-    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_expect(r.converged);
     expect_same_mass(m, mass_of(c));
     terrain_columns_destroy(c);
@@ -142,7 +142,7 @@ Test(terrain_brush, collapse_erosion_drops_an_overhang_to_the_floor) {
     cr_assert(terrain_erode(c, &(terrain_erode_desc){ .mode = TERRAIN_ERODE_COLLAPSE, .x = 0.5, .y = TERRAIN_FLOOR_Y + 9,
                                                       .z = 0.5, .radius = 3, .rocks_ratio = 0.5f }, &q));
     cr_expect_eq(q, 64);
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     terrain_layer out[8];
     cr_assert_eq(terrain_columns_get(c, 0, 0, out, 8), 3);
     cr_expect_eq(out[0].material, TERRAIN_BEDROCK);
@@ -164,7 +164,7 @@ Test(terrain_brush, collapse_inside_rock_leaves_rubble_under_the_rock_above) {
     cr_assert(terrain_erode(c, &(terrain_erode_desc){ .mode = TERRAIN_ERODE_COLLAPSE, .x = 0.5, .y = TERRAIN_FLOOR_Y + 10,
                                                       .z = 0.5, .radius = 2 }, &q));
     cr_expect_eq(q, 4 * QPM);
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     terrain_layer out[8];
     cr_assert_eq(terrain_columns_get(c, 0, 0, out, 8), 3);
     cr_expect_eq(out[1].material, TERRAIN_SAND);

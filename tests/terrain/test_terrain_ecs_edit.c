@@ -36,7 +36,7 @@ static running running_open(void) {
     running r = { .jobs = job_system_create(&(job_system_desc){ .threads = 2 }) };
     r.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = r.jobs });
     r.world = terrain_world_create(&(terrain_world_desc){ .generate = flat_chunk });
-    r.te = terrain_ecs_create(r.ecs, r.world);
+    r.te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = r.ecs, .terrain = r.world });
     cr_assert(r.te);
     return r;
 }
@@ -80,7 +80,7 @@ Test(terrain_ecs_edit, edits_wait_in_the_queue_and_the_next_frame_applies_them) 
                                   .deposit = { .x = 16.5, .z = 16.5, .radius = 2, .volume = 10 } };
     cr_assert(terrain_ecs_edit(r.te, &stroke));
     cr_assert(terrain_ecs_edit(r.te, &stroke));
-    terrain_edit_stats st = terrain_ecs_edit_stats(r.te);
+    terrain_ecs_edit_stats_info st = terrain_ecs_edit_stats(r.te);
     cr_expect_eq(st.queued, 2);
     cr_expect_eq(st.edits_applied, 0);
     cr_expect_eq(sand_quanta(r.world, -1, 1), 0, "queued, not applied");
@@ -100,7 +100,7 @@ Test(terrain_ecs_edit, edits_wait_in_the_queue_and_the_next_frame_applies_them) 
  * (≈ 2400 quanta) lies in one of the four chunks, far more than the 1000 asked for below. */
 Test(terrain_ecs_edit, a_pile_on_a_chunk_corner_spreads_into_four_chunks_and_keeps_its_mass) {
     running r = running_open();
-    terrain_ecs_set_edit_settings(r.te, &(terrain_edit_settings){ .stabilize = { .max_iterations = 8 } });
+    terrain_ecs_set_editing(r.te, &(terrain_editing_desc){ .stabilize = { .max_iterations = 8 } });
     cr_assert(terrain_ecs_edit(r.te, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
                                                       .deposit = { .x = 0.5, .z = 0.5, .radius = 2, .volume = 300 } }));
     int frames = 0;
@@ -110,7 +110,7 @@ Test(terrain_ecs_edit, a_pile_on_a_chunk_corner_spreads_into_four_chunks_and_kee
         if (terrain_ecs_edit_stats(r.te).stabilizing_chunks == 0 && frames > 0) break;
     }
     cr_assert_lt(frames, 3000, "never stable");
-    terrain_edit_stats st = terrain_ecs_edit_stats(r.te);
+    terrain_ecs_edit_stats_info st = terrain_ecs_edit_stats(r.te);
     cr_expect_eq(st.edits_applied, 1);
     cr_expect_gt(st.iterations, 8, "took several frames of 8 iterations");
     cr_expect_geq(st.chunks_committed, 4);
@@ -133,7 +133,7 @@ Test(terrain_ecs_edit, what_is_not_a_brush_is_refused_and_nothing_is_queued) {
     cr_expect_not(terrain_ecs_edit(r.te, &(terrain_edit){ .tool = TERRAIN_EDIT_STABILIZE }));
     cr_expect_not(terrain_ecs_edit(r.te, &(terrain_edit){ .tool = TERRAIN_EDIT_SWEEP, .sweep = { .radius = 2 } }));
     core_log_set_level(level);
-    terrain_edit_stats st = terrain_ecs_edit_stats(r.te);
+    terrain_ecs_edit_stats_info st = terrain_ecs_edit_stats(r.te);
     cr_expect_eq(st.edits_refused, 4);
     cr_expect_eq(st.queued, 0);
     ecs_progress(r.ecs, DT);

@@ -88,7 +88,7 @@ Test(terrain_stabilize, runs_between_bedrock_are_merged_and_sorted_sand_rocks_ai
                            { TERRAIN_SAND, 0.5f } };
     cr_assert(terrain_columns_set(c, 0, 0, in, 9));
     masses before = mass_of(c);
-    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_expect(r.converged);
     cr_expect_eq(r.moved, 0);
     terrain_layer out[16];
@@ -109,7 +109,7 @@ Test(terrain_stabilize, sand_over_a_cave_roof_stays_and_sand_without_a_roof_fall
     terrain_columns *c = region(0, 0, 1, 1);
     terrain_layer roof[] = { { TERRAIN_BEDROCK, 2 }, { TERRAIN_AIR, 3 }, { TERRAIN_BEDROCK, 1 }, { TERRAIN_SAND, 1 } };
     cr_assert(terrain_columns_set(c, 0, 0, roof, 4));
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     terrain_layer out[8];
     cr_assert_eq(terrain_columns_get(c, 0, 0, out, 8), 4);
     cr_expect_eq(out[3].material, TERRAIN_SAND);
@@ -117,7 +117,7 @@ Test(terrain_stabilize, sand_over_a_cave_roof_stays_and_sand_without_a_roof_fall
 
     terrain_layer floating[] = { { TERRAIN_BEDROCK, 2 }, { TERRAIN_AIR, 3 }, { TERRAIN_SAND, 1 } };
     cr_assert(terrain_columns_set(c, 0, 0, floating, 3));
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_assert_eq(terrain_columns_get(c, 0, 0, out, 8), 2);
     cr_expect_eq(out[1].material, TERRAIN_SAND);
     cr_expect_eq(out[1].thickness, 1.0f);
@@ -133,7 +133,7 @@ Test(terrain_stabilize, custom_materials_hold_like_bedrock) {
     terrain_layer in[] = { { TERRAIN_BEDROCK, 1 }, { TERRAIN_AIR, 1 }, { TERRAIN_SAND, 1 }, { custom, 1 },
                            { TERRAIN_ROCKS, 1 },   { TERRAIN_SAND, 1 } };
     cr_assert(terrain_columns_set(c, 0, 0, in, 6));
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     terrain_layer out[8];
     const terrain_material want[] = { TERRAIN_BEDROCK, TERRAIN_SAND, TERRAIN_AIR, custom, TERRAIN_SAND, TERRAIN_ROCKS };
     cr_assert_eq(terrain_columns_get(c, 0, 0, out, 8), 6);
@@ -155,7 +155,7 @@ static void one_step_case(float step, const int64_t want_side[4], const int64_t 
     fill_flat(c, 10.0f);
     set_pile(c, 1, 1, 10.0f, 2.0f, 0.0f);
     masses before = mass_of(c);
-    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_params){ .step = step, .max_iterations = 1 }, NULL);
+    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_desc){ .step = step, .max_iterations = 1 }, NULL);
     cr_expect_eq(r.iterations, 1);
     const int side[4][2] = { { 1, 0 }, { 0, 1 }, { 2, 1 }, { 1, 2 } }, corner[4][2] = { { 0, 0 }, { 2, 0 }, { 0, 2 }, { 2, 2 } };
     int64_t given = 0;
@@ -200,7 +200,7 @@ Test(terrain_stabilize, tall_sand_column_spreads_to_the_angle_of_repose) {
     fill_flat(c, 100.0f);
     set_pile(c, 20, 20, 100.0f, 20.0f, 0.0f);
     masses before = mass_of(c);
-    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_expect(r.converged);
     expect_same_mass(before, mass_of(c));
     cr_expect_leq(worst_excess(c, 33.0, 42.0), 0.0);
@@ -211,7 +211,7 @@ Test(terrain_stabilize, tall_sand_column_spreads_to_the_angle_of_repose) {
             if ((i - 20) * (i - 20) + (k - 20) * (k - 20) > 8 * 8)
                 cr_expect_eq(column_quanta(c, i, k, TERRAIN_SAND), 0, "sand at (%d, %d)", i, k);
     /* Converged means stable: another call finds nothing to do. */
-    terrain_stabilize_result again = stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result again = stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_expect(again.converged);
     cr_expect_eq(again.moved, 0);
     terrain_columns_destroy(c);
@@ -223,7 +223,7 @@ Test(terrain_stabilize, tolerance_and_angles_bound_the_slopes_at_rest) {
     set_pile(c, 15, 15, 50.0f, 6.0f, 6.0f);
     set_pile(c, 10, 12, 50.0f, 0.0f, 9.0f);
     masses before = mass_of(c);
-    terrain_stabilize_params p = { .sand_angle = 30.0f, .rocks_angle = 45.0f, .tolerance = 0.25f };
+    terrain_stabilize_desc p = { .sand_angle = 30.0f, .rocks_angle = 45.0f, .tolerance = 0.25f };
     cr_expect(stabilize(c, &p, NULL).converged);
     expect_same_mass(before, mass_of(c));
     cr_expect_leq(worst_excess(c, 30.0, 45.0), 0.25);
@@ -238,8 +238,8 @@ Test(terrain_stabilize, rocks_rest_steeper_than_sand) {
     fill_flat(rocks, 10.0f);
     set_pile(sand, 15, 15, 10.0f, 16.0f, 0.0f);
     set_pile(rocks, 15, 15, 10.0f, 0.0f, 16.0f);
-    stabilize(sand, &(terrain_stabilize_params){ 0 }, NULL);
-    stabilize(rocks, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(sand, &(terrain_stabilize_desc){ 0 }, NULL);
+    stabilize(rocks, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_expect_gt(terrain_columns_top(rocks, 15, 15), terrain_columns_top(sand, 15, 15));
     cr_expect_leq(worst_excess(sand, 33.0, 42.0), 0.0);
     cr_expect_leq(worst_excess(rocks, 33.0, 42.0), 0.0);
@@ -268,9 +268,9 @@ Test(terrain_stabilize, result_is_the_same_for_one_two_and_four_threads) {
     terrain_columns *one = edited_region(0, 0, 128), *two = edited_region(0, 0, 128), *four = edited_region(0, 0, 128);
     job_system *jobs2 = job_system_create(&(job_system_desc){ .threads = 2 });
     job_system *jobs4 = job_system_create(&(job_system_desc){ .threads = 4 });
-    terrain_stabilize_result r1 = stabilize(one, &(terrain_stabilize_params){ 0 }, NULL);
-    terrain_stabilize_result r2 = stabilize(two, &(terrain_stabilize_params){ 0 }, jobs2);
-    terrain_stabilize_result r4 = stabilize(four, &(terrain_stabilize_params){ 0 }, jobs4);
+    terrain_stabilize_result r1 = stabilize(one, &(terrain_stabilize_desc){ 0 }, NULL);
+    terrain_stabilize_result r2 = stabilize(two, &(terrain_stabilize_desc){ 0 }, jobs2);
+    terrain_stabilize_result r4 = stabilize(four, &(terrain_stabilize_desc){ 0 }, jobs4);
     cr_expect(r1.converged && r2.converged && r4.converged);
     cr_expect_gt(r1.moved, 0);
     cr_expect_eq(r1.iterations, r2.iterations);
@@ -288,13 +288,13 @@ Test(terrain_stabilize, result_is_the_same_for_one_two_and_four_threads) {
 
 Test(terrain_stabilize, stopping_on_a_budget_and_continuing_gives_the_same_bytes) {
     terrain_columns *whole = edited_region(0, 0, 64), *steps = edited_region(0, 0, 64);
-    terrain_stabilize_result r = stabilize(whole, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result r = stabilize(whole, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_assert(r.converged);
     int calls = 0, iterations = 0;
     int64_t moved = 0;
     terrain_stabilize_result s;
     do {
-        s = stabilize(steps, &(terrain_stabilize_params){ .max_iterations = 7 }, NULL);
+        s = stabilize(steps, &(terrain_stabilize_desc){ .max_iterations = 7 }, NULL);
         iterations += s.iterations;
         moved += s.moved;
         calls++;
@@ -306,7 +306,7 @@ Test(terrain_stabilize, stopping_on_a_budget_and_continuing_gives_the_same_bytes
     terrain_columns *timed = edited_region(0, 0, 64);
     calls = 0;
     do {
-        s = stabilize(timed, &(terrain_stabilize_params){ .budget_ns = 200000 }, NULL);
+        s = stabilize(timed, &(terrain_stabilize_desc){ .budget_ns = 200000 }, NULL);
         calls++;
     } while (!s.converged && calls < 100000);
     cr_expect_eq(region_hash(whole), region_hash(timed));
@@ -348,9 +348,9 @@ Test(terrain_stabilize, two_by_two_chunk_regions_equal_one_big_region) {
         terrain_columns_touch(chunks[n], 0, 0, N, N);
     }
     terrain_columns_touch(big, 0, 0, 64, 64);
-    terrain_stabilize_result rb = stabilize(big, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result rb = stabilize(big, &(terrain_stabilize_desc){ 0 }, NULL);
     terrain_stabilize_result rs;
-    cr_assert(terrain_stabilize_regions(chunks, 4, &(terrain_stabilize_params){ 0 }, NULL, &rs));
+    cr_assert(terrain_stabilize_regions(chunks, 4, &(terrain_stabilize_desc){ 0 }, NULL, &rs));
     cr_expect(rb.converged && rs.converged);
     cr_expect_gt(rb.moved, 0);
     cr_expect_eq(rb.iterations, rs.iterations);
@@ -382,7 +382,7 @@ Test(terrain_stabilize, a_pile_wakes_the_chunks_it_spreads_into) {
     }
     terrain_deposit_desc pile = { .x = 60, .z = 58, .radius = 3, .volume = 1500 };
     cr_assert(terrain_deposit(big, &pile, NULL));
-    terrain_stabilize_result rb = stabilize(big, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result rb = stabilize(big, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_assert(rb.converged);
 
     terrain_columns *set[9];
@@ -392,7 +392,7 @@ Test(terrain_stabilize, a_pile_wakes_the_chunks_it_spreads_into) {
     terrain_columns_load(set[count++], (terrain_chunk_coord){ 1, 1 }, s);
     terrain_stacks_destroy(s);
     cr_assert(terrain_deposit(set[0], &pile, NULL));
-    terrain_stabilize_params wake = { .edge = TERRAIN_EDGE_WAKE };
+    terrain_stabilize_desc wake = { .edge = TERRAIN_EDGE_WAKE };
     terrain_stabilize_result r;
     int calls = 0, woken = 0;
     do {
@@ -432,7 +432,7 @@ Test(terrain_stabilize, walls_report_the_regions_material_reaches) {
     terrain_columns *c = region(N, 0, N, N);
     fill_flat(c, 10.0f);
     cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .x = 2 * N - 1, .z = 16, .radius = 2, .volume = 300 }, NULL));
-    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_expect(r.converged);
     bool east = false;
     for (int w = 0; w < r.woken_count && w < TERRAIN_STABILIZE_MAX_WOKEN; w++)
@@ -444,7 +444,7 @@ Test(terrain_stabilize, walls_report_the_regions_material_reaches) {
 /* ---- stacks round trip and changed chunks ----------------------------------------------------- */
 
 Test(terrain_stabilize, stacks_round_trip_byte_for_byte) {
-    terrain_generation_params params = terrain_generation_defaults(11);
+    terrain_generation_desc params = terrain_generation_defaults(11);
     terrain_columns *c = region(-48, 16, 96, 64);            /* chunks (−2 … 1, 0 … 2), partly covered */
     for (int cz = 0; cz < 3; cz++)
         for (int cx = -2; cx < 2; cx++) {
@@ -492,7 +492,7 @@ Test(terrain_stabilize, unsorted_columns_round_trip_until_stabilized) {
     cr_expect_eq(memcmp(back, original, terrain_stacks_bytes(original)), 0);
     terrain_stacks_destroy(back);
     masses before = mass_of(c);
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     expect_same_mass(before, mass_of(c));
     cr_expect_eq(terrain_columns_changed_chunks(c, changed, 4, true), 1, "sorting changed the chunk");
     cr_expect_eq(terrain_columns_changed_chunks(c, changed, 4, false), 0, "cleared");
@@ -508,7 +508,7 @@ Test(terrain_stabilize, changed_chunks_name_the_edited_and_the_reached_chunks) {
     cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .x = 34, .z = 16, .radius = 1.5f, .volume = 200 }, NULL));
     cr_assert_eq(terrain_columns_changed_chunks(c, changed, 8, false), 1);
     cr_expect(changed[0].x == 1 && changed[0].z == 0);
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     /* 200 m³ at 33° spread over a radius of about 6.6 m: across x = 32 into chunk 0, not to 64. */
     cr_assert_eq(terrain_columns_changed_chunks(c, changed, 8, true), 2);
     cr_expect(changed[0].x == 0 && changed[1].x == 1);
@@ -527,22 +527,22 @@ Test(terrain_stabilize, bad_parameters_are_refused_not_crashed_on) {
     fill_flat(c, 5.0f);
     uint64_t before = region_hash(c);
     terrain_stabilize_result r;
-    const terrain_stabilize_params bad[] = {
+    const terrain_stabilize_desc bad[] = {
         { .sand_angle = -5 }, { .sand_angle = 90 }, { .rocks_angle = NAN }, { .step = -1 }, { .step = NAN },
         { .step = 1e9f },     { .tolerance = -1 },  { .tolerance = NAN },  { .max_iterations = -2 }, { .edge = 7 },
     };
     for (size_t n = 0; n < sizeof bad / sizeof *bad; n++)
         cr_expect_not(terrain_stabilize_region(c, &bad[n], NULL, &r), "parameters %zu", n);
     cr_expect_not(terrain_stabilize_region(c, NULL, NULL, &r));
-    cr_expect_not(terrain_stabilize_regions(NULL, 1, &(terrain_stabilize_params){ 0 }, NULL, &r));
-    cr_expect_not(terrain_stabilize_regions(&c, 0, &(terrain_stabilize_params){ 0 }, NULL, &r));
+    cr_expect_not(terrain_stabilize_regions(NULL, 1, &(terrain_stabilize_desc){ 0 }, NULL, &r));
+    cr_expect_not(terrain_stabilize_regions(&c, 0, &(terrain_stabilize_desc){ 0 }, NULL, &r));
     terrain_columns *pair[2] = { c, c };
-    cr_expect_not(terrain_stabilize_regions(pair, 2, &(terrain_stabilize_params){ 0 }, NULL, &r), "twice at one place");
+    cr_expect_not(terrain_stabilize_regions(pair, 2, &(terrain_stabilize_desc){ 0 }, NULL, &r), "twice at one place");
     terrain_columns *odd = region(3, 0, 8, 8), *small = region(8, 0, 4, 4);
     pair[1] = odd;
-    cr_expect_not(terrain_stabilize_regions(pair, 2, &(terrain_stabilize_params){ 0 }, NULL, &r), "off the grid");
+    cr_expect_not(terrain_stabilize_regions(pair, 2, &(terrain_stabilize_desc){ 0 }, NULL, &r), "off the grid");
     pair[1] = small;
-    cr_expect_not(terrain_stabilize_regions(pair, 2, &(terrain_stabilize_params){ 0 }, NULL, &r), "sizes differ");
+    cr_expect_not(terrain_stabilize_regions(pair, 2, &(terrain_stabilize_desc){ 0 }, NULL, &r), "sizes differ");
     terrain_layer bad_layer = { TERRAIN_SAND, -1.0f }, nan_layer = { TERRAIN_SAND, NAN }, odd_material = { 42, 1.0f };
     cr_expect_not(terrain_columns_set(c, 0, 0, &bad_layer, 1));
     cr_expect_not(terrain_columns_set(c, 0, 0, &nan_layer, 1));

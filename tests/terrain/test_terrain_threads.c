@@ -39,7 +39,7 @@ static void fetch_range(void *user, size_t begin, size_t end) {
 }
 
 Test(terrain_threads, shared_world_gives_the_bytes_of_a_lone_thread) {
-    terrain_generation_params params = terrain_generation_defaults(11);
+    terrain_generation_desc params = terrain_generation_defaults(11);
     terrain_world *lone = terrain_world_create(&(terrain_world_desc){ .generation = params });
     terrain_world *shared = terrain_world_create(&(terrain_world_desc){ .generation = params });
     world_job expected = { .world = lone }, got = { .world = shared };
@@ -157,8 +157,8 @@ Test(terrain_threads, stabilization_on_four_threads_gives_the_bytes_of_one) {
     int64_t sand = terrain_columns_mass(lone, TERRAIN_SAND), rocks = terrain_columns_mass(lone, TERRAIN_ROCKS);
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 4 });
     terrain_stabilize_result a, b;
-    cr_assert(terrain_stabilize_region(lone, &(terrain_stabilize_params){ 0 }, NULL, &a));
-    cr_assert(terrain_stabilize_region(shared, &(terrain_stabilize_params){ 0 }, jobs, &b));
+    cr_assert(terrain_stabilize_region(lone, &(terrain_stabilize_desc){ 0 }, NULL, &a));
+    cr_assert(terrain_stabilize_region(shared, &(terrain_stabilize_desc){ 0 }, jobs, &b));
     cr_expect(a.converged && b.converged);
     cr_expect_gt(a.moved, 0);
     cr_expect_eq(a.moved, b.moved);
@@ -177,8 +177,8 @@ Test(terrain_threads, regions_side_by_side_on_four_threads_give_the_bytes_of_one
     for (int n = 0; n < 4; n++) parts[n] = bumpy_part(n % 2 * HALF, n / 2 * HALF, HALF);
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 4 });
     terrain_stabilize_result a, b;
-    cr_assert(terrain_stabilize_region(whole, &(terrain_stabilize_params){ 0 }, NULL, &a));
-    cr_assert(terrain_stabilize_regions(parts, 4, &(terrain_stabilize_params){ 0 }, jobs, &b));
+    cr_assert(terrain_stabilize_region(whole, &(terrain_stabilize_desc){ 0 }, NULL, &a));
+    cr_assert(terrain_stabilize_regions(parts, 4, &(terrain_stabilize_desc){ 0 }, jobs, &b));
     cr_expect(a.converged && b.converged);
     cr_expect_eq(a.moved, b.moved);
     for (int n = 0; n < 4; n++)
@@ -210,7 +210,7 @@ Test(terrain_threads, stabilize_batches_carry_their_columns) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 4 });
     cr_assert(trace_start(path));
     terrain_stabilize_result result;
-    cr_assert(terrain_stabilize_region(region, &(terrain_stabilize_params){ 0 }, jobs, &result));
+    cr_assert(terrain_stabilize_region(region, &(terrain_stabilize_desc){ 0 }, jobs, &result));
     trace_stop();
     job_system_destroy(jobs);
     terrain_columns_destroy(region);
@@ -321,7 +321,7 @@ static void record_loop(log_share *s) {
 /* State A saved by a log of its own; the file's bytes (free with free). */
 static void *file_of(const terrain_stacks *generated, const terrain_stacks *a, terrain_chunk_coord coord,
                      uint64_t key, size_t *size) {
-    terrain_edit_log *log = terrain_edit_log_create(key);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key });
     cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, generated, a));
     char dir[64], path[160], error[256];
     snprintf(dir, sizeof dir, "/tmp/terrain_threads_log_XXXXXX");
@@ -345,7 +345,7 @@ static void *file_of(const terrain_stacks *generated, const terrain_stacks *a, t
 }
 
 Test(terrain_threads, edit_log_replays_on_four_threads_while_one_records) {
-    terrain_generation_params params = terrain_generation_defaults(17);
+    terrain_generation_desc params = terrain_generation_defaults(17);
     terrain_chunk_coord coord = { 1, -2 };
     terrain_stacks *generated = terrain_generate_chunk(&params, coord);
     terrain_columns *region = terrain_columns_create(&(terrain_columns_desc){
@@ -359,7 +359,7 @@ Test(terrain_threads, edit_log_replays_on_four_threads_while_one_records) {
     terrain_columns_destroy(region);
 
     uint64_t key = terrain_generation_key(&params);
-    log_share share = { .log = terrain_edit_log_create(key), .coord = coord, .generated = generated,
+    log_share share = { .log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key }), .coord = coord, .generated = generated,
                         .state = { a, b } };
     share.file_a = file_of(generated, a, coord, key, &share.file_a_size);
     cr_assert(terrain_edit_log_record(share.log, coord, TERRAIN_EDIT_SET, generated, a));
@@ -410,7 +410,7 @@ static void *commit_reader(void *user) {
 }
 
 Test(terrain_threads, workers_read_while_the_main_thread_commits_and_trims) {
-    terrain_edit_log *log = terrain_edit_log_create(1);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = 1 });
     commit_share s = { .world = terrain_world_create(&(terrain_world_desc){
                            .generation = terrain_generation_defaults(11), .edits = log, .max_chunks = 4 }) };
     pthread_t readers[3];
@@ -457,8 +457,8 @@ Test(terrain_threads, the_store_saves_in_the_background_while_the_main_thread_ed
     char dir[64];
     snprintf(dir, sizeof dir, "/tmp/terrain_threads_store_XXXXXX");
     cr_assert(mkdtemp(dir));
-    terrain_generation_params params = terrain_generation_defaults(11);
-    terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
+    terrain_generation_desc params = terrain_generation_defaults(11);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
     terrain_store_report report;
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = 11 }, &report);
     cr_assert(store, "%s", report.error);
@@ -487,7 +487,7 @@ Test(terrain_threads, the_store_saves_in_the_background_while_the_main_thread_ed
     terrain_world_destroy(world);
     terrain_store_destroy(store);
 
-    terrain_edit_log *again = terrain_edit_log_create(terrain_generation_key(&params));
+    terrain_edit_log *again = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
     store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = again }, &report);
     cr_assert(store, "%s", report.error);
     world = terrain_world_create(&(terrain_world_desc){ .generation = params, .edits = again });

@@ -142,7 +142,7 @@ Test(terrain_world_edit, without_a_log_an_edited_chunk_is_never_evicted) {
 }
 
 Test(terrain_world_edit, with_a_log_an_evicted_chunk_comes_back_byte_for_byte) {
-    terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&(terrain_generation_params){ 0 }));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&(terrain_generation_desc){ 0 }) });
     terrain_world *w = flat_world(log);
     terrain_world_set_max_chunks(w, 1);
     /* Two strokes on chunk (0, 0): a deposit and an erosion through it. */

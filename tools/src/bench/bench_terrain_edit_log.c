@@ -63,14 +63,14 @@ static terrain_stacks *edit_chunk(const terrain_stacks *from, terrain_chunk_coor
 }
 
 static void bench_setup(edit_log_bench *b) {
-    terrain_generation_params params = terrain_generation_defaults(42);
+    terrain_generation_desc params = terrain_generation_defaults(42);
     b->key = terrain_generation_key(&params);
     for (int n = 0; n < SAVE_CHUNKS; n++) {
         b->coord[n] = (terrain_chunk_coord){ n % SAVE_SIDE, n / SAVE_SIDE };
         b->generated[n] = terrain_generate_chunk(&params, b->coord[n]);
         b->edited[n] = edit_chunk(b->generated[n], b->coord[n], (uint64_t)n);
     }
-    b->replay_log = terrain_edit_log_create(b->key);
+    b->replay_log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
     b->steps[0] = b->generated[0];
     for (int e = 1; e <= REPLAY_ENTRIES; e++) {
         b->steps[e] = edit_chunk(b->steps[e - 1], b->coord[0], 1000u + (uint64_t)e);
@@ -109,7 +109,7 @@ static void bench_teardown(edit_log_bench *b) {
 }
 
 static terrain_edit_log *recorded_log(const edit_log_bench *b) {
-    terrain_edit_log *log = terrain_edit_log_create(b->key);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
     for (int n = 0; n < SAVE_CHUNKS; n++)
         terrain_edit_log_record(log, b->coord[n], TERRAIN_EDIT_SET, b->generated[n], b->edited[n]);
     return log;
@@ -128,7 +128,7 @@ static double sample_save_files(void *user) {
 
 static void open_store(edit_log_bench *b) {
     if (b->store) return;
-    b->store_log = terrain_edit_log_create(b->key);
+    b->store_log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
     terrain_store_report report;
     b->store = terrain_store_create(&(terrain_store_desc){ .dir = b->store_dir, .edits = b->store_log, .seed = 42 },
                                     &report);
@@ -167,7 +167,7 @@ static double sample_save_frame(void *user) {
 
 static double sample_load(void *user) {
     edit_log_bench *b = user;
-    terrain_edit_log *log = terrain_edit_log_create(b->key);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
     terrain_store_report report;
     uint64_t start = core_time_ns();
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = b->store_dir, .edits = log }, &report);
@@ -181,7 +181,7 @@ static double sample_load(void *user) {
 
 static double sample_load_files(void *user) {
     edit_log_bench *b = user;
-    terrain_edit_log *log = terrain_edit_log_create(b->key);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
     terrain_edit_log_load_result result;
     uint64_t start = core_time_ns();
     bool ok = terrain_edit_log_load(log, b->files_dir, &result);
