@@ -763,8 +763,11 @@ typedef struct terrain_stream_desc {
     int viewport_height;              /* pixels, for pixel_error; 0 = 720. The window's size
                                          changes: terrain_ecs_stream_set_screen */
     float fov_y;                      /* radians, for pixel_error; 0 = 60° */
-    double y_min, y_max;              /* metres the mesh layers cover; equal = the generation
-                                         parameters' relief ± 48 m (base ± relief ± 48) */
+    double y_min, y_max;              /* metres the mesh layers cover at first; equal = the
+                                         generation parameters' relief ± 48 m (base ± relief ±
+                                         48). The layers grow, never shrink, to reach every
+                                         interface of the column chunks generated or edited, so
+                                         no peak or tower is cut off */
     int collision_radius;             /* column chunks each way kept generated; 0 = 2 */
     float upload_budget_ms;           /* main-thread GPU uploads and frees a frame; 0 = 2 ms */
     size_t memory_budget;             /* bytes of stacks and meshes kept (CPU + GPU); 0 = 384 MB */
@@ -1271,6 +1274,8 @@ terrain_store *terrain_store_create(const terrain_store_desc *desc, terrain_stor
 void terrain_store_destroy(terrain_store *store);
 
 /* Everything changed since the last save, in one transaction; waits for a save in flight first.
+ * Each changed chunk's entries are folded into one first (terrain_edit_log_compact), so a
+ * folder's size follows the columns edited, not the frames played.
  * False with "DIR/world.db: reason" in `error` (nothing of this save is kept; retried next time). */
 bool terrain_store_save(terrain_store *store, char *error, size_t error_size);
 /* A snapshot of what changed, committed on the store's thread; returns at once. False when the
@@ -1352,7 +1357,10 @@ typedef struct terrain_world_change {
  * nothing is not one); returns how many (writes at most `capacity`; the rest stay for the next
  * call). The streamer remeshes the mesh chunks that read them. */
 int terrain_world_take_changes(terrain_world *world, terrain_world_change *out, int capacity);
-/* How many commits the chunk has had in this world (0 = as generated or replayed). */
+/* A version that changes with every commit of the chunk: the world's commit count at the
+ * chunk's last commit (0 = never committed in this world: as generated, or replayed from a log
+ * it was opened with). It survives the chunk's eviction and regeneration, so a cache keyed on it
+ * stays right. */
 uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord coord);
 
 /* ---- editing in the ECS ----

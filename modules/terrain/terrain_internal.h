@@ -633,5 +633,9 @@ void terrain__material_texels_free(terrain__material_texels *texels);
 
 /* Passes a sampled field through terrain_world_desc.amplify, if the world has one. */
 void terrain__world_amplify(terrain_world *world, terrain_field *field);
+/* For tests of the chunk cache's races: `fn` runs on the generating thread after a chunk was
+ * generated and replayed, before it is inserted (set before any thread uses the world). */
+void terrain__world_on_generated(terrain_world *world, void (*fn)(void *user, terrain_chunk_coord coord),
+                                  void *user);
 
 #endif

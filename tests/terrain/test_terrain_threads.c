@@ -6,6 +6,7 @@
 
 #include "jobs/jobs.h"
 #include "terrain/terrain.h"
+#include "terrain/terrain_internal.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -427,6 +428,117 @@ Test(terrain_threads, workers_read_while_the_main_thread_commits_and_trims) {
     for (int t = 0; t < 3; t++) pthread_join(readers[t], NULL);
     cr_expect_gt(atomic_load(&s.reads), 0);
     cr_expect_eq(terrain_edit_log_entries(log, (terrain_chunk_coord){ 0, 0 }), 40, "every stroke logged");
+    terrain_world_destroy(s.world);
+    terrain_edit_log_destroy(log);
+}
+
+/* ---- generation, commits and eviction interleaved (terrain_world's chunk cache) ----
+ * Readers keep asking for three chunks of a world that caches one, so the chunk the main thread
+ * edits is evicted and regenerated (from the log) over and over, often by a reader while the
+ * main thread commits. Whatever the interleaving, each cached chunk must equal the log's replay
+ * over the generated ground, and the edited chunk's version is the stamp of the last commit. */
+
+static void churn_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
+    (void)user, (void)x, (void)z;
+    terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, -TERRAIN_FLOOR_Y);
+}
+
+static terrain_stacks *churn_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, churn_column, user);
+}
+
+static void *churn_reader(void *user) {
+    commit_share *s = user;
+    for (long round = 0; !atomic_load(&s->stop); round++) {
+        uint64_t token = terrain_world_read_begin(s->world);
+        for (int n = 0; n < 3; n++)
+            (void)terrain_stacks_hash(terrain_world_stacks(s->world, (terrain_chunk_coord){ (round + n) % 3, 0 }));
+        terrain_world_read_end(s->world, token);
+        atomic_fetch_add(&s->reads, 1);
+    }
+    return NULL;
+}
+
+Test(terrain_threads, chunks_regenerated_while_committed_and_evicted_match_the_log) {
+    enum { STROKES = 200 };
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = 7 });
+    terrain_world_desc desc = { .generation = terrain_generation_defaults(7), .generate = churn_chunk,
+                                .edits = log, .max_chunks = 1 };
+    commit_share s = { .world = terrain_world_create(&desc) };
+    pthread_t readers[3];
+    for (int t = 0; t < 3; t++) pthread_create(&readers[t], NULL, churn_reader, &s);
+    for (int stroke = 0; stroke < STROKES; stroke++) {
+        /* Inside chunk (0, 0) only: x and z stay 4 m from its borders. */
+        terrain_world_edit(s.world, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                     .deposit = { .x = 4 + stroke % 24, .z = 4 + (stroke * 7) % 24,
+                                                                  .radius = 2, .volume = 1 } }, NULL, 0);
+        terrain_world_change changes[8];
+        terrain_world_take_changes(s.world, changes, 8);
+        terrain_world_trim(s.world);
+    }
+    atomic_store(&s.stop, true);
+    for (int t = 0; t < 3; t++) pthread_join(readers[t], NULL);
+    cr_expect_gt(atomic_load(&s.reads), 0);
+    /* One commit a stroke, all to chunk (0, 0): its version is the last one's stamp. */
+    cr_expect_eq(terrain_edit_log_entries(log, (terrain_chunk_coord){ 0, 0 }), STROKES);
+    cr_expect_eq(terrain_world_chunk_version(s.world, (terrain_chunk_coord){ 0, 0 }), STROKES);
+    terrain_world *fresh = terrain_world_create(&desc);
+    for (int x = 0; x < 3; x++) {
+        terrain_chunk_coord c = { x, 0 };
+        cr_expect(same_stacks(terrain_world_stacks(s.world, c), terrain_world_stacks(fresh, c)),
+                  "chunk (%d, 0) equals the log's replay", x);
+    }
+    terrain_world_destroy(fresh);
+    terrain_world_destroy(s.world);
+    terrain_edit_log_destroy(log);
+}
+
+/* The interleaving itself, forced: a reader has generated chunk (0, 0) from the log as it was,
+ * and before it inserts its copy the main thread commits a stroke there and evicts the chunk.
+ * The reader's copy lacks the stroke: it must not be the one cached. */
+typedef struct late_insert {
+    _Atomic int state;                 /* 0 reader generating, 1 reader waits, 2 main done */
+    pthread_t reader;
+} late_insert;
+
+static void hold_first_copy(void *user, terrain_chunk_coord coord) {
+    late_insert *l = user;
+    if (coord.x != 0 || coord.z != 0 || !pthread_equal(pthread_self(), l->reader)) return;
+    int expected = 0;
+    if (!atomic_compare_exchange_strong(&l->state, &expected, 1)) return;   /* only the first copy */
+    while (atomic_load(&l->state) != 2) usleep(100);
+}
+
+static void *late_reader(void *user) {
+    commit_share *s = user;
+    uint64_t token = terrain_world_read_begin(s->world);
+    (void)terrain_stacks_hash(terrain_world_stacks(s->world, (terrain_chunk_coord){ 0, 0 }));
+    terrain_world_read_end(s->world, token);
+    return NULL;
+}
+
+Test(terrain_threads, a_copy_generated_before_a_commit_and_eviction_is_not_cached) {
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = 8 });
+    terrain_world_desc desc = { .generation = terrain_generation_defaults(8), .generate = churn_chunk,
+                                .edits = log };
+    commit_share s = { .world = terrain_world_create(&desc) };
+    late_insert l = { 0 };
+    terrain__world_on_generated(s.world, hold_first_copy, &l);
+    cr_assert_eq(pthread_create(&l.reader, NULL, late_reader, &s), 0);
+    while (atomic_load(&l.state) != 1) usleep(100);
+    terrain_world_edit(s.world, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                 .deposit = { .x = 16, .z = 16, .radius = 3, .volume = 4 } }, NULL, 0);
+    (void)terrain_world_stacks(s.world, (terrain_chunk_coord){ 1, 0 });   /* (0, 0) the least recent */
+    terrain_world_set_max_chunks(s.world, 1);
+    terrain_world_trim(s.world);
+    cr_assert(!terrain_world_has(s.world, (terrain_chunk_coord){ 0, 0 }), "evicted");
+    atomic_store(&l.state, 2);
+    pthread_join(l.reader, NULL);
+    terrain_world *fresh = terrain_world_create(&desc);
+    terrain_chunk_coord c = { 0, 0 };
+    cr_expect(same_stacks(terrain_world_stacks(s.world, c), terrain_world_stacks(fresh, c)),
+              "the cached chunk holds the stroke");
+    terrain_world_destroy(fresh);
     terrain_world_destroy(s.world);
     terrain_edit_log_destroy(log);
 }
