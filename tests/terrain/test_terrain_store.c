@@ -665,3 +665,66 @@ Test(terrain_store, bad_calls_are_refused_with_a_reason) {
     terrain_edit_log_destroy(log);
     remove_tree(dir);
 }
+
+/* ---- a long slide: the folder's size is bounded by the columns edited, not the frames -------
+ * 10 000 stabilization frames each change the same 16 columns of chunk (0, 0) (sand sliding
+ * back and forth), and the world is saved every 500 frames. Each save folds the chunk's entries
+ * into one (terrain_edit_log_compact), so every save writes one entry of 16 columns and the
+ * folder stays at its size after the first save, give or take SQLite's pages: the bound below
+ * allows 256 KiB for the database's free pages and its write-ahead log. Without the fold the
+ * chunk's blob holds every frame's entry: 16 columns of at least 6 bytes each a frame, over
+ * 960 KB by the end. Replay cost follows the entries, so one entry also bounds the replay. */
+
+typedef struct slide_state {
+    int frame;
+} slide_state;
+
+static void slide_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
+    const slide_state *s = user;
+    terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, -TERRAIN_FLOOR_Y);
+    if (x < 4 && z < 4)
+        terrain_stacks_builder_push(builder, TERRAIN_SAND, (float)(1 + (s->frame + x + z) % 5) / QPM);
+}
+
+Test(terrain_store, ten_thousand_stabilization_frames_save_as_one_entry_a_chunk) {
+    enum { FRAMES = 10000, SAVE_EVERY = 500 };
+    char dir[64];
+    make_temp_dir(dir, sizeof dir);
+    terrain_chunk_coord c = { 0, 0 };
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, NULL);
+    cr_assert_not_null(store);
+    terrain_stacks *generated = terrain_stacks_from_columns(c, flat_column, NULL);
+    terrain_stacks *before = terrain_stacks_from_columns(c, flat_column, NULL);
+    slide_state slide = { 0 };
+    long long first_save_bytes = 0;
+    char error[512];
+    for (slide.frame = 0; slide.frame < FRAMES; slide.frame++) {
+        terrain_stacks *after = terrain_stacks_from_columns(c, slide_column, &slide);
+        cr_assert(terrain_edit_log_record(log, c, TERRAIN_EDIT_STABILIZE, before, after));
+        terrain_stacks_destroy(before);
+        before = after;
+        if ((slide.frame + 1) % SAVE_EVERY) continue;
+        cr_assert(terrain_store_save(store, error, sizeof error), "%s", error);
+        if (!first_save_bytes) first_save_bytes = folder_bytes(dir);
+    }
+    cr_expect_eq(terrain_edit_log_entries(log, c), 1, "the last save folded the chunk");
+    long long bytes = folder_bytes(dir);
+    cr_expect_leq(bytes, first_save_bytes + 256 * 1024, "%lld bytes after the soak, %lld after the first save",
+                  bytes, first_save_bytes);
+    terrain_store_destroy(store);
+    terrain_edit_log_destroy(log);
+
+    terrain_edit_log *reopened = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
+    store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = reopened, .seed = SEED }, NULL);
+    cr_assert_not_null(store);
+    cr_expect_eq(terrain_edit_log_entries(reopened, c), 1);
+    terrain_stacks *replayed = terrain_edit_log_replay(reopened, c, generated);
+    cr_expect(same_bytes(replayed, before), "the replay gives the last frame's columns");
+    terrain_stacks_destroy(replayed);
+    terrain_store_destroy(store);
+    terrain_edit_log_destroy(reopened);
+    terrain_stacks_destroy(before);
+    terrain_stacks_destroy(generated);
+    remove_tree(dir);
+}

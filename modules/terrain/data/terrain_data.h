@@ -618,6 +618,8 @@ terrain_store *terrain_store_create(const terrain_store_desc *desc, terrain_stor
 void terrain_store_destroy(terrain_store *store);
 
 /* Everything changed since the last save, in one transaction; waits for a save in flight first.
+ * Each changed chunk's entries are folded into one first (terrain_edit_log_compact), so a
+ * folder's size follows the columns edited, not the frames played.
  * False with "DIR/world.db: reason" in `error` (nothing of this save is kept; retried next time). */
 bool terrain_store_save(terrain_store *store, char *error, size_t error_size);
 /* A snapshot of what changed, committed on the store's thread; returns at once. False when the
