@@ -14,7 +14,7 @@ static void GLAD_API_PTR gfx_debug_message(GLenum source, GLenum type, GLuint id
     (void)id; (void)length; (void)user;
     if (severity == GL_DEBUG_SEVERITY_NOTIFICATION) return;   /* driver chatter */
     if (source == GL_DEBUG_SOURCE_SHADER_COMPILER) return;     /* printed at file:line instead */
-    if (type == GL_DEBUG_TYPE_ERROR) core_error("gl", "%s", message);
+    if (type == GL_DEBUG_TYPE_ERROR) core_log_error("gl", "%s", message);
     else core_warn("gl", "%s", message);
 }
 #endif
@@ -42,7 +42,7 @@ gfx_context *gfx_create(const gfx_desc *desc_in) {
     gfx_desc desc = *desc_in;
     if (desc.width <= 0 || desc.height <= 0) { desc.width = 1280; desc.height = 720; }
     if (desc.width > 16384 || desc.height > 16384) {
-        core_error("gfx", "size %dx%d is larger than 16384x16384", desc.width, desc.height);
+        core_log_error("gfx", "size %dx%d is larger than 16384x16384", desc.width, desc.height);
         return NULL;
     }
     if (!desc.title) desc.title = "engine";
@@ -165,7 +165,7 @@ bool gfx_screenshot(gfx_context *gfx, const char *path) {
 
 bool gfx_write_png(const char *path, int width, int height, const uint8_t *rgba) {
     int ok = stbi_write_png(path, width, height, 4, rgba, width * 4);
-    if (!ok) core_error("gfx", "cannot write the picture %s", path);
+    if (!ok) core_log_error("gfx", "cannot write the picture %s", path);
     else core_info("gfx", "picture %s (%dx%d)", path, width, height);
     return ok != 0;
 }

@@ -54,7 +54,7 @@ gfx_buffer gfx_buffer_create(const gfx_buffer_desc *desc) {
 
 void gfx_buffer_update(gfx_buffer buffer, size_t offset, const void *data, size_t size) {
     if (offset + size > buffer.size) {
-        core_error("gfx", "buffer update of %zu bytes at %zu overruns a %zu-byte buffer", size,
+        core_log_error("gfx", "buffer update of %zu bytes at %zu overruns a %zu-byte buffer", size,
                    offset, buffer.size);
         return;
     }
@@ -185,7 +185,7 @@ bool gfx_framebuffer_create(gfx_framebuffer *framebuffer, const gfx_framebuffer_
     }
     GLenum status = glCheckNamedFramebufferStatus(framebuffer->id, GL_FRAMEBUFFER);
     if (status != GL_FRAMEBUFFER_COMPLETE) {
-        core_error("gfx", "framebuffer %dx%d is incomplete (status 0x%x)", desc->width, desc->height,
+        core_log_error("gfx", "framebuffer %dx%d is incomplete (status 0x%x)", desc->width, desc->height,
                    status);
         gfx_framebuffer_destroy(framebuffer);
         return false;

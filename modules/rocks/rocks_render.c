@@ -70,7 +70,7 @@ static void make_vertex_array(rocks_renderer *r) {
 
 rocks_renderer *rocks__renderer_create(gfx_context *gfx, const rocks_tileset *set) {
     if (!set->vertices || !set->indices) {
-        core_error("rocks", "the tile set's meshes were released (rocks_tiles_release_meshes): nothing to draw");
+        core_log_error("rocks", "the tile set's meshes were released (rocks_tiles_release_meshes): nothing to draw");
         return NULL;
     }
     gfx_program program = gfx_program_load(gfx, "rocks.vert", "rocks.frag");

@@ -117,7 +117,7 @@ terrain__shadows *terrain__shadows_create(gfx_context *gfx, terrain_shadow_quali
         glNamedFramebufferReadBuffer(fb, GL_NONE);
         s->cascades[c].framebuffer = fb;
         if (glCheckNamedFramebufferStatus(fb, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
-            core_error("terrain", "the shadow map's depth target is incomplete; shadows off");
+            core_log_error("terrain", "the shadow map's depth target is incomplete; shadows off");
             terrain__shadows_destroy(s);
             return NULL;
         }

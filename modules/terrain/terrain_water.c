@@ -134,11 +134,11 @@ static bool water_quality_valid(terrain_water_quality quality) { return (unsigne
 
 terrain_water *terrain_water_create(const terrain_water_desc *desc) {
     if (!desc || !desc->gfx || !desc->world) {
-        core_error("terrain", "terrain_water_create: gfx and world are required");
+        core_log_error("terrain", "terrain_water_create: gfx and world are required");
         return NULL;
     }
     if (!water_quality_valid(desc->quality)) {
-        core_error("terrain", "terrain_water_create: unknown quality %d", (int)desc->quality);
+        core_log_error("terrain", "terrain_water_create: unknown quality %d", (int)desc->quality);
         return NULL;
     }
     gfx_program surface = gfx_program_load(desc->gfx, "water.vert", "water.frag");
@@ -187,7 +187,7 @@ void terrain_water_destroy(terrain_water *w) {
 
 bool terrain_water_set_quality(terrain_water *w, terrain_water_quality quality) {
     if (!water_quality_valid(quality)) {
-        core_error("terrain", "terrain_water_set_quality: unknown quality %d", (int)quality);
+        core_log_error("terrain", "terrain_water_set_quality: unknown quality %d", (int)quality);
         return false;
     }
     if (quality == TERRAIN_WATER_DEFAULT) quality = TERRAIN_WATER_LOW;

@@ -270,12 +270,12 @@ static void grass_defaults(grass_desc *d) {
 
 grass_system *grass_create(const grass_desc *desc) {
     if (!desc || !desc->gfx || !desc->ecs || !desc->world) {
-        core_error("grass", "grass_create needs .gfx, .ecs and .world");
+        core_log_error("grass", "grass_create needs .gfx, .ecs and .world");
         return NULL;
     }
     ecs_component mesh_chunk = ecs_component_lookup(desc->ecs, "TerrainMeshChunk");
     if (!mesh_chunk) {
-        core_error("grass", "no TerrainMeshChunk in this ECS world: call terrain_ecs_create first");
+        core_log_error("grass", "no TerrainMeshChunk in this ECS world: call terrain_ecs_create first");
         return NULL;
     }
     gfx_program place = gfx_program_load_compute(desc->gfx, "grass_place.comp");

@@ -36,9 +36,12 @@ static size_t fuzz_walk(const core_json_value *value) {
 static void fuzz_parse(const char *data, size_t size) {
     core_arena arena = { 0 };
     core_json_value *root;
-    core_json_error error;
+    core_error error = { 0 };
+    int line = 0, column = 0;
     if (core_json_parse(data, size, &arena, &root, &error)) fuzz_walk(root);
-    else if (error.line < 1 || error.column < 1 || error.offset > size || error.message[0] == '\0') __builtin_trap();
+    else if (error.code != CORE_ERROR_FORMAT || sscanf(error.message, "line %d, column %d:", &line, &column) != 2 ||
+             line < 1 || column < 1 || (size_t)line > size + 1 || (size_t)column > size + 1)
+        __builtin_trap();
     core_arena_release(&arena);
 }
 

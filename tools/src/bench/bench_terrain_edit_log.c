@@ -118,9 +118,9 @@ static terrain_edit_log *recorded_log(const edit_log_bench *b) {
 static double sample_save_files(void *user) {
     edit_log_bench *b = user;
     terrain_edit_log *log = recorded_log(b);
-    char error[512];
+    core_error error = { 0 };
     uint64_t start = core_time_ns();
-    if (!terrain_edit_log_save(log, b->files_dir, error, sizeof error)) core_fatal("bench", "%s", error);
+    if (!terrain_edit_log_save(log, b->files_dir, &error)) core_fatal("bench", "%s", error.message);
     double ms = core_ns_to_ms(core_time_ns() - start);
     terrain_edit_log_destroy(log);
     return ms;
@@ -130,9 +130,10 @@ static void open_store(edit_log_bench *b) {
     if (b->store) return;
     b->store_log = terrain_edit_log_create(b->key);
     terrain_store_report report;
+    core_error error = { 0 };
     b->store = terrain_store_create(&(terrain_store_desc){ .dir = b->store_dir, .edits = b->store_log, .seed = 42 },
-                                    &report);
-    if (!b->store) core_fatal("bench", "%s", report.error);
+                                    &report, &error);
+    if (!b->store) core_fatal("bench", "%s", error.message);
 }
 
 /* Every chunk of the open store's log flipped between edited and generated, one entry each. */
@@ -148,9 +149,9 @@ static void dirty_all(edit_log_bench *b) {
 static double sample_save(void *user) {
     edit_log_bench *b = user;
     dirty_all(b);
-    char error[512];
+    core_error error = { 0 };
     uint64_t start = core_time_ns();
-    if (!terrain_store_save(b->store, error, sizeof error)) core_fatal("bench", "%s", error);
+    if (!terrain_store_save(b->store, &error)) core_fatal("bench", "%s", error.message);
     return core_ns_to_ms(core_time_ns() - start);
 }
 
@@ -160,8 +161,8 @@ static double sample_save_frame(void *user) {
     uint64_t start = core_time_ns();
     if (!terrain_store_save_async(b->store)) core_fatal("bench", "a save still in flight");
     double ms = core_ns_to_ms(core_time_ns() - start);
-    char error[512];
-    if (!terrain_store_wait(b->store, error, sizeof error)) core_fatal("bench", "%s", error);
+    core_error error = { 0 };
+    if (!terrain_store_wait(b->store, &error)) core_fatal("bench", "%s", error.message);
     return ms;
 }
 
@@ -169,11 +170,13 @@ static double sample_load(void *user) {
     edit_log_bench *b = user;
     terrain_edit_log *log = terrain_edit_log_create(b->key);
     terrain_store_report report;
+    core_error error = { 0 };
     uint64_t start = core_time_ns();
-    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = b->store_dir, .edits = log }, &report);
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = b->store_dir, .edits = log }, &report,
+                                                &error);
     double ms = core_ns_to_ms(core_time_ns() - start);
     if (!store || report.chunks_loaded != SAVE_CHUNKS || report.set_aside)
-        core_fatal("bench", "store load: %d loaded, %s%s", report.chunks_loaded, report.error, report.notice);
+        core_fatal("bench", "store load: %d loaded, %s%s", report.chunks_loaded, error.message, report.notice);
     terrain_store_destroy(store);
     terrain_edit_log_destroy(log);
     return ms;
@@ -183,11 +186,13 @@ static double sample_load_files(void *user) {
     edit_log_bench *b = user;
     terrain_edit_log *log = terrain_edit_log_create(b->key);
     terrain_edit_log_load_result result;
+    core_error error = { 0 };
     uint64_t start = core_time_ns();
-    bool ok = terrain_edit_log_load(log, b->files_dir, &result);
+    bool ok = terrain_edit_log_load(log, b->files_dir, &result, &error);
     double ms = core_ns_to_ms(core_time_ns() - start);
     if (!ok || result.chunks_loaded != SAVE_CHUNKS || result.files_rejected)
-        core_fatal("bench", "edit log load: %d loaded, %s", result.chunks_loaded, result.first_problem);
+        core_fatal("bench", "edit log load: %d loaded, %s%s", result.chunks_loaded, error.message,
+                   result.first_problem.message);
     terrain_edit_log_destroy(log);
     return ms;
 }
@@ -220,8 +225,8 @@ void bench_group_terrain_edit_log(bench_context *ctx) {
     if (bench_wants(ctx, "terrain.edit_log.load")) {
         /* What to load, whatever the filter: the store closed (its WAL checkpointed) and the files. */
         dirty_all(b);
-        char error[512];
-        if (!terrain_store_save(b->store, error, sizeof error)) core_fatal("bench", "%s", error);
+        core_error error = { 0 };
+        if (!terrain_store_save(b->store, &error)) core_fatal("bench", "%s", error.message);
         terrain_store_destroy(b->store);
         b->store = NULL;
         sample_save_files(b);
