@@ -162,7 +162,8 @@ bool input__sdl_mapping_parse(const char *line, size_t length, input_sdl_mapping
     const char *name = comma + 1, *name_end = memchr(name, ',', (size_t)(end - name));
     if (!name_end) name_end = end;
     if (name_end == name || (size_t)(name_end - name) >= sizeof m->name) {
-        core_error_set(error, CORE_ERROR_RANGE, "the name must be 1 to %zu bytes", sizeof m->name - 1);
+        core_error_set(error, name_end == name ? CORE_ERROR_FORMAT : CORE_ERROR_RANGE, "the name must be 1 to %zu bytes",
+                       sizeof m->name - 1);
         return false;
     }
     for (const char *c = name; c < name_end; c++)

@@ -68,7 +68,8 @@ static void fuzz_write_round_trip(const char *data, size_t size) {
 
 static void fuzz_report(const char *data, size_t size) {
     trace_report report;
-    if (trace_report_parse(data, size, &report)) {
+    core_error error = { 0 };
+    if (trace_report_parse(data, size, &report, &error)) {
         FILE *sink = fopen("/dev/null", "w");
         /* The drill-down reads what the summary kept (zone instances, counter samples, args). */
         trace_slowest slowest;
@@ -79,8 +80,8 @@ static void fuzz_report(const char *data, size_t size) {
             fclose(sink);
         }
         trace_slowest_free(&slowest);
-    } else if (report.error[0] == '\0') {
-        __builtin_trap(); /* a failure always says why */
+    } else if (error.code == CORE_ERROR_NONE || error.message[0] == '\0') {
+        __builtin_trap(); /* a failure always says what kind and why */
     }
     trace_report_free(&report);
 }
