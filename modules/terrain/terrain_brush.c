@@ -54,7 +54,9 @@ static double brush_weight(const terrain_columns *c, double x, double z, double 
     return falloff == TERRAIN_FALLOFF_FLAT ? 1.0 : (1.0 - t) * (1.0 - t);   /* 000 §4.1's g(r) */
 }
 
-static bool valid_falloff(terrain_falloff f) { return f == TERRAIN_FALLOFF_SMOOTH || f == TERRAIN_FALLOFF_FLAT; }
+static bool valid_falloff(terrain_falloff f) {
+    return f == TERRAIN_FALLOFF_DEFAULT || f == TERRAIN_FALLOFF_SMOOTH || f == TERRAIN_FALLOFF_FLAT;
+}
 
 /* ---- deposit (000 §4.3) --------------------------------------------------------------------- */
 
@@ -72,8 +74,8 @@ static int by_remainder(const void *a, const void *b) {
 
 static bool valid_deposit(const terrain_deposit_desc *d, terrain_material material) {
     if (material != TERRAIN_SAND && material != TERRAIN_ROCKS) {
-        core_log_error("terrain", "deposit: material %d (%s) is not sand or rocks", (int)d->material,
-                   terrain_material_name(d->material));
+        core_log_error("terrain", "deposit: brush material %d (%s) is not sand or rocks", (int)d->material,
+                   terrain_material_name(material));
         return false;
     }
     if (!isfinite(d->x) || !isfinite(d->z) || !(d->radius > 0.0f) || d->radius > MAX_RADIUS) {
@@ -123,7 +125,7 @@ bool terrain_deposit(terrain_columns *c, const terrain_deposit_desc *desc, int64
         core_log_error("terrain", "deposit: no region or no description");
         return false;
     }
-    terrain_material material = desc->material == TERRAIN_AIR ? TERRAIN_SAND : desc->material;
+    terrain_material material = terrain__brush_material(desc->material, TERRAIN_SAND);
     if (!valid_deposit(desc, material)) return false;
     int64_t total = llround(desc->volume * TERRAIN__QUANTA_PER_METRE);
     if (total == 0) return true;
@@ -175,7 +177,7 @@ bool terrain_deposit(terrain_columns *c, const terrain_deposit_desc *desc, int64
 /* ---- erosion (000 §4.4) --------------------------------------------------------------------- */
 
 static bool valid_erode(const terrain_erode_desc *d) {
-    if (d->mode != TERRAIN_ERODE_SURFACE && d->mode != TERRAIN_ERODE_COLLAPSE) {
+    if (d->mode != TERRAIN_ERODE_DEFAULT && d->mode != TERRAIN_ERODE_SURFACE && d->mode != TERRAIN_ERODE_COLLAPSE) {
         core_log_error("terrain", "erode: unknown mode %d", (int)d->mode);
         return false;
     }
@@ -297,7 +299,7 @@ bool terrain_erode(terrain_columns *c, const terrain_erode_desc *desc, int64_t *
             for (int i = i0; i <= i1; i++) {
                 double w = brush_weight(c, desc->x, desc->z, r, desc->falloff, i, k);
                 if (w <= 0.0) continue;
-                if (desc->mode == TERRAIN_ERODE_SURFACE) {
+                if (desc->mode != TERRAIN_ERODE_COLLAPSE) {   /* surface, the default */
                     erode_surface(&e, i, k, llround((double)desc->depth * w * TERRAIN__QUANTA_PER_METRE));
                     continue;
                 }

@@ -634,4 +634,16 @@ void terrain__material_texels_free(terrain__material_texels *texels);
 /* Passes a sampled field through terrain_world_desc.amplify, if the world has one. */
 void terrain__world_amplify(terrain_world *world, terrain_field *field);
 
+/* A desc's brush material as the stored material: DEFAULT is `fallback`; an unknown value is
+ * TERRAIN_MATERIAL_MAX (which no tool accepts). */
+static inline terrain_material terrain__brush_material(terrain_brush_material material, terrain_material fallback) {
+    switch (material) {
+    case TERRAIN_BRUSH_DEFAULT: return fallback;
+    case TERRAIN_BRUSH_BEDROCK: return TERRAIN_BEDROCK;
+    case TERRAIN_BRUSH_SAND: return TERRAIN_SAND;
+    case TERRAIN_BRUSH_ROCKS: return TERRAIN_ROCKS;
+    }
+    return TERRAIN_MATERIAL_MAX;
+}
+
 #endif

@@ -457,7 +457,7 @@ static bool valid_sculpt(const terrain_sculpt_desc *d, terrain_material material
         return false;
     }
     if (material != TERRAIN_BEDROCK && material != TERRAIN_SAND) {
-        core_log_error("terrain", "sculpt: material %d (%s) is not in the field (bedrock or sand)", (int)d->material,
+        core_log_error("terrain", "sculpt: brush material %d (%s) is not in the field (bedrock or sand)", (int)d->material,
                    terrain_material_name(material));
         return false;
     }
@@ -470,7 +470,7 @@ bool terrain_sculpt(terrain_columns *c, const terrain_sculpt_desc *desc, int64_t
         core_log_error("terrain", "sculpt: no region or no description");
         return false;
     }
-    terrain_material material = desc->material == TERRAIN_AIR ? TERRAIN_BEDROCK : desc->material;
+    terrain_material material = terrain__brush_material(desc->material, TERRAIN_BEDROCK);
     if (!valid_sculpt(desc, material)) return false;
     const double radius = desc->radius, delta = (desc->offset == 0.0f ? 0.5 : (double)desc->offset) * radius;
     /* The ball's centre lies within δ (+ the projection's half metre) of the target, the columns
