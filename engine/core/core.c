@@ -131,8 +131,7 @@ const char *core_error_code_name(core_error_code code) {
         [CORE_ERROR_NONE] = "none",         [CORE_ERROR_IO] = "io",
         [CORE_ERROR_FORMAT] = "format",     [CORE_ERROR_VERSION] = "version",
         [CORE_ERROR_MISMATCH] = "mismatch", [CORE_ERROR_CORRUPT] = "corrupt",
-        [CORE_ERROR_RANGE] = "range",       [CORE_ERROR_MEMORY] = "memory",
-        [CORE_ERROR_ARGUMENT] = "argument",
+        [CORE_ERROR_RANGE] = "range",       [CORE_ERROR_ARGUMENT] = "argument",
     };
     return (unsigned)code < CORE_ERROR_CODE_COUNT ? names[code] : "unknown";
 }

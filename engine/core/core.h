@@ -25,14 +25,12 @@
  *     CORE_ERROR_FORMAT    the content is malformed: bad syntax, bad magic, a missing field, a
  *                          value of the wrong type, an unknown name or keyword
  *     CORE_ERROR_VERSION   well-formed, but a version (or kind of file) this code does not read
- *     CORE_ERROR_MISMATCH  well-formed, but it belongs to something else than the caller asked for:
- *                          a world folder or edit file of another world (another seed or
+ *     CORE_ERROR_MISMATCH  well-formed, but of something other than the caller asked for: a
+ *                          world folder or edit file of another world (another seed or
  *                          generator key), a chunk file that holds another chunk
  *     CORE_ERROR_CORRUPT   a checksum does not match, or the content is truncated or inconsistent
  *                          with itself (sizes that disagree, a record past the end)
  *     CORE_ERROR_RANGE     a value is out of its allowed range (a size too big, a negative count)
- *     CORE_ERROR_MEMORY    a size the input asks for cannot be allocated (never for our own
- *                          allocations, which are fatal)
  *     CORE_ERROR_ARGUMENT  a bad argument from the caller: a NULL or empty name, a desc field
  *                          that makes no sense, a request the object's state cannot serve
  *   core_error_set(error, code, fmt, …) fills one (NULL-safe, returns false so that a function
@@ -61,8 +59,8 @@
  * JSON
  *   core_json_parse reads RFC 8259 JSON into a tree of core_json_value allocated from an arena,
  *   so one core_arena_release frees it all. Bad input is CORE_ERROR_FORMAT with a message that
- *   gives line and column ("line 3, column 14: expected ':' after object key"); nesting is capped at
- *   CORE_JSON_MAX_DEPTH, and the parser never reads outside [text, text + size).
+ *   gives line and column ("line 3, column 14: expected ':' after object key"); nesting is
+ *   capped at CORE_JSON_MAX_DEPTH, and the parser never reads outside [text, text + size).
  *       core_arena arena = {0};
  *       core_json_value *root;
  *       core_error error = {0};
@@ -132,7 +130,6 @@ typedef enum core_error_code {
     CORE_ERROR_MISMATCH,
     CORE_ERROR_CORRUPT,
     CORE_ERROR_RANGE,
-    CORE_ERROR_MEMORY,
     CORE_ERROR_ARGUMENT,
     CORE_ERROR_CODE_COUNT,
 } core_error_code;
@@ -144,7 +141,8 @@ typedef struct core_error {
 
 /* Sets error->code and formats error->message (when error is not NULL); returns false. */
 bool core_error_set(core_error *error, core_error_code code, const char *fmt, ...) CORE_PRINTF(3, 4);
-/* "none", "io", "format", "version", "mismatch", "corrupt", "range", "memory", "argument"; "unknown" else. */
+/* "none", "io", "format", "version", "mismatch", "corrupt", "range", "argument"; "unknown" for
+ * any other value. */
 const char *core_error_code_name(core_error_code code);
 
 /* Prints "fatal: module: message" and aborts. For states the program cannot go on from

@@ -1113,10 +1113,11 @@ bool terrain_raycast(terrain_world *world, const double origin[3], const float d
  * database with terrain_store (below), whose every save is one transaction:
  *
  *     terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
+ *     core_error error = {0};
  *     terrain_store *store = terrain_store_create(&(terrain_store_desc){
- *         .dir = "saves/world1", .edits = log, .seed = params.seed }, &report);
+ *         .dir = "saves/world1", .edits = log, .seed = params.seed }, &report, &error);
  *     ... edits ...
- *     terrain_store_save(store, error, sizeof error);
+ *     terrain_store_save(store, &error);
  *
  * The per-file layout (terrain_edit_log_save and _load) is how world folders were kept before
  * world.db; terrain_store imports such a folder once. It stays for exporting and importing one
