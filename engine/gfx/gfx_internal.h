@@ -22,7 +22,7 @@ typedef struct gfx_program_entry gfx_program_entry;   /* gfx_shader.c */
 
 /* What gfx_draw has drawn since the last gfx_frame_end (gfx_resources.c; OpenGL is used from
  * the main thread only, so plain counters). */
-extern gfx_frame_stats gfx__frame_counts;
+extern gfx_context_stats_info gfx__frame_counts;
 
 struct gfx_context {
     gfx_backend backend;
@@ -34,7 +34,7 @@ struct gfx_context {
     bool fullscreen;
     int windowed_x, windowed_y, windowed_width, windowed_height;
     uint64_t frame_index;
-    gfx_frame_stats last_frame;    /* counted by gfx_draw (gfx__frame_counts) */
+    gfx_context_stats_info last_frame;    /* counted by gfx_draw (gfx__frame_counts) */
 
     /* GPU timing (gfx_timer.c) */
     gfx_timer_frame timer_frames[GFX_TIMER_FRAMES];
@@ -54,7 +54,7 @@ struct gfx_context {
 
 /* Backends (gfx_window.c, gfx_offscreen.c). The window says why it failed in `reason`; the
  * offscreen backend logs its own errors. */
-bool gfx__window_open(gfx_context *gfx, const gfx_desc *desc, char *reason, size_t reason_size);
+bool gfx__window_open(gfx_context *gfx, const gfx_context_desc *desc, char *reason, size_t reason_size);
 void gfx__window_close(gfx_context *gfx);
 void gfx__window_swap(gfx_context *gfx);
 bool gfx__offscreen_open(gfx_context *gfx, int width, int height);

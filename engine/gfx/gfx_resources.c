@@ -202,7 +202,7 @@ void gfx_framebuffer_destroy(gfx_framebuffer *framebuffer) {
 
 /* ---- draws ---- */
 
-gfx_frame_stats gfx__frame_counts;
+gfx_context_stats_info gfx__frame_counts;
 
 void gfx_draw(const gfx_draw_desc *desc) {
     GLenum primitive = desc->primitive ? desc->primitive : GL_TRIANGLES;
