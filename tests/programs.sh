@@ -317,6 +317,38 @@ expect "terrain_water: screenshot is a PNG" 0 "^ *137 +80 +78 +71" -- od -An -tu
 expect "terrain_water: off draws no plane" 0 "terrain_water: water off, 0 planes drawn" -- \
   "$bin/terrain_water" --headless --size 96x64 --frames 2 --water off
 expect "terrain_water: bad --water" 2 "bad value for '--water'" -- "$bin/terrain_water" --water deep
+
+# The examples' pictures (tools/example_pictures, tools/examples/README.md). The pictures the
+# runs above wrote hold more than one colour; the tool itself, run on this build for the
+# platform example, writes one too. Its PNG reader on pictures made here by hand, one row per
+# filter (none, Up; Sub, Paeth, Average): grey (10,20,30) everywhere is refused as one colour;
+# the second picture holds it and (11,21,31), worked out from the filters: 2 colours.
+expect "example_pictures: the runs' pictures are not one colour" 0 "" -- \
+  "$root/tools/example_pictures" --check "$tmp/scene.png" "$tmp/terrain.png" "$tmp/blocks.png" "$tmp/water.png" "$tmp/grass.png"
+expect "example_pictures: a picture of gfx_scene" 0 "gfx_scene.png 160x90, ([2-9]|[1-9][0-9]+) colours" -- \
+  env -u DISPLAY "$root/tools/example_pictures" --bin "$bin" --out "$tmp/pictures" --size 160x90 gfx_scene
+# png FILE W H ROW…: an 8-bit RGB PNG whose rows are given in hex, each its filter byte first.
+png() {
+  python3 -c 'import struct, sys, zlib
+path, width, height = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+def chunk(kind, body): return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+open(path, "wb").write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
+    + chunk(b"IDAT", zlib.compress(bytes.fromhex("".join(sys.argv[4:])))) + chunk(b"IEND", b""))' "$@"
+}
+png "$tmp/flat.png" 2 2 000a141e0a141e 02000000000000
+expect "example_pictures: one colour refused" 1 "flat.png: every pixel is the same colour" -- \
+  "$root/tools/example_pictures" --check "$tmp/flat.png"
+png "$tmp/two.png" 2 3 010a141e000000 04000000010101 03050a0f000000
+expect "example_pictures: two colours through the filters" 0 "two.png 2x3, 2 colours" -- \
+  "$root/tools/example_pictures" --check "$tmp/two.png"
+# Every example that draws (a --screenshot option) has its picture, under 150 KB, linked.
+for source in "${example_sources[@]}"; do
+  grep -q '"screenshot"' "$source" || continue
+  program=$(basename "$source" .c)
+  expect "$program: its picture, under 150 KB" 0 "^[0-9]+$" -- \
+    bash -c 's=$(stat -c %s "$1") && ((s < 150 * 1024)) && echo "$s"' _ "$root/tools/examples/pictures/$program.png"
+  expect "$program: its picture in the README" 0 "\\(pictures/$program\\.png\\)" -- cat "$root/tools/examples/README.md"
+done
 expect "world: bad --grass" 2 "bad value for '--grass': 'lush' is not off, low or high" -- "$bin/world" --grass lush
 expect "world: --grass without value" 2 "option '--grass' needs a value" -- "$bin/world" --grass
 expect "world: bad --water" 2 "bad value for '--water': 'deep' is not off, low or high" -- "$bin/world" --water deep

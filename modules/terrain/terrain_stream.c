@@ -496,13 +496,35 @@ static void terrain_stream_generate_system(ecs_iter *it) {
 
 /* ---- meshing: delivering and submitting --------------------------------------------------- */
 
+/* The mesh layers reach every interface the column chunks hold, with the kernel and a column of
+ * margin: the range stream_defaults takes from the generator's parameters is a first guess
+ * (its ground can rise far above base + relief), and edits can build above it. Grown layers are
+ * wanted from the next layout on; they never shrink. */
+static void stream_fit_layers(terrain__streamer *s, float low, float high) {
+    double top = (double)TERRAIN_MESH_CELLS * (double)(1 << (s->desc.levels - 1));
+    double pad = 2.0 * TERRAIN_COLUMN_SIZE + 1.0;
+    double y_min = floor(((double)low - pad) / top) * top, y_max = ceil(((double)high + pad) / top) * top;
+    bool grew = false;
+    for (int level = 0; level < s->desc.levels; level++) {
+        double height = (double)TERRAIN_MESH_CELLS * (double)(1 << level);
+        int64_t first = (int64_t)floor(y_min / height), last = (int64_t)ceil(y_max / height) - 1;
+        if (first < s->y_first[level]) s->y_first[level] = first, grew = true;
+        if (last > s->y_last[level]) s->y_last[level] = last, grew = true;
+    }
+    if (grew) s->laid_out = false;
+}
+
 static void stream_deliver(terrain_ecs *te, ecs_commands *commands, stream_task *t) {
     terrain__streamer *s = te->stream;
     stream_record *r = t->record;
     r->task = NULL;
     if (r->key.level == STREAM_COLUMN_LEVEL) {
-        terrain_world_retain(te->terrain, (terrain_chunk_coord){ r->key.x, r->key.z });
+        terrain_chunk_coord coord = { r->key.x, r->key.z };
+        terrain_world_retain(te->terrain, coord);
         r->retained = r->ready = true;
+        float low, high;
+        terrain_stacks_interface_range(terrain_world_stacks(te->terrain, coord), &low, &high);
+        stream_fit_layers(s, low, high);
         return;
     }
     TerrainMeshChunk *c = ecs_get(te->ecs, r->entity, te->mesh_chunk);
@@ -604,6 +626,7 @@ static void stream_remesh_edits(terrain_ecs *te, ecs_commands *commands) {
     terrain__streamer *s = te->stream;
     if (te->changed_count == 0) return;
     TRACE_ZONE("terrain_stream_remesh_edits");
+    for (size_t c = 0; c < te->changed_count; c++) stream_fit_layers(s, te->changed[c].y_min, te->changed[c].y_max);
     size_t urgent = 0;
     for (size_t i = 0; i < s->meshes.capacity; i++) {
         stream_record *r = s->meshes.slots[i];

@@ -488,3 +488,46 @@ Test(render_stream, spawned_chunks_follow_edits_too) {
     cr_expect_eq(checked, 9);
     streamed_close(&s);
 }
+
+/* Nothing cut off (issue 16): a mesa rises to 300 m over ground at 0 m, far above the layers the
+ * generation parameters suggest (base 0 ± relief 0 ± 48 m: −64 … 64 m for two levels). When its
+ * column chunk is generated the layers grow to reach it, and the level-0 chunk holding 300 m
+ * (y = 9: 288 … 320 m) over the mesa's columns is meshed with triangles: the mesa's top, closed.
+ * Columns 8 … 23 of chunk (0, 0) are the mesa; every other column is flat at 0 m. */
+static void mesa_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
+    (void)user;
+    bool mesa = x >= 8 && x < 24 && z >= 8 && z < 24;
+    terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, -TERRAIN_FLOOR_Y + (mesa ? 300.0f : 0.0f));
+}
+
+static terrain_stacks *mesa_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, mesa_column, user);
+}
+
+Test(render_stream, the_layers_grow_to_a_peak_above_the_generations_range_and_mesh_its_top) {
+    streamed s = { .gfx = render_offscreen(64, 64) };
+    s.jobs = job_system_create(&(job_system_desc){ .threads = 2 });
+    s.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = s.jobs });
+    s.world = terrain_world_create(&(terrain_world_desc){ .generate = mesa_chunk });
+    s.te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = s.ecs, .terrain = s.world });
+    terrain_ecs_stream(s.te, &(terrain_stream_desc){ .half_width = 2, .levels = 2 });
+    const double eye[1][3] = { { 16, 310, 16 } };
+    cr_assert(streamed_settle(&s, eye, 1, 3000) > 0, "streaming never settled");
+    ecs_component mesh_chunk = ecs_component_lookup(s.ecs, "TerrainMeshChunk");
+    ecs_query *q = ecs_query_create(s.ecs, &(ecs_query_desc){ .with = { mesh_chunk } });
+    int top_chunks = 0;
+    int64_t highest = INT64_MIN;
+    ecs_iter it = ecs_query_iter(s.ecs, q);
+    while (ecs_query_next(&it)) {
+        const TerrainMeshChunk *c = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++) {
+            if (c[i].lod.level != 0) continue;
+            if (c[i].y > highest) highest = c[i].y;
+            if (c[i].y == 9 && c[i].x == 0 && c[i].z == 0) top_chunks += c[i].gpu.index_count > 0 || c[i].mesh.index_count > 0;
+        }
+    }
+    ecs_query_destroy(s.ecs, q);
+    cr_expect_geq(highest, 9, "the highest level-0 layer is %lld (288 m needs 9)", (long long)highest);
+    cr_expect_eq(top_chunks, 1, "the mesa's top is meshed");
+    streamed_close(&s);
+}

@@ -84,11 +84,11 @@ int main(int argc, char **argv) {
 
     int status = 0;
     if (!frames && gfx_backend_get(gfx) == GFX_BACKEND_OFFSCREEN) frames = 30;
-    terrain_view view = { .pitch = -0.1f, .aspect = (float)width / (float)height,
+    terrain_view view = { .pitch = 0.02f, .aspect = (float)width / (float)height,
                           .sun_direction = { 0.45f, 0.55f, -0.7f } };   /* raking along the face */
     for (int frame = 0; (!frames || frame < frames) && !gfx_window_should_close(gfx); frame++) {
         double swing = sin(frame * 0.01);               /* along the wall, looking at it */
-        view.camera[0] = 9.0, view.camera[1] = 6.0, view.camera[2] = 2.0 + 6.0 * swing;
+        view.camera[0] = 22.0, view.camera[1] = 8.0, view.camera[2] = 2.0 + 6.0 * swing;
         view.yaw = (float)(-M_PI / 2 - 0.6 + 0.2 * swing);   /* facing −x, turned along +z (yaw 0 looks along −z) */
         gfx_frame_begin(gfx);
         terrain_ecs_set_view(terrain, &view);

@@ -57,16 +57,19 @@ static int parse(int argc, char **argv, options *o, int *width, int *height) {
     return -1;
 }
 
-/* Frame rate, chunk counts, position and seed in the top-left corner. */
-static void draw_hud(gfx_text *hud, terrain_ecs *te, const terrain_view *view, double frame_seconds, int seed) {
+/* Frame rate, chunk counts, position and seed in the top-left corner (text half as big in a
+ * frame under 960 pixels wide, where the lines would not fit). */
+static void draw_hud(gfx_text *hud, terrain_ecs *te, const terrain_view *view, double frame_seconds, int seed,
+                     int width) {
     terrain_ecs_stats_info s = terrain_ecs_stats(te);
     const float white[4] = { 1, 1, 1, 1 };
-    gfx_text_print(hud, 8, 8, 2, white, "%.0f fps  %.1f ms", frame_seconds > 0 ? 1.0 / frame_seconds : 0.0,
+    int scale = width < 960 ? 1 : 2, line = 11 * scale;
+    gfx_text_print(hud, 8, 8, scale, white, "%.0f fps  %.1f ms", frame_seconds > 0 ? 1.0 / frame_seconds : 0.0,
                    frame_seconds * 1e3);
-    gfx_text_print(hud, 8, 30, 2, white, "chunks %d of %d meshed, %d waiting, %.2f M triangles",
+    gfx_text_print(hud, 8, 8 + line, scale, white, "chunks %d of %d meshed, %d waiting, %.2f M triangles",
                    s.mesh_chunks_uploaded, s.mesh_chunks, s.mesh_chunks_waiting, (double)s.triangles * 1e-6);
-    gfx_text_print(hud, 8, 52, 2, white, "x %.1f  y %.1f  z %.1f  seed %d", view->camera[0], view->camera[1],
-                   view->camera[2], seed);
+    gfx_text_print(hud, 8, 8 + 2 * line, scale, white, "x %.1f  y %.1f  z %.1f  seed %d", view->camera[0],
+                   view->camera[1], view->camera[2], seed);
     gfx_text_draw(hud);
 }
 
@@ -120,7 +123,7 @@ int main(int argc, char **argv) {
         gfx_frame_begin(gfx);
         ecs_progress(ecs, 1.0f / 60.0f);           /* generate, mesh, cull and upload */
         terrain_ecs_draw(te, renderer, &view);
-        draw_hud(hud, te, &view, frame_seconds, o.seed);
+        draw_hud(hud, te, &view, frame_seconds, o.seed, width);
         if (o.screenshot && frames && frame + 1 == frames && !gfx_screenshot(gfx, o.screenshot)) rc = 1;
         gfx_frame_end(gfx);
         trace_frame_end();

@@ -4,9 +4,10 @@
  * chunks around each viewer; generation and meshing run as background jobs that span frames,
  * so no frame waits for them. A clipmap (terrain_clipmap) draws the far ground and sinks under
  * the square the rings cover once their chunks are in. Here a viewer moves one chunk (32 m)
- * along x at each step; after each step the frames run until every wanted chunk is ready, and
- * the counts are printed: the chunks the rings want, how many are ready, how many left behind
- * are kept while memory allows.
+ * along −x at each step (seed 1's ground stays near the start's height that way; along +x it
+ * climbs a mountain); after each step the frames run until every wanted chunk is ready, and the
+ * counts are printed: the chunks the rings want, how many are ready, how many left behind are
+ * kept while memory allows.
  *
  *   terrain_streaming [--seed S] [--hills] [--steps N] [--size WxH] [--headless]
  *                     [--screenshot FILE] [--threads N] [--trace FILE]
@@ -99,10 +100,10 @@ int main(int argc, char **argv) {
      * still follows the viewer and sinks under the rings, but would draw another world's ground. */
     if (renderer && !hand_made) terrain_renderer_set_clipmap(renderer, far);
 
-    terrain_view view = { .camera = { 16, ground + 12, 16 }, .yaw = 1.57f, .pitch = -0.3f,
+    terrain_view view = { .camera = { 16, ground + 12, 16 }, .yaw = -1.57f, .pitch = -0.6f,   /* facing −x */
                           .aspect = (float)width / (float)height };
     for (int step = 0; step <= steps; step++) {
-        view.camera[0] = 16 + 32.0 * step;             /* one chunk further along +x */
+        view.camera[0] = 16 - 32.0 * step;             /* one chunk further along −x */
         const double eye[1][3] = { { view.camera[0], view.camera[1], view.camera[2] } };
         terrain_ecs_stream_stats_info stats = { 0 };
         for (int frame = 0; frame < 2000; frame++) {   /* until the rings are in */
@@ -148,7 +149,7 @@ int main(int argc, char **argv) {
 /* Expected output:
  * Run: --hills --headless --size 64x48 --steps 2 --threads 2
  * ^terrain_streaming: step 0 at x 16: 8 chunks wanted, 8 ready, 0 kept$
- * ^terrain_streaming: step 1 at x 48: 8 chunks wanted, 8 ready, 4 kept$
- * ^terrain_streaming: step 2 at x 80: 8 chunks wanted, 8 ready, 8 kept$
+ * ^terrain_streaming: step 1 at x -16: 8 chunks wanted, 8 ready, 4 kept$
+ * ^terrain_streaming: step 2 at x -48: 8 chunks wanted, 8 ready, 8 kept$
  * ^terrain_streaming: [1-9][0-9]* chunks meshed, [0-9]+ empty skipped unsampled, [0-9.]+ MB resident$
  */
