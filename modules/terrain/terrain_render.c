@@ -49,7 +49,7 @@ static void terrain_material_textures(terrain_renderer *r) {
         .data = texels.detail, .mipmaps = true });
     /* The detail within one mip level (bilinear, not trilinear): half its fetches on llvmpipe,
      * and a step between levels is hidden where it shows at all, the detail fading out. */
-    glTextureParameteri(r->detail.id, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
+    glTextureParameteri(gfx_texture_gl(r->detail), GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
     memcpy(r->material_means, texels.means, sizeof r->material_means);
     memcpy(r->material_tints, texels.tints, sizeof r->material_tints);
     terrain__material_texels_free(&texels);
