@@ -64,7 +64,7 @@ struct game_app {
     uint64_t start_ns, last_ns;
     double frame_seconds;
     double *cpu_ms, *engine_ms, *thread_ms; /* per frame past loading */
-    double *triangles;                      /* drawn per frame past loading (gfx_stats) */
+    double *triangles;                      /* drawn per frame past loading (gfx_context_stats) */
     size_t cpu_count, cpu_capacity, engine_capacity, thread_capacity, triangles_capacity;
     int eye_in_solid, waiting;
     double grass_ms_sum, grass_ms_max;     /* past loading */
@@ -126,11 +126,11 @@ static bool app_open_rocks(game_app *app, float fog_density) {
     if (d->rocks == ROCKS_OFF) return true;
     app->rock_tiles = d->rock_tiles;
     if (!app->rock_tiles) {
-        app->own_rock_tiles = rocks_tiles_create(&(rocks_tiles_desc){ .jobs = app->jobs,
+        app->own_rock_tiles = rocks_tileset_create(&(rocks_tileset_desc){ .jobs = app->jobs,
                                                                       .cache_path = d->rocks_cache_path });
         if (!(app->rock_tiles = app->own_rock_tiles)) return false;
     }
-    app->rocks = rocks_create(&(rocks_desc){ .gfx = app->gfx, .ecs = app->ecs, .world = app->world,
+    app->rocks = rocks_system_create(&(rocks_system_desc){ .gfx = app->gfx, .ecs = app->ecs, .world = app->world,
                                              .tiles = app->rock_tiles, .quality = d->rocks,
                                              .fog_density = fog_density });
     if (!app->rocks) return false;
@@ -146,7 +146,7 @@ static bool app_open_rocks(game_app *app, float fog_density) {
 static bool app_open_input(game_app *app) {
     const game_app_desc *d = &app->desc;
     if (d->bindings_path && !(app->bindings = input_bindings_load(d->bindings_path, NULL))) return false;
-    app->input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(app->gfx), .bindings = app->bindings,
+    app->input = input_system_create(&(input_system_desc){ .glfw_window = gfx_glfw_window(app->gfx), .bindings = app->bindings,
                                              .record_path = d->record_path, .replay_path = d->replay_path,
                                              .gamepad_mappings_path = d->gamepad_mappings_path });
     app->ids.input = ecs_resource_register(app->ecs, &(ecs_resource_desc){ .name = "input", .object = app->input });
@@ -249,10 +249,10 @@ static void app_save(game_app *app, bool last) {
 }
 
 static bool app_open_terrain(game_app *app) {
-    terrain_generation_params params = terrain_generation_defaults(app->desc.seed);
+    terrain_generation_desc params = terrain_generation_defaults(app->desc.seed);
     /* Always a log: an edited chunk can then leave the cache like any other and come back as
      * edited. With a world folder it is also loaded and saved. */
-    app->edits = terrain_edit_log_create(terrain_generation_key(&params));
+    app->edits = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
     if (app->desc.world_dir && !app_open_store(app)) return false;
     if (app->desc.cliffs != ROCKS_OFF && !(app->cliffs = rocks_cliffs_create(&(rocks_cliffs_desc){
                                             .seed = app->desc.seed, .jobs = app->jobs,
@@ -264,7 +264,7 @@ static bool app_open_terrain(game_app *app) {
                                                              .amplify = app->cliffs ? rocks_cliffs_amplify : NULL,
                                                              .amplify_user = app->cliffs });
     app->ecs = ecs_world_create(&(ecs_world_desc){ .jobs = app->jobs });
-    app->terrain = terrain_ecs_create(app->ecs, app->world);
+    app->terrain = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = app->ecs, .terrain = app->world });
     terrain_stream_desc stream = app->desc.stream;
     if (app->desc.pixel_error > 0 && stream.half_width <= 0 && stream.levels <= 0) {
         stream.pixel_error = app->desc.pixel_error;
@@ -312,7 +312,7 @@ static void app_frame_shot(game_app *app) {
 /* Held long enough, and every chunk the rings want is in (or the wait is over). */
 static bool app_shot_ready(game_app *app) {
     if (app->shot_hold < APP_SHOT_MIN_FRAMES) return false;
-    terrain_stream_stats s = terrain_ecs_stream_stats(app->terrain);
+    terrain_ecs_stream_stats_info s = terrain_ecs_stream_stats(app->terrain);
     return s.mesh_chunks_ready == s.mesh_chunks_wanted || app->shot_hold >= APP_SHOT_MAX_FRAMES;
 }
 
@@ -402,7 +402,7 @@ static void app_place_at(game_app *app) {
 
 static void app_spawn_player(game_app *app) {
     const game_app_desc *d = &app->desc;
-    game_player_params params = { 0 };
+    game_player_desc params = { 0 };
     if (app->interactive) {
         params.region_ready = app_region_ready;
         params.region_user = app;
@@ -445,7 +445,7 @@ game_app *game_app_create(const game_app_desc *desc) {
     if (!d->width || !d->height) d->width = 1280, d->height = 720;
     if (!(d->max_loading_seconds > 0)) d->max_loading_seconds = 300.0;
     if (!(d->step_seconds > 0)) d->step_seconds = 1.0f / 60.0f;
-    app->gfx = gfx_create(&(gfx_desc){ .width = d->width, .height = d->height, .title = "world (loading)",
+    app->gfx = gfx_context_create(&(gfx_context_desc){ .width = d->width, .height = d->height, .title = "world (loading)",
                                        .headless = d->headless });
     if (!app->gfx) goto fail;
     app->windowed = gfx_backend_get(app->gfx) == GFX_BACKEND_WINDOW;
@@ -472,7 +472,7 @@ game_app *game_app_create(const game_app_desc *desc) {
         app_view(app)->far_distance = 6000.0f;
     }
     if (d->grass != GRASS_OFF &&
-        !(app->grass = grass_create(&(grass_desc){ .gfx = app->gfx, .ecs = app->ecs, .world = app->world,
+        !(app->grass = grass_system_create(&(grass_system_desc){ .gfx = app->gfx, .ecs = app->ecs, .world = app->world,
                                                    .quality = d->grass, .fog_density = fog_density })))
         goto fail;
     if (d->water != TERRAIN_WATER_OFF &&
@@ -494,13 +494,13 @@ fail:
 
 void game_app_destroy(game_app *app) {
     if (!app) return;
-    input_destroy(app->input);
+    input_system_destroy(app->input);
     input_bindings_destroy(app->bindings);
     gfx_text_destroy(app->hud);
     if (app->store) app_save(app, true);
     terrain_store_destroy(app->store);
-    grass_destroy(app->grass);               /* its patches live on the terrain's entities */
-    rocks_destroy(app->rocks);               /* so do its RockTiles */
+    grass_system_destroy(app->grass);               /* its patches live on the terrain's entities */
+    rocks_system_destroy(app->rocks);               /* so do its RockTiles */
     terrain_water_destroy(app->water);
     if (app->terrain) terrain_ecs_destroy(app->terrain);
     terrain_clipmap_destroy(app->clipmap);
@@ -509,11 +509,11 @@ void game_app_destroy(game_app *app) {
     terrain_world_destroy(app->world);
     rocks_cliffs_destroy(app->cliffs);       /* after the world: its hook reads them */
     terrain_edit_log_destroy(app->edits);
-    rocks_tiles_destroy(app->own_rock_tiles);
+    rocks_tileset_destroy(app->own_rock_tiles);
     job_system_destroy(app->jobs);
     app_free_shots(app);
     game_walk_free(&app->walk);
-    gfx_destroy(app->gfx);
+    gfx_context_destroy(app->gfx);
     core_free(app->cpu_ms, app->cpu_capacity * sizeof *app->cpu_ms);
     core_free(app->engine_ms, app->engine_capacity * sizeof *app->engine_ms);
     core_free(app->thread_ms, app->thread_capacity * sizeof *app->thread_ms);
@@ -526,7 +526,7 @@ void game_app_destroy(game_app *app) {
 /* The start area is in: every chunk the rings want around the spawn is meshed (or known empty)
  * and the player's collision chunks are generated. */
 static bool app_loaded(game_app *app) {
-    terrain_stream_stats s = terrain_ecs_stream_stats(app->terrain);
+    terrain_ecs_stream_stats_info s = terrain_ecs_stream_stats(app->terrain);
     double feet[3] = { app_player(app)->position[0], app_player(app)->position[1], app_player(app)->position[2] };
     double lo[3] = { feet[0] - 8, feet[1] - 8, feet[2] - 8 }, hi[3] = { feet[0] + 8, feet[1] + 8, feet[2] + 8 };
     bool ready = s.mesh_chunks_wanted > 0 && s.mesh_chunks_ready == s.mesh_chunks_wanted &&
@@ -594,7 +594,7 @@ static void app_draw_hud(game_app *app) {
         gfx_text_draw(app->hud);
         return;
     }
-    terrain_stream_stats s = terrain_ecs_stream_stats(app->terrain);
+    terrain_ecs_stream_stats_info s = terrain_ecs_stream_stats(app->terrain);
     double seconds = app->frame_seconds;
     char lines[APP_HUD_LINES][160];
     int count = 0;
@@ -698,15 +698,15 @@ static void app_finish_loading(game_app *app) {
  * process's heap): terrain stacks, meshes made and uploaded, rocks, grass, the trace itself. */
 static void app_memory_counters(game_app *app) {
     if (!trace_active()) return;
-    terrain_stream_stats st = terrain_ecs_stream_stats(app->terrain);
+    terrain_ecs_stream_stats_info st = terrain_ecs_stream_stats(app->terrain);
     trace_counter("memory.terrain_stacks", (double)st.stacks_bytes);
     trace_counter("memory.meshes_cpu", (double)st.cpu_mesh_bytes);
     trace_counter("memory.meshes_gpu", (double)st.gpu_mesh_bytes);
     if (app->rocks) {
-        rocks_stats r = rocks_stats_get(app->rocks);
+        rocks_system_stats_info r = rocks_system_stats(app->rocks);
         trace_counter("memory.rocks", (double)(r.tiles_bytes + r.placed_bytes + r.gpu_bytes));
     }
-    if (app->grass) trace_counter("memory.grass", (double)grass_stats_get(app->grass).bytes);
+    if (app->grass) trace_counter("memory.grass", (double)grass_system_stats(app->grass).bytes);
 }
 
 /* ---- the frame's systems (app.h, THE FRAME IS ONE ecs_progress) -------------------------- */
@@ -718,7 +718,7 @@ static void app_memory_counters(game_app *app) {
  * (player.c) at the fastest it can go: a sprint in flight or in water, a frame of gravity, a
  * step and the capsule. */
 static bool app_reach_ready(game_app *app, const game_player *pl, float seconds) {
-    const game_player_params *p = &pl->params;
+    const game_player_desc *p = &pl->params;
     float v = sqrtf(pl->velocity[0] * pl->velocity[0] + pl->velocity[1] * pl->velocity[1] +
                     pl->velocity[2] * pl->velocity[2]);
     float speed = v + fmaxf(p->fly_sprint_speed, p->swim_sprint_speed + p->dive_speed) + p->gravity * seconds;
@@ -1059,8 +1059,8 @@ bool game_app_frame(game_app *app) {
         if (app_loaded(app)) app_finish_loading(app);
     } else {
         app->frames++;
-        app_record_cpu(app, cpu_ms, engine_ms, thread_ms, (double)gfx_stats(app->gfx).triangles);
-        double grass_ms = app->grass ? grass_stats_get(app->grass).cpu_ms : 0.0;
+        app_record_cpu(app, cpu_ms, engine_ms, thread_ms, (double)gfx_context_stats(app->gfx).triangles);
+        double grass_ms = app->grass ? grass_system_stats(app->grass).cpu_ms : 0.0;
         app->grass_ms_sum += grass_ms;
         app->grass_ms_max = fmax(app->grass_ms_max, grass_ms);
     }
@@ -1083,8 +1083,8 @@ static void app_sorted(const double *values, size_t count, double *sorted) {
 }
 
 
-game_app_stats game_app_stats_get(const game_app *app) {
-    game_app_stats s = { .frames = app->frames, .loading_frames = app->loading_frames,
+game_app_stats_info game_app_stats(const game_app *app) {
+    game_app_stats_info s = { .frames = app->frames, .loading_frames = app->loading_frames,
                          .eye_in_solid_frames = app->eye_in_solid, .waiting_frames = app->waiting };
     memcpy(s.eye, app_view(app)->camera, sizeof s.eye);
     memcpy(s.feet, app_player(app)->position, sizeof s.feet);
@@ -1118,19 +1118,19 @@ game_app_stats game_app_stats_get(const game_app *app) {
     s.strokes = app->tools.strokes;
     s.edited_chunks = terrain_edit_log_chunks(app->edits);
     if (app->grass) {
-        grass_stats g = grass_stats_get(app->grass);
+        grass_system_stats_info g = grass_system_stats(app->grass);
         s.grass_tufts = g.tufts;
         s.grass_tufts_drawn = g.tufts_drawn;
     }
     if (app->rocks) {
-        rocks_stats r = rocks_stats_get(app->rocks);
+        rocks_system_stats_info r = rocks_system_stats(app->rocks);
         s.rocks_placed = r.instances;
         s.rocks_drawn = r.instances_drawn;
         s.rock_shapes = app->rock_tiles->rock_count;
         s.rocks_build_seconds = app->rock_tiles->build_seconds;
     }
     if (app->cliffs) {
-        rocks_cliffs_stats c = rocks_cliffs_stats_get(app->cliffs);
+        rocks_cliffs_stats_info c = rocks_cliffs_stats(app->cliffs);
         s.cliffs = true;
         s.cliff_blocks = c.copies_present;
         s.cliff_fields = c.fields;

@@ -6,7 +6,7 @@
  *     game_app *app = game_app_create(&(game_app_desc){ .seed = 7, .width = 1280, .height = 720 });
  *     if (!app) return 1;                               // the reason is printed
  *     while (game_app_frame(app)) {}                    // until closed, quit or the walk ends
- *     game_app_stats stats = game_app_stats_get(app);
+ *     game_app_stats_info stats = game_app_stats(app);
  *     game_app_destroy(app);
  *
  * Start-up: the world streams in around the spawn point while a loading line shows. The player
@@ -186,7 +186,7 @@ game_app *game_app_create(const game_app_desc *desc);
 bool game_app_frame(game_app *app);
 void game_app_destroy(game_app *app);
 
-typedef struct game_app_stats {
+typedef struct game_app_stats_info {
     int frames;                       /* past loading */
     int loading_frames;
     double eye[3], feet[3];           /* of the player now */
@@ -209,12 +209,12 @@ typedef struct game_app_stats {
     /* The same less the draw calls (terrain_ecs_draw and the HUD): input, player, every phase
      * and the uploads. On llvmpipe the draw calls include the vertex shading a GPU does. */
     double engine_ms_p50, engine_ms_p99;
-    /* Triangles drawn a frame (gfx_stats: every module's draws, the grass's GPU-generated ones
+    /* Triangles drawn a frame (gfx_context_stats: every module's draws, the grass's GPU-generated ones
      * not included), the median over the frames past loading. */
     double triangles_p50;
     int hitches;                      /* frames past loading whose CPU time exceeded 33 ms */
-    terrain_stream_stats stream;
-    terrain_edit_stats edits;
+    terrain_ecs_stream_stats_info stream;
+    terrain_ecs_edit_stats_info edits;
     uint64_t strokes;                 /* tool strokes the player made */
     int edited_chunks;                /* chunks with logged edits */
     size_t peak_rss_bytes;            /* of the process (getrusage), driver memory included */
@@ -234,9 +234,9 @@ typedef struct game_app_stats {
     uint64_t cliff_blocks, cliff_fields, cliff_cells_computed, cliff_cells_reused;
     double cliffs_build_seconds, cliffs_amplify_seconds, cliffs_presence_seconds;
     uint32_t cliff_tiles_from_cache;
-} game_app_stats;
+} game_app_stats_info;
 
-game_app_stats game_app_stats_get(const game_app *app);
+game_app_stats_info game_app_stats(const game_app *app);
 /* The ECS and the ids of the game's components and resources (for desc.setup). */
 ecs_world *game_app_ecs(game_app *app);
 const game_ids *game_app_ids(const game_app *app);

@@ -200,7 +200,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
     return -1;
 }
 
-static void print_results(const game_app_stats *s, bool walked) {
+static void print_results(const game_app_stats_info *s, bool walked) {
     printf("world: %d frames after %d loading frames\n", s->frames, s->loading_frames);
     if (walked)
         printf("world: walked %.1f m (%.1f m from the start)%s, eye in solid on %d frames, waited %d frames\n",
@@ -276,7 +276,7 @@ int main(int argc, char **argv) {
         return 1;
     }
     while (game_app_frame(app)) {}
-    game_app_stats stats = game_app_stats_get(app);
+    game_app_stats_info stats = game_app_stats(app);
     print_results(&stats, o.walk != NULL || o.tour);
     game_app_destroy(app);
     game_walk_free(&walk);

@@ -24,7 +24,7 @@ typedef struct local_field {
     terrain_field field;
     float lo[3];
     double origin[3];                /* world position of local (0, 0, 0) */
-    const game_player_params *params;   /* its obstacle hooks */
+    const game_player_desc *params;   /* its obstacle hooks */
 } local_field;
 
 /* f and its gradient at local point p by trilinear interpolation of the cell around p (outside
@@ -69,7 +69,7 @@ typedef struct contact {
 
 /* The nearer of the terrain's contact and the obstacles' (rocks), when there are obstacles. */
 static contact obstacle_contact(const local_field *lf, const float c[3], contact terrain) {
-    const game_player_params *p = lf->params;
+    const game_player_desc *p = lf->params;
     if (!p || !p->obstacle_distance) return terrain;
     double point[3] = { lf->origin[0] + c[0], lf->origin[1] + c[1], lf->origin[2] + c[2] };
     float normal[3];
@@ -100,7 +100,7 @@ static contact probe(const local_field *lf, const float c[3]) {
 /* ---- the capsule ---------------------------------------------------------------------------- */
 
 typedef struct mover {
-    const game_player_params *params;
+    const game_player_desc *params;
     const local_field *lf;
     float height;                /* of the capsule now */
     float cos_max_slope;
@@ -223,7 +223,7 @@ static bool held_below(const mover *m, const float p[3]) {
 
 /* One walking substep of `h` seconds (the move is at most r/2 long). */
 static void walk_substep(const mover *m, float p[3], float v[3], bool *on_ground, float h) {
-    const game_player_params *pr = m->params;
+    const game_player_desc *pr = m->params;
     if (*on_ground && v[1] <= 0.0f) {
         v[1] = 0.0f;
         float start[3] = { p[0], p[1], p[2] };
@@ -288,7 +288,7 @@ typedef struct swim_plan {
  * overshoot or jitter however long the step (a player arriving at the zone's edge at `speed` has
  * v0 + ωx0 = 0 and decays as a pure exponential). Farther away the velocity eases towards `speed`
  * in the height's direction. Returns the rise of the feet. */
-static float swim_float(const game_player_params *pr, float x0, float speed, float v[3], float h) {
+static float swim_float(const game_player_desc *pr, float x0, float speed, float v[3], float h) {
     float w = pr->buoyancy_rate;
     if (fabsf(x0) * w <= speed) {
         float decay = expf(-w * h), c = v[1] + w * x0;
@@ -303,7 +303,7 @@ static float swim_float(const game_player_params *pr, float x0, float speed, flo
 /* One substep in water (at most r/2 long, as walking's). Returns whether the feet stand on the bed
  * (a walkable contact under them). Collision is walking's: the bed lifts, walls push sideways. */
 static bool swim_substep(const mover *m, const swim_plan *s, float p[3], float v[3], float h) {
-    const game_player_params *pr = m->params;
+    const game_player_desc *pr = m->params;
     float rise;
     if (!isnan(s->climb_to)) {
         /* climbing out: up the shore while pressing on, then level until over its top */
@@ -326,9 +326,9 @@ static bool swim_substep(const mover *m, const swim_plan *s, float p[3], float v
 
 static float or_default(float value, float fallback) { return value > 0.0f ? value : fallback; }
 
-void game_player_init(game_player *player, const game_player_params *params) {
+void game_player_init(game_player *player, const game_player_desc *params) {
     memset(player, 0, sizeof *player);
-    game_player_params p = params ? *params : (game_player_params){ 0 };
+    game_player_desc p = params ? *params : (game_player_desc){ 0 };
     p.radius = or_default(p.radius, 0.35f);
     p.height = or_default(p.height, 1.8f);
     p.crouch_height = or_default(p.crouch_height, 1.2f);
@@ -373,13 +373,13 @@ float game_player_height(const game_player *player) {
 }
 
 void game_player_eye(const game_player *player, double eye[3]) {
-    const game_player_params *p = &player->params;
+    const game_player_desc *p = &player->params;
     eye[0] = player->position[0];
     eye[1] = player->position[1] + (double)(player->crouching ? p->crouch_eye_height : p->eye_height);
     eye[2] = player->position[2];
 }
 
-float game_player_wade_share(const game_player_params *params, float depth) {
+float game_player_wade_share(const game_player_desc *params, float depth) {
     if (!(depth > 0.0f)) return 1.0f;
     return 1.0f - params->wade_slowdown * fminf(depth / params->swim_depth, 1.0f);
 }
@@ -387,7 +387,7 @@ float game_player_wade_share(const game_player_params *params, float depth) {
 #define BOB_STRIDE 1.2f                /* metres a half cycle: a dip per step */
 
 float game_player_bob(const game_player *player) {
-    const game_player_params *p = &player->params;
+    const game_player_desc *p = &player->params;
     if (player->flying || player->swimming || !player->on_ground || p->bob_amplitude <= 0.0f) return 0.0f;
     float speed = hypotf(player->velocity[0], player->velocity[2]);
     float share = fminf(speed / p->sprint_speed, 1.0f);
@@ -401,7 +401,7 @@ static bool pressed(const input_actions *a, input_action action) {
 
 /* The velocity the input asks for this frame. */
 static void wish_velocity(const game_player *pl, const input_actions *a, float out[3]) {
-    const game_player_params *p = &pl->params;
+    const game_player_desc *p = &pl->params;
     float mx = a->move_x, my = a->move_y, len = sqrtf(mx * mx + my * my);
     if (len > 1.0f) mx /= len, my /= len;
     float sy = sinf(pl->yaw), cy = cosf(pl->yaw);
@@ -434,7 +434,7 @@ static void wish_velocity(const game_player *pl, const input_actions *a, float o
  * once deeper than swim_depth. Both rules at swim_depth, but a floating swimmer's feet are
  * eye_height − swim_eye_above deep, deeper than swim_depth, so only the bed ends a swim. */
 static void water_refresh(game_player *pl, terrain_world *world) {
-    const game_player_params *p = &pl->params;
+    const game_player_desc *p = &pl->params;
     float surface = 0.0f, ground = 0.0f;
     double feet = pl->position[1];
     bool wet = terrain_world_water_at(world, pl->position[0], pl->position[2], &surface, &ground) &&
@@ -455,7 +455,7 @@ static void water_refresh(game_player *pl, terrain_world *world) {
  * feet. Its top, when at most climb_out_height above the surface, in world metres; NaN otherwise
  * (open water, or a cliff: the swimmer stays in the water below it). */
 static float swim_climb_top(const game_player *pl, terrain_world *world, const float wish[3]) {
-    const game_player_params *p = &pl->params;
+    const game_player_desc *p = &pl->params;
     float speed = hypotf(wish[0], wish[2]);
     if (!(speed > 0.0f)) return NAN;
     for (int k = 0; k < 3; k++) {
@@ -477,7 +477,7 @@ static float swim_climb_top(const game_player *pl, terrain_world *world, const f
  * climb goes on while the move input holds, within its time, until the feet are over the shore's
  * top (checked after the move, climb_done). */
 static bool climb_begin(game_player *pl, terrain_world *world, const input_actions *a, const float wish[3]) {
-    const game_player_params *p = &pl->params;
+    const game_player_desc *p = &pl->params;
     bool moving = wish[0] != 0.0f || wish[2] != 0.0f;
     if (pl->climbing && (!moving || pl->climb_time <= 0.0f)) pl->climbing = false;
     if (pl->climbing || !pl->swimming || down(a, INPUT_ACTION_CROUCH)) return pl->climbing;
@@ -498,7 +498,7 @@ static void climb_done(game_player *pl, terrain_world *world, float dt) {
 }
 
 static void update(game_player *pl, terrain_world *world, const input_actions *a, float dt, bool ask_region) {
-    const game_player_params *p = &pl->params;
+    const game_player_desc *p = &pl->params;
     if (!(dt > 0.0f)) dt = 0.0f;
     if (dt > p->max_dt) dt = p->max_dt;
 
@@ -666,7 +666,7 @@ void game_player_spawn(game_player *player, terrain_world *world, double x, doub
             column_heights(world, gx + dx, gz + dz, &top, NULL);
             highest = fmaxf(highest, top);
         }
-    game_player_params params = player->params;
+    game_player_desc params = player->params;
     memset(player, 0, sizeof *player);
     player->params = params;
     player->position[0] = cx;

@@ -5,7 +5,7 @@
  *     terrain_world *world = terrain_world_create(&(terrain_world_desc){
  *         .generation = terrain_generation_defaults(42) });
  *     game_player player;
- *     game_player_init(&player, &(game_player_params){ 0 });      // zero = every default
+ *     game_player_init(&player, &(game_player_desc){ 0 });      // zero = every default
  *     game_player_spawn(&player, world, 0.0, 0.0);                 // on solid ground near (0, 0)
  *     for (;;) {                                                    // each frame
  *         input_update(input, dt);                                  // devices or a replay
@@ -77,7 +77,7 @@
 #include "terrain/terrain.h"
 
 /* Zero means the default for every field. */
-typedef struct game_player_params {
+typedef struct game_player_desc {
     float radius;                     /* capsule radius; 0 = 0.35 m */
     float height;                     /* standing capsule height; 0 = 1.8 m */
     float crouch_height;              /* 0 = 1.2 m */
@@ -126,10 +126,10 @@ typedef struct game_player_params {
     void (*obstacles_near)(void *user, const double min[3], const double max[3]);
     float (*obstacle_distance)(void *user, const double point[3], float max_distance, float normal[3]);
     void *obstacle_user;
-} game_player_params;
+} game_player_desc;
 
 typedef struct game_player {
-    game_player_params params;        /* with the defaults filled in */
+    game_player_desc params;        /* with the defaults filled in */
     double position[3];               /* the feet: bottom centre of the capsule, world metres */
     float velocity[3];                /* m/s */
     float yaw, pitch;                 /* radians, the view */
@@ -148,7 +148,7 @@ typedef struct game_player {
 } game_player;
 
 /* Fills in the defaults; the player stands at the origin, not spawned. */
-void game_player_init(game_player *player, const game_player_params *params);
+void game_player_init(game_player *player, const game_player_desc *params);
 /* Puts the player on solid ground at or near column (x, z): on top of the highest solid layer of
  * the column (never in a cave), settled so that the capsule touches the surface f = 0 without
  * intersecting it. Columns under water are avoided: the nearest dry column within 64 m is taken
@@ -176,6 +176,6 @@ float game_player_bob(const game_player *player);
 float game_player_height(const game_player *player);
 /* The share of its gait a wading player keeps with its feet `depth` metres under the surface:
  * 1 − wade_slowdown·min(depth / swim_depth, 1); 1 for depth ≤ 0. */
-float game_player_wade_share(const game_player_params *params, float depth);
+float game_player_wade_share(const game_player_desc *params, float depth);
 
 #endif

@@ -508,7 +508,7 @@ static void target(const game_walker *w, int i, double out[3]) {
 /* What the player's speed is on this leg on dry land (player.c: sprint is a held button, fly has
  * its own). */
 static float dry_gait_speed(const game_player *pl, const game_walk_point *p) {
-    const game_player_params *pr = &pl->params;
+    const game_player_desc *pr = &pl->params;
     if (p->fly) return p->walk ? pr->fly_speed : pr->fly_sprint_speed;
     return p->walk ? pr->walk_speed : pr->sprint_speed;
 }
@@ -516,7 +516,7 @@ static float dry_gait_speed(const game_player *pl, const game_walk_point *p) {
 /* ... and where the player is now (player.h: wading walks slower and never sprints; swimming has
  * its own speeds; flying ignores water). */
 static float gait_speed(const game_player *pl, const game_walk_point *p) {
-    const game_player_params *pr = &pl->params;
+    const game_player_desc *pr = &pl->params;
     if (p->fly || pl->flying || !pl->in_water) return dry_gait_speed(pl, p);
     if (pl->swimming) return p->walk ? pr->swim_speed : pr->swim_sprint_speed;
     return pr->walk_speed * game_player_wade_share(pr, pl->water_depth);

@@ -147,7 +147,7 @@ static bool cave_view_along(terrain_world *world, double x, double z, const cave
 }
 
 bool game_find_cave_view(terrain_world *world, double centre_x, double centre_z, double radius, game_cave_view *out) {
-    const terrain_generation_params *params = terrain_world_generation(world);
+    const terrain_generation_desc *params = terrain_world_generation(world);
     float sea_level = params ? params->sea_level : 0.0f;
     static const int directions[8][2] = { { 1, 0 }, { 1, 1 }, { 0, 1 }, { -1, 1 }, { -1, 0 }, { -1, -1 }, { 0, -1 }, { 1, -1 } };
     bool found = false;

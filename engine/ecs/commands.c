@@ -54,14 +54,14 @@ static size_t store_value(ecs_commands *commands, const void *value, size_t size
     return offset;
 }
 
-ecs_entity ecs_defer_create(ecs_commands *commands) {
+ecs_entity ecs_defer_entity_create(ecs_commands *commands) {
     uint32_t local = commands->placeholder_count++;
     ecs_entity placeholder = ECS_PLACEHOLDER_BIT | ecs_id_make(local, commands->serial);
     record(commands, (ecs_command){ .kind = ECS_COMMAND_CREATE, .entity = placeholder });
     return placeholder;
 }
 
-void ecs_defer_destroy(ecs_commands *commands, ecs_entity entity) {
+void ecs_defer_entity_destroy(ecs_commands *commands, ecs_entity entity) {
     record(commands, (ecs_command){ .kind = ECS_COMMAND_DESTROY, .entity = entity });
 }
 

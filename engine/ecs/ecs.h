@@ -59,9 +59,9 @@
  * COMMANDS defer structural changes (create, destroy, add, set, remove). A system gets its own
  * buffer in it->commands; the scheduler applies all buffers at the end of the phase, in system
  * registration order and then batch order, so the result never depends on thread timing.
- *     ecs_entity chunk = ecs_defer_create(it->commands);  // a placeholder id, see below
+ *     ecs_entity chunk = ecs_defer_entity_create(it->commands);  // a placeholder id, see below
  *     ecs_defer_set(it->commands, chunk, position, &(Position){ 0, 0 });
- *     ecs_defer_destroy(it->commands, it->entities[i]);
+ *     ecs_defer_entity_destroy(it->commands, it->entities[i]);
  *   Outside systems, a buffer of your own: ecs_commands_create, ecs_commands_apply, _destroy.
  *
  * SYSTEMS AND PHASES. A frame runs the phases in order; the default pipeline is
@@ -84,7 +84,7 @@
  *   A phase whose systems took under 20 us in all last frame (and that has no system of
  *   several batches now) runs on the calling thread: waking workers would cost more.
  *
- * PLACEHOLDER IDS. ecs_defer_create returns a placeholder that only the buffer it came from
+ * PLACEHOLDER IDS. ecs_defer_entity_create returns a placeholder that only the buffer it came from
  * understands: use it in later commands of that buffer; the real entity exists once the buffer
  * is applied. Real ids are handed out at apply time, in apply order, which is what keeps them
  * identical for any thread count. Do not store a placeholder in component data.
@@ -102,7 +102,7 @@
  *   so moves between tables no observer cares about cost nothing more. Like hooks, observers
  *   run on the thread making the change and may not change structure.
  *
- * STATS. ecs_stats(world) counts entities, tables, queries, systems, observers and the rows
+ * STATS. ecs_world_stats(world) counts entities, tables, queries, systems, observers and the rows
  * moved between tables since the world began (every add or remove that changes an entity's
  * component set); ecs_progress emits each frame's moves as the trace counter ecs.table_moves.
  *
@@ -344,13 +344,13 @@ void ecs_observer_remove(ecs_world *world, ecs_observer observer);   /* 0 is ign
 
 /* ---- stats ------------------------------------------------------------------------------ */
 
-typedef struct ecs_world_stats {
+typedef struct ecs_world_stats_info {
     uint64_t table_moves;                    /* rows moved between tables (archetype changes)
                                                 since the world was created */
     int entities, tables, components, queries, systems, observers;
-} ecs_world_stats;
+} ecs_world_stats_info;
 /* ecs_progress also emits the moves of each frame as the trace counter "ecs.table_moves". */
-ecs_world_stats ecs_stats(const ecs_world *world);
+ecs_world_stats_info ecs_world_stats(const ecs_world *world);
 
 /* ---- commands --------------------------------------------------------------------------- */
 
@@ -361,8 +361,8 @@ void ecs_commands_destroy(ecs_commands *commands);
 void ecs_commands_apply(ecs_commands *commands);
 int ecs_commands_count(const ecs_commands *commands);
 
-ecs_entity ecs_defer_create(ecs_commands *commands);                 /* returns a placeholder */
-void ecs_defer_destroy(ecs_commands *commands, ecs_entity entity);
+ecs_entity ecs_defer_entity_create(ecs_commands *commands);                 /* returns a placeholder */
+void ecs_defer_entity_destroy(ecs_commands *commands, ecs_entity entity);
 void ecs_defer_add(ecs_commands *commands, ecs_entity entity, ecs_component component);
 void ecs_defer_set(ecs_commands *commands, ecs_entity entity, ecs_component component,
                    const void *value);

@@ -15,7 +15,7 @@
 
 /* ---- ids -------------------------------------------------------------------------------- */
 
-/* The generation's top bit marks a placeholder from ecs_defer_create; real generations use
+/* The generation's top bit marks a placeholder from ecs_defer_entity_create; real generations use
  * the low 31 bits and wrap, so a real id never looks like a placeholder. */
 #define ECS_PLACEHOLDER_BIT (1ull << 63)
 #define ECS_GENERATION_MASK 0x7fffffffu
@@ -220,7 +220,7 @@ struct ecs_world {
     ecs_observer_info **observers;   /* ecs_observer is index + 1; NULL = removed */
     uint32_t observer_count, observer_capacity;
 
-    uint64_t table_moves;            /* rows moved between tables, ever (ecs_stats) */
+    uint64_t table_moves;            /* rows moved between tables, ever (ecs_world_stats_info) */
     uint64_t table_moves_reported;   /* table_moves at the last ecs.table_moves counter */
 
     core_arena frame;                /* scheduler scratch, reset every phase */

@@ -633,8 +633,8 @@ void ecs_entity_create_many(ecs_world *world, const ecs_bulk_desc *desc) {
 
 /* ---- stats ------------------------------------------------------------------------------ */
 
-ecs_world_stats ecs_stats(const ecs_world *world) {
-    ecs_world_stats stats = {
+ecs_world_stats_info ecs_world_stats(const ecs_world *world) {
+    ecs_world_stats_info stats = {
         .table_moves = world->table_moves,
         .entities = world->alive_count,
         .tables = (int)world->table_count,

@@ -2,7 +2,7 @@
  *
  * One renderer, two context backends. The same drawing code runs on both:
  *
- *     gfx_context *gfx = gfx_create(&(gfx_desc){ .width = 640, .height = 360, .title = "demo" });
+ *     gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = 640, .height = 360, .title = "demo" });
  *     if (!gfx) return 1;                          // the reason has been logged
  *     gfx_program lit = gfx_program_load(gfx, "scene.vert", "scene.frag");
  *     if (!lit.id) return 1;                       // file:line of the GLSL error printed
@@ -17,7 +17,7 @@
  *         gfx_pass_end(gfx);
  *         gfx_frame_end(gfx);                      // swap, or finish the offscreen frame
  *     }
- *     gfx_destroy(gfx);
+ *     gfx_context_destroy(gfx);
  *
  * Backends. A window is made when a display exists (DISPLAY or WAYLAND_DISPLAY set) and GLFW can
  * open one; otherwise, or with .headless, the context is OSMesa's (llvmpipe) and one line says
@@ -43,8 +43,8 @@
  * kind and do nothing (never touch another object). `_destroy` of a zero handle does nothing.
  * `gfx_X_valid` says whether a handle names a live object; `gfx_X_gl` gives its GL name, for the
  * GL calls this layer does not wrap (0 for a stale handle, which is reported as above).
- * The pools belong to the context made last by gfx_create (the one OpenGL draws with); objects
- * die with it, and destroying them after gfx_destroy does nothing.
+ * The pools belong to the context made last by gfx_context_create (the one OpenGL draws with); objects
+ * die with it, and destroying them after gfx_context_destroy does nothing.
  *
  *     gfx_buffer b = gfx_buffer_create(&(gfx_buffer_desc){ .size = 64 });
  *     gfx_buffer copy = b;
@@ -66,7 +66,7 @@
 
 typedef enum gfx_backend { GFX_BACKEND_WINDOW, GFX_BACKEND_OFFSCREEN } gfx_backend;
 
-typedef struct gfx_desc {
+typedef struct gfx_context_desc {
     int width, height;         /* framebuffer size; 0 = 1280 × 720 */
     const char *title;         /* window title; NULL = "engine" */
     bool headless;             /* force the OSMesa backend (--headless) */
@@ -75,16 +75,16 @@ typedef struct gfx_desc {
     bool hidden;               /* make the window but do not show it (tests) */
     const char *shader_dir;    /* NULL = $ENGINE_SHADERS, else the repository's shaders/ (found
                                   from the executable: bin/CONFIG/../../shaders) */
-} gfx_desc;
+} gfx_context_desc;
 
 typedef struct gfx_context gfx_context;
 
 /* NULL when no context of either kind can be made (the reason is logged). */
-gfx_context *gfx_create(const gfx_desc *desc);
-void gfx_destroy(gfx_context *gfx);
+gfx_context *gfx_context_create(const gfx_context_desc *desc);
+void gfx_context_destroy(gfx_context *gfx);
 
 gfx_backend gfx_backend_get(const gfx_context *gfx);
-/* The GLFWwindow * of a window backend (for input_desc.glfw_window), NULL offscreen. */
+/* The GLFWwindow * of a window backend (for input_system_desc.glfw_window), NULL offscreen. */
 void *gfx_glfw_window(const gfx_context *gfx);
 /* Size of the default framebuffer in pixels (follows window resizes). */
 void gfx_size(const gfx_context *gfx, int *width, int *height);
@@ -108,12 +108,12 @@ uint64_t gfx_frame_index(const gfx_context *gfx);
  * trace counters gfx.draw_calls, gfx.triangles and gfx.indirect_draws. Triangles are those of
  * GL_TRIANGLES draws times their instances; an indirect draw's count lives on the GPU, so it is
  * counted in indirect_draws and not in triangles (the grass's patches, for one). */
-typedef struct gfx_frame_stats {
+typedef struct gfx_context_stats_info {
     uint32_t draw_calls;
     uint64_t triangles;
     uint32_t indirect_draws;
-} gfx_frame_stats;
-gfx_frame_stats gfx_stats(const gfx_context *gfx);
+} gfx_context_stats_info;
+gfx_context_stats_info gfx_context_stats(const gfx_context *gfx);
 
 /* Reads the default framebuffer into `rgba` (width × height × 4 bytes, top row first). */
 void gfx_read_pixels(gfx_context *gfx, uint8_t *rgba);

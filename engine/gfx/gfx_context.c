@@ -38,8 +38,8 @@ static bool gfx_display_present(void) {
     return (x11 && *x11) || (wayland && *wayland);
 }
 
-gfx_context *gfx_create(const gfx_desc *desc_in) {
-    gfx_desc desc = *desc_in;
+gfx_context *gfx_context_create(const gfx_context_desc *desc_in) {
+    gfx_context_desc desc = *desc_in;
     if (desc.width <= 0 || desc.height <= 0) { desc.width = 1280; desc.height = 720; }
     if (desc.width > 16384 || desc.height > 16384) {
         core_error("gfx", "size %dx%d is larger than 16384x16384", desc.width, desc.height);
@@ -72,7 +72,7 @@ gfx_context *gfx_create(const gfx_desc *desc_in) {
     return gfx;
 }
 
-void gfx_destroy(gfx_context *gfx) {
+void gfx_context_destroy(gfx_context *gfx) {
     if (!gfx) return;
     gfx__programs_destroy(gfx);
     gfx__timers_destroy(gfx);
@@ -128,13 +128,13 @@ void gfx_frame_end(gfx_context *gfx) {
     }
     gfx->frame_index++;
     gfx->last_frame = gfx__frame_counts;
-    gfx__frame_counts = (gfx_frame_stats){ 0 };
+    gfx__frame_counts = (gfx_context_stats_info){ 0 };
     trace_counter("gfx.draw_calls", gfx->last_frame.draw_calls);
     trace_counter("gfx.triangles", (double)gfx->last_frame.triangles);
     trace_counter("gfx.indirect_draws", gfx->last_frame.indirect_draws);
 }
 
-gfx_frame_stats gfx_stats(const gfx_context *gfx) { return gfx->last_frame; }
+gfx_context_stats_info gfx_context_stats(const gfx_context *gfx) { return gfx->last_frame; }
 
 void gfx_read_pixels(gfx_context *gfx, uint8_t *rgba) {
     TRACE_ZONE("gfx_read_pixels");

@@ -69,7 +69,7 @@ void gfx__pool_report(gfx_pool *pool, uint32_t id, const char *call);
 
 /* What gfx_draw has drawn since the last gfx_frame_end (gfx_resources.c; OpenGL is used from
  * the main thread only, so plain counters). */
-extern gfx_frame_stats gfx__frame_counts;
+extern gfx_context_stats_info gfx__frame_counts;
 
 struct gfx_context {
     gfx_backend backend;
@@ -81,7 +81,7 @@ struct gfx_context {
     bool fullscreen;
     int windowed_x, windowed_y, windowed_width, windowed_height;
     uint64_t frame_index;
-    gfx_frame_stats last_frame;    /* counted by gfx_draw (gfx__frame_counts) */
+    gfx_context_stats_info last_frame;    /* counted by gfx_draw (gfx__frame_counts) */
 
     /* GPU timing (gfx_timer.c) */
     gfx_timer_frame timer_frames[GFX_TIMER_FRAMES];
@@ -102,14 +102,14 @@ struct gfx_context {
     gfx_pool buffers, vertex_arrays, textures, framebuffers;
 };
 
-/* The context gfx_create made last (NULL after its gfx_destroy): whose pools handles name. */
+/* The context gfx_context_create made last (NULL after its gfx_context_destroy): whose pools handles name. */
 extern gfx_context *gfx__current;
 void gfx__resources_init(gfx_context *gfx);
 void gfx__resources_destroy(gfx_context *gfx);
 
 /* Backends (gfx_window.c, gfx_offscreen.c). The window says why it failed in `reason`; the
  * offscreen backend logs its own errors. */
-bool gfx__window_open(gfx_context *gfx, const gfx_desc *desc, char *reason, size_t reason_size);
+bool gfx__window_open(gfx_context *gfx, const gfx_context_desc *desc, char *reason, size_t reason_size);
 void gfx__window_close(gfx_context *gfx);
 void gfx__window_swap(gfx_context *gfx);
 bool gfx__offscreen_open(gfx_context *gfx, int width, int height);

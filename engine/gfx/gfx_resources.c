@@ -65,7 +65,7 @@ static gfx__framebuffer_entry *gfx_framebuffer_use(gfx_framebuffer framebuffer, 
 /* A new entry of the current context's pool `field`; NULL (logged) without a context. */
 static uint32_t gfx_make(gfx_pool *pool, void **entry, const char *call) {
     if (!pool) {
-        core_error("gfx", "%s without a context (before gfx_create or after gfx_destroy)", call);
+        core_error("gfx", "%s without a context (before gfx_context_create or after gfx_context_destroy)", call);
         return 0;
     }
     return gfx__pool_alloc(pool, entry);
@@ -409,7 +409,7 @@ void gfx_framebuffer_size(gfx_framebuffer framebuffer, int *width, int *height) 
 
 /* ---- draws ---- */
 
-gfx_frame_stats gfx__frame_counts;
+gfx_context_stats_info gfx__frame_counts;
 
 void gfx_draw(const gfx_draw_desc *desc) {
     const gfx__vertex_array_entry *array = gfx_vertex_array_use(desc->vertex_array, "gfx_draw");

@@ -22,7 +22,7 @@ static void gfx_glfw_failure(char *reason, size_t size) {
     snprintf(reason, size, "%s", description ? description : "unknown reason");
 }
 
-bool gfx__window_open(gfx_context *gfx, const gfx_desc *desc, char *reason, size_t reason_size) {
+bool gfx__window_open(gfx_context *gfx, const gfx_context_desc *desc, char *reason, size_t reason_size) {
     /* Errors while opening are reported once, by the caller; later ones go to the log. */
     glfwSetErrorCallback(NULL);
     if (gfx_glfw_users == 0 && !glfwInit()) {

@@ -9,7 +9,7 @@
  *          if (input_decoder_decode(d, report, size, &pad) == INPUT_DECODE_OK) use(pad.lx);
  *      Known pads (DualShock 4, DualSense, Switch Pro) are picked by vendor and product id; any
  *      other pad is decoded from its HID report descriptor (.descriptor). Reports that are too
- *      short, too long, of an unknown report ID or malformed are counted (input_decoder_stats)
+ *      short, too long, of an unknown report ID or malformed are counted (input_decoder_stats_info)
  *      and ignored — a decoder never reads outside the bytes it is given.
  *      Axes follow SDL's convention: x positive right, y positive down, full deflection ±1;
  *      triggers 0…1. input_apply_dead_zone applies the radial dead zone to a state.
@@ -19,8 +19,8 @@
  *      takes keyboard and mouse events from a GLFW window (raw mouse motion where offered). Pads
  *      hidapi cannot read (the xpad driver's, or a hidraw node this user may not open: the log
  *      names the node and data/input/70-gamepads.rules) are read through GLFW's gamepad API while a
- *      window exists, with SDL's mappings and the lines of input_desc.gamepad_mappings_path:
- *          input_create(&(input_desc){ .glfw_window = window,
+ *      window exists, with SDL's mappings and the lines of input_system_desc.gamepad_mappings_path:
+ *          input_system_create(&(input_system_desc){ .glfw_window = window,
  *                                      .gamepad_mappings_path = "gamecontrollerdb.txt" });
  *
  *   3. Actions (move, look, jump, sprint, crouch, tool, toggle fly) are what a game reads. They
@@ -128,10 +128,10 @@ const char *input_decode_result_name(input_decode_result result);
  * need 10"); the text lives in the decoder until its next failure. */
 const char *input_decoder_last_error(input_decoder *decoder);
 
-typedef struct input_decoder_stats {
+typedef struct input_decoder_stats_info {
     uint64_t decoded, short_reports, oversized, unknown_id, malformed;
-} input_decoder_stats;
-input_decoder_stats input_decoder_stats_get(const input_decoder *decoder);
+} input_decoder_stats_info;
+input_decoder_stats_info input_decoder_stats(const input_decoder *decoder);
 
 /* ---- actions ------------------------------------------------------------------------------ */
 
@@ -184,7 +184,7 @@ void input_bindings_destroy(input_bindings *bindings);
 
 /* ---- the input system --------------------------------------------------------------------- */
 
-typedef struct input_desc {
+typedef struct input_system_desc {
     const input_bindings *bindings;  /* NULL = defaults; copied */
     void *glfw_window;               /* a GLFWwindow *, or NULL (no keyboard or mouse) */
     bool no_gamepads;                /* don't open hidapi (tests, replays) */
@@ -193,15 +193,15 @@ typedef struct input_desc {
     const char *replay_path;         /* --replay FILE: read frames from here instead of devices */
     /* --gamepad-mappings FILE: lines in SDL's game controller database format for the pads read
      * through GLFW (bad lines are reported with FILE:LINE and skipped; an unreadable file fails
-     * input_create) */
+     * input_system_create) */
     const char *gamepad_mappings_path;
-} input_desc;
+} input_system_desc;
 
 typedef struct input_system input_system;
 
 /* NULL on failure (an unreadable replay, an unwritable record file), after a message naming it. */
-input_system *input_create(const input_desc *desc);
-void input_destroy(input_system *input);
+input_system *input_system_create(const input_system_desc *desc);
+void input_system_destroy(input_system *input);
 
 /* Once per frame on the main thread: polls GLFW events (glfwPollEvents; the input system owns
  * the window's key, mouse-button, cursor and scroll callbacks), gathers gamepad states, computes the

@@ -134,7 +134,7 @@ struct input_decoder {
     input_gamepad_kind kind;
     uint16_t vendor_id, product_id;
     uint8_t crc_good;                /* Bluetooth reports with a correct CRC, up to the threshold */
-    input_decoder_stats stats;
+    input_decoder_stats_info stats;
     input_decode_result last_result; /* of the last failed decode, for input_decoder_last_error */
     input_decode_failure last_failure;
     char last_error[128];
@@ -183,7 +183,7 @@ void input_decoder_destroy(input_decoder *decoder) {
 
 input_gamepad_kind input_decoder_kind(const input_decoder *decoder) { return decoder->kind; }
 
-input_decoder_stats input_decoder_stats_get(const input_decoder *decoder) { return decoder->stats; }
+input_decoder_stats_info input_decoder_stats(const input_decoder *decoder) { return decoder->stats; }
 
 /* ---- CRC-32 (IEEE 802.3, reflected, as zlib), slicing by 8 ------------------------------------ */
 

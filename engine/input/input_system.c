@@ -198,16 +198,16 @@ static void input_gather_gamepads(input_system *in) {
 
 /* ---- create, destroy ------------------------------------------------------------------------ */
 
-input_system *input_create(const input_desc *desc) {
-    input_desc d = desc ? *desc : (input_desc){ 0 };
+input_system *input_system_create(const input_system_desc *desc) {
+    input_system_desc d = desc ? *desc : (input_system_desc){ 0 };
     input_bindings bindings;
     if (d.bindings && input__bindings_valid(d.bindings)) {
         bindings = *d.bindings;
     } else {
-        if (d.bindings) core_warn("input", "input_desc.bindings holds values out of range: using the defaults");
+        if (d.bindings) core_warn("input", "input_system_desc.bindings holds values out of range: using the defaults");
         input__bindings_set_default(&bindings);
     }
-    /* input_desc.dead_zone wins when set; else the bindings' dead_zone (default 0.15). */
+    /* input_system_desc.dead_zone wins when set; else the bindings' dead_zone (default 0.15). */
     float dead_zone = bindings.dead_zone;
     if (d.dead_zone != 0.0f) {
         if (d.dead_zone > 0.0f && d.dead_zone <= INPUT_DEAD_ZONE_MAX) dead_zone = d.dead_zone;
@@ -220,14 +220,14 @@ input_system *input_create(const input_desc *desc) {
     /* GLFW's pads need its joystick API, so a window (GLFW initialised); a replay opens no device. */
     bool glfw_pads = d.glfw_window && !d.no_gamepads && !d.replay_path;
     if (!input__glfw_pads_init(&in->glfw_pads, d.gamepad_mappings_path, glfw_pads)) {
-        input_destroy(in);
+        input_system_destroy(in);
         return NULL;
     }
     if (d.replay_path) {
         in->replay_path = core_strdup(d.replay_path);
         in->replayer = input__replayer_open(d.replay_path, &bindings, &dead_zone);
         if (!in->replayer) {
-            input_destroy(in);
+            input_system_destroy(in);
             return NULL;
         }
         if (d.bindings && !input__bindings_equal(d.bindings, &bindings))
@@ -236,7 +236,7 @@ input_system *input_create(const input_desc *desc) {
     if (d.record_path) {
         in->recorder = input__recorder_open(d.record_path, &bindings, dead_zone);
         if (!in->recorder) {
-            input_destroy(in);
+            input_system_destroy(in);
             return NULL;
         }
     }
@@ -249,7 +249,7 @@ input_system *input_create(const input_desc *desc) {
     return in;
 }
 
-void input_destroy(input_system *in) {
+void input_system_destroy(input_system *in) {
     if (!in) return;
     input__gamepads_stop(in->gamepads);
     input__glfw_pads_close(&in->glfw_pads, &in->pads);

@@ -656,8 +656,8 @@ void job_parallel_for(job_system *jobs, size_t count, size_t batch, job_range_fn
     job_wait(jobs, job_parallel_for_async(jobs, count, batch, fn, user, name));
 }
 
-job_stats job_system_stats(job_system *jobs) {
-    job_stats stats = {
+job_system_stats_info job_system_stats(job_system *jobs) {
+    job_system_stats_info stats = {
         .completed = sum_completed(jobs),
         .submitted = sum_submitted(jobs),
         .sleeps = atomic_load_explicit(&jobs->sleeps, memory_order_relaxed),
@@ -675,7 +675,7 @@ job_stats job_system_stats(job_system *jobs) {
 /* The one place the job system's counters are recorded (jobs.h, TRACES). */
 void job_system_trace_counters(job_system *jobs) {
     if (!trace_active()) return;
-    job_stats now = job_system_stats(jobs), *last = &jobs->traced;
+    job_system_stats_info now = job_system_stats(jobs), *last = &jobs->traced;
     trace_counter("jobs.run", (double)(now.completed - last->completed));
     trace_counter("jobs.stolen", (double)(now.stolen - last->stolen));
     trace_counter("jobs.sleeps", (double)(now.sleeps - last->sleeps));

@@ -113,14 +113,14 @@ job_handle job_parallel_for_async(job_system *jobs, size_t count, size_t batch,
                                   job_range_fn fn, void *user, const char *name);
 
 /* Statistics, for counters and tests. */
-typedef struct job_stats {
+typedef struct job_system_stats_info {
     uint64_t submitted, completed; /* completed = jobs run */
     uint64_t stolen;         /* jobs moved from one thread's queue to another's */
     uint64_t sleeps;         /* times a thread went to sleep for want of work */
     uint64_t wakes;          /* sleepers woken for a new job or a finished one */
     int queued;              /* ready jobs not yet started */
-} job_stats;
-job_stats job_system_stats(job_system *jobs);
+} job_system_stats_info;
+job_system_stats_info job_system_stats(job_system *jobs);
 /* Records the TRACES counters above for the frame since the last call (one caller, once a
  * frame, from the thread that ends frames). Nothing when no capture runs. */
 void job_system_trace_counters(job_system *jobs);

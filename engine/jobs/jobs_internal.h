@@ -96,7 +96,7 @@ struct job_system {
 
     _Atomic uint64_t foreign_submitted, foreign_completed; /* by threads not in the pool */
     _Atomic uint64_t sleeps, wakes;
-    job_stats traced;             /* at the last job_system_trace_counters (its caller's) */
+    job_system_stats_info traced;             /* at the last job_system_trace_counters (its caller's) */
 };
 
 #endif

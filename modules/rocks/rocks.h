@@ -4,11 +4,11 @@
  * Two parts. The tile set is built once (or read from its cache file): 256 corner cubes, each
  * with the rocks whose seed point lies in it, every rock a closed mesh with levels of detail.
  *
- *     rocks_tileset *set = rocks_tiles_create(&(rocks_tiles_desc){ .shape = ROCKS_SHAPE_MIXED,
+ *     rocks_tileset *set = rocks_tileset_create(&(rocks_tileset_desc){ .shape = ROCKS_SHAPE_MIXED,
  *                                                                  .cache_path = "out/rocks.bin" });
  *     for (uint32_t e = set->tiles[t].first; e < set->tiles[t].first + set->tiles[t].count; e++)
  *         ... set->entries[e].rock, set->entries[e].offset ...
- *     rocks_tiles_destroy(set);
+ *     rocks_tileset_destroy(set);
  *
  * Rocks in the world (the second part, below) tile space with those cubes, colouring the
  * integer lattice by a hash, and keep the rocks whose anchor points fall in a support: the rock
@@ -65,7 +65,7 @@ typedef enum rocks_shape {
 #define ROCKS_HULL_AXES 13            /* a rock's collision hull: a 26-DOP (below) */
 
 /* Zero means the default (the shape preset's) for every field. */
-typedef struct rocks_tiles_desc {
+typedef struct rocks_tileset_desc {
     uint64_t seed;                    /* 0 = 1 */
     int cells;                        /* n, cells along a tile's side; 0 = 5; 4 … 8 */
     int voxels_per_cell;              /* n_G / n (001 §7: 10); 0 = 10; 4 … 16 */
@@ -79,7 +79,7 @@ typedef struct rocks_tiles_desc {
     float erosion_rate;               /* ε a step at a fully exposed voxel; 0 = 0.25 */
     job_system *jobs;                 /* build on these workers; NULL = the calling thread */
     const char *cache_path;           /* read from / written to this file; NULL = no cache */
-} rocks_tiles_desc;
+} rocks_tileset_desc;
 
 /* A rock's vertex: position in tile units relative to its region origin, unit normal. */
 typedef struct rocks_vertex {
@@ -135,7 +135,7 @@ typedef struct rocks_tile {
 
 /* Read-only once built. */
 typedef struct rocks_tileset {
-    rocks_tiles_desc desc;            /* with the defaults filled in (jobs and cache_path NULL) */
+    rocks_tileset_desc desc;            /* with the defaults filled in (jobs and cache_path NULL) */
     rocks_tile tiles[256];
     rocks_tile_entry *entries;
     rocks_rock *rocks;
@@ -157,12 +157,12 @@ extern const float rocks_hull_axes[ROCKS_HULL_AXES][3];
 /* Builds the set, or reads it from desc->cache_path when that file holds the same parameters.
  * A missing, old or damaged cache is rebuilt and rewritten, with a one-line notice; never fatal.
  * NULL (message logged) for parameters out of range. */
-rocks_tileset *rocks_tiles_create(const rocks_tiles_desc *desc);
-void rocks_tiles_destroy(rocks_tileset *set);
+rocks_tileset *rocks_tileset_create(const rocks_tileset_desc *desc);
+void rocks_tileset_destroy(rocks_tileset *set);
 /* Frees the CPU copies of the meshes (vertices and indices: about 80 % of the set) once something
- * else holds them — the renderer uploads them in rocks_create — and sets those pointers to NULL
+ * else holds them — the renderer uploads them in rocks_system_create — and sets those pointers to NULL
  * (the counts and each rock's ranges stay: they describe the GPU copy). Placement and collision
- * read anchors and hulls only; rocks_tile_write_ply fails after it, and a later rocks_create on
+ * read anchors and hulls only; rocks_tile_write_ply fails after it, and a later rocks_system_create on
  * the set would have nothing to upload. */
 void rocks_tiles_release_meshes(rocks_tileset *set);
 
@@ -197,7 +197,7 @@ bool rocks_tile_write_ply(const rocks_tileset *set, int t, const char *path, cha
  *     rocks_place_box(&(rocks_place_desc){ .tiles = set, .index = index, .world = world }, min, max, &p);
  *     ... p.instances[i].position (relative to p.origin), p.instances[i].rock ...
  *     rocks_placement_free(&p);
- *     rocks_place_index_destroy(index);                          // before rocks_tiles_destroy
+ *     rocks_place_index_destroy(index);                          // before rocks_tileset_destroy
  */
 typedef bool (*rocks_support_fn)(void *user, const double point[3]);
 
@@ -249,14 +249,14 @@ int rocks_lattice_colour(uint64_t seed, int64_t i, int64_t j, int64_t k);
 
 /* ---- rocks in the running world: the RockTiles component, drawing, collision ---------------- */
 /*
- *     rocks_system *rocks = rocks_create(&(rocks_desc){ .gfx = gfx, .ecs = ecs, .world = world,
+ *     rocks_system *rocks = rocks_system_create(&(rocks_system_desc){ .gfx = gfx, .ecs = ecs, .world = world,
  *                                                        .tiles = set });
  *     each frame:
  *         rocks_set_view(rocks, &view);                 // before ecs_progress
  *         ecs_progress(ecs, dt);                        // "rocks_place" runs in the draw phase
  *         terrain_ecs_draw(terrain, renderer, &view);   // the ground first
  *         rocks_draw(rocks, &view);
- *     rocks_destroy(rocks);                             // before ecs_world_destroy and gfx_destroy
+ *     rocks_system_destroy(rocks);                             // before ecs_world_destroy and gfx_context_destroy
  *
  * Every level-0 TerrainMeshChunk within range of the view gets a RockTiles component: the rocks
  * whose seeds lie in its 32 m box (rocks_place_box over the world's rock layers), placed by jobs
@@ -284,7 +284,7 @@ typedef enum rocks_quality {
 bool rocks_parse_quality(const char *text, rocks_quality *out);
 
 /* Zero means the default for every field. */
-typedef struct rocks_desc {
+typedef struct rocks_system_desc {
     gfx_context *gfx;                 /* required */
     ecs_world *ecs;                   /* required: the world terrain_ecs_create registered on */
     terrain_world *world;             /* required */
@@ -294,13 +294,13 @@ typedef struct rocks_desc {
     float range;                      /* metres to the last rock drawn; 0 = 70 */
     float lod_distance[ROCKS_LODS - 1];   /* metres where LOD 1 and 2 start; 0 = 10, 25 */
     float fog_density;                /* as terrain_renderer_desc's; 0 = 0.0025 */
-} rocks_desc;
+} rocks_system_desc;
 
 typedef struct rocks_system rocks_system;
 /* NULL (the reason logged) when a required field is missing or the shaders do not build. */
-rocks_system *rocks_create(const rocks_desc *desc);
+rocks_system *rocks_system_create(const rocks_system_desc *desc);
 /* Removes every RockTiles component, disables the systems, frees the GPU data. */
-void rocks_destroy(rocks_system *rocks);
+void rocks_system_destroy(rocks_system *rocks);
 void rocks_set_view(rocks_system *rocks, const terrain_view *view);
 /* Draws the rocks of the chunks in view, in one pass named "rocks" (after the terrain). */
 void rocks_draw(rocks_system *rocks, const terrain_view *view);
@@ -330,7 +330,7 @@ typedef struct rocks_ray_hit {
 bool rocks_raycast(rocks_system *rocks, const double origin[3], const float direction[3], float max_distance,
                    rocks_ray_hit *hit);
 
-typedef struct rocks_stats {
+typedef struct rocks_system_stats_info {
     int chunks;                       /* RockTiles components now */
     uint64_t instances;               /* rocks placed over them */
     uint64_t instances_drawn;         /* by the last rocks_draw */
@@ -342,8 +342,8 @@ typedef struct rocks_stats {
     size_t placed_bytes;              /* the placed rocks' instances, CPU side */
     size_t gpu_bytes;                 /* the renderer's buffers: the set's meshes, instances,
                                          draw commands */
-} rocks_stats;
-rocks_stats rocks_stats_get(const rocks_system *rocks);
+} rocks_system_stats_info;
+rocks_system_stats_info rocks_system_stats(const rocks_system *rocks);
 /* A hash of every placed rock (chunk coordinates, rock, key, position): tests and tools. */
 uint64_t rocks_digest(rocks_system *rocks);
 

@@ -216,14 +216,14 @@ rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc);   /* NULL with
 void rocks_cliffs_destroy(rocks_cliffs *cliffs);
 /* terrain_world_desc.amplify, with amplify_user = the cliffs (thread-safe). */
 void rocks_cliffs_amplify(void *cliffs, terrain_world *world, terrain_field *field);
-typedef struct rocks_cliffs_stats {
+typedef struct rocks_cliffs_stats_info {
     uint64_t fields, cells_computed, cells_reused;
     uint64_t copies_present;          /* block copies present whose bounds met a field's samples, summed over fields */
     double amplify_seconds;           /* in rocks_cliffs_amplify, summed over threads */
     double presence_seconds;          /* of which working out presence (cells_computed) */
     double build_seconds;             /* the tiles, built or read from cache_dir */
     uint32_t tiles_from_cache;        /* of the tiles, those read from cache_dir */
-} rocks_cliffs_stats;
-rocks_cliffs_stats rocks_cliffs_stats_get(rocks_cliffs *cliffs);
+} rocks_cliffs_stats_info;
+rocks_cliffs_stats_info rocks_cliffs_stats(rocks_cliffs *cliffs);
 
 #endif

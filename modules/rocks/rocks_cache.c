@@ -10,7 +10,7 @@
  *     u64 checksum: core_hash_bytes of every byte before it
  * Written to a temporary beside the target and renamed over it. A reader that finds anything
  * missing, old, for other parameters, cut short, damaged or inconsistent says which and returns
- * false; rocks_tiles_create then rebuilds, rewrites and prints one notice.
+ * false; rocks_tileset_create then rebuilds, rewrites and prints one notice.
  */
 #include "rocks_internal.h"
 
@@ -43,7 +43,7 @@ typedef struct cache_header {
 _Static_assert(sizeof(cache_header) == 8 + 8 + 8 + 16 + 44 + 24 + 4 + 8, "no padding in the cache header");
 
 static cache_header header_of(const rocks__params *params) {
-    const rocks_tiles_desc *d = &params->desc;
+    const rocks_tileset_desc *d = &params->desc;
     cache_header h;
     memset(&h, 0, sizeof h);
     memcpy(h.magic, MAGIC, 8);

@@ -37,7 +37,7 @@ struct rocks_cliffs {
     pthread_mutex_t lock;
     cell_entry *cache;
     size_t used;
-    rocks_cliffs_stats stats;
+    rocks_cliffs_stats_info stats;
 };
 
 static bool cliffs_desc_make(const rocks_cliffs_desc *in, rocks_cliffs_desc *d) {
@@ -138,9 +138,9 @@ void rocks_cliffs_destroy(rocks_cliffs *c) {
     core_free(c, sizeof *c);
 }
 
-rocks_cliffs_stats rocks_cliffs_stats_get(rocks_cliffs *c) {
+rocks_cliffs_stats_info rocks_cliffs_stats(rocks_cliffs *c) {
     pthread_mutex_lock(&c->lock);
-    rocks_cliffs_stats s = c->stats;
+    rocks_cliffs_stats_info s = c->stats;
     pthread_mutex_unlock(&c->lock);
     return s;
 }

@@ -56,7 +56,7 @@ static inline int rocks__floor_div(int a, int b) {
 
 /* The desc with its defaults filled in, and what follows from it. */
 typedef struct rocks__params {
-    rocks_tiles_desc desc;            /* jobs and cache_path NULL */
+    rocks_tileset_desc desc;            /* jobs and cache_path NULL */
     int n, m;                         /* cells a tile side, voxels a cell side */
     int seeds_max;                    /* s */
     bool seeds_fixed;                 /* n_k = s in every cell (round and slab presets) */
@@ -64,7 +64,7 @@ typedef struct rocks__params {
 } rocks__params;
 
 /* Fills `out` from desc (defaults, ranges). False with a message for bad values. */
-bool rocks__params_make(const rocks_tiles_desc *desc, rocks__params *out);
+bool rocks__params_make(const rocks_tileset_desc *desc, rocks__params *out);
 
 /* Colour of lattice point (x, y, z) of the caller's frame; only the points of the feature being
  * generated are asked for. */
@@ -161,7 +161,7 @@ typedef struct rocks__set {
     uint32_t voxel_total;
 } rocks__set;
 
-rocks_tileset *rocks__tiles_create(const rocks_tiles_desc *desc, const rocks__build_options *options);
+rocks_tileset *rocks__tiles_create(const rocks_tileset_desc *desc, const rocks__build_options *options);
 
 /* The cache (rocks_cache.c). Read: true when `path` holds exactly this set's parameters and is
  * whole; otherwise false with *why set ("missing", "old version", …) and nothing kept. */

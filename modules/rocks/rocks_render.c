@@ -135,7 +135,7 @@ static float key_unit(uint32_t key, int which) {
 }
 
 /* Distance-based level, spread by the rock's own factor; -1 = past range. */
-static int choose_lod(const rocks_draw_params *params, float distance, float spread, float *scale) {
+static int choose_lod(const rocks_draw_desc *params, float distance, float spread, float *scale) {
     float fade_start = 0.8f * params->range * spread, end = params->range * spread;
     if (distance >= end) return -1;
     *scale = distance <= fade_start ? 1.0f : (end - distance) / (end - fade_start);
@@ -151,7 +151,7 @@ static bool sphere_in_frustum(const terrain_frustum *f, const float c[3], float 
     return true;
 }
 
-uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const rocks_draw_params *params,
+uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const rocks_draw_desc *params,
                               const rocks_placement *const *placements, int count, int *commands_out) {
     TRACE_ZONE("rocks_draw");
     const rocks_tileset *set = r->set;

@@ -25,7 +25,7 @@
 #define ROCKS_MAX_WORK 64
 
 struct rocks_system {
-    rocks_desc desc;
+    rocks_system_desc desc;
     rocks_place_index *index;         /* the tile set laid out for placement, made once */
     rocks_place_desc place;
     ecs_component mesh_chunk, tiles;
@@ -34,7 +34,7 @@ struct rocks_system {
     terrain_view view;
     bool has_view;
     rocks_renderer *renderer;
-    rocks_stats stats;
+    rocks_system_stats_info stats;
     /* rocks_focus: the rocks near a box, so that many queries in it skip the chunks' lists */
     double focus_lo[3], focus_hi[3];
     bool focus_valid;
@@ -174,7 +174,7 @@ static void rocks_place_system(ecs_iter *it) {
 
 /* ---- the system ----------------------------------------------------------------------------- */
 
-static void rocks_defaults(rocks_desc *d) {
+static void rocks_defaults(rocks_system_desc *d) {
     if (d->quality == ROCKS_DEFAULT) d->quality = ROCKS_ON;
     if (!(d->tile_size > 0)) d->tile_size = 3.0f;
     if (!(d->range > 0)) d->range = 70.0f;
@@ -183,9 +183,9 @@ static void rocks_defaults(rocks_desc *d) {
     if (d->fog_density == 0) d->fog_density = 0.0025f;
 }
 
-rocks_system *rocks_create(const rocks_desc *desc) {
+rocks_system *rocks_system_create(const rocks_system_desc *desc) {
     if (!desc || !desc->gfx || !desc->ecs || !desc->world || !desc->tiles) {
-        core_error("rocks", "rocks_create needs .gfx, .ecs, .world and .tiles");
+        core_error("rocks", "rocks_system_create needs .gfx, .ecs, .world and .tiles");
         return NULL;
     }
     ecs_component mesh_chunk = ecs_component_lookup(desc->ecs, "TerrainMeshChunk");
@@ -213,10 +213,10 @@ rocks_system *rocks_create(const rocks_desc *desc) {
     return r;
 }
 
-void rocks_destroy(rocks_system *r) {
+void rocks_system_destroy(rocks_system *r) {
     if (!r) return;
     ecs_system_enable(r->desc.ecs, r->system, false);
-    /* Free every placement now (the components stay, empty: a later rocks_create places again). */
+    /* Free every placement now (the components stay, empty: a later rocks_system_create places again). */
     ecs_component_on_remove(r->desc.ecs, r->tiles, NULL, NULL);
     ecs_iter it = ecs_query_iter(r->desc.ecs, r->placed);
     while (ecs_query_next(&it)) {
@@ -238,8 +238,8 @@ void rocks_set_view(rocks_system *r, const terrain_view *view) {
     r->has_view = true;
 }
 
-rocks_stats rocks_stats_get(const rocks_system *r) {
-    rocks_stats s = r->stats;
+rocks_system_stats_info rocks_system_stats(const rocks_system *r) {
+    rocks_system_stats_info s = r->stats;
     s.tiles_bytes = r->desc.tiles ? r->desc.tiles->bytes : 0;
     s.placed_bytes = (size_t)s.instances * sizeof(rocks_instance);
     s.gpu_bytes = rocks__renderer_gpu_bytes(r->renderer);
@@ -266,7 +266,7 @@ void rocks_draw(rocks_system *r, const terrain_view *view) {
             list[n++] = p;
         }
     }
-    rocks_draw_params params = { .tile_size = r->desc.tile_size, .range = r->desc.range,
+    rocks_draw_desc params = { .tile_size = r->desc.tile_size, .range = r->desc.range,
                                  .fog_density = r->desc.fog_density,
                                  .lod_distance = { r->desc.lod_distance[0], r->desc.lod_distance[1] } };
     r->stats.instances_drawn = rocks__renderer_draw(r->renderer, view, &params, list, n, &r->stats.commands_drawn);

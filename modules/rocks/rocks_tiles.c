@@ -36,8 +36,8 @@ static bool bad(const char *what, double value) {
     return false;
 }
 
-bool rocks__params_make(const rocks_tiles_desc *desc_in, rocks__params *out) {
-    rocks_tiles_desc d = *desc_in;
+bool rocks__params_make(const rocks_tileset_desc *desc_in, rocks__params *out) {
+    rocks_tileset_desc d = *desc_in;
     d.jobs = NULL;
     d.cache_path = NULL;
     if (d.seed == 0) d.seed = 1;
@@ -133,7 +133,7 @@ int rocks__cell_seeds(const rocks__params *params, const int cell[3], rocks__col
     static const double r3[3] = { 0.8191725133961645, 0.6710436067037893, 0.5497004779019703 };
     double start[3] = { unit(core_hash_combine(key, 2)), unit(core_hash_combine(key, 3)),
                         unit(core_hash_combine(key, 4)) };
-    const rocks_tiles_desc *d = &params->desc;
+    const rocks_tileset_desc *d = &params->desc;
     for (int j = 0; j < count; j++) {
         rocks__seed *s = &out[j];
         uint64_t h = core_hash_combine(key, 100 + (uint64_t)j);
@@ -411,7 +411,7 @@ void rocks__set_free_arrays(rocks__set *full) {
     if (full->voxel_count) FREE_ARRAY(full->voxel_count, set->rock_count);
 }
 
-rocks_tileset *rocks__tiles_create(const rocks_tiles_desc *desc, const rocks__build_options *options_in) {
+rocks_tileset *rocks__tiles_create(const rocks_tileset_desc *desc, const rocks__build_options *options_in) {
     rocks__build_options options = options_in ? *options_in : (rocks__build_options){ 0 };
     rocks__params params;
     if (!desc || !rocks__params_make(desc, &params)) return NULL;
@@ -443,7 +443,7 @@ rocks_tileset *rocks__tiles_create(const rocks_tiles_desc *desc, const rocks__bu
     return &full->set;
 }
 
-rocks_tileset *rocks_tiles_create(const rocks_tiles_desc *desc) { return rocks__tiles_create(desc, NULL); }
+rocks_tileset *rocks_tileset_create(const rocks_tileset_desc *desc) { return rocks__tiles_create(desc, NULL); }
 
 void rocks_tiles_release_meshes(rocks_tileset *set) {
     if (!set || !set->vertices) return;
@@ -453,7 +453,7 @@ void rocks_tiles_release_meshes(rocks_tileset *set) {
     set->bytes = set->bytes > bytes ? set->bytes - bytes : 0;
 }
 
-void rocks_tiles_destroy(rocks_tileset *set) {
+void rocks_tileset_destroy(rocks_tileset *set) {
     if (!set) return;
     rocks__set *full = (rocks__set *)set;
     rocks__set_free_arrays(full);

@@ -11,13 +11,13 @@ typedef struct rocks_renderer rocks_renderer;
 rocks_renderer *rocks__renderer_create(gfx_context *gfx, const rocks_tileset *set);
 void rocks__renderer_destroy(rocks_renderer *r);
 size_t rocks__renderer_gpu_bytes(const rocks_renderer *r);   /* its buffers' sizes */
-typedef struct rocks_draw_params {
+typedef struct rocks_draw_desc {
     float tile_size, range, fog_density;
     float lod_distance[ROCKS_LODS - 1];
-} rocks_draw_params;
+} rocks_draw_desc;
 /* Draws the placements' rocks in view (one pass "rocks"); returns the instances drawn and the
  * commands in *commands. */
-uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const rocks_draw_params *params,
+uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const rocks_draw_desc *params,
                               const rocks_placement *const *placements, int count, int *commands);
 
 /* Block copy `block` of the tile copy at tile coordinate `cell` raised into the field's samples

@@ -110,7 +110,7 @@ uint64_t terrain_stacks_hash(const terrain_stacks *stacks);  /* of the logical c
 
 /* ---- generation (002 §3.1.3, 004 §2) ------------------------------------------------------ */
 
-typedef struct terrain_generation_params {
+typedef struct terrain_generation_desc {
     uint64_t seed;
     float sea_level;                  /* water fills air below this height */
     /* Macro relief: rescale-and-add multifractal with domain warping (004 §2). */
@@ -148,13 +148,13 @@ typedef struct terrain_generation_params {
     float scree_depth;                /* metres of scree on slopes too steep for sand; 0 = 1 */
     float scree_min_slope;            /* tan of the gentlest slope with scree; 0 = 0.58 (30°) */
     float lake_rocks_depth;           /* metres of stones near a lake's waterline; 0 = 0.8 */
-} terrain_generation_params;
+} terrain_generation_desc;
 
 /* Parameters that make a varied, good-looking world for this seed. */
-terrain_generation_params terrain_generation_defaults(uint64_t seed);
+terrain_generation_desc terrain_generation_defaults(uint64_t seed);
 
 /* The stacks of one chunk; depends only on (params, coord). Free with terrain_stacks_destroy. */
-terrain_stacks *terrain_generate_chunk(const terrain_generation_params *params, terrain_chunk_coord coord);
+terrain_stacks *terrain_generate_chunk(const terrain_generation_desc *params, terrain_chunk_coord coord);
 
 /* ---- noise -------------------------------------------------------------------------------- */
 
@@ -177,7 +177,7 @@ typedef struct terrain_world terrain_world;
 typedef struct terrain_field terrain_field;         /* the field's samples, below */
 
 typedef struct terrain_world_desc {
-    terrain_generation_params generation;
+    terrain_generation_desc generation;
     size_t max_chunks;                /* cached chunks kept (least recently used go); 0 = 4096 */
     terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);  /* NULL = generation */
     void *generate_user;              /* passed to generate */
@@ -225,7 +225,7 @@ size_t terrain_world_bytes(terrain_world *world);         /* bytes of the stacks
 bool terrain_world_has(terrain_world *world, terrain_chunk_coord coord);
 /* Changes terrain_world_desc.max_chunks (0 = 4096); the next trim applies it. */
 void terrain_world_set_max_chunks(terrain_world *world, size_t max_chunks);
-const terrain_generation_params *terrain_world_generation(const terrain_world *world);
+const terrain_generation_desc *terrain_world_generation(const terrain_world *world);
 /* Whether the world has a sea at generation.sea_level (terrain_world_desc.sea): generated worlds
  * always, hand-made ones when asked. The water renderer draws it; edits let it in. */
 bool terrain_world_has_sea(const terrain_world *world);
@@ -588,7 +588,7 @@ typedef struct terrain_clipmap_desc {
                                          sinks (the pit's wall); 0 = 2·finest_spacing */
     float hole_depth;                 /* how deep it sinks (the pit's floor below the ground);
                                          0 = below the generator's caves (156 m by default) */
-    terrain_generation_params generation;  /* copied; the world whose ground is drawn */
+    terrain_generation_desc generation;  /* copied; the world whose ground is drawn */
     job_system *jobs;                 /* computes new heights in parallel; NULL = the caller */
     /* Detail from a screen-space error (above): with pixel_error > 0 the fields left 0 among
      * cells, finest_spacing and levels are derived from K = terrain_screen_error_scale(
@@ -604,7 +604,7 @@ typedef struct terrain_clipmap_desc {
                                          0 = none, the finest spacing is then 1 m */
 } terrain_clipmap_desc;
 
-typedef struct terrain_clipmap_stats {
+typedef struct terrain_clipmap_stats_info {
     int levels, cells;
     float finest_spacing;
     double reach;                     /* metres the outermost level reaches at least from the
@@ -614,7 +614,7 @@ typedef struct terrain_clipmap_stats {
     uint64_t triangles_visible;       /* in those blocks */
     int blocks_drawn;                 /* by the last draw */
     uint64_t triangles;               /* drawn by the last draw */
-} terrain_clipmap_stats;
+} terrain_clipmap_stats_info;
 
 /* CPU only (no GL): the heights are computed on the first update. NULL never (bad fields are
  * clamped to their range, with a warning). */
@@ -654,7 +654,7 @@ void terrain_clipmap_upload(terrain_clipmap *clipmap);
  * for the camera of the last update; the hole's sinking not included); NAN outside every level
  * or before the first update. */
 float terrain_clipmap_height(const terrain_clipmap *clipmap, double x, double z);
-terrain_clipmap_stats terrain_clipmap_stats_get(const terrain_clipmap *clipmap);
+terrain_clipmap_stats_info terrain_clipmap_stats(const terrain_clipmap *clipmap);
 
 /* terrain_renderer_draw draws the clipmap after the meshes and before the sky (NULL = none);
  * the clipmap is not owned and must outlive its use here. */
@@ -709,14 +709,19 @@ typedef struct TerrainMeshChunk {
 } TerrainMeshChunk;
 
 typedef struct terrain_ecs terrain_ecs;
-typedef struct terrain_ecs_stats {
+typedef struct terrain_ecs_stats_info {
     int chunks, chunks_generated;
     int mesh_chunks, mesh_chunks_waiting, mesh_chunks_uploaded;
     uint64_t triangles;
-} terrain_ecs_stats;
+} terrain_ecs_stats_info;
 
-/* Registers the components and systems on `ecs`; `terrain` is not owned. */
-terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain);
+typedef struct terrain_ecs_desc {
+    ecs_world *ecs;                   /* required: the world the components and systems go on */
+    terrain_world *terrain;           /* required: the stacks they read and write (not owned) */
+} terrain_ecs_desc;
+/* Registers the components and systems on desc->ecs; NULL (message logged) without .ecs or
+ * .terrain. */
+terrain_ecs *terrain_ecs_create(const terrain_ecs_desc *desc);
 /* Destroys the mesh-chunk entities; TerrainMeshChunk's on_remove hook frees their meshes (GPU
  * ones too: call on the main thread, with the context), as it does for any other removal. */
 void terrain_ecs_destroy(terrain_ecs *te);
@@ -790,7 +795,7 @@ bool terrain_ecs_region_ready(terrain_ecs *te, const double min[3], const double
  * names it in its reads (stats, region checks) or writes (edits, viewers, the view). */
 ecs_component terrain_ecs_resource(const terrain_ecs *te);
 
-typedef struct terrain_stream_stats {
+typedef struct terrain_ecs_stream_stats_info {
     int mesh_chunks_wanted;           /* in the viewers' rings */
     int mesh_chunks_ready;            /* of those, drawn or empty */
     int mesh_chunks_kept;             /* out of range, kept while memory allows */
@@ -800,8 +805,8 @@ typedef struct terrain_stream_stats {
     size_t stacks_bytes;              /* of resident_bytes: the column chunks' stacks cached */
     size_t cpu_mesh_bytes;            /* meshes made and not uploaded yet */
     size_t gpu_mesh_bytes;            /* meshes uploaded (their vertex and index buffers) */
-} terrain_stream_stats;
-terrain_stream_stats terrain_ecs_stream_stats(terrain_ecs *te);
+} terrain_ecs_stream_stats_info;
+terrain_ecs_stream_stats_info terrain_ecs_stream_stats(terrain_ecs *te);
 /* Far terrain (after terrain_ecs_stream; the clipmap is not owned): the lod phase
  * ("terrain_clipmap") re-centres it on viewer 0 and sinks it under the squares every viewer's
  * rings cover (one hole each, duplicates dropped; terrain_clipmap_set_holes) once all their
@@ -815,7 +820,7 @@ void terrain_ecs_set_clipmap(terrain_ecs *te, terrain_clipmap *clipmap);
 void terrain_ecs_set_view(terrain_ecs *te, const terrain_view *view);
 /* Draws the uploaded chunks the cull phase found visible. */
 void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view);
-terrain_ecs_stats terrain_ecs_stats_get(terrain_ecs *te);
+terrain_ecs_stats_info terrain_ecs_stats(terrain_ecs *te);
 
 
 /* ---- editing: columns, stabilization, brushes (000 §3.4, §4) ---- */
@@ -832,7 +837,7 @@ terrain_ecs_stats terrain_ecs_stats_get(terrain_ecs *te);
  *     terrain_deposit(region, &(terrain_deposit_desc){ .x = 32, .z = 32, .radius = 8,
  *                                                      .volume = 500 }, NULL);    // sand
  *     terrain_stabilize_result result;
- *     terrain_stabilize_region(region, &(terrain_stabilize_params){ .budget_ns = 2000000 },
+ *     terrain_stabilize_region(region, &(terrain_stabilize_desc){ .budget_ns = 2000000 },
  *                              jobs, &result);                   // again next frame until
  *                                                                // result.converged
  *     terrain_chunk_coord changed[4];
@@ -913,7 +918,7 @@ typedef enum terrain_stabilize_edge {
                                          again (at the world's end, call with WALL instead) */
 } terrain_stabilize_edge;
 
-typedef struct terrain_stabilize_params {
+typedef struct terrain_stabilize_desc {
     float sand_angle;                 /* degrees of repose, 0 < angle < 90; 0 = 33 (000: 30–35) */
     float rocks_angle;                /* 0 = 42 (000: 40–45) */
     float step;                       /* metres a column gives away per material and look at most
@@ -928,7 +933,7 @@ typedef struct terrain_stabilize_params {
                                          its edit log, budget in iterations: where a time budget
                                          stops depends on the machine */
     terrain_stabilize_edge edge;
-} terrain_stabilize_params;
+} terrain_stabilize_desc;
 
 #define TERRAIN_STABILIZE_MAX_WOKEN 32
 
@@ -945,14 +950,14 @@ typedef struct terrain_stabilize_result {
 
 /* Stabilizes the region (its border is the edge). jobs may be NULL (one thread); the result is
  * the same for any thread count. False (message logged, nothing changed) for bad parameters. */
-bool terrain_stabilize_region(terrain_columns *columns, const terrain_stabilize_params *params, job_system *jobs,
+bool terrain_stabilize_region(terrain_columns *columns, const terrain_stabilize_desc *params, job_system *jobs,
                               terrain_stabilize_result *result);
 /* Stabilizes regions side by side as one: material flows across their borders, and the outcome
  * equals that of a single region covering them all (same iterations, same bytes). The regions
  * must have one size and lie on the grid of that size (origins multiples of it apart), e.g. one
  * per chunk; the edge is where no region continues. False (message logged) for bad parameters,
  * unequal sizes, misaligned or repeated regions. */
-bool terrain_stabilize_regions(terrain_columns *const *regions, int count, const terrain_stabilize_params *params,
+bool terrain_stabilize_regions(terrain_columns *const *regions, int count, const terrain_stabilize_desc *params,
                                job_system *jobs, terrain_stabilize_result *result);
 
 /* ---- brushes (000 §4.3, §4.4) ---- */
@@ -1097,7 +1102,7 @@ bool terrain_raycast(terrain_world *world, const double origin[3], const float d
  * (terrain_world_desc.edits, terrain_world_commit). A world folder keeps the log in one
  * database with terrain_store (below), whose every save is one transaction:
  *
- *     terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
+ *     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
  *     terrain_store *store = terrain_store_create(&(terrain_store_desc){
  *         .dir = "saves/world1", .edits = log, .seed = params.seed }, &report);
  *     ... edits ...
@@ -1138,10 +1143,14 @@ const char *terrain_edit_tool_name(terrain_edit_tool tool);
  * (EDIT_GENERATOR_REVISION in terrain_edit_log.c): a change to what terrain_generate_chunk makes
  * of the same parameters must bump it, so that old logs are refused, not replayed over other
  * ground. */
-uint64_t terrain_generation_key(const terrain_generation_params *params);
+uint64_t terrain_generation_key(const terrain_generation_desc *params);
 
 typedef struct terrain_edit_log terrain_edit_log;
-terrain_edit_log *terrain_edit_log_create(uint64_t world_key);
+typedef struct terrain_edit_log_desc {
+    uint64_t world_key;               /* terrain_generation_key of the world the edits apply to
+                                         (required: 0 is a key like any other, so pass it) */
+} terrain_edit_log_desc;
+terrain_edit_log *terrain_edit_log_create(const terrain_edit_log_desc *desc);
 void terrain_edit_log_destroy(terrain_edit_log *log);
 
 /* Appends an entry for `coord`: the columns where `after` differs from `before` (nothing when
@@ -1198,7 +1207,7 @@ bool terrain_edit_log_parse(terrain_edit_log *log, const void *bytes, size_t siz
  * that changed in one transaction, so a crash at any moment (kill -9, power loss) leaves the
  * world as it was before the save or as it is after it, never some chunks of each.
  *
- *     terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
+ *     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
  *     terrain_store_report report;
  *     terrain_store *store = terrain_store_create(&(terrain_store_desc){
  *         .dir = "saves/world1", .edits = log, .seed = params.seed }, &report);
@@ -1265,6 +1274,8 @@ terrain_store *terrain_store_create(const terrain_store_desc *desc, terrain_stor
 void terrain_store_destroy(terrain_store *store);
 
 /* Everything changed since the last save, in one transaction; waits for a save in flight first.
+ * Each changed chunk's entries are folded into one first (terrain_edit_log_compact), so a
+ * folder's size follows the columns edited, not the frames played.
  * False with "DIR/world.db: reason" in `error` (nothing of this save is kept; retried next time). */
 bool terrain_store_save(terrain_store *store, char *error, size_t error_size);
 /* A snapshot of what changed, committed on the store's thread; returns at once. False when the
@@ -1346,7 +1357,10 @@ typedef struct terrain_world_change {
  * nothing is not one); returns how many (writes at most `capacity`; the rest stay for the next
  * call). The streamer remeshes the mesh chunks that read them. */
 int terrain_world_take_changes(terrain_world *world, terrain_world_change *out, int capacity);
-/* How many commits the chunk has had in this world (0 = as generated or replayed). */
+/* A version that changes with every commit of the chunk: the world's commit count at the
+ * chunk's last commit (0 = never committed in this world: as generated, or replayed from a log
+ * it was opened with). It survives the chunk's eviction and regeneration, so a cache keyed on it
+ * stays right. */
 uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord coord);
 
 /* ---- editing in the ECS ----
@@ -1362,27 +1376,27 @@ uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord c
  * mesh chunk that reads a changed chunk is meshed again — streamed ones at once, as the frame's
  * own jobs, and uploaded whatever the upload budget — so a stroke is drawn in the frame its
  * edit is applied. Changes committed to the world by other code are remeshed the same way. */
-typedef struct terrain_edit_settings {
-    terrain_stabilize_params stabilize;   /* angles, step, tolerance; budget_ns per frame (0 with
+typedef struct terrain_editing_desc {
+    terrain_stabilize_desc stabilize;   /* angles, step, tolerance; budget_ns per frame (0 with
                                              max_iterations 0 = 2 ms); the edge is always WAKE */
     int max_regions;                      /* chunks stabilized at once; 0 = 256 (beyond, the
                                              border holds like a wall, with a warning) */
-} terrain_edit_settings;
+} terrain_editing_desc;
 
-typedef struct terrain_edit_stats {
+typedef struct terrain_ecs_edit_stats_info {
     int queued;                           /* edits waiting for the next stabilize phase */
     int stabilizing_chunks;               /* chunks not yet stable */
     uint64_t edits_applied, edits_refused;
     uint64_t iterations;                  /* of stabilization, in all */
     uint64_t chunks_committed;            /* by stabilization */
     double last_frame_ms;                 /* the stabilize phase's cost, the last frame it had work */
-} terrain_edit_stats;
+} terrain_ecs_edit_stats_info;
 
 /* Queues the edit (copied, sweep arrays too); false (message logged) for a tool that is not a
  * brush or a sweep without points. */
 bool terrain_ecs_edit(terrain_ecs *te, const terrain_edit *edit);
-void terrain_ecs_set_edit_settings(terrain_ecs *te, const terrain_edit_settings *settings);
-terrain_edit_stats terrain_ecs_edit_stats(terrain_ecs *te);
+void terrain_ecs_set_editing(terrain_ecs *te, const terrain_editing_desc *settings);
+terrain_ecs_edit_stats_info terrain_ecs_edit_stats(terrain_ecs *te);
 
 /* ---- water planes (002 §3.4, 004 §4.3) ---------------------------------------------------
  * Water is a material layer of the stacks; where it lies on top of a column its flat top is a
@@ -1438,7 +1452,7 @@ typedef struct WaterPlane {
  *         terrain_ecs_draw(te, renderer, &view);       // ground, far terrain, sky
  *         grass_draw(grass, &view);                    // everything opaque first
  *         terrain_water_draw(water, te, renderer, &view);
- *     terrain_water_destroy(water);                    // main thread, before gfx_destroy
+ *     terrain_water_destroy(water);                    // main thread, before gfx_context_destroy
  *
  * Low (the default: no extra scene pass, for llvmpipe): the opaque frame's colour and depth are
  * copied to textures, and each surface samples them. Refraction is the copy at a position
@@ -1497,12 +1511,12 @@ bool terrain_water_set_quality(terrain_water *water, terrain_water_quality quali
  * quality's meshes; NULL = the sea alone, its passes with the far terrain and sky only. */
 void terrain_water_draw(terrain_water *water, terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view);
 
-typedef struct terrain_water_stats {
+typedef struct terrain_water_stats_info {
     int planes_drawn;                 /* surfaces the last draw drew (the sea counts one) */
     bool under_water;                 /* the last draw's camera was below a surface */
     double cpu_ms;                    /* CPU ms of the last draw; on llvmpipe its GPU work too,
                                          and the frame's before it (the copy waits for it) */
-} terrain_water_stats;
-terrain_water_stats terrain_water_stats_get(const terrain_water *water);
+} terrain_water_stats_info;
+terrain_water_stats_info terrain_water_stats(const terrain_water *water);
 
 #endif

@@ -113,7 +113,7 @@ struct terrain_clipmap {
     size_t index_count;
     row_task *tasks;
     size_t task_count, task_capacity;
-    terrain_clipmap_stats stats;
+    terrain_clipmap_stats_info stats;
     gfx_texture texture;            /* one layer per level; { 0 } until the first upload */
     gfx_buffer index_buffer;
     gfx_vertex_array vertex_array;
@@ -251,7 +251,7 @@ static void clipmap_init(terrain_clipmap *c, const terrain_clipmap_desc *desc) {
         lv->dirty_rows = core_calloc((size_t)c->size, 1);
     }
     build_blocks(c);
-    c->stats = (terrain_clipmap_stats){ .levels = c->level_count, .cells = c->cells,
+    c->stats = (terrain_clipmap_stats_info){ .levels = c->level_count, .cells = c->cells,
                                         .finest_spacing = c->desc.finest_spacing };
 }
 
@@ -671,7 +671,7 @@ float terrain_clipmap_height(const terrain_clipmap *c, double x, double z) {
     return NAN;
 }
 
-terrain_clipmap_stats terrain_clipmap_stats_get(const terrain_clipmap *c) { return c->stats; }
+terrain_clipmap_stats_info terrain_clipmap_stats(const terrain_clipmap *c) { return c->stats; }
 
 /* ---- GPU ---- */
 

@@ -125,7 +125,13 @@ static void terrain_mesh_chunk_removed(ecs_world *world, ecs_entity entity, void
     c->gpu = (terrain_gpu_mesh){ 0 };
 }
 
-terrain_ecs *terrain_ecs_create(ecs_world *ecs, terrain_world *terrain) {
+terrain_ecs *terrain_ecs_create(const terrain_ecs_desc *desc) {
+    if (!desc || !desc->ecs || !desc->terrain) {
+        core_error("terrain", "terrain_ecs_create needs .ecs and .terrain");
+        return NULL;
+    }
+    ecs_world *ecs = desc->ecs;
+    terrain_world *terrain = desc->terrain;
     terrain_ecs *te = core_calloc(1, sizeof *te);
     te->ecs = ecs;
     te->terrain = terrain;
@@ -302,8 +308,8 @@ void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain
     terrain_world_trim(te->terrain);
 }
 
-terrain_ecs_stats terrain_ecs_stats_get(terrain_ecs *te) {
-    terrain_ecs_stats stats = { 0 };
+terrain_ecs_stats_info terrain_ecs_stats(terrain_ecs *te) {
+    terrain_ecs_stats_info stats = { 0 };
     ecs_iter it = ecs_query_iter(te->ecs, te->chunks);
     while (ecs_query_next(&it)) {
         TerrainChunk *chunks = ecs_field(&it, 0);

@@ -31,18 +31,18 @@ typedef struct edit_region {
 } edit_region;
 
 struct terrain__editor {
-    terrain_edit_settings settings;        /* defaults filled in */
+    terrain_editing_desc settings;        /* defaults filled in */
     terrain_edit *queue;                   /* sweep arrays point into owned copies */
     size_t queue_count, queue_capacity;
     edit_region *regions;                  /* chunks being stabilized */
     size_t region_count, region_capacity;
     terrain_columns **scratch;
     size_t scratch_capacity;
-    terrain_edit_stats stats;
+    terrain_ecs_edit_stats_info stats;
 };
 
-static terrain_edit_settings edit_defaults(const terrain_edit_settings *in) {
-    terrain_edit_settings s = in ? *in : (terrain_edit_settings){ 0 };
+static terrain_editing_desc edit_defaults(const terrain_editing_desc *in) {
+    terrain_editing_desc s = in ? *in : (terrain_editing_desc){ 0 };
     if (s.stabilize.budget_ns == 0 && s.stabilize.max_iterations == 0) s.stabilize.budget_ns = EDIT_DEFAULT_BUDGET_NS;
     if (s.max_regions <= 0) s.max_regions = EDIT_DEFAULT_MAX_REGIONS;
     s.stabilize.edge = TERRAIN_EDGE_WAKE;
@@ -166,7 +166,7 @@ static void regions_commit(terrain_ecs *te) {
 static void regions_stabilize(terrain_ecs *te) {
     terrain__editor *ed = te->editor;
     job_system *jobs = ecs_world_jobs(te->ecs);
-    terrain_stabilize_params params = ed->settings.stabilize;
+    terrain_stabilize_desc params = ed->settings.stabilize;
     uint64_t start = core_time_ns();
     for (;;) {
         ed->scratch = core_grow(ed->scratch, &ed->scratch_capacity, ed->region_count, sizeof *ed->scratch);
@@ -325,13 +325,13 @@ void terrain__editor_destroy(terrain_ecs *te) {
 
 /* ---- the API -------------------------------------------------------------------------------- */
 
-void terrain_ecs_set_edit_settings(terrain_ecs *te, const terrain_edit_settings *settings) {
+void terrain_ecs_set_editing(terrain_ecs *te, const terrain_editing_desc *settings) {
     editor_get(te)->settings = edit_defaults(settings);
 }
 
-terrain_edit_stats terrain_ecs_edit_stats(terrain_ecs *te) {
+terrain_ecs_edit_stats_info terrain_ecs_edit_stats(terrain_ecs *te) {
     terrain__editor *ed = editor_get(te);
-    terrain_edit_stats stats = ed->stats;
+    terrain_ecs_edit_stats_info stats = ed->stats;
     stats.queued = (int)ed->queue_count;
     stats.stabilizing_chunks = (int)ed->region_count;
     return stats;

@@ -92,10 +92,10 @@ static bool tool_valid(unsigned tool) {
     return tool >= TERRAIN_EDIT_SET && tool < TERRAIN_EDIT_TOOL_COUNT;
 }
 
-/* A field added to terrain_generation_params must be added to the key too: this fails to
+/* A field added to terrain_generation_desc must be added to the key too: this fails to
  * compile until someone looks (8 bytes of seed + 26 four-byte fields). */
-_Static_assert(sizeof(terrain_generation_params) == 112,
-               "terrain_generation_params changed: hash the new field in terrain_generation_key");
+_Static_assert(sizeof(terrain_generation_desc) == 112,
+               "terrain_generation_desc changed: hash the new field in terrain_generation_key");
 
 /* Bumped whenever terrain_generate_chunk's output changes for the same parameters, so that edit
  * logs of the old generator are refused instead of replayed over different ground. */
@@ -108,7 +108,7 @@ static uint64_t key_float(uint64_t h, float value) {
     return core_hash_combine(h, bits);
 }
 
-uint64_t terrain_generation_key(const terrain_generation_params *p) {
+uint64_t terrain_generation_key(const terrain_generation_desc *p) {
     /* Field by field, never the struct's bytes: padding is not part of the parameters. */
     uint64_t h = core_hash_combine(0x6b657973ull /* "keys" */, EDIT_GENERATOR_REVISION);
     h = core_hash_combine(h, p->seed);
@@ -313,7 +313,8 @@ static void chunk_free(edit_chunk *c) {
     core_free(c, sizeof *c);
 }
 
-terrain_edit_log *terrain_edit_log_create(uint64_t world_key) {
+terrain_edit_log *terrain_edit_log_create(const terrain_edit_log_desc *desc) {
+    uint64_t world_key = desc ? desc->world_key : 0;
     terrain_edit_log *log = core_calloc(1, sizeof *log);
     pthread_mutex_init(&log->lock, NULL);
     pthread_mutex_init(&log->io_lock, NULL);

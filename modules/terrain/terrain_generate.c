@@ -163,8 +163,8 @@
 #define ROCK_CLIP_PASSES 16
 #define RING_LEVELS_AROUND 8.0f                    /* metres around the ring's G its lattice covers */
 
-terrain_generation_params terrain_generation_defaults(uint64_t seed) {
-    return (terrain_generation_params){
+terrain_generation_desc terrain_generation_defaults(uint64_t seed) {
+    return (terrain_generation_desc){
         .seed = seed,
         .sea_level = 0.0f,
         /* Relief: about −80 m (sea floors) to +160 m (peaks) around 25 m, rarely +250 m. */
@@ -232,7 +232,7 @@ typedef struct ground_model {
     uint64_t key;                                          /* terrain_generation_key: whose sites */
 } ground_model;
 
-static uint32_t field_seed(const terrain_generation_params *p, uint64_t field) {
+static uint32_t field_seed(const terrain_generation_desc *p, uint64_t field) {
     return terrain__seed32(core_hash_combine(p->seed, field));
 }
 
@@ -244,7 +244,7 @@ static float clampf(float v, float lo, float hi) {
     return v < lo ? lo : v > hi ? hi : v;
 }
 
-static ground_model ground_model_make(const terrain_generation_params *p) {
+static ground_model ground_model_make(const terrain_generation_desc *p) {
     ground_model g;
     float lacunarity = p->lacunarity > 1.01f ? p->lacunarity : 2.0f;
     float hurst = p->hurst > 0.01f ? p->hurst : 0.85f;
@@ -456,7 +456,7 @@ static float lake_level_at(const ground_model *g, double x, double z, float *bas
     return r < s->water ? s->level : NAN;
 }
 
-float terrain__ground_height(const terrain_generation_params *params, double x, double z) {
+float terrain__ground_height(const terrain_generation_desc *params, double x, double z) {
     ground_model g = ground_model_make(params);
     float h;
     ground_row(&g, &x, z, 1, &h);
@@ -480,7 +480,7 @@ static float multifractal_weight_sum(const terrain__multifractal *mf) {
 }
 
 /* The generator's model with the detail a grid of `spacing` metres cannot carry taken out. */
-static ground_model ground_model_spaced(const terrain_generation_params *p, float spacing) {
+static ground_model ground_model_spaced(const terrain_generation_desc *p, float spacing) {
     ground_model g = ground_model_make(p);
     if (!(spacing > TERRAIN_COLUMN_SIZE)) return g;        /* the columns' own G, bit for bit */
     float relief = g.relief > 1.0f ? g.relief : 1.0f;
@@ -506,7 +506,7 @@ static ground_model ground_model_spaced(const terrain_generation_params *p, floa
     return g;
 }
 
-void terrain__ground_row_spaced(const terrain_generation_params *params, double x0, double dx, double z, int count,
+void terrain__ground_row_spaced(const terrain_generation_desc *params, double x0, double dx, double z, int count,
                                 float spacing, float *out, float *lakes) {
     ground_model g = ground_model_spaced(params, spacing);
     double xs[GROUND_ROW_MAX];
@@ -517,7 +517,7 @@ void terrain__ground_row_spaced(const terrain_generation_params *params, double 
     }
 }
 
-void terrain__lake_row_spaced(const terrain_generation_params *params, double x0, double dx, double z, int count,
+void terrain__lake_row_spaced(const terrain_generation_desc *params, double x0, double dx, double z, int count,
                               float spacing, float *out) {
     float ground[GROUND_ROW_MAX];
     for (int done = 0; done < count; done += GROUND_ROW_MAX) {
@@ -526,14 +526,14 @@ void terrain__lake_row_spaced(const terrain_generation_params *params, double x0
     }
 }
 
-float terrain__ground_octaves(const terrain_generation_params *params, float spacing) {
+float terrain__ground_octaves(const terrain_generation_desc *params, float spacing) {
     return ground_model_spaced(params, spacing).multifractal.octaves;
 }
 
 /* ---- one chunk ------------------------------------------------------------------------- */
 
 typedef struct chunk_gen {
-    const terrain_generation_params *params;
+    const terrain_generation_desc *params;
     ground_model model;
     double x0, z0;                        /* world position of the chunk's corner */
     float displacement;                   /* A, metres */
@@ -608,13 +608,13 @@ static void ground_reach(chunk_gen *g, int radius) {
     core_free(row_max, (size_t)size * n * sizeof(float));
 }
 
-static float cave_depth(const terrain_generation_params *p) {
+static float cave_depth(const terrain_generation_desc *p) {
     /* The band below the ground where caves live: the fade, then one and a half cave
      * wavelengths (about 110 m by default: deeper caves cost time and nobody sees them). */
     return p->cave_fade_height + 1.5f * p->cave_wavelength;
 }
 
-static bool caves_enabled(const terrain_generation_params *p) {
+static bool caves_enabled(const terrain_generation_desc *p) {
     return p->cave_threshold > 0.0f && p->cave_wavelength > 0.0f;
 }
 
@@ -629,7 +629,7 @@ static void column_range(const chunk_gen *g, int i, int k, float *lo, float *hi)
 }
 
 static void coarse_setup(chunk_gen *g) {
-    const terrain_generation_params *p = g->params;
+    const terrain_generation_desc *p = g->params;
     int f = 0;
     int octaves = g->model.perturbation_octaves;
     float total = 0.0f;
@@ -797,7 +797,7 @@ static float ridged_bound(const float *n, int levels, int l) {
 
 static void column_generate(const chunk_gen *g, int i, int k, const float *fields, bool *cave_possible,
                             column_layers *out) {
-    const terrain_generation_params *p = g->params;
+    const terrain_generation_desc *p = g->params;
     float y_lo, y_hi;
     column_range(g, i, k, &y_lo, &y_hi);
     float ground_here = g->heights[(k + g->margin) * g->ground_size + i + g->margin];
@@ -933,7 +933,7 @@ static const float rock_dist[8] = { 1, 1, 1, 1, 1.41421356f, 1.41421356f, 1.4142
 /* Rock thickness over the chunk and its ring ([reach_index]) from the tops there (top of the
  * highest solid run) and the lake levels (NAN outside a lake's water circle). */
 static void rock_layers(const chunk_gen *g, const float *top, const float *lake, float *rock) {
-    const terrain_generation_params *p = g->params;
+    const terrain_generation_desc *p = g->params;
     float talus = rock_depth(p->talus_depth, TALUS_DEPTH), scree = rock_depth(p->scree_depth, SCREE_DEPTH);
     float lake_rocks = rock_depth(p->lake_rocks_depth, LAKE_ROCKS_DEPTH);
     float scree_slope = p->scree_min_slope > 0.0f ? p->scree_min_slope : SCREE_MIN_SLOPE;
@@ -1029,7 +1029,7 @@ static void rock_layers(const chunk_gen *g, const float *top, const float *lake,
 /* Pushes a column: bedrock/air runs, then sand and rocks on the top run and water above it. */
 static void column_push(const chunk_gen *g, int i, int k, const float *transitions, int count, float rocks,
                         terrain_stacks_builder *builder) {
-    const terrain_generation_params *p = g->params;
+    const terrain_generation_desc *p = g->params;
     float top = transitions[count - 1];
     float top_run_bottom = count >= 3 ? transitions[count - 2] : TERRAIN_FLOOR_Y;
     /* Sand on low slopes: the macro ground's gradient at the column, central differences. */
@@ -1067,7 +1067,7 @@ static void column_push(const chunk_gen *g, int i, int k, const float *transitio
     terrain_stacks_builder_end_column(builder);
 }
 
-terrain_stacks *terrain_generate_chunk(const terrain_generation_params *params, terrain_chunk_coord coord) {
+terrain_stacks *terrain_generate_chunk(const terrain_generation_desc *params, terrain_chunk_coord coord) {
     chunk_gen g = { .params = params };
     g.model = ground_model_make(params);
     g.model.lakes = &g.lakes;                      /* the chunk's grid rows share the sites */

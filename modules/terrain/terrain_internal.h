@@ -107,7 +107,7 @@ float terrain__ridged_from_octaves(const float *n, int octaves, float gain);
 
 /* Macro ground height (metres) at world column position (x, z): base + relief·multifractal,
  * plus the vertical fBm perturbation (002 §3.1.3.1's "fractal sampled along y = 0"). */
-float terrain__ground_height(const terrain_generation_params *params, double x, double z);
+float terrain__ground_height(const terrain_generation_desc *params, double x, double z);
 
 /* G for a grid `spacing` metres apart, at (x0 + j·dx, z) for j < count (the far terrain's
  * clipmap, 002 §3.2). Only the detail such a grid can carry: the multifractal's octave count
@@ -115,7 +115,7 @@ float terrain__ground_height(const terrain_generation_params *params, double x, 
  * weight); the y perturbation's octaves fade out towards their Nyquist spacing; cliff terraces
  * fade out between 4 and 16 m. spacing ≤ TERRAIN_COLUMN_SIZE gives terrain__ground_height's
  * values bit for bit. A value depends only on (params, x, z, spacing), not on the row. */
-void terrain__ground_row_spaced(const terrain_generation_params *params, double x0, double dx, double z, int count,
+void terrain__ground_row_spaced(const terrain_generation_desc *params, double x0, double dx, double z, int count,
                                 float spacing, float *out, float *lakes);
 /* The far terrain's lakes, on the same grid (terrain__ground_row_spaced's `lakes`, NULL for
  * none, in the same pass): the level of the lake whose water circle holds (x0 + j·dx, z) (the
@@ -124,10 +124,10 @@ void terrain__ground_row_spaced(const terrain_generation_params *params, double 
  * the clipmap's morph may average it with a neighbour's level: any mix with it stays far below
  * the ground. */
 #define TERRAIN__NO_LAKE (-1.0e30f)
-void terrain__lake_row_spaced(const terrain_generation_params *params, double x0, double dx, double z, int count,
+void terrain__lake_row_spaced(const terrain_generation_desc *params, double x0, double dx, double z, int count,
                               float spacing, float *out);
 /* The multifractal octave count ν that terrain__ground_row_spaced uses for `spacing`. */
-float terrain__ground_octaves(const terrain_generation_params *params, float spacing);
+float terrain__ground_octaves(const terrain_generation_desc *params, float spacing);
 
 /* ==== end of the stacks/noise/generation section ========================================== */
 
@@ -633,5 +633,9 @@ void terrain__material_texels_free(terrain__material_texels *texels);
 
 /* Passes a sampled field through terrain_world_desc.amplify, if the world has one. */
 void terrain__world_amplify(terrain_world *world, terrain_field *field);
+/* For tests of the chunk cache's races: `fn` runs on the generating thread after a chunk was
+ * generated and replayed, before it is inserted (set before any thread uses the world). */
+void terrain__world_on_generated(terrain_world *world, void (*fn)(void *user, terrain_chunk_coord coord),
+                                  void *user);
 
 #endif

@@ -104,7 +104,7 @@ static bool angle_rule(const char *name, float degrees, float fallback, int64_t 
     return true;
 }
 
-static bool make_rules(const terrain_stabilize_params *p, stabilize_rules *r) {
+static bool make_rules(const terrain_stabilize_desc *p, stabilize_rules *r) {
     if (!p) {
         core_error("terrain", "stabilize: no parameters");
         return false;
@@ -629,7 +629,7 @@ static void prepare_regions(terrain_columns *const *regions, int count) {
     for (int r = 0; r < count; r++) push_sides(regions[r], 0);
 }
 
-bool terrain_stabilize_regions(terrain_columns *const *regions, int count, const terrain_stabilize_params *params,
+bool terrain_stabilize_regions(terrain_columns *const *regions, int count, const terrain_stabilize_desc *params,
                                job_system *jobs, terrain_stabilize_result *result) {
     TRACE_ZONE("terrain.stabilize");
     terrain_stabilize_result local;
@@ -667,7 +667,7 @@ bool terrain_stabilize_regions(terrain_columns *const *regions, int count, const
     return true;
 }
 
-bool terrain_stabilize_region(terrain_columns *columns, const terrain_stabilize_params *params, job_system *jobs,
+bool terrain_stabilize_region(terrain_columns *columns, const terrain_stabilize_desc *params, job_system *jobs,
                               terrain_stabilize_result *result) {
     return terrain_stabilize_regions(&columns, 1, params, jobs, result);
 }

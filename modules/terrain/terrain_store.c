@@ -53,9 +53,14 @@
 #define STORE_NAME_MAX 63
 #define STORE_VALUE_MAX ((size_t)1 << 20)
 #define VALUE_ALLOC(size) ((size) ? (size) : 1)   /* an empty value still owns a byte */
-/* SQLite's default limit on one blob is 10^9 bytes; a chunk bigger than this is compacted
- * before it is saved (a compacted chunk takes at most about 336 MB). */
-#define STORE_BLOB_COMPACT_ABOVE ((size_t)900 * 1000 * 1000)
+/* Every chunk with more than one entry is compacted before it is saved (terrain_edit_log_compact:
+ * one entry with each edited column's final layers). The world folder then holds one entry per
+ * edited chunk, its size bounded by the columns edited, not by the frames played: a slide that
+ * stabilizes over 10 000 frames appends 10 000 entries to the log, and the next save folds them.
+ * The fold is in memory too, so the log's memory is bounded at every save. It also keeps each
+ * blob under SQLite's default limit of 10^9 bytes (a compacted chunk takes at most about
+ * 336 MB). */
+#define STORE_COMPACT_ABOVE 0
 
 /* ---- named values ------------------------------------------------------------------------ */
 
@@ -473,11 +478,11 @@ static bool import_old_layout(terrain_store *s, terrain_store_report *r) {
         goto done;
     }
     if (!marker[0]) {
-        terrain_edit_log *staging = terrain_edit_log_create(terrain__edit_log_key(s->edits));
+        terrain_edit_log *staging = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain__edit_log_key(s->edits) });
         terrain_edit_log_load_result loaded;
         terrain_edit_log_load(staging, s->dir, &loaded);
         /* Every chunk read is clean in the staging log: written as "all", marked by the import. */
-        store_snapshot snap = { .chunks = terrain__edit_log_all_files(staging, STORE_BLOB_COMPACT_ABOVE) };
+        store_snapshot snap = { .chunks = terrain__edit_log_all_files(staging, STORE_COMPACT_ABOVE) };
         char reason[512];
         snprintf(snap.imported_edits, sizeof snap.imported_edits, "%d", loaded.chunks_loaded);
         if (!write_snapshot(s, &snap, reason, sizeof reason)) {
@@ -530,7 +535,7 @@ static bool desc_valid(const terrain_store_desc *desc, terrain_store_report *r) 
 /* Opens the database, setting a damaged one aside once; false with r->error. */
 static bool store_open(terrain_store *s, uint64_t seed, terrain_store_report *r) {
     for (int attempt = 0; attempt < 2; attempt++) {
-        opening o = { .store = s, .report = r, .staging = terrain_edit_log_create(terrain__edit_log_key(s->edits)) };
+        opening o = { .store = s, .report = r, .staging = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain__edit_log_key(s->edits) }) };
         open_outcome outcome = open_db(&o, seed);
         if (outcome == OPEN_OK) terrain__edit_log_take(s->edits, o.staging);
         terrain_edit_log_destroy(o.staging);
@@ -659,7 +664,7 @@ static void snapshot_values(terrain_store *s, store_snapshot *snap) {
 
 static store_snapshot *snapshot_take(terrain_store *s) {
     store_snapshot *snap = core_calloc(1, sizeof *snap);
-    snap->chunks = terrain__edit_log_dirty_files(s->edits, STORE_BLOB_COMPACT_ABOVE);
+    snap->chunks = terrain__edit_log_dirty_files(s->edits, STORE_COMPACT_ABOVE);
     pthread_mutex_lock(&s->lock);
     snapshot_values(s, snap);
     pthread_mutex_unlock(&s->lock);

@@ -95,7 +95,7 @@ struct terrain__streamer {
     terrain_clipmap *clipmap;              /* far terrain around viewer 0, or NULL */
     int hole_count;                        /* the rings' squares of the last layout that was ready, */
     double hole_min[TERRAIN_MAX_VIEWERS][2], hole_max[TERRAIN_MAX_VIEWERS][2];   /* one per place */
-    terrain_stream_stats stats;
+    terrain_ecs_stream_stats_info stats;
 };
 
 /* ---- the map ------------------------------------------------------------------------------ */
@@ -284,7 +284,7 @@ static void stream_want(terrain_ecs *te, ecs_commands *commands, stream_key key)
     uint32_t mask = stream_mask(s, key.level, key.x, key.y, key.z);
     if (!r) {
         r = stream_record_create(&s->meshes, key);
-        ecs_entity e = ecs_defer_create(commands);
+        ecs_entity e = ecs_defer_entity_create(commands);
         ecs_defer_set(commands, e, te->mesh_chunk, &(TerrainMeshChunk){
             .x = key.x, .y = key.y, .z = key.z, .lod = { .level = key.level, .finer_neighbours = mask } });
         ecs_defer_add(commands, e, te->streamed);
@@ -386,7 +386,7 @@ static void stream_record_destroy(terrain_ecs *te, ecs_commands *commands, strea
          * at the end of this phase. */
         s->cpu_mesh_bytes -= terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count);
         s->gpu_mesh_bytes -= c->gpu_bytes;
-        ecs_defer_destroy(commands, r->entity);
+        ecs_defer_entity_destroy(commands, r->entity);
     }
     map_remove(&s->meshes, r->key);
     core_free(r, sizeof *r);
@@ -716,7 +716,7 @@ static terrain_stream_desc stream_defaults(const terrain_ecs *te, const terrain_
     if (d.levels > 1 && d.half_width % 2) d.half_width++;   /* rings align with coarser chunks */
     if (!(d.y_max > d.y_min)) {
         /* The relief's range with a margin for overhangs, as the generator shapes it. */
-        const terrain_generation_params *g = terrain_world_generation(te->terrain);
+        const terrain_generation_desc *g = terrain_world_generation(te->terrain);
         d.y_min = g->base_height - g->relief_height - 48.0;
         d.y_max = g->base_height + g->relief_height + 48.0;
     }
@@ -799,8 +799,8 @@ bool terrain_ecs_region_ready(terrain_ecs *te, const double min[3], const double
     return true;
 }
 
-terrain_stream_stats terrain_ecs_stream_stats(terrain_ecs *te) {
-    return te->stream ? te->stream->stats : (terrain_stream_stats){ 0 };
+terrain_ecs_stream_stats_info terrain_ecs_stream_stats(terrain_ecs *te) {
+    return te->stream ? te->stream->stats : (terrain_ecs_stream_stats_info){ 0 };
 }
 
 uint64_t terrain__stream_upload_budget(const terrain_ecs *te) {

@@ -44,7 +44,7 @@ struct terrain_water {
     GLuint queries[2];
     bool query_issued[2];
     int query_next;
-    terrain_water_stats stats;
+    terrain_water_stats_info stats;
 };
 
 bool terrain_water_parse_quality(const char *text, terrain_water_quality *out) {
@@ -196,7 +196,7 @@ bool terrain_water_set_quality(terrain_water *w, terrain_water_quality quality) 
     return true;
 }
 
-terrain_water_stats terrain_water_stats_get(const terrain_water *w) { return w->stats; }
+terrain_water_stats_info terrain_water_stats(const terrain_water *w) { return w->stats; }
 
 /* ---- targets ------------------------------------------------------------------------------- */
 
@@ -447,7 +447,7 @@ static void water_draw_surfaces(terrain_water *w, const water_frame *f, terrain_
 }
 
 void terrain_water_draw(terrain_water *w, terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view) {
-    w->stats = (terrain_water_stats){ 0 };
+    w->stats = (terrain_water_stats_info){ 0 };
     terrain__renderer_set_water_drawn(renderer, w->desc.quality != TERRAIN_WATER_OFF && terrain_world_has_sea(w->desc.world));
     if (w->desc.quality == TERRAIN_WATER_OFF) return;
     TRACE_ZONE("terrain_water_draw");

@@ -5,6 +5,13 @@
  * threads that race on the same chunk both generate it and the second to finish frees its copy
  * (the bytes are identical: generation is a pure function of (params, coord)).
  *
+ * Versions: every commit stamps its chunk with the world's commit count, and an evicted chunk's
+ * stamp is kept (`stamps`), so a chunk regenerated from the log keeps the version it had. The
+ * same stamps close a race: a thread that generates a chunk outside the lock replays the log as
+ * it was when it started; a commit to that chunk followed by its eviction before the thread
+ * inserts would let it insert the older copy. A copy whose chunk was stamped after the
+ * generation began is therefore thrown away and made again.
+ *
  * Eviction never happens inside terrain_world_stacks: a caller may hold pointers to several
  * chunks at once (the field sampler reads up to four) while other threads fetch more. Only
  * terrain_world_trim evicts, at a point the owner chooses (once a frame, when no job reads
@@ -27,22 +34,33 @@ struct world_entry {
     world_entry *next_in_bucket;
     world_entry *lru_prev, *lru_next;     /* most recently used at the head */
     int retained;
-    uint32_t version;                     /* commits since it was cached */
+    uint32_t version;                     /* the world's commit count at its last commit; 0 = never */
     bool pinned;                          /* edited with no log to keep the edits: never evicted */
 };
 
+typedef struct world_stamp {
+    terrain_chunk_coord coord;
+    uint32_t version;                     /* 0 = an empty slot */
+} world_stamp;
+
 struct terrain_world {
     pthread_mutex_t lock;
-    terrain_generation_params generation;
+    terrain_generation_desc generation;
     terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);
     void *generate_user;
     terrain_edit_log *edits;              /* replayed over generated chunks, or NULL */
     bool sea;                             /* edits let the sea in (terrain_world_desc.sea) */
     void (*amplify)(void *user, terrain_world *world, terrain_field *field);
     void *amplify_user;
+    void (*generated)(void *user, terrain_chunk_coord coord);   /* tests' seam (internal header) */
+    void *generated_user;
     terrain_world_change *changes;        /* committed since the last terrain_world_take_changes */
     size_t change_count, change_capacity;
     size_t max_chunks;
+    uint32_t commits;                     /* commits so far: the stamp of the newest */
+    /* The stamps of evicted chunks that had commits (open addressing; a power of two). */
+    world_stamp *stamps;
+    size_t stamp_count, stamp_capacity;
     world_entry **buckets;
     size_t bucket_count;                  /* a power of two */
     size_t count, bytes;
@@ -85,6 +103,7 @@ void terrain_world_destroy(terrain_world *world) {
     for (size_t i = 0; i < world->graveyard_count; i++) terrain_stacks_destroy(world->graveyard[i].stacks);
     core_free(world->graveyard, world->graveyard_capacity * sizeof *world->graveyard);
     core_free(world->changes, world->change_capacity * sizeof *world->changes);
+    core_free(world->stamps, world->stamp_capacity * sizeof *world->stamps);
     for (world_entry *e = world->lru_head, *next; e; e = next) {
         next = e->lru_next;
         terrain_stacks_destroy(e->stacks);
@@ -138,17 +157,51 @@ static void grow_buckets(terrain_world *w) {
     core_free(old, old_count * sizeof *old);
 }
 
+/* ---- stamps of evicted chunks (lock held) ------------------------------------------------ */
+
+static size_t stamp_slot(const terrain_world *w, terrain_chunk_coord coord) {
+    size_t mask = w->stamp_capacity - 1, i = coord_hash(coord) & mask;
+    while (w->stamps[i].version && !coord_equal(w->stamps[i].coord, coord)) i = (i + 1) & mask;
+    return i;
+}
+
+static uint32_t stamp_of(const terrain_world *w, terrain_chunk_coord coord) {
+    return w->stamp_capacity ? w->stamps[stamp_slot(w, coord)].version : 0;
+}
+
+static void keep_stamp(terrain_world *w, terrain_chunk_coord coord, uint32_t version) {
+    if (!version) return;
+    if ((w->stamp_count + 1) * 2 > w->stamp_capacity) {     /* at most half full */
+        size_t old_capacity = w->stamp_capacity;
+        world_stamp *old = w->stamps;
+        w->stamp_capacity = old_capacity ? old_capacity * 2 : 64;
+        w->stamps = core_calloc(w->stamp_capacity, sizeof *w->stamps);
+        for (size_t i = 0; i < old_capacity; i++)
+            if (old[i].version) w->stamps[stamp_slot(w, old[i].coord)] = old[i];
+        core_free(old, old_capacity * sizeof *old);
+    }
+    size_t i = stamp_slot(w, coord);
+    w->stamp_count += w->stamps[i].version == 0;
+    w->stamps[i].coord = coord;
+    w->stamps[i].version = version;
+}
+
 /* Inserts a freshly generated chunk unless another thread got there first; returns the entry
- * that is in the map (ours or theirs; a losing copy is freed). */
-static world_entry *insert_or_get(terrain_world *w, terrain_chunk_coord coord, terrain_stacks *stacks) {
+ * that is in the map (ours or theirs; a losing copy is freed), or NULL when the chunk was
+ * committed after `started` (the commit count when our generation began): our copy may lack
+ * that commit, so it is freed and the caller generates again. */
+static world_entry *insert_or_get(terrain_world *w, terrain_chunk_coord coord, terrain_stacks *stacks,
+                                  uint32_t started) {
     world_entry **slot = find_slot(w, coord);
-    if (*slot) {
+    uint32_t version = stamp_of(w, coord);
+    if (*slot || version > started) {
         terrain_stacks_destroy(stacks);
         return *slot;
     }
     world_entry *e = core_calloc(1, sizeof *e);
     e->coord = coord;
     e->stacks = stacks;
+    e->version = version;
     *slot = e;
     lru_push_front(w, e);
     w->bytes += terrain_stacks_bytes(stacks);
@@ -171,11 +224,13 @@ static terrain_stacks *generate(terrain_world *w, terrain_chunk_coord coord) {
 static world_entry *acquire(terrain_world *w, terrain_chunk_coord coord) {
     pthread_mutex_lock(&w->lock);
     world_entry *e = *find_slot(w, coord);
-    if (!e) {
+    while (!e) {
+        uint32_t started = w->commits;
         pthread_mutex_unlock(&w->lock);
         terrain_stacks *stacks = generate(w, coord);   /* outside the lock: slow, parallel */
+        if (w->generated) w->generated(w->generated_user, coord);
         pthread_mutex_lock(&w->lock);
-        e = insert_or_get(w, coord, stacks);
+        e = insert_or_get(w, coord, stacks, started);
     }
     touch(w, e);
     return e;
@@ -242,6 +297,7 @@ static void evict(terrain_world *w, world_entry *e) {
     *find_slot(w, e->coord) = e->next_in_bucket;
     lru_unlink(w, e);
     w->bytes -= terrain_stacks_bytes(e->stacks);
+    keep_stamp(w, e->coord, e->version);
     /* Eviction runs in a trim, where no frame reader is left: only spanning readers matter. */
     if (w->reader_epochs > 0) bury(w, e->stacks);
     else terrain_stacks_destroy(e->stacks);
@@ -320,7 +376,7 @@ bool terrain_world_has(terrain_world *world, terrain_chunk_coord coord) {
     return has;
 }
 
-const terrain_generation_params *terrain_world_generation(const terrain_world *world) { return &world->generation; }
+const terrain_generation_desc *terrain_world_generation(const terrain_world *world) { return &world->generation; }
 
 bool terrain__world_sea(const terrain_world *world, int32_t *sea_quanta) {
     double quanta = ((double)world->generation.sea_level - TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE;
@@ -403,7 +459,7 @@ void terrain_world_commit(terrain_world *world, terrain_chunk_coord coord, terra
     else if (differs) e->pinned = true;
     world->bytes += terrain_stacks_bytes(stacks) - terrain_stacks_bytes(before);
     e->stacks = stacks;
-    e->version++;
+    e->version = ++world->commits;
     bury(world, before);       /* a job of this frame may still read it: freed at a later trim */
     if (differs) queue_change(world, &change);
     pthread_mutex_unlock(&world->lock);
@@ -428,6 +484,12 @@ uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord c
     uint32_t version = e ? e->version : 0;
     pthread_mutex_unlock(&world->lock);
     return version;
+}
+
+void terrain__world_on_generated(terrain_world *world, void (*fn)(void *user, terrain_chunk_coord coord),
+                                  void *user) {
+    world->generated = fn;
+    world->generated_user = user;
 }
 
 void terrain__world_amplify(terrain_world *world, terrain_field *field) {

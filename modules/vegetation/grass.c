@@ -22,7 +22,7 @@
 #define GRASS_WAVE_PERIOD 256.0           /* metres after which the gusts repeat */
 
 struct grass_system {
-    grass_desc desc;
+    grass_system_desc desc;
     gfx_program place, scan, cull, draw;
     gfx_texture blades;
     ecs_component mesh_chunk, patch;
@@ -41,7 +41,7 @@ struct grass_system {
     float sea_level;
     uint32_t seed;
     uint64_t place_ns;
-    grass_stats stats;
+    grass_system_stats_info stats;
 };
 
 bool grass_parse_quality(const char *text, grass_quality *out) {
@@ -253,7 +253,7 @@ static void grass_place_system(ecs_iter *it) {
 
 static void grass_cull_system(ecs_iter *it);      /* with the drawing, below */
 
-static void grass_defaults(grass_desc *d) {
+static void grass_defaults(grass_system_desc *d) {
     bool high = d->quality == GRASS_HIGH;
     if (d->quality == GRASS_DEFAULT) d->quality = GRASS_LOW;
     if (d->density <= 0) d->density = high ? 3 : 2;
@@ -266,9 +266,9 @@ static void grass_defaults(grass_desc *d) {
     if (d->max_placements <= 0) d->max_placements = 4;
 }
 
-grass_system *grass_create(const grass_desc *desc) {
+grass_system *grass_system_create(const grass_system_desc *desc) {
     if (!desc || !desc->gfx || !desc->ecs || !desc->world) {
-        core_error("grass", "grass_create needs .gfx, .ecs and .world");
+        core_error("grass", "grass_system_create needs .gfx, .ecs and .world");
         return NULL;
     }
     ecs_component mesh_chunk = ecs_component_lookup(desc->ecs, "TerrainMeshChunk");
@@ -290,7 +290,7 @@ grass_system *grass_create(const grass_desc *desc) {
     static const uint32_t quads[12] = { 0, 1, 2, 2, 1, 3, 4, 5, 6, 6, 5, 7 };   /* corners as grass.vert numbers them */
     g->corner_indices = gfx_buffer_create(&(gfx_buffer_desc){ .size = sizeof quads, .data = quads });
     g->corners = gfx_vertex_array_create(&(gfx_vertex_array_desc){ .indices = g->corner_indices });
-    const terrain_generation_params *generation = terrain_world_generation(desc->world);
+    const terrain_generation_desc *generation = terrain_world_generation(desc->world);
     g->sea_level = generation->sea_level;
     g->seed = (uint32_t)core_hash_u64(generation->seed ^ 0x6772617373ull);   /* "grass" */
     g->blades = grass__blade_texture();
@@ -308,10 +308,10 @@ grass_system *grass_create(const grass_desc *desc) {
     return g;
 }
 
-void grass_destroy(grass_system *g) {
+void grass_system_destroy(grass_system *g) {
     if (!g) return;
     /* The hook and the system would outlive `g` in the world: release the patches here (a
-     * released patch is empty, source 0: a later grass_create places it again), unhook, and
+     * released patch is empty, source 0: a later grass_system_create places it again), unhook, and
      * disable the system. */
     ecs_component_on_remove(g->desc.ecs, g->patch, NULL, NULL);
     ecs_system_enable(g->desc.ecs, g->system, false);
@@ -475,8 +475,8 @@ uint64_t grass_visible_tufts(grass_system *g) {
     return command[1];
 }
 
-grass_stats grass_stats_get(const grass_system *g) {
-    grass_stats s = g->stats;
+grass_system_stats_info grass_system_stats(const grass_system *g) {
+    grass_system_stats_info s = g->stats;
     s.bytes = (size_t)s.tufts * GRASS_TUFT_BYTES;
     return s;
 }

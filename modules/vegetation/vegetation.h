@@ -1,15 +1,15 @@
 /* vegetation.h — grass patches grown on the GPU over the terrain's mesh chunks (002 §3.3).
  *
- *     grass_system *grass = grass_create(&(grass_desc){ .gfx = gfx, .ecs = ecs, .world = world,
+ *     grass_system *grass = grass_system_create(&(grass_system_desc){ .gfx = gfx, .ecs = ecs, .world = world,
  *                                                       .quality = GRASS_HIGH });
  *     each frame:
  *         grass_set_view(grass, &view, player_feet);   // before ecs_progress
  *         ecs_progress(ecs, dt);                        // "grass_place" runs in the draw phase
  *         terrain_ecs_draw(terrain, renderer, &view);   // the ground first: grass is depth-tested
  *         grass_draw(grass, &view);
- *     grass_destroy(grass);                             // before ecs_world_destroy and gfx_destroy
+ *     grass_system_destroy(grass);                             // before ecs_world_destroy and gfx_context_destroy
  *
- * Call grass_create after terrain_ecs_create (it reads the TerrainMeshChunk component). Every
+ * Call grass_system_create after terrain_ecs_create(it reads the TerrainMeshChunk component). Every
  * mesh chunk of levels 0 and 1 that is uploaded, shown and within reach of the viewer gets a
  * GrassPatch component. Its tufts are placed by compute shaders from the chunk's GPU triangles
  * (no CPU work per tuft): each triangle takes the points of a hashed world lattice (one jittered
@@ -64,7 +64,7 @@ bool grass_parse_quality(const char *text, grass_quality *out);
 const char *grass_quality_name(grass_quality quality);
 
 /* Zero means the default for every field. */
-typedef struct grass_desc {
+typedef struct grass_system_desc {
     gfx_context *gfx;                 /* required */
     ecs_world *ecs;                   /* required: the world terrain_ecs_create registered on */
     terrain_world *world;             /* required: for the sky test and the sea level */
@@ -79,15 +79,15 @@ typedef struct grass_desc {
     int max_placements;               /* new patches placed per frame ahead of need; 0 = 4
                                          (chunks within range, and chunks remeshed, are always
                                          placed in the frame they are uploaded) */
-} grass_desc;
+} grass_system_desc;
 
 typedef struct grass_system grass_system;
 
 /* NULL (the reason logged) when a required field is missing or the shaders do not build. */
-grass_system *grass_create(const grass_desc *desc);
+grass_system *grass_system_create(const grass_system_desc *desc);
 /* Releases every patch (the components stay, empty) and disables the system; the ECS world
- * runs on without grass, and a new grass_create may follow. */
-void grass_destroy(grass_system *grass);
+ * runs on without grass, and a new grass_system_create may follow. */
+void grass_system_destroy(grass_system *grass);
 
 /* The view the next frame is drawn from, and the player's feet (world metres) that the grass
  * bends away from (NULL = nothing bends). Patches follow the view's camera. */
@@ -108,7 +108,7 @@ typedef struct GrassPatch {
     float bounds_min[3], bounds_max[3];
 } GrassPatch;
 
-typedef struct grass_stats {
+typedef struct grass_system_stats_info {
     int patches;                      /* GrassPatch components now */
     uint64_t tufts;                   /* placed over all patches now (two billboards each) */
     uint64_t tufts_drawn;             /* in the patches the last grass_draw looked at (its culling
@@ -117,9 +117,9 @@ typedef struct grass_stats {
     uint64_t placements;              /* patches placed since creation (re-placements too) */
     double cpu_ms;                    /* CPU ms of the last frame: placing and drawing */
     size_t bytes;                     /* GPU memory of the patches' tufts (32 bytes a tuft) */
-} grass_stats;
+} grass_system_stats_info;
 
-grass_stats grass_stats_get(const grass_system *grass);
+grass_system_stats_info grass_system_stats(const grass_system *grass);
 /* The tufts the last grass_draw drew: those its culling pass kept (reads the GPU back, a wait:
  * tests, benchmarks). Two billboards each. */
 uint64_t grass_visible_tufts(grass_system *grass);

@@ -45,7 +45,7 @@ static ecs_entity only_entity_with(ecs_world *world, ecs_component component) {
 
 Test(ecs_commands, deferred_create_and_set_appear_after_apply) {
     fixture f = fixture_make();
-    ecs_entity placeholder = ecs_defer_create(f.commands);
+    ecs_entity placeholder = ecs_defer_entity_create(f.commands);
     ecs_defer_set(f.commands, placeholder, f.position, &(Position){ 5, 6 });
     ecs_defer_add(f.commands, placeholder, f.frozen);
     cr_expect_neq(placeholder, 0);
@@ -67,8 +67,8 @@ Test(ecs_commands, deferred_create_and_set_appear_after_apply) {
 
 Test(ecs_commands, placeholders_of_one_buffer_stay_apart) {
     fixture f = fixture_make();
-    ecs_entity a = ecs_defer_create(f.commands);
-    ecs_entity b = ecs_defer_create(f.commands);
+    ecs_entity a = ecs_defer_entity_create(f.commands);
+    ecs_entity b = ecs_defer_entity_create(f.commands);
     cr_expect_neq(a, b);
     ecs_defer_set(f.commands, b, f.health, &(Health){ 2 });
     ecs_defer_set(f.commands, a, f.health, &(Health){ 1 });
@@ -85,7 +85,7 @@ Test(ecs_commands, deferred_destroy_happens_at_apply) {
     fixture f = fixture_make();
     ecs_entity e = ecs_entity_create(f.world);
     ecs_set(f.world, e, f.health, &(Health){ 3 });
-    ecs_defer_destroy(f.commands, e);
+    ecs_defer_entity_destroy(f.commands, e);
     cr_expect(ecs_is_alive(f.world, e));
     cr_expect_eq(((Health *)ecs_get(f.world, e, f.health))->points, 3);
     ecs_commands_apply(f.commands);
@@ -112,8 +112,8 @@ Test(ecs_commands, commands_on_dead_entities_are_skipped) {
     fixture f = fixture_make();
     ecs_entity e = ecs_entity_create(f.world);
     ecs_commands *later = ecs_commands_create(f.world);
-    ecs_defer_destroy(f.commands, e);
-    ecs_defer_destroy(later, e);                     /* two systems destroy the same entity */
+    ecs_defer_entity_destroy(f.commands, e);
+    ecs_defer_entity_destroy(later, e);                     /* two systems destroy the same entity */
     ecs_defer_set(later, e, f.health, &(Health){ 1 });
     ecs_defer_add(later, e, f.frozen);
     ecs_commands_apply(f.commands);
@@ -129,9 +129,9 @@ Test(ecs_commands, commands_on_dead_entities_are_skipped) {
 
 Test(ecs_commands, a_created_entity_can_be_destroyed_in_the_same_buffer) {
     fixture f = fixture_make();
-    ecs_entity e = ecs_defer_create(f.commands);
+    ecs_entity e = ecs_defer_entity_create(f.commands);
     ecs_defer_add(f.commands, e, f.frozen);
-    ecs_defer_destroy(f.commands, e);
+    ecs_defer_entity_destroy(f.commands, e);
     ecs_commands_apply(f.commands);
     cr_expect_eq(ecs_entity_count(f.world), 0);
     fixture_free(&f);
@@ -158,7 +158,7 @@ static void spawn(ecs_iter *it) {
         for (int i = 0; i < it->count; i++) {
             uint64_t h = decide(it->entities[i], p->frame, 1);
             if (h % 9 != 0) continue;
-            ecs_entity child = ecs_defer_create(it->commands);
+            ecs_entity child = ecs_defer_entity_create(it->commands);
             ecs_defer_set(it->commands, child, p->value, &(Value){ h });
             ecs_defer_add(it->commands, child, p->counter);
         }
@@ -170,7 +170,7 @@ static void thin(ecs_iter *it) {
     while (ecs_query_next(it))
         for (int i = 0; i < it->count; i++) {
             uint64_t h = decide(it->entities[i], p->frame, 2);
-            if (h % 11 == 0) ecs_defer_destroy(it->commands, it->entities[i]);
+            if (h % 11 == 0) ecs_defer_entity_destroy(it->commands, it->entities[i]);
             if (h % 5 == 0) ecs_defer_add(it->commands, it->entities[i], p->marked);
             if (h % 7 == 0) ecs_defer_set(it->commands, it->entities[i], p->value, &(Value){ h });
         }
@@ -196,7 +196,7 @@ static void unmark(ecs_iter *it) {
         for (int i = 0; i < it->count; i++)
             if (decide(it->entities[i], p->frame, 3) % 3 == 0) {
                 ecs_defer_remove(it->commands, it->entities[i], p->marked);
-                ecs_defer_create(it->commands);
+                ecs_defer_entity_create(it->commands);
             }
 }
 

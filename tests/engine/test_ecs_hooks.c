@@ -166,9 +166,9 @@ Test(ecs_hooks, deferred_destroy_and_remove_call_hook_at_apply) {
     fixture *f = fixture_make(0);
     ecs_entity a = spawn_mesh(f, 10), b = spawn_mesh(f, 20), c = spawn_mesh(f, 30);
     ecs_commands *commands = ecs_commands_create(f->world);
-    ecs_defer_destroy(commands, b);
+    ecs_defer_entity_destroy(commands, b);
     ecs_defer_remove(commands, a, f->mesh);
-    ecs_defer_destroy(commands, b);          /* b is dead by then: skipped */
+    ecs_defer_entity_destroy(commands, b);          /* b is dead by then: skipped */
     ecs_defer_set(commands, c, f->mesh, &(Mesh){ 31 });
     cr_expect_eq(f->log.calls, 0, "nothing happens before apply");
 
@@ -192,7 +192,7 @@ static void destroy_odd(ecs_iter *it) {
     while (ecs_query_next(it)) {
         const Mesh *m = ecs_field(it, 0);
         for (int i = 0; i < it->count; i++)
-            if (m[i].buffer % 2) ecs_defer_destroy(it->commands, it->entities[i]);
+            if (m[i].buffer % 2) ecs_defer_entity_destroy(it->commands, it->entities[i]);
     }
 }
 
@@ -280,7 +280,7 @@ Test(ecs_hooks, clearing_with_null_stops_calls) {
     ecs_remove(f->world, b, f->mesh);
     ecs_entity_destroy(f->world, c);
     ecs_commands *commands = ecs_commands_create(f->world);
-    ecs_defer_destroy(commands, a);
+    ecs_defer_entity_destroy(commands, a);
     ecs_commands_apply(commands);
     ecs_commands_destroy(commands);
     fixture_destroy_world(f);
@@ -583,13 +583,13 @@ Test(ecs_hooks, lifecycle_through_a_command_buffer) {
     life_fixture *f = life_make(0);
     ecs_entity a = ecs_entity_create(f->world), b = ecs_entity_create(f->world);
     ecs_commands *commands = ecs_commands_create(f->world);
-    ecs_entity p = ecs_defer_create(commands);
+    ecs_entity p = ecs_defer_entity_create(commands);
     ecs_defer_add(commands, a, f->tracked);
     ecs_defer_add(commands, b, f->tracked);
     ecs_defer_add(commands, p, f->tracked);
     ecs_defer_set(commands, p, f->counter, &(Counter){ 7 });
     ecs_defer_remove(commands, a, f->tracked);
-    ecs_defer_destroy(commands, b);
+    ecs_defer_entity_destroy(commands, b);
     cr_expect_eq(f->t.ctor + f->c.ctor, 0, "nothing before apply");
     ecs_commands_apply(commands);
     cr_expect_eq(f->t.ctor, 3);

@@ -2,7 +2,7 @@
  * (ECS_ON_ADD) or stops (ECS_ON_REMOVE) matching its query, whatever made it so — add, remove,
  * destroy, create_many, a command buffer, a system's commands, ecs_world_destroy — and never
  * for a move between two tables that both match or both do not. Also the world's table-move
- * count (ecs_stats, and the ecs.table_moves trace counter).
+ * count (ecs_world_stats_info, and the ecs.table_moves trace counter).
  * Also meant to run under ThreadSanitizer (one test uses a 2-thread job system). */
 #include "core/core.h"
 #include "ecs/ecs.h"
@@ -161,9 +161,9 @@ Test(ecs_observers, added_after_the_tables_and_removed) {
     ecs_add(f->world, e, f->d);
     cr_expect_eq(late.removes, 1);
     cr_expect_eq(late.adds, 1);
-    cr_expect_eq(ecs_stats(f->world).observers, 2);
+    cr_expect_eq(ecs_world_stats(f->world).observers, 2);
     ecs_observer_remove(f->world, late_id);
-    cr_expect_eq(ecs_stats(f->world).observers, 1);
+    cr_expect_eq(ecs_world_stats(f->world).observers, 1);
     ecs_remove(f->world, e, f->d);
     ecs_entity_destroy(f->world, e);
     cr_expect_eq(late.removes + late.adds, 2, "no calls once removed");
@@ -255,13 +255,13 @@ Test(ecs_observers, command_buffer) {
     fixture *f = fixture_make(0);
     ecs_entity e = ecs_entity_create(f->world);
     ecs_commands *commands = ecs_commands_create(f->world);
-    ecs_entity p = ecs_defer_create(commands);
+    ecs_entity p = ecs_defer_entity_create(commands);
     ecs_defer_set(commands, p, f->a, &(A){ 1 });
     ecs_defer_add(commands, p, f->b);        /* p matches */
     ecs_defer_add(commands, e, f->a);
     ecs_defer_add(commands, e, f->b);        /* e matches */
     ecs_defer_add(commands, e, f->c);        /* e stops */
-    ecs_defer_destroy(commands, p);          /* p stops */
+    ecs_defer_entity_destroy(commands, p);          /* p stops */
     cr_expect_eq(f->seen.adds + f->seen.removes, 0, "nothing before apply");
     ecs_commands_apply(commands);
     cr_expect_eq(f->seen.adds, 2);
@@ -299,7 +299,7 @@ static void check_system_commands(int threads) {
     cr_expect_eq(f->seen.thread_max, 0, "threads %d: observers run on the progress thread",
                  threads);
     /* 10 entities moved each frame, plus none at creation (bulk). */
-    cr_expect_eq(ecs_stats(f->world).table_moves, 30u, "threads %d", threads);
+    cr_expect_eq(ecs_world_stats(f->world).table_moves, 30u, "threads %d", threads);
     fixture_destroy_world(f);
     cr_expect_eq(f->seen.removes, 20, "threads %d", threads);
     free(f);
@@ -312,9 +312,9 @@ Test(ecs_observers, system_commands_on_the_progress_thread) {
 
 /* ---- table moves and stats -------------------------------------------------------------- */
 
-Test(ecs_stats, counts_table_moves_and_the_world) {
+Test(ecs_world_stats_info, counts_table_moves_and_the_world) {
     fixture *f = fixture_make(0);
-    ecs_world_stats st = ecs_stats(f->world);
+    ecs_world_stats_info st = ecs_world_stats(f->world);
     cr_expect_eq(st.table_moves, 0u);
     cr_expect_eq(st.entities, 0);
     cr_expect_eq(st.tables, 1, "the empty table");
@@ -330,7 +330,7 @@ Test(ecs_stats, counts_table_moves_and_the_world) {
     ecs_entity_destroy(f->world, e);             /* leaves, moves to no table */
     ecs_system_add(f->world, &(ecs_system_desc){ .name = "noop", .phase = "game",
         .fn = toggle_b, .query = { .with = { f->c } }, .user = &f->b });
-    st = ecs_stats(f->world);
+    st = ecs_world_stats(f->world);
     cr_expect_eq(st.table_moves, 3u);
     cr_expect_eq(st.entities, 5);
     /* {}, {A}, {A, B}, {B}, {D} */
@@ -342,7 +342,7 @@ Test(ecs_stats, counts_table_moves_and_the_world) {
     free(f);
 }
 
-Test(ecs_stats, table_moves_is_a_trace_counter_per_frame) {
+Test(ecs_world_stats_info, table_moves_is_a_trace_counter_per_frame) {
     char path[] = "/tmp/test_ecs_moves_XXXXXX";
     int fd = mkstemp(path);
     cr_assert_geq(fd, 0);

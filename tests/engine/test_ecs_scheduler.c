@@ -257,7 +257,7 @@ typedef struct spawn_probe {
 
 static void spawn_one(ecs_iter *it) {
     spawn_probe *probe = it->user;
-    ecs_entity e = ecs_defer_create(it->commands);
+    ecs_entity e = ecs_defer_entity_create(it->commands);
     ecs_defer_set(it->commands, e, probe->position, &(Position){ 1, 2 });
 }
 

@@ -157,7 +157,7 @@ Test(input_hid, plain_pad_bad_reports) {
     expect_rejected(d, r, 0, INPUT_DECODE_SHORT);
     expect_rejected(d, r, 7, INPUT_DECODE_OVERSIZED);
     cr_expect_str_eq(input_decoder_last_error(d), "report too long: 7 bytes, at most 6");
-    input_decoder_stats stats = input_decoder_stats_get(d);
+    input_decoder_stats_info stats = input_decoder_stats(d);
     cr_expect_eq(stats.short_reports, 2u);
     cr_expect_eq(stats.oversized, 1u);
     cr_expect_eq(stats.decoded, 0u);

@@ -15,7 +15,7 @@
 #define BIT(action) INPUT_ACTION_BIT(INPUT_ACTION_##action)
 
 static input_system *make(void) {
-    input_system *in = input_create(&(input_desc){ .no_gamepads = true });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true });
     cr_assert_not_null(in);
     return in;
 }
@@ -61,7 +61,7 @@ Test(input_actions, key_press_hold_release_edges) {
 
     a = step(in);
     cr_expect_eq(a->down | a->pressed | a->released, 0u);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, tap_within_one_frame_gives_both_edges) {
@@ -74,7 +74,7 @@ Test(input_actions, tap_within_one_frame_gives_both_edges) {
     cr_expect_eq(a->released, BIT(TOGGLE_FLY));
     a = step(in);
     cr_expect_eq(a->pressed | a->released, 0u);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, two_keys_on_one_action_release_once) {
@@ -94,7 +94,7 @@ Test(input_actions, two_keys_on_one_action_release_once) {
     key_tap(in, GLFW_KEY_C, false);
     a = step(in);
     cr_expect_eq(a->released, BIT(CROUCH));
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, default_keys_reach_their_actions) {
@@ -114,7 +114,7 @@ Test(input_actions, default_keys_reach_their_actions) {
         a = step(in);
         cr_expect_eq(a->released, cases[i].bit, "key %d", cases[i].key);
     }
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 /* ---- move ----------------------------------------------------------------------------------- */
@@ -135,7 +135,7 @@ Test(input_actions, single_keys_move_along_axes) {
         cr_expect_eq(a->move_x, 0.0f);
         cr_expect_eq(a->move_y, 0.0f);
     }
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, diagonal_move_is_normalised) {
@@ -154,7 +154,7 @@ Test(input_actions, diagonal_move_is_normalised) {
     a = step(in);
     cr_expect_float_eq(a->move_x, -0.70710678f, 1e-6f);
     cr_expect_float_eq(a->move_y, 0.70710678f, 1e-6f);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, opposite_keys_cancel_and_same_direction_does_not_add) {
@@ -168,7 +168,7 @@ Test(input_actions, opposite_keys_cancel_and_same_direction_does_not_add) {
     key_tap(in, GLFW_KEY_UP, true); /* w and up: still 1, not 2 */
     a = step(in);
     cr_expect_eq(a->move_y, 1.0f);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, left_stick_moves_after_the_dead_zone) {
@@ -193,12 +193,12 @@ Test(input_actions, left_stick_moves_after_the_dead_zone) {
     a = step(in);
     cr_expect_float_eq(a->move_x, 0.6f, 1e-6f);
     cr_expect_float_eq(a->move_y, 0.8f, 1e-6f);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, dead_zone_from_the_desc) {
     const input_actions *a;
-    input_system *in = input_create(&(input_desc){ .no_gamepads = true, .dead_zone = 0.3f });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .dead_zone = 0.3f });
     cr_assert_not_null(in);
     input_feed_gamepad(in, 0, &(input_gamepad_state){ .lx = -0.5f });
     /* (0.5 − 0.3) / 0.7 = 0.28571429, to the left */
@@ -207,7 +207,7 @@ Test(input_actions, dead_zone_from_the_desc) {
     input_feed_gamepad(in, 0, &(input_gamepad_state){ .lx = -0.25f });
     a = step(in);
     cr_expect_eq(a->move_x, 0.0f);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, stick_and_keys_take_the_larger_push) {
@@ -217,7 +217,7 @@ Test(input_actions, stick_and_keys_take_the_larger_push) {
     input_feed_gamepad(in, 0, &(input_gamepad_state){ .lx = 0.5f });
     a = step(in);
     cr_expect_eq(a->move_x, 1.0f);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 /* ---- look ----------------------------------------------------------------------------------- */
@@ -244,7 +244,7 @@ Test(input_actions, mouse_motion_turns_the_view_only_while_captured) {
     a = step(in);
     cr_expect_eq(a->look_x, 0.0f);
     cr_expect_eq(a->look_y, 0.0f);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, right_stick_turns_by_speed_times_dt) {
@@ -272,14 +272,14 @@ Test(input_actions, right_stick_turns_by_speed_times_dt) {
     a = frame(in, 0.02f);
     cr_expect_eq(a->look_x, 0.0f);
     cr_expect_eq(a->look_y, 0.0f);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, invert_y_flips_mouse_and_stick) {
     const input_actions *a;
     const char text[] = "invert_y = true\nlook_speed = 0.01\nstick_look_speed = 2\n";
     input_bindings *b = input_bindings_parse(text, sizeof text - 1, "invert", NULL);
-    input_system *in = input_create(&(input_desc){ .no_gamepads = true, .bindings = b });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = b });
     input_bindings_destroy(b);
     cr_assert_not_null(in);
     capture_by_click(in);
@@ -289,20 +289,20 @@ Test(input_actions, invert_y_flips_mouse_and_stick) {
     input_feed_gamepad(in, 0, &(input_gamepad_state){ .ry = -1.0f }); /* 2 × 0.25 = 0.5, inverted */
     a = frame(in, 0.25f);
     cr_expect_float_eq(a->look_y, -0.5f, 1e-6f);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, keys_bound_to_look_turn_like_a_full_stick) {
     const char text[] = "look_right = key:l\nlook_up = key:i\n";
     input_bindings *b = input_bindings_parse(text, sizeof text - 1, "keys", NULL);
-    input_system *in = input_create(&(input_desc){ .no_gamepads = true, .bindings = b });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = b });
     input_bindings_destroy(b);
     key_tap(in, GLFW_KEY_L, true);
     key_tap(in, GLFW_KEY_I, true);
     const input_actions *a = frame(in, 0.1f); /* 3 rad/s × 0.1 s */
     cr_expect_float_eq(a->look_x, 0.3f, 1e-6f);
     cr_expect_float_eq(a->look_y, 0.3f, 1e-6f);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 /* ---- mouse capture -------------------------------------------------------------------------- */
@@ -329,7 +329,7 @@ Test(input_actions, the_capturing_click_does_not_use_the_tool) {
     input_feed_mouse_button(in, GLFW_MOUSE_BUTTON_2, false);
     a = step(in);
     cr_expect_eq(a->released, BIT(TOOL) | BIT(TOOL_ALT));
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, escape_releases_capture_then_quits) {
@@ -348,7 +348,7 @@ Test(input_actions, escape_releases_capture_then_quits) {
     a = step(in);
     cr_expect_eq(a->pressed, BIT(QUIT));
     cr_expect_eq(a->down, BIT(QUIT));
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, capture_mouse_call_applies_at_the_next_update) {
@@ -364,7 +364,7 @@ Test(input_actions, capture_mouse_call_applies_at_the_next_update) {
     a = step(in);
     cr_expect_eq(a->look_x, 0.0f);
     cr_expect_not(input__mouse_captured(in));
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 /* ---- gamepad buttons ------------------------------------------------------------------------ */
@@ -392,7 +392,7 @@ Test(input_actions, gamepad_buttons_and_triggers) {
         a = step(in);
         cr_expect_eq(a->released, cases[i].bits, "case %zu", i);
     }
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, unplugging_a_pad_releases_what_it_held) {
@@ -407,7 +407,7 @@ Test(input_actions, unplugging_a_pad_releases_what_it_held) {
     cr_expect_eq(a->released, BIT(JUMP));
     cr_expect_eq(a->move_x, 0.0f);
     cr_expect_eq(input_gamepad_count(in), 0);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, first_pad_after_dead_zone_and_count) {
@@ -426,7 +426,7 @@ Test(input_actions, first_pad_after_dead_zone_and_count) {
     cr_expect_float_eq(pad.ly, 0.575f * k, 1e-6f);
     cr_expect_eq(pad.rt, 0.25f);
     cr_expect_eq(pad.buttons, 5u);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_actions, two_pads_combine) {
@@ -442,7 +442,7 @@ Test(input_actions, two_pads_combine) {
     input_feed_gamepad(in, 1, &(input_gamepad_state){ 0 });
     a = step(in);
     cr_expect_eq(a->released, BIT(JUMP));
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 /* The slots the gamepad thread publishes into, without the thread: what input_update makes of them. */
@@ -473,7 +473,7 @@ Test(input_actions, published_pad_states_become_events) {
     a = step(in);
     cr_expect_eq(a->released, BIT(JUMP));
     cr_expect_eq(input_gamepad_count(in), 0);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 /* ---- names ---------------------------------------------------------------------------------- */
@@ -497,5 +497,5 @@ Test(input_actions, bad_dt_counts_as_zero) {
     a = frame(in, 0.1f);
     cr_expect_float_eq(a->look_x, 0.3f, 1e-6f);
     cr_expect_eq(input_frame_dt(in), 0.1f);
-    input_destroy(in);
+    input_system_destroy(in);
 }

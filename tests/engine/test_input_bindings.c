@@ -100,7 +100,7 @@ Test(input_bindings, a_line_replaces_the_defaults_of_its_action) {
     cr_expect(has_source(b, INPUT_ACTION_SPRINT, INPUT_SOURCE_KEY, GLFW_KEY_LEFT_SHIFT), "other actions keep theirs");
 
     /* Through the input system: space no longer jumps, j does. */
-    input_system *in = input_create(&(input_desc){ .no_gamepads = true, .bindings = b });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = b });
     input_bindings_destroy(b);
     input_feed_key(in, GLFW_KEY_SPACE, true);
     cr_assert(input_update(in, 0.016f));
@@ -108,7 +108,7 @@ Test(input_bindings, a_line_replaces_the_defaults_of_its_action) {
     input_feed_key(in, GLFW_KEY_J, true);
     cr_assert(input_update(in, 0.016f));
     cr_expect_eq(input_actions_get(in)->pressed, INPUT_ACTION_BIT(INPUT_ACTION_JUMP));
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_bindings, whitespace_comments_case_and_line_endings) {

@@ -317,7 +317,7 @@ Test(input_decode, ds4_bad_sizes_and_ids) {
     r[0] = 0x05; /* an output report's ID, never an input */
     expect_rejected(d, r, 32, INPUT_DECODE_UNKNOWN_ID);
     cr_expect(strstr(input_decoder_last_error(d), "0x05") != NULL);
-    input_decoder_stats stats = input_decoder_stats_get(d);
+    input_decoder_stats_info stats = input_decoder_stats(d);
     cr_expect_eq(stats.decoded, 0u);
     cr_expect_eq(stats.short_reports, 4u);
     cr_expect_eq(stats.oversized, 2u);
@@ -337,7 +337,7 @@ Test(input_decode, ds4_malformed_reports) {
     bt[1] = 0x40; /* no HID data in this report */
     sony_bt_seal(bt);
     expect_rejected(d, bt, sizeof bt, INPUT_DECODE_MALFORMED);
-    cr_expect_eq(input_decoder_stats_get(d).malformed, 2u);
+    cr_expect_eq(input_decoder_stats(d).malformed, 2u);
     input_decoder_destroy(d);
 }
 
@@ -360,7 +360,7 @@ Test(input_decode, ds4_crc_enforced_once_trusted) {
     bad[40] ^= 0x80;
     expect_rejected(d, bad, sizeof bad, INPUT_DECODE_MALFORMED);
     decode_ok(d, good, sizeof good);
-    input_decoder_stats stats = input_decoder_stats_get(d);
+    input_decoder_stats_info stats = input_decoder_stats(d);
     cr_expect_eq(stats.decoded, 5u);
     cr_expect_eq(stats.malformed, 2u);
     input_decoder_destroy(d);
@@ -468,7 +468,7 @@ Test(input_decode, dualsense_bad_reports) {
     memcpy(bad, good, sizeof bad);
     bad[2] = 0x00; /* lx changed after the CRC was computed */
     expect_rejected(d, bad, sizeof bad, INPUT_DECODE_MALFORMED);
-    input_decoder_stats stats = input_decoder_stats_get(d);
+    input_decoder_stats_info stats = input_decoder_stats(d);
     cr_expect_eq(stats.decoded, 3u);
     cr_expect_eq(stats.short_reports, 3u);
     cr_expect_eq(stats.oversized, 1u);
@@ -585,7 +585,7 @@ Test(input_decode, switch_bad_reports) {
     expect_rejected(d, r, 64, INPUT_DECODE_UNKNOWN_ID);
     r[0] = 0x81; /* a USB command ack */
     expect_rejected(d, r, 64, INPUT_DECODE_UNKNOWN_ID);
-    input_decoder_stats stats = input_decoder_stats_get(d);
+    input_decoder_stats_info stats = input_decoder_stats(d);
     cr_expect_eq(stats.decoded, 2u);
     cr_expect_eq(stats.short_reports, 1u);
     cr_expect_eq(stats.oversized, 1u);

@@ -55,7 +55,7 @@ Test(input_mappings, hand_built_line_maps_a_raw_joystick_to_the_pad) {
     /* Through the default bindings, dt 0.1: south is jump; rt 0.6 is past half way, so tool is
      * down; the left stick at 0.8 up gives move_y (0.8 − 0.15)/(1 − 0.15) = 0.764706; the right
      * stick fully right turns 3 rad/s · 0.1 s = 0.3 rad. */
-    input_system *in = input_create(&(input_desc){ .no_gamepads = true });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true });
     cr_assert_not_null(in);
     input_feed_gamepad(in, 0, &s);
     cr_assert(input_update(in, 0.1f));
@@ -65,7 +65,7 @@ Test(input_mappings, hand_built_line_maps_a_raw_joystick_to_the_pad) {
     cr_expect_float_eq(a->move_y, 0.65f / 0.85f, 1e-5f);
     cr_expect_float_eq(a->look_x, 0.3f, 1e-5f);
     cr_expect_float_eq(a->look_y, 0.0f, 1e-6f);
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 Test(input_mappings, half_axes_hats_and_buttons_follow_the_format) {

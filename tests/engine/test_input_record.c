@@ -131,7 +131,7 @@ static input_bindings *session_bindings(void) {
 /* Records `frames` frames to `path`; returns the actions and dts computed live (caller frees). */
 static input_actions *record_session(const char *path, int frames, float **dts) {
     input_bindings *b = session_bindings();
-    input_system *in = input_create(&(input_desc){ .no_gamepads = true, .bindings = b, .record_path = path });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = b, .record_path = path });
     input_bindings_destroy(b);
     cr_assert_not_null(in);
     input_actions *actions = malloc((size_t)frames * sizeof *actions);
@@ -143,7 +143,7 @@ static input_actions *record_session(const char *path, int frames, float **dts) 
         actions[f] = *input_actions_get(in);
         (*dts)[f] = dt;
     }
-    input_destroy(in);
+    input_system_destroy(in);
     return actions;
 }
 
@@ -151,12 +151,12 @@ static bool same_bits(const input_actions *a, const input_actions *b) { return m
 
 /* Replays `path` to its end; returns the frames delivered. */
 static int replay_count(const char *path, bool *failed) {
-    input_system *in = input_create(&(input_desc){ .replay_path = path });
+    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path });
     if (!in) return -1;
     int frames = 0;
     while (input_update(in, 0.0f) && frames < 100000) frames++;
     *failed = input__replay_failed(in);
-    input_destroy(in);
+    input_system_destroy(in);
     return frames;
 }
 
@@ -185,7 +185,7 @@ Test(input_record, replay_reproduces_every_frame_bit_for_bit) {
     cr_expect(any_move);
 
     /* Replay with the default bindings and no-pads left out: the file's bindings apply, no device opens. */
-    input_system *in = input_create(&(input_desc){ .replay_path = path });
+    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path });
     cr_assert_not_null(in);
     cr_expect_not(input__gamepad_thread_running(in));
     for (int f = 0; f < FRAMES; f++) {
@@ -200,7 +200,7 @@ Test(input_record, replay_reproduces_every_frame_bit_for_bit) {
     cr_expect_eq(input_actions_get(in)->down, 0u);
     cr_expect_eq(input__replay_mismatches(in), 0u);
     cr_expect_not(input__replay_failed(in));
-    input_destroy(in);
+    input_system_destroy(in);
     free(recorded);
     free(dts);
     unlink(path);
@@ -266,7 +266,7 @@ Test(input_record, a_changed_recorded_action_is_a_determinism_warning) {
         for (int i = 0; i < 4; i++) rec[8 + length + (size_t)i] = (uint8_t)(sum >> (8 * i));
     }
     write_all(path, b.data, b.size);
-    input_system *in = input_create(&(input_desc){ .replay_path = path });
+    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path });
     cr_assert_not_null(in);
     for (int f = 0; f < 20; f++) {
         cr_assert(input_update(in, 0.0f));
@@ -275,7 +275,7 @@ Test(input_record, a_changed_recorded_action_is_a_determinism_warning) {
     cr_expect_not(input_update(in, 0.0f));
     cr_expect_eq(input__replay_mismatches(in), 3u);
     cr_expect_not(input__replay_failed(in));
-    input_destroy(in);
+    input_system_destroy(in);
     free(b.data);
     free(recorded);
     free(dts);
@@ -287,9 +287,9 @@ Test(input_record, a_changed_recorded_action_is_a_determinism_warning) {
 Test(input_record, missing_empty_wrong_magic_and_version_are_refused) {
     char path[256];
     temp_path(path, sizeof path, "bad.rec");
-    cr_expect_null(input_create(&(input_desc){ .replay_path = "/nonexistent/replay.rec" }));
+    cr_expect_null(input_system_create(&(input_system_desc){ .replay_path = "/nonexistent/replay.rec" }));
     write_all(path, (const uint8_t *)"", 0);
-    cr_expect_null(input_create(&(input_desc){ .replay_path = path }));
+    cr_expect_null(input_system_create(&(input_system_desc){ .replay_path = path }));
 
     float *dts;
     free(record_session(path, 3, &dts));
@@ -297,16 +297,16 @@ Test(input_record, missing_empty_wrong_magic_and_version_are_refused) {
     bytes b = read_all(path);
     b.data[0] = 'X';
     write_all(path, b.data, b.size);
-    cr_expect_null(input_create(&(input_desc){ .replay_path = path }), "wrong magic");
+    cr_expect_null(input_system_create(&(input_system_desc){ .replay_path = path }), "wrong magic");
     b.data[0] = 'I';
     b.data[8] = 2;
     write_all(path, b.data, b.size);
-    cr_expect_null(input_create(&(input_desc){ .replay_path = path }), "unknown version");
+    cr_expect_null(input_system_create(&(input_system_desc){ .replay_path = path }), "unknown version");
     b.data[8] = 1;
     write_all(path, b.data, b.size);
-    input_system *in = input_create(&(input_desc){ .replay_path = path });
+    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path });
     cr_expect_not_null(in, "restored, it replays");
-    input_destroy(in);
+    input_system_destroy(in);
     free(b.data);
     unlink(path);
 }
@@ -394,7 +394,7 @@ Test(input_record, an_interrupted_recording_replays_up_to_the_crash) {
     temp_path(path, sizeof path, "crash.rec");
     temp_path(copy, sizeof copy, "crash_copy.rec");
     snprintf(part, sizeof part, "%s.part", path);
-    input_system *in = input_create(&(input_desc){ .no_gamepads = true, .record_path = path });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .record_path = path });
     cr_assert_not_null(in);
     script s = { .rng = 77 };
     input_actions live[5];
@@ -406,10 +406,10 @@ Test(input_record, an_interrupted_recording_replays_up_to_the_crash) {
     cr_expect_not(exists(path), "the target appears only when the recording ends");
     bytes b = read_all(part); /* what a crash right now would leave */
     write_all(copy, b.data, b.size);
-    input_destroy(in);
+    input_system_destroy(in);
     cr_expect(exists(path));
 
-    input_system *replay = input_create(&(input_desc){ .replay_path = copy });
+    input_system *replay = input_system_create(&(input_system_desc){ .replay_path = copy });
     cr_assert_not_null(replay);
     for (int f = 0; f < 5; f++) {
         cr_assert(input_update(replay, 0.0f));
@@ -417,14 +417,14 @@ Test(input_record, an_interrupted_recording_replays_up_to_the_crash) {
     }
     cr_expect_not(input_update(replay, 0.0f));
     cr_expect(input__replay_failed(replay));
-    input_destroy(replay);
+    input_system_destroy(replay);
     free(b.data);
     unlink(path);
     unlink(copy);
 }
 
 Test(input_record, unwritable_record_path_fails_at_create) {
-    cr_expect_null(input_create(&(input_desc){ .no_gamepads = true, .record_path = "/nonexistent/dir/x.rec" }));
+    cr_expect_null(input_system_create(&(input_system_desc){ .no_gamepads = true, .record_path = "/nonexistent/dir/x.rec" }));
 }
 
 Test(input_record, a_replay_can_be_recorded_again_identically) {
@@ -434,10 +434,10 @@ Test(input_record, a_replay_can_be_recorded_again_identically) {
     float *dts;
     free(record_session(first, 50, &dts));
     free(dts);
-    input_system *in = input_create(&(input_desc){ .replay_path = first, .record_path = second });
+    input_system *in = input_system_create(&(input_system_desc){ .replay_path = first, .record_path = second });
     cr_assert_not_null(in);
     while (input_update(in, 0.0f)) {}
-    input_destroy(in);
+    input_system_destroy(in);
     bytes a = read_all(first), b = read_all(second);
     cr_expect_eq(a.size, b.size);
     cr_expect(a.size == b.size && memcmp(a.data, b.data, a.size) == 0, "same bytes");

@@ -25,7 +25,7 @@ static void log_finish(void *arg) {
     job->log->position[job->id] = atomic_fetch_add(&job->log->next, 1);
 }
 
-Test(jobs, chain_runs_in_dependency_order) {
+Test(job_system, chain_runs_in_dependency_order) {
     for (int threads = 1; threads <= 4; threads++) {
         job_system *jobs = job_system_create(&(job_system_desc){ .threads = threads });
         order_log log = { 0 };
@@ -42,7 +42,7 @@ Test(jobs, chain_runs_in_dependency_order) {
     }
 }
 
-Test(jobs, diamond_joins_after_both_branches) {
+Test(job_system, diamond_joins_after_both_branches) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     for (int round = 0; round < 200; round++) {
         order_log log = { 0 };
@@ -80,7 +80,7 @@ static void stress_run(void *arg) {
     job->state->finished_at[job->id] = atomic_fetch_add(&job->state->clock, 1) + 1;
 }
 
-Test(jobs, million_jobs_with_random_dependencies, .timeout = 240) {
+Test(job_system, million_jobs_with_random_dependencies, .timeout = 240) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     stress_state state = { 0 };
     state.finished_at = calloc(STRESS_JOBS, sizeof *state.finished_at);
@@ -115,7 +115,7 @@ Test(jobs, million_jobs_with_random_dependencies, .timeout = 240) {
     }
     cr_expect_eq(wrong_runs, 0, "%d jobs did not run exactly once", wrong_runs);
     cr_expect_eq(wrong_order, 0, "%d jobs ran before a dependency", wrong_order);
-    job_stats stats = job_system_stats(jobs);
+    job_system_stats_info stats = job_system_stats(jobs);
     cr_expect_eq(stats.submitted, (uint64_t)STRESS_JOBS);
     cr_expect_eq(stats.completed, (uint64_t)STRESS_JOBS);
     job_system_destroy(jobs);
@@ -134,7 +134,7 @@ static void visit_range(void *arg, size_t begin, size_t end) {
     for (size_t i = begin; i < end; i++) atomic_fetch_add(&c->visits[i], 1);
 }
 
-Test(jobs, parallel_for_visits_every_index_once) {
+Test(job_system, parallel_for_visits_every_index_once) {
     const size_t counts[] = { 1, 2, 7, 64, 1000, 100003 };
     const size_t batches[] = { 0, 1, 3, 64, 5000 };
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
@@ -171,7 +171,7 @@ static void submit_pinned_from_worker(void *arg) {
     for (int i = 0; i < 10; i++) job_submit(p->jobs, &(job_desc){ .fn = record_thread, .user = p, .main_thread = true });
 }
 
-Test(jobs, main_thread_jobs_run_on_the_main_thread) {
+Test(job_system, main_thread_jobs_run_on_the_main_thread) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     pinned p = { .jobs = jobs };
     job_handle spawner = job_submit(jobs, &(job_desc){ .fn = submit_pinned_from_worker, .user = &p });
@@ -183,7 +183,7 @@ Test(jobs, main_thread_jobs_run_on_the_main_thread) {
     job_system_destroy(jobs);
 }
 
-Test(jobs, run_main_thread_jobs_drains_the_pinned_queue) {
+Test(job_system, run_main_thread_jobs_drains_the_pinned_queue) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     pinned p = { .jobs = jobs };
     for (int i = 0; i < 5; i++) job_submit(jobs, &(job_desc){ .fn = record_thread, .user = &p, .main_thread = true });
@@ -201,7 +201,7 @@ static void count_main_thread_work(void *arg) {
     nanosleep(&pause, NULL);
 }
 
-Test(jobs, wait_runs_other_jobs_instead_of_blocking) {
+Test(job_system, wait_runs_other_jobs_instead_of_blocking) {
     /* One thread: nobody else could run the jobs, so finishing proves the wait runs them. */
     job_system *alone = job_system_create(&(job_system_desc){ .threads = 1 });
     pinned p = { .jobs = alone };
@@ -223,7 +223,7 @@ Test(jobs, wait_runs_other_jobs_instead_of_blocking) {
     job_system_destroy(jobs);
 }
 
-Test(jobs, stale_and_zero_handles_read_as_done) {
+Test(job_system, stale_and_zero_handles_read_as_done) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     pinned p = { .jobs = jobs };
     job_handle first = job_submit(jobs, &(job_desc){ .fn = record_thread, .user = &p });
@@ -246,7 +246,7 @@ static double process_cpu_ms(void) {
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
-Test(jobs, idle_workers_sleep) {
+Test(job_system, idle_workers_sleep) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 4 });
     pinned p = { .jobs = jobs };
     for (int i = 0; i < 1000; i++) job_submit(jobs, &(job_desc){ .fn = record_thread, .user = &p });
@@ -260,7 +260,7 @@ Test(jobs, idle_workers_sleep) {
     job_system_destroy(jobs);
 }
 
-Test(jobs, queues_grow_instead_of_dropping_jobs) {
+Test(job_system, queues_grow_instead_of_dropping_jobs) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 1 });
     pinned p = { .jobs = jobs };
     for (int i = 0; i < 100000; i++) job_submit(jobs, &(job_desc){ .fn = record_thread, .user = &p });
@@ -270,7 +270,7 @@ Test(jobs, queues_grow_instead_of_dropping_jobs) {
     job_system_destroy(jobs);
 }
 
-Test(jobs, destroy_runs_what_is_still_queued) {
+Test(job_system, destroy_runs_what_is_still_queued) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 3 });
     pinned p = { .jobs = jobs };
     for (int i = 0; i < 5000; i++) job_submit(jobs, &(job_desc){ .fn = record_thread, .user = &p, .main_thread = (i % 10) == 0 });
@@ -278,7 +278,7 @@ Test(jobs, destroy_runs_what_is_still_queued) {
     cr_expect_eq(atomic_load(&p.ran_on_main) + atomic_load(&p.ran_elsewhere), 5000);
 }
 
-Test(jobs, thread_indices) {
+Test(job_system, thread_indices) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 3 });
     cr_expect_eq(job_thread_count(jobs), 3);
     cr_expect_eq(job_thread_index(jobs), 0);
@@ -305,7 +305,7 @@ static void noop_range(void *user, size_t begin, size_t end) {
 
 /* A frame that waits for its own parallel loop must never run queued background work on the
  * main thread: that is the whole point of the flag. */
-Test(jobs, background_jobs_never_run_inside_a_main_thread_wait) {
+Test(job_system, background_jobs_never_run_inside_a_main_thread_wait) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     background_probe probe = { .jobs = jobs };
     job_handle last = { 0, 0 };
@@ -322,7 +322,7 @@ Test(jobs, background_jobs_never_run_inside_a_main_thread_wait) {
 
 /* With no workers the main thread is the only one that can run them: in job_help, and in a
  * wait that cannot finish otherwise (no deadlock). */
-Test(jobs, background_jobs_run_on_a_lone_main_thread) {
+Test(job_system, background_jobs_run_on_a_lone_main_thread) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 1 });
     background_probe probe = { .jobs = jobs };
     for (int i = 0; i < 3; i++) job_submit(jobs, &(job_desc){ .fn = background_job, .user = &probe, .background = true });
@@ -354,7 +354,7 @@ static void fifo_job(void *arg) {
     item->probe->order[item->id] = atomic_fetch_add(&item->probe->next, 1);
 }
 
-Test(jobs, background_jobs_start_oldest_first) {
+Test(job_system, background_jobs_start_oldest_first) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     fifo_probe probe = { 0 };
     fifo_item items[32];
@@ -392,7 +392,7 @@ static void parent_job(void *user) {
 
 /* A background job's children are background too: a main thread waiting for them never runs
  * them (jobs.h), a worker does once the parent is done. */
-Test(jobs, children_of_background_jobs_are_background) {
+Test(job_system, children_of_background_jobs_are_background) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     parent_probe probe = { .jobs = jobs, .child_thread = -2 };
     job_handle parent = job_submit(jobs, &(job_desc){ .fn = parent_job, .user = &probe, .background = true });

@@ -59,7 +59,7 @@ static void slow_job(void *user) {
 
 /* The main thread waits on slow jobs: each wait is a "wait" zone on its lane, and every job it
  * runs meanwhile nests inside one. An idle worker's sleep is a "sleep" zone on its lane. */
-Test(jobs_trace, waits_and_sleeps_are_zones) {
+Test(job_trace, waits_and_sleeps_are_zones) {
     char path[128];
     snprintf(path, sizeof path, "/tmp/engine_test_jobs_trace_%d_wait.json", (int)getpid());
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
@@ -107,7 +107,7 @@ Test(jobs_trace, waits_and_sleeps_are_zones) {
 
 /* Each frame runs exactly JOBS jobs and waits for all of them: jobs.run reads JOBS every frame
  * and jobs.queued 0; the other counters are there, each once a frame. */
-Test(jobs_trace, counters_once_a_frame) {
+Test(job_trace, counters_once_a_frame) {
     char path[128];
     snprintf(path, sizeof path, "/tmp/engine_test_jobs_trace_%d_counters.json", (int)getpid());
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 3 });

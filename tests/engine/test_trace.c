@@ -119,7 +119,7 @@ static void *record_work(void *arg) {
     return NULL;
 }
 
-Test(trace, capture_from_several_threads) {
+Test(trace_capture, capture_from_several_threads) {
     char path[128];
     temp_trace_path(path, sizeof path, "threads");
     cr_assert(trace_start(path));
@@ -196,7 +196,7 @@ static void *record_then_wait(void *arg) {
     return NULL;
 }
 
-Test(trace, stop_writes_threads_that_are_still_running) {
+Test(trace_capture, stop_writes_threads_that_are_still_running) {
     char path[128];
     temp_trace_path(path, sizeof path, "live");
     handshake h = { .lock = PTHREAD_MUTEX_INITIALIZER, .changed = PTHREAD_COND_INITIALIZER };
@@ -223,7 +223,7 @@ Test(trace, stop_writes_threads_that_are_still_running) {
 
 /* ---- start and stop --------------------------------------------------------------------- */
 
-Test(trace, start_fails_on_an_unwritable_path) {
+Test(trace_capture, start_fails_on_an_unwritable_path) {
     cr_expect_not(trace_start("/nonexistent-dir/x.json"));
     cr_expect_not(trace_active());
     /* With no capture these are no-ops. */
@@ -250,7 +250,7 @@ static void *record_second(void *unused) {
     return NULL;
 }
 
-Test(trace, start_and_stop_twice_in_one_process) {
+Test(trace_capture, start_and_stop_twice_in_one_process) {
     char first_path[128], second_path[128];
     temp_trace_path(first_path, sizeof first_path, "first");
     temp_trace_path(second_path, sizeof second_path, "second");
@@ -288,7 +288,7 @@ Test(trace, start_and_stop_twice_in_one_process) {
     capture_free(&second);
 }
 
-Test(trace, nothing_recorded_is_still_a_valid_file) {
+Test(trace_capture, nothing_recorded_is_still_a_valid_file) {
     char path[128];
     temp_trace_path(path, sizeof path, "empty");
     cr_assert(trace_start(path));
@@ -303,7 +303,7 @@ Test(trace, nothing_recorded_is_still_a_valid_file) {
 
 /* ---- contents --------------------------------------------------------------------------- */
 
-Test(trace, complete_events_go_on_named_lanes) {
+Test(trace_capture, complete_events_go_on_named_lanes) {
     char path[128];
     temp_trace_path(path, sizeof path, "lanes");
     cr_assert(trace_start(path));
@@ -341,7 +341,7 @@ Test(trace, complete_events_go_on_named_lanes) {
     capture_free(&c);
 }
 
-Test(trace, lane_times_never_go_back) {
+Test(trace_capture, lane_times_never_go_back) {
     /* Lane events are written in the order they were recorded. One that starts before the one
      * written last is moved to start with it and keeps its end: "late" spans 1–2 µs, "early"
      * 0–5 µs, so "early" is written as 1–5 µs, a duration of 4 µs. */
@@ -364,7 +364,7 @@ Test(trace, lane_times_never_go_back) {
     capture_free(&c);
 }
 
-Test(trace, names_are_escaped) {
+Test(trace_capture, names_are_escaped) {
     char path[128];
     temp_trace_path(path, sizeof path, "escaped");
     const char *odd = "say \"hi\"\n\\ \xe2\x82\xac";
@@ -382,7 +382,7 @@ Test(trace, names_are_escaped) {
     trace_thread_name("main"); /* do not leave an odd name to later tests in this process */
 }
 
-Test(trace, counter_values_read_back_exactly) {
+Test(trace_capture, counter_values_read_back_exactly) {
     char path[128];
     temp_trace_path(path, sizeof path, "counters");
     const double values[] = { 0.1, -3.5, 1e300, 12345678901234567.0, 0.0, 1.0 / 3.0 };
@@ -405,7 +405,7 @@ Test(trace, counter_values_read_back_exactly) {
     capture_free(&c);
 }
 
-Test(trace, zone_times_follow_the_clock) {
+Test(trace_capture, zone_times_follow_the_clock) {
     char path[128];
     temp_trace_path(path, sizeof path, "clock");
     uint64_t before = core_time_ns();
@@ -428,7 +428,7 @@ Test(trace, zone_times_follow_the_clock) {
     capture_free(&c);
 }
 
-Test(trace, flush_writes_full_chunks_and_memory_stays_bounded) {
+Test(trace_capture, flush_writes_full_chunks_and_memory_stays_bounded) {
     char path[128];
     temp_trace_path(path, sizeof path, "bounded");
     cr_assert(trace_start(path));
@@ -462,7 +462,7 @@ Test(trace, flush_writes_full_chunks_and_memory_stays_bounded) {
     capture_free(&c);
 }
 
-Test(trace, intern_keeps_one_copy_per_string) {
+Test(trace_capture, intern_keeps_one_copy_per_string) {
     char buffer[32] = "chunk 12";
     const char *a = trace_intern(buffer);
     cr_expect_neq((const void *)a, (const void *)buffer);
@@ -484,7 +484,7 @@ Test(trace, intern_keeps_one_copy_per_string) {
 
 /* The frame thread never formats or writes: every "trace.write" zone is on the writer's own
  * named lane, and none on the lane of the thread that ends the frames. */
-Test(trace, writing_happens_on_the_writer_lane) {
+Test(trace_capture, writing_happens_on_the_writer_lane) {
     char path[128];
     temp_trace_path(path, sizeof path, "writer");
     cr_assert(trace_start(path));
@@ -522,7 +522,7 @@ Test(trace, writing_happens_on_the_writer_lane) {
 }
 
 /* trace_flush returns once the writer has written what the caller recorded. */
-Test(trace, flush_waits_for_the_writer) {
+Test(trace_capture, flush_waits_for_the_writer) {
     char path[128];
     temp_trace_path(path, sizeof path, "flush_waits");
     cr_assert(trace_start(path));
@@ -551,7 +551,7 @@ static const core_json_value *zone_args(const capture *c, const char *name, size
     return NULL;
 }
 
-Test(trace, zone_arguments_are_written_as_args) {
+Test(trace_capture, zone_arguments_are_written_as_args) {
     char path[128];
     temp_trace_path(path, sizeof path, "args");
     cr_assert(trace_start(path));
@@ -639,7 +639,7 @@ static void *record_in_lockstep(void *arg) {
  * (their counters read 25 … 29), a worker's zones only from about those frames (a chunk of 2048
  * events spans at most two frames of 6000, so between 5 and 7 frames' worth), and it stays
  * balanced: "long", whose B fell before the window, is left out whole. */
-Test(trace, keep_frames_writes_only_the_last_frames) {
+Test(trace_capture, keep_frames_writes_only_the_last_frames) {
     char path[128];
     temp_trace_path(path, sizeof path, "keep");
     trace_keep_frames(KEEP_FRAMES);

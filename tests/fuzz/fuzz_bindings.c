@@ -21,7 +21,7 @@ int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size);
 
 /* A few frames of events made from the input's bytes, through the bindings just parsed. */
 static void fuzz_drive(const input_bindings *bindings, const unsigned char *bytes, size_t size) {
-    input_system *in = input_create(&(input_desc){ .no_gamepads = true, .bindings = bindings });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = bindings });
     if (!in) __builtin_trap();
     for (size_t i = 0; i + 1 < size && i < 64; i += 2) {
         input_feed_key(in, bytes[i] + 256 * (bytes[i + 1] & 1), bytes[i + 1] & 2);
@@ -39,7 +39,7 @@ static void fuzz_drive(const input_bindings *bindings, const unsigned char *byte
             if (!(sqrtf(a->move_x * a->move_x + a->move_y * a->move_y) <= 1.0f + 1e-5f)) __builtin_trap();
         }
     }
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size) {

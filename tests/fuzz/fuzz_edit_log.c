@@ -28,7 +28,7 @@ static const terrain_stacks *generated_chunk(uint64_t *key) {
     static uint64_t world_key;
     if (!stacks) {
         core_log_set_level(CORE_LOG_OFF);         /* skipped entries log; the traps speak */
-        terrain_generation_params params = terrain_generation_defaults(1);
+        terrain_generation_desc params = terrain_generation_defaults(1);
         stacks = terrain_generate_chunk(&params, (terrain_chunk_coord){ 0, 0 });
         world_key = terrain_generation_key(&params);
     }
@@ -66,7 +66,7 @@ static void check_replay(terrain_edit_log *log, terrain_chunk_coord coord, const
 
 /* Parses into a fresh log and checks the outcome; returns whether it was accepted. */
 static bool parse_and_check(const unsigned char *bytes, size_t size, uint64_t key, const terrain_stacks *generated) {
-    terrain_edit_log *log = terrain_edit_log_create(key);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key });
     char error[256];
     error[0] = '\0';
     bool ok = terrain_edit_log_parse(log, bytes, size, error, sizeof error);

@@ -36,7 +36,7 @@ static input_decode_result fuzz_decode_checked(input_decoder *decoder, const uin
 
 /* Every decode counted exactly once. */
 static void fuzz_check_stats(const input_decoder *decoder, uint64_t calls) {
-    input_decoder_stats stats = input_decoder_stats_get(decoder);
+    input_decoder_stats_info stats = input_decoder_stats(decoder);
     if (stats.decoded + stats.short_reports + stats.oversized + stats.unknown_id + stats.malformed != calls)
         __builtin_trap();
 }

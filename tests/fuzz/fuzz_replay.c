@@ -5,7 +5,7 @@
  * Seeds: tests/fuzz/corpus/fuzz_replay/ (a short recorded session; one frame's payload; one
  * header's payload).
  *
- * Each input is tried three ways (four, counting the report-descriptor check below): as a whole file given to input_create(.replay_path) and played
+ * Each input is tried three ways (four, counting the report-descriptor check below): as a whole file given to input_system_create(.replay_path) and played
  * to its end; and, since a fuzzer rarely gets a checksum right, as a header payload and as a
  * frame payload fed straight to the decoders behind the reader. Besides "no crash, no leak, no
  * read out of bounds" it traps when a property fails: a decoder that refuses says why, what it
@@ -36,13 +36,13 @@ static void fuzz_file(const unsigned char *bytes, size_t size) {
         snprintf(path, sizeof path, "/proc/self/fd/%d", fd);
     }
     if (ftruncate(fd, 0) != 0 || (size && pwrite(fd, bytes, size, 0) != (ssize_t)size)) __builtin_trap();
-    input_system *in = input_create(&(input_desc){ .replay_path = path });
+    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path });
     if (!in) return;
     for (int frame = 0; frame < 100000 && input_update(in, 0.016f); frame++) {
         fuzz_check_move(input_actions_get(in));
         if (!(input_frame_dt(in) >= 0.0f)) __builtin_trap();
     }
-    input_destroy(in);
+    input_system_destroy(in);
 }
 
 static void fuzz_payloads(const unsigned char *bytes, size_t size) {

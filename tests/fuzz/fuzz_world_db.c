@@ -26,7 +26,7 @@
 int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size);
 
 static char dir[64];
-static terrain_generation_params params;
+static terrain_generation_desc params;
 static terrain_stacks *generated[2];
 
 static void setup(void) {
@@ -75,7 +75,7 @@ int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size) {
     snprintf(path, sizeof path, "%s/world.db", dir);
     FILE *f = fopen(path, "wb");
     if (!f || fwrite(bytes, 1, size, f) != size || fclose(f) != 0) __builtin_trap();
-    terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
     terrain_store_report report;
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = 1 }, &report);
     if (store) {

@@ -69,7 +69,7 @@ static terrain_world *hand_world_create(hand_world *hand) {
 
 /* Stands the player at (x, y, z), on the ground, looking along +x. */
 static void place(game_player *pl, double x, double y, double z) {
-    game_player_init(pl, &(game_player_params){ 0 });
+    game_player_init(pl, &(game_player_desc){ 0 });
     pl->position[0] = x, pl->position[1] = y, pl->position[2] = z;
     pl->yaw = YAW_PLUS_X;
     pl->on_ground = true;
@@ -358,7 +358,7 @@ Test(game_player, waits_at_the_edge_of_unready_terrain_and_never_falls) {
     terrain_world *world = hand_world_create(&hand);
     double limit = 20.0;
     game_player pl;
-    game_player_init(&pl, &(game_player_params){ .region_ready = ready_below_x, .region_user = &limit });
+    game_player_init(&pl, &(game_player_desc){ .region_ready = ready_below_x, .region_user = &limit });
     pl.position[0] = 5.5, pl.position[2] = 0.5, pl.yaw = YAW_PLUS_X, pl.on_ground = true;
     for (int i = 0; i < 300; i++) {
         game_player_update(&pl, world, &walk(0, 1), 1.0f / 60.0f);

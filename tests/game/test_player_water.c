@@ -120,7 +120,7 @@ Test(game_player_water, wading_half_a_metre_deep_is_slower_by_the_stated_rule_an
     double dry_sprint = steady_distance(0.0, true), wet_sprint = steady_distance(0.5, true);
     cr_expect_float_eq(dry_sprint, 16.0, 0.01, "a sprint on dry ground: %.4f m", dry_sprint);
     cr_expect_float_eq(wet_sprint, wet, 1e-3, "a sprint in the water: %.4f m, walking %.4f m", wet_sprint, wet);
-    game_player_params params;
+    game_player_desc params;
     game_player pl;
     game_player_init(&pl, NULL);
     params = pl.params;

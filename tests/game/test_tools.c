@@ -76,7 +76,7 @@ Test(game_tools, update_aims_switches_and_repeats_while_held) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 1 });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = flat_chunk });
-    terrain_ecs *te = terrain_ecs_create(ecs, world);
+    terrain_ecs *te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });
     game_tools tools;
     game_tools_init(&tools);
     const double eye[3] = { 0.5, 5, 0.5 };

@@ -42,7 +42,7 @@ static terrain_stacks *cave_generate(void *user, terrain_chunk_coord coord) {
 }
 
 static terrain_world *cave_world_create(cave_world *cw) {
-    terrain_generation_params generation = { .sea_level = cw->sea_level };
+    terrain_generation_desc generation = { .sea_level = cw->sea_level };
     return terrain_world_create(&(terrain_world_desc){ .generation = generation, .generate = cave_generate,
                                                        .generate_user = cw });
 }

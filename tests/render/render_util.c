@@ -11,7 +11,7 @@
 #include <unistd.h>
 
 gfx_context *render_offscreen(int width, int height) {
-    return gfx_create(&(gfx_desc){ .width = width, .height = height, .headless = true });
+    return gfx_context_create(&(gfx_context_desc){ .width = width, .height = height, .headless = true });
 }
 
 render_image render_scene(gfx_context *gfx, int frames) {

@@ -97,5 +97,5 @@ Test(render_ao, a_cave_floor_darkens_and_open_ground_does_not_change) {
     terrain_world_destroy(world);
     terrain_renderer_destroy(lit);
     terrain_renderer_destroy(flat);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }

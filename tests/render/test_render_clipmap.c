@@ -24,7 +24,7 @@ typedef struct far_scene {
     terrain_clipmap *clipmap;
 } far_scene;
 
-static far_scene far_scene_open(terrain_generation_params generation, terrain_renderer_desc renderer_desc) {
+static far_scene far_scene_open(terrain_generation_desc generation, terrain_renderer_desc renderer_desc) {
     far_scene s = { .gfx = render_offscreen(W, H) };
     s.renderer = terrain_renderer_create(s.gfx, &renderer_desc);
     cr_assert(s.renderer, "the renderer's shaders (clipmap.vert, clipmap.frag included) build");
@@ -36,7 +36,7 @@ static far_scene far_scene_open(terrain_generation_params generation, terrain_re
 static void far_scene_close(far_scene *s) {
     terrain_clipmap_destroy(s->clipmap);
     terrain_renderer_destroy(s->renderer);
-    gfx_destroy(s->gfx);
+    gfx_context_destroy(s->gfx);
 }
 
 /* Distance along the view axis of every pixel (top row first), from the depth buffer. */
@@ -106,7 +106,7 @@ Test(render_clipmap, ground_below_the_horizon_sky_above) {
     terrain_clipmap_update(s.clipmap, view.camera);
     view.camera[1] = terrain_clipmap_height(s.clipmap, 100, 200) + 60.0;
     render_image image = far_draw(&s, &view, NULL, 0), sky = sky_draw(&s, &view);
-    terrain_clipmap_stats stats = terrain_clipmap_stats_get(s.clipmap);
+    terrain_clipmap_stats_info stats = terrain_clipmap_stats(s.clipmap);
     cr_assert_gt(stats.blocks_drawn, 0);
     cr_assert_gt(stats.triangles, 10000u, "%llu triangles", (unsigned long long)stats.triangles);
     cr_assert_geq(stats.reach, 4000.0, "the defaults reach past 4 km: %.0f m", stats.reach);
@@ -162,8 +162,8 @@ Test(render_clipmap, no_sky_shows_through_the_ground) {
 
 /* A flat world at 10 m, seen straight down from 100 m above it: the vertical half-field of 30°
  * covers ±57.7 m along z and ±86.6 m along x (aspect 1.5) at the ground's depth. */
-static terrain_generation_params flat_world(float height) {
-    terrain_generation_params p = terrain_generation_defaults(1);
+static terrain_generation_desc flat_world(float height) {
+    terrain_generation_desc p = terrain_generation_defaults(1);
     p.relief_height = 0.0f;
     p.base_height = height;
     p.vertical_perturbation = 0.0f;
@@ -219,7 +219,7 @@ Test(render_clipmap, the_hole_leaves_nothing_at_ground_level) {
 /* The centre of seed 1's first lake east of the origin and its level, from the far terrain's own
  * lake rows (whose agreement with the chunks' water test_terrain_water checks): the mean of the
  * 4 m texels at that level. */
-static void find_far_lake(const terrain_generation_params *p, double centre[2], float *level) {
+static void find_far_lake(const terrain_generation_desc *p, double centre[2], float *level) {
     float row[160];
     *level = TERRAIN__NO_LAKE;
     for (int k = -50; k < 50 && *level == TERRAIN__NO_LAKE; k++) {
@@ -242,7 +242,7 @@ static void find_far_lake(const terrain_generation_params *p, double centre[2], 
 
 /* Whether the finest level's cell under world (x, z) lies wholly in the lake at `level` with its
  * ground at least `depth` metres under it (all four corners). */
-static bool deep_lake_cell(const terrain_generation_params *p, double x, double z, float level, float depth) {
+static bool deep_lake_cell(const terrain_generation_desc *p, double x, double z, float level, float depth) {
     double x0 = floor(x / 4.0) * 4.0, z0 = floor(z / 4.0) * 4.0;
     for (int k = 0; k < 2; k++) {
         float lakes[2], ground[2];
@@ -259,7 +259,7 @@ static bool deep_lake_cell(const terrain_generation_params *p, double x, double 
  * drawn at the lake's level, 150 m away (not on its bed), in the water's colour: blue-green
  * over a bed of sand and grass, whose red the water takes first (water_optics.glsl). */
 Test(render_clipmap, a_far_lake_is_drawn_as_water_at_its_level) {
-    terrain_generation_params p = terrain_generation_defaults(1);
+    terrain_generation_desc p = terrain_generation_defaults(1);
     double centre[2] = { 0, 0 };
     float level;
     find_far_lake(&p, centre, &level);
@@ -316,13 +316,13 @@ Test(render_clipmap, a_view_100_km_away_renders_as_at_the_origin) {
  * ground is never pierced by the sky. */
 Test(render_clipmap, the_volumetric_area_and_the_clipmap_meet_without_holes) {
     const uint64_t seed = 7;
-    terrain_generation_params generation = terrain_generation_defaults(seed);
+    terrain_generation_desc generation = terrain_generation_defaults(seed);
     far_scene s = far_scene_open(generation, (terrain_renderer_desc){ .cloud_cover = -1, .fog_density = 1e-5f,
                                                                      .sea_level = generation.sea_level });
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = generation });
-    terrain_ecs *te = terrain_ecs_create(ecs, world);
+    terrain_ecs *te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });
     terrain_ecs_spawn_area(te, 0, 0, 1, -4, 8);                /* columns and meshes over [−32, 64)² */
     ecs_progress(ecs, 1.0f / 60.0f);
     terrain_clipmap_set_hole(s.clipmap, (double[2]){ -32, -32 }, (double[2]){ 64, 64 });
@@ -369,13 +369,13 @@ Test(render_clipmap, the_volumetric_area_and_the_clipmap_meet_without_holes) {
 /* Streams the generator's world around `eyes` with the clipmap through the ECS (as the game
  * does: the lod phase re-centres it on eyes[0] and sets its holes), until every wanted chunk is
  * meshed and uploaded, then draws `view`. */
-static render_image streamed_far_view(terrain_generation_params generation, const double (*eyes)[3], int count,
+static render_image streamed_far_view(terrain_generation_desc generation, const double (*eyes)[3], int count,
                                       const terrain_view *view) {
     far_scene s = far_scene_open(generation, (terrain_renderer_desc){ .cloud_cover = -1, .sea_level = generation.sea_level });
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = generation });
-    terrain_ecs *te = terrain_ecs_create(ecs, world);
+    terrain_ecs *te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });
     terrain_ecs_stream(te, &(terrain_stream_desc){ .half_width = 2, .levels = 2 });
     terrain_ecs_set_clipmap(te, s.clipmap);
     int settled = -1;
@@ -384,8 +384,8 @@ static render_image streamed_far_view(terrain_generation_params generation, cons
         terrain_ecs_set_view(te, view);
         ecs_progress(ecs, 1.0f / 60.0f);
         terrain_world_trim(world);
-        terrain_stream_stats st = terrain_ecs_stream_stats(te);
-        terrain_ecs_stats es = terrain_ecs_stats_get(te);
+        terrain_ecs_stream_stats_info st = terrain_ecs_stream_stats(te);
+        terrain_ecs_stats_info es = terrain_ecs_stats(te);
         if (st.mesh_chunks_wanted > 0 && st.mesh_chunks_ready == st.mesh_chunks_wanted && st.jobs_in_flight == 0 &&
             es.mesh_chunks_uploaded == es.mesh_chunks)
             settled = frame;
@@ -418,7 +418,7 @@ static render_image streamed_far_view(terrain_generation_params generation, cons
  * a pit floor 156 m down: they should agree but for the odd pixel where a ray slips through
  * a seam between chunks onto the differently tessellated floor, hence 0.5 % of the pixels. */
 Test(render_clipmap, a_second_viewers_rings_sink_the_clipmap_as_the_first_viewers_do) {
-    terrain_generation_params generation = terrain_generation_defaults(6);
+    terrain_generation_desc generation = terrain_generation_defaults(6);
     const double second[2] = { 1536.0, 512.0 };   /* on the 64 m grid the rings snap to */
     terrain_clipmap *probe = terrain_clipmap_create(&(terrain_clipmap_desc){ .generation = generation });
     terrain_clipmap_update(probe, (double[3]){ second[0], 0.0, second[1] });

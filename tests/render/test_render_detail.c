@@ -120,7 +120,7 @@ static render_image render_ground(float detail_distance, double height) {
     free(mesh.vertices);
     free(mesh.indices);
     terrain_renderer_destroy(renderer);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
     return image;
 }
 
@@ -234,7 +234,7 @@ static double wall_luminance(float facing, float sun_x) {
     free(mesh.vertices);
     free(mesh.indices);
     terrain_renderer_destroy(renderer);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
     return sum / (W * H);
 }
 

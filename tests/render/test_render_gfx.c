@@ -35,7 +35,7 @@ static gfx_context *quad_context(const char *fragment, const char *include, cons
     const char *texts[] = { vertex_ok, fragment, include };
     const char *made = render_shader_folder(names, texts, 3);
     if (folder) *folder = made;
-    return gfx_create(&(gfx_desc){ .width = 32, .height = 32, .headless = true, .shader_dir = made });
+    return gfx_context_create(&(gfx_context_desc){ .width = 32, .height = 32, .headless = true, .shader_dir = made });
 }
 
 Test(render_gfx, include_pastes_the_file) {
@@ -43,7 +43,7 @@ Test(render_gfx, include_pastes_the_file) {
     gfx_program program = gfx_program_load(gfx, "quad.vert", "quad.frag");
     cr_assert(program.id, "the program builds");
     cr_assert_neq(gfx_program_gl(gfx, program), 0);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 /* Runs gfx_program_load on a folder whose files hold an error, and returns the log. */
@@ -53,7 +53,7 @@ static char *load_errors(const char *fragment, const char *include, bool *built)
     gfx_program program = gfx_program_load(gfx, "quad.vert", "quad.frag");
     char *log = render_capture_end();
     *built = program.id != 0;
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
     return log;
 }
 
@@ -102,7 +102,7 @@ Test(render_gfx, missing_include_is_reported) {
 Test(render_gfx, include_cycle_is_harmless) {
     gfx_context *gfx = quad_context(fragment_with_include, "#include \"colour.glsl\"\n#define COLOUR vec3(1.0)\n", NULL);
     cr_assert(gfx_program_load(gfx, "quad.vert", "quad.frag").id);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 /* Draws instanced quads (one per offset) in the program's colour and counts coloured pixels. */
@@ -156,14 +156,14 @@ Test(render_gfx, instanced_draw_covers_each_instance) {
     /* Each quad is 0.5 × 0.5 of the 2 × 2 clip square: 1/16 of 64 × 64 = 256 pixels. */
     cr_assert_eq(draw_quads(gfx, program, false, 1), 256);
     cr_assert_eq(draw_quads(gfx, program, false, 4), 4 * 256);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_gfx, indirect_draw_takes_its_counts_from_the_buffer) {
     gfx_context *gfx = render_offscreen(32, 32);
     gfx_program program = red_program(gfx);
     cr_assert_eq(draw_quads(gfx, program, true, 3), 3 * 256);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_gfx, frame_stats_count_the_draws_and_their_triangles) {
@@ -176,15 +176,15 @@ Test(render_gfx, frame_stats_count_the_draws_and_their_triangles) {
     draw_quads(gfx, program, false, 4);
     draw_quads(gfx, program, true, 3);
     gfx_frame_end(gfx);
-    gfx_frame_stats s = gfx_stats(gfx);
+    gfx_context_stats_info s = gfx_context_stats(gfx);
     cr_expect_eq(s.draw_calls, 3);
     cr_expect_eq(s.triangles, 10);
     cr_expect_eq(s.indirect_draws, 1);
     gfx_frame_begin(gfx);   /* an empty frame resets them */
     gfx_frame_end(gfx);
-    s = gfx_stats(gfx);
+    s = gfx_context_stats(gfx);
     cr_expect_eq(s.draw_calls + s.triangles + s.indirect_draws, 0);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_gfx, texture_round_trip) {
@@ -204,7 +204,7 @@ Test(render_gfx, texture_round_trip) {
     cr_assert_float_eq(back[10], -4.0f, 0);
     cr_assert_float_eq(back[15], 7.5f, 0);
     gfx_texture_destroy(&texture);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 static void touch_later(const char *folder, const char *name, const char *text) {
@@ -237,7 +237,7 @@ Test(render_gfx, changed_include_rebuilds_the_program_and_a_broken_edit_keeps_th
     cr_assert_eq(gfx_program_gl(gfx, program), second, "the working program stays");
     cr_assert(strstr(log, "quad.frag:2:"), "log: %s", log);
     free(log);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_gfx, pass_times_reach_the_trace_on_the_gpu_lane) {
@@ -262,7 +262,7 @@ Test(render_gfx, pass_times_reach_the_trace_on_the_gpu_lane) {
     cr_assert_str_eq(timings[0].name, "scene");
     cr_assert(timings[0].gpu_ms >= 0 && timings[0].gpu_ms < 1000);
     gfx_scene_destroy(scene);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
     trace_stop();
     FILE *file = fopen(path, "rb");
     static char text[1 << 20];
@@ -281,14 +281,14 @@ Test(render_gfx, no_display_falls_back_to_offscreen_and_says_so) {
     unsetenv("DISPLAY");
     unsetenv("WAYLAND_DISPLAY");
     render_capture_begin();
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = 32, .height = 32 });
+    gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = 32, .height = 32 });
     char *log = render_capture_end();
     cr_assert(gfx);
     cr_assert_eq(gfx_backend_get(gfx), GFX_BACKEND_OFFSCREEN);
     cr_assert(strstr(log, "OSMesa"), "log: %s", log);
     cr_assert_null(gfx_glfw_window(gfx));
     free(log);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_gfx, size_flag_parsing) {
@@ -322,7 +322,7 @@ Test(render_gfx, screenshot_writes_a_png_and_reports_unwritable_paths) {
     cr_assert_not(ok);
     cr_assert(strstr(log, "/nonexistent-dir/shot.png"), "log: %s", log);
     free(log);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 #ifdef ENGINE_DEBUG
@@ -334,7 +334,7 @@ Test(render_gfx, debug_builds_route_gl_errors_to_the_log) {
     cr_assert_eq(glGetError(), GL_INVALID_OPERATION);
     cr_assert(strstr(log, "[error] gl:"), "log: %s", log);
     free(log);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 #endif
 
@@ -342,7 +342,7 @@ Test(render_gfx, a_window_that_cannot_open_falls_back_in_one_line) {
     setenv("DISPLAY", ":97", 1);          /* a display no X server serves */
     unsetenv("WAYLAND_DISPLAY");
     render_capture_begin();
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = 32, .height = 32 });
+    gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = 32, .height = 32 });
     char *log = render_capture_end();
     cr_assert(gfx);
     cr_assert_eq(gfx_backend_get(gfx), GFX_BACKEND_OFFSCREEN);
@@ -351,7 +351,7 @@ Test(render_gfx, a_window_that_cannot_open_falls_back_in_one_line) {
     cr_assert_eq(lines, 1, "log: %s", log);
     cr_assert(strstr(log, "no window (") && strstr(log, ":97") && strstr(log, "OSMesa"), "log: %s", log);
     free(log);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 #pragma GCC diagnostic push
@@ -387,5 +387,5 @@ Test(render_gfx, hud_text_lands_where_it_was_printed) {
     cr_assert_eq(outside, 0, "%d text pixels outside its box (10, 20)–(%d, %d)", outside, right, bottom);
     free(pixels);
     gfx_text_destroy(hud);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }

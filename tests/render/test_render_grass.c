@@ -74,14 +74,14 @@ static void meadow_open(meadow *m, ground_kind kind, int threads, int density, i
     cr_assert_not_null(m->gfx);
     m->jobs = job_system_create(&(job_system_desc){ .threads = threads });
     m->ecs = ecs_world_create(&(ecs_world_desc){ .jobs = m->jobs });
-    terrain_generation_params generation = terrain_generation_defaults(5);
+    terrain_generation_desc generation = terrain_generation_defaults(5);
     generation.sea_level = 0;
     m->world = terrain_world_create(&(terrain_world_desc){ .generation = generation, .generate = ground_chunk,
                                                            .generate_user = &m->kind });
-    m->te = terrain_ecs_create(m->ecs, m->world);
+    m->te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = m->ecs, .terrain = m->world });
     m->renderer = terrain_renderer_create(m->gfx, &(terrain_renderer_desc){ .sea_level = 0 });
     cr_assert_not_null(m->renderer);
-    m->grass = grass_create(&(grass_desc){ .gfx = m->gfx, .ecs = m->ecs, .world = m->world,
+    m->grass = grass_system_create(&(grass_system_desc){ .gfx = m->gfx, .ecs = m->ecs, .world = m->world,
                                            .quality = GRASS_HIGH, .density = density, .max_placements = 16 });
     cr_assert_not_null(m->grass);
     terrain_ecs_spawn_area(m->te, 0, 0, 1, y_first, y_last);
@@ -90,13 +90,13 @@ static void meadow_open(meadow *m, ground_kind kind, int threads, int density, i
 }
 
 static void meadow_close(meadow *m) {
-    grass_destroy(m->grass);
+    grass_system_destroy(m->grass);
     terrain_ecs_destroy(m->te);
     terrain_renderer_destroy(m->renderer);
     ecs_world_destroy(m->ecs);
     terrain_world_destroy(m->world);
     job_system_destroy(m->jobs);
-    gfx_destroy(m->gfx);
+    gfx_context_destroy(m->gfx);
 }
 
 /* One frame as the game draws it; grass off draws the same frame without the grass. */
@@ -150,7 +150,7 @@ Test(render_grass, flat_soil_holds_one_tuft_per_lattice_cell) {
     meadow m;
     meadow_open(&m, GROUND_FLAT, 2, 2, 0, 0);
     for (int frame = 0; frame < 4; frame++) meadow_frame(&m, true);
-    grass_stats st = grass_stats_get(m.grass);
+    grass_system_stats_info st = grass_system_stats(m.grass);
     cr_expect_eq(st.patches, 9);
     cr_expect_eq(st.tufts, 9u * 64u * 64u, "%llu tufts", (unsigned long long)st.tufts);
     size_t count;
@@ -188,7 +188,7 @@ Test(render_grass, grass_is_drawn_on_flat_ground) {
     int pixels = WIDTH * (HEIGHT / 2);
     cr_expect_gt(changed, pixels / 5, "%d of %d ground pixels changed by grass", changed, pixels);
     cr_expect_gt(green, changed * 9 / 10, "%d of %d changed pixels green", green, changed);
-    cr_expect_gt(grass_stats_get(m.grass).tufts_drawn, 0);
+    cr_expect_gt(grass_system_stats(m.grass).tufts_drawn, 0);
     render_image_free(&bare);
     render_image_free(&grassy);
     meadow_close(&m);
@@ -232,7 +232,7 @@ static uint64_t tufts_on(ground_kind kind, int64_t y_first, int64_t y_last) {
     meadow_open(&m, kind, 2, 2, y_first, y_last);
     m.view.camera[1] = kind == GROUND_SLOPE_60 ? 60.0 : m.view.camera[1];
     for (int frame = 0; frame < 4; frame++) meadow_frame(&m, true);
-    grass_stats st = grass_stats_get(m.grass);
+    grass_system_stats_info st = grass_system_stats(m.grass);
     cr_expect_gt(st.patches, 0, "the ground has patches (placed, empty)");
     meadow_close(&m);
     return st.tufts;
@@ -277,7 +277,7 @@ Test(render_grass, placement_is_the_same_every_run) {
         meadow m;
         meadow_open(&m, GROUND_SAND, run + 1, 3, 0, 0);
         for (int frame = 0; frame < 4; frame++) meadow_frame(&m, true);
-        cr_expect_eq(grass_stats_get(m.grass).patches, 9);
+        cr_expect_eq(grass_system_stats(m.grass).patches, 9);
         digests[run] = grass_tufts_digest(m.grass);
         meadow_close(&m);
     }
@@ -294,12 +294,12 @@ Test(render_grass, an_edit_replaces_the_grass_in_its_frame) {
     for (int frame = 0; frame < 4; frame++) meadow_frame(&m, true);
     size_t before_count;
     tuft *before = meadow_tufts(&m, &before_count);
-    uint64_t placements = grass_stats_get(m.grass).placements;
+    uint64_t placements = grass_system_stats(m.grass).placements;
     const double centre[1][3] = { { 16, 11, 16 } };
     cr_assert(terrain_ecs_edit(m.te, &(terrain_edit){ .tool = TERRAIN_EDIT_SWEEP,
                                                      .sweep = { .points = centre, .point_count = 1, .radius = 4 } }));
     meadow_frame(&m, true);
-    cr_expect_gt(grass_stats_get(m.grass).placements, placements, "placed again in the frame of the edit");
+    cr_expect_gt(grass_system_stats(m.grass).placements, placements, "placed again in the frame of the edit");
     size_t after_count;
     tuft *after = meadow_tufts(&m, &after_count);
     int floating = 0;
@@ -324,10 +324,10 @@ Test(render_grass, an_edit_replaces_the_grass_in_its_frame) {
 Test(render_grass, quality_off_places_nothing) {
     meadow m;
     meadow_open(&m, GROUND_FLAT, 2, 2, 0, 0);
-    grass_destroy(m.grass);
-    m.grass = grass_create(&(grass_desc){ .gfx = m.gfx, .ecs = m.ecs, .world = m.world, .quality = GRASS_OFF });
+    grass_system_destroy(m.grass);
+    m.grass = grass_system_create(&(grass_system_desc){ .gfx = m.gfx, .ecs = m.ecs, .world = m.world, .quality = GRASS_OFF });
     for (int frame = 0; frame < 3; frame++) meadow_frame(&m, true);
-    cr_expect_eq(grass_stats_get(m.grass).patches, 0);
+    cr_expect_eq(grass_system_stats(m.grass).patches, 0);
     meadow_close(&m);
 }
 
@@ -335,9 +335,9 @@ Test(render_grass, bad_descriptions_are_refused) {
     gfx_context *gfx = render_offscreen(32, 32);
     ecs_world *ecs = ecs_world_create(NULL);
     render_capture_begin();
-    cr_expect_null(grass_create(&(grass_desc){ .gfx = gfx }));
+    cr_expect_null(grass_system_create(&(grass_system_desc){ .gfx = gfx }));
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ 0 });
-    cr_expect_null(grass_create(&(grass_desc){ .gfx = gfx, .ecs = ecs, .world = world }));
+    cr_expect_null(grass_system_create(&(grass_system_desc){ .gfx = gfx, .ecs = ecs, .world = world }));
     char *log = render_capture_end();
     cr_expect(strstr(log, "terrain_ecs_create"), "names the missing step: %s", log);
     free(log);
@@ -347,5 +347,5 @@ Test(render_grass, bad_descriptions_are_refused) {
     cr_expect_not(grass_parse_quality("", &q));
     terrain_world_destroy(world);
     ecs_world_destroy(ecs);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }

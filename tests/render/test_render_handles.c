@@ -34,7 +34,7 @@ Test(render_gfx_handles, zero_handles_are_none_and_destroying_them_does_nothing)
     char *log = render_capture_end();
     cr_assert_str_eq(log, "", "destroying nothing is silent: %s", log);
     free(log);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_gfx_handles, destroying_makes_every_copy_stale) {
@@ -59,7 +59,7 @@ Test(render_gfx_handles, destroying_makes_every_copy_stale) {
     cr_assert(gfx_vertex_array_valid(array_copy));
     gfx_vertex_array_destroy(&array);
     cr_assert_not(gfx_vertex_array_valid(array_copy));
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_gfx_handles, a_framebuffer_takes_the_attachments_it_made_with_it) {
@@ -87,7 +87,7 @@ Test(render_gfx_handles, a_framebuffer_takes_the_attachments_it_made_with_it) {
     gfx_framebuffer_destroy(&framebuffer);
     cr_assert(gfx_texture_valid(layers));
     gfx_texture_destroy(&layers);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_gfx_handles, a_reused_slot_gets_a_new_generation) {
@@ -116,13 +116,13 @@ Test(render_gfx_handles, a_reused_slot_gets_a_new_generation) {
     cr_assert_not(gfx_buffer_valid(kept), "the old handle does not name the slot's new buffer");
     gfx_buffer_destroy(&fresh);
     free(ids);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_gfx_handles, a_handle_from_a_destroyed_context_names_nothing_in_the_next) {
     gfx_context *first = render_offscreen(16, 16);
     gfx_buffer left = buffer_of(1);         /* dies with its context */
-    gfx_destroy(first);
+    gfx_context_destroy(first);
     cr_assert_not(gfx_buffer_valid(left), "no context: nothing is valid");
     gfx_context *second = render_offscreen(16, 16);
     cr_assert_not(gfx_buffer_valid(left));
@@ -130,7 +130,7 @@ Test(render_gfx_handles, a_handle_from_a_destroyed_context_names_nothing_in_the_
     cr_assert_eq(SLOT(fresh.id), SLOT(left.id), "the same slot of the new context's pool");
     cr_assert_not(gfx_buffer_valid(left), "another context's handle stays stale");
     gfx_buffer_destroy(&fresh);
-    gfx_destroy(second);
+    gfx_context_destroy(second);
 }
 
 #ifdef NDEBUG
@@ -172,10 +172,10 @@ Test(render_gfx_handles, a_stale_handle_leaves_the_slots_new_object_alone) {
     gfx_frame_begin(gfx);
     gfx_draw(&(gfx_draw_desc){ .vertex_array = stale_array, .count = 3 });
     gfx_frame_end(gfx);
-    cr_assert_eq(gfx_stats(gfx).draw_calls, 0);
+    cr_assert_eq(gfx_context_stats(gfx).draw_calls, 0);
     gfx_texture_destroy(&other);
     gfx_buffer_destroy(&fresh);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 #elif !defined(TEST_WITHOUT_CRITERION)
 /* Debug builds stop where a stale or zero handle is used. */

@@ -49,31 +49,31 @@ static void yard_open(yard *y, int threads) {
     cr_assert_not_null(y->gfx);
     y->jobs = job_system_create(&(job_system_desc){ .threads = threads });
     y->ecs = ecs_world_create(&(ecs_world_desc){ .jobs = y->jobs });
-    terrain_generation_params generation = terrain_generation_defaults(5);
+    terrain_generation_desc generation = terrain_generation_defaults(5);
     generation.sea_level = -50;
     y->world = terrain_world_create(&(terrain_world_desc){ .generation = generation, .generate = yard_chunk });
-    y->te = terrain_ecs_create(y->ecs, y->world);
+    y->te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = y->ecs, .terrain = y->world });
     y->renderer = terrain_renderer_create(y->gfx, &(terrain_renderer_desc){ .sea_level = -50 });
     cr_assert_not_null(y->renderer);
-    rocks_tiles_desc tiles = { .cells = 4, .voxels_per_cell = 6, .jobs = y->jobs };
+    rocks_tileset_desc tiles = { .cells = 4, .voxels_per_cell = 6, .jobs = y->jobs };
     tiles.cache_path = rocks_test_cache(&tiles);
-    y->tiles = rocks_tiles_create(&tiles);
+    y->tiles = rocks_tileset_create(&tiles);
     cr_assert_not_null(y->tiles);
-    y->rocks = rocks_create(&(rocks_desc){ .gfx = y->gfx, .ecs = y->ecs, .world = y->world, .tiles = y->tiles });
+    y->rocks = rocks_system_create(&(rocks_system_desc){ .gfx = y->gfx, .ecs = y->ecs, .world = y->world, .tiles = y->tiles });
     cr_assert_not_null(y->rocks);
     terrain_ecs_spawn_area(y->te, 0, 0, 1, 0, 0);
     y->view = (terrain_view){ .camera = { 16, 16, 34 }, .yaw = 0.0f, .pitch = -0.45f, .aspect = (float)WIDTH / HEIGHT };
 }
 
 static void yard_close(yard *y) {
-    rocks_destroy(y->rocks);
-    rocks_tiles_destroy(y->tiles);
+    rocks_system_destroy(y->rocks);
+    rocks_tileset_destroy(y->tiles);
     terrain_ecs_destroy(y->te);
     terrain_renderer_destroy(y->renderer);
     ecs_world_destroy(y->ecs);
     terrain_world_destroy(y->world);
     job_system_destroy(y->jobs);
-    gfx_destroy(y->gfx);
+    gfx_context_destroy(y->gfx);
 }
 
 static void yard_frame(yard *y, bool draw_rocks) {
@@ -102,7 +102,7 @@ Test(render_rocks, a_rock_layer_is_drawn_as_rocks) {
     render_image bare = yard_image(&y);
     yard_frame(&y, true);
     render_image rocky = yard_image(&y);
-    rocks_stats st = rocks_stats_get(y.rocks);
+    rocks_system_stats_info st = rocks_system_stats(y.rocks);
     cr_expect_gt(st.instances, 50, "%llu rocks in a 16 × 16 × 1.5 m layer", (unsigned long long)st.instances);
     cr_expect_gt(st.instances_drawn, 0);
     int changed = 0, grey = 0;
@@ -128,7 +128,7 @@ Test(render_rocks, the_same_rocks_on_one_thread_and_on_two) {
         yard y;
         yard_open(&y, t + 1);
         for (int frame = 0; frame < 4; frame++) yard_frame(&y, true);
-        cr_assert_gt(rocks_stats_get(y.rocks).instances, 0);
+        cr_assert_gt(rocks_system_stats(y.rocks).instances, 0);
         digest[t] = rocks_digest(y.rocks);
         yard_close(&y);
     }
@@ -141,18 +141,18 @@ Test(render_rocks, edits_place_and_remove_rocks_in_their_frame) {
     yard y;
     yard_open(&y, 2);
     for (int frame = 0; frame < 4; frame++) yard_frame(&y, true);
-    uint64_t before = rocks_stats_get(y.rocks).instances;
+    uint64_t before = rocks_system_stats(y.rocks).instances;
     cr_assert(terrain_ecs_edit(y.te, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
         .deposit = { .material = TERRAIN_ROCKS, .x = 4, .z = 16, .radius = 3, .volume = 30 } }));
     yard_frame(&y, true);
-    uint64_t dropped = rocks_stats_get(y.rocks).instances;
+    uint64_t dropped = rocks_system_stats(y.rocks).instances;
     cr_expect_gt(dropped, before, "a rock deposit shows in its frame: %llu → %llu rocks",
                  (unsigned long long)before, (unsigned long long)dropped);
     double points[2][3] = { { 16, 20, 16 }, { 16, 8, 16 } };
     cr_assert(terrain_ecs_edit(y.te, &(terrain_edit){ .tool = TERRAIN_EDIT_SWEEP,
         .sweep = { .points = (const double (*)[3])points, .point_count = 2, .radius = 3 } }));
     yard_frame(&y, true);
-    uint64_t dug = rocks_stats_get(y.rocks).instances;
+    uint64_t dug = rocks_system_stats(y.rocks).instances;
     cr_expect_lt(dug, dropped, "a shaft through the layer takes rocks in its frame: %llu → %llu",
                  (unsigned long long)dropped, (unsigned long long)dug);
     yard_close(&y);

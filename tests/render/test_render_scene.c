@@ -30,7 +30,7 @@ Test(render_scene, sky_fills_the_top_rows) {
         }
     cr_assert_geq(blue, total * 98 / 100, "only %d of %d top pixels are sky blue", blue, total);
     render_image_free(&image);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_scene, sphere_sits_where_projection_puts_it) {
@@ -58,7 +58,7 @@ Test(render_scene, sphere_sits_where_projection_puts_it) {
     cr_assert(fabs(sum_x / covered - W / 2.0) < 1.0 && fabs(sum_y / covered - H / 2.0) < 1.0,
               "disc centred at (%.1f, %.1f)", sum_x / covered, sum_y / covered);
     render_image_free(&image);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_scene, sphere_is_lit_from_the_suns_side) {
@@ -78,7 +78,7 @@ Test(render_scene, sphere_is_lit_from_the_suns_side) {
     cr_assert_gt(left / left_count, 1.5 * right / right_count, "left %.1f, right %.1f",
                  left / left_count, right / right_count);
     render_image_free(&image);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_scene, ground_shows_grid_lines) {
@@ -89,7 +89,7 @@ Test(render_scene, ground_shows_grid_lines) {
         for (int x = 0; x < W; x++, total++) dark += render_luminance(render_pixel(&image, x, y)) < 70;
     cr_assert(dark > total / 50 && dark < total * 2 / 5, "%d of %d ground pixels on lines", dark, total);
     render_image_free(&image);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 /* View-space distance along the camera's axis from a depth-buffer value. */
@@ -117,7 +117,7 @@ Test(render_scene, depth_puts_the_sphere_in_front_of_the_ground) {
               eye_depth(bottom), expected);
     cr_assert_lt(eye_depth(centre), 13.0, "the ground behind the sphere must not show through");
     render_image_free(&image);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 /* A reviewed image of the scene at 160×90 lives in tests/render/golden/. Renderers differ in
@@ -151,5 +151,5 @@ Test(render_scene, matches_the_golden_image) {
     cr_assert_leq(far_off, W * H / 100, "%d pixels differ by more than 32", far_off);
     stbi_image_free(golden);
     render_image_free(&image);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }

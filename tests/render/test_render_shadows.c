@@ -50,7 +50,7 @@ static wall_scene wall_open(void) {
     s.jobs = job_system_create(&(job_system_desc){ .threads = 1 });
     s.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = s.jobs });
     s.world = terrain_world_create(&(terrain_world_desc){ .generate = wall_chunk });
-    s.te = terrain_ecs_create(s.ecs, s.world);
+    s.te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = s.ecs, .terrain = s.world });
     terrain_ecs_spawn_area(s.te, 0, 0, 1, 0, 0);
     /* 30 m above (10, 25), looking straight down (the top of the image towards −z): within the
      * reach of every quality's cascades (50 m for low) and short of low's fade. */
@@ -66,7 +66,7 @@ static void wall_close(wall_scene *s) {
     ecs_world_destroy(s->ecs);
     terrain_world_destroy(s->world);
     job_system_destroy(s->jobs);
-    gfx_destroy(s->gfx);
+    gfx_context_destroy(s->gfx);
 }
 
 static render_image wall_draw(wall_scene *s, terrain_shadow_quality shadows) {

@@ -33,7 +33,7 @@ static streamed streamed_open(int threads, const terrain_stream_desc *desc) {
     s.jobs = job_system_create(&(job_system_desc){ .threads = threads });
     s.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = s.jobs });
     s.world = terrain_world_create(&(terrain_world_desc){ .generate = render_rolling_chunk });
-    s.te = terrain_ecs_create(s.ecs, s.world);
+    s.te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = s.ecs, .terrain = s.world });
     if (desc) terrain_ecs_stream(s.te, desc);
     return s;
 }
@@ -43,7 +43,7 @@ static void streamed_close(streamed *s) {
     ecs_world_destroy(s->ecs);
     terrain_world_destroy(s->world);
     job_system_destroy(s->jobs);
-    gfx_destroy(s->gfx);
+    gfx_context_destroy(s->gfx);
 }
 
 /* Frames (with the trim terrain_ecs_draw does, minus the drawing) until every wanted chunk is
@@ -53,7 +53,7 @@ static int streamed_settle(streamed *s, const double (*eyes)[3], int count, int 
         terrain_ecs_set_viewers(s->te, eyes, count);
         ecs_progress(s->ecs, DT);
         terrain_world_trim(s->world);
-        terrain_stream_stats st = terrain_ecs_stream_stats(s->te);
+        terrain_ecs_stream_stats_info st = terrain_ecs_stream_stats(s->te);
         if (st.mesh_chunks_wanted > 0 && st.mesh_chunks_ready == st.mesh_chunks_wanted && st.jobs_in_flight == 0)
             return frame + 1;
         if (job_thread_count(s->jobs) > 1) nanosleep(&(struct timespec){ 0, 1000000 }, NULL);   /* let the worker get on */
@@ -69,7 +69,7 @@ Test(render_stream, one_viewer_wants_the_rings_and_all_become_ready) {
     streamed s = streamed_open(2, &small_rings);
     const double eye[1][3] = { { 10, 5, 10 } };
     cr_assert(streamed_settle(&s, eye, 1, 2000) > 0, "streaming never settled");
-    terrain_stream_stats st = terrain_ecs_stream_stats(s.te);
+    terrain_ecs_stream_stats_info st = terrain_ecs_stream_stats(s.te);
     int expected = 16 * 4 + (16 - 4) * 2;
     cr_expect_eq(st.mesh_chunks_wanted, expected, "%d wanted, expected %d", st.mesh_chunks_wanted, expected);
     cr_expect_eq(st.chunks_meshed + st.chunks_skipped_empty, (uint64_t)expected);
@@ -127,14 +127,14 @@ Test(render_stream, rings_at_the_origin_equal_the_static_rings) {
     streamed s = streamed_open(2, &small_rings);
     const double eye[1][3] = { { 1, 5, 1 } };
     cr_assert(streamed_settle(&s, eye, 1, 2000) > 0);
-    uint64_t streamed_triangles = terrain_ecs_stats_get(s.te).triangles;
+    uint64_t streamed_triangles = terrain_ecs_stats(s.te).triangles;
     streamed_close(&s);
 
     streamed fixed = streamed_open(2, NULL);
     terrain_ecs_spawn_rings(fixed.te, 2, 2, -40, 40);
     ecs_progress(fixed.ecs, DT);
     ecs_progress(fixed.ecs, DT);
-    uint64_t static_triangles = terrain_ecs_stats_get(fixed.te).triangles;
+    uint64_t static_triangles = terrain_ecs_stats(fixed.te).triangles;
     streamed_close(&fixed);
     cr_expect_gt(static_triangles, 0);
     cr_expect_eq(streamed_triangles, static_triangles, "streamed %llu, static %llu triangles",
@@ -153,7 +153,7 @@ Test(render_stream, a_hundred_kilometres_out_streams_the_same) {
         double offset = far ? 100800.0 : 0.0;
         const double eye[1][3] = { { offset + 1, 5, offset + 1 } };
         cr_assert(streamed_settle(&s, eye, 1, 2000) > 0);
-        triangles[far] = terrain_ecs_stats_get(s.te).triangles;
+        triangles[far] = terrain_ecs_stats(s.te).triangles;
         ecs_query *q = ecs_query_create(s.ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(s.ecs, "TerrainMeshChunk") } });
         ecs_iter it = ecs_query_iter(s.ecs, q);
         while (ecs_query_next(&it)) {
@@ -182,15 +182,15 @@ Test(render_stream, walking_away_cancels_keeps_and_evicts) {
     for (int step = 1; step <= 12; step++) {
         eye[0][0] = 64.0 * step;                   /* one coarsest chunk a step */
         cr_assert(streamed_settle(&s, eye, 1, 3000) > 0, "step %d never settled", step);
-        terrain_stream_stats st = terrain_ecs_stream_stats(s.te);
+        terrain_ecs_stream_stats_info st = terrain_ecs_stream_stats(s.te);
         cr_expect_leq(st.mesh_chunks_kept, st.mesh_chunks_wanted, "step %d: %d kept, %d wanted", step,
                       st.mesh_chunks_kept, st.mesh_chunks_wanted);
     }
-    terrain_stream_stats st = terrain_ecs_stream_stats(s.te);
+    terrain_ecs_stream_stats_info st = terrain_ecs_stream_stats(s.te);
     cr_expect_gt(st.chunks_cancelled, 0, "the first frame's jobs should have been cancelled");
     cr_expect_gt(st.chunks_evicted, 0);
     /* Every chunk drawn now is in the rings around the viewer: no old ground left behind. */
-    terrain_ecs_stats all = terrain_ecs_stats_get(s.te);
+    terrain_ecs_stats_info all = terrain_ecs_stats(s.te);
     cr_expect_leq(all.mesh_chunks, 2 * st.mesh_chunks_wanted);
     streamed_close(&s);
 }
@@ -206,7 +206,7 @@ Test(render_stream, memory_by_kind_is_what_the_chunks_hold) {
         cr_assert(streamed_settle(&s, eye, 1, 3000) > 0, "step %d never settled", step);
         terrain_ecs_set_viewers(s.te, eye, 1);
         ecs_progress(s.ecs, DT);                   /* the counts are taken in the stream phase */
-        terrain_stream_stats st = terrain_ecs_stream_stats(s.te);
+        terrain_ecs_stream_stats_info st = terrain_ecs_stream_stats(s.te);
         size_t gpu = 0, cpu = 0;
         ecs_query *q = ecs_query_create(s.ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(s.ecs, "TerrainMeshChunk") } });
         ecs_iter it = ecs_query_iter(s.ecs, q);
@@ -238,7 +238,7 @@ Test(render_stream, memory_budget_evicts_out_of_range_chunks) {
     cr_assert(streamed_settle(&s, eye, 1, 3000) > 0);
     ecs_progress(s.ecs, DT);                       /* the replaced ones hide, then go */
     ecs_progress(s.ecs, DT);
-    terrain_stream_stats st = terrain_ecs_stream_stats(s.te);
+    terrain_ecs_stream_stats_info st = terrain_ecs_stream_stats(s.te);
     cr_expect_eq(st.mesh_chunks_kept, 0, "%d kept over budget", st.mesh_chunks_kept);
     streamed_close(&s);
 }
@@ -420,7 +420,7 @@ Test(render_stream, an_edit_is_drawn_the_frame_it_is_applied) {
     cr_expect_gt(after->gpu.bounds_max[1], top_before + 2.0f, "the pile shows: top %g m, was %g m",
                  (double)after->gpu.bounds_max[1], (double)top_before);
     cr_expect_neq(after->gpu.index_count, indices_before);
-    terrain_edit_stats st = terrain_ecs_edit_stats(s.te);
+    terrain_ecs_edit_stats_info st = terrain_ecs_edit_stats(s.te);
     cr_expect_eq(st.edits_applied, 1);
     cr_expect_eq(st.queued, 0);
     streamed_close(&s);
@@ -433,7 +433,7 @@ Test(render_stream, stabilization_spreads_a_pile_across_chunks_and_keeps_its_mas
     streamed s = streamed_open(2, &small_rings);
     const double eye[1][3] = { { 0, 8, 0 } };
     cr_assert(streamed_settle(&s, eye, 1, 2000) > 0);
-    terrain_ecs_set_edit_settings(s.te, &(terrain_edit_settings){ .stabilize = { .max_iterations = 8 } });
+    terrain_ecs_set_editing(s.te, &(terrain_editing_desc){ .stabilize = { .max_iterations = 8 } });
     cr_assert(terrain_ecs_edit(s.te, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
                                                       .deposit = { .x = 0.5, .z = 0.5, .radius = 2, .volume = 300 } }));
     int frames = 0;
@@ -444,7 +444,7 @@ Test(render_stream, stabilization_spreads_a_pile_across_chunks_and_keeps_its_mas
         if (terrain_ecs_edit_stats(s.te).stabilizing_chunks == 0 && frames > 0) break;
     }
     cr_assert_lt(frames, 3000, "never stable");
-    terrain_edit_stats st = terrain_ecs_edit_stats(s.te);
+    terrain_ecs_edit_stats_info st = terrain_ecs_edit_stats(s.te);
     cr_expect_gt(st.iterations, 8, "took several frames of 8 iterations");
     cr_expect_geq(st.chunks_committed, 4);
     cr_expect_eq(sand_quanta(s.world, -3, 2), 300 * 32, "sand in the world: exactly the deposit");

@@ -71,7 +71,7 @@ Test(render_terrain, vertex_weights_pick_the_material) {
     render_image_free(&a);
     render_image_free(&b);
     terrain_renderer_destroy(renderer);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_terrain, a_view_100_km_away_renders_exactly_as_at_the_origin) {
@@ -92,7 +92,7 @@ Test(render_terrain, a_view_100_km_away_renders_exactly_as_at_the_origin) {
     render_image_free(&a);
     render_image_free(&b);
     terrain_renderer_destroy(renderer);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 #include "ecs/ecs.h"
@@ -114,7 +114,7 @@ static area area_open(int threads, uint64_t seed, int width, int height, terrain
     a.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = a.jobs });
     a.world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(seed) });
     a.renderer = terrain_renderer_create(a.gfx, &renderer_desc);
-    a.te = terrain_ecs_create(a.ecs, a.world);
+    a.te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = a.ecs, .terrain = a.world });
     return a;
 }
 
@@ -124,7 +124,7 @@ static void area_close(area *a) {
     ecs_world_destroy(a->ecs);
     terrain_world_destroy(a->world);
     job_system_destroy(a->jobs);
-    gfx_destroy(a->gfx);
+    gfx_context_destroy(a->gfx);
 }
 
 /* Draws the area's uploaded chunks from `view` and reads the frame back. */
@@ -143,21 +143,21 @@ static float area_ground(area *a) {
 }
 
 /* Generates, meshes and draws a 3 × 3-chunk area through the ECS on `threads` threads. */
-static terrain_ecs_stats render_generated(int threads, render_image *image) {
+static terrain_ecs_stats_info render_generated(int threads, render_image *image) {
     area a = area_open(threads, 7, W, H, (terrain_renderer_desc){ .sea_level = terrain_generation_defaults(7).sea_level });
     terrain_ecs_spawn_area(a.te, 0, 0, 1, -4, 8);
     ecs_progress(a.ecs, 1.0f / 60.0f);
     /* From 60 m above the middle of chunk (0, 0), looking north and down a little. */
     terrain_view view = { .camera = { 16, area_ground(&a) + 60, 40 }, .pitch = -0.3f, .aspect = (float)W / H };
     *image = area_draw(&a, &view);
-    terrain_ecs_stats stats = terrain_ecs_stats_get(a.te);
+    terrain_ecs_stats_info stats = terrain_ecs_stats(a.te);
     area_close(&a);
     return stats;
 }
 
 Test(render_terrain, generated_area_shows_ground_under_sky_the_same_on_any_thread_count) {
     render_image one, two;
-    terrain_ecs_stats a = render_generated(1, &one), b = render_generated(2, &two);
+    terrain_ecs_stats_info a = render_generated(1, &one), b = render_generated(2, &two);
     cr_assert_eq(a.chunks, 9);
     cr_assert_eq(a.chunks_generated, 9, "the generate phase made every chunk's stacks");
     cr_assert_eq(a.mesh_chunks_uploaded, a.mesh_chunks, "the mesh and draw phases finished in one frame");
@@ -324,7 +324,7 @@ Test(render_terrain, clouds_drift_with_time_and_a_clear_sky_has_none) {
     render_image_free(&d);
     terrain_renderer_destroy(cloudy);
     terrain_renderer_destroy(clear);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 Test(render_terrain, frustum_keeps_what_is_seen_and_drops_what_is_behind) {

@@ -69,11 +69,11 @@ static void sea_open_scaled(sea *s, sea_kind kind, terrain_view view, int scale,
     cr_assert_not_null(s->gfx);
     s->jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     s->ecs = ecs_world_create(&(ecs_world_desc){ .jobs = s->jobs });
-    terrain_generation_params generation = terrain_generation_defaults(5);
+    terrain_generation_desc generation = terrain_generation_defaults(5);
     generation.sea_level = 0;
     s->world = terrain_world_create(&(terrain_world_desc){ .generation = generation, .generate = sea_chunk,
                                                            .generate_user = &s->kind, .sea = has_sea });
-    s->te = terrain_ecs_create(s->ecs, s->world);
+    s->te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = s->ecs, .terrain = s->world });
     s->renderer = terrain_renderer_create(s->gfx, &(terrain_renderer_desc){
         .sea_level = 0, .cloud_cover = -1, .shadows = TERRAIN_SHADOWS_OFF, .no_occlusion = true });
     cr_assert_not_null(s->renderer);
@@ -90,7 +90,7 @@ static void sea_close(sea *s) {
     ecs_world_destroy(s->ecs);
     terrain_world_destroy(s->world);
     job_system_destroy(s->jobs);
-    gfx_destroy(s->gfx);
+    gfx_context_destroy(s->gfx);
 }
 
 static terrain_water *sea_water(sea *s, terrain_water_quality quality) {
@@ -160,7 +160,7 @@ Test(render_water, grazing_sea_mirrors_the_sky) {
                               "%s: row %d below the horizon, channel %d: %.3f against the sky's %.3f",
                               terrain_water_quality_name(qualities[q]), d, c, sea_row[c], sky[c]);
         }
-        cr_expect_eq(terrain_water_stats_get(water).planes_drawn, 1);
+        cr_expect_eq(terrain_water_stats(water).planes_drawn, 1);
         terrain_water_destroy(water);
         render_image_free(&dry);
         render_image_free(&wet);
@@ -251,7 +251,7 @@ Test(render_water, off_draws_nothing) {
     terrain_water *water = sea_water(&s, TERRAIN_WATER_OFF);
     render_image off = sea_frame(&s, water);
     cr_expect_eq(memcmp(without.rgba, off.rgba, WIDTH * HEIGHT * 4), 0, "water off changed the frame");
-    cr_expect_eq(terrain_water_stats_get(water).planes_drawn, 0);
+    cr_expect_eq(terrain_water_stats(water).planes_drawn, 0);
     /* And back on, it draws: the same call site is live. */
     cr_expect(terrain_water_set_quality(water, TERRAIN_WATER_LOW));
     render_image on = sea_frame(&s, water);
@@ -274,7 +274,7 @@ Test(render_water, water_out_of_sight_is_only_probed) {
     terrain_water *water = sea_water(&s, TERRAIN_WATER_HIGH);
     render_image wet = sea_frame(&s, water);
     cr_expect_eq(memcmp(dry.rgba, wet.rgba, WIDTH * HEIGHT * 4), 0, "hidden water changed the frame");
-    cr_expect_eq(terrain_water_stats_get(water).planes_drawn, 0);
+    cr_expect_eq(terrain_water_stats(water).planes_drawn, 0);
     terrain_water_destroy(water);
     render_image_free(&dry);
     render_image_free(&wet);
@@ -330,7 +330,7 @@ Test(render_water, under_water_the_frame_is_tinted) {
     render_image dry = sea_frame(&s, NULL);
     terrain_water *water = sea_water(&s, TERRAIN_WATER_LOW);
     render_image wet = sea_frame(&s, water);
-    cr_expect(terrain_water_stats_get(water).under_water);
+    cr_expect(terrain_water_stats(water).under_water);
     float tinted[3], plain[3];
     mean_color(&wet, 20, HEIGHT / 2 - 10, WIDTH - 20, HEIGHT / 2 + 10, tinted);
     mean_color(&dry, 20, HEIGHT / 2 - 10, WIDTH - 20, HEIGHT / 2 + 10, plain);
@@ -393,7 +393,7 @@ Test(render_water, a_lake_plane_covers_its_cells_only) {
     for (int k = 0; k < TERRAIN_MESH_CELLS; k++) plane.planes[0].rows[k] = 0xffffu;   /* cells x < 16 */
     ecs_set(s.ecs, ecs_entity_create(s.ecs), plane_c, &plane);
     render_image wet = sea_frame(&s, water);
-    cr_expect_eq(terrain_water_stats_get(water).planes_drawn, 1);
+    cr_expect_eq(terrain_water_stats(water).planes_drawn, 1);
     /* Camera 30 m over x = 16 looking down (86°): the frame's 80 half-columns span 30·tan 30°·16/9
      * ≈ 30 m each way, so columns 45…74 see x ≈ 3…14 m (lake) and 86…115 x ≈ 18…29 m (none);
      * the middle rows see z ≈ 12…20 m, inside the chunk. */

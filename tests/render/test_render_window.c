@@ -9,7 +9,7 @@
 
 Test(render_window, ten_frames_and_a_screenshot) {
     if (!getenv("DISPLAY") && !getenv("WAYLAND_DISPLAY")) cr_skip_test("no display");
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = 160, .height = 90, .title = "window test" });
+    gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = 160, .height = 90, .title = "window test" });
     cr_assert(gfx);
     cr_assert_eq(gfx_backend_get(gfx), GFX_BACKEND_WINDOW, "a display exists, so a window opens");
     cr_assert_not_null(gfx_glfw_window(gfx));
@@ -43,5 +43,5 @@ Test(render_window, ten_frames_and_a_screenshot) {
     cr_assert_gt(blue_top, width * 5 * 9 / 10);
     stbi_image_free(rgba);
     gfx_scene_destroy(scene);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }

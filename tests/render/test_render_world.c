@@ -24,9 +24,9 @@ static const terrain_stream_desc small_view = { .half_width = 2, .levels = 2, .m
 
 /* A small rock tile set (one build a test run: rocks_test_cache.h). */
 static rocks_tileset *small_rock_tiles(void) {
-    rocks_tiles_desc desc = { .cells = 4, .voxels_per_cell = 5 };
+    rocks_tileset_desc desc = { .cells = 4, .voxels_per_cell = 5 };
     desc.cache_path = rocks_test_cache(&desc);
-    return rocks_tiles_create(&desc);
+    return rocks_tileset_create(&desc);
 }
 
 /* Worlds here run without rocks unless a test gives a tile set: the default set takes the debug
@@ -34,14 +34,14 @@ static rocks_tileset *small_rock_tiles(void) {
  * blocks only where a test asks for them (ROCKS_ON): under the sanitizers their tiles and their
  * presence tests more than double the tour's time (test_rocks covers them; tests/programs.sh
  * runs the release world, cliffs on). */
-static game_app_stats run_world(game_app_desc desc) {
+static game_app_stats_info run_world(game_app_desc desc) {
     if (!desc.rock_tiles) desc.rocks = ROCKS_OFF;
     if (desc.cliffs == ROCKS_DEFAULT) desc.cliffs = ROCKS_OFF;
     game_app *app = game_app_create(&desc);
     cr_assert(app, "the world did not start");
     int guard = 0;
     while (game_app_frame(app) && guard++ < 20000) {}
-    game_app_stats stats = game_app_stats_get(app);
+    game_app_stats_info stats = game_app_stats(app);
     game_app_destroy(app);
     return stats;
 }
@@ -86,7 +86,7 @@ Test(render_world, a_scripted_walk_stays_above_ground_within_budget_and_shows_gr
     int fd = mkstemps(shot, 4);
     cr_assert(fd >= 0);
     close(fd);
-    game_app_stats s = run_world((game_app_desc){ .seed = 5, .width = 96, .height = 64, .headless = true,
+    game_app_stats_info s = run_world((game_app_desc){ .seed = 5, .width = 96, .height = 64, .headless = true,
                                                   .threads = 2, .walk = &walk, .stream = small_view,
                                                   .screenshot_path = shot, .frames = 2000 });
     cr_expect_gt(s.frames, 200, "only %d frames", s.frames);
@@ -118,11 +118,11 @@ Test(render_world, a_recorded_walk_replays_to_the_same_place, .timeout = 600) {
                            .stream = small_view, .no_hud = true, .frames = 1500, .grass = GRASS_OFF,
                            .water = TERRAIN_WATER_OFF, .shadows = TERRAIN_SHADOWS_OFF };
     desc.record_path = rec;
-    game_app_stats recorded = run_world(desc);
+    game_app_stats_info recorded = run_world(desc);
     desc.record_path = NULL;
     desc.replay_path = rec;
     desc.threads = 1;                           /* other scheduling, other loading time */
-    game_app_stats replayed = run_world(desc);
+    game_app_stats_info replayed = run_world(desc);
     cr_expect_gt(recorded.frames, 60);
     cr_expect_eq(recorded.frames, replayed.frames);
     for (int a = 0; a < 3; a++)
@@ -136,7 +136,7 @@ Test(render_world, a_recorded_walk_replays_to_the_same_place, .timeout = 600) {
  * are other tests'), which halves its time under the sanitizers. */
 Test(render_world, a_walk_a_hundred_kilometres_out_goes_as_at_the_origin, .timeout = 600) {
     game_walk walk = parse_walk("relative\n18 18\n-12 36 walk\n");
-    game_app_stats at[2];
+    game_app_stats_info at[2];
     for (int far = 0; far < 2; far++) {
         double offset = far ? 100800.0 : 0.0;
         at[far] = run_world((game_app_desc){ .width = 64, .height = 48, .headless = true, .threads = 2,
@@ -176,7 +176,7 @@ static edited_run carve_and_close(const char *dir) {
                                                       .water = TERRAIN_WATER_OFF, .shadows = TERRAIN_SHADOWS_OFF });
     cr_assert(app);
     for (int guard = 0; !game_app_loaded(app) && guard < 20000; guard++) game_app_frame(app);
-    game_app_stats s = game_app_stats_get(app);
+    game_app_stats_info s = game_app_stats(app);
     double origin[3] = { s.feet[0] + 3.5, s.feet[1] + 4, s.feet[2] + 3.5 };
     terrain_ray_hit hit;
     cr_assert(terrain_raycast(game_app_world(app), origin, (const float[3]){ 0, -1, 0 }, 40, &hit));
@@ -187,7 +187,7 @@ static edited_run carve_and_close(const char *dir) {
     double chunk = TERRAIN_CHUNK_COLUMNS * TERRAIN_COLUMN_SIZE;
     edited_run run = { .chunk = { (int64_t)floor(hit.position[0] / chunk), (int64_t)floor(hit.position[2] / chunk) } };
     run.hash = terrain_stacks_hash(terrain_world_stacks(game_app_world(app), run.chunk));
-    game_app_stats end = game_app_stats_get(app);
+    game_app_stats_info end = game_app_stats(app);
     memcpy(run.feet, end.feet, sizeof run.feet);
     game_app_destroy(app);
     return run;
@@ -205,7 +205,7 @@ static uint64_t chunk_hash_in(const char *dir, uint64_t seed, terrain_chunk_coor
     *started = app != NULL;
     if (!app) return 0;
     uint64_t hash = terrain_stacks_hash(terrain_world_stacks(game_app_world(app), chunk));
-    game_app_stats s = game_app_stats_get(app);
+    game_app_stats_info s = game_app_stats(app);
     if (feet) memcpy(feet, s.feet, sizeof s.feet);
     game_app_destroy(app);
     return hash;
@@ -218,7 +218,7 @@ Test(render_world, edits_are_saved_and_come_back_and_a_damaged_file_is_set_aside
     char dir[] = "/tmp/world_edits_XXXXXX";
     cr_assert(mkdtemp(dir));
     edited_run run = carve_and_close(dir);
-    terrain_generation_params params = terrain_generation_defaults(3);
+    terrain_generation_desc params = terrain_generation_defaults(3);
     terrain_stacks *fresh = terrain_generate_chunk(&params, run.chunk);
     uint64_t generated = terrain_stacks_hash(fresh);
     terrain_stacks_destroy(fresh);
@@ -347,7 +347,7 @@ Test(render_world, the_tour_ends_where_its_script_says_and_every_picture_shows_s
     /* a small tile set: the rocks stop shows rocks, as tools/play's does, at a debug build's cost */
     rocks_tileset *tiles = small_rock_tiles();
     cr_assert_not_null(tiles);
-    game_app_stats s = run_world((game_app_desc){ .seed = 1, .width = 160, .height = 96, .headless = true,
+    game_app_stats_info s = run_world((game_app_desc){ .seed = 1, .width = 160, .height = 96, .headless = true,
                                                   .threads = 2, .walk = &walk, .face_open_view = true,
                                                   .stream = small_view, .screenshot_path = sheet,
                                                   .rock_tiles = tiles });
@@ -392,7 +392,7 @@ Test(render_world, the_tour_ends_where_its_script_says_and_every_picture_shows_s
     }
     stbi_image_free(rgb);
     game_walk_free(&walk);
-    rocks_tiles_destroy(tiles);
+    rocks_tileset_destroy(tiles);
     char command[64];
     snprintf(command, sizeof command, "rm -rf '%s'", dir);
     cr_expect_eq(system(command), 0);
@@ -400,7 +400,7 @@ Test(render_world, the_tour_ends_where_its_script_says_and_every_picture_shows_s
 
 /* ---- a view asked for (world --at X,Y,Z --look YAW,PITCH) ---- */
 
-static game_app_stats run_at(double x, double y, double z, double yaw, double pitch, const game_walk *walk) {
+static game_app_stats_info run_at(double x, double y, double z, double yaw, double pitch, const game_walk *walk) {
     return run_world((game_app_desc){ .width = 64, .height = 48, .headless = true, .threads = 2, .walk = walk,
                                       .frames = walk ? 2000 : 5, .stream = small_view, .no_clipmap = true,
                                       .generate = wall_chunk, .at_set = true, .at = { x, y, z }, .look_set = true,
@@ -423,7 +423,7 @@ Test(render_world, a_view_asked_for_is_drawn_exactly_as_asked, .timeout = 600) {
         { { 0.5, 1.82, -20.5 }, { 270, 89 }, false, { cos(89 * d), sin(89 * d), 0 } },   /* feet 0.2 m up */
     };
     for (size_t n = 0; n < sizeof cases / sizeof cases[0]; n++) {
-        game_app_stats s = run_at(cases[n].at[0], cases[n].at[1], cases[n].at[2], cases[n].look[0], cases[n].look[1],
+        game_app_stats_info s = run_at(cases[n].at[0], cases[n].at[1], cases[n].at[2], cases[n].look[0], cases[n].look[1],
                                   NULL);
         cr_expect_eq(s.frames, 5);
         cr_expect_eq(s.flying, cases[n].flying, "case %zu: flying %d", n, s.flying);
@@ -446,7 +446,7 @@ Test(render_world, a_view_asked_for_is_drawn_exactly_as_asked, .timeout = 600) {
  * flat ground facing +x (yaw 270) ends 10 m along +x, on the ground. */
 Test(render_world, a_walk_starts_from_the_view_asked_for, .timeout = 600) {
     game_walk walk = parse_walk("ahead\n0 10 walk\n");
-    game_app_stats s = run_at(0.5, 1.62, -20.5, 270, 0, &walk);
+    game_app_stats_info s = run_at(0.5, 1.62, -20.5, 270, 0, &walk);
     cr_expect(s.walk_done && !s.walk_stuck, "the walk %s", s.walk_stuck ? "got stuck" : "did not end");
     cr_expect_eq(s.eye_in_solid_frames, 0);
     cr_expect(hypot(s.feet[0] - 10.5, s.feet[2] + 20.5) <= 2.0 + 1e-6, "ended at (%.2f, %.2f)", s.feet[0], s.feet[2]);
@@ -460,14 +460,14 @@ Test(render_world, a_walk_starts_from_the_view_asked_for, .timeout = 600) {
 Test(render_world, the_game_places_and_draws_the_generated_talus) {
     rocks_tileset *tiles = small_rock_tiles();
     cr_assert_not_null(tiles);
-    game_app_stats s = run_world((game_app_desc){ .seed = 1, .width = 96, .height = 64, .headless = true,
+    game_app_stats_info s = run_world((game_app_desc){ .seed = 1, .width = 96, .height = 64, .headless = true,
                                                   .threads = 2, .frames = 30, .stream = small_view,
                                                   .no_clipmap = true, .rock_tiles = tiles, .at_set = true,
                                                   .at = { 49.5, 27, 6 }, .look_set = true, .look = { 0, -25 } });
     cr_expect_gt(s.rocks_placed, 100, "%llu rocks placed around the talus", (unsigned long long)s.rocks_placed);
     cr_expect_gt(s.rocks_drawn, 20, "%llu rocks drawn looking at it", (unsigned long long)s.rocks_drawn);
     cr_expect_eq(s.rock_shapes, tiles->rock_count);
-    rocks_tiles_destroy(tiles);
+    rocks_tileset_destroy(tiles);
 }
 
 /* ---- the frame as ECS systems (app.h) ---- */
@@ -478,7 +478,7 @@ Test(render_world, the_game_places_and_draws_the_generated_talus) {
 Test(render_world, a_walk_ends_at_the_same_place_at_30_60_and_144_frames_a_second, .timeout = 600) {
     game_walk walk = parse_walk("relative\n6 5\n-3 9 walk\n");
     const float rates[3] = { 30.0f, 60.0f, 144.0f };
-    game_app_stats at[3];
+    game_app_stats_info at[3];
     for (int r = 0; r < 3; r++) {
         at[r] = run_world((game_app_desc){ .width = 48, .height = 32, .headless = true, .threads = 2, .walk = &walk,
                                            .stream = small_view, .no_hud = true, .frames = 20000, .spawn = { 8, 8 },

@@ -13,7 +13,7 @@
 
 #include "rocks/rocks.h"
 
-static inline const char *rocks_test_cache(const rocks_tiles_desc *desc) {
+static inline const char *rocks_test_cache(const rocks_tileset_desc *desc) {
     static char path[512];
     const char *dir = getenv("ROCKS_TEST_CACHE_DIR");
     if (!dir || !*dir) return NULL;

@@ -529,10 +529,10 @@ Test(rocks_blocks, cliffs_on_bedrock_walls) {
     cr_assert_not_null(cliffs);
     terrain_world *world = cliff_world(wall_chunk, cliffs);
     cr_assert_gt(raised_samples(wall_chunk, world, 1), 20);
-    rocks_cliffs_stats first = rocks_cliffs_stats_get(cliffs);
+    rocks_cliffs_stats_info first = rocks_cliffs_stats(cliffs);
     cr_assert_gt(first.cells_computed, 0);
     cr_assert_gt(raised_samples(wall_chunk, world, 1), 20);
-    rocks_cliffs_stats second = rocks_cliffs_stats_get(cliffs);
+    rocks_cliffs_stats_info second = rocks_cliffs_stats(cliffs);
     cr_assert_eq(second.cells_computed, first.cells_computed, "the second field computes no cell again");
     cr_assert_gt(second.cells_reused, first.cells_reused);
     cr_assert_eq(raised_samples(wall_chunk, world, 4), 0, "none below the coarse grid");
@@ -999,7 +999,7 @@ Test(rocks_blocks, cliffs_cache_dir_and_jobs) {
     rocks_cliffs *first = counting_notices(create_cliffs, &desc, &lines);
     cr_assert_not_null(first);
     cr_expect_eq(lines, 2, "one notice per type's missing file: %d lines", lines);
-    cr_expect_eq(rocks_cliffs_stats_get(first).tiles_from_cache, 0u);
+    cr_expect_eq(rocks_cliffs_stats(first).tiles_from_cache, 0u);
     cr_expect_eq(files_in(serial_dir), 2, "a file per type the strata use");
     char columnar[400], tabular[400];
     snprintf(columnar, sizeof columnar, "%s/blocks-columnar-000000000000002a.bin", serial_dir);
@@ -1010,7 +1010,7 @@ Test(rocks_blocks, cliffs_cache_dir_and_jobs) {
     rocks_cliffs *second = counting_notices(create_cliffs, &desc, &lines);
     cr_assert_not_null(second);
     cr_expect_eq(lines, 0);
-    cr_expect_eq(rocks_cliffs_stats_get(second).tiles_from_cache, 2u, "both tiles read back");
+    cr_expect_eq(rocks_cliffs_stats(second).tiles_from_cache, 2u, "both tiles read back");
     rocks_cliffs_destroy(second);
 
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 3 });
@@ -1019,7 +1019,7 @@ Test(rocks_blocks, cliffs_cache_dir_and_jobs) {
     rocks_cliffs *third = counting_notices(create_cliffs, &parallel, &lines);
     cr_assert_not_null(third);
     cr_expect_eq(lines, 2);
-    cr_expect_eq(rocks_cliffs_stats_get(third).tiles_from_cache, 0u);
+    cr_expect_eq(rocks_cliffs_stats(third).tiles_from_cache, 0u);
     rocks_cliffs_destroy(third);
     job_system_destroy(jobs);
     const char *types[] = { "columnar", "tabular" };

@@ -21,18 +21,18 @@
 #define CELLS (BLOCK * N)
 #define VOXELS (N * M)                /* voxels a tile side */
 
-static rocks_tiles_desc small_desc(void) {
-    return (rocks_tiles_desc){ .seed = 7, .cells = N, .voxels_per_cell = M, .shape = ROCKS_SHAPE_MIXED };
+static rocks_tileset_desc small_desc(void) {
+    return (rocks_tileset_desc){ .seed = 7, .cells = N, .voxels_per_cell = M, .shape = ROCKS_SHAPE_MIXED };
 }
 
 /* For the tests that need no block: n = 4 (every seed then comes from a vertex feature, but
  * contacts, meshes and threads do not care), a sixth of the rocks. */
-static rocks_tiles_desc quick_desc(void) {
-    return (rocks_tiles_desc){ .seed = 7, .cells = 4, .voxels_per_cell = 6, .shape = ROCKS_SHAPE_MIXED };
+static rocks_tileset_desc quick_desc(void) {
+    return (rocks_tileset_desc){ .seed = 7, .cells = 4, .voxels_per_cell = 6, .shape = ROCKS_SHAPE_MIXED };
 }
 
 static rocks__set *build_full(void) {
-    rocks_tiles_desc desc = small_desc();
+    rocks_tileset_desc desc = small_desc();
     rocks_tileset *set = rocks__tiles_create(&desc, &(rocks__build_options){ .keep_voxels = true, .keep_empty = true });
     cr_assert_not_null(set);
     return (rocks__set *)set;
@@ -329,8 +329,8 @@ static float mesh_distance(const rocks_tileset *set, uint32_t r, const float p[3
  * contact has the other rock across the voxel face nearest to it); LOD 0 may then stray by the
  * simplifier's error bound, ROCKS__LOD0_ERROR voxels. */
 Test(rocks_tiles, both_meshes_pass_within_a_voxel_and_the_simplifier_s_error_of_every_contact) {
-    rocks_tiles_desc desc = quick_desc();
-    rocks_tileset *set = rocks_tiles_create(&desc);
+    rocks_tileset_desc desc = quick_desc();
+    rocks_tileset *set = rocks_tileset_create(&desc);
     cr_assert_not_null(set);
     const float voxel = (1.0f + ROCKS__LOD0_ERROR) / (float)(desc.cells * desc.voxels_per_cell);
     uint32_t checked = 0, far = 0, far_other = 0;
@@ -357,7 +357,7 @@ Test(rocks_tiles, both_meshes_pass_within_a_voxel_and_the_simplifier_s_error_of_
                  (double)(worst / voxel));
     cr_expect_eq(far_other, 0u, "%u contacts are further than the bound from the other rock (worst %.2f of it)", far_other,
                  (double)(worst / voxel));
-    rocks_tiles_destroy(set);
+    rocks_tileset_destroy(set);
 }
 
 /* A vertex of one rock may not lie deeper than a voxel inside another: the voxel holding it and
@@ -415,7 +415,7 @@ Test(rocks_tiles, one_set_against_the_global_voronoi_its_seeds_its_straddling_ro
     straddling_rock_is_the_same_whatever_the_neighbours(full);
     every_seed_is_listed_by_exactly_one_tile(full);
     no_rock_reaches_deeper_than_a_voxel_into_another(full);
-    rocks_tiles_destroy(&full->set);
+    rocks_tileset_destroy(&full->set);
 }
 
 /* ---- meshes ---------------------------------------------------------------------------------- */
@@ -426,8 +426,8 @@ static int compare_edge(const void *a, const void *b) {
 }
 
 Test(rocks_tiles, every_level_of_every_rock_is_closed) {
-    rocks_tiles_desc desc = quick_desc();
-    rocks_tileset *set = rocks_tiles_create(&desc);
+    rocks_tileset_desc desc = quick_desc();
+    rocks_tileset *set = rocks_tileset_create(&desc);
     cr_assert_not_null(set);
     int open = 0, empty = 0;
     double triangles[ROCKS_LODS] = { 0 };
@@ -461,7 +461,7 @@ Test(rocks_tiles, every_level_of_every_rock_is_closed) {
      * collapsing would change the shape too much, so only roughly) */
     cr_expect_lt(triangles[1], 0.6 * triangles[0]);
     cr_expect_lt(triangles[2], 0.3 * triangles[0]);
-    rocks_tiles_destroy(set);
+    rocks_tileset_destroy(set);
 }
 
 /* ---- determinism --------------------------------------------------------------------------------- */
@@ -481,24 +481,24 @@ static bool same_arrays(const rocks_tileset *a, const rocks_tileset *b) {
 Test(rocks_tiles, one_and_two_workers_give_the_same_bytes) {
     job_system *one = job_system_create(&(job_system_desc){ .threads = 1 });
     job_system *two = job_system_create(&(job_system_desc){ .threads = 2 });
-    rocks_tiles_desc desc = quick_desc();
+    rocks_tileset_desc desc = quick_desc();
     desc.jobs = one;
-    rocks_tileset *a = rocks_tiles_create(&desc);
+    rocks_tileset *a = rocks_tileset_create(&desc);
     desc.jobs = two;
-    rocks_tileset *b = rocks_tiles_create(&desc);
+    rocks_tileset *b = rocks_tileset_create(&desc);
     cr_assert(a && b);
     cr_expect(same_arrays(a, b));
     cr_expect_gt(a->rock_count, 1000u);
-    rocks_tiles_destroy(a);
-    rocks_tiles_destroy(b);
+    rocks_tileset_destroy(a);
+    rocks_tileset_destroy(b);
     job_system_destroy(one);
     job_system_destroy(two);
 }
 
 /* ---- the cache ----------------------------------------------------------------------------------- */
 
-static rocks_tiles_desc cache_desc(const char *path) {
-    return (rocks_tiles_desc){ .seed = 3, .cells = 4, .voxels_per_cell = 4, .shape = ROCKS_SHAPE_ROUND, .cache_path = path };
+static rocks_tileset_desc cache_desc(const char *path) {
+    return (rocks_tileset_desc){ .seed = 3, .cells = 4, .voxels_per_cell = 4, .shape = ROCKS_SHAPE_ROUND, .cache_path = path };
 }
 
 static unsigned char *read_all(const char *path, size_t *size) {
@@ -520,13 +520,13 @@ static void write_all(const char *path, const unsigned char *data, size_t size) 
     fclose(f);
 }
 
-/* Runs rocks_tiles_create with stderr in a file; returns the set and the lines logged. */
-static rocks_tileset *create_counting_notices(const rocks_tiles_desc *desc, int *lines) {
+/* Runs rocks_tileset_create with stderr in a file; returns the set and the lines logged. */
+static rocks_tileset *create_counting_notices(const rocks_tileset_desc *desc, int *lines) {
     fflush(stderr);
     int saved = dup(2);
     FILE *log = tmpfile();
     dup2(fileno(log), 2);
-    rocks_tileset *set = rocks_tiles_create(desc);
+    rocks_tileset *set = rocks_tileset_create(desc);
     fflush(stderr);
     dup2(saved, 2);
     close(saved);
@@ -543,7 +543,7 @@ Test(rocks_tiles, cache_reloads_and_rebuilds_whatever_is_wrong_with_it) {
     cr_assert_not_null(mkdtemp(dir));
     char path[256];
     snprintf(path, sizeof path, "%s/rocks.bin", dir);
-    rocks_tiles_desc desc = cache_desc(path);
+    rocks_tileset_desc desc = cache_desc(path);
     int lines;
     rocks_tileset *built = create_counting_notices(&desc, &lines);
     cr_assert_not_null(built);
@@ -553,7 +553,7 @@ Test(rocks_tiles, cache_reloads_and_rebuilds_whatever_is_wrong_with_it) {
     cr_expect(loaded->from_cache);
     cr_expect_eq(lines, 0);
     cr_expect(same_arrays(built, loaded));
-    rocks_tiles_destroy(loaded);
+    rocks_tileset_destroy(loaded);
 
     size_t size;
     unsigned char *good = read_all(path, &size);
@@ -586,7 +586,7 @@ Test(rocks_tiles, cache_reloads_and_rebuilds_whatever_is_wrong_with_it) {
         if (ok) rocks__set_free_arrays(&scratch);
         free(bad);
     }
-    /* through rocks_tiles_create: a cut file, a flipped byte, an old version number; each is
+    /* through rocks_tileset_create: a cut file, a flipped byte, an old version number; each is
      * rebuilt with one notice, gives the same set, and leaves a good cache behind */
     for (int kind = 0; kind < 3; kind++) {
         unsigned char *bad = malloc(size);
@@ -602,19 +602,19 @@ Test(rocks_tiles, cache_reloads_and_rebuilds_whatever_is_wrong_with_it) {
         cr_expect_not(again->from_cache, "case %d", kind);
         cr_expect_eq(lines, 1, "case %d: %d lines", kind, lines);
         cr_expect(same_arrays(built, again), "case %d", kind);
-        rocks_tiles_destroy(again);
+        rocks_tileset_destroy(again);
         rocks_tileset *reread = create_counting_notices(&desc, &lines);
         cr_expect(reread->from_cache, "case %d: the rewritten cache", kind);
-        rocks_tiles_destroy(reread);
+        rocks_tileset_destroy(reread);
     }
     /* other parameters: rebuilt, not read */
     desc.seed = 4;
     rocks_tileset *other = create_counting_notices(&desc, &lines);
     cr_expect_not(other->from_cache);
     cr_expect_eq(lines, 1);
-    rocks_tiles_destroy(other);
+    rocks_tileset_destroy(other);
     free(good);
-    rocks_tiles_destroy(built);
+    rocks_tileset_destroy(built);
     remove(path);
     rmdir(dir);
 }
@@ -622,7 +622,7 @@ Test(rocks_tiles, cache_reloads_and_rebuilds_whatever_is_wrong_with_it) {
 /* ---- parameters ----------------------------------------------------------------------------------- */
 
 Test(rocks_tiles, bad_parameters_give_null) {
-    rocks_tiles_desc bad[] = {
+    rocks_tileset_desc bad[] = {
         { .cells = 3 },
         { .cells = 9 },
         { .cells = -1 },
@@ -636,8 +636,8 @@ Test(rocks_tiles, bad_parameters_give_null) {
         { .shape = (rocks_shape)7 },
         { .scale_min = { -1, 1, 1 }, .scale_max = { 1, 1, 1 } },
     };
-    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) cr_expect_null(rocks_tiles_create(&bad[i]), "desc %zu", i);
-    cr_expect_null(rocks_tiles_create(NULL));
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) cr_expect_null(rocks_tileset_create(&bad[i]), "desc %zu", i);
+    cr_expect_null(rocks_tileset_create(NULL));
 }
 
 Test(rocks_tiles, hull_distance_is_exact_inside_and_a_lower_bound_outside) {

@@ -42,9 +42,9 @@ static terrain_world *pile_world(bool bare, terrain_edit_log *log) {
 
 /* A small set, quick to build: what matters here is placement, not the rocks' finish. */
 static rocks_tileset *small_set(void) {
-    rocks_tiles_desc desc = { .cells = 4, .voxels_per_cell = 6, .shape = ROCKS_SHAPE_ROUND };
+    rocks_tileset_desc desc = { .cells = 4, .voxels_per_cell = 6, .shape = ROCKS_SHAPE_ROUND };
     desc.cache_path = rocks_test_cache(&desc);
-    rocks_tileset *set = rocks_tiles_create(&desc);
+    rocks_tileset *set = rocks_tileset_create(&desc);
     cr_assert_not_null(set);
     return set;
 }
@@ -123,7 +123,7 @@ Test(rocks_place, every_rock_placed_has_most_anchors_in_the_rock_layer) {
     }
     rocks_placement_free(&p);
     terrain_world_destroy(world);
-    rocks_tiles_destroy(set);
+    rocks_tileset_destroy(set);
 }
 
 Test(rocks_place, bare_ground_has_no_rocks) {
@@ -134,7 +134,7 @@ Test(rocks_place, bare_ground_has_no_rocks) {
     cr_assert_eq(p.count, 0);
     rocks_placement_free(&p);
     terrain_world_destroy(world);
-    rocks_tiles_destroy(set);
+    rocks_tileset_destroy(set);
 }
 
 typedef struct placed_rock { int64_t mm[3]; uint32_t rock; } placed_rock;
@@ -174,7 +174,7 @@ Test(rocks_place, boxes_that_partition_space_place_each_rock_once) {
     rocks_placement_free(&whole);
     rocks_placement_free(&part);
     terrain_world_destroy(world);
-    rocks_tiles_destroy(set);
+    rocks_tileset_destroy(set);
 }
 
 /* ---- a brute-force reference ------------------------------------------------------------------ */
@@ -346,7 +346,7 @@ Test(rocks_place, placement_is_the_definition_applied_to_every_rock) {
     rocks_placement_free(&p);
     terrain_world_destroy(strata);
     terrain_world_destroy(pile);
-    rocks_tiles_destroy(set);
+    rocks_tileset_destroy(set);
 }
 
 /* A vertical shaft swept through the pile's centre: everything within 1.5 m becomes air. */
@@ -408,12 +408,12 @@ Test(rocks_place, after_a_carve_no_rock_floats_and_the_dug_rocks_are_gone) {
     rocks_placement_free(&before);
     rocks_placement_free(&after);
     terrain_world_destroy(world);
-    rocks_tiles_destroy(set);
+    rocks_tileset_destroy(set);
 }
 
 Test(rocks_place, a_reloaded_world_gives_the_same_rocks_byte_for_byte) {
     rocks_tileset *set = small_set();
-    terrain_edit_log *log = terrain_edit_log_create(1234);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = 1234 });
     terrain_world *world = pile_world(false, log);
     double points[2][3];
     terrain_edit edit = shaft(points);
@@ -430,7 +430,7 @@ Test(rocks_place, a_reloaded_world_gives_the_same_rocks_byte_for_byte) {
     rocks_placement_free(&second);
     terrain_world_destroy(world);
     terrain_edit_log_destroy(log);
-    rocks_tiles_destroy(set);
+    rocks_tileset_destroy(set);
 }
 
 /* ---- the player on a pile ----------------------------------------------------------------------- */
@@ -464,7 +464,7 @@ Test(rocks_place, the_player_stands_on_a_rock_pile) {
     place(set, world, PILE_MIN, PILE_MAX, &p);
     pile_obstacles obstacles = { set, &p };
     game_player player;
-    game_player_init(&player, &(game_player_params){ .obstacle_distance = pile_distance, .obstacle_user = &obstacles });
+    game_player_init(&player, &(game_player_desc){ .obstacle_distance = pile_distance, .obstacle_user = &obstacles });
     player.position[0] = PILE_X, player.position[1] = GROUND + PILE_HEIGHT + 2.0, player.position[2] = PILE_Z;
     input_actions idle = { 0 };
     for (int f = 0; f < 180; f++) game_player_update(&player, world, &idle, 1.0f / 60.0f);
@@ -492,7 +492,7 @@ Test(rocks_place, the_player_stands_on_a_rock_pile) {
                  fabs(player.position[2] - start_z));
     rocks_placement_free(&p);
     terrain_world_destroy(world);
-    rocks_tiles_destroy(set);
+    rocks_tileset_destroy(set);
 }
 
 Test(rocks_place, an_index_of_another_tile_set_is_refused) {
@@ -506,8 +506,8 @@ Test(rocks_place, an_index_of_another_tile_set_is_refused) {
     rocks_place_index_destroy(index);
     rocks_placement_free(&p);
     terrain_world_destroy(world);
-    rocks_tiles_destroy(other);
-    rocks_tiles_destroy(set);
+    rocks_tileset_destroy(other);
+    rocks_tileset_destroy(set);
 }
 
 /* Releasing the CPU meshes (what the game does once they are on the GPU) leaves placement as it
@@ -530,5 +530,5 @@ Test(rocks_place, placement_needs_no_meshes) {
     rocks_placement_free(&with);
     rocks_placement_free(&without);
     terrain_world_destroy(world);
-    rocks_tiles_destroy(set);
+    rocks_tileset_destroy(set);
 }

@@ -38,6 +38,21 @@ static inline void remove_tree(const char *path) {
     rmdir(path);
 }
 
+/* Bytes of the plain files directly in `path` (a world folder: world.db and its journal). */
+static inline long long folder_bytes(const char *path) {
+    DIR *dir = opendir(path);
+    cr_assert_not_null(dir, "%s", path);
+    long long total = 0;
+    for (struct dirent *e; (e = readdir(dir));) {
+        char child[4096];
+        struct stat info;
+        snprintf(child, sizeof child, "%s/%s", path, e->d_name);
+        if (stat(child, &info) == 0 && S_ISREG(info.st_mode)) total += info.st_size;
+    }
+    closedir(dir);
+    return total;
+}
+
 static inline bool exists(const char *path) {
     struct stat info;
     return stat(path, &info) == 0;

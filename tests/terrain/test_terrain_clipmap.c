@@ -29,7 +29,7 @@ static terrain_clipmap *small_clipmap(uint64_t seed, int levels, int cells, floa
 
 Test(terrain_clipmap, texels_are_the_ground_at_the_levels_spacing) {
     terrain_clipmap *c = small_clipmap(42, 4, 32, 4.0f, NULL);
-    terrain_generation_params p = terrain_generation_defaults(42);
+    terrain_generation_desc p = terrain_generation_defaults(42);
     uint64_t texels = terrain_clipmap_update(c, (double[3]){ 123.4, 50.0, -987.6 });
     cr_assert_eq(texels, 4u * 35u * 35u, "the first update computes every level's window");
     float previous_octaves = 100;
@@ -57,7 +57,7 @@ Test(terrain_clipmap, texels_are_the_ground_at_the_levels_spacing) {
 
 Test(terrain_clipmap, at_column_spacing_the_texels_are_the_generators_ground_bit_for_bit) {
     terrain_clipmap *c = small_clipmap(7, 2, 16, TERRAIN_COLUMN_SIZE, NULL);
-    terrain_generation_params p = terrain_generation_defaults(7);
+    terrain_generation_desc p = terrain_generation_defaults(7);
     terrain_clipmap_update(c, (double[3]){ -3000.2, 0, 411.7 });
     terrain__clipmap_level_info info = terrain__clipmap_level(c, 0);
     FOR_WINDOW(info, i, k)
@@ -71,7 +71,7 @@ static int compare_floats(const void *a, const void *b) {
 }
 
 /* Largest |∇G| (1 m differences of the column ground) over the disc of radius r around (x, z). */
-static float ground_slope_max(const terrain_generation_params *p, double x, double z, int r) {
+static float ground_slope_max(const terrain_generation_desc *p, double x, double z, int r) {
     float grid[2 * 16 + 3][2 * 16 + 3];
     int size = 2 * r + 3;
     for (int k = 0; k < size; k++)
@@ -94,7 +94,7 @@ static float ground_slope_max(const terrain_generation_params *p, double x, doub
  * differs from the columns' G by the octaves the spacing drops (004 §4.1), added as measured.
  * Caves are switched off: a cave mouth cuts the top, and the clipmap does not draw caves. */
 Test(terrain_clipmap, heights_match_the_stacks_top_within_the_generators_bound) {
-    terrain_generation_params p = terrain_generation_defaults(42);
+    terrain_generation_desc p = terrain_generation_defaults(42);
     p.cave_threshold = 0.0f;
     const float a = p.horizontal_perturbation, quantum = TERRAIN_HEIGHT_QUANTUM;
     const int reach = (int)ceilf(a * 1.41422f);
@@ -238,7 +238,7 @@ Test(terrain_clipmap, footprints_nest_on_the_coarser_levels_vertex_lines_anywher
  * it sits on. The camera at draw time is not the one of the update (the player moved on). */
 static void check_seams(terrain_clipmap *c, int levels, int cells, const double update_camera[3], const double draw_camera[3]) {
     terrain_clipmap_update(c, update_camera);
-    double reach = terrain_clipmap_stats_get(c).reach;
+    double reach = terrain_clipmap_stats(c).reach;
     for (int l = 0; l + 1 < levels; l++) {
         terrain__clipmap_level_info fine = terrain__clipmap_level(c, l), coarse = terrain__clipmap_level(c, l + 1);
         for (int e = 0; e < 4 * (cells + 1); e++) {
@@ -339,7 +339,7 @@ Test(terrain_clipmap, culling_drops_blocks_behind_and_keeps_the_one_under_the_ca
     int visible = terrain_clipmap_cull(c, &frustum);
     cr_assert_gt(visible, 0);
     cr_assert_lt(visible, total / 2, "%d of %d blocks kept looking one way", visible, total);
-    cr_assert_eq(terrain_clipmap_stats_get(c).blocks_visible, visible);
+    cr_assert_eq(terrain_clipmap_stats(c).blocks_visible, visible);
     for (int l = 0; l < levels; l++)
         for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) {
             terrain__clipmap_block_info info = terrain__clipmap_block(c, l, b);

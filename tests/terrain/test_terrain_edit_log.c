@@ -30,12 +30,12 @@
 /* ---- helpers -------------------------------------------------------------------------- */
 
 static uint64_t key_of(uint64_t seed) {
-    terrain_generation_params params = terrain_generation_defaults(seed);
+    terrain_generation_desc params = terrain_generation_defaults(seed);
     return terrain_generation_key(&params);
 }
 
 static terrain_stacks *generated(terrain_chunk_coord coord) {
-    terrain_generation_params params = terrain_generation_defaults(SEED);
+    terrain_generation_desc params = terrain_generation_defaults(SEED);
     return terrain_generate_chunk(&params, coord);
 }
 
@@ -113,7 +113,7 @@ static int count_names(const char *dir, const char *part) {
 
 /* A new log with `key`, loaded from `dir` (the load itself must succeed). */
 static terrain_edit_log *load_new(const char *dir, uint64_t key, terrain_edit_log_load_result *result) {
-    terrain_edit_log *log = terrain_edit_log_create(key);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key });
     cr_assert(terrain_edit_log_load(log, dir, result), "%s", result->first_problem);
     return log;
 }
@@ -135,33 +135,33 @@ Test(terrain_edit_log, tool_names) {
 }
 
 Test(terrain_edit_log, generation_key_covers_every_parameter) {
-    terrain_generation_params a = terrain_generation_defaults(42), b = terrain_generation_defaults(42);
+    terrain_generation_desc a = terrain_generation_defaults(42), b = terrain_generation_defaults(42);
     cr_expect_eq(terrain_generation_key(&a), terrain_generation_key(&b), "equal parameters, equal keys");
     b.seed = 43;
     cr_expect_neq(terrain_generation_key(&a), terrain_generation_key(&b), "another seed");
     /* Each field changed alone gives a key of its own. */
     const size_t floats[] = {
-        offsetof(terrain_generation_params, sea_level), offsetof(terrain_generation_params, relief_height),
-        offsetof(terrain_generation_params, base_height), offsetof(terrain_generation_params, relief_wavelength),
-        offsetof(terrain_generation_params, lacunarity), offsetof(terrain_generation_params, hurst),
-        offsetof(terrain_generation_params, warp_strength),
-        offsetof(terrain_generation_params, vertical_perturbation),
-        offsetof(terrain_generation_params, horizontal_perturbation),
-        offsetof(terrain_generation_params, perturbation_wavelength),
-        offsetof(terrain_generation_params, cave_threshold), offsetof(terrain_generation_params, cave_wavelength),
-        offsetof(terrain_generation_params, cave_fade_height), offsetof(terrain_generation_params, sand_max_slope),
-        offsetof(terrain_generation_params, sand_depth), offsetof(terrain_generation_params, lake_spacing),
-        offsetof(terrain_generation_params, lake_probability), offsetof(terrain_generation_params, lake_radius_min),
-        offsetof(terrain_generation_params, lake_radius_max), offsetof(terrain_generation_params, lake_depth),
-        offsetof(terrain_generation_params, talus_depth), offsetof(terrain_generation_params, scree_depth),
-        offsetof(terrain_generation_params, scree_min_slope), offsetof(terrain_generation_params, lake_rocks_depth) };
-    const size_t ints[] = { offsetof(terrain_generation_params, relief_octaves),
-                            offsetof(terrain_generation_params, perturbation_octaves) };
+        offsetof(terrain_generation_desc, sea_level), offsetof(terrain_generation_desc, relief_height),
+        offsetof(terrain_generation_desc, base_height), offsetof(terrain_generation_desc, relief_wavelength),
+        offsetof(terrain_generation_desc, lacunarity), offsetof(terrain_generation_desc, hurst),
+        offsetof(terrain_generation_desc, warp_strength),
+        offsetof(terrain_generation_desc, vertical_perturbation),
+        offsetof(terrain_generation_desc, horizontal_perturbation),
+        offsetof(terrain_generation_desc, perturbation_wavelength),
+        offsetof(terrain_generation_desc, cave_threshold), offsetof(terrain_generation_desc, cave_wavelength),
+        offsetof(terrain_generation_desc, cave_fade_height), offsetof(terrain_generation_desc, sand_max_slope),
+        offsetof(terrain_generation_desc, sand_depth), offsetof(terrain_generation_desc, lake_spacing),
+        offsetof(terrain_generation_desc, lake_probability), offsetof(terrain_generation_desc, lake_radius_min),
+        offsetof(terrain_generation_desc, lake_radius_max), offsetof(terrain_generation_desc, lake_depth),
+        offsetof(terrain_generation_desc, talus_depth), offsetof(terrain_generation_desc, scree_depth),
+        offsetof(terrain_generation_desc, scree_min_slope), offsetof(terrain_generation_desc, lake_rocks_depth) };
+    const size_t ints[] = { offsetof(terrain_generation_desc, relief_octaves),
+                            offsetof(terrain_generation_desc, perturbation_octaves) };
     enum { FIELDS = CORE_COUNTOF(floats) + CORE_COUNTOF(ints) };
     uint64_t keys[FIELDS + 1];
     keys[FIELDS] = terrain_generation_key(&a);
     for (size_t f = 0; f < FIELDS; f++) {
-        terrain_generation_params p = a;
+        terrain_generation_desc p = a;
         if (f < CORE_COUNTOF(floats)) *(float *)((char *)&p + floats[f]) += 0.5f;
         else *(int *)((char *)&p + ints[f - CORE_COUNTOF(floats)]) += 1;
         keys[f] = terrain_generation_key(&p);
@@ -169,7 +169,7 @@ Test(terrain_edit_log, generation_key_covers_every_parameter) {
     for (int x = 0; x <= FIELDS; x++)
         for (int y = x + 1; y <= FIELDS; y++) cr_expect_neq(keys[x], keys[y], "fields %d and %d", x, y);
     /* −0 and +0 are equal parameters. */
-    terrain_generation_params plus = a, minus = a;
+    terrain_generation_desc plus = a, minus = a;
     plus.warp_strength = 0.0f, minus.warp_strength = -0.0f;
     cr_expect_eq(terrain_generation_key(&plus), terrain_generation_key(&minus));
 }
@@ -234,7 +234,7 @@ Test(terrain_edit_log, quanta_push_is_exact_beyond_float_precision) {
 Test(terrain_edit_log, record_then_replay_gives_the_edited_bytes) {
     terrain_chunk_coord coord = { 2, -1 };
     terrain_stacks *g = generated(coord), *a = edited(g, coord, 1, 40);
-    terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     cr_expect_eq(terrain_edit_log_chunks(log), 0);
     cr_expect_null(terrain_edit_log_replay(log, coord, g), "no entries: NULL");
     cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, g, a));
@@ -253,7 +253,7 @@ Test(terrain_edit_log, later_entries_override_earlier_columns) {
     terrain_chunk_coord coord = { -3, 5 };
     terrain_stacks *g = generated(coord), *a = edited(g, coord, 2, 40), *b = edited(a, coord, 3, 60);
     terrain_stacks *c = edited(b, coord, 2, 20);   /* the first 20 of a's columns, set again alike */
-    terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SCULPT_ADD, g, a));
     cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_DEPOSIT, a, b));
     cr_expect_eq(terrain_edit_log_entries(log, coord), 2);
@@ -275,7 +275,7 @@ Test(terrain_edit_log, equal_stacks_record_nothing) {
     terrain_chunk_coord coord = { 0, 0 };
     terrain_stacks *g = generated(coord), *same = edited(g, coord, 9, 0);   /* loaded, written back */
     cr_assert(same_bytes(g, same));
-    terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     cr_expect(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, g, g));
     cr_expect(terrain_edit_log_record(log, coord, TERRAIN_EDIT_STABILIZE, g, same));
     cr_expect_eq(terrain_edit_log_entries(log, coord), 0);
@@ -317,7 +317,7 @@ Test(terrain_edit_log, record_refuses_columns_no_file_could_hold) {
     terrain_stacks *g = generated(coord);
     terrain_stacks *many = with_column(g, N - 1, 65536, 1), *tall = with_column(g, 40, 1, 1u << 26);
     terrain_stacks *most = with_column(g, N - 1, 65535, 1), *tallest = with_column(g, 40, 1, (1u << 26) - 1);
-    terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     cr_expect_not(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, g, many));
     cr_expect_not(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, g, tall));
     cr_expect_eq(terrain_edit_log_entries(log, coord), 0);
@@ -344,7 +344,7 @@ Test(terrain_edit_log, compact_folds_to_one_entry_with_the_same_replay) {
     terrain_chunk_coord one = { 1, 1 }, two = { 4, -2 };
     terrain_stacks *g1 = generated(one), *g2 = generated(two);
     terrain_stacks *s[4] = { g1, NULL, NULL, NULL };
-    terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     for (int n = 1; n < 4; n++) {
         s[n] = edited(s[n - 1], one, (uint64_t)(10 + n), 30);
         cr_assert(terrain_edit_log_record(log, one, TERRAIN_EDIT_SWEEP, s[n - 1], s[n]));
@@ -384,7 +384,7 @@ typedef struct world_fixture {
 
 static void fixture_make(world_fixture *w) {
     const terrain_chunk_coord coords[3] = { { 0, 0 }, { -1, 7 }, { 2000, -3000 } };
-    w->log = terrain_edit_log_create(key_of(SEED));
+    w->log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     for (int c = 0; c < 3; c++) {
         w->coord[c] = coords[c];
         w->base[c] = generated(coords[c]);
@@ -509,7 +509,7 @@ Test(terrain_edit_log, missing_folder_is_an_empty_world_and_a_file_is_refused) {
     make_temp_dir(dir, sizeof dir);
     terrain_edit_log_load_result result;
     snprintf(path, sizeof path, "%s/none", dir);
-    terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     cr_expect(terrain_edit_log_load(log, path, &result));
     cr_expect_eq(result.chunks_loaded + result.files_rejected, 0);
     cr_expect(terrain_edit_log_load(log, dir, &result), "no edits folder yet");
@@ -557,7 +557,7 @@ Test(terrain_edit_log, file_size_and_header_follow_the_format) {
     size_t expected = HEADER + 3 + TRAILER;
     for (int n = 0; n < N * N; n++)
         if (changed[n]) expected += 4 + 5 * (size_t)terrain_stacks_column(a, n % N, n / N, NULL, 0);
-    terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_DEPOSIT, g, a));
     char dir[128], path[512], error[512];
     make_temp_dir(dir, sizeof dir);
@@ -590,7 +590,7 @@ Test(terrain_edit_log, file_size_and_header_follow_the_format) {
 Test(terrain_edit_log, extreme_coordinates_round_trip) {
     const terrain_chunk_coord coord = { INT64_MIN, INT64_MAX };
     terrain_stacks *g = generated((terrain_chunk_coord){ 0, 0 }), *a = edited(g, (terrain_chunk_coord){ 0, 0 }, 8, 10);
-    terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, g, a));
     char dir[128], path[512], error[512];
     make_temp_dir(dir, sizeof dir);
@@ -666,7 +666,7 @@ Test(terrain_edit_log, a_file_written_by_hand_replays_as_described) {
     terrain_stacks *expected = terrain_stacks_builder_finish(b);
     terrain_stacks_builder_destroy(b);
 
-    terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     char error[256] = "";
     cr_assert(terrain_edit_log_parse(log, o.data, o.size, error, sizeof error), "%s", error);
     cr_expect_eq(terrain_edit_log_entries(log, coord), 1);
@@ -726,7 +726,7 @@ Test(terrain_edit_log, content_we_never_write_is_refused) {
         { "entry 1: unknown tool 171", 1, 1, { 3 }, { 1 }, { 1 }, { 5 }, 2, 7 },
         { "no entries", 1, 1, { 3 }, { 1 }, { 1 }, { 5 }, -1, 0 },
     };
-    terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     for (size_t n = 0; n < CORE_COUNTOF(cases); n++) {
         bad_case c = cases[n];
         bytes_out o = bad_file(&c);
@@ -759,7 +759,7 @@ Test(terrain_edit_log, an_entry_too_big_for_stacks_is_skipped_on_replay) {
         for (int l = 0; l < 2200; l++) put(&o, l % 2 ? TERRAIN_SAND : TERRAIN_BEDROCK, 1), put(&o, 1, 4);
     }
     put_crc(&o);
-    terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     char error[256] = "";
     cr_assert(terrain_edit_log_parse(log, o.data, o.size, error, sizeof error), "%s", error);
     expect_replay(log, coord, g, g);
@@ -783,11 +783,11 @@ Test(terrain_edit_log, every_flipped_bit_and_every_truncation_is_refused) {
     fixture_make(&w);
     size_t size;
     uint8_t *bytes = fixture_file(&w, &size);
-    terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     char error[256];
     cr_assert(terrain_edit_log_parse(log, bytes, size, error, sizeof error), "%s", error);
     terrain_edit_log_destroy(log);
-    log = terrain_edit_log_create(key_of(SEED));
+    log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     for (size_t at = 0; at < size; at++)
         for (int bit = 0; bit < 8; bit++) {
             bytes[at] ^= (uint8_t)(1u << bit);
@@ -909,7 +909,7 @@ Test(terrain_edit_log, a_saver_killed_at_any_moment_leaves_state_a_or_b, .timeou
     make_temp_dir(dir, sizeof dir);
     int seen_a = 0, seen_b = 0;
     for (int round = 0; round < 20; round++) {
-        terrain_edit_log *log = terrain_edit_log_create(key_of(SEED));
+        terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
         cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, g, a));
         char error[512];
         cr_assert(terrain_edit_log_save(log, dir, error, sizeof error), "%s", error);

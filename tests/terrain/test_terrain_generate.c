@@ -14,8 +14,8 @@
 #define Q TERRAIN_HEIGHT_QUANTUM
 
 /* A world with no relief, no perturbation and no caves: every column is the same by hand. */
-static terrain_generation_params flat_params(float base, float sea) {
-    terrain_generation_params p = terrain_generation_defaults(1);
+static terrain_generation_desc flat_params(float base, float sea) {
+    terrain_generation_desc p = terrain_generation_defaults(1);
     p.base_height = base;
     p.sea_level = sea;
     p.relief_height = 0.0f;
@@ -30,7 +30,7 @@ static terrain_generation_params flat_params(float base, float sea) {
 
 Test(terrain_generate, flat_land_is_bedrock_under_sand) {
     /* Ground at 10 m: bedrock from −256 to 8, then 2 m of sand (slope 0: full depth), no water. */
-    terrain_generation_params p = flat_params(10.0f, 0.0f);
+    terrain_generation_desc p = flat_params(10.0f, 0.0f);
     terrain_stacks *s = terrain_generate_chunk(&p, (terrain_chunk_coord){ 3, -2 });
     terrain_layer layers[8];
     for (int k = 0; k < N; k += 7) {
@@ -48,7 +48,7 @@ Test(terrain_generate, flat_land_is_bedrock_under_sand) {
 
 Test(terrain_generate, flat_sea_floor_under_water) {
     /* Ground at −12 m under a sea at 0: bedrock to −14, sand to −12, 12 m of water. */
-    terrain_generation_params p = flat_params(-12.0f, 0.0f);
+    terrain_generation_desc p = flat_params(-12.0f, 0.0f);
     terrain_stacks *s = terrain_generate_chunk(&p, (terrain_chunk_coord){ -5, 9 });
     terrain_layer layers[8];
     cr_assert_eq(terrain_stacks_column(s, 4, 30, layers, 8), 3);
@@ -73,7 +73,7 @@ Test(terrain_generate, flat_sea_floor_under_water) {
 #define DET_SIDE 4
 
 typedef struct generate_job {
-    terrain_generation_params params;
+    terrain_generation_desc params;
     bool reverse;
     uint64_t hashes[DET_SIDE * DET_SIDE];
 } generate_job;
@@ -110,7 +110,7 @@ Test(terrain_generate, same_bytes_on_any_thread_count_and_order) {
 }
 
 Test(terrain_generate, seed_changes_the_world) {
-    terrain_generation_params a = terrain_generation_defaults(1), b = terrain_generation_defaults(2);
+    terrain_generation_desc a = terrain_generation_defaults(1), b = terrain_generation_defaults(2);
     terrain_stacks *sa = terrain_generate_chunk(&a, (terrain_chunk_coord){ 0, 0 });
     terrain_stacks *sb = terrain_generate_chunk(&b, (terrain_chunk_coord){ 0, 0 });
     cr_expect_neq(terrain_stacks_hash(sa), terrain_stacks_hash(sb));
@@ -129,7 +129,7 @@ typedef struct area_stats {
     float lowest, highest;
 } area_stats;
 
-static area_stats survey(const terrain_generation_params *p, int64_t x0, int64_t z0, int side) {
+static area_stats survey(const terrain_generation_desc *p, int64_t x0, int64_t z0, int side) {
     area_stats st = { .lowest = INFINITY, .highest = -INFINITY };
     terrain_layer layers[256];
     for (int64_t cz = z0; cz < z0 + side; cz++) {
@@ -174,9 +174,9 @@ static area_stats survey(const terrain_generation_params *p, int64_t x0, int64_t
 
 Test(terrain_generate, overhangs_and_caves_exist) {
     /* A fixed sample area of 4 × 4 chunks with cliffs (seed 42, chunks x 12…15, z −4…−1). */
-    terrain_generation_params p = terrain_generation_defaults(42);
+    terrain_generation_desc p = terrain_generation_defaults(42);
     /* Caves off: only overhangs (the sideways displacement shearing steep ground) make gaps. */
-    terrain_generation_params no_caves = p;
+    terrain_generation_desc no_caves = p;
     no_caves.cave_threshold = 0.0f;
     area_stats overhangs = survey(&no_caves, 12, -4, 4);
     cr_expect_gt(overhangs.gaps, overhangs.columns / 50, "%d overhang columns of %d", overhangs.gaps, overhangs.columns);
@@ -184,7 +184,7 @@ Test(terrain_generate, overhangs_and_caves_exist) {
     area_stats all = survey(&p, 12, -4, 4);
     cr_expect_gt(all.gaps, overhangs.gaps + all.columns / 10, "%d gap columns of %d", all.gaps, all.columns);
     /* Neither: a pure height field, no gaps at all. */
-    terrain_generation_params height_field = no_caves;
+    terrain_generation_desc height_field = no_caves;
     height_field.horizontal_perturbation = 0.0f;
     area_stats none = survey(&height_field, 12, -4, 2);
     cr_expect_eq(none.gaps, 0);
@@ -193,7 +193,7 @@ Test(terrain_generate, overhangs_and_caves_exist) {
 Test(terrain_generate, water_exactly_where_the_ground_is_low) {
     /* Seed 7 has sea near the origin; lowering the base adds more. Every column whose ground is
      * below the sea level holds water up to it, no other column holds any. */
-    terrain_generation_params p = terrain_generation_defaults(7);
+    terrain_generation_desc p = terrain_generation_defaults(7);
     p.base_height = -20.0f;
     area_stats st = survey(&p, 0, 0, 3);
     cr_expect_gt(st.low_columns, st.columns / 10, "%d low columns", st.low_columns);
@@ -203,7 +203,7 @@ Test(terrain_generate, water_exactly_where_the_ground_is_low) {
 }
 
 Test(terrain_generate, relief_spans_tens_of_metres_within_the_floor) {
-    terrain_generation_params p = terrain_generation_defaults(42);
+    terrain_generation_desc p = terrain_generation_defaults(42);
     area_stats st = survey(&p, -6, -6, 4);
     area_stats other = survey(&p, 20, 5, 4);
     float lowest = fminf(st.lowest, other.lowest), highest = fmaxf(st.highest, other.highest);
@@ -215,7 +215,7 @@ Test(terrain_generate, relief_spans_tens_of_metres_within_the_floor) {
 Test(terrain_generate, not_periodic) {
     /* Chunks far apart — including 384 chunks (12 288 m = 256 × 48 m, where a 256-entry
      * permutation table would repeat at the perturbation wavelength) — all differ. */
-    terrain_generation_params p = terrain_generation_defaults(42);
+    terrain_generation_desc p = terrain_generation_defaults(42);
     terrain_chunk_coord coords[] = { { 0, 0 }, { 384, 0 }, { 0, 384 }, { 8192, 0 }, { -65536, 4096 }, { 1 << 16, 1 << 16 } };
     uint64_t hashes[6];
     for (int n = 0; n < 6; n++) {
@@ -229,7 +229,7 @@ Test(terrain_generate, not_periodic) {
 Test(terrain_generate, continuous_across_chunk_borders) {
     /* The step in ground height between the last column of one chunk and the first of the next
      * is no larger on average than steps between neighbours inside a chunk. */
-    terrain_generation_params p = terrain_generation_defaults(42);
+    terrain_generation_desc p = terrain_generation_defaults(42);
     p.cave_threshold = 0.0f;             /* compare ground, not cave roofs */
     double inside = 0.0, across = 0.0;
     int inside_count = 0, across_count = 0;
@@ -254,9 +254,9 @@ Test(terrain_generate, continuous_across_chunk_borders) {
 Test(terrain_generate, memory_per_column_under_budget) {
     /* The 512 × 512-column region must fit in 3 MB: 3·2²⁰ / 512² = 12 bytes a column. Two
      * samples of 4 × 4 chunks, one with sea. */
-    terrain_generation_params p = terrain_generation_defaults(42);
+    terrain_generation_desc p = terrain_generation_defaults(42);
     area_stats land = survey(&p, 0, 0, 4);
-    terrain_generation_params wet = terrain_generation_defaults(7);
+    terrain_generation_desc wet = terrain_generation_defaults(7);
     area_stats sea = survey(&wet, 0, 0, 4);
     double per_column = (double)(land.bytes + sea.bytes) / (land.columns + sea.columns);
     cr_expect_lt(per_column, 3.0 * 1024 * 1024 / (512.0 * 512.0), "%.2f bytes per column", per_column);

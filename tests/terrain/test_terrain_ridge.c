@@ -26,7 +26,7 @@
 #include <math.h>
 
 /* Seed 1's highest ground within 1 km of the spawn, on an 8 m search grid. */
-static void ridge_summit(const terrain_generation_params *p, double *x, double *z, double *height) {
+static void ridge_summit(const terrain_generation_desc *p, double *x, double *z, double *height) {
     *height = -1e9;
     for (int k = -1000; k <= 1000; k += 8)
         for (int i = -1000; i <= 1000; i += 8) {
@@ -49,7 +49,7 @@ static double longest_edge(const terrain_mesh *m, double cell) {
 }
 
 Test(terrain_ridge, no_chunk_triangle_is_longer_than_its_cells_diagonal_at_any_level) {
-    terrain_generation_params params = terrain_generation_defaults(1);
+    terrain_generation_desc params = terrain_generation_defaults(1);
     double x = 0.0, z = 0.0, top;
     ridge_summit(&params, &x, &z, &top);
     cr_assert_gt(top, 120.0, "seed 1 has a mountain near the spawn (summit %.1f m)", top);
@@ -78,7 +78,7 @@ Test(terrain_ridge, no_chunk_triangle_is_longer_than_its_cells_diagonal_at_any_l
 }
 
 Test(terrain_ridge, the_far_clipmap_has_no_tooth_along_the_ridge) {
-    terrain_generation_params params = terrain_generation_defaults(1);
+    terrain_generation_desc params = terrain_generation_defaults(1);
     double x = 0.0, z = 0.0, top;
     ridge_summit(&params, &x, &z, &top);
     terrain_clipmap *far = terrain_clipmap_create(&(terrain_clipmap_desc){ .generation = params });

@@ -56,7 +56,7 @@ typedef struct rock_survey {
     double mass;
 } rock_survey;
 
-static rock_survey survey(const terrain_generation_params *p, int64_t x0, int64_t z0, int side) {
+static rock_survey survey(const terrain_generation_desc *p, int64_t x0, int64_t z0, int side) {
     rock_survey r = { 0 };
     for (int64_t cz = z0; cz < z0 + side; cz++)
         for (int64_t cx = x0; cx < x0 + side; cx++) {
@@ -81,7 +81,7 @@ Test(terrain_rocks_generate, the_default_world_has_rock_layers_in_a_sane_share) 
     /* 8 × 8 chunks around the origin (256 m square) of seeds 1 and 2. Measured when written:
      * seed 1 5.3 % of columns with 0.5 m or more (10.1 % with any), seed 2 4.0 % (8.9 %). */
     for (uint64_t seed = 1; seed <= 2; seed++) {
-        terrain_generation_params p = terrain_generation_defaults(seed);
+        terrain_generation_desc p = terrain_generation_defaults(seed);
         rock_survey r = survey(&p, -4, -4, 8);
         double share = (double)r.stony_half_metre / r.columns;
         cr_log_info("seed %llu: %.2f %% of columns hold 0.5 m of rocks or more, %.2f %% any, %.2f m on average",
@@ -95,7 +95,7 @@ Test(terrain_rocks_generate, the_default_world_has_rock_layers_in_a_sane_share) 
 }
 
 Test(terrain_rocks_generate, off_when_every_depth_is_negative) {
-    terrain_generation_params p = terrain_generation_defaults(1);
+    terrain_generation_desc p = terrain_generation_defaults(1);
     p.talus_depth = p.scree_depth = p.lake_rocks_depth = -1.0f;
     rock_survey r = survey(&p, 1, 0, 2);
     cr_expect_eq(r.stony, 0);
@@ -108,7 +108,7 @@ Test(terrain_rocks_generate, talus_lies_at_the_feet_of_walls) {
      * 1.5 m, where it puts the full depth), no neighbour more than 0.7 m a metre lower (the
      * foot is not itself on a steep slope), above the sea. Most hold half a metre or more (the
      * rest: rocks thinned where the ground beyond falls fast, or a wall too narrow). */
-    terrain_generation_params p = terrain_generation_defaults(1);
+    terrain_generation_desc p = terrain_generation_defaults(1);
     p.scree_depth = p.lake_rocks_depth = -1.0f;
     int feet = 0, stony_feet = 0, stony = 0, stony_near_wall = 0;
     for (int64_t cz = 0; cz < 4; cz++)
@@ -146,7 +146,7 @@ Test(terrain_rocks_generate, talus_lies_at_the_feet_of_walls) {
 Test(terrain_rocks_generate, scree_only_on_slopes_steeper_than_sand_holds) {
     /* Scree only: every stony column's ground falls faster than scree_min_slope (sand's angle
      * of repose) towards some neighbour (a quantum of rounding either side). */
-    terrain_generation_params p = terrain_generation_defaults(1);
+    terrain_generation_desc p = terrain_generation_defaults(1);
     p.talus_depth = p.lake_rocks_depth = -1.0f;
     int stony = 0, steep = 0;
     for (int64_t cz = 0; cz < 4; cz++)
@@ -171,7 +171,7 @@ Test(terrain_rocks_generate, lake_beds_are_partly_stony_and_mostly_sand) {
     /* Seed 1's lake in chunks (19…21, −5…−4) (test_terrain_water.c finds it from the water):
      * of the columns under its water, some have rocks right under the water (the ring at the
      * waterline), most keep the basin's sand. Measured when written: 861 of 3377, 25 %. */
-    terrain_generation_params p = terrain_generation_defaults(1);
+    terrain_generation_desc p = terrain_generation_defaults(1);
     int wet = 0, stony = 0, sandy = 0;
     terrain_layer layers[256];
     for (int64_t cz = -5; cz <= -4; cz++)
@@ -212,7 +212,7 @@ Test(terrain_rocks_generate, the_stabilizer_leaves_generated_rocks_in_place) {
      * (rocks 42°, sand 33°) until at rest: the rocks that change columns are at most 2 % of
      * them (the generator keeps its rock surfaces at 38°; what can move is where a chunk's
      * estimate of its neighbour's ground was off). */
-    terrain_generation_params p = terrain_generation_defaults(1);
+    terrain_generation_desc p = terrain_generation_defaults(1);
     enum { SIDE = 4 };
     terrain_columns *c = terrain_columns_create(&(terrain_columns_desc){ .x = N, .z = 0, .width = SIDE * N,
                                                                         .depth = SIDE * N });
@@ -229,7 +229,7 @@ Test(terrain_rocks_generate, the_stabilizer_leaves_generated_rocks_in_place) {
     cr_assert_gt(total, 0);
     terrain_columns_touch(c, 0, 0, SIDE * N, SIDE * N);
     terrain_stabilize_result result;
-    cr_assert(terrain_stabilize_region(c, &(terrain_stabilize_params){ 0 }, NULL, &result));
+    cr_assert(terrain_stabilize_region(c, &(terrain_stabilize_desc){ 0 }, NULL, &result));
     cr_expect(result.converged);
     int64_t changed = 0;
     for (int k = 0; k < SIDE * N; k++)

@@ -96,11 +96,11 @@ Test(terrain_screen_error, rings_meet_the_target_and_more_pixels_never_give_less
 
 /* ---- the clipmap ---- */
 
-static terrain_clipmap_stats clipmap_for(float pixel_error, int height, float inner_distance) {
+static terrain_clipmap_stats_info clipmap_for(float pixel_error, int height, float inner_distance) {
     terrain_clipmap *c = terrain_clipmap_create(&(terrain_clipmap_desc){ .pixel_error = pixel_error, .viewport_height = height,
                                                                           .inner_distance = inner_distance,
                                                                           .generation = terrain_generation_defaults(1) });
-    terrain_clipmap_stats stats = terrain_clipmap_stats_get(c);
+    terrain_clipmap_stats_info stats = terrain_clipmap_stats(c);
     terrain_clipmap_destroy(c);
     return stats;
 }
@@ -112,21 +112,21 @@ static terrain_clipmap_stats clipmap_for(float pixel_error, int height, float in
  * With rings reaching 704 m: s ≤ 4.52 → 4 m, 1280 · 2^(L−1) ≥ 8192 → L = 4.
  * pixel_error 0 is today's 6 levels of 128 cells from 4 m. */
 Test(terrain_screen_error, clipmap_derived_by_hand_and_zero_is_the_fixed_default) {
-    terrain_clipmap_stats s = clipmap_for(1.0f, 720, 1472.0f);
+    terrain_clipmap_stats_info s = clipmap_for(1.0f, 720, 1472.0f);
     cr_assert_eq(s.cells, 640);
     cr_assert_eq(s.finest_spacing, 8.0f);
     cr_assert_eq(s.levels, 3);
-    terrain_clipmap_stats nearer = clipmap_for(1.0f, 720, 704.0f);
+    terrain_clipmap_stats_info nearer = clipmap_for(1.0f, 720, 704.0f);
     cr_assert_eq(nearer.finest_spacing, 4.0f);
     cr_assert_eq(nearer.levels, 4);
-    terrain_clipmap_stats fixed = clipmap_for(0.0f, 720, 704.0f);
+    terrain_clipmap_stats_info fixed = clipmap_for(0.0f, 720, 704.0f);
     cr_assert_eq(fixed.cells, 128);
     cr_assert_eq(fixed.finest_spacing, 4.0f);
     cr_assert_eq(fixed.levels, 6);
     /* Given fields win over derived ones. */
     terrain_clipmap *c = terrain_clipmap_create(&(terrain_clipmap_desc){ .pixel_error = 1.0f, .cells = 64, .levels = 3,
                                                                           .generation = terrain_generation_defaults(1) });
-    terrain_clipmap_stats given = terrain_clipmap_stats_get(c);
+    terrain_clipmap_stats_info given = terrain_clipmap_stats(c);
     cr_assert_eq(given.cells, 64);
     cr_assert_eq(given.levels, 3);
     cr_assert_eq(given.finest_spacing, 1.0f, "no inner distance: the finest spacing is 1 m");
@@ -141,7 +141,7 @@ Test(terrain_screen_error, every_clipmap_level_starts_where_its_error_is_under_t
         for (int t = 0; t < 5; t++) {
             double k = terrain_screen_error_scale(heights[h], 0.0f, targets[t]);
             float inner = (float)terrain_rings_clearance(terrain_rings_half_width(3, k), 3, 2);
-            terrain_clipmap_stats s = clipmap_for(targets[t], heights[h], inner);
+            terrain_clipmap_stats_info s = clipmap_for(targets[t], heights[h], inner);
             cr_assert_geq(s.cells, previous_cells, "more pixels, fewer cells");
             previous_cells = s.cells;
             if (s.cells == 1024) continue;                                         /* the cap */
@@ -166,7 +166,7 @@ Test(terrain_screen_error, clipmap_set_screen_derives_again_and_keeps_fixed_ones
     /* 360 px, rings of 704 m: K = 311.77, cells ≥ 311.77 + 8 → 320; s ≤ 704 / 77.9 = 9.03 → 8 m;
      * 160·8·2^(L−1) ≥ 8192 → 4. */
     cr_assert(terrain_clipmap_set_screen(c, 360, 0.0f, 704.0f));
-    terrain_clipmap_stats s = terrain_clipmap_stats_get(c);
+    terrain_clipmap_stats_info s = terrain_clipmap_stats(c);
     cr_assert_eq(s.cells, 320);
     cr_assert_eq(s.finest_spacing, 8.0f);
     cr_assert_eq(s.levels, 4);
@@ -176,6 +176,6 @@ Test(terrain_screen_error, clipmap_set_screen_derives_again_and_keeps_fixed_ones
     terrain_clipmap_destroy(c);
     terrain_clipmap *fixed = terrain_clipmap_create(&(terrain_clipmap_desc){ .generation = terrain_generation_defaults(1) });
     cr_assert_not(terrain_clipmap_set_screen(fixed, 360, 0.0f, 100.0f), "no pixel_error: fixed");
-    cr_assert_eq(terrain_clipmap_stats_get(fixed).cells, 128);
+    cr_assert_eq(terrain_clipmap_stats(fixed).cells, 128);
     terrain_clipmap_destroy(fixed);
 }

@@ -1,9 +1,9 @@
-/* Editing: columns regions, stabilization by the angle of repose and the brushes (000 §3.4, §4).
+/* Editing: columns regions and stabilization by the angle of repose (000 §3.4); the brushes
+ * (§4.3, §4.4) are tested in test_terrain_brush.c.
  * Expectations come from the paper's formulas worked by hand, from invariants (mass of every
  * material, slopes at rest) and from equalities between runs that must agree (threads, splits,
  * budgets), never from printed output. */
-#include "../engine/test.h"
-#include "terrain/terrain.h"
+#include "terrain_columns_test.h"
 
 #include "core/core.h"
 #include "jobs/jobs.h"
@@ -13,41 +13,15 @@
 
 #define N TERRAIN_CHUNK_COLUMNS
 #define Q TERRAIN_HEIGHT_QUANTUM
-#define QPM 32                              /* quanta per metre */
 
 static const double PI = 3.14159265358979323846;
 
-/* ---- helpers -------------------------------------------------------------------------- */
-
-static terrain_columns *region(int64_t x, int64_t z, int width, int depth) {
-    terrain_columns *c = terrain_columns_create(&(terrain_columns_desc){ .x = x, .z = z, .width = width, .depth = depth });
-    cr_assert_not_null(c);
-    return c;
-}
-
-/* Every column bedrock up to `height` metres above the floor. */
-static void fill_flat(terrain_columns *c, float height) {
-    terrain_columns_desc e = terrain_columns_extent(c);
-    terrain_layer bedrock = { TERRAIN_BEDROCK, height };
-    for (int k = 0; k < e.depth; k++)
-        for (int i = 0; i < e.width; i++) cr_assert(terrain_columns_set(c, i, k, &bedrock, 1));
-}
+/* ---- helpers (more in terrain_columns_test.h) ------------------------------------------ */
 
 /* Bedrock, then sand and rocks on top (metres). */
 static void set_pile(terrain_columns *c, int i, int k, float bedrock, float sand, float rocks) {
     terrain_layer layers[3] = { { TERRAIN_BEDROCK, bedrock }, { TERRAIN_SAND, sand }, { TERRAIN_ROCKS, rocks } };
     cr_assert(terrain_columns_set(c, i, k, layers, 3));
-}
-
-/* Quanta of `material` in column (i, k). */
-static int64_t column_quanta(const terrain_columns *c, int i, int k, terrain_material material) {
-    terrain_layer layers[64];
-    int n = terrain_columns_get(c, i, k, layers, 64);
-    cr_assert_leq(n, 64);
-    int64_t q = 0;
-    for (int l = 0; l < n; l++)
-        if (layers[l].material == material) q += llroundf(layers[l].thickness * QPM);
-    return q;
 }
 
 /* The top of the column's highest bedrock, of the sand and of the rocks on it (the sand surface
@@ -66,20 +40,6 @@ static void surfaces(const terrain_columns *c, int i, int k, int64_t *base_out, 
     *base_out = base;
     *sand_top = base + sand;
     *ground = base + sand + rocks;
-}
-
-typedef struct masses { int64_t bedrock, sand, rocks, water; } masses;
-
-static masses mass_of(const terrain_columns *c) {
-    return (masses){ terrain_columns_mass(c, TERRAIN_BEDROCK), terrain_columns_mass(c, TERRAIN_SAND),
-                     terrain_columns_mass(c, TERRAIN_ROCKS), terrain_columns_mass(c, TERRAIN_WATER) };
-}
-
-static void expect_same_mass(masses a, masses b) {
-    cr_expect_eq(a.bedrock, b.bedrock, "bedrock %lld != %lld", (long long)a.bedrock, (long long)b.bedrock);
-    cr_expect_eq(a.sand, b.sand, "sand %lld != %lld", (long long)a.sand, (long long)b.sand);
-    cr_expect_eq(a.rocks, b.rocks, "rocks %lld != %lld", (long long)a.rocks, (long long)b.rocks);
-    cr_expect_eq(a.water, b.water, "water %lld != %lld", (long long)a.water, (long long)b.water);
 }
 
 /* The most any slope may exceed the angle of repose (metres over the distance d), checked on
@@ -109,34 +69,11 @@ static double worst_excess(const terrain_columns *c, double sand_deg, double roc
     return worst;
 }
 
-/* Hash of every column of a region (its chunks need not be whole). */
-static uint64_t region_hash(const terrain_columns *c) {
-    terrain_columns_desc e = terrain_columns_extent(c);
-    uint64_t h = 1;
-    terrain_layer layers[64];
-    for (int k = 0; k < e.depth; k++)
-        for (int i = 0; i < e.width; i++) {
-            int n = terrain_columns_get(c, i, k, layers, 64);
-            for (int l = 0; l < n && l < 64; l++) {
-                h = core_hash_combine(h, (uint64_t)layers[l].material);
-                h = core_hash_combine(h, (uint64_t)llroundf(layers[l].thickness * QPM));
-            }
-            h = core_hash_combine(h, 0xc01u);
-        }
-    return h;
-}
-
 /* Column (i, k) of `a` equals (i + di, k + dk) of `b`, layer for layer. */
 static bool same_column(const terrain_columns *a, int i, int k, const terrain_columns *b, int bi, int bk) {
     terrain_layer x[64], y[64];
     int n = terrain_columns_get(a, i, k, x, 64), m = terrain_columns_get(b, bi, bk, y, 64);
     return n == m && memcmp(x, y, (size_t)CORE_MIN(n, 64) * sizeof *x) == 0;
-}
-
-static terrain_stabilize_result stabilize(terrain_columns *c, const terrain_stabilize_params *params, job_system *jobs) {
-    terrain_stabilize_result result;
-    cr_assert(terrain_stabilize_region(c, params, jobs, &result));
-    return result;
 }
 
 /* ---- sorting (000 §3.4, Figure 6) ----------------------------------------------------- */
@@ -151,7 +88,7 @@ Test(terrain_stabilize, runs_between_bedrock_are_merged_and_sorted_sand_rocks_ai
                            { TERRAIN_SAND, 0.5f } };
     cr_assert(terrain_columns_set(c, 0, 0, in, 9));
     masses before = mass_of(c);
-    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_expect(r.converged);
     cr_expect_eq(r.moved, 0);
     terrain_layer out[16];
@@ -172,7 +109,7 @@ Test(terrain_stabilize, sand_over_a_cave_roof_stays_and_sand_without_a_roof_fall
     terrain_columns *c = region(0, 0, 1, 1);
     terrain_layer roof[] = { { TERRAIN_BEDROCK, 2 }, { TERRAIN_AIR, 3 }, { TERRAIN_BEDROCK, 1 }, { TERRAIN_SAND, 1 } };
     cr_assert(terrain_columns_set(c, 0, 0, roof, 4));
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     terrain_layer out[8];
     cr_assert_eq(terrain_columns_get(c, 0, 0, out, 8), 4);
     cr_expect_eq(out[3].material, TERRAIN_SAND);
@@ -180,7 +117,7 @@ Test(terrain_stabilize, sand_over_a_cave_roof_stays_and_sand_without_a_roof_fall
 
     terrain_layer floating[] = { { TERRAIN_BEDROCK, 2 }, { TERRAIN_AIR, 3 }, { TERRAIN_SAND, 1 } };
     cr_assert(terrain_columns_set(c, 0, 0, floating, 3));
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_assert_eq(terrain_columns_get(c, 0, 0, out, 8), 2);
     cr_expect_eq(out[1].material, TERRAIN_SAND);
     cr_expect_eq(out[1].thickness, 1.0f);
@@ -196,7 +133,7 @@ Test(terrain_stabilize, custom_materials_hold_like_bedrock) {
     terrain_layer in[] = { { TERRAIN_BEDROCK, 1 }, { TERRAIN_AIR, 1 }, { TERRAIN_SAND, 1 }, { custom, 1 },
                            { TERRAIN_ROCKS, 1 },   { TERRAIN_SAND, 1 } };
     cr_assert(terrain_columns_set(c, 0, 0, in, 6));
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     terrain_layer out[8];
     const terrain_material want[] = { TERRAIN_BEDROCK, TERRAIN_SAND, TERRAIN_AIR, custom, TERRAIN_SAND, TERRAIN_ROCKS };
     cr_assert_eq(terrain_columns_get(c, 0, 0, out, 8), 6);
@@ -218,7 +155,7 @@ static void one_step_case(float step, const int64_t want_side[4], const int64_t 
     fill_flat(c, 10.0f);
     set_pile(c, 1, 1, 10.0f, 2.0f, 0.0f);
     masses before = mass_of(c);
-    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_params){ .step = step, .max_iterations = 1 }, NULL);
+    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_desc){ .step = step, .max_iterations = 1 }, NULL);
     cr_expect_eq(r.iterations, 1);
     const int side[4][2] = { { 1, 0 }, { 0, 1 }, { 2, 1 }, { 1, 2 } }, corner[4][2] = { { 0, 0 }, { 2, 0 }, { 0, 2 }, { 2, 2 } };
     int64_t given = 0;
@@ -263,7 +200,7 @@ Test(terrain_stabilize, tall_sand_column_spreads_to_the_angle_of_repose) {
     fill_flat(c, 100.0f);
     set_pile(c, 20, 20, 100.0f, 20.0f, 0.0f);
     masses before = mass_of(c);
-    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_expect(r.converged);
     expect_same_mass(before, mass_of(c));
     cr_expect_leq(worst_excess(c, 33.0, 42.0), 0.0);
@@ -274,7 +211,7 @@ Test(terrain_stabilize, tall_sand_column_spreads_to_the_angle_of_repose) {
             if ((i - 20) * (i - 20) + (k - 20) * (k - 20) > 8 * 8)
                 cr_expect_eq(column_quanta(c, i, k, TERRAIN_SAND), 0, "sand at (%d, %d)", i, k);
     /* Converged means stable: another call finds nothing to do. */
-    terrain_stabilize_result again = stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result again = stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_expect(again.converged);
     cr_expect_eq(again.moved, 0);
     terrain_columns_destroy(c);
@@ -286,7 +223,7 @@ Test(terrain_stabilize, tolerance_and_angles_bound_the_slopes_at_rest) {
     set_pile(c, 15, 15, 50.0f, 6.0f, 6.0f);
     set_pile(c, 10, 12, 50.0f, 0.0f, 9.0f);
     masses before = mass_of(c);
-    terrain_stabilize_params p = { .sand_angle = 30.0f, .rocks_angle = 45.0f, .tolerance = 0.25f };
+    terrain_stabilize_desc p = { .sand_angle = 30.0f, .rocks_angle = 45.0f, .tolerance = 0.25f };
     cr_expect(stabilize(c, &p, NULL).converged);
     expect_same_mass(before, mass_of(c));
     cr_expect_leq(worst_excess(c, 30.0, 45.0), 0.25);
@@ -301,76 +238,14 @@ Test(terrain_stabilize, rocks_rest_steeper_than_sand) {
     fill_flat(rocks, 10.0f);
     set_pile(sand, 15, 15, 10.0f, 16.0f, 0.0f);
     set_pile(rocks, 15, 15, 10.0f, 0.0f, 16.0f);
-    stabilize(sand, &(terrain_stabilize_params){ 0 }, NULL);
-    stabilize(rocks, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(sand, &(terrain_stabilize_desc){ 0 }, NULL);
+    stabilize(rocks, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_expect_gt(terrain_columns_top(rocks, 15, 15), terrain_columns_top(sand, 15, 15));
     cr_expect_leq(worst_excess(sand, 33.0, 42.0), 0.0);
     cr_expect_leq(worst_excess(rocks, 33.0, 42.0), 0.0);
     cr_expect_eq(terrain_columns_mass(rocks, TERRAIN_ROCKS), 16 * QPM);
     terrain_columns_destroy(sand);
     terrain_columns_destroy(rocks);
-}
-
-/* ---- random edits: mass of every material ------------------------------------------------ */
-
-static void load_generated(terrain_columns *c, uint64_t seed) {
-    /* Generated chunks: bedrock, caves, sand on gentle slopes, water below the sea. */
-    terrain_generation_params params = terrain_generation_defaults(seed);
-    terrain_columns_desc e = terrain_columns_extent(c);
-    for (int64_t cz = e.z / N; cz < (e.z + e.depth) / N; cz++)
-        for (int64_t cx = e.x / N; cx < (e.x + e.width) / N; cx++) {
-            terrain_stacks *s = terrain_generate_chunk(&params, (terrain_chunk_coord){ cx, cz });
-            cr_assert(terrain_columns_load(c, (terrain_chunk_coord){ cx, cz }, s));
-            terrain_stacks_destroy(s);
-        }
-}
-
-Test(terrain_stabilize, random_deposits_and_erosions_conserve_every_material) {
-    terrain_columns *c = region(0, 0, 64, 64);
-    load_generated(c, 7);
-    masses m = mass_of(c);
-    for (int n = 0; n < 24; n++) {
-        uint64_t h = core_hash_u64(0x5eed + (uint64_t)n);
-        double x = (double)(h % 6400) / 100.0, z = (double)((h >> 16) % 6400) / 100.0;
-        float radius = 1.0f + (float)((h >> 32) % 100) / 10.0f;
-        int64_t q = 0;
-        if (n % 3 == 0) {
-            terrain_material material = (h >> 40) & 1 ? TERRAIN_ROCKS : TERRAIN_SAND;
-            double volume = (double)((h >> 44) % 3000) / 10.0;
-            cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .material = material, .x = x, .z = z,
-                                                                  .radius = radius, .volume = volume }, &q));
-            cr_expect_eq(q, llround(volume * QPM));
-            if (material == TERRAIN_SAND) m.sand += q;
-            else m.rocks += q;
-            /* The deposit displaces the water standing on the pile (terrain.h, "the sea after
-             * edits"): some goes, at most as much as was dropped, none comes. */
-            int64_t water = terrain_columns_mass(c, TERRAIN_WATER);
-            cr_expect(water <= m.water && water >= m.water - q, "water %lld from %lld after %lld dropped",
-                      (long long)water, (long long)m.water, (long long)q);
-            m.water = water;
-        } else {
-            /* ρ = 0 or 1 makes each material's share exact; in between only the sum is. */
-            float rho = n % 3 == 1 ? 0.0f : 1.0f;
-            bool collapse = (h >> 41) & 1;
-            float ground = terrain_columns_top(c, (int)x, (int)z);
-            cr_assert(terrain_erode(c, &(terrain_erode_desc){ .mode = collapse ? TERRAIN_ERODE_COLLAPSE : TERRAIN_ERODE_SURFACE,
-                                                               .x = x, .y = ground - 2.0f, .z = z, .radius = radius,
-                                                               .depth = 3.0f, .rocks_ratio = rho }, &q));
-            m.bedrock -= q;
-            if (rho == 0.0f) m.sand += q;
-            else m.rocks += q;
-        }
-        expect_same_mass(m, mass_of(c));
-        if (n % 4 == 3) {
-            /* In steps, with a budget of a few iterations: stopping anywhere conserves mass too. */
-            stabilize(c, &(terrain_stabilize_params){ .max_iterations = 3 }, NULL);
-            expect_same_mass(m, mass_of(c));
-        }
-    }
-    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
-    cr_expect(r.converged);
-    expect_same_mass(m, mass_of(c));
-    terrain_columns_destroy(c);
 }
 
 /* ---- determinism: threads, splits, budgets ----------------------------------------------- */
@@ -393,9 +268,9 @@ Test(terrain_stabilize, result_is_the_same_for_one_two_and_four_threads) {
     terrain_columns *one = edited_region(0, 0, 128), *two = edited_region(0, 0, 128), *four = edited_region(0, 0, 128);
     job_system *jobs2 = job_system_create(&(job_system_desc){ .threads = 2 });
     job_system *jobs4 = job_system_create(&(job_system_desc){ .threads = 4 });
-    terrain_stabilize_result r1 = stabilize(one, &(terrain_stabilize_params){ 0 }, NULL);
-    terrain_stabilize_result r2 = stabilize(two, &(terrain_stabilize_params){ 0 }, jobs2);
-    terrain_stabilize_result r4 = stabilize(four, &(terrain_stabilize_params){ 0 }, jobs4);
+    terrain_stabilize_result r1 = stabilize(one, &(terrain_stabilize_desc){ 0 }, NULL);
+    terrain_stabilize_result r2 = stabilize(two, &(terrain_stabilize_desc){ 0 }, jobs2);
+    terrain_stabilize_result r4 = stabilize(four, &(terrain_stabilize_desc){ 0 }, jobs4);
     cr_expect(r1.converged && r2.converged && r4.converged);
     cr_expect_gt(r1.moved, 0);
     cr_expect_eq(r1.iterations, r2.iterations);
@@ -413,13 +288,13 @@ Test(terrain_stabilize, result_is_the_same_for_one_two_and_four_threads) {
 
 Test(terrain_stabilize, stopping_on_a_budget_and_continuing_gives_the_same_bytes) {
     terrain_columns *whole = edited_region(0, 0, 64), *steps = edited_region(0, 0, 64);
-    terrain_stabilize_result r = stabilize(whole, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result r = stabilize(whole, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_assert(r.converged);
     int calls = 0, iterations = 0;
     int64_t moved = 0;
     terrain_stabilize_result s;
     do {
-        s = stabilize(steps, &(terrain_stabilize_params){ .max_iterations = 7 }, NULL);
+        s = stabilize(steps, &(terrain_stabilize_desc){ .max_iterations = 7 }, NULL);
         iterations += s.iterations;
         moved += s.moved;
         calls++;
@@ -431,7 +306,7 @@ Test(terrain_stabilize, stopping_on_a_budget_and_continuing_gives_the_same_bytes
     terrain_columns *timed = edited_region(0, 0, 64);
     calls = 0;
     do {
-        s = stabilize(timed, &(terrain_stabilize_params){ .budget_ns = 200000 }, NULL);
+        s = stabilize(timed, &(terrain_stabilize_desc){ .budget_ns = 200000 }, NULL);
         calls++;
     } while (!s.converged && calls < 100000);
     cr_expect_eq(region_hash(whole), region_hash(timed));
@@ -473,9 +348,9 @@ Test(terrain_stabilize, two_by_two_chunk_regions_equal_one_big_region) {
         terrain_columns_touch(chunks[n], 0, 0, N, N);
     }
     terrain_columns_touch(big, 0, 0, 64, 64);
-    terrain_stabilize_result rb = stabilize(big, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result rb = stabilize(big, &(terrain_stabilize_desc){ 0 }, NULL);
     terrain_stabilize_result rs;
-    cr_assert(terrain_stabilize_regions(chunks, 4, &(terrain_stabilize_params){ 0 }, NULL, &rs));
+    cr_assert(terrain_stabilize_regions(chunks, 4, &(terrain_stabilize_desc){ 0 }, NULL, &rs));
     cr_expect(rb.converged && rs.converged);
     cr_expect_gt(rb.moved, 0);
     cr_expect_eq(rb.iterations, rs.iterations);
@@ -507,7 +382,7 @@ Test(terrain_stabilize, a_pile_wakes_the_chunks_it_spreads_into) {
     }
     terrain_deposit_desc pile = { .x = 60, .z = 58, .radius = 3, .volume = 1500 };
     cr_assert(terrain_deposit(big, &pile, NULL));
-    terrain_stabilize_result rb = stabilize(big, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result rb = stabilize(big, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_assert(rb.converged);
 
     terrain_columns *set[9];
@@ -517,7 +392,7 @@ Test(terrain_stabilize, a_pile_wakes_the_chunks_it_spreads_into) {
     terrain_columns_load(set[count++], (terrain_chunk_coord){ 1, 1 }, s);
     terrain_stacks_destroy(s);
     cr_assert(terrain_deposit(set[0], &pile, NULL));
-    terrain_stabilize_params wake = { .edge = TERRAIN_EDGE_WAKE };
+    terrain_stabilize_desc wake = { .edge = TERRAIN_EDGE_WAKE };
     terrain_stabilize_result r;
     int calls = 0, woken = 0;
     do {
@@ -557,7 +432,7 @@ Test(terrain_stabilize, walls_report_the_regions_material_reaches) {
     terrain_columns *c = region(N, 0, N, N);
     fill_flat(c, 10.0f);
     cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .x = 2 * N - 1, .z = 16, .radius = 2, .volume = 300 }, NULL));
-    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     cr_expect(r.converged);
     bool east = false;
     for (int w = 0; w < r.woken_count && w < TERRAIN_STABILIZE_MAX_WOKEN; w++)
@@ -569,7 +444,7 @@ Test(terrain_stabilize, walls_report_the_regions_material_reaches) {
 /* ---- stacks round trip and changed chunks ----------------------------------------------------- */
 
 Test(terrain_stabilize, stacks_round_trip_byte_for_byte) {
-    terrain_generation_params params = terrain_generation_defaults(11);
+    terrain_generation_desc params = terrain_generation_defaults(11);
     terrain_columns *c = region(-48, 16, 96, 64);            /* chunks (−2 … 1, 0 … 2), partly covered */
     for (int cz = 0; cz < 3; cz++)
         for (int cx = -2; cx < 2; cx++) {
@@ -617,7 +492,7 @@ Test(terrain_stabilize, unsorted_columns_round_trip_until_stabilized) {
     cr_expect_eq(memcmp(back, original, terrain_stacks_bytes(original)), 0);
     terrain_stacks_destroy(back);
     masses before = mass_of(c);
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     expect_same_mass(before, mass_of(c));
     cr_expect_eq(terrain_columns_changed_chunks(c, changed, 4, true), 1, "sorting changed the chunk");
     cr_expect_eq(terrain_columns_changed_chunks(c, changed, 4, false), 0, "cleared");
@@ -633,125 +508,10 @@ Test(terrain_stabilize, changed_chunks_name_the_edited_and_the_reached_chunks) {
     cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .x = 34, .z = 16, .radius = 1.5f, .volume = 200 }, NULL));
     cr_assert_eq(terrain_columns_changed_chunks(c, changed, 8, false), 1);
     cr_expect(changed[0].x == 1 && changed[0].z == 0);
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
+    stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
     /* 200 m³ at 33° spread over a radius of about 6.6 m: across x = 32 into chunk 0, not to 64. */
     cr_assert_eq(terrain_columns_changed_chunks(c, changed, 8, true), 2);
     cr_expect(changed[0].x == 0 && changed[1].x == 1);
-    terrain_columns_destroy(c);
-}
-
-/* ---- brushes (000 §4.3, §4.4) ------------------------------------------------------------- */
-
-Test(terrain_stabilize, deposit_drops_exactly_the_volume_with_the_falloff) {
-    terrain_columns *c = region(0, 0, 40, 40);
-    fill_flat(c, 10.0f);
-    int64_t q;
-    cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .material = TERRAIN_ROCKS, .x = 20.5, .z = 20.5, .radius = 6,
-                                                          .volume = 123.4 }, &q));
-    cr_expect_eq(q, 3949);                                  /* 123.4 m³ · 32 = 3948.8 → 3949 */
-    cr_expect_eq(terrain_columns_mass(c, TERRAIN_ROCKS), 3949);
-    cr_expect_eq(terrain_columns_mass(c, TERRAIN_SAND), 0);
-    /* (1 − r²/R²)²: most at the centre column, less at r = 3, nothing at r ≥ 6. */
-    int64_t centre = column_quanta(c, 20, 20, TERRAIN_ROCKS), mid = column_quanta(c, 23, 20, TERRAIN_ROCKS);
-    cr_expect_gt(centre, mid);
-    cr_expect_gt(mid, 0);
-    cr_expect_eq(column_quanta(c, 26, 20, TERRAIN_ROCKS), 0);
-    /* The distribution's ratio: weights 1 and (1 − 9/36)² = 0.5625 (±1 quantum of rounding). */
-    cr_expect_leq(llabs(mid - llround((double)centre * 0.5625)), 2);
-    /* Flat: the same on every column under the disc, sand 0 meaning sand. */
-    cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .x = 5.5, .z = 5.5, .radius = 2.2f, .volume = 13,
-                                                          .falloff = TERRAIN_FALLOFF_FLAT }, &q));
-    cr_expect_eq(q, 416);
-    cr_expect_eq(terrain_columns_mass(c, TERRAIN_SAND), 416);
-    /* 13 columns have centres within 2.2 of (5.5, 5.5) (r² ∈ {0, 1, 2, 4}): 416 = 13·32. */
-    for (int k = 0; k < 12; k++)
-        for (int i = 0; i < 12; i++) {
-            int r2 = (i - 5) * (i - 5) + (k - 5) * (k - 5);
-            cr_expect_eq(column_quanta(c, i, k, TERRAIN_SAND), r2 <= 4 ? 32 : 0, "(%d, %d)", i, k);
-        }
-    terrain_columns_destroy(c);
-}
-
-Test(terrain_stabilize, deposit_over_the_border_puts_it_all_inside) {
-    terrain_columns *c = region(0, 0, 16, 16);
-    fill_flat(c, 10.0f);
-    int64_t q;
-    cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .x = -2, .z = 8, .radius = 5, .volume = 50 }, &q));
-    cr_expect_eq(q, 1600);
-    cr_expect_eq(terrain_columns_mass(c, TERRAIN_SAND), 1600);
-    core_log_level level = core_log_get_level();
-    core_log_set_level(CORE_LOG_OFF);
-    cr_expect_not(terrain_deposit(c, &(terrain_deposit_desc){ .x = -20, .z = 8, .radius = 5, .volume = 50 }, &q));
-    core_log_set_level(level);
-    cr_expect_eq(terrain_columns_mass(c, TERRAIN_SAND), 1600);
-    terrain_columns_destroy(c);
-}
-
-Test(terrain_stabilize, surface_erosion_turns_bedrock_into_sand_and_rocks_in_place) {
-    /* Flat bedrock 10 m, flat brush of radius 1.2 around (5.5, 5.5): five columns, each losing
-     * 2 m = 64 quanta of bedrock, ρ = 0.25 → 16 rocks, 48 sand; the ground does not move. */
-    terrain_columns *c = region(0, 0, 11, 11);
-    fill_flat(c, 10.0f);
-    int64_t q;
-    cr_assert(terrain_erode(c, &(terrain_erode_desc){ .x = 5.5, .z = 5.5, .radius = 1.2f, .depth = 2,
-                                                      .rocks_ratio = 0.25f, .falloff = TERRAIN_FALLOFF_FLAT }, &q));
-    cr_expect_eq(q, 5 * 64);
-    const int at[5][2] = { { 5, 5 }, { 4, 5 }, { 6, 5 }, { 5, 4 }, { 5, 6 } };
-    for (int n = 0; n < 5; n++) {
-        cr_expect_eq(column_quanta(c, at[n][0], at[n][1], TERRAIN_BEDROCK), 320 - 64);
-        cr_expect_eq(column_quanta(c, at[n][0], at[n][1], TERRAIN_ROCKS), 16);
-        cr_expect_eq(column_quanta(c, at[n][0], at[n][1], TERRAIN_SAND), 48);
-        cr_expect_float_eq(terrain_columns_top(c, at[n][0], at[n][1]), TERRAIN_FLOOR_Y + 10.0f, 0.0f);
-    }
-    cr_expect_eq(column_quanta(c, 4, 4, TERRAIN_SAND), 0);
-    /* Eroding deeper than the layer stops at the floor. */
-    cr_assert(terrain_erode(c, &(terrain_erode_desc){ .x = 0.5, .z = 0.5, .radius = 0.6f, .depth = 50 }, &q));
-    cr_expect_eq(q, 320);
-    cr_expect_eq(column_quanta(c, 0, 0, TERRAIN_SAND), 320);
-    terrain_columns_destroy(c);
-}
-
-Test(terrain_stabilize, collapse_erosion_drops_an_overhang_to_the_floor) {
-    /* Bedrock 0–4 m, air 4–8 m, a bedrock roof 8–10 m with 1 m of sand: the ball of radius 3 m
-     * around y = 9 m above the floor (world y = −247) takes the whole roof of the centre column
-     * (the chord there is 2·3 = 6 m: 6–12 m) — 2 m = 64 quanta, ρ = 0.5 → 32 sand, 32 rocks.
-     * With the roof gone the sand above falls into the cave: sand 1 + 1 m, rocks 1 m on the
-     * floor at 4 m, sorted sand under rocks. */
-    terrain_columns *c = region(0, 0, 1, 1);
-    terrain_layer layers[] = { { TERRAIN_BEDROCK, 4 }, { TERRAIN_AIR, 4 }, { TERRAIN_BEDROCK, 2 }, { TERRAIN_SAND, 1 } };
-    cr_assert(terrain_columns_set(c, 0, 0, layers, 4));
-    int64_t q;
-    cr_assert(terrain_erode(c, &(terrain_erode_desc){ .mode = TERRAIN_ERODE_COLLAPSE, .x = 0.5, .y = TERRAIN_FLOOR_Y + 9,
-                                                      .z = 0.5, .radius = 3, .rocks_ratio = 0.5f }, &q));
-    cr_expect_eq(q, 64);
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
-    terrain_layer out[8];
-    cr_assert_eq(terrain_columns_get(c, 0, 0, out, 8), 3);
-    cr_expect_eq(out[0].material, TERRAIN_BEDROCK);
-    cr_expect_eq(out[0].thickness, 4.0f);
-    cr_expect_eq(out[1].material, TERRAIN_SAND);
-    cr_expect_eq(out[1].thickness, 2.0f);
-    cr_expect_eq(out[2].material, TERRAIN_ROCKS);
-    cr_expect_eq(out[2].thickness, 1.0f);
-    terrain_columns_destroy(c);
-}
-
-Test(terrain_stabilize, collapse_inside_rock_leaves_rubble_under_the_rock_above) {
-    /* Bedrock 0–20 m; a ball of radius 2 at 10 m above the floor: the centre column's chord
-     * 8–12 m turns to rubble between bedrock 0–8 and 12–20 (bedrock is stable: it stays). */
-    terrain_columns *c = region(0, 0, 1, 1);
-    terrain_layer rock = { TERRAIN_BEDROCK, 20 };
-    cr_assert(terrain_columns_set(c, 0, 0, &rock, 1));
-    int64_t q;
-    cr_assert(terrain_erode(c, &(terrain_erode_desc){ .mode = TERRAIN_ERODE_COLLAPSE, .x = 0.5, .y = TERRAIN_FLOOR_Y + 10,
-                                                      .z = 0.5, .radius = 2 }, &q));
-    cr_expect_eq(q, 4 * QPM);
-    stabilize(c, &(terrain_stabilize_params){ 0 }, NULL);
-    terrain_layer out[8];
-    cr_assert_eq(terrain_columns_get(c, 0, 0, out, 8), 3);
-    cr_expect_eq(out[1].material, TERRAIN_SAND);
-    cr_expect_eq(out[1].thickness, 4.0f);
-    cr_expect_eq(out[2].thickness, 8.0f);
     terrain_columns_destroy(c);
 }
 
@@ -767,41 +527,22 @@ Test(terrain_stabilize, bad_parameters_are_refused_not_crashed_on) {
     fill_flat(c, 5.0f);
     uint64_t before = region_hash(c);
     terrain_stabilize_result r;
-    const terrain_stabilize_params bad[] = {
+    const terrain_stabilize_desc bad[] = {
         { .sand_angle = -5 }, { .sand_angle = 90 }, { .rocks_angle = NAN }, { .step = -1 }, { .step = NAN },
         { .step = 1e9f },     { .tolerance = -1 },  { .tolerance = NAN },  { .max_iterations = -2 }, { .edge = 7 },
     };
     for (size_t n = 0; n < sizeof bad / sizeof *bad; n++)
         cr_expect_not(terrain_stabilize_region(c, &bad[n], NULL, &r), "parameters %zu", n);
     cr_expect_not(terrain_stabilize_region(c, NULL, NULL, &r));
-    cr_expect_not(terrain_stabilize_regions(NULL, 1, &(terrain_stabilize_params){ 0 }, NULL, &r));
-    cr_expect_not(terrain_stabilize_regions(&c, 0, &(terrain_stabilize_params){ 0 }, NULL, &r));
+    cr_expect_not(terrain_stabilize_regions(NULL, 1, &(terrain_stabilize_desc){ 0 }, NULL, &r));
+    cr_expect_not(terrain_stabilize_regions(&c, 0, &(terrain_stabilize_desc){ 0 }, NULL, &r));
     terrain_columns *pair[2] = { c, c };
-    cr_expect_not(terrain_stabilize_regions(pair, 2, &(terrain_stabilize_params){ 0 }, NULL, &r), "twice at one place");
+    cr_expect_not(terrain_stabilize_regions(pair, 2, &(terrain_stabilize_desc){ 0 }, NULL, &r), "twice at one place");
     terrain_columns *odd = region(3, 0, 8, 8), *small = region(8, 0, 4, 4);
     pair[1] = odd;
-    cr_expect_not(terrain_stabilize_regions(pair, 2, &(terrain_stabilize_params){ 0 }, NULL, &r), "off the grid");
+    cr_expect_not(terrain_stabilize_regions(pair, 2, &(terrain_stabilize_desc){ 0 }, NULL, &r), "off the grid");
     pair[1] = small;
-    cr_expect_not(terrain_stabilize_regions(pair, 2, &(terrain_stabilize_params){ 0 }, NULL, &r), "sizes differ");
-
-    const terrain_deposit_desc bad_deposits[] = {
-        { .radius = -1, .volume = 1 },   { .radius = NAN, .volume = 1 },  { .radius = 2, .volume = -1 },
-        { .radius = 2, .volume = NAN },  { .x = NAN, .radius = 2 },       { .material = TERRAIN_WATER, .radius = 2 },
-        { .material = TERRAIN_BEDROCK, .radius = 2 }, { .material = 99, .radius = 2 }, { .radius = 2, .falloff = 5 },
-        { .radius = 2, .volume = 1e12 },
-    };
-    for (size_t n = 0; n < sizeof bad_deposits / sizeof *bad_deposits; n++)
-        cr_expect_not(terrain_deposit(c, &bad_deposits[n], NULL), "deposit %zu", n);
-    cr_expect_not(terrain_deposit(NULL, &(terrain_deposit_desc){ .radius = 1 }, NULL));
-    cr_expect_not(terrain_deposit(c, NULL, NULL));
-    /* A whole cubic kilometre on one column would overflow it. */
-    cr_expect_not(terrain_deposit(c, &(terrain_deposit_desc){ .x = 1.5, .z = 1.5, .radius = 0.5f, .volume = 1e8 }, NULL));
-    const terrain_erode_desc bad_erosions[] = {
-        { .radius = -1 }, { .radius = 2, .depth = -1 }, { .radius = 2, .rocks_ratio = 1.5f }, { .radius = 2, .rocks_ratio = NAN },
-        { .radius = 2, .mode = 9 }, { .radius = 2, .mode = TERRAIN_ERODE_COLLAPSE, .y = NAN }, { .z = INFINITY, .radius = 2 },
-    };
-    for (size_t n = 0; n < sizeof bad_erosions / sizeof *bad_erosions; n++)
-        cr_expect_not(terrain_erode(c, &bad_erosions[n], NULL), "erosion %zu", n);
+    cr_expect_not(terrain_stabilize_regions(pair, 2, &(terrain_stabilize_desc){ 0 }, NULL, &r), "sizes differ");
     terrain_layer bad_layer = { TERRAIN_SAND, -1.0f }, nan_layer = { TERRAIN_SAND, NAN }, odd_material = { 42, 1.0f };
     cr_expect_not(terrain_columns_set(c, 0, 0, &bad_layer, 1));
     cr_expect_not(terrain_columns_set(c, 0, 0, &nan_layer, 1));

@@ -32,7 +32,7 @@ static terrain_stacks *flat_chunk(void *user, terrain_chunk_coord coord) {
 }
 
 static uint64_t world_key(uint64_t seed) {
-    terrain_generation_params params = terrain_generation_defaults(seed);
+    terrain_generation_desc params = terrain_generation_defaults(seed);
     return terrain_generation_key(&params);
 }
 
@@ -124,7 +124,7 @@ static void db_path(char *out, size_t size, const char *dir) { snprintf(out, siz
 
 /* A folder whose world.db holds state A of the corner. */
 static void save_state_a(const char *dir, const corner_states *s) {
-    terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     terrain_store_report report;
     terrain_store *store = open_store(dir, log, &report);
     record_states(log, s, (const terrain_stacks *const *)s->generated, s->a);
@@ -148,7 +148,7 @@ Test(terrain_store, a_new_world_saves_and_comes_back_byte_for_byte) {
     cr_expect_eq(terrain_store_read_seed(nested, &seed, NULL, 0), 1);
     cr_expect_eq(seed, SEED);
 
-    terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     terrain_store_report report;
     terrain_store *store = open_store(nested, log, &report);
     cr_expect_eq(report.chunks_loaded, 4);
@@ -169,7 +169,7 @@ Test(terrain_store, a_new_world_saves_and_comes_back_byte_for_byte) {
 Test(terrain_store, named_values_are_saved_with_the_edits) {
     char dir[128];
     make_temp_dir(dir, sizeof dir);
-    terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     terrain_store_report report;
     terrain_store *store = open_store(dir, log, &report);
     const double pose[5] = { 12.5, 40.25, -3.0, 1.5, -0.25 };
@@ -186,7 +186,7 @@ Test(terrain_store, named_values_are_saved_with_the_edits) {
     cr_assert(terrain_store_save(store, error, sizeof error), "%s", error);
     terrain_store_destroy(store);
 
-    terrain_edit_log *again = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *again = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     store = open_store(dir, again, &report);
     double got[5] = { 0 };
     cr_expect_eq(terrain_store_get(store, "game.player", got, sizeof got), (int64_t)sizeof pose);
@@ -208,7 +208,7 @@ Test(terrain_store, saves_in_the_background_keep_what_changed_meanwhile) {
     corner_states_make(&s);
     char dir[128];
     make_temp_dir(dir, sizeof dir);
-    terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     terrain_store_report report;
     terrain_store *store = open_store(dir, log, &report);
     record_states(log, &s, (const terrain_stacks *const *)s.generated, s.a);
@@ -224,7 +224,7 @@ Test(terrain_store, saves_in_the_background_keep_what_changed_meanwhile) {
     cr_expect(terrain_store_save_async(store), "nothing changed: true, nothing written");
     terrain_store_destroy(store);
 
-    terrain_edit_log *again = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *again = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     store = open_store(dir, again, &report);
     int64_t sand;
     cr_expect_eq(replayed_state(again, &s, &sand), 'B');
@@ -245,7 +245,7 @@ Test(terrain_store, saves_in_the_background_keep_what_changed_meanwhile) {
  * switching the four chunks between A and B in each save, writing a byte to `progress` after
  * each, until killed. */
 static _Noreturn void save_forever(const char *dir, const corner_states *s, int progress) {
-    terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, NULL);
     if (!store) _exit(3);
     int64_t sand;
@@ -266,7 +266,7 @@ static _Noreturn void save_forever(const char *dir, const corner_states *s, int 
 /* Nanoseconds one save of the four chunks takes here (a child is killed at a random moment
  * within about one save after the saves it was let finish). */
 static uint64_t time_one_save(const char *dir, const corner_states *s) {
-    terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, NULL);
     cr_assert_not_null(store);
     uint64_t total = 0;
@@ -317,7 +317,7 @@ Test(terrain_store, a_saver_killed_at_any_moment_leaves_the_world_before_or_afte
         cr_assert(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL, "round %d: the child ended by itself (%d)",
                   round, WIFEXITED(status) ? WEXITSTATUS(status) : -1);
 
-        terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
+        terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
         terrain_store_report report;
         terrain_store *store = open_store(dir, log, &report);
         cr_expect(!report.set_aside, "round %d: %s", round, report.notice);
@@ -348,7 +348,7 @@ Test(terrain_store, an_old_folder_is_imported_once_with_the_same_bytes_as_loadin
     char dir[128], path[256];
     make_temp_dir(dir, sizeof dir);
     /* The old layout: DIR/edits/<x>_<z>.tel, plus one damaged file and a crash's temporary. */
-    terrain_edit_log *old = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *old = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     record_states(old, &s, (const terrain_stacks *const *)s.generated, s.a);
     record_states(old, &s, s.a, s.b);
     char error[512];
@@ -362,18 +362,18 @@ Test(terrain_store, an_old_folder_is_imported_once_with_the_same_bytes_as_loadin
     /* What loading the folder gives today (from a copy: loading renames the damaged file). */
     char copy[128];
     make_temp_dir(copy, sizeof copy);
-    terrain_edit_log *copied = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *copied = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     record_states(copied, &s, (const terrain_stacks *const *)s.generated, s.a);
     record_states(copied, &s, s.a, s.b);
     cr_assert(terrain_edit_log_save(copied, copy, error, sizeof error), "%s", error);
-    terrain_edit_log *today = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *today = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     terrain_edit_log_load_result loaded;
     cr_assert(terrain_edit_log_load(today, copy, &loaded));
     cr_assert_eq(loaded.chunks_loaded, 4);
     terrain_edit_log_destroy(copied);
     remove_tree(copy);
 
-    terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     terrain_store_report report;
     terrain_store *store = open_store(dir, log, &report);
     cr_expect_eq(report.chunks_imported, 4);
@@ -401,10 +401,10 @@ Test(terrain_store, an_old_folder_is_imported_once_with_the_same_bytes_as_loadin
 
     /* A stale old folder after the import (a crash between the commit and the rename, or an old
      * build run since) is not imported again: it would replace newer saves. It is renamed. */
-    terrain_edit_log *stale = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *stale = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     record_states(stale, &s, (const terrain_stacks *const *)s.generated, s.a);
     cr_assert(terrain_edit_log_save(stale, dir, error, sizeof error), "%s", error);
-    terrain_edit_log *again = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *again = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     store = open_store(dir, again, &report);
     cr_expect_eq(report.chunks_imported, 0);
     cr_expect_eq(report.chunks_loaded, 4);
@@ -432,7 +432,7 @@ static void expect_set_aside(const char *dir, const uint8_t *bytes, size_t size,
     snprintf(bad, sizeof bad, "%s.bad", path);
     snprintf(notes, sizeof notes, "%s/notes.txt", dir);
     write_all(notes, "mine", 4);
-    terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     terrain_store_report report;
     terrain_store *store = open_store(dir, log, &report);
     cr_expect(report.set_aside);
@@ -570,7 +570,7 @@ Test(terrain_store, another_worlds_database_is_refused_and_left_alone) {
     make_temp_dir(dir, sizeof dir);
     size_t size;
     uint8_t *bytes = saved_database(dir, &s, &size);
-    terrain_edit_log *log = terrain_edit_log_create(world_key(SEED + 1));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED + 1) });
     terrain_store_report report;
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED + 1 },
                                                 &report);
@@ -606,7 +606,7 @@ Test(terrain_store, a_second_process_is_refused_and_the_first_goes_on_saving) {
         char byte;
         close(ready[1]);
         if (read(ready[0], &byte, 1) != 1) _exit(10);
-        terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
+        terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
         terrain_store_report report;
         terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED },
                                                     &report);
@@ -618,7 +618,7 @@ Test(terrain_store, a_second_process_is_refused_and_the_first_goes_on_saving) {
               : !strstr(error, "in use by another process") ? 16 : 0);
     }
     close(ready[0]);
-    terrain_edit_log *log = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     terrain_store_report report;
     terrain_store *store = open_store(dir, log, &report);
     cr_assert_eq(write(ready[1], "x", 1), 1);
@@ -630,7 +630,7 @@ Test(terrain_store, a_second_process_is_refused_and_the_first_goes_on_saving) {
     char error[512];
     cr_expect(terrain_store_save(store, error, sizeof error), "the first goes on saving: %s", error);
     terrain_store_destroy(store);
-    terrain_edit_log *again = terrain_edit_log_create(world_key(SEED));
+    terrain_edit_log *again = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     store = open_store(dir, again, &report);
     int64_t sand;
     cr_expect_eq(replayed_state(again, &s, &sand), 'B');
@@ -648,7 +648,7 @@ Test(terrain_store, bad_calls_are_refused_with_a_reason) {
     cr_expect(strstr(report.error, "desc"), "%s", report.error);
     cr_expect_null(terrain_store_create(&(terrain_store_desc){ .dir = "/tmp" }, &report));
     cr_expect(strstr(report.error, "desc.edits"), "%s", report.error);
-    terrain_edit_log *log = terrain_edit_log_create(1);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = 1 });
     cr_expect_null(terrain_store_create(&(terrain_store_desc){ .dir = "", .edits = log }, &report));
     cr_expect(strstr(report.error, "desc.dir"), "%s", report.error);
     /* A folder that cannot be made: a file stands where a parent would be. */
@@ -663,5 +663,68 @@ Test(terrain_store, bad_calls_are_refused_with_a_reason) {
     char error[256];
     cr_expect_eq(terrain_store_read_seed(NULL, &seed, error, sizeof error), -1);
     terrain_edit_log_destroy(log);
+    remove_tree(dir);
+}
+
+/* ---- a long slide: the folder's size is bounded by the columns edited, not the frames -------
+ * 10 000 stabilization frames each change the same 16 columns of chunk (0, 0) (sand sliding
+ * back and forth), and the world is saved every 500 frames. Each save folds the chunk's entries
+ * into one (terrain_edit_log_compact), so every save writes one entry of 16 columns and the
+ * folder stays at its size after the first save, give or take SQLite's pages: the bound below
+ * allows 256 KiB for the database's free pages and its write-ahead log. Without the fold the
+ * chunk's blob holds every frame's entry: 16 columns of at least 6 bytes each a frame, over
+ * 960 KB by the end. Replay cost follows the entries, so one entry also bounds the replay. */
+
+typedef struct slide_state {
+    int frame;
+} slide_state;
+
+static void slide_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
+    const slide_state *s = user;
+    terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, -TERRAIN_FLOOR_Y);
+    if (x < 4 && z < 4)
+        terrain_stacks_builder_push(builder, TERRAIN_SAND, (float)(1 + (s->frame + x + z) % 5) / QPM);
+}
+
+Test(terrain_store, ten_thousand_stabilization_frames_save_as_one_entry_a_chunk) {
+    enum { FRAMES = 10000, SAVE_EVERY = 500 };
+    char dir[64];
+    make_temp_dir(dir, sizeof dir);
+    terrain_chunk_coord c = { 0, 0 };
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, NULL);
+    cr_assert_not_null(store);
+    terrain_stacks *generated = terrain_stacks_from_columns(c, flat_column, NULL);
+    terrain_stacks *before = terrain_stacks_from_columns(c, flat_column, NULL);
+    slide_state slide = { 0 };
+    long long first_save_bytes = 0;
+    char error[512];
+    for (slide.frame = 0; slide.frame < FRAMES; slide.frame++) {
+        terrain_stacks *after = terrain_stacks_from_columns(c, slide_column, &slide);
+        cr_assert(terrain_edit_log_record(log, c, TERRAIN_EDIT_STABILIZE, before, after));
+        terrain_stacks_destroy(before);
+        before = after;
+        if ((slide.frame + 1) % SAVE_EVERY) continue;
+        cr_assert(terrain_store_save(store, error, sizeof error), "%s", error);
+        if (!first_save_bytes) first_save_bytes = folder_bytes(dir);
+    }
+    cr_expect_eq(terrain_edit_log_entries(log, c), 1, "the last save folded the chunk");
+    long long bytes = folder_bytes(dir);
+    cr_expect_leq(bytes, first_save_bytes + 256 * 1024, "%lld bytes after the soak, %lld after the first save",
+                  bytes, first_save_bytes);
+    terrain_store_destroy(store);
+    terrain_edit_log_destroy(log);
+
+    terrain_edit_log *reopened = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
+    store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = reopened, .seed = SEED }, NULL);
+    cr_assert_not_null(store);
+    cr_expect_eq(terrain_edit_log_entries(reopened, c), 1);
+    terrain_stacks *replayed = terrain_edit_log_replay(reopened, c, generated);
+    cr_expect(same_bytes(replayed, before), "the replay gives the last frame's columns");
+    terrain_stacks_destroy(replayed);
+    terrain_store_destroy(store);
+    terrain_edit_log_destroy(reopened);
+    terrain_stacks_destroy(before);
+    terrain_stacks_destroy(generated);
     remove_tree(dir);
 }

@@ -6,6 +6,7 @@
 
 #include "jobs/jobs.h"
 #include "terrain/terrain.h"
+#include "terrain/terrain_internal.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -39,7 +40,7 @@ static void fetch_range(void *user, size_t begin, size_t end) {
 }
 
 Test(terrain_threads, shared_world_gives_the_bytes_of_a_lone_thread) {
-    terrain_generation_params params = terrain_generation_defaults(11);
+    terrain_generation_desc params = terrain_generation_defaults(11);
     terrain_world *lone = terrain_world_create(&(terrain_world_desc){ .generation = params });
     terrain_world *shared = terrain_world_create(&(terrain_world_desc){ .generation = params });
     world_job expected = { .world = lone }, got = { .world = shared };
@@ -157,8 +158,8 @@ Test(terrain_threads, stabilization_on_four_threads_gives_the_bytes_of_one) {
     int64_t sand = terrain_columns_mass(lone, TERRAIN_SAND), rocks = terrain_columns_mass(lone, TERRAIN_ROCKS);
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 4 });
     terrain_stabilize_result a, b;
-    cr_assert(terrain_stabilize_region(lone, &(terrain_stabilize_params){ 0 }, NULL, &a));
-    cr_assert(terrain_stabilize_region(shared, &(terrain_stabilize_params){ 0 }, jobs, &b));
+    cr_assert(terrain_stabilize_region(lone, &(terrain_stabilize_desc){ 0 }, NULL, &a));
+    cr_assert(terrain_stabilize_region(shared, &(terrain_stabilize_desc){ 0 }, jobs, &b));
     cr_expect(a.converged && b.converged);
     cr_expect_gt(a.moved, 0);
     cr_expect_eq(a.moved, b.moved);
@@ -177,8 +178,8 @@ Test(terrain_threads, regions_side_by_side_on_four_threads_give_the_bytes_of_one
     for (int n = 0; n < 4; n++) parts[n] = bumpy_part(n % 2 * HALF, n / 2 * HALF, HALF);
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 4 });
     terrain_stabilize_result a, b;
-    cr_assert(terrain_stabilize_region(whole, &(terrain_stabilize_params){ 0 }, NULL, &a));
-    cr_assert(terrain_stabilize_regions(parts, 4, &(terrain_stabilize_params){ 0 }, jobs, &b));
+    cr_assert(terrain_stabilize_region(whole, &(terrain_stabilize_desc){ 0 }, NULL, &a));
+    cr_assert(terrain_stabilize_regions(parts, 4, &(terrain_stabilize_desc){ 0 }, jobs, &b));
     cr_expect(a.converged && b.converged);
     cr_expect_eq(a.moved, b.moved);
     for (int n = 0; n < 4; n++)
@@ -210,7 +211,7 @@ Test(terrain_threads, stabilize_batches_carry_their_columns) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 4 });
     cr_assert(trace_start(path));
     terrain_stabilize_result result;
-    cr_assert(terrain_stabilize_region(region, &(terrain_stabilize_params){ 0 }, jobs, &result));
+    cr_assert(terrain_stabilize_region(region, &(terrain_stabilize_desc){ 0 }, jobs, &result));
     trace_stop();
     job_system_destroy(jobs);
     terrain_columns_destroy(region);
@@ -321,7 +322,7 @@ static void record_loop(log_share *s) {
 /* State A saved by a log of its own; the file's bytes (free with free). */
 static void *file_of(const terrain_stacks *generated, const terrain_stacks *a, terrain_chunk_coord coord,
                      uint64_t key, size_t *size) {
-    terrain_edit_log *log = terrain_edit_log_create(key);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key });
     cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, generated, a));
     char dir[64], path[160], error[256];
     snprintf(dir, sizeof dir, "/tmp/terrain_threads_log_XXXXXX");
@@ -345,7 +346,7 @@ static void *file_of(const terrain_stacks *generated, const terrain_stacks *a, t
 }
 
 Test(terrain_threads, edit_log_replays_on_four_threads_while_one_records) {
-    terrain_generation_params params = terrain_generation_defaults(17);
+    terrain_generation_desc params = terrain_generation_defaults(17);
     terrain_chunk_coord coord = { 1, -2 };
     terrain_stacks *generated = terrain_generate_chunk(&params, coord);
     terrain_columns *region = terrain_columns_create(&(terrain_columns_desc){
@@ -359,7 +360,7 @@ Test(terrain_threads, edit_log_replays_on_four_threads_while_one_records) {
     terrain_columns_destroy(region);
 
     uint64_t key = terrain_generation_key(&params);
-    log_share share = { .log = terrain_edit_log_create(key), .coord = coord, .generated = generated,
+    log_share share = { .log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key }), .coord = coord, .generated = generated,
                         .state = { a, b } };
     share.file_a = file_of(generated, a, coord, key, &share.file_a_size);
     cr_assert(terrain_edit_log_record(share.log, coord, TERRAIN_EDIT_SET, generated, a));
@@ -410,7 +411,7 @@ static void *commit_reader(void *user) {
 }
 
 Test(terrain_threads, workers_read_while_the_main_thread_commits_and_trims) {
-    terrain_edit_log *log = terrain_edit_log_create(1);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = 1 });
     commit_share s = { .world = terrain_world_create(&(terrain_world_desc){
                            .generation = terrain_generation_defaults(11), .edits = log, .max_chunks = 4 }) };
     pthread_t readers[3];
@@ -427,6 +428,117 @@ Test(terrain_threads, workers_read_while_the_main_thread_commits_and_trims) {
     for (int t = 0; t < 3; t++) pthread_join(readers[t], NULL);
     cr_expect_gt(atomic_load(&s.reads), 0);
     cr_expect_eq(terrain_edit_log_entries(log, (terrain_chunk_coord){ 0, 0 }), 40, "every stroke logged");
+    terrain_world_destroy(s.world);
+    terrain_edit_log_destroy(log);
+}
+
+/* ---- generation, commits and eviction interleaved (terrain_world's chunk cache) ----
+ * Readers keep asking for three chunks of a world that caches one, so the chunk the main thread
+ * edits is evicted and regenerated (from the log) over and over, often by a reader while the
+ * main thread commits. Whatever the interleaving, each cached chunk must equal the log's replay
+ * over the generated ground, and the edited chunk's version is the stamp of the last commit. */
+
+static void churn_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
+    (void)user, (void)x, (void)z;
+    terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, -TERRAIN_FLOOR_Y);
+}
+
+static terrain_stacks *churn_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, churn_column, user);
+}
+
+static void *churn_reader(void *user) {
+    commit_share *s = user;
+    for (long round = 0; !atomic_load(&s->stop); round++) {
+        uint64_t token = terrain_world_read_begin(s->world);
+        for (int n = 0; n < 3; n++)
+            (void)terrain_stacks_hash(terrain_world_stacks(s->world, (terrain_chunk_coord){ (round + n) % 3, 0 }));
+        terrain_world_read_end(s->world, token);
+        atomic_fetch_add(&s->reads, 1);
+    }
+    return NULL;
+}
+
+Test(terrain_threads, chunks_regenerated_while_committed_and_evicted_match_the_log) {
+    enum { STROKES = 200 };
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = 7 });
+    terrain_world_desc desc = { .generation = terrain_generation_defaults(7), .generate = churn_chunk,
+                                .edits = log, .max_chunks = 1 };
+    commit_share s = { .world = terrain_world_create(&desc) };
+    pthread_t readers[3];
+    for (int t = 0; t < 3; t++) pthread_create(&readers[t], NULL, churn_reader, &s);
+    for (int stroke = 0; stroke < STROKES; stroke++) {
+        /* Inside chunk (0, 0) only: x and z stay 4 m from its borders. */
+        terrain_world_edit(s.world, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                     .deposit = { .x = 4 + stroke % 24, .z = 4 + (stroke * 7) % 24,
+                                                                  .radius = 2, .volume = 1 } }, NULL, 0);
+        terrain_world_change changes[8];
+        terrain_world_take_changes(s.world, changes, 8);
+        terrain_world_trim(s.world);
+    }
+    atomic_store(&s.stop, true);
+    for (int t = 0; t < 3; t++) pthread_join(readers[t], NULL);
+    cr_expect_gt(atomic_load(&s.reads), 0);
+    /* One commit a stroke, all to chunk (0, 0): its version is the last one's stamp. */
+    cr_expect_eq(terrain_edit_log_entries(log, (terrain_chunk_coord){ 0, 0 }), STROKES);
+    cr_expect_eq(terrain_world_chunk_version(s.world, (terrain_chunk_coord){ 0, 0 }), STROKES);
+    terrain_world *fresh = terrain_world_create(&desc);
+    for (int x = 0; x < 3; x++) {
+        terrain_chunk_coord c = { x, 0 };
+        cr_expect(same_stacks(terrain_world_stacks(s.world, c), terrain_world_stacks(fresh, c)),
+                  "chunk (%d, 0) equals the log's replay", x);
+    }
+    terrain_world_destroy(fresh);
+    terrain_world_destroy(s.world);
+    terrain_edit_log_destroy(log);
+}
+
+/* The interleaving itself, forced: a reader has generated chunk (0, 0) from the log as it was,
+ * and before it inserts its copy the main thread commits a stroke there and evicts the chunk.
+ * The reader's copy lacks the stroke: it must not be the one cached. */
+typedef struct late_insert {
+    _Atomic int state;                 /* 0 reader generating, 1 reader waits, 2 main done */
+    pthread_t reader;
+} late_insert;
+
+static void hold_first_copy(void *user, terrain_chunk_coord coord) {
+    late_insert *l = user;
+    if (coord.x != 0 || coord.z != 0 || !pthread_equal(pthread_self(), l->reader)) return;
+    int expected = 0;
+    if (!atomic_compare_exchange_strong(&l->state, &expected, 1)) return;   /* only the first copy */
+    while (atomic_load(&l->state) != 2) usleep(100);
+}
+
+static void *late_reader(void *user) {
+    commit_share *s = user;
+    uint64_t token = terrain_world_read_begin(s->world);
+    (void)terrain_stacks_hash(terrain_world_stacks(s->world, (terrain_chunk_coord){ 0, 0 }));
+    terrain_world_read_end(s->world, token);
+    return NULL;
+}
+
+Test(terrain_threads, a_copy_generated_before_a_commit_and_eviction_is_not_cached) {
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = 8 });
+    terrain_world_desc desc = { .generation = terrain_generation_defaults(8), .generate = churn_chunk,
+                                .edits = log };
+    commit_share s = { .world = terrain_world_create(&desc) };
+    late_insert l = { 0 };
+    terrain__world_on_generated(s.world, hold_first_copy, &l);
+    cr_assert_eq(pthread_create(&l.reader, NULL, late_reader, &s), 0);
+    while (atomic_load(&l.state) != 1) usleep(100);
+    terrain_world_edit(s.world, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                 .deposit = { .x = 16, .z = 16, .radius = 3, .volume = 4 } }, NULL, 0);
+    (void)terrain_world_stacks(s.world, (terrain_chunk_coord){ 1, 0 });   /* (0, 0) the least recent */
+    terrain_world_set_max_chunks(s.world, 1);
+    terrain_world_trim(s.world);
+    cr_assert(!terrain_world_has(s.world, (terrain_chunk_coord){ 0, 0 }), "evicted");
+    atomic_store(&l.state, 2);
+    pthread_join(l.reader, NULL);
+    terrain_world *fresh = terrain_world_create(&desc);
+    terrain_chunk_coord c = { 0, 0 };
+    cr_expect(same_stacks(terrain_world_stacks(s.world, c), terrain_world_stacks(fresh, c)),
+              "the cached chunk holds the stroke");
+    terrain_world_destroy(fresh);
     terrain_world_destroy(s.world);
     terrain_edit_log_destroy(log);
 }
@@ -457,8 +569,8 @@ Test(terrain_threads, the_store_saves_in_the_background_while_the_main_thread_ed
     char dir[64];
     snprintf(dir, sizeof dir, "/tmp/terrain_threads_store_XXXXXX");
     cr_assert(mkdtemp(dir));
-    terrain_generation_params params = terrain_generation_defaults(11);
-    terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
+    terrain_generation_desc params = terrain_generation_defaults(11);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
     terrain_store_report report;
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = 11 }, &report);
     cr_assert(store, "%s", report.error);
@@ -487,7 +599,7 @@ Test(terrain_threads, the_store_saves_in_the_background_while_the_main_thread_ed
     terrain_world_destroy(world);
     terrain_store_destroy(store);
 
-    terrain_edit_log *again = terrain_edit_log_create(terrain_generation_key(&params));
+    terrain_edit_log *again = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
     store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = again }, &report);
     cr_assert(store, "%s", report.error);
     world = terrain_world_create(&(terrain_world_desc){ .generation = params, .edits = again });

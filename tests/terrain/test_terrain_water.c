@@ -153,7 +153,7 @@ static water_ecs water_ecs_open(void) {
     w.jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     w.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = w.jobs });
     w.world = terrain_world_create(&(terrain_world_desc){ .generate = deep_sea_chunk });
-    w.te = terrain_ecs_create(w.ecs, w.world);
+    w.te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = w.ecs, .terrain = w.world });
     w.water = ecs_component_lookup(w.ecs, "WaterPlane");
     w.with_water = ecs_query_create(w.ecs, &(ecs_query_desc){ .with = { w.water } });
     return w;
@@ -323,7 +323,7 @@ Test(terrain_water_sea, a_world_without_a_sea_keeps_its_pits_dry) {
 }
 
 Test(terrain_water_sea, replaying_the_edit_log_gives_the_flooded_bytes) {
-    terrain_edit_log *log = terrain_edit_log_create(1234);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = 1234 });
     terrain_world *world = beach_world(log);
     cr_assert_gt(carve_ball(world, 30, 1, 16), 0);          /* across the chunk border at x = 32 */
     uint64_t hashes[2] = { terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 })),
@@ -368,7 +368,7 @@ Test(terrain_water_sea, sand_that_slides_into_the_sea_keeps_the_surface_at_sea_l
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
     terrain_world *world = beach_world(NULL);
-    terrain_ecs *te = terrain_ecs_create(ecs, world);
+    terrain_ecs *te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });
     /* On the beach's edge: the pile slides down into the sea over the next frames. */
     cr_assert(terrain_ecs_edit(te, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
                                                     .deposit = { .x = 16.5, .z = 16.5, .radius = 2.5f, .volume = 80 } }));
@@ -492,7 +492,7 @@ Test(terrain_water_lakes, every_lake_column_is_held_by_its_neighbours) {
  * grid, and grids coarser than 8 m (no basins) no lake. */
 Test(terrain_water_lakes, the_far_terrains_lake_levels_are_the_chunks_water) {
     terrain_world *world = seed_1_world();
-    const terrain_generation_params *p = terrain_world_generation(world);
+    const terrain_generation_desc *p = terrain_world_generation(world);
     float sea = p->sea_level;
     lake_found lakes[LAKES_MAX];
     cr_assert_gt(find_lakes(world, sea, lake_corner, lakes), 0);
@@ -538,7 +538,7 @@ Test(terrain_water_lakes, the_far_terrains_lake_levels_are_the_chunks_water) {
 #define LAKE_DET_SIDE 3
 
 typedef struct lake_job {
-    terrain_generation_params params;
+    terrain_generation_desc params;
     terrain_chunk_coord first;
     bool reverse;
     uint64_t hashes[LAKE_DET_SIDE * LAKE_DET_SIDE];

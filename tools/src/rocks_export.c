@@ -35,7 +35,7 @@ typedef struct export_args {
     int seed;
 } export_args;
 
-#define EXPORT_TILE_SIZE 3.0          /* metres: the game's (rocks_desc.tile_size's default) */
+#define EXPORT_TILE_SIZE 3.0          /* metres: the game's (rocks_system_desc.tile_size's default) */
 
 /* Files are written to PATH.tmp and renamed over PATH once complete (CONVENTIONS: nothing half
  * written is left under the real name). */
@@ -187,7 +187,7 @@ static bool write_region_json(const rocks_tileset *set, const rocks_placement *p
 static int export_region(const export_args *args, rocks_shape shape, const double min[3], const double max[3],
                          job_system *jobs) {
     /* the flags' defaults are the game's set: 5 cells, 10 voxels, mixed, seed 1 */
-    rocks_tileset *set = rocks_tiles_create(&(rocks_tiles_desc){ .cells = args->cells, .voxels_per_cell = args->voxels,
+    rocks_tileset *set = rocks_tileset_create(&(rocks_tileset_desc){ .cells = args->cells, .voxels_per_cell = args->voxels,
                                                                  .shape = shape, .jobs = jobs,   /* seed: the game's */
                                                                  .cache_path = args->cache });
     if (!set) return 1;
@@ -208,7 +208,7 @@ static int export_region(const export_args *args, rocks_shape shape, const doubl
     }
     rocks_placement_free(&placement);
     terrain_world_destroy(world);
-    rocks_tiles_destroy(set);
+    rocks_tileset_destroy(set);
     return status;
 }
 
@@ -268,11 +268,11 @@ int main(int argc, char **argv) {
         return 2;
     }
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = args.common.threads });
-    rocks_tileset *set = rocks_tiles_create(&(rocks_tiles_desc){ .seed = (uint64_t)args.seed, .cells = args.cells,
+    rocks_tileset *set = rocks_tileset_create(&(rocks_tileset_desc){ .seed = (uint64_t)args.seed, .cells = args.cells,
                                                                  .voxels_per_cell = args.voxels, .shape = shape,
                                                                  .jobs = jobs, .cache_path = args.cache });
     int status = set ? export_tiles(set, args.tiles, args.out) : 1;
-    rocks_tiles_destroy(set);
+    rocks_tileset_destroy(set);
     job_system_destroy(jobs);
     return status;
 }

@@ -35,7 +35,7 @@ static void spawn(ecs_iter *it) {
         uint64_t h = core_hash_u64(d->spawned++);
         float angle = (float)(h & 0xffff) * (6.2831853f / 65536.0f);
         float speed = 2.0f + (float)((h >> 16) & 0xff) * (3.0f / 255.0f);
-        ecs_entity e = ecs_defer_create(it->commands);
+        ecs_entity e = ecs_defer_entity_create(it->commands);
         ecs_defer_set(it->commands, e, d->position, &(Position){ 0, 0, 0 });
         ecs_defer_set(it->commands, e, d->velocity, &(Velocity){ cosf(angle) * speed, 8.0f, sinf(angle) * speed });
         ecs_defer_set(it->commands, e, d->lifetime, &(Lifetime){ 1.0f + (float)((h >> 24) & 0xff) / 64.0f });
@@ -77,7 +77,7 @@ static void age(ecs_iter *it) {
         Lifetime *life = ecs_field(it, 0);
         for (int i = 0; i < it->count; i++) {
             life[i].seconds_left -= it->dt;
-            if (life[i].seconds_left <= 0) ecs_defer_destroy(it->commands, it->entities[i]);
+            if (life[i].seconds_left <= 0) ecs_defer_entity_destroy(it->commands, it->entities[i]);
         }
     }
 }

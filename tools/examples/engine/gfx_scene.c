@@ -84,7 +84,7 @@ int main(int argc, char **argv) {
     if (o.common.trace_path && !trace_start(o.common.trace_path)) return 2;
     trace_thread_name("main");
 
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "gfx_scene",
+    gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = width, .height = height, .title = "gfx_scene",
                                                .headless = o.headless, .no_vsync = o.no_vsync,
                                                .fullscreen = o.fullscreen });
     if (!gfx) return 1;
@@ -92,7 +92,7 @@ int main(int argc, char **argv) {
     if (!scene) return 1;                 /* the shader errors are printed at file:line */
     input_bindings *bindings = NULL;
     if (o.bindings && !(bindings = input_bindings_load(o.bindings, NULL))) return 1;
-    input_system *input = input_create(&(input_desc){ .bindings = bindings, .glfw_window = gfx_glfw_window(gfx),
+    input_system *input = input_system_create(&(input_system_desc){ .bindings = bindings, .glfw_window = gfx_glfw_window(gfx),
                                                       .record_path = o.record, .replay_path = o.replay });
     if (!input) return 1;
     bool windowed = gfx_backend_get(gfx) == GFX_BACKEND_WINDOW;
@@ -133,10 +133,10 @@ int main(int argc, char **argv) {
            gfx_frame_index(gfx) ? seconds * 1e3 / (double)gfx_frame_index(gfx) : 0.0,
            windowed ? "window" : "offscreen", width, height, camera.position[0], camera.position[1],
            camera.position[2]);
-    input_destroy(input);
+    input_system_destroy(input);
     input_bindings_destroy(bindings);
     gfx_scene_destroy(scene);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
     trace_stop();
     return rc < 0 ? 0 : rc;
 }

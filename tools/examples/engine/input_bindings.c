@@ -64,7 +64,7 @@ int main(int argc, char **argv) {
     printf("input_bindings: bindings read, %d bad line skipped\n", bad_lines);
 
     /* 2. An input system with them and no device: nothing is down. */
-    input_system *input = input_create(&(input_desc){ .bindings = bindings, .no_gamepads = true });
+    input_system *input = input_system_create(&(input_system_desc){ .bindings = bindings, .no_gamepads = true });
     input_bindings_destroy(bindings);              /* the system keeps a copy */
     if (!input) return 1;
     input_update(input, 1.0f / 60.0f);
@@ -96,7 +96,7 @@ int main(int argc, char **argv) {
         printf("input_bindings: report %d: stick (%.2f, %.2f), r2 %.1f, buttons %s\n", i + 1, state.lx, state.ly,
                state.rt, button_names(state.buttons, names, sizeof names));
     }
-    input_decoder_stats stats = input_decoder_stats_get(pad);
+    input_decoder_stats_info stats = input_decoder_stats(pad);
     printf("input_bindings: %llu reports decoded, %llu too short\n", (unsigned long long)stats.decoded,
            (unsigned long long)stats.short_reports);
     input_decoder_destroy(pad);
@@ -109,7 +109,7 @@ int main(int argc, char **argv) {
     actions = input_actions_get(input);
     printf("input_bindings: fed pad and key, actions down: %s, move (%.1f, %.1f)\n",
            action_names(actions->down, names, sizeof names), actions->move_x, actions->move_y);
-    input_destroy(input);
+    input_system_destroy(input);
     trace_stop();
     return 0;
 }

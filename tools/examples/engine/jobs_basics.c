@@ -115,7 +115,7 @@ int main(int argc, char **argv) {
     printf("jobs_basics: background job done, result %016llx; the main thread ran %d frames meanwhile\n",
            (unsigned long long)work.result, frames);
 
-    job_stats stats = job_system_stats(jobs);
+    job_system_stats_info stats = job_system_stats(jobs);
     printf("jobs_basics: %llu jobs run\n", (unsigned long long)stats.completed);
     job_system_destroy(jobs);
     trace_stop();

@@ -79,7 +79,7 @@ int main(int argc, char **argv) {
         .frames = frames, .screenshot_path = screenshot, .stream = { .half_width = radius, .levels = levels }, .rocks = ROCKS_OFF, .cliffs = ROCKS_OFF, .setup = setup, .setup_user = &day_seconds });
     if (!app) return 1;
     while (game_app_frame(app)) {}
-    game_app_stats stats = game_app_stats_get(app);
+    game_app_stats_info stats = game_app_stats(app);
     const GameCamera *camera = ecs_get(game_app_ecs(app), game_app_camera(app), game_app_ids(app)->camera);
     printf("game_setup_system: %d frames, the sun at %.0f degrees over the horizon\n", stats.frames,
            asin(camera->view.sun_direction[1] / sqrt(1.0 + 0.09)) * 180.0 / 3.14159265358979);

@@ -85,9 +85,9 @@ int main(int argc, char **argv) {
         .no_clipmap = true, .no_hud = true, .grass = GRASS_OFF, .water = TERRAIN_WATER_OFF,
         .shadows = TERRAIN_SHADOWS_OFF, .rocks = ROCKS_OFF, .cliffs = ROCKS_OFF });
     if (!app) return 1;
-    game_app_stats start = game_app_stats_get(app);
+    game_app_stats_info start = game_app_stats(app);
     while (game_app_frame(app)) {}                 /* until the walk ends */
-    game_app_stats stats = game_app_stats_get(app);
+    game_app_stats_info stats = game_app_stats(app);
     double dx = stats.feet[0] - start.feet[0], dz = stats.feet[2] - start.feet[2];
     printf("game_walk: walked %.1f m in %d frames, %s, %.1f m along x and %.1f m along z from the start\n",
            stats.walked, stats.frames, stats.walk_stuck ? "stuck" : "arrived", dx, dz);

@@ -71,13 +71,13 @@ int main(int argc, char **argv) {
      * show between the blocks */
     cliff_blocks cliff = { .tile = rocks_block_tile_create(&(rocks_block_tile_desc){ .type = type, .joint = 0.6f }) };
     if (!cliff.tile) return 1;
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "rocks_blocks", .headless = headless });
+    gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = width, .height = height, .title = "rocks_blocks", .headless = headless });
     if (!gfx) return 1;
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = common.threads });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = wall_chunk,
                                                                       .amplify = add_blocks, .amplify_user = &cliff });
-    terrain_ecs *terrain = terrain_ecs_create(ecs, world);
+    terrain_ecs *terrain = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });
     terrain_ecs_spawn_area(terrain, 0, 0, 2, -1, 0);   /* the floor is on a layer boundary */
     terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = -100 });
     if (!renderer) return 1;
@@ -97,7 +97,7 @@ int main(int argc, char **argv) {
         if (screenshot && frames && frame + 1 == frames && !gfx_screenshot(gfx, screenshot)) status = 1;
         gfx_frame_end(gfx);
     }
-    terrain_ecs_stats stats = terrain_ecs_stats_get(terrain);
+    terrain_ecs_stats_info stats = terrain_ecs_stats(terrain);
     printf("rocks_blocks: %s tile: %u blocks from %u points and %u fractures in %.2f s; %d mesh chunks, %llu triangles\n",
            rocks_block_type_name(type), cliff.tile->block_count, cliff.tile->sample_count, cliff.tile->disc_count,
            cliff.tile->build_seconds, stats.mesh_chunks_uploaded, (unsigned long long)stats.triangles);
@@ -107,7 +107,7 @@ int main(int argc, char **argv) {
     terrain_world_destroy(world);
     rocks_block_tile_destroy(cliff.tile);
     job_system_destroy(jobs);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
     trace_stop();
     return status;
 }

@@ -59,17 +59,17 @@ int main(int argc, char **argv) {
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
     trace_thread_name("main");
 
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "rocks_pile", .headless = headless });
+    gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = width, .height = height, .title = "rocks_pile", .headless = headless });
     if (!gfx) return 1;
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = common.threads });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = slope_chunk });
-    terrain_ecs *terrain = terrain_ecs_create(ecs, world);
+    terrain_ecs *terrain = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });
     terrain_ecs_spawn_area(terrain, 0, 0, 1, 0, 0);
     terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = -100 });
     /* The rocks: a tile set (built once, a few seconds; cached by a real game), then one call. */
-    rocks_tileset *tiles = rocks_tiles_create(&(rocks_tiles_desc){ .jobs = jobs });
-    rocks_system *rocks = tiles ? rocks_create(&(rocks_desc){ .gfx = gfx, .ecs = ecs, .world = world, .tiles = tiles }) : NULL;
+    rocks_tileset *tiles = rocks_tileset_create(&(rocks_tileset_desc){ .jobs = jobs });
+    rocks_system *rocks = tiles ? rocks_system_create(&(rocks_system_desc){ .gfx = gfx, .ecs = ecs, .world = world, .tiles = tiles }) : NULL;
     if (!renderer || !rocks) return 1;
 
     int status = 0;
@@ -89,18 +89,18 @@ int main(int argc, char **argv) {
         if (screenshot && frames && frame + 1 == frames && !gfx_screenshot(gfx, screenshot)) status = 1;
         gfx_frame_end(gfx);
     }
-    rocks_stats stats = rocks_stats_get(rocks);
+    rocks_system_stats_info stats = rocks_system_stats(rocks);
     printf("rocks_pile: %u rock shapes in %.2f s; %llu rocks placed in %d chunks, %llu drawn with %d commands\n",
            tiles->rock_count, tiles->build_seconds, (unsigned long long)stats.instances, stats.chunks,
            (unsigned long long)stats.instances_drawn, stats.commands_drawn);
-    rocks_destroy(rocks);
-    rocks_tiles_destroy(tiles);
+    rocks_system_destroy(rocks);
+    rocks_tileset_destroy(tiles);
     terrain_renderer_destroy(renderer);
     terrain_ecs_destroy(terrain);
     ecs_world_destroy(ecs);
     terrain_world_destroy(world);
     job_system_destroy(jobs);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
     trace_stop();
     return status;
 }

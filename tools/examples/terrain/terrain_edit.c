@@ -43,7 +43,7 @@ static int settle(terrain_world *world, job_system *jobs, int64_t cx, int64_t cz
         terrain_columns_touch(regions[n], 0, 0, TERRAIN_CHUNK_COLUMNS, TERRAIN_CHUNK_COLUMNS);
     }
     terrain_stabilize_result result;
-    terrain_stabilize_regions(regions, SIDE * SIDE, &(terrain_stabilize_params){ 0 }, jobs, &result);
+    terrain_stabilize_regions(regions, SIDE * SIDE, &(terrain_stabilize_desc){ 0 }, jobs, &result);
     for (int n = 0; n < SIDE * SIDE; n++) {
         terrain_chunk_coord c = { cx + n % SIDE - 1, cz + n / SIDE - 1 };
         if (terrain_columns_changed_chunks(regions[n], NULL, 0, true))
@@ -72,8 +72,8 @@ int main(int argc, char **argv) {
     trace_thread_name("main");
 
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = common.threads });
-    terrain_generation_params params = terrain_generation_defaults((uint64_t)seed);
-    terrain_edit_log *log = terrain_edit_log_create(terrain_generation_key(&params));
+    terrain_generation_desc params = terrain_generation_defaults((uint64_t)seed);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
     /* The world folder: its earlier edits (if any) come into the log, and it is held until
      * destroyed (a second program opening it is refused). */
     terrain_store_report report;
@@ -119,7 +119,7 @@ int main(int argc, char **argv) {
         return 1;
     }
     uint64_t edited = terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 }));
-    terrain_edit_log *loaded = terrain_edit_log_create(terrain_generation_key(&params));
+    terrain_edit_log *loaded = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
     terrain_store *reopened = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = loaded }, &report);
     terrain_world *again = terrain_world_create(&(terrain_world_desc){ .generation = params, .edits = loaded });
     uint64_t reloaded = terrain_stacks_hash(terrain_world_stacks(again, (terrain_chunk_coord){ 0, 0 }));

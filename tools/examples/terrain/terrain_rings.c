@@ -59,7 +59,7 @@ static int parse(int argc, char **argv, options *o, int *width, int *height) {
 
 /* Frame rate, chunk counts, position and seed in the top-left corner. */
 static void draw_hud(gfx_text *hud, terrain_ecs *te, const terrain_view *view, double frame_seconds, int seed) {
-    terrain_ecs_stats s = terrain_ecs_stats_get(te);
+    terrain_ecs_stats_info s = terrain_ecs_stats(te);
     const float white[4] = { 1, 1, 1, 1 };
     gfx_text_print(hud, 8, 8, 2, white, "%.0f fps  %.1f ms", frame_seconds > 0 ? 1.0 / frame_seconds : 0.0,
                    frame_seconds * 1e3);
@@ -77,19 +77,19 @@ int main(int argc, char **argv) {
     if (rc >= 0) return rc;
     if (o.common.trace_path && !trace_start(o.common.trace_path)) return 2;
     trace_thread_name("main");
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "terrain_rings (loading)",
+    gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = width, .height = height, .title = "terrain_rings (loading)",
                                                .headless = o.headless });
     if (!gfx) return 1;
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = o.common.threads });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
-    terrain_generation_params params = terrain_generation_defaults((uint64_t)o.seed);
+    terrain_generation_desc params = terrain_generation_defaults((uint64_t)o.seed);
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = params });
     terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = params.sea_level });
     gfx_text *hud = gfx_text_create(gfx);
     /* Input only to notice Escape and the window closing. */
-    input_system *input = input_create(&(input_desc){ .glfw_window = gfx_glfw_window(gfx) });
+    input_system *input = input_system_create(&(input_system_desc){ .glfw_window = gfx_glfw_window(gfx) });
     if (!renderer || !hud || !input) return 1;
-    terrain_ecs *te = terrain_ecs_create(ecs, world);
+    terrain_ecs *te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });
     /* Mesh layers that cover the relief, with a margin for overhangs. */
     double low = params.base_height - params.relief_height - 48, high = params.base_height + params.relief_height + 48;
     terrain_ecs_spawn_rings(te, 2 * o.radius, o.rings + 1, low, high);
@@ -126,18 +126,18 @@ int main(int argc, char **argv) {
         trace_frame_end();
         if (frame == 0) gfx_window_set_title(gfx, "terrain_rings");   /* the first frame is meshed */
     }
-    terrain_ecs_stats stats = terrain_ecs_stats_get(te);
+    terrain_ecs_stats_info stats = terrain_ecs_stats(te);
     printf("terrain_rings: %d chunks, %d mesh chunks (%d drawn), %llu triangles, %llu frames\n", stats.chunks,
            stats.mesh_chunks, stats.mesh_chunks_uploaded, (unsigned long long)stats.triangles,
            (unsigned long long)gfx_frame_index(gfx));
-    input_destroy(input);
+    input_system_destroy(input);
     gfx_text_destroy(hud);
     terrain_ecs_destroy(te);
     terrain_renderer_destroy(renderer);
     ecs_world_destroy(ecs);
     terrain_world_destroy(world);
     job_system_destroy(jobs);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
     trace_stop();
     return rc < 0 ? 0 : rc;
 }

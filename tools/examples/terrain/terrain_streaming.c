@@ -68,12 +68,12 @@ int main(int argc, char **argv) {
     trace_thread_name("main");
 
     /* Meshes are uploaded to the GPU, so there is a context (offscreen with --headless). */
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "terrain_streaming",
+    gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = width, .height = height, .title = "terrain_streaming",
                                                .headless = headless });
     if (!gfx) return 1;
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = common.threads });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
-    terrain_generation_params params = terrain_generation_defaults((uint64_t)seed);
+    terrain_generation_desc params = terrain_generation_defaults((uint64_t)seed);
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = params,
                                                                        .generate = hand_made ? hills : NULL });
     /* A renderer only when there is something to see: a window, or a screenshot to write
@@ -88,7 +88,7 @@ int main(int argc, char **argv) {
     /* Small rings: 2 × 2 chunks of full detail around the viewer, over the 32 m of height
      * around the start's ground; the far ground beyond
      * is the clipmap's. */
-    terrain_ecs *te = terrain_ecs_create(ecs, world);
+    terrain_ecs *te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });
     double ground = terrain_world_top(world, 16, 16);
     terrain_ecs_stream(te, &(terrain_stream_desc){ .half_width = 1, .levels = 1, .y_min = ground - 16,
                                                    .y_max = ground + 16, .collision_radius = 1 });
@@ -104,7 +104,7 @@ int main(int argc, char **argv) {
     for (int step = 0; step <= steps; step++) {
         view.camera[0] = 16 + 32.0 * step;             /* one chunk further along +x */
         const double eye[1][3] = { { view.camera[0], view.camera[1], view.camera[2] } };
-        terrain_stream_stats stats = { 0 };
+        terrain_ecs_stream_stats_info stats = { 0 };
         for (int frame = 0; frame < 2000; frame++) {   /* until the rings are in */
             trace_frame_begin();
             terrain_ecs_set_viewers(te, eye, 1);
@@ -128,7 +128,7 @@ int main(int argc, char **argv) {
         printf("terrain_streaming: step %d at x %.0f: %d chunks wanted, %d ready, %d kept\n", step, view.camera[0],
                stats.mesh_chunks_wanted, stats.mesh_chunks_ready, stats.mesh_chunks_kept);
     }
-    terrain_stream_stats stats = terrain_ecs_stream_stats(te);
+    terrain_ecs_stream_stats_info stats = terrain_ecs_stream_stats(te);
     printf("terrain_streaming: %llu chunks meshed, %llu empty skipped unsampled, %.1f MB resident\n",
            (unsigned long long)stats.chunks_meshed, (unsigned long long)stats.chunks_skipped_empty,
            (double)stats.resident_bytes / (1 << 20));
@@ -140,7 +140,7 @@ int main(int argc, char **argv) {
     ecs_world_destroy(ecs);
     terrain_world_destroy(world);
     job_system_destroy(jobs);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
     trace_stop();
     return rc < 0 ? 0 : rc;
 }

@@ -66,12 +66,12 @@ int main(int argc, char **argv) {
     trace_thread_name("main");
 
     /* The terrain: 5 × 5 chunks of 32 m around the origin, meshed as entities. */
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "terrain_water", .headless = headless });
+    gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = width, .height = height, .title = "terrain_water", .headless = headless });
     if (!gfx) return 1;
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = common.threads });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = basin_chunk });
-    terrain_ecs *terrain = terrain_ecs_create(ecs, world);
+    terrain_ecs *terrain = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });
     terrain_ecs_spawn_area(terrain, 0, 0, 2, 0, 0);
     terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = LAKE_LEVEL });
     /* The water: one call. The mesh phase gives the chunks that hold the lake's surface a
@@ -97,7 +97,7 @@ int main(int argc, char **argv) {
         if (screenshot && frames && frame + 1 == frames && !gfx_screenshot(gfx, screenshot)) status = 1;
         gfx_frame_end(gfx);
     }
-    terrain_water_stats stats = terrain_water_stats_get(water);
+    terrain_water_stats_info stats = terrain_water_stats(water);
     printf("terrain_water: water %s, %d planes drawn in the last frame, %.2f ms CPU\n",
            terrain_water_quality_name(water_level), stats.planes_drawn, stats.cpu_ms);
     terrain_water_destroy(water);
@@ -106,7 +106,7 @@ int main(int argc, char **argv) {
     ecs_world_destroy(ecs);
     terrain_world_destroy(world);
     job_system_destroy(jobs);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
     trace_stop();
     return status;
 }

@@ -58,16 +58,16 @@ int main(int argc, char **argv) {
     trace_thread_name("main");
 
     /* The terrain: 5 × 5 chunks of 32 m around the origin, meshed as entities. */
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .title = "grass_meadow", .headless = headless });
+    gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = width, .height = height, .title = "grass_meadow", .headless = headless });
     if (!gfx) return 1;
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = common.threads });
     ecs_world *ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs });
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = meadow_chunk });
-    terrain_ecs *terrain = terrain_ecs_create(ecs, world);
+    terrain_ecs *terrain = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });
     terrain_ecs_spawn_area(terrain, 0, 0, 2, 0, 0);
     terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = -100 });
     /* The grass: one call; it follows the terrain's mesh chunks from then on. */
-    grass_system *grass = grass_create(&(grass_desc){ .gfx = gfx, .ecs = ecs, .world = world, .quality = grass_level });
+    grass_system *grass = grass_system_create(&(grass_system_desc){ .gfx = gfx, .ecs = ecs, .world = world, .quality = grass_level });
     if (!renderer || !grass) return 1;
 
     int status = 0;
@@ -88,16 +88,16 @@ int main(int argc, char **argv) {
         if (screenshot && frames && frame + 1 == frames && !gfx_screenshot(gfx, screenshot)) status = 1;
         gfx_frame_end(gfx);
     }
-    grass_stats stats = grass_stats_get(grass);
+    grass_system_stats_info stats = grass_system_stats(grass);
     printf("grass_meadow: %d patches, %llu tufts placed, %llu drawn in the last frame, %.2f ms CPU\n", stats.patches,
            (unsigned long long)stats.tufts, (unsigned long long)grass_visible_tufts(grass), stats.cpu_ms);
-    grass_destroy(grass);
+    grass_system_destroy(grass);
     terrain_renderer_destroy(renderer);
     terrain_ecs_destroy(terrain);
     ecs_world_destroy(ecs);
     terrain_world_destroy(world);
     job_system_destroy(jobs);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
     trace_stop();
     return status;
 }

@@ -38,15 +38,15 @@ static double sample_frames(void *user) {
 static void bench_frame_size(bench_context *ctx, const char *name, int width, int height, bool scene) {
     if (!bench_wants(ctx, name)) return;
     gfx_bench b = { .camera = gfx_scene_default_camera() };
-    b.gfx = gfx_create(&(gfx_desc){ .width = width, .height = height, .headless = true });
+    b.gfx = gfx_context_create(&(gfx_context_desc){ .width = width, .height = height, .headless = true });
     if (!b.gfx || (scene && !(b.scene = gfx_scene_create(b.gfx)))) {
         core_error("bench", "%s: no OpenGL context or scene; row skipped", name);
-        gfx_destroy(b.gfx);
+        gfx_context_destroy(b.gfx);
         return;
     }
     bench_run(ctx, name, "ms", 9, sample_frames, &b);
     gfx_scene_destroy(b.scene);
-    gfx_destroy(b.gfx);
+    gfx_context_destroy(b.gfx);
 }
 
 void bench_group_gfx(bench_context *ctx) {

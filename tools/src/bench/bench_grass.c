@@ -33,7 +33,7 @@
 
 static void add_grass_ms(game_app *app, void *user) {
     grass_system *grass = game_app_grass(app);
-    if (grass) *(double *)user += grass_stats_get(grass).cpu_ms;
+    if (grass) *(double *)user += grass_system_stats(grass).cpu_ms;
 }
 
 /* `runs` samples of the start view's frames at a grass quality (shadows at the game's default). */
@@ -116,28 +116,28 @@ static double sample_meadow_frame(void *user) {
 /* 7 × 7 chunks (224 m square) of rolling soil, grass of `density` cells a metre out to `range`,
  * the camera `height` above the middle looking `pitch` down. */
 static bool meadow_open(meadow *m, bench_context *ctx, int density, float range, double height, float pitch) {
-    *m = (meadow){ .gfx = gfx_create(&(gfx_desc){ .width = 640, .height = 360, .headless = true }) };
+    *m = (meadow){ .gfx = gfx_context_create(&(gfx_context_desc){ .width = 640, .height = 360, .headless = true }) };
     if (!m->gfx) return false;
     m->jobs = job_system_create(&(job_system_desc){ .threads = bench_threads(ctx) });
     m->ecs = ecs_world_create(&(ecs_world_desc){ .jobs = m->jobs });
     m->world = terrain_world_create(&(terrain_world_desc){ .generate = meadow_chunk });
-    m->terrain = terrain_ecs_create(m->ecs, m->world);
+    m->terrain = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = m->ecs, .terrain = m->world });
     terrain_ecs_spawn_area(m->terrain, 0, 0, 3, 0, 0);
     m->renderer = terrain_renderer_create(m->gfx, &(terrain_renderer_desc){ .sea_level = -100 });
-    m->grass = grass_create(&(grass_desc){ .gfx = m->gfx, .ecs = m->ecs, .world = m->world, .quality = GRASS_HIGH,
+    m->grass = grass_system_create(&(grass_system_desc){ .gfx = m->gfx, .ecs = m->ecs, .world = m->world, .quality = GRASS_HIGH,
                                            .density = density, .range = range, .max_placements = 64 });
     m->view = (terrain_view){ .camera = { 16, 10 + height, 16 }, .pitch = pitch, .aspect = 640.0f / 360.0f };
     return m->renderer && m->grass;
 }
 
 static void meadow_close(meadow *m) {
-    grass_destroy(m->grass);
+    grass_system_destroy(m->grass);
     terrain_renderer_destroy(m->renderer);
     if (m->terrain) terrain_ecs_destroy(m->terrain);
     ecs_world_destroy(m->ecs);
     terrain_world_destroy(m->world);
     job_system_destroy(m->jobs);
-    gfx_destroy(m->gfx);
+    gfx_context_destroy(m->gfx);
 }
 
 static void bench_instances(bench_context *ctx) {
@@ -159,8 +159,8 @@ static void bench_instances(bench_context *ctx) {
 static double sample_place(void *user) {
     meadow *m = user;
     /* Every patch again: a new system over the same chunks places them all in its first frame. */
-    grass_destroy(m->grass);
-    m->grass = grass_create(&(grass_desc){ .gfx = m->gfx, .ecs = m->ecs, .world = m->world, .quality = GRASS_HIGH,
+    grass_system_destroy(m->grass);
+    m->grass = grass_system_create(&(grass_system_desc){ .gfx = m->gfx, .ecs = m->ecs, .world = m->world, .quality = GRASS_HIGH,
                                            .max_placements = 64 });
     /* The frame up to its draws: the draw phase places (and culls); glFinish waits for it. */
     gfx_frame_begin(m->gfx);
@@ -174,7 +174,7 @@ static double sample_place(void *user) {
     terrain_ecs_draw(m->terrain, m->renderer, &m->view);
     grass_draw(m->grass, &m->view);
     gfx_frame_end(m->gfx);
-    uint64_t patches = grass_stats_get(m->grass).placements;
+    uint64_t patches = grass_system_stats(m->grass).placements;
     return patches ? ms / (double)patches : 0.0;
 }
 

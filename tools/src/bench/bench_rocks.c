@@ -138,13 +138,13 @@ void bench_group_rocks(bench_context *ctx) {
         double seconds[ROCKS_BENCH_RUNS], stones[ROCKS_BENCH_RUNS], mb[ROCKS_BENCH_RUNS], cpu[ROCKS_BENCH_RUNS];
         for (int r = 0; r < ROCKS_BENCH_RUNS; r++) {
             double cpu0 = process_cpu_seconds();
-            rocks_tileset *set = rocks_tiles_create(&(rocks_tiles_desc){
+            rocks_tileset *set = rocks_tileset_create(&(rocks_tileset_desc){
                 .cells = cells[i], .shape = ROCKS_SHAPE_ROUND, .voxels_per_cell = 10, .jobs = jobs });
             cpu[r] = process_cpu_seconds() - cpu0;
             seconds[r] = set->build_seconds;
             stones[r] = set->rock_count;
             mb[r] = (double)set->bytes / 1e6;
-            rocks_tiles_destroy(set);
+            rocks_tileset_destroy(set);
         }
         bench_record(ctx, name, "s", seconds, ROCKS_BENCH_RUNS);
         bench_record(ctx, stones_name, "stones", stones, ROCKS_BENCH_RUNS);

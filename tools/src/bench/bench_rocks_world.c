@@ -160,7 +160,7 @@ static void bench_draw(bench_context *ctx) {
             return;
         }
         for (int r = 0; r < RUNS; r++) frames[on][r] = bench_start_view_frames(app, NULL, NULL);
-        if (on) drawn = (double)game_app_stats_get(app).rocks_drawn;
+        if (on) drawn = (double)game_app_stats(app).rocks_drawn;
         game_app_destroy(app);
     }
     double base = bench_median(frames[0], RUNS), added[RUNS];
@@ -173,7 +173,7 @@ static void bench_draw(bench_context *ctx) {
 void bench_group_rocks_world(bench_context *ctx) {
     if (!bench_wants(ctx, "rocks.instance") && !bench_wants(ctx, "rocks.draw")) return;
     if (bench_wants(ctx, "rocks.instance")) {
-        rocks_tileset *set = rocks_tiles_create(&(rocks_tiles_desc){ .cache_path = bench_rocks_cache_path() });
+        rocks_tileset *set = rocks_tileset_create(&(rocks_tileset_desc){ .cache_path = bench_rocks_cache_path() });
         if (!set) {
             core_error("bench", "rocks: no tile set; rows skipped");
             return;
@@ -184,7 +184,7 @@ void bench_group_rocks_world(bench_context *ctx) {
         bench_place(ctx, set, index);
         bench_place_world(ctx, set, index);
         rocks_place_index_destroy(index);
-        rocks_tiles_destroy(set);
+        rocks_tileset_destroy(set);
     }
     bench_draw(ctx);
 }

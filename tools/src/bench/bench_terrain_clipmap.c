@@ -63,7 +63,7 @@ void bench_group_terrain_clipmap(bench_context *ctx) {
                                   .aspect = 16.0f / 9.0f };
             terrain_frustum frustum = terrain_frustum_from_view(&view);
             terrain_clipmap_cull(b.clipmap, &frustum);
-            triangles[d] = (double)terrain_clipmap_stats_get(b.clipmap).triangles_visible;
+            triangles[d] = (double)terrain_clipmap_stats(b.clipmap).triangles_visible;
         }
         bench_record(ctx, "terrain.clipmap.triangles", "count", triangles, 8);
     }

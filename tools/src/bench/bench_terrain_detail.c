@@ -84,7 +84,7 @@ static double sample_flat(void *user) {
 
 static void bench_flat(bench_context *ctx) {
     if (!bench_wants(ctx, "terrain.detail.flat.frame_ms.640x360")) return;
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = 640, .height = 360, .headless = true });
+    gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = 640, .height = 360, .headless = true });
     if (!gfx) return;
     terrain_vertex vertices[4] = { { .position = { -500, 0, -500 } }, { .position = { -500, 0, 500 } },
                                    { .position = { 500, 0, 500 } }, { .position = { 500, 0, -500 } } };
@@ -122,7 +122,7 @@ static void bench_flat(bench_context *ctx) {
         terrain_renderer_destroy(f[on].renderer);
         terrain_gpu_mesh_destroy(&f[on].mesh);
     }
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }
 
 /* ---- the world ---- */
@@ -147,10 +147,10 @@ static void bench_view(bench_context *ctx, const char *name, double pitch_degree
 void bench_group_terrain_detail(bench_context *ctx) {
     if (bench_wants(ctx, "terrain.textures.make_ms")) bench_run(ctx, "terrain.textures.make_ms", "ms", 5, sample_make, NULL);
     if (bench_wants(ctx, "terrain.textures.renderer_ms")) {
-        gfx_context *gfx = gfx_create(&(gfx_desc){ .width = 64, .height = 64, .headless = true });
+        gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = 64, .height = 64, .headless = true });
         if (gfx) {
             bench_run(ctx, "terrain.textures.renderer_ms", "ms", 5, sample_renderer, gfx);
-            gfx_destroy(gfx);
+            gfx_context_destroy(gfx);
         }
     }
     bench_flat(ctx);

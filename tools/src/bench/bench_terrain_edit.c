@@ -41,7 +41,7 @@ static bool edit_bench_settle(edit_bench *b, double seconds) {
         terrain_ecs_set_viewers(b->te, (const double (*)[3])b->eye, 1);
         ecs_progress(b->ecs, 1.0f / 60.0f);
         terrain_world_trim(b->world);
-        terrain_stream_stats s = terrain_ecs_stream_stats(b->te);
+        terrain_ecs_stream_stats_info s = terrain_ecs_stream_stats(b->te);
         if (s.mesh_chunks_wanted > 0 && s.mesh_chunks_ready == s.mesh_chunks_wanted && s.jobs_in_flight == 0 &&
             terrain_ecs_edit_stats(b->te).stabilizing_chunks == 0)
             return true;
@@ -82,7 +82,7 @@ static double sample_idle(void *user) { return edit_bench_frame(user); }
 
 void bench_group_terrain_edit(bench_context *ctx) {
     if (!bench_wants(ctx, "terrain.edit.brush")) return;
-    gfx_context *gfx = gfx_create(&(gfx_desc){ .width = 64, .height = 64, .headless = true, .title = "bench" });
+    gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = 64, .height = 64, .headless = true, .title = "bench" });
     if (!gfx) {
         core_error("bench", "terrain.edit.brush: no offscreen context; rows skipped");
         return;
@@ -90,7 +90,7 @@ void bench_group_terrain_edit(bench_context *ctx) {
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = bench_threads(ctx) });
     edit_bench b = { .ecs = ecs_world_create(&(ecs_world_desc){ .jobs = jobs }) };
     b.world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(42) });
-    b.te = terrain_ecs_create(b.ecs, b.world);
+    b.te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = b.ecs, .terrain = b.world });
     terrain_ecs_stream(b.te, &(terrain_stream_desc){ 0 });
     b.eye[0] = 16, b.eye[2] = 16;
     b.eye[1] = terrain_stacks_top(terrain_world_stacks(b.world, (terrain_chunk_coord){ 0, 0 }), 16, 16) + 12.0;
@@ -106,5 +106,5 @@ void bench_group_terrain_edit(bench_context *ctx) {
     ecs_world_destroy(b.ecs);
     terrain_world_destroy(b.world);
     job_system_destroy(jobs);
-    gfx_destroy(gfx);
+    gfx_context_destroy(gfx);
 }

@@ -17,6 +17,9 @@
  *   terrain.edit_log.replay   µs for terrain_edit_log_replay of one chunk with 10 entries of
  *       about 40 columns each over its generated stacks (what a worker adds to generating an
  *       edited chunk); mean of 200 replays per run.
+ *   terrain.edit_log.soak_bytes  bytes of a world folder after a slide of 10 000 stabilization
+ *       frames on chunk (0, 0) (the same 16 columns changed every frame), saved every 500 frames
+ *       and closed: bounded by the columns edited, since each save folds a chunk's entries.
  */
 #include "bench.h"
 
@@ -27,6 +30,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 enum { SAVE_SIDE = 8, SAVE_CHUNKS = SAVE_SIDE * SAVE_SIDE, EDIT_COLUMNS = 40, REPLAY_ENTRIES = 10,
@@ -63,14 +67,14 @@ static terrain_stacks *edit_chunk(const terrain_stacks *from, terrain_chunk_coor
 }
 
 static void bench_setup(edit_log_bench *b) {
-    terrain_generation_params params = terrain_generation_defaults(42);
+    terrain_generation_desc params = terrain_generation_defaults(42);
     b->key = terrain_generation_key(&params);
     for (int n = 0; n < SAVE_CHUNKS; n++) {
         b->coord[n] = (terrain_chunk_coord){ n % SAVE_SIDE, n / SAVE_SIDE };
         b->generated[n] = terrain_generate_chunk(&params, b->coord[n]);
         b->edited[n] = edit_chunk(b->generated[n], b->coord[n], (uint64_t)n);
     }
-    b->replay_log = terrain_edit_log_create(b->key);
+    b->replay_log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
     b->steps[0] = b->generated[0];
     for (int e = 1; e <= REPLAY_ENTRIES; e++) {
         b->steps[e] = edit_chunk(b->steps[e - 1], b->coord[0], 1000u + (uint64_t)e);
@@ -109,7 +113,7 @@ static void bench_teardown(edit_log_bench *b) {
 }
 
 static terrain_edit_log *recorded_log(const edit_log_bench *b) {
-    terrain_edit_log *log = terrain_edit_log_create(b->key);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
     for (int n = 0; n < SAVE_CHUNKS; n++)
         terrain_edit_log_record(log, b->coord[n], TERRAIN_EDIT_SET, b->generated[n], b->edited[n]);
     return log;
@@ -128,7 +132,7 @@ static double sample_save_files(void *user) {
 
 static void open_store(edit_log_bench *b) {
     if (b->store) return;
-    b->store_log = terrain_edit_log_create(b->key);
+    b->store_log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
     terrain_store_report report;
     b->store = terrain_store_create(&(terrain_store_desc){ .dir = b->store_dir, .edits = b->store_log, .seed = 42 },
                                     &report);
@@ -167,7 +171,7 @@ static double sample_save_frame(void *user) {
 
 static double sample_load(void *user) {
     edit_log_bench *b = user;
-    terrain_edit_log *log = terrain_edit_log_create(b->key);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
     terrain_store_report report;
     uint64_t start = core_time_ns();
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = b->store_dir, .edits = log }, &report);
@@ -181,7 +185,7 @@ static double sample_load(void *user) {
 
 static double sample_load_files(void *user) {
     edit_log_bench *b = user;
-    terrain_edit_log *log = terrain_edit_log_create(b->key);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
     terrain_edit_log_load_result result;
     uint64_t start = core_time_ns();
     bool ok = terrain_edit_log_load(log, b->files_dir, &result);
@@ -203,6 +207,53 @@ static double sample_replay(void *user) {
     double us = (double)(core_time_ns() - start) * 1e-3 / REPLAYS_PER_RUN;
     bench_consume((double)check);
     return us;
+}
+
+/* The soak: 16 columns of chunk 0's generated ground get a sand cover that changes every frame. */
+static double sample_soak_bytes(void *user) {
+    edit_log_bench *b = user;
+    enum { FRAMES = 10000, SAVE_EVERY = 500, SIDE = 4 };
+    char dir[160];
+    snprintf(dir, sizeof dir, "%s/soak", b->dir);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log }, NULL);
+    if (!store) core_fatal("bench", "cannot open a world in %s", dir);
+    terrain_chunk_coord coord = b->coord[0];
+    terrain_columns *region = terrain_columns_create(&(terrain_columns_desc){
+        .x = coord.x * TERRAIN_CHUNK_COLUMNS, .z = coord.z * TERRAIN_CHUNK_COLUMNS,
+        .width = TERRAIN_CHUNK_COLUMNS, .depth = TERRAIN_CHUNK_COLUMNS });
+    terrain_columns_load(region, coord, b->generated[0]);
+    terrain_stacks *before = terrain_columns_to_stacks(region, coord);
+    char error[512];
+    for (int frame = 0; frame < FRAMES; frame++) {
+        for (int k = 0; k < SIDE; k++)
+            for (int i = 0; i < SIDE; i++) {
+                terrain_layer layers[2] = { { TERRAIN_BEDROCK, 240.0f },
+                                            { TERRAIN_SAND, (float)(1 + (frame + i + k) % 5) / 32.0f } };
+                terrain_columns_set(region, i, k, layers, 2);
+            }
+        terrain_stacks *after = terrain_columns_to_stacks(region, coord);
+        terrain_edit_log_record(log, coord, TERRAIN_EDIT_STABILIZE, before, after);
+        terrain_stacks_destroy(before);
+        before = after;
+        if ((frame + 1) % SAVE_EVERY == 0 && !terrain_store_save(store, error, sizeof error))
+            core_fatal("bench", "%s", error);
+    }
+    terrain_store_destroy(store);
+    terrain_edit_log_destroy(log);
+    terrain_stacks_destroy(before);
+    terrain_columns_destroy(region);
+    double bytes = 0;
+    DIR *listing = opendir(dir);
+    for (struct dirent *e; listing && (e = readdir(listing));) {
+        char path[512];
+        struct stat info;
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        if (stat(path, &info) == 0 && S_ISREG(info.st_mode)) bytes += (double)info.st_size;
+    }
+    if (listing) closedir(listing);
+    remove_tree(dir);
+    return bytes;
 }
 
 void bench_group_terrain_edit_log(bench_context *ctx) {
@@ -229,6 +280,8 @@ void bench_group_terrain_edit_log(bench_context *ctx) {
         bench_run(ctx, "terrain.edit_log.load.tel_files", "ms", 9, sample_load_files, b);
     }
     if (bench_wants(ctx, "terrain.edit_log.replay")) bench_run(ctx, "terrain.edit_log.replay", "us", 9, sample_replay, b);
+    if (bench_wants(ctx, "terrain.edit_log.soak_bytes"))
+        bench_run(ctx, "terrain.edit_log.soak_bytes", "bytes", 3, sample_soak_bytes, b);
     bench_teardown(b);
     core_free(b, sizeof *b);
 }

@@ -40,7 +40,7 @@
 
 typedef struct generate_bench {
     job_system *jobs;
-    terrain_generation_params params;
+    terrain_generation_desc params;
     int side;                             /* chunks along each side */
     terrain_stacks **stacks;
 } generate_bench;

@@ -37,7 +37,7 @@ enum { REGION_CHUNKS = 8, REGION_COLUMNS = REGION_CHUNKS * TERRAIN_CHUNK_COLUMNS
 typedef struct stabilize_bench {
     job_system *jobs;                 /* NULL: one thread */
     terrain_stacks *stacks[REGION_CHUNKS * REGION_CHUNKS];
-    terrain_stabilize_params params;
+    terrain_stabilize_desc params;
     bool erode;
     bool per_chunk;                   /* one region per chunk instead of one big region */
     double iterations[32], moved[32];
@@ -56,7 +56,7 @@ static void load_flat(stabilize_bench *b) {
 }
 
 static void load_generated(stabilize_bench *b) {
-    terrain_generation_params params = terrain_generation_defaults(42);
+    terrain_generation_desc params = terrain_generation_defaults(42);
     for (int n = 0; n < REGION_CHUNKS * REGION_CHUNKS; n++)
         b->stacks[n] = terrain_generate_chunk(&params, (terrain_chunk_coord){ n % REGION_CHUNKS, n / REGION_CHUNKS });
 }

@@ -66,14 +66,14 @@ static double sample_coast_frames(void *user) {
 }
 
 static bool coast_open(coast *c, bench_context *ctx) {
-    *c = (coast){ .gfx = gfx_create(&(gfx_desc){ .width = 640, .height = 360, .headless = true }) };
+    *c = (coast){ .gfx = gfx_context_create(&(gfx_context_desc){ .width = 640, .height = 360, .headless = true }) };
     if (!c->gfx) return false;
     c->jobs = job_system_create(&(job_system_desc){ .threads = bench_threads(ctx) });
     c->ecs = ecs_world_create(&(ecs_world_desc){ .jobs = c->jobs });
-    terrain_generation_params generation = terrain_generation_defaults(1);
+    terrain_generation_desc generation = terrain_generation_defaults(1);
     generation.sea_level = 0;
     c->world = terrain_world_create(&(terrain_world_desc){ .generation = generation, .generate = coast_chunk });
-    c->terrain = terrain_ecs_create(c->ecs, c->world);
+    c->terrain = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = c->ecs, .terrain = c->world });
     terrain_ecs_spawn_area(c->terrain, 0, 0, 2, -1, 0);
     c->renderer = terrain_renderer_create(c->gfx, &(terrain_renderer_desc){ .sea_level = 0 });
     c->water = terrain_water_create(&(terrain_water_desc){ .gfx = c->gfx, .ecs = c->ecs, .world = c->world,
@@ -90,7 +90,7 @@ static void coast_close(coast *c) {
     ecs_world_destroy(c->ecs);
     terrain_world_destroy(c->world);
     job_system_destroy(c->jobs);
-    gfx_destroy(c->gfx);
+    gfx_context_destroy(c->gfx);
 }
 
 void bench_group_water(bench_context *ctx) {

@@ -26,7 +26,7 @@
  *                                     inside them on this thread; a GPU would not)
  *   world.walk.thread_cpu.p50 / .p99  the main thread's own CPU time over the cpu_frame span
  *                                     (CLOCK_THREAD_CPUTIME_ID): the work, without the waits
- *   world.walk.triangles              triangles drawn a frame, the median (gfx_stats: every draw
+ *   world.walk.triangles              triangles drawn a frame, the median (gfx_context_stats: every draw
  *                                     but the grass's GPU-generated ones)
  *   world.walk.hitches                frames over 33 ms
  *   world.walk.memory                 peak process RSS, MB (driver memory included)
@@ -63,7 +63,7 @@ void bench_group_world(bench_context *ctx) {
     }
     rocks_quality rocks = bench_rocks_off(ctx) ? ROCKS_OFF : ROCKS_ON;
     const char *rocks_cache = bench_rocks_cache_path();
-    if (rocks == ROCKS_ON && rocks_cache) rocks_tiles_destroy(rocks_tiles_create(&(rocks_tiles_desc){ .cache_path = rocks_cache }));
+    if (rocks == ROCKS_ON && rocks_cache) rocks_tileset_destroy(rocks_tileset_create(&(rocks_tileset_desc){ .cache_path = rocks_cache }));
     game_app *app = game_app_create(&(game_app_desc){ .seed = 1, .width = full ? 1280 : 640, .height = full ? 720 : 360,
                                                       .headless = true,
                                                       .threads = bench_threads(ctx), .walk = &walk,
@@ -78,13 +78,13 @@ void bench_group_world(bench_context *ctx) {
     uint64_t ready_at_load = 0;
     while (game_app_frame(app)) {
         if (loaded) continue;
-        game_app_stats s = game_app_stats_get(app);
+        game_app_stats_info s = game_app_stats(app);
         if (s.frames > 0) {
             loaded = core_time_ns();
             ready_at_load = s.stream.chunks_meshed + s.stream.chunks_skipped_empty;
         }
     }
-    game_app_stats s = game_app_stats_get(app);
+    game_app_stats_info s = game_app_stats(app);
     game_app_destroy(app);
     game_walk_free(&walk);
     double load_seconds = (double)(loaded - start) * 1e-9;

@@ -1,0 +1,143 @@
+/* Editing a running world (terrain.h, "editing in the ECS"; terrain_ecs_edit.c): the queue, the
+ * stabilize phase that applies it, stabilization across chunks over several frames, refusals.
+ * No mesh chunk is spawned or streamed, so nothing is uploaded and no GL context is needed; the
+ * tests that look at what an edit draws are in tests/render (render_stream, render_grass,
+ * render_rocks, render_world). The world is flat bedrock up to y = 0, made by hand, so every
+ * quantum of sand in it came from the edits: a deposit of V m³ is round(32·V) quanta (000 §4.3,
+ * terrain.h "brushes"), and stabilization moves material without making or losing any (§3.4). */
+#include "../engine/test.h"
+#include "terrain/terrain.h"
+
+#include "core/core.h"
+#include "ecs/ecs.h"
+#include "jobs/jobs.h"
+
+#include <math.h>
+
+#define DT (1.0f / 60.0f)
+
+static void flat_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
+    (void)user, (void)x, (void)z;
+    terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, -TERRAIN_FLOOR_Y);
+}
+
+static terrain_stacks *flat_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, flat_column, user);
+}
+
+typedef struct running {
+    job_system *jobs;
+    ecs_world *ecs;
+    terrain_world *world;
+    terrain_ecs *te;
+} running;
+
+static running running_open(void) {
+    running r = { .jobs = job_system_create(&(job_system_desc){ .threads = 2 }) };
+    r.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = r.jobs });
+    r.world = terrain_world_create(&(terrain_world_desc){ .generate = flat_chunk });
+    r.te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = r.ecs, .terrain = r.world });
+    cr_assert(r.te);
+    return r;
+}
+
+static void running_close(running *r) {
+    terrain_ecs_destroy(r->te);
+    ecs_world_destroy(r->ecs);
+    terrain_world_destroy(r->world);
+    job_system_destroy(r->jobs);
+}
+
+/* Sand in one chunk, in quanta·column (32 quanta a metre). */
+static int64_t chunk_sand_quanta(terrain_world *w, int64_t cx, int64_t cz) {
+    int64_t q = 0;
+    terrain_layer layers[64];
+    const terrain_stacks *st = terrain_world_stacks(w, (terrain_chunk_coord){ cx, cz });
+    for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
+        for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
+            int n = terrain_stacks_column(st, i, k, layers, 64);
+            cr_assert_leq(n, 64);
+            for (int l = 0; l < n; l++)
+                if (layers[l].material == TERRAIN_SAND) q += llroundf(layers[l].thickness * 32.0f);
+        }
+    return q;
+}
+
+/* Sand in chunks [lo, hi]². */
+static int64_t sand_quanta(terrain_world *w, int64_t lo, int64_t hi) {
+    int64_t q = 0;
+    for (int64_t cz = lo; cz <= hi; cz++)
+        for (int64_t cx = lo; cx <= hi; cx++) q += chunk_sand_quanta(w, cx, cz);
+    return q;
+}
+
+/* Two strokes queued: nothing changes until the next frame's stabilize phase, which applies
+ * both; 10 m³ each is 320 quanta each, all of it in the world (a pile of 10 m³ in the middle of
+ * chunk (0, 0) cannot slide further than its neighbours). */
+Test(terrain_ecs_edit, edits_wait_in_the_queue_and_the_next_frame_applies_them) {
+    running r = running_open();
+    const terrain_edit stroke = { .tool = TERRAIN_EDIT_DEPOSIT,
+                                  .deposit = { .x = 16.5, .z = 16.5, .radius = 2, .volume = 10 } };
+    cr_assert(terrain_ecs_edit(r.te, &stroke));
+    cr_assert(terrain_ecs_edit(r.te, &stroke));
+    terrain_ecs_edit_stats_info st = terrain_ecs_edit_stats(r.te);
+    cr_expect_eq(st.queued, 2);
+    cr_expect_eq(st.edits_applied, 0);
+    cr_expect_eq(sand_quanta(r.world, -1, 1), 0, "queued, not applied");
+    ecs_progress(r.ecs, DT);
+    terrain_world_trim(r.world);
+    st = terrain_ecs_edit_stats(r.te);
+    cr_expect_eq(st.queued, 0);
+    cr_expect_eq(st.edits_applied, 2);
+    cr_expect_eq(st.edits_refused, 0);
+    cr_expect_eq(sand_quanta(r.world, -1, 1), 2 * 320, "applied in the frame after they were queued");
+    running_close(&r);
+}
+
+/* A steep pile on the corner of four chunks, at most 8 iterations a frame: it slides into all
+ * four over several frames until it is stable, and not a quantum is lost or made. A 300 m³ cone
+ * of sand at 33° has a radius of (3·300 / (π·tan 33°))^(1/3) ≈ 7.6 m, so each quarter of it
+ * (≈ 2400 quanta) lies in one of the four chunks, far more than the 1000 asked for below. */
+Test(terrain_ecs_edit, a_pile_on_a_chunk_corner_spreads_into_four_chunks_and_keeps_its_mass) {
+    running r = running_open();
+    terrain_ecs_set_editing(r.te, &(terrain_editing_desc){ .stabilize = { .max_iterations = 8 } });
+    cr_assert(terrain_ecs_edit(r.te, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                      .deposit = { .x = 0.5, .z = 0.5, .radius = 2, .volume = 300 } }));
+    int frames = 0;
+    for (; frames < 3000; frames++) {
+        ecs_progress(r.ecs, DT);
+        terrain_world_trim(r.world);
+        if (terrain_ecs_edit_stats(r.te).stabilizing_chunks == 0 && frames > 0) break;
+    }
+    cr_assert_lt(frames, 3000, "never stable");
+    terrain_ecs_edit_stats_info st = terrain_ecs_edit_stats(r.te);
+    cr_expect_eq(st.edits_applied, 1);
+    cr_expect_gt(st.iterations, 8, "took several frames of 8 iterations");
+    cr_expect_geq(st.chunks_committed, 4);
+    cr_expect_eq(sand_quanta(r.world, -3, 2), 300 * 32, "sand in the world: exactly the deposit");
+    for (int c = 0; c < 4; c++) {
+        int64_t cx = c & 1 ? 0 : -1, cz = c & 2 ? 0 : -1;
+        cr_expect_gt(chunk_sand_quanta(r.world, cx, cz), 1000, "chunk (%lld, %lld)", (long long)cx, (long long)cz);
+    }
+    running_close(&r);
+}
+
+/* Only brushes are queued: no edit, a tool that is not a brush, a sweep without points are
+ * refused (counted, nothing queued, the world untouched). */
+Test(terrain_ecs_edit, what_is_not_a_brush_is_refused_and_nothing_is_queued) {
+    running r = running_open();
+    core_log_level level = core_log_get_level();
+    core_log_set_level(CORE_LOG_OFF);   /* each refusal logs a message */
+    cr_expect_not(terrain_ecs_edit(r.te, NULL));
+    cr_expect_not(terrain_ecs_edit(r.te, &(terrain_edit){ .tool = TERRAIN_EDIT_SET }));
+    cr_expect_not(terrain_ecs_edit(r.te, &(terrain_edit){ .tool = TERRAIN_EDIT_STABILIZE }));
+    cr_expect_not(terrain_ecs_edit(r.te, &(terrain_edit){ .tool = TERRAIN_EDIT_SWEEP, .sweep = { .radius = 2 } }));
+    core_log_set_level(level);
+    terrain_ecs_edit_stats_info st = terrain_ecs_edit_stats(r.te);
+    cr_expect_eq(st.edits_refused, 4);
+    cr_expect_eq(st.queued, 0);
+    ecs_progress(r.ecs, DT);
+    cr_expect_eq(terrain_ecs_edit_stats(r.te).edits_applied, 0);
+    cr_expect_eq(sand_quanta(r.world, -1, 1), 0);
+    running_close(&r);
+}
