@@ -19,6 +19,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#define APP_REPLAY_STABILIZE_ITERATIONS 3   /* per frame when recording, replaying or walking */
 #define APP_HITCH_MS 33.0
 #define APP_PI 3.14159265358979323846
 
@@ -265,6 +266,10 @@ static bool app_open_terrain(game_app *app) {
                                                              .amplify_user = app->cliffs });
     app->ecs = ecs_world_create(&(ecs_world_desc){ .jobs = app->jobs });
     app->terrain = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = app->ecs, .terrain = app->world });
+    int iterations = app->desc.stabilize_iterations;
+    if (iterations <= 0 && !app->interactive) iterations = APP_REPLAY_STABILIZE_ITERATIONS;
+    if (iterations > 0)
+        terrain_ecs_set_editing(app->terrain, &(terrain_editing_desc){ .stabilize = { .max_iterations = iterations } });
     terrain_stream_desc stream = app->desc.stream;
     if (app->desc.pixel_error > 0 && stream.half_width <= 0 && stream.levels <= 0) {
         stream.pixel_error = app->desc.pixel_error;

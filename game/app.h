@@ -131,6 +131,12 @@ typedef struct game_app_desc {
     terrain_stacks *(*generate)(void *user, terrain_chunk_coord coord);
     void *generate_user;
     terrain_stream_desc stream;       /* view distance and budgets; zero = defaults */
+    int stabilize_iterations;         /* how far sand slides each frame after an edit. 0 = 2 ms
+                                         of wall-clock time in interactive play, and 3 iterations
+                                         (about that long on this project's 2-core machine) when
+                                         recording, replaying or walking a script: an iteration
+                                         budget does not depend on the machine, so a replay gives
+                                         the recording's world byte for byte */
     float pixel_error;                /* screen-space error target in pixels for the far terrain
                                          and, when stream leaves half_width and levels 0, the
                                          rings (terrain.h, "detail from a screen-space error"),

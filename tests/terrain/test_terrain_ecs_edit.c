@@ -32,14 +32,16 @@ typedef struct running {
     terrain_ecs *te;
 } running;
 
-static running running_open(void) {
-    running r = { .jobs = job_system_create(&(job_system_desc){ .threads = 2 }) };
+static running running_open_on(int threads) {
+    running r = { .jobs = job_system_create(&(job_system_desc){ .threads = threads }) };
     r.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = r.jobs });
     r.world = terrain_world_create(&(terrain_world_desc){ .generate = flat_chunk });
     r.te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = r.ecs, .terrain = r.world });
     cr_assert(r.te);
     return r;
 }
+
+static running running_open(void) { return running_open_on(2); }
 
 static void running_close(running *r) {
     terrain_ecs_destroy(r->te);
@@ -140,4 +142,46 @@ Test(terrain_ecs_edit, what_is_not_a_brush_is_refused_and_nothing_is_queued) {
     cr_expect_eq(terrain_ecs_edit_stats(r.te).edits_applied, 0);
     cr_expect_eq(sand_quanta(r.world, -1, 1), 0);
     running_close(&r);
+}
+
+/* Exact replays (issue 16): with the stabilization budgeted in iterations, where a slide is after
+ * each frame is a function of the edits and the frame count alone, not of the machine's speed or
+ * the thread count. The same strokes on 1 and 3 threads give the same bytes in all four chunks
+ * after every frame, including a second stroke queued while the first still slides. */
+static uint64_t corner_hash(terrain_world *w) {
+    uint64_t h = 0;
+    for (int c = 0; c < 4; c++)
+        h = core_hash_combine(h, terrain_stacks_hash(terrain_world_stacks(w, (terrain_chunk_coord){ c & 1 ? 0 : -1,
+                                                                                                   c & 2 ? 0 : -1 })));
+    return h;
+}
+
+Test(terrain_ecs_edit, budgeted_in_iterations_a_slide_is_the_same_bytes_every_frame_on_any_thread_count) {
+    enum { FRAMES = 12 };
+    uint64_t hashes[2][FRAMES];
+    int sliding[2][FRAMES];
+    for (int run = 0; run < 2; run++) {
+        running r = running_open_on(run ? 3 : 1);
+        terrain_ecs_set_editing(r.te, &(terrain_editing_desc){ .stabilize = { .max_iterations = 2 } });
+        cr_assert(terrain_ecs_edit(r.te, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                          .deposit = { .x = 0.5, .z = 0.5, .radius = 2, .volume = 200 } }));
+        for (int f = 0; f < FRAMES; f++) {
+            if (f == 4)
+                cr_assert(terrain_ecs_edit(r.te, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+                                                                  .deposit = { .x = -3, .z = 2, .radius = 1.5f,
+                                                                               .volume = 60 } }));
+            ecs_progress(r.ecs, DT);
+            terrain_world_trim(r.world);
+            hashes[run][f] = corner_hash(r.world);
+            sliding[run][f] = terrain_ecs_edit_stats(r.te).stabilizing_chunks;
+        }
+        cr_expect_eq(sand_quanta(r.world, -3, 2), (200 + 60) * 32, "mass kept");
+        running_close(&r);
+    }
+    cr_expect_gt(sliding[0][FRAMES - 1], 0, "still sliding after %d frames of 2 iterations: the budget bound", FRAMES);
+    for (int f = 0; f < FRAMES; f++) {
+        cr_expect_eq(hashes[0][f], hashes[1][f], "frame %d: 1 thread and 3 threads differ", f);
+        cr_expect_eq(sliding[0][f], sliding[1][f], "frame %d", f);
+        if (f) cr_expect_neq(hashes[0][f], hashes[0][f - 1], "frame %d moved sand", f);
+    }
 }
