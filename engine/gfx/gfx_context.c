@@ -66,6 +66,7 @@ gfx_context *gfx_context_create(const gfx_context_desc *desc_in) {
     core_debug("gfx", "%s on %s", (const char *)glGetString(GL_VERSION),
                (const char *)glGetString(GL_RENDERER));
     gfx_default_state();
+    gfx__resources_init(gfx);
     gfx__timers_init(gfx);
     gfx__programs_init(gfx, desc.shader_dir);
     return gfx;
@@ -75,6 +76,7 @@ void gfx_context_destroy(gfx_context *gfx) {
     if (!gfx) return;
     gfx__programs_destroy(gfx);
     gfx__timers_destroy(gfx);
+    gfx__resources_destroy(gfx);
     if (gfx->backend == GFX_BACKEND_WINDOW) gfx__window_close(gfx);
     else gfx__offscreen_close(gfx);
     core_free(gfx, sizeof *gfx);
