@@ -172,7 +172,7 @@ static int app_world_txt_seed(const char *dir, uint64_t *seed) {
 int game_world_dir_seed(const char *dir, uint64_t *seed) {
     /* world.db when it can be read; a damaged one is the store's to set aside, so the old
      * world.txt (if any) speaks then. */
-    if (terrain_store_read_seed(dir, seed, NULL, 0) == 1) return 1;
+    if (terrain_store_read_seed(dir, seed, NULL) == 1) return 1;
     return app_world_txt_seed(dir, seed);
 }
 
@@ -194,11 +194,13 @@ static bool app_open_store(game_app *app) {
         return false;
     }
     terrain_store_report report;
+    core_error error = { 0 };
     app->store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = app->edits, .seed = app->desc.seed },
-                                      &report);
+                                      &report, &error);
     if (!app->store) {
-        fprintf(stderr, "world: %s%s\n", report.error,
-                report.other_world ? " (made by another version of the generator: use another --world)" : "");
+        fprintf(stderr, "world: %s%s\n", error.message,
+                error.code == CORE_ERROR_MISMATCH ? " (made by another version of the generator: use another --world)"
+                                                  : "");
         return false;
     }
     if (report.notice[0]) fprintf(stderr, "world: %s\n", report.notice);
@@ -242,10 +244,10 @@ static void app_save(game_app *app, bool last) {
     if (!app->store) return;
     TRACE_ZONE("game.save");
     if (app->spawned) app_put_player(app);
-    char error[512];
+    core_error error = { 0 };
     if (last) {
-        if (!terrain_store_save(app->store, error, sizeof error))
-            fprintf(stderr, "world: the last save failed: %s\n", error);
+        if (!terrain_store_save(app->store, &error))
+            fprintf(stderr, "world: the last save failed: %s\n", error.message);
     } else if (terrain_store_save_async(app->store)) app->last_save_ns = core_time_ns();
 }
 

@@ -177,14 +177,15 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
     desc->look_set = o->look != NULL;
     if (o->look && !parse_numbers(o->look, 2, "YAW,PITCH", look_names, look_limits, desc->look, error, sizeof error))
         return bad_value(&cli, "look", error);
-    if (o->walk && !game_walk_parse(o->walk, walk, error, sizeof error)) return bad_value(&cli, "walk", error);
+    core_error walk_error = { 0 };
+    if (o->walk && !game_walk_parse(o->walk, walk, &walk_error)) return bad_value(&cli, "walk", walk_error.message);
     if (o->tour && o->walk) {
         fprintf(stderr, "world: '--tour' and '--walk' cannot be used together\n");
         core_cli_print_usage(&cli, stderr);
         return 2;
     }
-    if (o->tour && !game_walk_parse_text(game_walk_tour, strlen(game_walk_tour), "tour", walk, error, sizeof error)) {
-        fprintf(stderr, "world: the built-in tour does not parse: %s\n", error);   /* a programmer's error */
+    if (o->tour && !game_walk_parse_text(game_walk_tour, strlen(game_walk_tour), "tour", walk, &walk_error)) {
+        fprintf(stderr, "world: the built-in tour does not parse: %s\n", walk_error.message);   /* a programmer's error */
         return 1;
     }
     if (o->trace_frames && !o->common.trace_path) {

@@ -16,10 +16,10 @@ static bool game_screenshot_folder(const char *folder) {
     if (mkdir(folder, 0755) == 0 || errno == EEXIST) {
         struct stat st;
         if (stat(folder, &st) == 0 && S_ISDIR(st.st_mode)) return true;
-        core_error("game", "cannot keep screenshots in %s: it is not a folder", folder);
+        core_log_error("game", "cannot keep screenshots in %s: it is not a folder", folder);
         return false;
     }
-    core_error("game", "cannot make the screenshots folder %s: %s", folder, strerror(errno));
+    core_log_error("game", "cannot make the screenshots folder %s: %s", folder, strerror(errno));
     return false;
 }
 
@@ -32,7 +32,7 @@ bool game_screenshot_reserve(const char *folder, const char *prefix, const struc
         char suffix[8] = "";
         if (n > 1) snprintf(suffix, sizeof suffix, "-%d", n);
         if (snprintf(path, path_size, "%s/%s-%s%s.png", folder, prefix, stamp, suffix) >= (int)path_size) {
-            core_error("game", "the screenshot path in %s is too long", folder);
+            core_log_error("game", "the screenshot path in %s is too long", folder);
             return false;
         }
         int fd = open(path, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
@@ -41,11 +41,11 @@ bool game_screenshot_reserve(const char *folder, const char *prefix, const struc
             return true;
         }
         if (errno != EEXIST) {
-            core_error("game", "cannot create the screenshot %s: %s", path, strerror(errno));
+            core_log_error("game", "cannot create the screenshot %s: %s", path, strerror(errno));
             return false;
         }
     }
-    core_error("game", "no free screenshot name in %s for %s-%s (up to -%d)", folder, prefix, stamp,
+    core_log_error("game", "no free screenshot name in %s for %s-%s (up to -%d)", folder, prefix, stamp,
                GAME_SCREENSHOT_MAX_SUFFIX);
     return false;
 }

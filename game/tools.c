@@ -41,7 +41,7 @@ terrain_edit game_tools_edit(game_tool tool, bool alt, float radius, const terra
     }
     case GAME_TOOL_SAND:
         return (terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
-                               .deposit = { .material = alt ? TERRAIN_ROCKS : TERRAIN_SAND, .x = p[0], .z = p[2],
+                               .deposit = { .material = alt ? TERRAIN_BRUSH_ROCKS : TERRAIN_BRUSH_SAND, .x = p[0], .z = p[2],
                                             .radius = r, .volume = TOOL_DEPOSIT_VOLUME } };
     case GAME_TOOL_ERODE:
         return (terrain_edit){ .tool = TERRAIN_EDIT_ERODE,

@@ -15,19 +15,18 @@
 
 /* ---- errors ------------------------------------------------------------------------------------ */
 
-/* "NAME:LINE: reason" (line 0: "NAME: reason") into the caller's buffer; returns false. */
-static bool fail_at(char *error, size_t error_size, const char *name, int line, const char *fmt, ...)
+/* "NAME:LINE: reason" (line 0: "NAME: reason") into the caller's error; returns false. */
+static bool fail_at(core_error *error, core_error_code code, const char *name, int line, const char *fmt, ...)
     CORE_PRINTF(5, 6);
-static bool fail_at(char *error, size_t error_size, const char *name, int line, const char *fmt, ...) {
-    if (!error || !error_size) return false;
-    int used = line > 0 ? snprintf(error, error_size, "%s:%d: ", name, line)
-                        : snprintf(error, error_size, "%s: ", name);
-    if (used < 0 || (size_t)used >= error_size) return false;
+static bool fail_at(core_error *error, core_error_code code, const char *name, int line, const char *fmt, ...) {
+    if (!error) return false;
+    char reason[sizeof error->message];
     va_list args;
     va_start(args, fmt);
-    vsnprintf(error + used, error_size - (size_t)used, fmt, args);
+    vsnprintf(reason, sizeof reason, fmt, args);
     va_end(args);
-    return false;
+    if (line > 0) return core_error_set(error, code, "%s:%d: %s", name, line, reason);
+    return core_error_set(error, code, "%s: %s", name, reason);
 }
 
 /* ---- numbers ----------------------------------------------------------------------------------- */
@@ -64,14 +63,15 @@ static bool decimal(token t, double *value) {
 typedef struct parser {
     const char *name;
     int line;
-    char *error;
-    size_t error_size;
+    core_error *error;
     game_walk walk;
     size_t capacity;
     bool framed, radius_given;        /* relative/ahead and radius seen */
 } parser;
 
-#define FAIL(p, ...) fail_at((p)->error, (p)->error_size, (p)->name, (p)->line, __VA_ARGS__)
+/* FAIL for malformed lines, FAIL_RANGE for a value or a count past its limits. */
+#define FAIL(p, ...) fail_at((p)->error, CORE_ERROR_FORMAT, (p)->name, (p)->line, __VA_ARGS__)
+#define FAIL_RANGE(p, ...) fail_at((p)->error, CORE_ERROR_RANGE, (p)->name, (p)->line, __VA_ARGS__)
 
 static bool next_token(const char **at, const char *end, token *t) {
     const char *s = *at;
@@ -91,7 +91,7 @@ static bool is(token t, const char *word) {
 static bool coordinate(parser *p, token t, const char *what, double *value) {
     if (!decimal(t, value)) return FAIL(p, "%s: '%.*s' is not a number", what, QUOTED(t));
     if (!(fabs(*value) <= GAME_WALK_MAX_COORD))
-        return FAIL(p, "%s: '%.*s' is out of range (-1e9 ... 1e9 m)", what, QUOTED(t));
+        return FAIL_RANGE(p, "%s: '%.*s' is out of range (-1e9 ... 1e9 m)", what, QUOTED(t));
     return true;
 }
 
@@ -123,7 +123,7 @@ static bool directive(parser *p, token word, const char *rest, const char *end) 
         return FAIL(p, "radius needs one number (metres)");
     if (!decimal(value, &radius)) return FAIL(p, "radius: '%.*s' is not a number", QUOTED(value));
     if (!(radius >= GAME_WALK_MIN_RADIUS && radius <= GAME_WALK_MAX_RADIUS))
-        return FAIL(p, "radius: '%.*s' is out of range (0.1 ... 1000 m)", QUOTED(value));
+        return FAIL_RANGE(p, "radius: '%.*s' is out of range (0.1 ... 1000 m)", QUOTED(value));
     p->radius_given = true;
     p->walk.radius = (float)radius;
     return true;
@@ -138,7 +138,7 @@ static bool look_word(parser *p, token value, game_walk_point *point) {
     double yaw, pitch;
     if (!decimal(yaw_text, &yaw) || !(fabs(yaw) <= 1e6)) return FAIL(p, "look=: yaw '%.*s' is not a number", QUOTED(yaw_text));
     if (!decimal(pitch_text, &pitch)) return FAIL(p, "look=: pitch '%.*s' is not a number", QUOTED(pitch_text));
-    if (!(fabs(pitch) <= 89.0)) return FAIL(p, "look=: pitch '%.*s' is out of range (-89 ... 89)", QUOTED(pitch_text));
+    if (!(fabs(pitch) <= 89.0)) return FAIL_RANGE(p, "look=: pitch '%.*s' is out of range (-89 ... 89)", QUOTED(pitch_text));
     yaw = fmod(yaw, 360.0);
     point->look_yaw = (float)(yaw < 0.0 ? yaw + 360.0 : yaw);
     point->look_pitch = (float)pitch;
@@ -183,7 +183,7 @@ static bool found_line(parser *p, const char *kind, const char *rest, const char
     if (!next_token(&rest, end, &value)) return FAIL(p, "%s needs a radius (metres)", kind);
     if (!decimal(value, &radius)) return FAIL(p, "%s: '%.*s' is not a number", kind, QUOTED(value));
     if (!(radius >= 1.0 && radius <= 1000.0))
-        return FAIL(p, "%s: '%.*s' is out of range (1 ... 1000 m)", kind, QUOTED(value));
+        return FAIL_RANGE(p, "%s: '%.*s' is out of range (1 ... 1000 m)", kind, QUOTED(value));
     while (next_token(&rest, end, &word)) {
         if (!is(word, "shot"))
             return FAIL(p, "%s: unknown word '%.*s' (only shot; the flight and the view are found)", kind, QUOTED(word));
@@ -194,7 +194,7 @@ static bool found_line(parser *p, const char *kind, const char *rest, const char
     else if (strcmp(kind, "shore") == 0) point.shore_radius = (float)radius;
     else if (strcmp(kind, "rocks") == 0) point.rocks_radius = (float)radius;
     else point.cliff_radius = (float)radius;
-    if (p->walk.count >= GAME_WALK_MAX_POINTS) return FAIL(p, "more than %d waypoints", GAME_WALK_MAX_POINTS);
+    if (p->walk.count >= GAME_WALK_MAX_POINTS) return FAIL_RANGE(p, "more than %d waypoints", GAME_WALK_MAX_POINTS);
     p->walk.points = core_grow(p->walk.points, &p->capacity, (size_t)p->walk.count + 1, sizeof point);
     p->walk.points[p->walk.count++] = point;
     return true;
@@ -207,14 +207,14 @@ static bool waypoint(parser *p, token first, const char *rest, const char *end) 
     if (!next_token(&rest, end, &second)) return FAIL(p, "a waypoint needs X and Z; Z is missing");
     if (!coordinate(p, second, "z", &point.z)) return false;
     if (!point_words(p, rest, end, &point)) return false;
-    if (p->walk.count >= GAME_WALK_MAX_POINTS) return FAIL(p, "more than %d waypoints", GAME_WALK_MAX_POINTS);
+    if (p->walk.count >= GAME_WALK_MAX_POINTS) return FAIL_RANGE(p, "more than %d waypoints", GAME_WALK_MAX_POINTS);
     p->walk.points = core_grow(p->walk.points, &p->capacity, (size_t)p->walk.count + 1, sizeof point);
     p->walk.points[p->walk.count++] = point;
     return true;
 }
 
 static bool line(parser *p, const char *begin, const char *end) {
-    if (end - begin > GAME_WALK_MAX_LINE) return FAIL(p, "line longer than %d bytes", GAME_WALK_MAX_LINE);
+    if (end - begin > GAME_WALK_MAX_LINE) return FAIL_RANGE(p, "line longer than %d bytes", GAME_WALK_MAX_LINE);
     if (end > begin && end[-1] == '\r') end--;          /* CRLF */
     const char *hash = memchr(begin, '#', (size_t)(end - begin));
     if (hash) end = hash;
@@ -238,15 +238,14 @@ static void walk_release(game_walk *walk, size_t capacity) {
     memset(walk, 0, sizeof *walk);
 }
 
-bool game_walk_parse_text(const char *text, size_t size, const char *name, game_walk *out, char *error,
-                          size_t error_size) {
-    parser p = { .name = name ? name : "walk", .error = error, .error_size = error_size };
+bool game_walk_parse_text(const char *text, size_t size, const char *name, game_walk *out, core_error *error) {
+    parser p = { .name = name ? name : "walk", .error = error };
     memset(out, 0, sizeof *out);
     const char *at = text, *end = text + size;
     if (size >= 3 && memcmp(text, "\xef\xbb\xbf", 3) == 0) at += 3;
     bool ok = true;
     while (ok && at < end) {
-        if (p.line == INT_MAX) return walk_release(&p.walk, p.capacity), FAIL(&p, "too many lines");
+        if (p.line == INT_MAX) return walk_release(&p.walk, p.capacity), FAIL_RANGE(&p, "too many lines");
         p.line++;
         const char *newline = memchr(at, '\n', (size_t)(end - at));
         const char *line_end = newline ? newline : end;
@@ -281,15 +280,15 @@ void game_walk_free(game_walk *walk) {
 
 /* ---- the spec ---------------------------------------------------------------------------------- */
 
-static bool parse_straight(const char *spec, game_walk *out, char *error, size_t error_size) {
+static bool parse_straight(const char *spec, game_walk *out, core_error *error) {
     const char *number = spec + strlen("straight:");
     double metres;
-    if (!*number) return core_error_format(error, error_size, "straight: needs a distance in metres (straight:2000)");
+    if (!*number) return core_error_set(error, CORE_ERROR_FORMAT, "straight: needs a distance in metres (straight:2000)");
     size_t length = strlen(number);
     if (length > GAME_WALK_MAX_LINE || !decimal((token){ number, (int)length }, &metres))
-        return core_error_format(error, error_size, "%.60s: '%.40s' is not a number of metres", spec, number);
+        return core_error_set(error, CORE_ERROR_FORMAT, "%.60s: '%.40s' is not a number of metres", spec, number);
     if (!(metres > 0.0 && metres <= GAME_WALK_MAX_STRAIGHT))
-        return core_error_format(error, error_size, "%.60s: the distance must be more than 0 and at most 100000 m",
+        return core_error_set(error, CORE_ERROR_RANGE, "%.60s: the distance must be more than 0 and at most 100000 m",
                                  spec);
     out->points = core_calloc(1, sizeof *out->points);
     out->points[0].z = metres;
@@ -299,10 +298,10 @@ static bool parse_straight(const char *spec, game_walk *out, char *error, size_t
 }
 
 /* The whole file, at most GAME_WALK_MAX_FILE bytes; NULL after a message. */
-static char *read_file(const char *path, size_t *size, char *error, size_t error_size) {
+static char *read_file(const char *path, size_t *size, core_error *error) {
     FILE *file = fopen(path, "rb");
     if (!file) {
-        core_error_format(error, error_size, "%s: cannot open (%s); a walk is " GAME_WALK_USAGE, path, strerror(errno));
+        core_error_set(error, CORE_ERROR_IO, "%s: cannot open (%s); a walk is " GAME_WALK_USAGE, path, strerror(errno));
         return NULL;
     }
     size_t capacity = 4096, used = 0;
@@ -321,8 +320,8 @@ static char *read_file(const char *path, size_t *size, char *error, size_t error
     int read_errno = errno;
     fclose(file);
     if (failed || used > GAME_WALK_MAX_FILE) {
-        if (failed) core_error_format(error, error_size, "%s: cannot read (%s)", path, strerror(read_errno));
-        else core_error_format(error, error_size, "%s: larger than %d MiB", path, GAME_WALK_MAX_FILE >> 20);
+        if (failed) core_error_set(error, CORE_ERROR_IO, "%s: cannot read (%s)", path, strerror(read_errno));
+        else core_error_set(error, CORE_ERROR_RANGE, "%s: larger than %d MiB", path, GAME_WALK_MAX_FILE >> 20);
         core_free(text, capacity);
         return NULL;
     }
@@ -331,14 +330,14 @@ static char *read_file(const char *path, size_t *size, char *error, size_t error
     return text;
 }
 
-bool game_walk_parse(const char *spec, game_walk *out, char *error, size_t error_size) {
+bool game_walk_parse(const char *spec, game_walk *out, core_error *error) {
     memset(out, 0, sizeof *out);
-    if (!spec || !*spec) return core_error_format(error, error_size, "no walk given; a walk is " GAME_WALK_USAGE);
-    if (strncmp(spec, "straight:", strlen("straight:")) == 0) return parse_straight(spec, out, error, error_size);
+    if (!spec || !*spec) return core_error_set(error, CORE_ERROR_ARGUMENT, "no walk given; a walk is " GAME_WALK_USAGE);
+    if (strncmp(spec, "straight:", strlen("straight:")) == 0) return parse_straight(spec, out, error);
     size_t size;
-    char *text = read_file(spec, &size, error, error_size);
+    char *text = read_file(spec, &size, error);
     if (!text) return false;
-    bool ok = game_walk_parse_text(text, size, spec, out, error, error_size);
+    bool ok = game_walk_parse_text(text, size, spec, out, error);
     core_free(text, size ? size : 1);
     return ok;
 }

@@ -2,9 +2,9 @@
  * headless run (an end-to-end test, a benchmark, a screenshot) walks the world like a player.
  *
  *     game_walk walk;
- *     char error[256];
- *     if (!game_walk_parse(spec, &walk, error, sizeof error)) {    // "straight:2000" or a file
- *         fprintf(stderr, "demo: bad value for '--walk': %s\n", error);
+ *     core_error error = {0};
+ *     if (!game_walk_parse(spec, &walk, &error)) {                 // "straight:2000" or a file
+ *         fprintf(stderr, "demo: bad value for '--walk': %s\n", error.message);
  *         return 2;
  *     }
  *     game_walker walker;
@@ -89,6 +89,8 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#include "core/core.h"   /* core_error */
+
 #include "player.h"
 
 #define GAME_WALK_MAX_POINTS 100000
@@ -167,13 +169,15 @@ game_walk_found game_walk_resolve_stops(game_walk *walk, terrain_world *world, c
 int game_walk_resolve_caves(game_walk *walk, terrain_world *world, const game_player *player);
 
 /* `spec` is straight:METRES or the path of a waypoint file. On success *out holds the walk (free it
- * with game_walk_free); on failure *out is zeroed (freeing it is harmless), `error` (when given)
- * receives one line naming the problem, and false is returned. */
-bool game_walk_parse(const char *spec, game_walk *out, char *error, size_t error_size);
+ * with game_walk_free); on failure *out is zeroed (freeing it is harmless), false is returned and
+ * `error` (may be NULL) says why in one line naming the file and line ("walk.txt:3: …"):
+ * CORE_ERROR_IO (cannot open or read the file), CORE_ERROR_FORMAT (a malformed line, an unknown
+ * word, no waypoints, a bad straight: distance), CORE_ERROR_RANGE (a number out of its range,
+ * too many waypoints or lines, a line or file too long), CORE_ERROR_ARGUMENT (no spec). */
+bool game_walk_parse(const char *spec, game_walk *out, core_error *error);
 /* A waypoint file's contents, text[0, size) (no NUL needed); `name` is what errors call it
  * ("walk.txt:3: …"). Same outcome as game_walk_parse. */
-bool game_walk_parse_text(const char *text, size_t size, const char *name, game_walk *out, char *error,
-                          size_t error_size);
+bool game_walk_parse_text(const char *text, size_t size, const char *name, game_walk *out, core_error *error);
 /* A copy whose points are its own (free it with game_walk_free too). */
 void game_walk_copy(const game_walk *from, game_walk *to);
 void game_walk_free(game_walk *walk);

@@ -115,14 +115,25 @@ void *core__grow_slow(void *items, size_t *capacity, size_t needed, size_t item_
 
 size_t core_memory_in_use(void) { return atomic_load_explicit(&memory_in_use, memory_order_relaxed); }
 
-bool core_error_format(char *error, size_t error_size, const char *fmt, ...) {
-    if (error && error_size) {
+bool core_error_set(core_error *error, core_error_code code, const char *fmt, ...) {
+    if (error) {
+        error->code = code;
         va_list args;
         va_start(args, fmt);
-        vsnprintf(error, error_size, fmt, args);
+        vsnprintf(error->message, sizeof error->message, fmt, args);
         va_end(args);
     }
     return false;
+}
+
+const char *core_error_code_name(core_error_code code) {
+    static const char *const names[CORE_ERROR_CODE_COUNT] = {
+        [CORE_ERROR_NONE] = "none",         [CORE_ERROR_IO] = "io",
+        [CORE_ERROR_FORMAT] = "format",     [CORE_ERROR_VERSION] = "version",
+        [CORE_ERROR_MISMATCH] = "mismatch", [CORE_ERROR_CORRUPT] = "corrupt",
+        [CORE_ERROR_RANGE] = "range",       [CORE_ERROR_ARGUMENT] = "argument",
+    };
+    return (unsigned)code < CORE_ERROR_CODE_COUNT ? names[code] : "unknown";
 }
 
 char *core_strjoin(const char *a, const char *b) {

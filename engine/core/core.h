@@ -4,9 +4,37 @@
  *
  * LOGGING
  *     core_log(CORE_LOG_WARN, "ecs", "component %s registered twice", name);
- *     core_info("jobs", "%d threads", n);          // shorthands: core_debug/info/warn/error
+ *     core_info("jobs", "%d threads", n);          // shorthands: core_debug/info/warn/log_error
  *   Lines go to stderr as "[warn] ecs: component … registered twice". Thread-safe: one line is
  *   written with one call, so lines from different threads never interleave mid-line.
+ *
+ * ERRORS
+ *   Every public function that can fail on outside input (a file, a device's bytes, a script, a
+ *   command line, a desc) takes a trailing `core_error *error` (may be NULL) and returns false or
+ *   NULL on failure, with error->code saying what kind of failure it was and error->message saying
+ *   what and where, in a sentence for a person ("world/seed.json: line 3, column 14: expected
+ *   ':'"). The library does not log it: the caller decides (a program prints it and exits, a game
+ *   shows it, a test asserts the code). On success the error is left as it was.
+ *       core_error error = {0};
+ *       if (!terrain_field_read(path, &field, &error)) {
+ *           core_log_error("export", "%s", error.message);
+ *           return error.code == CORE_ERROR_IO ? 1 : 2;
+ *       }
+ *   Codes (zero is CORE_ERROR_NONE; tests assert the code, not the message):
+ *     CORE_ERROR_IO        a file or folder cannot be opened, read, written, renamed or created
+ *     CORE_ERROR_FORMAT    the content is malformed: bad syntax, bad magic, a missing field, a
+ *                          value of the wrong type, an unknown name or keyword
+ *     CORE_ERROR_VERSION   well-formed, but a version (or kind of file) this code does not read
+ *     CORE_ERROR_MISMATCH  well-formed, but of something other than the caller asked for: a
+ *                          world folder or edit file of another world (another seed or
+ *                          generator key), a chunk file that holds another chunk
+ *     CORE_ERROR_CORRUPT   a checksum does not match, or the content is truncated or inconsistent
+ *                          with itself (sizes that disagree, a record past the end)
+ *     CORE_ERROR_RANGE     a value is out of its allowed range (a size too big, a negative count)
+ *     CORE_ERROR_ARGUMENT  a bad argument from the caller: a NULL or empty name, a desc field
+ *                          that makes no sense, a request the object's state cannot serve
+ *   core_error_set(error, code, fmt, …) fills one (NULL-safe, returns false so that a function
+ *   can `return core_error_set(…);`); core_error_code_name(code) is "io", "format", ….
  *
  * TIME
  *     uint64_t t0 = core_time_ns();   // monotonic nanoseconds, vDSO-fast (~20 ns)
@@ -30,12 +58,12 @@
  *
  * JSON
  *   core_json_parse reads RFC 8259 JSON into a tree of core_json_value allocated from an arena,
- *   so one core_arena_release frees it all. Bad input gets a message with line and column
- *   ("line 3, column 14: expected ':' after object key"); nesting is capped at
- *   CORE_JSON_MAX_DEPTH, and the parser never reads outside [text, text + size).
+ *   so one core_arena_release frees it all. Bad input is CORE_ERROR_FORMAT with a message that
+ *   gives line and column ("line 3, column 14: expected ':' after object key"); nesting is
+ *   capped at CORE_JSON_MAX_DEPTH, and the parser never reads outside [text, text + size).
  *       core_arena arena = {0};
  *       core_json_value *root;
- *       core_json_error error;
+ *       core_error error = {0};
  *       if (!core_json_parse(text, size, &arena, &root, &error)) core_warn("io", "%s", error.message);
  *       double ts = core_json_number_or(core_json_get(event, "ts"), 0.0);
  *       core_arena_release(&arena);
@@ -89,7 +117,33 @@ core_log_level core_log_get_level(void);
 #define core_debug(module, ...) core_log(CORE_LOG_DEBUG, module, __VA_ARGS__)
 #define core_info(module, ...) core_log(CORE_LOG_INFO, module, __VA_ARGS__)
 #define core_warn(module, ...) core_log(CORE_LOG_WARN, module, __VA_ARGS__)
-#define core_error(module, ...) core_log(CORE_LOG_ERROR, module, __VA_ARGS__)
+#define core_log_error(module, ...) core_log(CORE_LOG_ERROR, module, __VA_ARGS__)
+
+/* ---- errors ---------------------------------------------------------------------------- */
+
+/* What kind of failure; see ERRORS in the doc block above. Zero is "no error". */
+typedef enum core_error_code {
+    CORE_ERROR_NONE = 0,
+    CORE_ERROR_IO,
+    CORE_ERROR_FORMAT,
+    CORE_ERROR_VERSION,
+    CORE_ERROR_MISMATCH,
+    CORE_ERROR_CORRUPT,
+    CORE_ERROR_RANGE,
+    CORE_ERROR_ARGUMENT,
+    CORE_ERROR_CODE_COUNT,
+} core_error_code;
+
+typedef struct core_error {
+    core_error_code code;
+    char message[256];   /* for a person: what was wrong and where (the file, the line) */
+} core_error;
+
+/* Sets error->code and formats error->message (when error is not NULL); returns false. */
+bool core_error_set(core_error *error, core_error_code code, const char *fmt, ...) CORE_PRINTF(3, 4);
+/* "none", "io", "format", "version", "mismatch", "corrupt", "range", "argument"; "unknown" for
+ * any other value. */
+const char *core_error_code_name(core_error_code code);
 
 /* Prints "fatal: module: message" and aborts. For states the program cannot go on from
  * (out of memory); never for bad input, which gets an error and a defined outcome. */
@@ -120,9 +174,6 @@ void *core_alloc_aligned(size_t size, size_t align);
 size_t core_memory_in_use(void);                  /* live bytes through core_alloc & co. */
 char *core_strdup(const char *s);                 /* free with core_free(p, strlen(p) + 1) */
 char *core_strjoin(const char *a, const char *b); /* a then b; free like core_strdup's */
-/* For functions that report into a caller's buffer (`bool read(…, char *error, size_t size)`):
- * formats the message into `error` when there is one, and returns false to be returned on. */
-bool core_error_format(char *error, size_t error_size, const char *fmt, ...) CORE_PRINTF(3, 4);
 /* Creates the folder and any missing parents (mkdir -p); true when it exists afterwards as a
  * folder. On failure errno says why. */
 bool core_make_dirs(const char *path);
@@ -237,17 +288,12 @@ struct core_json_value {
     };
 };
 
-typedef struct core_json_error {
-    char message[192];   /* "line 3, column 14: expected ':' after object key" */
-    int line, column;    /* from 1; the column counts UTF-8 characters */
-    size_t offset;       /* byte offset into the text */
-} core_json_error;
-
 /* Parses text[0, size) (no NUL needed). On success *out is the root, allocated from `arena`; on
- * failure *out is NULL, `error` (may be NULL) says why and where, and whatever was allocated
+ * failure *out is NULL, `error` (may be NULL) is CORE_ERROR_FORMAT with a message that starts
+ * "line L, column C: " (from 1; the column counts UTF-8 characters), and whatever was allocated
  * stays in the arena for the caller's release. */
 bool core_json_parse(const char *text, size_t size, core_arena *arena, core_json_value **out,
-                     core_json_error *error);
+                     core_error *error);
 /* The member `key` of an object (the last one if repeated); NULL when absent or not an object. */
 const core_json_value *core_json_get(const core_json_value *object, const char *key);
 /* The number or string a value holds, or `fallback` when it is NULL or of another type. */

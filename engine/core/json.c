@@ -21,7 +21,7 @@ typedef struct json_parser {
     size_t size;
     size_t pos;
     core_arena *arena;
-    core_json_error *error;
+    core_error *error;
     bool failed;
     int depth;
     /* Children of the open containers, innermost last. Keys only grow for objects. */
@@ -52,17 +52,12 @@ static bool json_fail_at(json_parser *p, size_t at, const char *fmt, ...) {
             column++;
         }
     }
-    char reason[128]; /* leaves room for the position in message[192] */
+    char reason[160]; /* leaves room for the position in core_error's message[256] */
     va_list args;
     va_start(args, fmt);
     vsnprintf(reason, sizeof reason, fmt, args);
     va_end(args);
-    p->error->line = line;
-    p->error->column = column;
-    p->error->offset = at;
-    snprintf(p->error->message, sizeof p->error->message, "line %d, column %d: %s", line, column,
-             reason);
-    return false;
+    return core_error_set(p->error, CORE_ERROR_FORMAT, "line %d, column %d: %s", line, column, reason);
 }
 
 /* Describes the byte at `at` for a message: a printable character in quotes, else its code. */
@@ -414,9 +409,8 @@ static bool json_parse_value(json_parser *p, core_json_value *out) {
 /* ---- public API ------------------------------------------------------------------------- */
 
 bool core_json_parse(const char *text, size_t size, core_arena *arena, core_json_value **out,
-                     core_json_error *error) {
+                     core_error *error) {
     json_parser p = { .text = text, .size = text ? size : 0, .arena = arena, .error = error };
-    if (error) *error = (core_json_error){ 0 };
     *out = NULL;
     /* A UTF-8 byte-order mark is not JSON, but editors add it; RFC 8259 lets parsers skip it. */
     if (p.size >= 3 && memcmp(text, "\xef\xbb\xbf", 3) == 0) p.pos = 3;

@@ -68,6 +68,9 @@ void ecs_observer_remove(ecs_world *world, ecs_observer id) {
     ECS_ASSERT_STRUCTURAL(world);
     if (!id) return;
     assert(id <= world->observer_count && world->observers[id - 1] && "not a live observer");
+    /* Release builds: an id removed already, or never made, is ignored (ids are not reused, so
+     * it cannot name another observer). */
+    if (id > world->observer_count || !world->observers[id - 1]) return;
     ecs_observer_info *observer = world->observers[id - 1];
     for (uint32_t i = 0; i < world->table_count; i++)
         table_observer_drop(world->tables[i], observer);

@@ -80,11 +80,11 @@ bool ecs_phase_add(ecs_world *world, const char *name, const char *after) {
     ECS_ASSERT_STRUCTURAL(world);
     int before = phase_find(world, after);
     if (before < 0) {
-        core_error("ecs", "phase '%s': no phase '%s' to add it after", name, after);
+        core_log_error("ecs", "phase '%s': no phase '%s' to add it after", name, after);
         return false;
     }
     if (phase_find(world, name) >= 0) {
-        core_error("ecs", "phase '%s' exists already", name);
+        core_log_error("ecs", "phase '%s' exists already", name);
         return false;
     }
     phase_insert(world, (uint32_t)before + 1, name);
@@ -126,7 +126,7 @@ ecs_system ecs_system_add(ecs_world *world, const ecs_system_desc *desc) {
     assert(desc && desc->fn && desc->phase);
     int phase_index = phase_find(world, desc->phase);
     if (phase_index < 0) {
-        core_error("ecs", "system '%s': no phase '%s'", desc->name ? desc->name : "?",
+        core_log_error("ecs", "system '%s': no phase '%s'", desc->name ? desc->name : "?",
                    desc->phase);
         return 0;
     }
@@ -208,7 +208,7 @@ static void access_refuse(const ecs_world *world, const ecs_system_info *system,
                           ecs_component component, bool write, const char *call) {
     const char *name = component > 0 && component < world->component_count
                            ? world->components[component].name : "?";
-    core_error("ecs", "system '%s' calls %s on %s '%s' without declaring it in %s", system->name,
+    core_log_error("ecs", "system '%s' calls %s on %s '%s' without declaring it in %s", system->name,
                call, ecs_is_resource(world, component) ? "resource" : "component", name,
                write ? "its writes" : "its reads or writes");
     abort();

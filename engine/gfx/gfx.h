@@ -34,6 +34,23 @@
  * queries and, when tracing is on, shows as a zone on the "GPU" lane of the trace a few frames
  * later (when the results are ready, never stalling).
  *
+ * Handles. Buffers, vertex arrays, textures and framebuffers are handles: a 32-bit id whose low
+ * 16 bits name a slot in the context's pool of that kind and whose high 16 bits are the slot's
+ * generation (sokol_gfx's pools). Destroying bumps the slot's generation, so a copy of the handle
+ * kept elsewhere goes stale and never names the object made later in the same slot. A zero
+ * handle is none. Every call looks the handle up; a stale or zero handle passed to a call that
+ * uses it is a programmer error: debug builds stop on an assert, release builds log it once per
+ * kind and do nothing (never touch another object). `_destroy` of a zero handle does nothing.
+ * `gfx_X_valid` says whether a handle names a live object; `gfx_X_gl` gives its GL name, for the
+ * GL calls this layer does not wrap (0 for a stale handle, which is reported as above).
+ * The pools belong to the context made last by gfx_context_create (the one OpenGL draws with); objects
+ * die with it, and destroying them after gfx_context_destroy does nothing.
+ *
+ *     gfx_buffer b = gfx_buffer_create(&(gfx_buffer_desc){ .size = 64 });
+ *     gfx_buffer copy = b;
+ *     gfx_buffer_destroy(&b);                      // b = { 0 }; copy is stale now
+ *     gfx_buffer_valid(copy);                      // false
+ *
  * Threads: OpenGL is called from the main thread only; everything here is main-thread only.
  */
 #ifndef GFX_H
@@ -107,11 +124,12 @@ bool gfx_write_png(const char *path, int width, int height, const uint8_t *rgba)
 
 /* ---- passes and GPU timing ---------------------------------------------------------------- */
 
-typedef struct gfx_framebuffer gfx_framebuffer;
+/* A handle (see "Handles" above); { 0 } = none. */
+typedef struct gfx_framebuffer { uint32_t id; } gfx_framebuffer;
 
 typedef struct gfx_pass_desc {
     const char *name;              /* trace zone name on the GPU lane; a string literal */
-    const gfx_framebuffer *target; /* NULL = the default framebuffer */
+    gfx_framebuffer target;        /* { 0 } = the default framebuffer */
     bool clear_color;              /* clear with .color first */
     float color[4];
     bool clear_depth;              /* clear depth to 1 */
@@ -135,7 +153,8 @@ typedef enum gfx_buffer_usage {
     GFX_BUFFER_DYNAMIC,        /* rewritten often (per-frame uniforms, instances) */
 } gfx_buffer_usage;
 
-typedef struct gfx_buffer { GLuint id; size_t size; } gfx_buffer;
+/* A handle (see "Handles" above); { 0 } = none. */
+typedef struct gfx_buffer { uint32_t id; } gfx_buffer;
 
 typedef struct gfx_buffer_desc {
     size_t size;               /* bytes */
@@ -143,9 +162,14 @@ typedef struct gfx_buffer_desc {
     gfx_buffer_usage usage;
 } gfx_buffer_desc;
 
+/* { 0 } (logged) when no context is current or its pool is full. */
 gfx_buffer gfx_buffer_create(const gfx_buffer_desc *desc);
 void gfx_buffer_update(gfx_buffer buffer, size_t offset, const void *data, size_t size);
+/* Destroys the buffer and sets *buffer to { 0 }. */
 void gfx_buffer_destroy(gfx_buffer *buffer);
+bool gfx_buffer_valid(gfx_buffer buffer);
+size_t gfx_buffer_size(gfx_buffer buffer);   /* bytes; 0 for a stale handle */
+GLuint gfx_buffer_gl(gfx_buffer buffer);
 
 /* ---- vertex arrays ------------------------------------------------------------------------ */
 
@@ -168,10 +192,15 @@ typedef struct gfx_vertex_array_desc {
     gfx_attribute attributes[GFX_MAX_ATTRIBUTES];  /* location = index in this array */
 } gfx_vertex_array_desc;
 
-typedef struct gfx_vertex_array { GLuint id; } gfx_vertex_array;
+/* A handle (see "Handles" above); { 0 } = none. */
+typedef struct gfx_vertex_array { uint32_t id; } gfx_vertex_array;
 
+/* A zero desc makes an array with no attributes (draws whose vertices come from gl_VertexID).
+ * The buffers must outlive the array. */
 gfx_vertex_array gfx_vertex_array_create(const gfx_vertex_array_desc *desc);
 void gfx_vertex_array_destroy(gfx_vertex_array *vertex_array);
+bool gfx_vertex_array_valid(gfx_vertex_array vertex_array);
+GLuint gfx_vertex_array_gl(gfx_vertex_array vertex_array);
 
 /* ---- textures and framebuffers ------------------------------------------------------------ */
 
@@ -183,46 +212,61 @@ typedef enum gfx_format {
     GFX_FORMAT_RGBA16F,
     GFX_FORMAT_RGBA32F,
     GFX_FORMAT_DEPTH32F,
+    GFX_FORMAT_DEPTH24,        /* the default framebuffer's depth (copies of it keep its bits) */
 } gfx_format;
 
 typedef struct gfx_texture_desc {
     int width, height;
     int layers;                /* > 1 makes a 2D array texture (one layer per material, …) */
+    bool array;                /* a 2D array texture even with one layer */
     gfx_format format;
     const void *data;          /* NULL = uninitialised; all layers, tightly packed */
     bool mipmaps;              /* generate a full chain, trilinear filtering */
     bool nearest;              /* nearest filtering (default linear) */
     bool clamp;                /* clamp to edge (default repeat) */
+    bool compare;              /* depth formats: sampled with comparison (sampler2DShadow, …):
+                                  the reference ≤ the stored depth gives 1 */
 } gfx_texture_desc;
 
-typedef struct gfx_texture { GLuint id; GLenum target; int width, height, layers; gfx_format format; } gfx_texture;
+/* A handle (see "Handles" above); { 0 } = none. */
+typedef struct gfx_texture { uint32_t id; } gfx_texture;
 
+/* { 0 } (logged) when no context is current or its pool is full. */
 gfx_texture gfx_texture_create(const gfx_texture_desc *desc);
 /* Rewrites a rectangle of one layer (data tightly packed in the texture's format). */
 void gfx_texture_update(gfx_texture texture, int layer, int x, int y, int width, int height,
                         const void *data);
 void gfx_texture_bind(gfx_texture texture, int unit);
 void gfx_texture_destroy(gfx_texture *texture);
+bool gfx_texture_valid(gfx_texture texture);
+GLuint gfx_texture_gl(gfx_texture texture);
 
 typedef struct gfx_framebuffer_desc {
     int width, height;
     gfx_format color_format;   /* one colour attachment */
+    bool depth_only;           /* no colour attachment (shadow maps) */
     bool depth;                /* add a DEPTH32F attachment */
+    gfx_texture depth_texture; /* instead: draw depth into this texture's layer .depth_layer; the
+                                  texture is not the framebuffer's and outlives it */
+    int depth_layer;
 } gfx_framebuffer_desc;
 
-struct gfx_framebuffer {
-    GLuint id;
-    int width, height;
-    gfx_texture color, depth;
-};
-
-/* false (message logged) when the driver refuses the combination. */
-bool gfx_framebuffer_create(gfx_framebuffer *framebuffer, const gfx_framebuffer_desc *desc);
+/* { 0 } (message logged) when the driver refuses the combination. Destroying it destroys the
+ * attachments it made. */
+gfx_framebuffer gfx_framebuffer_create(const gfx_framebuffer_desc *desc);
 void gfx_framebuffer_destroy(gfx_framebuffer *framebuffer);
+bool gfx_framebuffer_valid(gfx_framebuffer framebuffer);
+GLuint gfx_framebuffer_gl(gfx_framebuffer framebuffer);
+/* Its attachments ({ 0 } where it has none) and size (0 × 0 for a stale handle). */
+gfx_texture gfx_framebuffer_color(gfx_framebuffer framebuffer);
+gfx_texture gfx_framebuffer_depth(gfx_framebuffer framebuffer);
+void gfx_framebuffer_size(gfx_framebuffer framebuffer, int *width, int *height);
 
 /* ---- programs ----------------------------------------------------------------------------- */
 
-/* A handle that stays valid when the program is rebuilt from changed files. id 0 = none. */
+/* A handle that stays valid when the program is rebuilt from changed files. id 0 = none.
+ * Programs live as long as their context (none is destroyed alone), so they need no
+ * generation: an id is a slot number, checked against the context's count. */
 typedef struct gfx_program { uint32_t id; } gfx_program;
 
 /* Files are names inside the shader folder ("scene.vert"). A compute program passes
@@ -259,7 +303,8 @@ typedef struct gfx_draw_desc {
     uint32_t count;            /* vertices or indices */
     uint32_t instances;        /* 0 = 1, not instanced */
     int32_t base_vertex;
-    /* Indirect: when .indirect.id is set, the draw parameters come from that buffer (a
+    /* vertex_array: required (a zero one is a programmer error, as a stale one).
+     * Indirect: when .indirect.id is set, the draw parameters come from that buffer (a
      * DrawArraysIndirectCommand or DrawElementsIndirectCommand at .indirect_offset); for
      * GPU-generated draws such as grass. .count etc. are then ignored. */
     gfx_buffer indirect;

@@ -14,7 +14,7 @@ static void GLAD_API_PTR gfx_debug_message(GLenum source, GLenum type, GLuint id
     (void)id; (void)length; (void)user;
     if (severity == GL_DEBUG_SEVERITY_NOTIFICATION) return;   /* driver chatter */
     if (source == GL_DEBUG_SOURCE_SHADER_COMPILER) return;     /* printed at file:line instead */
-    if (type == GL_DEBUG_TYPE_ERROR) core_error("gl", "%s", message);
+    if (type == GL_DEBUG_TYPE_ERROR) core_log_error("gl", "%s", message);
     else core_warn("gl", "%s", message);
 }
 #endif
@@ -42,7 +42,7 @@ gfx_context *gfx_context_create(const gfx_context_desc *desc_in) {
     gfx_context_desc desc = *desc_in;
     if (desc.width <= 0 || desc.height <= 0) { desc.width = 1280; desc.height = 720; }
     if (desc.width > 16384 || desc.height > 16384) {
-        core_error("gfx", "size %dx%d is larger than 16384x16384", desc.width, desc.height);
+        core_log_error("gfx", "size %dx%d is larger than 16384x16384", desc.width, desc.height);
         return NULL;
     }
     if (!desc.title) desc.title = "engine";
@@ -66,6 +66,7 @@ gfx_context *gfx_context_create(const gfx_context_desc *desc_in) {
     core_debug("gfx", "%s on %s", (const char *)glGetString(GL_VERSION),
                (const char *)glGetString(GL_RENDERER));
     gfx_default_state();
+    gfx__resources_init(gfx);
     gfx__timers_init(gfx);
     gfx__programs_init(gfx, desc.shader_dir);
     return gfx;
@@ -75,6 +76,7 @@ void gfx_context_destroy(gfx_context *gfx) {
     if (!gfx) return;
     gfx__programs_destroy(gfx);
     gfx__timers_destroy(gfx);
+    gfx__resources_destroy(gfx);
     if (gfx->backend == GFX_BACKEND_WINDOW) gfx__window_close(gfx);
     else gfx__offscreen_close(gfx);
     core_free(gfx, sizeof *gfx);
@@ -165,7 +167,7 @@ bool gfx_screenshot(gfx_context *gfx, const char *path) {
 
 bool gfx_write_png(const char *path, int width, int height, const uint8_t *rgba) {
     int ok = stbi_write_png(path, width, height, 4, rgba, width * 4);
-    if (!ok) core_error("gfx", "cannot write the picture %s", path);
+    if (!ok) core_log_error("gfx", "cannot write the picture %s", path);
     else core_info("gfx", "picture %s (%dx%d)", path, width, height);
     return ok != 0;
 }

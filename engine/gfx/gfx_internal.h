@@ -20,6 +20,53 @@ typedef struct gfx_timer_frame {
 
 typedef struct gfx_program_entry gfx_program_entry;   /* gfx_shader.c */
 
+/* A pool of one kind of object (gfx_pool.c): slots 1…count−1 with a generation each; freed
+ * slots queue first in, first out, so a slot is reused as late as possible (a stale handle
+ * would need 65 535 reuses of its one slot to alias). A handle's id is generation << 16 | slot;
+ * slot 0 is never handed out, so the zero id is none. */
+#define GFX_POOL_SLOT_BITS 16
+#define GFX_POOL_MAX_SLOTS (1u << GFX_POOL_SLOT_BITS)
+
+typedef struct gfx_pool {
+    const char *kind;              /* "buffer", … for messages */
+    size_t entry_size;
+    uint8_t *entries;              /* capacity × entry_size */
+    uint16_t *generations;
+    uint32_t *next_free;           /* the free queue's links */
+    bool *live;
+    uint32_t count, capacity;      /* slots handed out at least once (slot 0 counted), allocated */
+    uint32_t free_head, free_tail; /* 0 = empty */
+    uint32_t live_count;
+    uint16_t first_generation;     /* new slots start here: differs from context to context */
+    bool stale_reported;           /* release builds log a stale handle once per pool */
+} gfx_pool;
+
+typedef struct gfx__buffer_entry { GLuint name; size_t size; } gfx__buffer_entry;
+typedef struct gfx__vertex_array_entry { GLuint name; } gfx__vertex_array_entry;
+typedef struct gfx__texture_entry {
+    GLuint name;
+    GLenum target;
+    int width, height, layers;
+    gfx_format format;
+} gfx__texture_entry;
+typedef struct gfx__framebuffer_entry {
+    GLuint name;
+    int width, height;
+    gfx_texture color, depth;      /* attachments it made (and destroys) */
+    gfx_texture depth_borrowed;    /* desc.depth_texture: attached, not destroyed */
+} gfx__framebuffer_entry;
+
+void gfx__pool_init(gfx_pool *pool, const char *kind, size_t entry_size, uint16_t first_generation);
+void gfx__pool_destroy(gfx_pool *pool);
+/* A fresh slot's id and its zeroed entry; 0 (logged) when the pool is full. */
+uint32_t gfx__pool_alloc(gfx_pool *pool, void **entry);
+/* The live entry `id` names, or NULL: reports nothing. */
+void *gfx__pool_lookup(const gfx_pool *pool, uint32_t id);
+/* Bumps the slot's generation and queues it for reuse; `id` must be live. */
+void gfx__pool_free(gfx_pool *pool, uint32_t id);
+/* A stale or zero handle reached `call`: debug builds stop, release builds log once. */
+void gfx__pool_report(gfx_pool *pool, uint32_t id, const char *call);
+
 /* What gfx_draw has drawn since the last gfx_frame_end (gfx_resources.c; OpenGL is used from
  * the main thread only, so plain counters). */
 extern gfx_context_stats_info gfx__frame_counts;
@@ -50,7 +97,15 @@ struct gfx_context {
     size_t program_capacity;
     uint64_t next_reload_check_ns;
     uint32_t program_in_use;
+
+    /* Objects (gfx_resources.c), behind generation-checked handles */
+    gfx_pool buffers, vertex_arrays, textures, framebuffers;
 };
+
+/* The context gfx_context_create made last (NULL after its gfx_context_destroy): whose pools handles name. */
+extern gfx_context *gfx__current;
+void gfx__resources_init(gfx_context *gfx);
+void gfx__resources_destroy(gfx_context *gfx);
 
 /* Backends (gfx_window.c, gfx_offscreen.c). The window says why it failed in `reason`; the
  * offscreen backend logs its own errors. */

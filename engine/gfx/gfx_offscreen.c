@@ -24,19 +24,19 @@ bool gfx__offscreen_open(gfx_context *gfx, int width, int height) {
     };
     OSMesaContext context = OSMesaCreateContextAttribs(attributes, NULL);
     if (!context) {
-        core_error("gfx", "OSMesa cannot make an OpenGL 4.5 core context (Mesa too old?)");
+        core_log_error("gfx", "OSMesa cannot make an OpenGL 4.5 core context (Mesa too old?)");
         return false;
     }
     size_t size = (size_t)width * (size_t)height * 4;
     uint8_t *pixels = core_alloc(size);
     if (!OSMesaMakeCurrent(context, pixels, GL_UNSIGNED_BYTE, width, height)) {
-        core_error("gfx", "OSMesa cannot use a %dx%d framebuffer", width, height);
+        core_log_error("gfx", "OSMesa cannot use a %dx%d framebuffer", width, height);
         OSMesaDestroyContext(context);
         core_free(pixels, size);
         return false;
     }
     if (!gladLoadGL(gfx_osmesa_proc)) {
-        core_error("gfx", "cannot load OpenGL functions through OSMesa");
+        core_log_error("gfx", "cannot load OpenGL functions through OSMesa");
         OSMesaDestroyContext(context);
         core_free(pixels, size);
         return false;

@@ -97,7 +97,7 @@ gfx_scene *gfx_scene_create(gfx_context *gfx) {
     gfx_scene *scene = core_calloc(1, sizeof *scene);
     *scene = (gfx_scene){ .gfx = gfx, .lit = lit, .sky = sky, .sphere = scene_sphere(),
                           .ground = scene_ground() };
-    glCreateVertexArrays(1, &scene->empty.id);
+    scene->empty = gfx_vertex_array_create(&(gfx_vertex_array_desc){ 0 });
     return scene;
 }
 

@@ -255,12 +255,12 @@ static void gfx_report_log_line(const gfx_source *source, const char *line, size
         if (after != number && file >= 0 && file < source->file_count) {
             while (after < end && (*after == ')' || *after == ':' || *after == ' ' || *after == '('
                                    || (*after >= '0' && *after <= '9'))) after++;
-            core_error("gfx", "%s:%ld: %.*s", source->entry->dependencies[source->files[file]], line_number,
+            core_log_error("gfx", "%s:%ld: %.*s", source->entry->dependencies[source->files[file]], line_number,
                        (int)(end - after), after);
             return;
         }
     }
-    if (length) core_error("gfx", "%.*s", (int)length, line);
+    if (length) core_log_error("gfx", "%.*s", (int)length, line);
 }
 
 static void gfx_report_log(const gfx_source *source, const char *log) {
@@ -313,7 +313,7 @@ static GLuint gfx_link(const GLuint *shaders, int count, const char *name) {
         size_t size;
         char *log = gfx_info_log(program, true, &size);
         /* Link messages name no source line: print them as they are. */
-        core_error("gfx", "program %s does not link:\n%s", name, log);
+        core_log_error("gfx", "program %s does not link:\n%s", name, log);
         core_free(log, size);
         glDeleteProgram(program);
         return 0;
@@ -334,7 +334,7 @@ static GLuint gfx_build_from_files(gfx_context *gfx, gfx_program_entry *entry) {
         gfx_source source = { .entry = entry, .dir = gfx->shader_dir };
         /* Every stage shares the entry's file list, so source numbers match across stages. */
         ok = gfx_source_add_file(&source, entry->stage_files[stage], 0);
-        if (!ok) core_error("gfx", "%s", source.error);
+        if (!ok) core_log_error("gfx", "%s", source.error);
         else {
             GLuint shader = gfx_compile_stage(&source, gfx_stage_kinds[stage], source.text);
             if (shader) shaders[shader_count++] = shader;

@@ -4,9 +4,11 @@
  *
  *   1. Report decoders turn the raw HID input reports of a gamepad into one plain state:
  *          input_decoder *d = input_decoder_create(&(input_decoder_desc){
- *              .vendor_id = 0x054c, .product_id = 0x09cc });          // a DualShock 4
+ *              .vendor_id = 0x054c, .product_id = 0x09cc }, NULL);    // a DualShock 4
  *          input_gamepad_state pad;
- *          if (input_decoder_decode(d, report, size, &pad) == INPUT_DECODE_OK) use(pad.lx);
+ *          core_error why = {0};                                      // or NULL: no text formatted
+ *          if (input_decoder_decode(d, report, size, &pad, &why) == INPUT_DECODE_OK) use(pad.lx);
+ *          else log("%s", why.message);      // "report too short: 9 bytes, need 10"
  *      Known pads (DualShock 4, DualSense, Switch Pro) are picked by vendor and product id; any
  *      other pad is decoded from its HID report descriptor (.descriptor). Reports that are too
  *      short, too long, of an unknown report ID or malformed are counted (input_decoder_stats_info)
@@ -42,6 +44,8 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+
+#include "core/core.h"   /* core_error */
 
 /* ---- gamepad state ------------------------------------------------------------------------ */
 
@@ -104,9 +108,10 @@ typedef struct input_decoder_desc {
 
 typedef struct input_decoder input_decoder;
 
-/* NULL when the pad is unknown and its descriptor missing or unusable (no stick or buttons);
- * then `error` (when given) receives a one-line reason. */
-input_decoder *input_decoder_create(const input_decoder_desc *desc, char *error, size_t error_size);
+/* NULL when the pad is unknown and its descriptor missing (CORE_ERROR_ARGUMENT) or unusable
+ * (CORE_ERROR_FORMAT: malformed, or no stick or buttons; CORE_ERROR_RANGE: past the parser's
+ * limits); then `error` (may be NULL) says why in one line. */
+input_decoder *input_decoder_create(const input_decoder_desc *desc, core_error *error);
 void input_decoder_destroy(input_decoder *decoder);
 input_gamepad_kind input_decoder_kind(const input_decoder *decoder);
 
@@ -119,14 +124,14 @@ typedef enum input_decode_result {
 } input_decode_result;
 
 /* `report` starts with the report ID byte where the device uses report IDs (as hid_read gives
- * it). On anything but INPUT_DECODE_OK, *state is left as it was. */
+ * it). On anything but INPUT_DECODE_OK, *state is left as it was and `error` (may be NULL; text
+ * is formatted only when given) says why with its numbers ("report too short: 9 bytes, need
+ * 10"): SHORT is CORE_ERROR_CORRUPT (truncated), OVERSIZED CORE_ERROR_RANGE, UNKNOWN_ID and
+ * MALFORMED CORE_ERROR_FORMAT. On INPUT_DECODE_OK `error` is left as it was. */
 input_decode_result input_decoder_decode(input_decoder *decoder, const uint8_t *report, size_t size,
-                                         input_gamepad_state *state);
+                                         input_gamepad_state *state, core_error *error);
 /* The result in a few words ("report too short"). */
 const char *input_decode_result_name(input_decode_result result);
-/* Why the decoder's last failed report failed, with its numbers ("report too short: 9 bytes,
- * need 10"); the text lives in the decoder until its next failure. */
-const char *input_decoder_last_error(input_decoder *decoder);
 
 typedef struct input_decoder_stats_info {
     uint64_t decoded, short_reports, oversized, unknown_id, malformed;

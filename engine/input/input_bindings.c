@@ -481,7 +481,7 @@ char *input__file_read(const char *path, const char *what, size_t max_bytes, siz
     *size = *capacity = 0;
     FILE *file = fopen(path, "rb");
     if (!file) {
-        core_error("input", "cannot open %s %s: %s", what, path, strerror(errno));
+        core_log_error("input", "cannot open %s %s: %s", what, path, strerror(errno));
         return NULL;
     }
     char *text = NULL;
@@ -491,13 +491,13 @@ char *input__file_read(const char *path, const char *what, size_t max_bytes, siz
         size_t got = fread(text + *size, 1, *capacity - *size, file);
         *size += got;
         if (*size > max_bytes) {
-            core_error("input", "cannot load %s %s: larger than %zu bytes", what, path, max_bytes);
+            core_log_error("input", "cannot load %s %s: larger than %zu bytes", what, path, max_bytes);
             failed = true;
             break;
         }
         if (got == 0) {
             if (ferror(file)) {
-                core_error("input", "cannot read %s %s: %s", what, path, strerror(errno));
+                core_log_error("input", "cannot read %s %s: %s", what, path, strerror(errno));
                 failed = true;
             }
             break;

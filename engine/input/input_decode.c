@@ -135,9 +135,6 @@ struct input_decoder {
     uint16_t vendor_id, product_id;
     uint8_t crc_good;                /* Bluetooth reports with a correct CRC, up to the threshold */
     input_decoder_stats_info stats;
-    input_decode_result last_result; /* of the last failed decode, for input_decoder_last_error */
-    input_decode_failure last_failure;
-    char last_error[128];
     input_hid_layout layout;         /* INPUT_GAMEPAD_GENERIC only */
 };
 
@@ -145,10 +142,9 @@ static void input_decode_crc_init(void);
 static pthread_once_t input_decode_crc_once = PTHREAD_ONCE_INIT;
 
 
-input_decoder *input_decoder_create(const input_decoder_desc *desc, char *error, size_t error_size) {
-    if (error && error_size) error[0] = '\0';
+input_decoder *input_decoder_create(const input_decoder_desc *desc, core_error *error) {
     if (!desc) {
-        core_error_format(error, error_size, "no decoder description given");
+        core_error_set(error, CORE_ERROR_ARGUMENT, "no decoder description given");
         return NULL;
     }
     input_gamepad_kind kind = INPUT_GAMEPAD_GENERIC;
@@ -156,15 +152,15 @@ input_decoder *input_decoder_create(const input_decoder_desc *desc, char *error,
     input_hid_layout layout;
     if (!known) {
         if (!desc->descriptor || desc->descriptor_size == 0) {
-            core_error_format(error, error_size,
+            core_error_set(error, CORE_ERROR_ARGUMENT,
                                "%04x:%04x is not a known pad and no report descriptor was given",
                                desc->vendor_id, desc->product_id);
             return NULL;
         }
-        char reason[160];
-        if (!input__hid_layout_parse(desc->descriptor, desc->descriptor_size, &layout, reason, sizeof reason)) {
-            core_error_format(error, error_size, "%04x:%04x: unusable report descriptor: %s",
-                               desc->vendor_id, desc->product_id, reason);
+        core_error reason = { 0 };
+        if (!input__hid_layout_parse(desc->descriptor, desc->descriptor_size, &layout, &reason)) {
+            core_error_set(error, reason.code, "%04x:%04x: unusable report descriptor: %s",
+                               desc->vendor_id, desc->product_id, reason.message);
             return NULL;
         }
     }
@@ -446,8 +442,10 @@ static input_decode_result input_decode_switch(const uint8_t *report, size_t siz
 
 /* ---- decode and its results ----------------------------------------------------------------- */
 
+static void input_decode_explain(input_decode_result result, const input_decode_failure *f, core_error *error);
+
 input_decode_result input_decoder_decode(input_decoder *decoder, const uint8_t *report, size_t size,
-                                         input_gamepad_state *state) {
+                                         input_gamepad_state *state, core_error *error) {
     assert(decoder && state);
     if (!report) size = 0;
     input_decode_failure failure = { 0 };
@@ -465,8 +463,7 @@ input_decode_result input_decoder_decode(input_decoder *decoder, const uint8_t *
     case INPUT_DECODE_UNKNOWN_ID: decoder->stats.unknown_id++; break;
     case INPUT_DECODE_MALFORMED: decoder->stats.malformed++; break;
     }
-    decoder->last_result = result;
-    decoder->last_failure = failure;
+    if (error) input_decode_explain(result, &failure, error);
     return result;
 }
 
@@ -481,24 +478,24 @@ const char *input_decode_result_name(input_decode_result result) {
     return "unknown result";
 }
 
-/* The reason of the last failed decode, with its numbers; written into the decoder on demand so
- * the decode path itself never formats text. */
-const char *input_decoder_last_error(input_decoder *decoder) {
-    const input_decode_failure *f = &decoder->last_failure;
-    char *text = decoder->last_error;
-    size_t cap = sizeof decoder->last_error;
-    const char *plain = input_decode_result_name(decoder->last_result);
-    switch (decoder->last_result) {
-    case INPUT_DECODE_OK: return "no failed report";
-    case INPUT_DECODE_SHORT: snprintf(text, cap, "%s: %zu bytes, need %zu", plain, f->size, f->limit); break;
-    case INPUT_DECODE_OVERSIZED: snprintf(text, cap, "%s: %zu bytes, at most %zu", plain, f->size, f->limit); break;
+/* A failed decode's reason, with its numbers, into the caller's error: formatted only when the
+ * caller asked for one, so the decode path itself formats no text. */
+static void input_decode_explain(input_decode_result result, const input_decode_failure *f, core_error *error) {
+    const char *plain = input_decode_result_name(result);
+    switch (result) {
+    case INPUT_DECODE_OK: break;
+    case INPUT_DECODE_SHORT:
+        core_error_set(error, CORE_ERROR_CORRUPT, "%s: %zu bytes, need %zu", plain, f->size, f->limit);
+        break;
+    case INPUT_DECODE_OVERSIZED:
+        core_error_set(error, CORE_ERROR_RANGE, "%s: %zu bytes, at most %zu", plain, f->size, f->limit);
+        break;
     case INPUT_DECODE_UNKNOWN_ID:
-        snprintf(text, cap, "%s 0x%02x (%zu bytes)", plain, (unsigned)f->report_id & 0xff, f->size);
+        core_error_set(error, CORE_ERROR_FORMAT, "%s 0x%02x (%zu bytes)", plain, (unsigned)f->report_id & 0xff, f->size);
         break;
     case INPUT_DECODE_MALFORMED:
-        if (!f->reason) return plain;
-        snprintf(text, cap, "%s: %s", plain, f->reason);
+        if (f->reason) core_error_set(error, CORE_ERROR_FORMAT, "%s: %s", plain, f->reason);
+        else core_error_set(error, CORE_ERROR_FORMAT, "%s", plain);
         break;
     }
-    return text;
 }

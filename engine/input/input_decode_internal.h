@@ -79,9 +79,9 @@ typedef struct input_hid_layout {
  * when the descriptor is malformed, beyond the limits above, or has neither a stick (X and Y) nor
  * buttons nor a hat. Reads only descriptor[0, size). */
 bool input__hid_layout_parse(const uint8_t *descriptor, size_t size, input_hid_layout *layout,
-                             char *error, size_t error_size);
+                             core_error *error);
 
-/* What a failed decode says besides its result (for input_decoder_last_error). */
+/* What a failed decode says besides its result (for the caller's core_error). */
 typedef struct input_decode_failure {
     size_t size;            /* the report's size */
     size_t limit;           /* SHORT: bytes needed; OVERSIZED: most bytes allowed */

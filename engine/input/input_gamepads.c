@@ -259,15 +259,15 @@ static void input_device_examine(input_gamepads *g, input_device *dev, const str
     size_t descriptor_size = input_read_descriptor(info->path, descriptor, sizeof descriptor);
     if (!known && !input__descriptor_is_gamepad(descriptor, descriptor_size)) return; /* a keyboard, … */
 
-    char error[160] = "";
+    core_error error = { 0 };
     input_decoder *decoder = input_decoder_create(
         &(input_decoder_desc){ .vendor_id = info->vendor_id, .product_id = info->product_id,
                                .descriptor = descriptor_size ? descriptor : NULL,
                                .descriptor_size = descriptor_size },
-        error, sizeof error);
+        &error);
     if (!decoder) {
         core_warn("input", "gamepad %s (%04x:%04x, %s) skipped: %s", dev->name, info->vendor_id, info->product_id,
-                  info->path, error[0] ? error : "its report descriptor cannot be decoded");
+                  info->path, error.code ? error.message : "its report descriptor cannot be decoded");
         return;
     }
     errno = 0;
@@ -360,7 +360,7 @@ static bool input_devices_read(input_gamepads *g) {
                 break;
             }
             if (size == 0) break;
-            if (input_decoder_decode(dev->decoder, report, (size_t)size, &dev->state) == INPUT_DECODE_OK)
+            if (input_decoder_decode(dev->decoder, report, (size_t)size, &dev->state, NULL) == INPUT_DECODE_OK)
                 input__gamepad_publish(g->shared, dev->slot, &dev->state);
         }
     }

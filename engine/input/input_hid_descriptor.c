@@ -126,16 +126,16 @@ typedef struct hid_parser {
     bool uses_report_ids;
     uint32_t input_bits[256];            /* per report ID, bits of input fields so far */
     hid_candidate_set gamepad_set, any_set;
-    char *error;
-    size_t error_size;
+    core_error *error;
 } hid_parser;
 
-static bool hid_fail(hid_parser *p, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static bool hid_fail(hid_parser *p, const char *fmt, ...) {
-    if (p->error && p->error_size) {
+static bool hid_fail(hid_parser *p, core_error_code code, const char *fmt, ...) CORE_PRINTF(3, 4);
+static bool hid_fail(hid_parser *p, core_error_code code, const char *fmt, ...) {
+    if (p->error) {
+        p->error->code = code;
         va_list args;
         va_start(args, fmt);
-        vsnprintf(p->error, p->error_size, fmt, args);
+        vsnprintf(p->error->message, sizeof p->error->message, fmt, args);
         va_end(args);
     }
     return false;
@@ -159,7 +159,7 @@ static void hid_logical_range(const hid_globals *g, int64_t *min, int64_t *max) 
 
 static bool hid_add_usage(hid_parser *p, uint32_t min, uint32_t max, bool extended) {
     if (p->usage_count == INPUT_HID_MAX_USAGES)
-        return hid_fail(p, "more than %d usages before one main item (byte %zu)", INPUT_HID_MAX_USAGES, p->at);
+        return hid_fail(p, CORE_ERROR_RANGE, "more than %d usages before one main item (byte %zu)", INPUT_HID_MAX_USAGES, p->at);
     p->usages[p->usage_count++] = (hid_usage_range){ .min = min, .max = max, .extended = extended };
     return true;
 }
@@ -219,7 +219,7 @@ static bool hid_input(hid_parser *p, uint32_t flags) {
     uint64_t bits = (uint64_t)p->global.report_size * p->global.report_count;
     uint64_t start = p->input_bits[id];
     if (start + bits > (uint64_t)INPUT_HID_MAX_REPORT_BYTES * 8)
-        return hid_fail(p, "input report %u longer than %d bytes (byte %zu)", (unsigned)id,
+        return hid_fail(p, CORE_ERROR_RANGE, "input report %u longer than %d bytes (byte %zu)", (unsigned)id,
                         INPUT_HID_MAX_REPORT_BYTES, p->at);
     p->input_bits[id] = (uint32_t)(start + bits);
     bool constant = flags & 1, variable = flags & 2, relative = flags & 4;
@@ -247,7 +247,7 @@ static bool hid_input(hid_parser *p, uint32_t flags) {
 
 static bool hid_collection_begin(hid_parser *p, uint32_t type) {
     if (p->depth == INPUT_HID_MAX_COLLECTION_DEPTH)
-        return hid_fail(p, "collections nested deeper than %d (byte %zu)", INPUT_HID_MAX_COLLECTION_DEPTH, p->at);
+        return hid_fail(p, CORE_ERROR_RANGE, "collections nested deeper than %d (byte %zu)", INPUT_HID_MAX_COLLECTION_DEPTH, p->at);
     hid_collection c = p->depth ? p->collections[p->depth - 1] : (hid_collection){ 0 };
     if ((type & 0xff) == 1) { /* application */
         uint32_t usage = p->usage_count ? hid_full_usage(p, p->usages[0].min, p->usages[0].extended) : 0;
@@ -267,7 +267,7 @@ static bool hid_main_item(hid_parser *p, unsigned tag, uint32_t value) {
     case 0x9: case 0xb: break;                                  /* Output, Feature: not read */
     case 0xa: ok = hid_collection_begin(p, value); break;       /* Collection */
     case 0xc:                                                   /* End Collection */
-        if (p->depth == 0) return hid_fail(p, "End Collection without a Collection (byte %zu)", p->at);
+        if (p->depth == 0) return hid_fail(p, CORE_ERROR_FORMAT, "End Collection without a Collection (byte %zu)", p->at);
         p->depth--;
         break;
     default: break;                                             /* reserved: ignored, as Linux does */
@@ -286,28 +286,28 @@ static bool hid_global_item(hid_parser *p, unsigned tag, uint32_t value, uint8_t
     case 0x2: g->logical_max_raw = value; g->logical_max_bytes = bytes; break;
     case 0x7:
         if (value > INPUT_HID_MAX_REPORT_SIZE)
-            return hid_fail(p, "report size %u bits exceeds %d (byte %zu)", (unsigned)value,
+            return hid_fail(p, CORE_ERROR_RANGE, "report size %u bits exceeds %d (byte %zu)", (unsigned)value,
                             INPUT_HID_MAX_REPORT_SIZE, p->at);
         g->report_size = value;
         break;
     case 0x8:
-        if (value == 0 || value > 255) return hid_fail(p, "invalid report ID %u (byte %zu)", (unsigned)value, p->at);
+        if (value == 0 || value > 255) return hid_fail(p, CORE_ERROR_FORMAT, "invalid report ID %u (byte %zu)", (unsigned)value, p->at);
         g->report_id = value;
         p->uses_report_ids = true;
         break;
     case 0x9:
         if (value > INPUT_HID_MAX_REPORT_COUNT)
-            return hid_fail(p, "report count %u exceeds %d (byte %zu)", (unsigned)value,
+            return hid_fail(p, CORE_ERROR_RANGE, "report count %u exceeds %d (byte %zu)", (unsigned)value,
                             INPUT_HID_MAX_REPORT_COUNT, p->at);
         g->report_count = value;
         break;
     case 0xa:
         if (p->stack_depth == INPUT_HID_MAX_GLOBAL_STACK)
-            return hid_fail(p, "Push nested deeper than %d (byte %zu)", INPUT_HID_MAX_GLOBAL_STACK, p->at);
+            return hid_fail(p, CORE_ERROR_RANGE, "Push nested deeper than %d (byte %zu)", INPUT_HID_MAX_GLOBAL_STACK, p->at);
         p->stack[p->stack_depth++] = *g;
         break;
     case 0xb:
-        if (p->stack_depth == 0) return hid_fail(p, "Pop without a Push (byte %zu)", p->at);
+        if (p->stack_depth == 0) return hid_fail(p, CORE_ERROR_FORMAT, "Pop without a Push (byte %zu)", p->at);
         *g = p->stack[--p->stack_depth];
         break;
     default: break; /* physical range, unit, unit exponent, reserved */
@@ -427,43 +427,41 @@ static void hid_build_layout(const hid_parser *p, const hid_candidate_set *set, 
 }
 
 static bool hid_parse(hid_parser *p, const uint8_t *descriptor, size_t size, input_hid_layout *layout,
-                      char *error, size_t error_size);
+                      core_error *error);
 
 bool input__hid_layout_parse(const uint8_t *descriptor, size_t size, input_hid_layout *layout,
-                             char *error, size_t error_size) {
+                             core_error *error) {
     /* About 15 KiB of bounded workspace, once per device: zeroed, on the heap. */
     hid_parser *p = core_calloc(1, sizeof *p);
-    bool ok = hid_parse(p, descriptor, size, layout, error, error_size);
+    bool ok = hid_parse(p, descriptor, size, layout, error);
     core_free(p, sizeof *p);
     return ok;
 }
 
 static bool hid_parse(hid_parser *p, const uint8_t *descriptor, size_t size, input_hid_layout *layout,
-                      char *error, size_t error_size) {
+                      core_error *error) {
     p->data = descriptor;
     p->size = descriptor ? size : 0;
     p->error = error;
-    p->error_size = error_size;
     p->gamepad_set.collection = p->any_set.collection = -1;
-    if (error && error_size) error[0] = '\0';
-    if (p->size == 0) return hid_fail(p, "empty report descriptor");
+    if (p->size == 0) return hid_fail(p, CORE_ERROR_FORMAT, "empty report descriptor");
 
     size_t at = 0;
     while (at < p->size) {
         p->at = at;
         uint8_t prefix = p->data[at];
         if (prefix == 0xfe) { /* long item: 0xfe, bDataSize, bLongItemTag, data */
-            if (p->size - at < 3) return hid_fail(p, "long item at byte %zu runs past the end", at);
+            if (p->size - at < 3) return hid_fail(p, CORE_ERROR_CORRUPT, "long item at byte %zu runs past the end", at);
             size_t length = p->data[at + 1];
             if (p->size - at - 3 < length)
-                return hid_fail(p, "long item at byte %zu needs %zu data bytes, %zu left", at, length,
+                return hid_fail(p, CORE_ERROR_CORRUPT, "long item at byte %zu needs %zu data bytes, %zu left", at, length,
                                 p->size - at - 3);
             at += 3 + length;
             continue;
         }
         uint8_t bytes = (prefix & 3) == 3 ? 4 : (prefix & 3);
         if (p->size - at - 1 < bytes)
-            return hid_fail(p, "item 0x%02x at byte %zu needs %u data bytes, %zu left", prefix, at, bytes,
+            return hid_fail(p, CORE_ERROR_CORRUPT, "item 0x%02x at byte %zu needs %u data bytes, %zu left", prefix, at, bytes,
                             p->size - at - 1);
         uint32_t value = 0;
         for (unsigned i = 0; i < bytes; i++) value |= (uint32_t)p->data[at + 1 + i] << (8 * i);
@@ -477,17 +475,17 @@ static bool hid_parse(hid_parser *p, const uint8_t *descriptor, size_t size, inp
         at += 1u + bytes;
     }
     if (p->depth != 0)
-        return hid_fail(p, "%d collection%s not ended at the end of the descriptor", p->depth,
+        return hid_fail(p, CORE_ERROR_FORMAT, "%d collection%s not ended at the end of the descriptor", p->depth,
                         p->depth == 1 ? "" : "s");
 
     const hid_candidate_set *set = hid_set_usable(&p->gamepad_set) ? &p->gamepad_set
                                    : hid_set_usable(&p->any_set)   ? &p->any_set
                                                                    : NULL;
-    if (!set) return hid_fail(p, "no stick (X and Y), hat switch or buttons in the input reports");
+    if (!set) return hid_fail(p, CORE_ERROR_FORMAT, "no stick (X and Y), hat switch or buttons in the input reports");
     input_hid_layout built;
     hid_build_layout(p, set, &built);
     if (built.field_count == 0)
-        return hid_fail(p, "the stick and buttons are declared before the first Report ID, in no report");
+        return hid_fail(p, CORE_ERROR_FORMAT, "the stick and buttons are declared before the first Report ID, in no report");
     *layout = built;
     return true;
 }

@@ -257,8 +257,7 @@ typedef struct input_sdl_mapping {
 /* One line of the SDL game controller database format (no newline):
  *     GUID,name,output:input,...,platform:Linux,
  * false with a one-line reason in `error` when it is not one; safe on any bytes. */
-bool input__sdl_mapping_parse(const char *line, size_t length, input_sdl_mapping *mapping, char *error,
-                              size_t error_size);
+bool input__sdl_mapping_parse(const char *line, size_t length, input_sdl_mapping *mapping, core_error *error);
 
 /* A raw joystick as glfwGetJoystickAxes/Buttons/Hats give it (hats as GLFW_HAT_* bits, which are
  * SDL's: 1 up, 2 right, 4 down, 8 left). Elements the mapping names beyond the counts read as
@@ -364,9 +363,9 @@ void input__replayer_close(input_replayer *replayer);
 /* The decoders behind the reader, exposed for the fuzz target: they check everything but the
  * checksum. `payload` is one record's payload. */
 bool input__record_decode_header(const uint8_t *payload, size_t size, input_bindings *bindings, float *dead_zone,
-                                 char *error, size_t error_size);
+                                 core_error *error);
 bool input__record_decode_frame(const uint8_t *payload, size_t size, input_frame *frame, input_event *events,
-                                uint32_t event_capacity, char *error, size_t error_size);
+                                uint32_t event_capacity, core_error *error);
 
 /* ---- test seams (input_system.c) ------------------------------------------------------------ */
 

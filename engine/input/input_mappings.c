@@ -97,11 +97,11 @@ static bool input_sdl_parse_input(const char *at, const char *end, input_sdl_bin
 }
 
 /* One "key:value" field; false with the reason in `error`. */
-static bool input_sdl_parse_field(input_sdl_mapping *m, const char *at, const char *end, char *error, size_t size) {
+static bool input_sdl_parse_field(input_sdl_mapping *m, const char *at, const char *end, core_error *error) {
     char shown[48];
     const char *colon = memchr(at, ':', (size_t)(end - at));
     if (!colon) {
-        snprintf(error, size, "'%s' is not output:input", input_sdl_shown(at, (size_t)(end - at), shown, sizeof shown));
+        core_error_set(error, CORE_ERROR_FORMAT, "'%s' is not output:input", input_sdl_shown(at, (size_t)(end - at), shown, sizeof shown));
         return false;
     }
     size_t key_length = (size_t)(colon - at);
@@ -114,30 +114,30 @@ static bool input_sdl_parse_field(input_sdl_mapping *m, const char *at, const ch
     if (at < colon && (*at == '+' || *at == '-')) b.output_half = *at++ == '+' ? 1 : -1;
     int output = input_sdl_output_from(at, (size_t)(colon - at));
     if (output < 0 || (b.output_half && output < INPUT_SDL_BUTTON_COUNT)) {
-        snprintf(error, size, "unknown output '%s'", input_sdl_shown(at - (b.output_half != 0), key_length, shown, sizeof shown));
+        core_error_set(error, CORE_ERROR_FORMAT, "unknown output '%s'", input_sdl_shown(at - (b.output_half != 0), key_length, shown, sizeof shown));
         return false;
     }
     b.output = (uint8_t)output;
     if (!input_sdl_parse_input(colon + 1, end, &b)) {
-        snprintf(error, size, "%s: bad input '%s' (expected bN, hN.M or aN)", input_sdl_output_names[output],
+        core_error_set(error, CORE_ERROR_FORMAT, "%s: bad input '%s' (expected bN, hN.M or aN)", input_sdl_output_names[output],
                  input_sdl_shown(colon + 1, (size_t)(end - colon - 1), shown, sizeof shown));
         return false;
     }
     for (int i = 0; i < m->binding_count; i++)
         if (m->bindings[i].output == b.output && (m->bindings[i].output_half == b.output_half || !b.output_half ||
                                                   !m->bindings[i].output_half)) {
-            snprintf(error, size, "%s mapped twice", input_sdl_output_names[output]);
+            core_error_set(error, CORE_ERROR_FORMAT, "%s mapped twice", input_sdl_output_names[output]);
             return false;
         }
     if (m->binding_count == INPUT_SDL_MAX_BINDINGS) {
-        snprintf(error, size, "more than %d elements", INPUT_SDL_MAX_BINDINGS);
+        core_error_set(error, CORE_ERROR_RANGE, "more than %d elements", INPUT_SDL_MAX_BINDINGS);
         return false;
     }
     m->bindings[m->binding_count++] = b;
     return true;
 }
 
-static bool input_sdl_parse_guid(input_sdl_mapping *m, const char *at, const char *end, char *error, size_t size) {
+static bool input_sdl_parse_guid(input_sdl_mapping *m, const char *at, const char *end, core_error *error) {
     char shown[48];
     bool ok = end - at == 32;
     for (int i = 0; ok && i < 32; i++) {
@@ -147,27 +147,28 @@ static bool input_sdl_parse_guid(input_sdl_mapping *m, const char *at, const cha
         m->guid[i] = c;
     }
     m->guid[32] = '\0';
-    if (!ok) snprintf(error, size, "GUID '%s' is not 32 hex digits", input_sdl_shown(at, (size_t)(end - at), shown, sizeof shown));
+    if (!ok) core_error_set(error, CORE_ERROR_FORMAT, "GUID '%s' is not 32 hex digits", input_sdl_shown(at, (size_t)(end - at), shown, sizeof shown));
     return ok;
 }
 
-bool input__sdl_mapping_parse(const char *line, size_t length, input_sdl_mapping *m, char *error, size_t size) {
+bool input__sdl_mapping_parse(const char *line, size_t length, input_sdl_mapping *m, core_error *error) {
     *m = (input_sdl_mapping){ 0 };
     const char *end = line + length, *comma = memchr(line, ',', length);
     if (!comma) {
-        snprintf(error, size, "expected GUID,name,output:input,...");
+        core_error_set(error, CORE_ERROR_FORMAT, "expected GUID,name,output:input,...");
         return false;
     }
-    if (!input_sdl_parse_guid(m, line, comma, error, size)) return false;
+    if (!input_sdl_parse_guid(m, line, comma, error)) return false;
     const char *name = comma + 1, *name_end = memchr(name, ',', (size_t)(end - name));
     if (!name_end) name_end = end;
     if (name_end == name || (size_t)(name_end - name) >= sizeof m->name) {
-        snprintf(error, size, "the name must be 1 to %zu bytes", sizeof m->name - 1);
+        core_error_set(error, name_end == name ? CORE_ERROR_FORMAT : CORE_ERROR_RANGE, "the name must be 1 to %zu bytes",
+                       sizeof m->name - 1);
         return false;
     }
     for (const char *c = name; c < name_end; c++)
         if ((unsigned char)*c < 0x20 || *c == 0x7f) {
-            snprintf(error, size, "control byte in the name");
+            core_error_set(error, CORE_ERROR_FORMAT, "control byte in the name");
             return false;
         }
     memcpy(m->name, name, (size_t)(name_end - name));
@@ -178,14 +179,14 @@ bool input__sdl_mapping_parse(const char *line, size_t length, input_sdl_mapping
         /* SDL's lines end with a comma; an empty last field is fine, an empty one inside is not */
         if (field_end == at) {
             if (field_end == end) break;
-            snprintf(error, size, "empty field");
+            core_error_set(error, CORE_ERROR_FORMAT, "empty field");
             return false;
         }
-        if (!input_sdl_parse_field(m, at, field_end, error, size)) return false;
+        if (!input_sdl_parse_field(m, at, field_end, error)) return false;
         at = field_end;
     }
     if (m->binding_count == 0) {
-        snprintf(error, size, "maps no button or axis");
+        core_error_set(error, CORE_ERROR_FORMAT, "maps no button or axis");
         return false;
     }
     return true;
@@ -305,14 +306,14 @@ void input__sdl_mappings_parse(input_sdl_mappings *ms, const char *text, size_t 
         while (length && (*line == ' ' || *line == '\t')) line++, length--;
         while (length && (line[length - 1] == ' ' || line[length - 1] == '\t')) length--;
         if (length == 0 || *line == '#') continue;
-        char error[160];
-        if (length > INPUT_SDL_MAX_LINE) snprintf(error, sizeof error, "line longer than %d bytes", INPUT_SDL_MAX_LINE);
-        else if (memchr(line, '\0', length)) snprintf(error, sizeof error, "line contains a NUL byte");
-        else if (input__sdl_mapping_parse(line, length, m, error, sizeof error)) {
+        core_error error = { 0 };
+        if (length > INPUT_SDL_MAX_LINE) core_error_set(&error, CORE_ERROR_RANGE, "line longer than %d bytes", INPUT_SDL_MAX_LINE);
+        else if (memchr(line, '\0', length)) core_error_set(&error, CORE_ERROR_FORMAT, "line contains a NUL byte");
+        else if (input__sdl_mapping_parse(line, length, m, &error)) {
             if (!m->other_platform) input_sdl_keep(ms, m, line, length);
             continue;
         }
-        core_warn("input", "%s:%d: %s (line skipped)", name, line_number, error);
+        core_warn("input", "%s:%d: %s (line skipped)", name, line_number, error.message);
         bad++;
     }
     core_free(m, sizeof *m);

@@ -121,21 +121,21 @@ static void input_encode_header(input_bytes *b, const input_bindings *bindings, 
 }
 
 bool input__record_decode_header(const uint8_t *payload, size_t size, input_bindings *bindings, float *dead_zone,
-                                 char *error, size_t error_size) {
+                                 core_error *error) {
     input_cursor c = { payload, payload + size, true };
     input_bindings b = { 0 };
     uint32_t targets = input_get(&c, 4);
     if (c.ok && targets != INPUT_TARGET_COUNT)
-        return core_error_format(error, error_size, "%u actions, this build has %d", targets, INPUT_TARGET_COUNT);
+        return core_error_set(error, CORE_ERROR_FORMAT, "%u actions, this build has %d", targets, INPUT_TARGET_COUNT);
     for (int t = 0; t < INPUT_TARGET_COUNT && c.ok; t++) {
         uint32_t count = input_get(&c, 1);
         if (count > INPUT_MAX_SOURCES)
-            return core_error_format(error, error_size, "%s has %u sources (at most %d)", input__target_name(t), count,
+            return core_error_set(error, CORE_ERROR_RANGE, "%s has %u sources (at most %d)", input__target_name(t), count,
                               INPUT_MAX_SOURCES);
         for (uint32_t i = 0; i < count && c.ok; i++) {
             input_source source = { .kind = (uint8_t)input_get(&c, 1), .code = (uint16_t)input_get(&c, 2) };
             if (c.ok && input__source_misfit(t, source))
-                return core_error_format(error, error_size, "bad source %u:%u for %s", source.kind, source.code,
+                return core_error_set(error, CORE_ERROR_FORMAT, "bad source %u:%u for %s", source.kind, source.code,
                                   input__target_name(t));
             b.sources[t][i] = source;
         }
@@ -146,11 +146,11 @@ bool input__record_decode_header(const uint8_t *payload, size_t size, input_bind
     b.dead_zone = input_get_f32(&c);
     uint32_t invert = input_get(&c, 1);
     float zone = input_get_f32(&c);
-    if (!c.ok) return core_error_format(error, error_size, "header payload too short");
-    if (c.at != c.end) return core_error_format(error, error_size, "%zu stray bytes in the header", (size_t)(c.end - c.at));
+    if (!c.ok) return core_error_set(error, CORE_ERROR_CORRUPT, "header payload too short");
+    if (c.at != c.end) return core_error_set(error, CORE_ERROR_CORRUPT, "%zu stray bytes in the header", (size_t)(c.end - c.at));
     b.invert_y = invert != 0;
     if (invert > 1 || !input__bindings_valid(&b) || !(zone >= 0.0f && zone <= INPUT_DEAD_ZONE_MAX))
-        return core_error_format(error, error_size, "settings out of range");
+        return core_error_set(error, CORE_ERROR_RANGE, "settings out of range");
     *bindings = b;
     *dead_zone = zone;
     return true;
@@ -247,18 +247,18 @@ static void input_encode_actions(input_bytes *b, const input_actions *a) {
 }
 
 bool input__record_decode_frame(const uint8_t *payload, size_t size, input_frame *frame, input_event *events,
-                                uint32_t event_capacity, char *error, size_t error_size) {
+                                uint32_t event_capacity, core_error *error) {
     input_cursor c = { payload, payload + size, true };
     frame->index = input_get(&c, 4);
     frame->dt = input_get_f32(&c);
     uint32_t count = input_get(&c, 4);
-    if (!c.ok) return core_error_format(error, error_size, "frame record too short");
-    if (!(frame->dt >= 0.0f) || !isfinite(frame->dt)) return core_error_format(error, error_size, "bad dt");
-    if (count > event_capacity) return core_error_format(error, error_size, "%u events (at most %u)", count, event_capacity);
+    if (!c.ok) return core_error_set(error, CORE_ERROR_CORRUPT, "frame record too short");
+    if (!(frame->dt >= 0.0f) || !isfinite(frame->dt)) return core_error_set(error, CORE_ERROR_RANGE, "bad dt");
+    if (count > event_capacity) return core_error_set(error, CORE_ERROR_RANGE, "%u events (at most %u)", count, event_capacity);
     for (uint32_t i = 0; i < count; i++) {
         events[i] = input_decode_event(&c);
-        if (!c.ok) return core_error_format(error, error_size, "event %u cut short", i);
-        if (!input__event_valid(&events[i])) return core_error_format(error, error_size, "event %u is not valid", i);
+        if (!c.ok) return core_error_set(error, CORE_ERROR_CORRUPT, "event %u cut short", i);
+        if (!input__event_valid(&events[i])) return core_error_set(error, CORE_ERROR_FORMAT, "event %u is not valid", i);
     }
     input_actions *a = &frame->actions;
     a->move_x = input_get_f32(&c);
@@ -268,8 +268,8 @@ bool input__record_decode_frame(const uint8_t *payload, size_t size, input_frame
     a->down = input_get(&c, 4);
     a->pressed = input_get(&c, 4);
     a->released = input_get(&c, 4);
-    if (!c.ok) return core_error_format(error, error_size, "frame record too short for its actions");
-    if (c.at != c.end) return core_error_format(error, error_size, "%zu stray bytes after the actions", (size_t)(c.end - c.at));
+    if (!c.ok) return core_error_set(error, CORE_ERROR_CORRUPT, "frame record too short for its actions");
+    if (c.at != c.end) return core_error_set(error, CORE_ERROR_CORRUPT, "%zu stray bytes after the actions", (size_t)(c.end - c.at));
     frame->events = events;
     frame->event_count = count;
     return true;
@@ -287,7 +287,7 @@ struct input_recorder {
 
 static void input_recorder_fail(input_recorder *r, const char *what) {
     if (!r->failed)
-        core_error("input", "cannot write the recording %s: %s: %s; recording stops (what was written stays in %s)",
+        core_log_error("input", "cannot write the recording %s: %s: %s; recording stops (what was written stays in %s)",
                    r->part_path, what, strerror(errno), r->part_path);
     r->failed = true;
 }
@@ -315,7 +315,7 @@ input_recorder *input__recorder_open(const char *path, const input_bindings *bin
     snprintf(r->part_path, size, "%s.part", path);
     r->file = fopen(r->part_path, "wb");
     if (!r->file) {
-        core_error("input", "cannot write the recording %s: %s", r->part_path, strerror(errno));
+        core_log_error("input", "cannot write the recording %s: %s", r->part_path, strerror(errno));
         core_free(r->part_path, size);
         core_free(r->path, strlen(r->path) + 1);
         core_free(r, sizeof *r);
@@ -329,7 +329,7 @@ input_recorder *input__recorder_open(const char *path, const input_bindings *bin
     input_patch_u32(b, 12, (uint32_t)(b->size - 16));
     input_put_u32(b, input_checksum(b->data, b->size));
     if (fwrite(b->data, 1, b->size, r->file) != b->size || fflush(r->file) != 0) {
-        core_error("input", "cannot write the recording %s: %s", r->part_path, strerror(errno));
+        core_log_error("input", "cannot write the recording %s: %s", r->part_path, strerror(errno));
         fclose(r->file);
         remove(r->part_path);
         input_bytes_free(b);
@@ -363,7 +363,7 @@ void input__recorder_close(input_recorder *r) {
     if (fclose(r->file) != 0) input_recorder_fail(r, "close failed");
     if (!r->failed) {
         if (rename(r->part_path, r->path) != 0)
-            core_error("input", "cannot rename the recording %s to %s: %s", r->part_path, r->path, strerror(errno));
+            core_log_error("input", "cannot rename the recording %s to %s: %s", r->part_path, r->path, strerror(errno));
         else
             core_info("input", "recorded %u frames to %s", r->frames, r->path);
     }
@@ -392,7 +392,7 @@ static void input_replayer_stop(input_replayer *r, bool failed, const char *fmt,
     va_start(args, fmt);
     vsnprintf(reason, sizeof reason, fmt, args);
     va_end(args);
-    core_error("input", "replay %s: after frame %u (byte %llu): %s; the replay ends here", r->path, r->frames,
+    core_log_error("input", "replay %s: after frame %u (byte %llu): %s; the replay ends here", r->path, r->frames,
                (unsigned long long)r->offset, reason);
     r->done = true;
     r->failed = failed;
@@ -414,12 +414,12 @@ input_replayer *input__replayer_open(const char *path, input_bindings *bindings,
     r->path = core_strdup(path);
     r->file = fopen(path, "rb");
     if (!r->file) {
-        core_error("input", "cannot open the replay %s: %s", path, strerror(errno));
+        core_log_error("input", "cannot open the replay %s: %s", path, strerror(errno));
         input_replayer_free(r);
         return NULL;
     }
     uint8_t head[16];
-    char error[200] = "";
+    char error[320] = "";   /* "bad header: " and a core_error message */
     input_bytes *b = &r->record;
     if (!input_read_exact(r, head, sizeof head)) {
         snprintf(error, sizeof error, "too short for a header (truncated or empty)");
@@ -439,14 +439,14 @@ input_replayer *input__replayer_open(const char *path, input_bindings *bindings,
         } else if (input_checksum(b->data, 16 + length) != input_read_u32(b->data + 16 + length)) {
             snprintf(error, sizeof error, "header checksum mismatch (corrupt)");
         } else {
-            char why[160];
-            if (!input__record_decode_header(b->data + 16, length, bindings, dead_zone, why, sizeof why))
-                snprintf(error, sizeof error, "bad header: %s", why);
+            core_error why = { 0 };
+            if (!input__record_decode_header(b->data + 16, length, bindings, dead_zone, &why))
+                snprintf(error, sizeof error, "bad header: %s", why.message);
             r->offset = 16 + length + 4;
         }
     }
     if (error[0]) {
-        core_error("input", "cannot replay %s: %s", path, error);
+        core_log_error("input", "cannot replay %s: %s", path, error);
         input_replayer_free(r);
         return NULL;
     }
@@ -495,9 +495,9 @@ bool input__replayer_next(input_replayer *r, input_frame *frame) {
         r->done = true;
         return false;
     }
-    char error[160];
-    if (!input__record_decode_frame(b->data + 8, length, frame, r->events, INPUT_MAX_EVENTS, error, sizeof error)) {
-        input_replayer_stop(r, true, "%s (corrupt)", error);
+    core_error error = { 0 };
+    if (!input__record_decode_frame(b->data + 8, length, frame, r->events, INPUT_MAX_EVENTS, &error)) {
+        input_replayer_stop(r, true, "%s (corrupt)", error.message);
         return false;
     }
     if (frame->index != r->frames) {

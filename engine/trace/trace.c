@@ -786,14 +786,14 @@ bool trace_start(const char *path) {
     pthread_once(&trace_once, trace_init);
     pthread_mutex_lock(&trace_lock);
     if (trace_capturing()) {
-        core_error("trace", "cannot start a trace to '%s': one is already being written to '%s'",
+        core_log_error("trace", "cannot start a trace to '%s': one is already being written to '%s'",
                    path, trace_writer.path);
         pthread_mutex_unlock(&trace_lock);
         return false;
     }
     FILE *file = fopen(path, "w");
     if (!file) {
-        core_error("trace", "cannot write trace file '%s': %s", path, strerror(errno));
+        core_log_error("trace", "cannot write trace file '%s': %s", path, strerror(errno));
         pthread_mutex_unlock(&trace_lock);
         return false;
     }
@@ -824,7 +824,7 @@ bool trace_start(const char *path) {
     trace_registry.writer_running = error == 0;
     pthread_mutex_unlock(&trace_lock);
     if (error) {
-        core_error("trace", "cannot start the writer thread for '%s': %s", path, strerror(error));
+        core_log_error("trace", "cannot start the writer thread for '%s': %s", path, strerror(error));
         trace_stop();
         return false;
     }
@@ -863,7 +863,7 @@ static void trace_close_file(void) {
         failed = true;
         error = errno;
     }
-    if (failed) core_error("trace", "writing trace file '%s' failed: %s", trace_writer.path, strerror(error));
+    if (failed) core_log_error("trace", "writing trace file '%s' failed: %s", trace_writer.path, strerror(error));
     core_free(trace_writer.path, strlen(trace_writer.path) + 1);
     trace_writer.file = NULL;
     trace_writer.path = NULL;

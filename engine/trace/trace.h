@@ -53,7 +53,8 @@
  *   times beside the trace.
  *
  *     trace_report report;
- *     if (!trace_report_load("run.json", &report)) { fprintf(stderr, "%s\n", report.error); return 1; }
+ *     core_error error = {0};
+ *     if (!trace_report_load("run.json", &report, &error)) { fprintf(stderr, "%s\n", error.message); return 1; }
  *     trace_report_print(&report, stdout);
  *     trace_slowest slowest;                          // the 5 slowest frames, 8 zones each
  *     trace_report_slowest(&report, 5, 8, &slowest);
@@ -70,6 +71,8 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+
+#include "core/core.h"   /* core_error */
 #include <stdio.h>
 
 /* ---- capture ---------------------------------------------------------------------------- */
@@ -156,13 +159,18 @@ typedef struct trace_report {
     trace_counter_stats *counters; /* one per series, sorted by name */
     size_t counter_series_count;
     trace_report_detail *detail;
-    char error[256];               /* why loading failed, when it did */
 } trace_report;
 
-bool trace_report_load(const char *path, trace_report *report);
-bool trace_report_parse(const char *json, size_t size, trace_report *report);
+/* False with `error` (may be NULL) set when the trace cannot be read: CORE_ERROR_IO (cannot read
+ * the file; load's messages start with the path), CORE_ERROR_FORMAT (not JSON, no traceEvents,
+ * an event without its fields, an unbalanced "E", a zone that ends before it begins),
+ * CORE_ERROR_RANGE (a negative duration, a time out of range). The report is then empty (free
+ * it all the same). */
+bool trace_report_load(const char *path, trace_report *report, core_error *error);
+bool trace_report_parse(const char *json, size_t size, trace_report *report, core_error *error);
 void trace_report_print(const trace_report *report, FILE *out);
-bool trace_report_write_svg(const trace_report *report, const char *svg_path);
+/* False with CORE_ERROR_IO in `error` when the file cannot be written. */
+bool trace_report_write_svg(const trace_report *report, const char *svg_path, core_error *error);
 void trace_report_free(trace_report *report);
 
 /* ---- the slowest frames ----------------------------------------------------------------- */

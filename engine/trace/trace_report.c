@@ -75,6 +75,7 @@ typedef struct report_thread {
 
 typedef struct report_builder {
     trace_report *report;
+    core_error *error;              /* may be NULL */
     trace_report_detail *detail;
     core_arena *arena;
     report_names zones, series;
@@ -85,14 +86,6 @@ typedef struct report_builder {
 
 /* ---- small helpers ---------------------------------------------------------------------- */
 
-CORE_PRINTF(2, 3)
-static bool report_fail(trace_report *report, const char *fmt, ...) {
-    va_list args;
-    va_start(args, fmt);
-    vsnprintf(report->error, sizeof report->error, fmt, args);
-    va_end(args);
-    return false;
-}
 
 static int report_compare_doubles(const void *a, const void *b) {
     double x = *(const double *)a, y = *(const double *)b;
@@ -194,7 +187,7 @@ static size_t report_args_text(report_builder *b, const core_json_value *event) 
 static bool report_add_zone(report_builder *b, size_t index, uint32_t thread, const report_open_zone *zone,
                             double end_us) {
     /* Finite timestamps far apart can still overflow their difference. */
-    if (!isfinite(end_us - zone->ts_us)) return report_fail(b->report, "event %zu: zone duration out of range", index);
+    if (!isfinite(end_us - zone->ts_us)) return core_error_set(b->error, CORE_ERROR_RANGE, "event %zu: zone duration out of range", index);
     trace_report_detail *d = b->detail;
     uint32_t name = report_name_index(&b->zones, zone->name);
     d->instances = core_grow(d->instances, &d->instance_capacity, d->instance_count + 1, sizeof *d->instances);
@@ -250,7 +243,7 @@ static bool report_event_time(report_builder *b, const core_json_value *event, s
                               const char *key, char ph, double *out) {
     const core_json_value *value = core_json_get(event, key);
     if (!value || value->type != CORE_JSON_NUMBER)
-        return report_fail(b->report, "event %zu (\"%c\") has no numeric \"%s\"", index, ph, key);
+        return core_error_set(b->error, CORE_ERROR_FORMAT, "event %zu (\"%c\") has no numeric \"%s\"", index, ph, key);
     *out = value->number;
     return true;
 }
@@ -272,13 +265,13 @@ static bool report_end(report_builder *b, const core_json_value *event, size_t i
     uint32_t thread_index = report_thread_of(b, event);
     report_thread *thread = &b->threads[thread_index];
     if (thread->open_count == 0)
-        return report_fail(b->report,
+        return core_error_set(b->error, CORE_ERROR_FORMAT,
                            "event %zu: unbalanced \"E\": no matching \"B\" open on its thread (pid %g, tid %g)", index,
                            core_json_number_or(core_json_get(event, "pid"), 0),
                            core_json_number_or(core_json_get(event, "tid"), 0));
     report_open_zone zone = thread->open[--thread->open_count];
     if (ts < zone.ts_us)
-        return report_fail(b->report, "event %zu: zone \"%.64s\" ends (ts %g) before it begins (ts %g)", index,
+        return core_error_set(b->error, CORE_ERROR_FORMAT, "event %zu: zone \"%.64s\" ends (ts %g) before it begins (ts %g)", index,
                            zone.name, ts, zone.ts_us);
     if (!zone.args) zone.args = report_args_text(b, event); /* Chrome merges an E's args into its zone */
     return report_add_zone(b, index, thread_index, &zone, ts);
@@ -288,7 +281,7 @@ static bool report_complete(report_builder *b, const core_json_value *event, siz
     double ts = 0, dur = 0;
     if (!report_event_time(b, event, index, "ts", 'X', &ts)) return false;
     if (!report_event_time(b, event, index, "dur", 'X', &dur)) return false;
-    if (dur < 0) return report_fail(b->report, "event %zu: \"X\" with a negative \"dur\" (%g)", index, dur);
+    if (dur < 0) return core_error_set(b->error, CORE_ERROR_RANGE, "event %zu: \"X\" with a negative \"dur\" (%g)", index, dur);
     report_open_zone zone = { .name = report_event_name(event), .ts_us = ts, .event = index,
                               .args = report_args_text(b, event) };
     return report_add_zone(b, index, report_thread_of(b, event), &zone, ts + dur);
@@ -329,10 +322,10 @@ static bool report_counter(report_builder *b, const core_json_value *event, size
 }
 
 static bool report_event(report_builder *b, const core_json_value *event, size_t index) {
-    if (event->type != CORE_JSON_OBJECT) return report_fail(b->report, "event %zu is not an object", index);
+    if (event->type != CORE_JSON_OBJECT) return core_error_set(b->error, CORE_ERROR_FORMAT, "event %zu is not an object", index);
     const core_json_value *ph = core_json_get(event, "ph");
     if (!ph || ph->type != CORE_JSON_STRING)
-        return report_fail(b->report, "event %zu has no \"ph\" (phase) string", index);
+        return core_error_set(b->error, CORE_ERROR_FORMAT, "event %zu has no \"ph\" (phase) string", index);
     if (ph->string.length != 1) return true; /* not a phase this report knows */
     switch (ph->string.chars[0]) {
     case 'B': return report_begin(b, event, index);
@@ -594,26 +587,26 @@ static void report_builder_free(report_builder *b) {
 
 /* ---- loading ---------------------------------------------------------------------------- */
 
-static const core_json_value *report_find_events(const core_json_value *root, trace_report *report) {
+static const core_json_value *report_find_events(const core_json_value *root, core_error *error) {
     if (root->type == CORE_JSON_ARRAY) return root; /* the bare-array form of the format */
     const core_json_value *events = core_json_get(root, "traceEvents");
     if (!events || events->type != CORE_JSON_ARRAY) {
-        report_fail(report, "no \"traceEvents\" array: not a Chrome trace");
+        core_error_set(error, CORE_ERROR_FORMAT, "no \"traceEvents\" array: not a Chrome trace");
         return NULL;
     }
     return events;
 }
 
-bool trace_report_parse(const char *json, size_t size, trace_report *report) {
+bool trace_report_parse(const char *json, size_t size, trace_report *report, core_error *error) {
     *report = (trace_report){ 0 };
     core_arena arena = { 0 };
     core_json_value *root;
-    core_json_error error;
-    bool ok = core_json_parse(json, size, &arena, &root, &error);
-    if (!ok) report_fail(report, "not valid JSON: %s", error.message);
-    const core_json_value *events = ok ? report_find_events(root, report) : NULL;
+    core_error json_error = { 0 };
+    bool ok = core_json_parse(json, size, &arena, &root, &json_error);
+    if (!ok) core_error_set(error, CORE_ERROR_FORMAT, "not valid JSON: %s", json_error.message);
+    const core_json_value *events = ok ? report_find_events(root, error) : NULL;
     ok = events != NULL;
-    report_builder b = { .report = report, .arena = &arena, .detail = core_calloc(1, sizeof(trace_report_detail)) };
+    report_builder b = { .report = report, .error = error, .arena = &arena, .detail = core_calloc(1, sizeof(trace_report_detail)) };
     for (size_t i = 0; ok && i < events->array.count; i++) ok = report_event(&b, &events->array.items[i], i);
     if (ok) {
         report_self_times(b.detail);
@@ -656,21 +649,18 @@ static char *report_read_file(const char *path, size_t *size, size_t *capacity) 
     return data;
 }
 
-bool trace_report_load(const char *path, trace_report *report) {
+bool trace_report_load(const char *path, trace_report *report, core_error *error) {
     size_t size, capacity;
     char *data = report_read_file(path, &size, &capacity);
     if (!data) {
-        int error = errno;
+        int read_errno = errno;
         *report = (trace_report){ 0 };
-        return report_fail(report, "cannot read '%s': %s", path, strerror(error));
+        return core_error_set(error, CORE_ERROR_IO, "cannot read '%s': %s", path, strerror(read_errno));
     }
-    bool ok = trace_report_parse(data, size, report);
+    core_error reason = { 0 };
+    bool ok = trace_report_parse(data, size, report, &reason);
     core_free(data, capacity);
-    if (!ok) {
-        char reason[sizeof report->error];
-        memcpy(reason, report->error, sizeof reason);
-        report_fail(report, "%s: %s", path, reason);
-    }
+    if (!ok) core_error_set(error, reason.code, "%s: %s", path, reason.message);
     return ok;
 }
 
@@ -1000,15 +990,12 @@ static void svg_write(FILE *out, const trace_report *report) {
     fputs("</svg>\n", out);
 }
 
-bool trace_report_write_svg(const trace_report *report, const char *svg_path) {
+bool trace_report_write_svg(const trace_report *report, const char *svg_path, core_error *error) {
     FILE *out = fopen(svg_path, "w");
-    if (!out) {
-        core_error("trace", "cannot write '%s': %s", svg_path, strerror(errno));
-        return false;
-    }
+    if (!out) return core_error_set(error, CORE_ERROR_IO, "cannot write '%s': %s", svg_path, strerror(errno));
     svg_write(out, report);
     bool failed = ferror(out) != 0;
     if (fclose(out) != 0) failed = true;
-    if (failed) core_error("trace", "writing '%s' failed: %s", svg_path, strerror(errno));
+    if (failed) core_error_set(error, CORE_ERROR_IO, "writing '%s' failed: %s", svg_path, strerror(errno));
     return !failed;
 }

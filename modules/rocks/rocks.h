@@ -178,9 +178,10 @@ static inline int rocks_tile_index(const uint8_t colour[8]) {
  * outside. */
 float rocks_hull_distance(const rocks_rock *rock, const float p[3], float normal[3]);
 
-/* Writes tile t's rocks as one binary PLY (tile units, tile origin at 0). False (message in
- * error) when the file cannot be written. */
-bool rocks_tile_write_ply(const rocks_tileset *set, int t, const char *path, char *error, size_t error_size);
+/* Writes tile t's rocks as one binary PLY (tile units, tile origin at 0). False with `error`
+ * set: CORE_ERROR_IO when the file cannot be written, CORE_ERROR_RANGE for a tile outside
+ * 0 … 255, CORE_ERROR_ARGUMENT for a set whose meshes were released or a path over 4 KiB. */
+bool rocks_tile_write_ply(const rocks_tileset *set, int t, const char *path, core_error *error);
 
 /* ---- placing rocks (001 §6, 000 §5) --------------------------------------------------------- */
 /*

@@ -695,7 +695,7 @@ float rocks_block_field(const rocks_block_tile *tile, uint32_t block, const floa
 static bool desc_make(const rocks_block_tile_desc *in, rocks_block_tile_desc *d) {
     *d = in ? *in : (rocks_block_tile_desc){ 0 };
     if ((unsigned)d->type >= ROCKS_BLOCK_TYPE_COUNT) {
-        core_error("rocks", "block tile: type %d is not a block type (0 … %d)", (int)d->type, ROCKS_BLOCK_TYPE_COUNT - 1);
+        core_log_error("rocks", "block tile: type %d is not a block type (0 … %d)", (int)d->type, ROCKS_BLOCK_TYPE_COUNT - 1);
         return false;
     }
     float spacing, radius;
@@ -731,7 +731,7 @@ static bool desc_make(const rocks_block_tile_desc *in, rocks_block_tile_desc *d)
         if (!box) bad = "custom block (a field, and bounds smaller than the tile centred inside it)";
     }
     if (bad) {
-        core_error("rocks", "block tile: bad %s", bad);
+        core_log_error("rocks", "block tile: bad %s", bad);
         return false;
     }
     return true;

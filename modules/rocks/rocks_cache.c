@@ -132,7 +132,7 @@ bool rocks__file_store(const char *path, const void *data, size_t size, const ch
     }
     if (ok) ok = rename(temp, path) == 0;
     if (!ok) {
-        core_error("rocks", "cannot write the %s %s: %s", what, path, strerror(errno));
+        core_log_error("rocks", "cannot write the %s %s: %s", what, path, strerror(errno));
         remove(temp);
     }
     core_free(temp, temp_size);

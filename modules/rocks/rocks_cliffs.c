@@ -58,7 +58,7 @@ static bool cliffs_desc_make(const rocks_cliffs_desc *in, rocks_cliffs_desc *d) 
         if ((unsigned)d->strata[i] >= ROCKS_BLOCK_TYPE_COUNT) bad = "strata (a block type each)";
     if (!bad && !(d->stratum_height >= 2.0f && d->stratum_height <= 1000.0f)) bad = "stratum_height (2 … 1000 m)";
     if (!bad && !(d->max_spacing > 0.0f && d->max_spacing <= 64.0f)) bad = "max_spacing (0 … 64 m)";
-    if (bad) core_error("rocks", "cliffs: bad %s", bad);
+    if (bad) core_log_error("rocks", "cliffs: bad %s", bad);
     return bad == NULL;
 }
 

@@ -854,20 +854,20 @@ static void place_tiles(placer *p, const int64_t lo[3], const int64_t hi[3]) {
 
 static bool place_desc_check(const rocks_place_desc *desc) {
     if (!desc || !desc->tiles) {
-        core_error("rocks", "rocks_place_box needs .tiles");
+        core_log_error("rocks", "rocks_place_box needs .tiles");
         return false;
     }
     if (!desc->support && !desc->world) {
-        core_error("rocks", "rocks_place_box needs .world or .support");
+        core_log_error("rocks", "rocks_place_box needs .world or .support");
         return false;
     }
     if (desc->tile_size < 0 || !isfinite(desc->tile_size) || desc->threshold < 0 || desc->threshold > 1) {
-        core_error("rocks", "rocks_place_box: tile_size %g (> 0) or threshold %g (0 … 1) out of range",
+        core_log_error("rocks", "rocks_place_box: tile_size %g (> 0) or threshold %g (0 … 1) out of range",
                    (double)desc->tile_size, (double)desc->threshold);
         return false;
     }
     if (desc->index && desc->index->set != desc->tiles) {
-        core_error("rocks", "rocks_place_box: .index was made for another tile set");
+        core_log_error("rocks", "rocks_place_box: .index was made for another tile set");
         return false;
     }
     return true;

@@ -70,7 +70,7 @@ static void make_vertex_array(rocks_renderer *r) {
 
 rocks_renderer *rocks__renderer_create(gfx_context *gfx, const rocks_tileset *set) {
     if (!set->vertices || !set->indices) {
-        core_error("rocks", "the tile set's meshes were released (rocks_tiles_release_meshes): nothing to draw");
+        core_log_error("rocks", "the tile set's meshes were released (rocks_tiles_release_meshes): nothing to draw");
         return NULL;
     }
     gfx_program program = gfx_program_load(gfx, "rocks.vert", "rocks.frag");
@@ -238,8 +238,8 @@ uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const
     gfx_uniform_float(r->gfx, r->program, "u_fog_density", params->fog_density);
     /* the context's defaults (gfx_context.c): depth test LEQUAL, back faces culled; closed,
      * outward-wound rocks need nothing else, and nothing here is left changed */
-    glBindVertexArray(r->vertex_array.id);
-    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, r->commands.id);
+    glBindVertexArray(gfx_vertex_array_gl(r->vertex_array));
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gfx_buffer_gl(r->commands));
     glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_SHORT, NULL, (GLsizei)touched, 0);
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
     glBindVertexArray(0);

@@ -185,12 +185,12 @@ static void rocks_defaults(rocks_system_desc *d) {
 
 rocks_system *rocks_system_create(const rocks_system_desc *desc) {
     if (!desc || !desc->gfx || !desc->ecs || !desc->world || !desc->tiles) {
-        core_error("rocks", "rocks_system_create needs .gfx, .ecs, .world and .tiles");
+        core_log_error("rocks", "rocks_system_create needs .gfx, .ecs, .world and .tiles");
         return NULL;
     }
     ecs_component mesh_chunk = ecs_component_lookup(desc->ecs, "TerrainMeshChunk");
     if (!mesh_chunk) {
-        core_error("rocks", "no TerrainMeshChunk in this ECS world: call terrain_ecs_create first");
+        core_log_error("rocks", "no TerrainMeshChunk in this ECS world: call terrain_ecs_create first");
         return NULL;
     }
     rocks_renderer *renderer = rocks__renderer_create(desc->gfx, desc->tiles);

@@ -32,7 +32,7 @@ const float rocks_hull_axes[ROCKS_HULL_AXES][3] = {
 /* ---- parameters ----------------------------------------------------------------------------- */
 
 static bool bad(const char *what, double value) {
-    core_error("rocks", "tile set: %s is out of range (%g)", what, value);
+    core_log_error("rocks", "tile set: %s is out of range (%g)", what, value);
     return false;
 }
 
@@ -482,9 +482,9 @@ float rocks_hull_distance(const rocks_rock *rock, const float p[3], float normal
     return best;
 }
 
-bool rocks_tile_write_ply(const rocks_tileset *set, int t, const char *path, char *error, size_t error_size) {
-    if (t < 0 || t > 255) return core_error_format(error, error_size, "tile %d is not 0 … 255", t);
-    if (!set->vertices) return core_error_format(error, error_size, "the set's meshes were released");
+bool rocks_tile_write_ply(const rocks_tileset *set, int t, const char *path, core_error *error) {
+    if (t < 0 || t > 255) return core_error_set(error, CORE_ERROR_RANGE, "tile %d is not 0 … 255", t);
+    if (!set->vertices) return core_error_set(error, CORE_ERROR_ARGUMENT, "the set's meshes were released");
     const rocks_tile *tile = &set->tiles[t];
     size_t vertices = 0, triangles = 0;
     for (uint32_t e = tile->first; e < tile->first + tile->count; e++) {
@@ -493,9 +493,9 @@ bool rocks_tile_write_ply(const rocks_tileset *set, int t, const char *path, cha
     }
     char temp[4096];
     if (snprintf(temp, sizeof temp, "%s.tmp", path) >= (int)sizeof temp)
-        return core_error_format(error, error_size, "path too long: %s", path);
+        return core_error_set(error, CORE_ERROR_ARGUMENT, "path too long: %s", path);
     FILE *f = fopen(temp, "wb");
-    if (!f) return core_error_format(error, error_size, "cannot write %s: %s", temp, strerror(errno));
+    if (!f) return core_error_set(error, CORE_ERROR_IO, "cannot write %s: %s", temp, strerror(errno));
     fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment rocks tile %d (paper 001), tile units\n"
                "element vertex %zu\nproperty float x\nproperty float y\nproperty float z\n"
                "property float nx\nproperty float ny\nproperty float nz\n"
@@ -527,7 +527,7 @@ bool rocks_tile_write_ply(const rocks_tileset *set, int t, const char *path, cha
     ok &= fclose(f) == 0;
     if (!ok || rename(temp, path) != 0) {
         remove(temp);
-        return core_error_format(error, error_size, "cannot write %s", path);
+        return core_error_set(error, CORE_ERROR_IO, "cannot write %s", path);
     }
     return true;
 }

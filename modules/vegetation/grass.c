@@ -65,8 +65,7 @@ const char *grass_quality_name(grass_quality quality) {
 /* ---- the component's lifetime ---------------------------------------------------------- */
 
 static void grass_patch_release(GrassPatch *patch) {
-    if (patch->tuft_buffer) glDeleteBuffers(1, &patch->tuft_buffer);
-    patch->tuft_buffer = 0;
+    gfx_buffer_destroy(&patch->tuft_buffer);
     patch->tufts = 0;
 }
 
@@ -84,7 +83,7 @@ static void grass_patch_removed(ecs_world *world, ecs_entity entity, void *data,
 /* ---- placement ------------------------------------------------------------------------- */
 
 static void grass_buffer_reserve(gfx_buffer *buffer, size_t bytes) {
-    if (buffer->id && buffer->size >= bytes) return;
+    if (buffer->id && gfx_buffer_size(*buffer) >= bytes) return;
     gfx_buffer_destroy(buffer);
     size_t size = bytes < 4096 ? 4096 : bytes + bytes / 2;
     *buffer = gfx_buffer_create(&(gfx_buffer_desc){ .size = size, .usage = GFX_BUFFER_DYNAMIC });
@@ -154,11 +153,11 @@ static void grass_place(grass_system *g, const TerrainMeshChunk *chunk, GrassPat
     float tops_origin[2];
     int tops_size = grass_upload_tops(g, chunk, tops_origin);
     grass_place_uniforms(g, chunk, triangles, tops_origin, tops_size);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, mesh->vertex_buffer);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, mesh->index_buffer);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, g->counts.id);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, g->tops.id);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, g->total.id);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gfx_buffer_gl(mesh->vertex_buffer));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, gfx_buffer_gl(mesh->index_buffer));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, gfx_buffer_gl(g->counts));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, gfx_buffer_gl(g->tops));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, gfx_buffer_gl(g->total));
     GLuint groups = (triangles + GRASS_GROUP_SIZE - 1) / GRASS_GROUP_SIZE;
     gfx_uniform_int(gfx, g->place, "u_write", 0);
     glDispatchCompute(groups, 1, 1);
@@ -169,11 +168,10 @@ static void grass_place(grass_system *g, const TerrainMeshChunk *chunk, GrassPat
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
     /* The one value the CPU reads: the tufts, to size their buffer (a wait for this chunk's
      * placement, once per placement, never per frame). */
-    glGetNamedBufferSubData(g->total.id, 0, sizeof patch->tufts, &patch->tufts);
+    glGetNamedBufferSubData(gfx_buffer_gl(g->total), 0, sizeof patch->tufts, &patch->tufts);
     if (patch->tufts) {
-        glCreateBuffers(1, &patch->tuft_buffer);
-        glNamedBufferData(patch->tuft_buffer, (GLsizeiptr)patch->tufts * GRASS_TUFT_BYTES, NULL, GL_STATIC_DRAW);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, patch->tuft_buffer);
+        patch->tuft_buffer = gfx_buffer_create(&(gfx_buffer_desc){ .size = (size_t)patch->tufts * GRASS_TUFT_BYTES });
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, gfx_buffer_gl(patch->tuft_buffer));
         gfx_program_use(gfx, g->place);
         gfx_uniform_int(gfx, g->place, "u_write", 1);
         glDispatchCompute(groups, 1, 1);
@@ -270,12 +268,12 @@ static void grass_defaults(grass_system_desc *d) {
 
 grass_system *grass_system_create(const grass_system_desc *desc) {
     if (!desc || !desc->gfx || !desc->ecs || !desc->world) {
-        core_error("grass", "grass_system_create needs .gfx, .ecs and .world");
+        core_log_error("grass", "grass_system_create needs .gfx, .ecs and .world");
         return NULL;
     }
     ecs_component mesh_chunk = ecs_component_lookup(desc->ecs, "TerrainMeshChunk");
     if (!mesh_chunk) {
-        core_error("grass", "no TerrainMeshChunk in this ECS world: call terrain_ecs_create first");
+        core_log_error("grass", "no TerrainMeshChunk in this ECS world: call terrain_ecs_create first");
         return NULL;
     }
     gfx_program place = gfx_program_load_compute(desc->gfx, "grass_place.comp");
@@ -402,8 +400,8 @@ static uint64_t grass_cull(grass_system *g, const terrain_view *view) {
     gfx_uniform_float(gfx, g->cull, "u_range", g->desc.range);
     gfx_uniform_float(gfx, g->cull, "u_height", g->desc.height);
     grass_shape_uniforms(g, view);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, g->command.id);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, g->visible.id);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, gfx_buffer_gl(g->command));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, gfx_buffer_gl(g->visible));
     it = ecs_query_iter(g->desc.ecs, g->patches);
     while (ecs_query_next(&it)) {
         const TerrainMeshChunk *chunks = ecs_field(&it, 0);
@@ -415,7 +413,7 @@ static uint64_t grass_cull(grass_system *g, const terrain_view *view) {
             for (int a = 0; a < 3; a++) offset[a] = (float)(p->origin[a] - view->camera[a]);
             gfx_uniform_vec3(gfx, g->cull, "u_offset", offset);
             grass_uniform_uint(program, "u_tuft_count", p->tufts);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, p->tuft_buffer);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gfx_buffer_gl(p->tuft_buffer));
             glDispatchCompute((p->tufts + GRASS_GROUP_SIZE - 1) / GRASS_GROUP_SIZE, 1, 1);
             g->stats.patches_drawn++;
         }
@@ -458,7 +456,7 @@ void grass_draw(grass_system *g, const terrain_view *view) {
             gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "grass" });
             grass_draw_uniforms(g, view);
             glDisable(GL_CULL_FACE);             /* a billboard is seen from both sides */
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, g->visible.id);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gfx_buffer_gl(g->visible));
             gfx_draw(&(gfx_draw_desc){ .vertex_array = g->corners, .index_type = GFX_INDEX_U32,
                                        .indirect = g->command });
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
@@ -473,7 +471,7 @@ void grass_draw(grass_system *g, const terrain_view *view) {
 uint64_t grass_visible_tufts(grass_system *g) {
     if (!g->stats.tufts_drawn) return 0;
     uint32_t command[5];
-    glGetNamedBufferSubData(g->command.id, 0, sizeof command, command);
+    glGetNamedBufferSubData(gfx_buffer_gl(g->command), 0, sizeof command, command);
     return command[1];
 }
 
@@ -507,7 +505,7 @@ uint64_t grass_tufts_digest(grass_system *g) {
             uint64_t hash = core_hash_u64(patches[i].tufts);
             if (bytes) {
                 void *data = core_alloc(bytes);
-                glGetNamedBufferSubData(patches[i].tuft_buffer, 0, (GLsizeiptr)bytes, data);
+                glGetNamedBufferSubData(gfx_buffer_gl(patches[i].tuft_buffer), 0, (GLsizeiptr)bytes, data);
                 hash = core_hash_bytes(data, bytes, hash);
                 core_free(data, bytes);
             }

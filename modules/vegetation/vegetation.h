@@ -99,7 +99,8 @@ void grass_draw(grass_system *grass, const terrain_view *view);
 /* The GrassPatch component of a mesh chunk entity (one per TerrainMeshChunk of levels 0 and 1
  * within reach). Its GPU buffers are released when the component leaves the entity. */
 typedef struct GrassPatch {
-    uint32_t tuft_buffer;             /* GL name: 2 vec4 per tuft (position, seed; normal, grow) */
+    gfx_buffer tuft_buffer;           /* 2 vec4 per tuft (position, seed; normal, grow); { 0 }
+                                         when no tuft */
     uint32_t tufts;
     uint64_t source;                  /* the mesh upload the tufts were placed from
                                          (terrain_gpu_mesh.serial) */

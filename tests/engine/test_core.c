@@ -1,4 +1,4 @@
-/* Tests of engine/core: command lines, arenas, memory accounting, hashing. */
+/* Tests of engine/core: command lines, arenas, memory accounting, hashing, errors. */
 #include "core/core.h"
 #include "test.h"
 
@@ -195,4 +195,41 @@ Test(core_hash, bytes_depend_on_every_byte_seed_and_length) {
     /* Zero-filled buffers of different lengths differ too. */
     char zeros[8] = { 0 };
     cr_expect_neq(core_hash_bytes(zeros, 4, 0), core_hash_bytes(zeros, 8, 0));
+}
+
+/* ---- errors ----------------------------------------------------------------------------- */
+
+Test(core_error, set_fills_code_and_message_and_returns_false) {
+    core_error error = { 0 };
+    cr_expect_eq(error.code, CORE_ERROR_NONE, "zero is no error");
+    cr_expect_not(core_error_set(&error, CORE_ERROR_IO, "cannot open %s: %s", "a.json", "No such file"));
+    cr_expect_eq(error.code, CORE_ERROR_IO);
+    cr_expect_str_eq(error.message, "cannot open a.json: No such file");
+    /* The latest call wins, code and message together. */
+    core_error_set(&error, CORE_ERROR_RANGE, "%d is over %d", 5000, 4096);
+    cr_expect_eq(error.code, CORE_ERROR_RANGE);
+    cr_expect_str_eq(error.message, "5000 is over 4096");
+    /* NULL is allowed: the caller did not ask why. */
+    cr_expect_not(core_error_set(NULL, CORE_ERROR_FORMAT, "ignored %d", 1));
+}
+
+Test(core_error, a_long_message_is_cut_and_terminated) {
+    char long_name[600];
+    memset(long_name, 'x', sizeof long_name - 1);
+    long_name[sizeof long_name - 1] = '\0';
+    core_error error;
+    memset(&error, 0x55, sizeof error);
+    core_error_set(&error, CORE_ERROR_IO, "cannot open %s", long_name);
+    cr_expect_eq(strlen(error.message), sizeof error.message - 1);
+    cr_expect(strncmp(error.message, "cannot open xxx", 15) == 0);
+}
+
+Test(core_error, every_code_has_a_name_of_its_own) {
+    static const char *const expected[] = { "none", "io", "format", "version", "mismatch", "corrupt", "range",
+                                            "argument" };
+    cr_assert_eq(CORE_COUNTOF(expected), (size_t)CORE_ERROR_CODE_COUNT);
+    for (int code = 0; code < CORE_ERROR_CODE_COUNT; code++)
+        cr_expect_str_eq(core_error_code_name((core_error_code)code), expected[code], "code %d", code);
+    cr_expect_str_eq(core_error_code_name(CORE_ERROR_CODE_COUNT), "unknown");
+    cr_expect_str_eq(core_error_code_name((core_error_code)-1), "unknown");
 }

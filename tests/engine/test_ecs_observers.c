@@ -362,7 +362,8 @@ Test(ecs_world_stats_info, table_moves_is_a_trace_counter_per_frame) {
     trace_stop();
 
     trace_report report = { 0 };
-    cr_assert(trace_report_load(path, &report), "%s", report.error);
+    core_error error = { 0 };
+    cr_assert(trace_report_load(path, &report, &error), "%s", error.message);
     const trace_counter_stats *moves = NULL;
     for (size_t i = 0; i < report.counter_series_count; i++)
         if (strcmp(report.counters[i].name, "ecs.table_moves") == 0) moves = &report.counters[i];

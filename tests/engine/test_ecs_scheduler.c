@@ -334,7 +334,8 @@ static void check_trace_zones(int threads) {
     trace_stop();
 
     trace_report report = { 0 };
-    cr_assert(trace_report_load(path, &report), "%s", report.error);
+    core_error error = { 0 };
+    cr_assert(trace_report_load(path, &report, &error), "%s", error.message);
     const char *phases[] = { "input", "game", "physics", "stream", "generate", "stabilize", "mesh",
                              "lod", "cull", "draw" };
     for (size_t i = 0; i < CORE_COUNTOF(phases); i++)

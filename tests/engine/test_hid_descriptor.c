@@ -85,24 +85,28 @@ static const uint8_t joystick_16bit[] = {
 };
 
 static input_decoder *generic_decoder(const uint8_t *descriptor, size_t size) {
-    char error[200];
+    core_error error = { 0 };
     input_decoder *d = input_decoder_create(&(input_decoder_desc){ .vendor_id = 0x0079, .product_id = 0x0006,
                                                                    .descriptor = descriptor,
                                                                    .descriptor_size = size },
-                                            error, sizeof error);
-    cr_assert_not_null(d, "%s", error);
+                                            &error);
+    cr_assert_not_null(d, "%s", error.message);
     cr_assert_eq(input_decoder_kind(d), INPUT_GAMEPAD_GENERIC);
     return d;
 }
 
-/* Whether parsing fails, with a non-empty reason containing `needle` (NULL: any). */
-static void expect_refused(const uint8_t *descriptor, size_t size, const char *needle) {
+/* Whether parsing fails with `code` (CORE_ERROR_NONE: any code) and a reason: CORE_ERROR_CORRUPT
+ * for items that run past the end, CORE_ERROR_RANGE past the parser's limits, CORE_ERROR_FORMAT
+ * for what HID does not allow or a pad does not have. */
+static void expect_refused(const uint8_t *descriptor, size_t size, core_error_code code) {
     input_hid_layout layout;
-    char error[200] = "";
-    cr_expect_not(input__hid_layout_parse(descriptor, size, &layout, error, sizeof error), "parsed, expected %s",
-                  needle ? needle : "a failure");
-    cr_expect_neq(error[0], '\0');
-    if (needle) cr_expect(strstr(error, needle) != NULL, "error '%s' lacks '%s'", error, needle);
+    core_error error = { 0 };
+    cr_expect_not(input__hid_layout_parse(descriptor, size, &layout, &error), "parsed, expected %s",
+                  core_error_code_name(code));
+    cr_expect_neq(error.message[0], '\0');
+    if (code) cr_expect_eq(error.code, code, "code %s, expected %s (%s)", core_error_code_name(error.code),
+                           core_error_code_name(code), error.message);
+    else cr_expect_neq(error.code, CORE_ERROR_NONE, "%s", error.message);
 }
 
 /* ---- the typical pad ------------------------------------------------------------------------- */
@@ -153,10 +157,10 @@ Test(input_hid, plain_pad_bad_reports) {
     input_decoder *d = generic_decoder(pad_plain, sizeof pad_plain);
     const uint8_t r[8] = { 0x80, 0x80, 0x80, 0x80, 0x08, 0x00, 0x00, 0x00 };
     expect_rejected(d, r, 5, INPUT_DECODE_SHORT);
-    cr_expect_str_eq(input_decoder_last_error(d), "report too short: 5 bytes, need 6");
+    cr_expect_str_eq(last_rejection.message, "report too short: 5 bytes, need 6");
     expect_rejected(d, r, 0, INPUT_DECODE_SHORT);
     expect_rejected(d, r, 7, INPUT_DECODE_OVERSIZED);
-    cr_expect_str_eq(input_decoder_last_error(d), "report too long: 7 bytes, at most 6");
+    cr_expect_str_eq(last_rejection.message, "report too long: 7 bytes, at most 6");
     input_decoder_stats_info stats = input_decoder_stats(d);
     cr_expect_eq(stats.short_reports, 2u);
     cr_expect_eq(stats.oversized, 1u);
@@ -176,9 +180,9 @@ Test(input_hid, pad_with_report_ids) {
     expect_rejected(d, vendor, sizeof vendor, INPUT_DECODE_UNKNOWN_ID);
     const uint8_t other[7] = { 0x07, 0, 0, 0, 0, 0, 0 };
     expect_rejected(d, other, sizeof other, INPUT_DECODE_UNKNOWN_ID);
-    cr_expect_str_eq(input_decoder_last_error(d), "unknown report ID 0x07 (7 bytes)");
+    cr_expect_str_eq(last_rejection.message, "unknown report ID 0x07 (7 bytes)");
     expect_rejected(d, r, 6, INPUT_DECODE_SHORT);
-    cr_expect_str_eq(input_decoder_last_error(d), "report too short: 6 bytes, need 7");
+    cr_expect_str_eq(last_rejection.message, "report too short: 6 bytes, need 7");
     uint8_t longer[12] = { 0x01, 0x80, 0x80, 0x80, 0x80, 0x08, 0x00 };
     decode_ok(d, longer, 9);  /* not longer than the device's longest report (2: 9 bytes) */
     expect_rejected(d, longer, 10, INPUT_DECODE_OVERSIZED);
@@ -343,13 +347,13 @@ Test(input_hid, fields_split_over_reports_keep_the_others) {
     input_decoder *d = generic_decoder(desc, sizeof desc);
     input_gamepad_state s = { .buttons = BIT(INPUT_BUTTON_DPAD_UP) }; /* not this pad's: must stay */
     const uint8_t sticks[3] = { 0x01, 0xff, 0x00 }, buttons[2] = { 0x02, 0x03 };
-    cr_assert_eq(input_decoder_decode(d, sticks, sizeof sticks, &s), INPUT_DECODE_OK);
-    cr_assert_eq(input_decoder_decode(d, buttons, sizeof buttons, &s), INPUT_DECODE_OK);
+    cr_assert_eq(input_decoder_decode(d, sticks, sizeof sticks, &s, NULL), INPUT_DECODE_OK);
+    cr_assert_eq(input_decoder_decode(d, buttons, sizeof buttons, &s, NULL), INPUT_DECODE_OK);
     cr_expect_eq(s.lx, 1.0f);
     cr_expect_eq(s.ly, -1.0f);
     cr_expect_eq(s.buttons, BIT(INPUT_BUTTON_SOUTH) | BIT(INPUT_BUTTON_EAST) | BIT(INPUT_BUTTON_DPAD_UP));
     const uint8_t released[2] = { 0x02, 0x00 };
-    cr_assert_eq(input_decoder_decode(d, released, sizeof released, &s), INPUT_DECODE_OK);
+    cr_assert_eq(input_decoder_decode(d, released, sizeof released, &s, NULL), INPUT_DECODE_OK);
     cr_expect_eq(s.buttons, BIT(INPUT_BUTTON_DPAD_UP));
     cr_expect_eq(s.lx, 1.0f);
     input_decoder_destroy(d);
@@ -363,9 +367,9 @@ Test(input_hid, long_items_are_skipped) {
     input_decoder *d = generic_decoder(desc, sizeof desc);
     input_decoder_destroy(d);
     const uint8_t running_off[] = { 0xfe, 0x10, 0x00, 0x01, 0x02 };
-    expect_refused(running_off, sizeof running_off, "long item at byte 0");
+    expect_refused(running_off, sizeof running_off, CORE_ERROR_CORRUPT);
     const uint8_t cut_header[] = { 0xfe, 0x10 };
-    expect_refused(cut_header, sizeof cut_header, "long item");
+    expect_refused(cut_header, sizeof cut_header, CORE_ERROR_CORRUPT);
 }
 
 Test(input_hid, extract_bits_is_bounded) {
@@ -394,18 +398,19 @@ Test(input_hid, truncated_descriptors_are_refused) {
         for (size_t length = 0; length < all[k].size; length++) {
             uint8_t *copy = malloc(length ? length : 1);
             memcpy(copy, all[k].bytes, length);
-            expect_refused(copy, length, NULL);
-            char error[200];
+            expect_refused(copy, length, CORE_ERROR_NONE);
+            core_error error = { 0 };
             cr_expect_null(input_decoder_create(&(input_decoder_desc){ .vendor_id = 1, .product_id = 2,
                                                                        .descriptor = copy,
                                                                        .descriptor_size = length },
-                                                error, sizeof error));
+                                                &error));
+            cr_expect_neq(error.code, CORE_ERROR_NONE);
             free(copy);
         }
     }
     const uint8_t mid_item[] = { 0x05, 0x01, 0x26, 0xff };
-    expect_refused(mid_item, sizeof mid_item, "item 0x26 at byte 2 needs 2 data bytes, 1 left");
-    expect_refused(NULL, 0, "empty");
+    expect_refused(mid_item, sizeof mid_item, CORE_ERROR_CORRUPT);
+    expect_refused(NULL, 0, CORE_ERROR_FORMAT);
 }
 
 Test(input_hid, absurd_report_count_and_size) {
@@ -415,27 +420,27 @@ Test(input_hid, absurd_report_count_and_size) {
         0x96, 0xff, 0xff,       /* Report Count (65535) */
         0x81, 0x02, 0xc0,
     };
-    expect_refused(count_65535, sizeof count_65535, "report count 65535");
+    expect_refused(count_65535, sizeof count_65535, CORE_ERROR_RANGE);
     const uint8_t too_long[] = {
         0x05, 0x01, 0x09, 0x05, 0xa1, 0x01, 0x09, 0x30,
         0x76, 0x00, 0x01,       /* Report Size (256) */
         0x96, 0x00, 0x30,       /* Report Count (12288): 384 KiB of report */
         0x81, 0x02, 0xc0,
     };
-    expect_refused(too_long, sizeof too_long, "longer than");
+    expect_refused(too_long, sizeof too_long, CORE_ERROR_RANGE);
     const uint8_t accumulating[] = {
         0x05, 0x01, 0x09, 0x05, 0xa1, 0x01,
         0x76, 0x00, 0x01, 0x96, 0xf0, 0x01,   /* 256 bits × 496 = 15872 bytes: one item fits … */
         0x81, 0x03, 0x81, 0x03,               /* … two do not */
         0xc0,
     };
-    expect_refused(accumulating, sizeof accumulating, "longer than 16383 bytes");
+    expect_refused(accumulating, sizeof accumulating, CORE_ERROR_RANGE);
     const uint8_t size_300[] = { 0x05, 0x01, 0x76, 0x2c, 0x01 };
-    expect_refused(size_300, sizeof size_300, "report size 300");
+    expect_refused(size_300, sizeof size_300, CORE_ERROR_RANGE);
     const uint8_t id_0[] = { 0x05, 0x01, 0x85, 0x00 };
-    expect_refused(id_0, sizeof id_0, "report ID 0");
+    expect_refused(id_0, sizeof id_0, CORE_ERROR_FORMAT);
     const uint8_t id_256[] = { 0x05, 0x01, 0x86, 0x00, 0x01 };
-    expect_refused(id_256, sizeof id_256, "report ID 256");
+    expect_refused(id_256, sizeof id_256, CORE_ERROR_FORMAT);
 }
 
 Test(input_hid, deep_nesting_is_refused) {
@@ -443,19 +448,19 @@ Test(input_hid, deep_nesting_is_refused) {
     size_t n = 0;
     for (int i = 0; i < 1000; i++) desc[n++] = 0xa1, desc[n++] = 0x00;
     for (int i = 0; i < 1000; i++) desc[n++] = 0xc0;
-    expect_refused(desc, n, "nested deeper than 32");
+    expect_refused(desc, n, CORE_ERROR_RANGE);
     n = 0;
     for (int i = 0; i < 17; i++) desc[n++] = 0xa4;   /* Push × 17 */
-    expect_refused(desc, n, "Push nested deeper than 16");
+    expect_refused(desc, n, CORE_ERROR_RANGE);
 }
 
 Test(input_hid, unbalanced_items_are_refused) {
     const uint8_t pop_first[] = { 0x05, 0x01, 0xb4 };
-    expect_refused(pop_first, sizeof pop_first, "Pop without a Push");
+    expect_refused(pop_first, sizeof pop_first, CORE_ERROR_FORMAT);
     const uint8_t end_first[] = { 0x05, 0x01, 0xc0 };
-    expect_refused(end_first, sizeof end_first, "End Collection without a Collection");
+    expect_refused(end_first, sizeof end_first, CORE_ERROR_FORMAT);
     const uint8_t left_open[] = { 0x05, 0x01, 0x09, 0x05, 0xa1, 0x01, 0xa1, 0x00, 0xc0 };
-    expect_refused(left_open, sizeof left_open, "1 collection not ended");
+    expect_refused(left_open, sizeof left_open, CORE_ERROR_FORMAT);
     /* A Push that is never popped is harmless: the pad still parses. */
     uint8_t pushed[sizeof pad_plain + 1] = { 0xa4 };
     memcpy(pushed + 1, pad_plain, sizeof pad_plain);
@@ -468,7 +473,7 @@ Test(input_hid, too_many_usages_are_refused) {
     size_t n = 0;
     desc[n++] = 0x05, desc[n++] = 0x01;
     for (int i = 0; i < 1100; i++) desc[n++] = 0x09, desc[n++] = 0x30;
-    expect_refused(desc, n, "more than 1024 usages");
+    expect_refused(desc, n, CORE_ERROR_RANGE);
 }
 
 Test(input_hid, nothing_to_read_is_refused) {
@@ -479,19 +484,20 @@ Test(input_hid, nothing_to_read_is_refused) {
         0x95, 0x06, 0x75, 0x08, 0x15, 0x00, 0x25, 0x65, 0x19, 0x00, 0x29, 0x65, 0x81, 0x00,
         0xc0,
     };
-    expect_refused(keyboard, sizeof keyboard, "no stick");
-    char error[200];
+    expect_refused(keyboard, sizeof keyboard, CORE_ERROR_FORMAT);
+    core_error error = { 0 };
     cr_expect_null(input_decoder_create(&(input_decoder_desc){ .vendor_id = 0x046d, .product_id = 0xc31c,
                                                                .descriptor = keyboard,
                                                                .descriptor_size = sizeof keyboard },
-                                        error, sizeof error));
-    cr_expect(strstr(error, "046d:c31c") != NULL, "%s", error);
+                                        &error));
+    cr_expect_eq(error.code, CORE_ERROR_FORMAT, "%s", error.message);
+    cr_expect(strstr(error.message, "046d:c31c") != NULL, "names the pad: %s", error.message);
     /* X alone is not a stick; a constant (padding) button is not a button. */
     const uint8_t x_only[] = {
         0x05, 0x01, 0x09, 0x05, 0xa1, 0x01, 0x09, 0x30, 0x15, 0x00, 0x26, 0xff, 0x00, 0x75, 0x08, 0x95, 0x01,
         0x81, 0x02, 0x05, 0x09, 0x09, 0x01, 0x25, 0x01, 0x75, 0x01, 0x81, 0x03, 0xc0,
     };
-    expect_refused(x_only, sizeof x_only, "no stick");
+    expect_refused(x_only, sizeof x_only, CORE_ERROR_FORMAT);
 }
 
 /* Random mutations of the good descriptors: whatever is accepted decodes random reports into
@@ -508,8 +514,8 @@ Test(input_hid, mutated_descriptors_stay_in_bounds) {
             desc[(seed >> 33) % size] = (uint8_t)(seed >> 20);
         }
         input_hid_layout layout;
-        char error[200] = "";
-        if (input__hid_layout_parse(desc, size, &layout, error, sizeof error)) {
+        core_error error = { 0 };
+        if (input__hid_layout_parse(desc, size, &layout, &error)) {
             for (int k = 0; k < 20; k++) {
                 uint8_t report[64];
                 for (size_t i = 0; i < sizeof report; i++) {
@@ -528,7 +534,8 @@ Test(input_hid, mutated_descriptors_stay_in_bounds) {
                 }
             }
         } else {
-            cr_expect_neq(error[0], '\0');
+            cr_expect_neq(error.code, CORE_ERROR_NONE);
+            cr_expect_neq(error.message[0], '\0');
         }
         free(desc);
     }

@@ -16,10 +16,10 @@
 
 
 static input_decoder *decoder_for(uint16_t vendor_id, uint16_t product_id) {
-    char error[160];
+    core_error error = { 0 };
     input_decoder *d = input_decoder_create(&(input_decoder_desc){ .vendor_id = vendor_id, .product_id = product_id },
-                                            error, sizeof error);
-    cr_assert_not_null(d, "%04x:%04x: %s", vendor_id, product_id, error);
+                                            &error);
+    cr_assert_not_null(d, "%04x:%04x: %s", vendor_id, product_id, error.message);
     return d;
 }
 
@@ -147,17 +147,21 @@ Test(input_decode, kinds_from_ids) {
 }
 
 Test(input_decode, unknown_pad_needs_a_descriptor) {
-    char error[160] = "untouched";
+    core_error error = { 0 };
     input_decoder *d = input_decoder_create(&(input_decoder_desc){ .vendor_id = 0x1234, .product_id = 0xabcd },
-                                            error, sizeof error);
+                                            &error);
     cr_expect_null(d);
-    cr_expect(strstr(error, "1234:abcd") != NULL, "error: %s", error);
-    cr_expect_null(input_decoder_create(&(input_decoder_desc){ .vendor_id = 0x1234 }, NULL, 0));
+    cr_expect_eq(error.code, CORE_ERROR_ARGUMENT, "%s: %s", core_error_code_name(error.code), error.message);
+    cr_expect(strstr(error.message, "1234:abcd") != NULL, "names the pad: %s", error.message);
+    cr_expect_null(input_decoder_create(&(input_decoder_desc){ .vendor_id = 0x1234 }, NULL));
+    error = (core_error){ 0 };
+    cr_expect_null(input_decoder_create(NULL, &error));
+    cr_expect_eq(error.code, CORE_ERROR_ARGUMENT);
     /* A known pad ignores a descriptor, even a useless one. */
     const uint8_t junk[] = { 0xff };
     d = input_decoder_create(&(input_decoder_desc){ .vendor_id = 0x054c, .product_id = 0x09cc, .descriptor = junk,
                                                     .descriptor_size = 1 },
-                             error, sizeof error);
+                             &error);
     cr_expect_not_null(d);
     input_decoder_destroy(d);
     input_decoder_destroy(NULL);
@@ -303,20 +307,20 @@ Test(input_decode, ds4_bad_sizes_and_ids) {
     ds4_usb(r, sony_idle);
     memset(r + 64, 0, 32);
     expect_rejected(d, r, 9, INPUT_DECODE_SHORT);
-    cr_expect_str_eq(input_decoder_last_error(d), "report too short: 9 bytes, need 10");
+    cr_expect_str_eq(last_rejection.message, "report too short: 9 bytes, need 10");
     expect_rejected(d, r, 0, INPUT_DECODE_SHORT);
     expect_rejected(d, NULL, 0, INPUT_DECODE_SHORT);
     expect_rejected(d, r, 65, INPUT_DECODE_OVERSIZED);
-    cr_expect_str_eq(input_decoder_last_error(d), "report too long: 65 bytes, at most 64");
+    cr_expect_str_eq(last_rejection.message, "report too long: 65 bytes, at most 64");
     uint8_t bt[96];
     ds4_bt(bt, sony_idle);
     memset(bt + 78, 0, 18);
     expect_rejected(d, bt, 77, INPUT_DECODE_SHORT);
-    cr_expect_str_eq(input_decoder_last_error(d), "report too short: 77 bytes, need 78");
+    cr_expect_str_eq(last_rejection.message, "report too short: 77 bytes, need 78");
     expect_rejected(d, bt, 79, INPUT_DECODE_OVERSIZED);
     r[0] = 0x05; /* an output report's ID, never an input */
     expect_rejected(d, r, 32, INPUT_DECODE_UNKNOWN_ID);
-    cr_expect(strstr(input_decoder_last_error(d), "0x05") != NULL);
+    cr_expect(strstr(last_rejection.message, "0x05") != NULL, "names the ID: %s", last_rejection.message);
     input_decoder_stats_info stats = input_decoder_stats(d);
     cr_expect_eq(stats.decoded, 0u);
     cr_expect_eq(stats.short_reports, 4u);
@@ -354,7 +358,7 @@ Test(input_decode, ds4_crc_enforced_once_trusted) {
     ds4_bt(good, sony_idle);
     for (int i = 0; i < 3; i++) decode_ok(d, good, sizeof good);
     expect_rejected(d, bad, sizeof bad, INPUT_DECODE_MALFORMED);
-    cr_expect_str_eq(input_decoder_last_error(d), "malformed report: CRC mismatch");
+    cr_expect_str_eq(last_rejection.message, "malformed report: CRC mismatch");
     /* A corrupted byte anywhere in the covered range is caught too. */
     memcpy(bad, good, sizeof good);
     bad[40] ^= 0x80;
@@ -457,7 +461,7 @@ Test(input_decode, dualsense_bad_reports) {
     memset(r + 64, 0, 16);
     expect_rejected(d, r, 9, INPUT_DECODE_SHORT);
     expect_rejected(d, r, 40, INPUT_DECODE_SHORT);
-    cr_expect_str_eq(input_decoder_last_error(d), "report too short: 40 bytes, need 64");
+    cr_expect_str_eq(last_rejection.message, "report too short: 40 bytes, need 64");
     expect_rejected(d, r, 65, INPUT_DECODE_OVERSIZED);
     r[0] = 0x11; /* the DS4's Bluetooth ID */
     expect_rejected(d, r, 78, INPUT_DECODE_UNKNOWN_ID);
@@ -577,7 +581,7 @@ Test(input_decode, switch_bad_reports) {
     memset(r, 0, sizeof r);
     switch_report(r, 0, 0, 0, 2048, 2048, 2048, 2048);
     expect_rejected(d, r, 11, INPUT_DECODE_SHORT);
-    cr_expect_str_eq(input_decoder_last_error(d), "report too short: 11 bytes, need 12");
+    cr_expect_str_eq(last_rejection.message, "report too short: 11 bytes, need 12");
     decode_ok(d, r, 12);
     decode_ok(d, r, 49); /* the Bluetooth size of 0x30 */
     expect_rejected(d, r, 363, INPUT_DECODE_OVERSIZED);
@@ -600,16 +604,25 @@ Test(input_decode, result_names) {
     cr_expect_str_eq(input_decode_result_name(INPUT_DECODE_SHORT), "report too short");
     cr_expect_str_eq(input_decode_result_name(INPUT_DECODE_OVERSIZED), "report too long");
     cr_expect_str_eq(input_decode_result_name(INPUT_DECODE_MALFORMED), "malformed report");
-    /* The detail belongs to the decoder that failed, and survives its later successes. */
+    /* The detail goes to the caller's error, one per call; a later success leaves it as it was;
+     * NULL asks for none. */
     input_decoder *d = decoder_for(0x057e, 0x2009);
     input_decoder *other = decoder_for(0x054c, 0x09cc);
-    cr_expect_str_eq(input_decoder_last_error(d), "no failed report");
     input_gamepad_state s = { 0 };
     const uint8_t ack[2] = { 0x81, 0x01 };
-    cr_assert_eq(input_decoder_decode(d, ack, sizeof ack, &s), INPUT_DECODE_UNKNOWN_ID);
-    cr_assert_eq(input_decoder_decode(other, ack, 1, &s), INPUT_DECODE_UNKNOWN_ID);
-    cr_expect_str_eq(input_decoder_last_error(d), "unknown report ID 0x81 (2 bytes)");
-    cr_expect_str_eq(input_decoder_last_error(other), "unknown report ID 0x81 (1 bytes)");
+    core_error error = { 0 }, other_error = { 0 };
+    cr_assert_eq(input_decoder_decode(d, ack, sizeof ack, &s, &error), INPUT_DECODE_UNKNOWN_ID);
+    cr_assert_eq(input_decoder_decode(other, ack, 1, &s, &other_error), INPUT_DECODE_UNKNOWN_ID);
+    cr_assert_eq(input_decoder_decode(other, ack, 1, &s, NULL), INPUT_DECODE_UNKNOWN_ID);
+    cr_expect_eq(error.code, CORE_ERROR_FORMAT);
+    cr_expect_eq(other_error.code, CORE_ERROR_FORMAT);
+    cr_expect_str_eq(error.message, "unknown report ID 0x81 (2 bytes)");
+    cr_expect_str_eq(other_error.message, "unknown report ID 0x81 (1 bytes)");
+    uint8_t r[64];
+    memset(r, 0, sizeof r);
+    switch_report(r, 0, 0, 0, 2048, 2048, 2048, 2048);
+    cr_assert_eq(input_decoder_decode(d, r, 12, &s, &error), INPUT_DECODE_OK);
+    cr_expect_eq(error.code, CORE_ERROR_FORMAT, "a success leaves the error as it was");
     input_decoder_destroy(d);
     input_decoder_destroy(other);
 }

@@ -24,8 +24,8 @@ static const char hand_line[] = "030000005e0400008e02000014010000,Hand Pad,a:b3,
 
 static input_sdl_mapping parse_ok(const char *line) {
     input_sdl_mapping m;
-    char error[160] = "";
-    cr_assert(input__sdl_mapping_parse(line, strlen(line), &m, error, sizeof error), "%s: %s", line, error);
+    core_error error = { 0 };
+    cr_assert(input__sdl_mapping_parse(line, strlen(line), &m, &error), "%s: %s", line, error.message);
     return m;
 }
 
@@ -156,9 +156,12 @@ Test(input_mappings, every_kind_of_bad_line_is_refused) {
     };
     for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
         input_sdl_mapping m;
-        char error[160] = "";
-        cr_expect(!input__sdl_mapping_parse(bad[i], strlen(bad[i]), &m, error, sizeof error), "accepted '%s'", bad[i]);
-        cr_expect(error[0], "no reason for '%s'", bad[i]);
+        core_error error = { 0 };
+        cr_expect(!input__sdl_mapping_parse(bad[i], strlen(bad[i]), &m, &error), "accepted '%s'", bad[i]);
+        /* Each is a malformed line (none is too long: that is the file reader's check). */
+        cr_expect_eq(error.code, CORE_ERROR_FORMAT, "'%s': %s (%s)", bad[i], core_error_code_name(error.code),
+                     error.message);
+        cr_expect(error.message[0], "no reason for '%s'", bad[i]);
     }
 }
 

@@ -10,7 +10,7 @@
 /* Parses a C string; the arena is released by the caller. */
 static core_json_value *parse_ok(core_arena *arena, const char *text) {
     core_json_value *root = NULL;
-    core_json_error error;
+    core_error error = { 0 };
     bool ok = core_json_parse(text, strlen(text), arena, &root, &error);
     cr_assert(ok, "parsing %s failed: %s", text, error.message);
     cr_assert_not_null(root);
@@ -22,13 +22,17 @@ static void expect_error(const char *text, size_t size, int line, int column, co
     core_arena arena = { 0 };
     static core_json_value sentinel;
     core_json_value *root = &sentinel; /* must be reset to NULL */
-    core_json_error error;
+    core_error error = { 0 };
     bool ok = core_json_parse(text, size, &arena, &root, &error);
     core_arena_release(&arena);
     cr_assert_not(ok, "%s parsed but should not", text);
     cr_expect_null(root);
-    cr_expect_eq(error.line, line, "%s: line %d, expected %d (%s)", text, error.line, line, error.message);
-    cr_expect_eq(error.column, column, "%s: column %d, expected %d (%s)", text, error.column, column, error.message);
+    cr_expect_eq(error.code, CORE_ERROR_FORMAT, "%s: code %s", text, core_error_code_name(error.code));
+    /* The position is part of the message: that is what a person reads. */
+    int got_line = 0, got_column = 0;
+    cr_assert_eq(sscanf(error.message, "line %d, column %d:", &got_line, &got_column), 2, "%s", error.message);
+    cr_expect_eq(got_line, line, "%s: line %d, expected %d (%s)", text, got_line, line, error.message);
+    cr_expect_eq(got_column, column, "%s: column %d, expected %d (%s)", text, got_column, column, error.message);
     char expected[256];
     snprintf(expected, sizeof expected, "line %d, column %d: %s", line, column, reason);
     cr_expect_str_eq(error.message, expected);
@@ -159,7 +163,7 @@ Test(core_json, byte_order_mark_is_skipped) {
 Test(core_json, size_bounds_the_input) {
     core_arena arena = { 0 };
     core_json_value *v;
-    core_json_error error;
+    core_error error = { 0 };
     /* Only "12" of "123" is read. */
     cr_assert(core_json_parse("123", 2, &arena, &v, &error));
     cr_expect(v->number == 12.0);
@@ -168,6 +172,7 @@ Test(core_json, size_bounds_the_input) {
     char *exact = malloc(sizeof text - 1);
     memcpy(exact, text, sizeof text - 1);
     cr_expect_not(core_json_parse(exact, sizeof text - 1, &arena, &v, &error));
+    cr_expect_eq(error.code, CORE_ERROR_FORMAT);
     cr_expect_str_eq(error.message, "line 1, column 5: unterminated string");
     memcpy(exact, "[1, tr", 6);
     cr_expect_not(core_json_parse(exact, 6, &arena, &v, &error));

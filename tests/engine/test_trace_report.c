@@ -9,7 +9,13 @@
 #include <string.h>
 #include <unistd.h>
 
-static bool parse_text(const char *json, trace_report *report) { return trace_report_parse(json, strlen(json), report); }
+/* The error of the last parse_text. */
+static core_error parse_error;
+
+static bool parse_text(const char *json, trace_report *report) {
+    parse_error = (core_error){ 0 };
+    return trace_report_parse(json, strlen(json), report, &parse_error);
+}
 
 static const trace_zone_stats *zone_named(const trace_report *report, const char *name) {
     for (size_t i = 0; i < report->zone_count; i++)
@@ -84,7 +90,7 @@ static const char *const hand_built_trace =
 
 Test(trace_report, frames_of_a_hand_built_trace) {
     trace_report report;
-    cr_assert(parse_text(hand_built_trace, &report), "%s", report.error);
+    cr_assert(parse_text(hand_built_trace, &report), "%s", parse_error.message);
     cr_assert_eq(report.frame_count, 5);
     /* In file order. */
     const double expected[] = { 12, 18, 35, 16, 20 };
@@ -105,7 +111,7 @@ Test(trace_report, frames_of_a_hand_built_trace) {
 
 Test(trace_report, zones_of_a_hand_built_trace) {
     trace_report report;
-    cr_assert(parse_text(hand_built_trace, &report), "%s", report.error);
+    cr_assert(parse_text(hand_built_trace, &report), "%s", parse_error.message);
     cr_assert_eq(report.zone_count, 5);
     /* By self time, largest first (inclusive totals, and self = total − zones nested in them on
      * the same thread):
@@ -136,7 +142,7 @@ Test(trace_report, zones_of_a_hand_built_trace) {
 
 Test(trace_report, print_shows_frames_and_zones) {
     trace_report report;
-    cr_assert(parse_text(hand_built_trace, &report), "%s", report.error);
+    cr_assert(parse_text(hand_built_trace, &report), "%s", parse_error.message);
     char *text = NULL;
     size_t size = 0;
     FILE *out = open_memstream(&text, &size);
@@ -159,10 +165,10 @@ Test(trace_report, print_shows_frames_and_zones) {
 
 Test(trace_report, svg_plot_is_a_standalone_document) {
     trace_report report;
-    cr_assert(parse_text(hand_built_trace, &report), "%s", report.error);
+    cr_assert(parse_text(hand_built_trace, &report), "%s", parse_error.message);
     char path[128];
     snprintf(path, sizeof path, "/tmp/engine_test_report_%d.svg", (int)getpid());
-    cr_assert(trace_report_write_svg(&report, path));
+    cr_assert(trace_report_write_svg(&report, path, NULL));
     trace_report_free(&report);
 
     FILE *file = fopen(path, "rb");
@@ -194,8 +200,11 @@ Test(trace_report, svg_plot_is_a_standalone_document) {
 
 Test(trace_report, svg_fails_on_an_unwritable_path) {
     trace_report report;
-    cr_assert(parse_text(hand_built_trace, &report), "%s", report.error);
-    cr_expect_not(trace_report_write_svg(&report, "/nonexistent-dir/plot.svg"));
+    cr_assert(parse_text(hand_built_trace, &report), "%s", parse_error.message);
+    core_error error = { 0 };
+    cr_expect_not(trace_report_write_svg(&report, "/nonexistent-dir/plot.svg", &error));
+    cr_expect_eq(error.code, CORE_ERROR_IO, "%s: %s", core_error_code_name(error.code), error.message);
+    cr_expect(strstr(error.message, "/nonexistent-dir/plot.svg") != NULL, "names the file: %s", error.message);
     trace_report_free(&report);
 }
 
@@ -206,7 +215,7 @@ Test(trace_report, bare_array_and_x_frames) {
     trace_report report;
     cr_assert(parse_text("[{\"ph\":\"X\",\"name\":\"frame\",\"ts\":0,\"dur\":16000,\"tid\":1},"
                          " {\"ph\":\"X\",\"name\":\"frame\",\"ts\":16000,\"dur\":40000,\"tid\":1}]",
-                         &report), "%s", report.error);
+                         &report), "%s", parse_error.message);
     cr_assert_eq(report.frame_count, 2);
     cr_expect_float_eq(report.frame_ms[0], 16, 1e-9);
     cr_expect_float_eq(report.frame_ms[1], 40, 1e-9);
@@ -217,41 +226,45 @@ Test(trace_report, bare_array_and_x_frames) {
 
 Test(trace_report, empty_and_truncated_traces) {
     trace_report report;
-    cr_assert(parse_text("{\"traceEvents\":[]}", &report), "%s", report.error);
+    cr_assert(parse_text("{\"traceEvents\":[]}", &report), "%s", parse_error.message);
     cr_expect_eq(report.frame_count, 0);
     cr_expect_eq(report.zone_count, 0);
     cr_expect(report.frame_p99_ms == 0);
     trace_report_free(&report);
     /* A zone still open at the end (a run that was cut off) is not counted, and not an error. */
     cr_assert(parse_text("{\"traceEvents\":[{\"ph\":\"B\",\"name\":\"frame\",\"ts\":0,\"tid\":1}]}", &report),
-              "%s", report.error);
+              "%s", parse_error.message);
     cr_expect_eq(report.frame_count, 0);
     trace_report_free(&report);
 }
 
 /* ---- bad input -------------------------------------------------------------------------- */
 
-static void expect_report_error(const char *json, const char *fragment) {
+static void expect_report_error(const char *json, core_error_code code) {
     trace_report report;
     cr_expect_not(parse_text(json, &report), "parsed: %s", json);
-    cr_expect(strstr(report.error, fragment) != NULL, "error '%s' lacks '%s'", report.error, fragment);
+    cr_expect_eq(parse_error.code, code, "%s: code %s, expected %s (%s)", json, core_error_code_name(parse_error.code),
+                 core_error_code_name(code), parse_error.message);
+    cr_expect_neq(parse_error.message[0], '\0');
     cr_expect_eq(report.frame_count, 0);
     cr_expect_null(report.zones);
     trace_report_free(&report);
 }
 
 Test(trace_report, bad_input_is_named) {
-    expect_report_error("not json", "not valid JSON: line 1, column 1:");
-    expect_report_error("{\"traceEvents\":[", "not valid JSON: line 1, column 17: expected a value");
-    expect_report_error("{\"events\":[]}", "no \"traceEvents\" array");
-    expect_report_error("{\"traceEvents\":{}}", "no \"traceEvents\" array");
-    expect_report_error("42", "no \"traceEvents\" array");
-    expect_report_error("{\"traceEvents\":[1]}", "event 0 is not an object");
-    expect_report_error("{\"traceEvents\":[{\"name\":\"x\"}]}", "event 0 has no \"ph\"");
-    expect_report_error("{\"traceEvents\":[{\"ph\":\"B\",\"tid\":1}]}", "event 0 (\"B\") has no numeric \"ts\"");
-    expect_report_error("{\"traceEvents\":[{\"ph\":\"B\",\"ts\":\"5\",\"tid\":1}]}", "has no numeric \"ts\"");
-    expect_report_error("{\"traceEvents\":[{\"ph\":\"X\",\"ts\":5,\"tid\":1}]}", "event 0 (\"X\") has no numeric \"dur\"");
-    expect_report_error("{\"traceEvents\":[{\"ph\":\"X\",\"ts\":5,\"dur\":-1,\"tid\":1}]}", "negative \"dur\"");
+    /* Malformed: not JSON, not a trace, events without the fields their phase needs. */
+    expect_report_error("not json", CORE_ERROR_FORMAT);
+    expect_report_error("{\"traceEvents\":[", CORE_ERROR_FORMAT);
+    expect_report_error("{\"events\":[]}", CORE_ERROR_FORMAT);
+    expect_report_error("{\"traceEvents\":{}}", CORE_ERROR_FORMAT);
+    expect_report_error("42", CORE_ERROR_FORMAT);
+    expect_report_error("{\"traceEvents\":[1]}", CORE_ERROR_FORMAT);
+    expect_report_error("{\"traceEvents\":[{\"name\":\"x\"}]}", CORE_ERROR_FORMAT);
+    expect_report_error("{\"traceEvents\":[{\"ph\":\"B\",\"tid\":1}]}", CORE_ERROR_FORMAT);
+    expect_report_error("{\"traceEvents\":[{\"ph\":\"B\",\"ts\":\"5\",\"tid\":1}]}", CORE_ERROR_FORMAT);
+    expect_report_error("{\"traceEvents\":[{\"ph\":\"X\",\"ts\":5,\"tid\":1}]}", CORE_ERROR_FORMAT);
+    /* Well-formed, but a value no zone can have. */
+    expect_report_error("{\"traceEvents\":[{\"ph\":\"X\",\"ts\":5,\"dur\":-1,\"tid\":1}]}", CORE_ERROR_RANGE);
 }
 
 Test(trace_report, unbalanced_end_is_named) {
@@ -259,17 +272,19 @@ Test(trace_report, unbalanced_end_is_named) {
     expect_report_error("{\"traceEvents\":["
                         "{\"ph\":\"B\",\"name\":\"a\",\"ts\":0,\"pid\":1,\"tid\":1},"
                         "{\"ph\":\"E\",\"ts\":5,\"pid\":1,\"tid\":2}]}",
-                        "event 1: unbalanced \"E\": no matching \"B\" open on its thread (pid 1, tid 2)");
+                        CORE_ERROR_FORMAT);
     expect_report_error("{\"traceEvents\":["
                         "{\"ph\":\"B\",\"name\":\"a\",\"ts\":10,\"tid\":1},"
                         "{\"ph\":\"E\",\"ts\":5,\"tid\":1}]}",
-                        "event 1: zone \"a\" ends (ts 5) before it begins (ts 10)");
+                        CORE_ERROR_FORMAT);
 }
 
 Test(trace_report, load_names_the_file) {
     trace_report report;
-    cr_expect_not(trace_report_load("/nonexistent-dir/run.json", &report));
-    cr_expect(strstr(report.error, "cannot read '/nonexistent-dir/run.json'") != NULL, "%s", report.error);
+    core_error error = { 0 };
+    cr_expect_not(trace_report_load("/nonexistent-dir/run.json", &report, &error));
+    cr_expect_eq(error.code, CORE_ERROR_IO, "%s: %s", core_error_code_name(error.code), error.message);
+    cr_expect(strstr(error.message, "/nonexistent-dir/run.json") != NULL, "names the file: %s", error.message);
     trace_report_free(&report);
 
     char path[128];
@@ -277,10 +292,12 @@ Test(trace_report, load_names_the_file) {
     FILE *file = fopen(path, "w");
     fputs("{\"traceEvents\":\n[}", file);
     fclose(file);
-    cr_expect_not(trace_report_load(path, &report));
-    char expected[256];
-    snprintf(expected, sizeof expected, "%s: not valid JSON: line 2, column 2: expected a value, found '}'", path);
-    cr_expect_str_eq(report.error, expected);
+    error = (core_error){ 0 };
+    cr_expect_not(trace_report_load(path, &report, &error));
+    cr_expect_eq(error.code, CORE_ERROR_FORMAT, "%s: %s", core_error_code_name(error.code), error.message);
+    /* The file first, then where in it (JSON's line and column). */
+    cr_expect(strncmp(error.message, path, strlen(path)) == 0, "names the file first: %s", error.message);
+    cr_expect(strstr(error.message, "line 2, column 2") != NULL, "names the place: %s", error.message);
     trace_report_free(&report);
     unlink(path);
 }
@@ -298,9 +315,10 @@ Test(trace_report, reads_back_a_capture) {
     }
     trace_stop();
     trace_report report;
-    bool ok = trace_report_load(path, &report);
+    core_error error = { 0 };
+    bool ok = trace_report_load(path, &report, &error);
     unlink(path);
-    cr_assert(ok, "%s", report.error);
+    cr_assert(ok, "%s", error.message);
     cr_expect_eq(report.frame_count, 3);
     const trace_zone_stats *sleep = zone_named(&report, "sleep");
     cr_assert_not_null(sleep);

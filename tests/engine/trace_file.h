@@ -31,7 +31,7 @@ static const core_json_value *trace_file_load(const char *path, core_arena *aren
     char *text = trace_file_read(path, &size);
     unlink(path);
     core_json_value *document;
-    core_json_error error;
+    core_error error = { 0 };
     bool ok = core_json_parse(text, size, arena, &document, &error);
     free(text);
     cr_assert(ok, "%s is not valid JSON: %s", path, error.message);

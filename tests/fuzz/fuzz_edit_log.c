@@ -67,9 +67,8 @@ static void check_replay(terrain_edit_log *log, terrain_chunk_coord coord, const
 /* Parses into a fresh log and checks the outcome; returns whether it was accepted. */
 static bool parse_and_check(const unsigned char *bytes, size_t size, uint64_t key, const terrain_stacks *generated) {
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key });
-    char error[256];
-    error[0] = '\0';
-    bool ok = terrain_edit_log_parse(log, bytes, size, error, sizeof error);
+    core_error error = { 0 };
+    bool ok = terrain_edit_log_parse(log, bytes, size, &error);
     if (ok) {
         terrain_chunk_coord coord = { (int64_t)get_u64(bytes + 20), (int64_t)get_u64(bytes + 28) };
         if (terrain_edit_log_chunks(log) != 1 || terrain_edit_log_entries(log, coord) < 1) __builtin_trap();
@@ -78,7 +77,9 @@ static bool parse_and_check(const unsigned char *bytes, size_t size, uint64_t ke
         if (terrain_edit_log_entries(log, coord) != 1) __builtin_trap();
         check_replay(log, coord, generated);
     } else {
-        if (error[0] == '\0' || memchr(error, '\0', sizeof error) == NULL) __builtin_trap();
+        if (error.code == CORE_ERROR_NONE || error.code == CORE_ERROR_IO || error.code == CORE_ERROR_ARGUMENT)
+            __builtin_trap();   /* bytes in memory: only a verdict on their content */
+        if (error.message[0] == '\0' || memchr(error.message, '\0', sizeof error.message) == NULL) __builtin_trap();
         if (terrain_edit_log_chunks(log) != 0) __builtin_trap();
     }
     terrain_edit_log_destroy(log);

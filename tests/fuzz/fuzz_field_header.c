@@ -19,16 +19,16 @@ int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size);
 
 int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size) {
     terrain_field_header header;
-    char error[256];
-    error[0] = '\0';
-    if (terrain_field_header_parse((const char *)bytes, size, &header, error, sizeof error)) {
+    core_error error = { 0 };
+    if (terrain_field_header_parse((const char *)bytes, size, &header, &error)) {
         for (int a = 0; a < 3; a++) {
             if (header.dims[a] < 1 || header.dims[a] > TERRAIN_FIELD_FILE_MAX_DIM) __builtin_trap();
             if (!isfinite(header.origin[a])) __builtin_trap();
         }
         if (!(header.spacing > 0.0f) || !isfinite(header.spacing)) __builtin_trap();
     } else {
-        if (error[0] == '\0' || memchr(error, '\0', sizeof error) == NULL) __builtin_trap();
+        if (error.code != CORE_ERROR_FORMAT && error.code != CORE_ERROR_RANGE) __builtin_trap();
+        if (error.message[0] == '\0' || memchr(error.message, '\0', sizeof error.message) == NULL) __builtin_trap();
         if (header.dims[0] != 0 || header.spacing != 0.0f) __builtin_trap();   /* zeroed on failure */
     }
     return 0;

@@ -23,13 +23,14 @@ static void fuzz_check_state(const input_gamepad_state *s) {
 static input_decode_result fuzz_decode_checked(input_decoder *decoder, const uint8_t *report, size_t length,
                                                input_gamepad_state *state) {
     input_gamepad_state before = *state;
-    input_decode_result result = input_decoder_decode(decoder, report, length, state);
+    core_error why = { 0 };
+    input_decode_result result = input_decoder_decode(decoder, report, length, state, &why);
     if (result == INPUT_DECODE_OK) {
         fuzz_check_state(state);
+        if (why.code != CORE_ERROR_NONE) __builtin_trap();
     } else {
         if (memcmp(&before, state, sizeof *state) != 0) __builtin_trap();
-        const char *why = input_decoder_last_error(decoder);
-        if (!why || !why[0] || !input_decode_result_name(result)[0]) __builtin_trap();
+        if (why.code == CORE_ERROR_NONE || !why.message[0] || !input_decode_result_name(result)[0]) __builtin_trap();
     }
     return result;
 }

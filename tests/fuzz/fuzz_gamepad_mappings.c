@@ -67,8 +67,9 @@ int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size) {
     }
     /* One line straight to the line parser too, whatever bytes it holds. */
     input_sdl_mapping m;
-    char error[160];
-    if (input__sdl_mapping_parse((const char *)bytes, size, &m, error, sizeof error)) fuzz_check(&m);
+    core_error error = { 0 };
+    if (input__sdl_mapping_parse((const char *)bytes, size, &m, &error)) fuzz_check(&m);
+    else if (error.code == CORE_ERROR_NONE || error.message[0] == '\0') __builtin_trap();
     input__sdl_mappings_free(&ms);
     return 0;
 }

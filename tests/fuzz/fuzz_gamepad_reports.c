@@ -71,7 +71,7 @@ int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size) {
     bool seal = pick & 0x80;
     input_decoder *decoder = input_decoder_create(&(input_decoder_desc){ .vendor_id = fuzz_pads[pad].vendor_id,
                                                                          .product_id = fuzz_pads[pad].product_id },
-                                                  NULL, 0);
+                                                  NULL);
     if (!decoder) __builtin_trap();
     input_gamepad_state state = { .ry = -0.25f, .buttons = 1u << INPUT_BUTTON_TOUCHPAD };
     uint64_t calls = 0;

@@ -52,16 +52,16 @@ int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size) {
     bytes += descriptor_size, size -= descriptor_size;
 
     input_hid_layout layout;
-    char error[200] = "";
-    bool parsed = input__hid_layout_parse(descriptor, descriptor_size, &layout, error, sizeof error);
-    if (!parsed && error[0] == '\0') __builtin_trap();
+    core_error error = { 0 };
+    bool parsed = input__hid_layout_parse(descriptor, descriptor_size, &layout, &error);
+    if (!parsed && (error.code == CORE_ERROR_NONE || error.message[0] == '\0')) __builtin_trap();
     if (parsed) fuzz_check_layout(&layout);
 
     /* The same bytes through the public door, with an id no known pad has. */
     input_decoder *decoder = input_decoder_create(&(input_decoder_desc){ .vendor_id = 0xf00d, .product_id = 0x0001,
                                                                          .descriptor = descriptor,
                                                                          .descriptor_size = descriptor_size },
-                                                  error, sizeof error);
+                                                  &error);
     free(descriptor);
     if ((decoder != NULL) != parsed) __builtin_trap();
     if (!decoder) return 0;

@@ -36,9 +36,12 @@ static size_t fuzz_walk(const core_json_value *value) {
 static void fuzz_parse(const char *data, size_t size) {
     core_arena arena = { 0 };
     core_json_value *root;
-    core_json_error error;
+    core_error error = { 0 };
+    int line = 0, column = 0;
     if (core_json_parse(data, size, &arena, &root, &error)) fuzz_walk(root);
-    else if (error.line < 1 || error.column < 1 || error.offset > size || error.message[0] == '\0') __builtin_trap();
+    else if (error.code != CORE_ERROR_FORMAT || sscanf(error.message, "line %d, column %d:", &line, &column) != 2 ||
+             line < 1 || column < 1 || (size_t)line > size + 1 || (size_t)column > size + 1)
+        __builtin_trap();
     core_arena_release(&arena);
 }
 
@@ -65,7 +68,8 @@ static void fuzz_write_round_trip(const char *data, size_t size) {
 
 static void fuzz_report(const char *data, size_t size) {
     trace_report report;
-    if (trace_report_parse(data, size, &report)) {
+    core_error error = { 0 };
+    if (trace_report_parse(data, size, &report, &error)) {
         FILE *sink = fopen("/dev/null", "w");
         /* The drill-down reads what the summary kept (zone instances, counter samples, args). */
         trace_slowest slowest;
@@ -76,8 +80,8 @@ static void fuzz_report(const char *data, size_t size) {
             fclose(sink);
         }
         trace_slowest_free(&slowest);
-    } else if (report.error[0] == '\0') {
-        __builtin_trap(); /* a failure always says why */
+    } else if (error.code == CORE_ERROR_NONE || error.message[0] == '\0') {
+        __builtin_trap(); /* a failure always says what kind and why */
     }
     trace_report_free(&report);
 }

@@ -46,20 +46,20 @@ static void fuzz_file(const unsigned char *bytes, size_t size) {
 }
 
 static void fuzz_payloads(const unsigned char *bytes, size_t size) {
-    char error[200] = "";
+    core_error error = { 0 };
     input_bindings bindings;
     float dead_zone;
-    if (input__record_decode_header(bytes, size, &bindings, &dead_zone, error, sizeof error)) {
+    if (input__record_decode_header(bytes, size, &bindings, &dead_zone, &error)) {
         if (!input__bindings_valid(&bindings) || !(dead_zone >= 0.0f && dead_zone <= 1.0f)) __builtin_trap();
-    } else if (!error[0]) {
+    } else if (error.code == CORE_ERROR_NONE || !error.message[0]) {
         __builtin_trap();
     }
 
     static input_event events[INPUT_MAX_EVENTS];
     input_frame frame;
-    error[0] = '\0';
-    if (!input__record_decode_frame(bytes, size, &frame, events, INPUT_MAX_EVENTS, error, sizeof error)) {
-        if (!error[0]) __builtin_trap();
+    error = (core_error){ 0 };
+    if (!input__record_decode_frame(bytes, size, &frame, events, INPUT_MAX_EVENTS, &error)) {
+        if (error.code == CORE_ERROR_NONE || !error.message[0]) __builtin_trap();
         return;
     }
     static input_state state;

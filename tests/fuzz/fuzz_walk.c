@@ -37,8 +37,10 @@ static void check_walk(const game_walk *walk) {
     }
 }
 
-static void check_error(const char *error, size_t error_size, const unsigned char *bytes, size_t size) {
-    if (error[0] == '\0' || memchr(error, '\0', error_size) == NULL) __builtin_trap();
+static void check_error(const core_error *failure, const unsigned char *bytes, size_t size) {
+    const char *error = failure->message;
+    if (failure->code != CORE_ERROR_FORMAT && failure->code != CORE_ERROR_RANGE) __builtin_trap();
+    if (error[0] == '\0' || memchr(error, '\0', sizeof failure->message) == NULL) __builtin_trap();
     if (strncmp(error, "fuzz:", 5) != 0) __builtin_trap();
     if (error[5] == ' ') return;                                   /* "fuzz: no waypoints …" */
     char *end;
@@ -75,13 +77,12 @@ static void drive(const game_walk *walk) {
 
 int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size) {
     game_walk walk;
-    char error[256];
-    error[0] = '\0';
-    if (game_walk_parse_text((const char *)bytes, size, "fuzz", &walk, error, sizeof error)) {
+    core_error error = { 0 };
+    if (game_walk_parse_text((const char *)bytes, size, "fuzz", &walk, &error)) {
         check_walk(&walk);
         drive(&walk);
     } else {
-        check_error(error, sizeof error, bytes, size);
+        check_error(&error, bytes, size);
         if (walk.count != 0 || walk.points != NULL) __builtin_trap();
     }
     game_walk_free(&walk);

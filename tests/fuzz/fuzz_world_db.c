@@ -77,7 +77,9 @@ int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size) {
     if (!f || fwrite(bytes, 1, size, f) != size || fclose(f) != 0) __builtin_trap();
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
     terrain_store_report report;
-    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = 1 }, &report);
+    core_error error = { 0 };
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = 1 }, &report,
+                                                &error);
     if (store) {
         if (report.set_aside) {
             if (!strstr(report.notice, "world.db.bad") || !file_exists("world.db.bad")) __builtin_trap();
@@ -86,7 +88,7 @@ int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size) {
         check_replays(log);
         terrain_store_destroy(store);
     } else {
-        if (!strstr(report.error, "world.db") || report.in_use) __builtin_trap();
+        if (error.code == CORE_ERROR_NONE || !strstr(error.message, "world.db") || report.in_use) __builtin_trap();
         if (file_exists("world.db.bad") || terrain_edit_log_chunks(log) != 0) __builtin_trap();
     }
     terrain_edit_log_destroy(log);

@@ -340,9 +340,9 @@ Test(game_player_water, a_walk_across_a_lake_swims_it_and_is_not_stuck) {
     water_world w = { .kind = LAKE };
     terrain_world *world = water_world_create(&w);
     game_walk walk;
-    char error[256] = "";
+    core_error error = { 0 };
     const char text[] = "relative\n40 0\n";
-    cr_assert(game_walk_parse_text(text, strlen(text), "lake.walk", &walk, error, sizeof error), "%s", error);
+    cr_assert(game_walk_parse_text(text, strlen(text), "lake.walk", &walk, &error), "%s", error.message);
     game_player pl;
     place(&pl, -10.5, 10.0, 0.5);
     game_walker walker;

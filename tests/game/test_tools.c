@@ -46,8 +46,8 @@ Test(game_tools, sand_drops_sand_or_rocks_and_erode_wears_or_collapses) {
     terrain_edit sand = game_tools_edit(GAME_TOOL_SAND, false, 0, &hit, forward, points);
     terrain_edit rocks = game_tools_edit(GAME_TOOL_SAND, true, 0, &hit, forward, points);
     cr_expect_eq(sand.tool, TERRAIN_EDIT_DEPOSIT);
-    cr_expect_eq(sand.deposit.material, TERRAIN_SAND);
-    cr_expect_eq(rocks.deposit.material, TERRAIN_ROCKS);
+    cr_expect_eq(sand.deposit.material, TERRAIN_BRUSH_SAND);
+    cr_expect_eq(rocks.deposit.material, TERRAIN_BRUSH_ROCKS);
     cr_expect_gt(sand.deposit.volume, 0.0);
     cr_expect_eq(sand.deposit.x, 10.0);
     cr_expect_eq(sand.deposit.z, -30.0);

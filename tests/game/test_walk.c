@@ -20,14 +20,24 @@
 
 /* ---- parsing ---------------------------------------------------------------------------------- */
 
-static bool parse(const char *text, game_walk *walk, char *error) {
-    return game_walk_parse_text(text, strlen(text), "t.walk", walk, error, 256);
+static bool parse(const char *text, game_walk *walk, core_error *error) {
+    return game_walk_parse_text(text, strlen(text), "t.walk", walk, error);
+}
+
+/* The failure's kind is `code`, and its message starts where `example` (what a person reads)
+ * starts: the file and line, up to the first space. */
+static void expect_failure(const core_error *error, core_error_code code, const char *example, const char *input) {
+    cr_expect_eq(error->code, code, "'%s': code %s, expected %s (%s)", input, core_error_code_name(error->code),
+                 core_error_code_name(code), error->message);
+    size_t where = strcspn(example, " ");
+    cr_expect(strncmp(error->message, example, where) == 0, "'%s': '%s' is not at '%.*s'", input, error->message,
+              (int)where, example);
 }
 
 Test(game_walk_parse, straight) {
     game_walk walk;
-    char error[256] = "";
-    cr_assert(game_walk_parse("straight:2000", &walk, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(game_walk_parse("straight:2000", &walk, &error), "%s", error.message);
     cr_expect_eq(walk.count, 1);
     cr_expect_eq(walk.frame, GAME_WALK_AHEAD);
     cr_expect_eq(walk.points[0].x, 0.0);
@@ -35,16 +45,18 @@ Test(game_walk_parse, straight) {
     cr_expect_not(walk.points[0].walk || walk.points[0].fly || walk.points[0].jump);
     game_walk_free(&walk);
     cr_expect_null(walk.points);
-    cr_assert(game_walk_parse("straight:100000", &walk, error, sizeof error), "%s", error);
+    cr_assert(game_walk_parse("straight:100000", &walk, &error), "%s", error.message);
     cr_expect_eq(walk.points[0].z, 100000.0);
     game_walk_free(&walk);
-    cr_assert(game_walk_parse("straight:0.5", &walk, error, sizeof error), "%s", error);
+    cr_assert(game_walk_parse("straight:0.5", &walk, &error), "%s", error.message);
     cr_expect_eq(walk.points[0].z, 0.5);
     game_walk_free(&walk);
 }
 
 typedef struct bad_case {
-    const char *input, *message;
+    const char *input;
+    core_error_code code;
+    const char *message;              /* what a person reads; its place (up to the first space) is checked */
 } bad_case;
 
 static const char RANGE[] = ": the distance must be more than 0 and at most 100000 m";
@@ -54,32 +66,32 @@ Test(game_walk_parse, bad_straight_values_name_the_problem) {
     const char *out_of_range[] = { "straight:0", "straight:-5", "straight:100000.5", "straight:1e999", "straight:-0" };
     for (int i = 0; i < 5; i++) snprintf(range[i], sizeof range[i], "%s%s", out_of_range[i], RANGE);
     const bad_case cases[] = {
-        { "straight:", "straight: needs a distance in metres (straight:2000)" },
-        { "straight:abc", "straight:abc: 'abc' is not a number of metres" },
-        { "straight:12m", "straight:12m: '12m' is not a number of metres" },
-        { "straight: 5", "straight: 5: ' 5' is not a number of metres" },
-        { "straight:nan", "straight:nan: 'nan' is not a number of metres" },
-        { "straight:inf", "straight:inf: 'inf' is not a number of metres" },
-        { "straight:0x10", "straight:0x10: '0x10' is not a number of metres" },
-        { "straight:1.2.3", "straight:1.2.3: '1.2.3' is not a number of metres" },
-        { "straight:-", "straight:-: '-' is not a number of metres" },
-        { "", "no walk given; a walk is " GAME_WALK_USAGE },
-        { out_of_range[0], range[0] },
-        { out_of_range[1], range[1] },
-        { out_of_range[2], range[2] },
-        { out_of_range[3], range[3] },
-        { out_of_range[4], range[4] },
+        { "straight:", CORE_ERROR_FORMAT, "straight: needs a distance in metres (straight:2000)" },
+        { "straight:abc", CORE_ERROR_FORMAT, "straight:abc: 'abc' is not a number of metres" },
+        { "straight:12m", CORE_ERROR_FORMAT, "straight:12m: '12m' is not a number of metres" },
+        { "straight: 5", CORE_ERROR_FORMAT, "straight: 5: ' 5' is not a number of metres" },
+        { "straight:nan", CORE_ERROR_FORMAT, "straight:nan: 'nan' is not a number of metres" },
+        { "straight:inf", CORE_ERROR_FORMAT, "straight:inf: 'inf' is not a number of metres" },
+        { "straight:0x10", CORE_ERROR_FORMAT, "straight:0x10: '0x10' is not a number of metres" },
+        { "straight:1.2.3", CORE_ERROR_FORMAT, "straight:1.2.3: '1.2.3' is not a number of metres" },
+        { "straight:-", CORE_ERROR_FORMAT, "straight:-: '-' is not a number of metres" },
+        { "", CORE_ERROR_ARGUMENT, "no walk given; a walk is " GAME_WALK_USAGE },
+        { out_of_range[0], CORE_ERROR_RANGE, range[0] },
+        { out_of_range[1], CORE_ERROR_RANGE, range[1] },
+        { out_of_range[2], CORE_ERROR_RANGE, range[2] },
+        { out_of_range[3], CORE_ERROR_RANGE, range[3] },
+        { out_of_range[4], CORE_ERROR_RANGE, range[4] },
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         game_walk walk = { .count = 99 };
-        char error[256] = "";
-        cr_expect_not(game_walk_parse(cases[i].input, &walk, error, sizeof error), "'%s' was taken", cases[i].input);
-        cr_expect_str_eq(error, cases[i].message, "'%s'", cases[i].input);
+        core_error error = { 0 };
+        cr_expect_not(game_walk_parse(cases[i].input, &walk, &error), "'%s' was taken", cases[i].input);
+        expect_failure(&error, cases[i].code, cases[i].message, cases[i].input);
         cr_expect(walk.count == 0 && walk.points == NULL, "'%s': output not zeroed", cases[i].input);
         game_walk_free(&walk);
     }
     game_walk walk;
-    cr_expect_not(game_walk_parse(NULL, &walk, NULL, 0), "NULL spec, no error buffer");
+    cr_expect_not(game_walk_parse(NULL, &walk, NULL), "NULL spec, no error");
 }
 
 Test(game_walk_parse, file_with_comments_blank_lines_crlf_and_words) {
@@ -93,8 +105,8 @@ Test(game_walk_parse, file_with_comments_blank_lines_crlf_and_words) {
                         "100000 -100000 fly y=-12.25\r\n"
                         "0 0 sprint";                                      /* no line end at the end */
     game_walk walk;
-    char error[256] = "";
-    cr_assert(parse(text, &walk, error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(parse(text, &walk, &error), "%s", error.message);
     cr_assert_eq(walk.count, 4);
     cr_expect_eq(walk.frame, GAME_WALK_RELATIVE);
     cr_expect_eq(walk.radius, 3.5f);
@@ -105,10 +117,10 @@ Test(game_walk_parse, file_with_comments_blank_lines_crlf_and_words) {
     cr_expect(p[3].x == 0.0 && p[3].z == 0.0 && !p[3].walk && !p[3].jump && !p[3].fly);
     game_walk_free(&walk);
     /* defaults: absolute, radius 0 (= 2 m); "ahead" */
-    cr_assert(parse("5 6\n", &walk, error), "%s", error);
+    cr_assert(parse("5 6\n", &walk, &error), "%s", error.message);
     cr_expect(walk.frame == GAME_WALK_ABSOLUTE && walk.radius == 0.0f && walk.count == 1);
     game_walk_free(&walk);
-    cr_assert(parse("ahead\n0 10\n", &walk, error), "%s", error);
+    cr_assert(parse("ahead\n0 10\n", &walk, &error), "%s", error.message);
     cr_expect_eq(walk.frame, GAME_WALK_AHEAD);
     game_walk_free(&walk);
 }
@@ -116,62 +128,64 @@ Test(game_walk_parse, file_with_comments_blank_lines_crlf_and_words) {
 /* Every error with the number of the line it is on: good, blank and comment lines come first. */
 Test(game_walk_parse, every_error_names_its_line) {
     const bad_case cases[] = {
-        { "1 2\n\n# c\nfoo 3\n",
+        { "1 2\n\n# c\nfoo 3\n", CORE_ERROR_FORMAT,
           "t.walk:4: unknown directive 'foo' (a line is X Z [words], relative, ahead, radius R or fly-over)" },
-        { "1 2\n3\n", "t.walk:2: a waypoint needs X and Z; Z is missing" },
-        { "\n\n1.2.3 4\n", "t.walk:3: x: '1.2.3' is not a number" },
-        { "1 abc\n", "t.walk:1: z: 'abc' is not a number" },
-        { "1 2\n3 0x4\n", "t.walk:2: z: '0x4' is not a number" },
-        { "-inf 2\n", "t.walk:1: x: '-inf' is not a number" },
-        { "1 2\r\n3 1e999\r\n", "t.walk:2: z: '1e999' is out of range (-1e9 ... 1e9 m)" },
-        { "# x\n1000000001 0\n", "t.walk:2: x: '1000000001' is out of range (-1e9 ... 1e9 m)" },
-        { "1 2 sprnt\n", "t.walk:1: unknown word 'sprnt' (walk, sprint, jump, fly, y=H, shot, look=YAW,PITCH)" },
-        { "1 2 shot shot\n", "t.walk:1: 'shot' given twice" },
-        { "fly-over\nfly-over\n1 2\n", "t.walk:2: fly-over given twice" },
-        { "fly-over now\n", "t.walk:1: 'fly-over' takes nothing after it" },
-        { "1 2\nfly-over\n", "t.walk:2: 'fly-over' must come before the first waypoint" },
-        { "1 2\n1 2 walk sprint\n", "t.walk:2: walk and sprint together" },
-        { "1 2 jump jump\n", "t.walk:1: 'jump' given twice" },
-        { "1 2 fly jump\n", "t.walk:1: jump and fly together (flying, there is nothing to jump from)" },
-        { "1 2 y=3\n", "t.walk:1: y=H needs fly (walking, the ground sets the height)" },
-        { "1 2 fly y=\n", "t.walk:1: y: '' is not a number" },
-        { "1 2 fly y=high\n", "t.walk:1: y: 'high' is not a number" },
-        { "1 2 fly y=2e9\n", "t.walk:1: y: '2e9' is out of range (-1e9 ... 1e9 m)" },
-        { "1 2 fly y=1 y=2\n", "t.walk:1: 'y=' given twice" },
-        { "1 2\nrelative\n", "t.walk:2: 'relative' must come before the first waypoint" },
-        { "relative\nahead\n1 2\n", "t.walk:2: only one of relative and ahead, once" },
-        { "relative now\n", "t.walk:1: 'relative' takes nothing after it" },
-        { "radius\n", "t.walk:1: radius needs one number (metres)" },
-        { "radius 1 2\n", "t.walk:1: radius needs one number (metres)" },
-        { "radius big\n", "t.walk:1: radius: 'big' is not a number" },
-        { "radius 0.09\n", "t.walk:1: radius: '0.09' is out of range (0.1 ... 1000 m)" },
-        { "radius 1000.5\n", "t.walk:1: radius: '1000.5' is out of range (0.1 ... 1000 m)" },
-        { "radius 2\nradius 3\n", "t.walk:2: radius given twice" },
-        { "1 2\n3 4 \x01\n", "t.walk:2: unexpected byte 0x01 in column 5" },
-        { "1 2\r3 4\n", "t.walk:1: unexpected byte 0x0d in column 4" },
-        { "1\t2 \xc3\xa9\n", "t.walk:1: unexpected byte 0xc3 in column 5" },
-        { "", "t.walk: no waypoints (a waypoint line is X Z)" },
-        { "# only a comment\n\nrelative\n", "t.walk: no waypoints (a waypoint line is X Z)" },
+        { "1 2\n3\n", CORE_ERROR_FORMAT, "t.walk:2: a waypoint needs X and Z; Z is missing" },
+        { "\n\n1.2.3 4\n", CORE_ERROR_FORMAT, "t.walk:3: x: '1.2.3' is not a number" },
+        { "1 abc\n", CORE_ERROR_FORMAT, "t.walk:1: z: 'abc' is not a number" },
+        { "1 2\n3 0x4\n", CORE_ERROR_FORMAT, "t.walk:2: z: '0x4' is not a number" },
+        { "-inf 2\n", CORE_ERROR_FORMAT, "t.walk:1: x: '-inf' is not a number" },
+        { "1 2\r\n3 1e999\r\n", CORE_ERROR_RANGE, "t.walk:2: z: '1e999' is out of range (-1e9 ... 1e9 m)" },
+        { "# x\n1000000001 0\n", CORE_ERROR_RANGE, "t.walk:2: x: '1000000001' is out of range (-1e9 ... 1e9 m)" },
+        { "1 2 sprnt\n", CORE_ERROR_FORMAT, "t.walk:1: unknown word 'sprnt' (walk, sprint, jump, fly, y=H, shot, look=YAW,PITCH)" },
+        { "1 2 shot shot\n", CORE_ERROR_FORMAT, "t.walk:1: 'shot' given twice" },
+        { "fly-over\nfly-over\n1 2\n", CORE_ERROR_FORMAT, "t.walk:2: fly-over given twice" },
+        { "fly-over now\n", CORE_ERROR_FORMAT, "t.walk:1: 'fly-over' takes nothing after it" },
+        { "1 2\nfly-over\n", CORE_ERROR_FORMAT, "t.walk:2: 'fly-over' must come before the first waypoint" },
+        { "1 2\n1 2 walk sprint\n", CORE_ERROR_FORMAT, "t.walk:2: walk and sprint together" },
+        { "1 2 jump jump\n", CORE_ERROR_FORMAT, "t.walk:1: 'jump' given twice" },
+        { "1 2 fly jump\n", CORE_ERROR_FORMAT, "t.walk:1: jump and fly together (flying, there is nothing to jump from)" },
+        { "1 2 y=3\n", CORE_ERROR_FORMAT, "t.walk:1: y=H needs fly (walking, the ground sets the height)" },
+        { "1 2 fly y=\n", CORE_ERROR_FORMAT, "t.walk:1: y: '' is not a number" },
+        { "1 2 fly y=high\n", CORE_ERROR_FORMAT, "t.walk:1: y: 'high' is not a number" },
+        { "1 2 fly y=2e9\n", CORE_ERROR_RANGE, "t.walk:1: y: '2e9' is out of range (-1e9 ... 1e9 m)" },
+        { "1 2 fly y=1 y=2\n", CORE_ERROR_FORMAT, "t.walk:1: 'y=' given twice" },
+        { "1 2\nrelative\n", CORE_ERROR_FORMAT, "t.walk:2: 'relative' must come before the first waypoint" },
+        { "relative\nahead\n1 2\n", CORE_ERROR_FORMAT, "t.walk:2: only one of relative and ahead, once" },
+        { "relative now\n", CORE_ERROR_FORMAT, "t.walk:1: 'relative' takes nothing after it" },
+        { "radius\n", CORE_ERROR_FORMAT, "t.walk:1: radius needs one number (metres)" },
+        { "radius 1 2\n", CORE_ERROR_FORMAT, "t.walk:1: radius needs one number (metres)" },
+        { "radius big\n", CORE_ERROR_FORMAT, "t.walk:1: radius: 'big' is not a number" },
+        { "radius 0.09\n", CORE_ERROR_RANGE, "t.walk:1: radius: '0.09' is out of range (0.1 ... 1000 m)" },
+        { "radius 1000.5\n", CORE_ERROR_RANGE, "t.walk:1: radius: '1000.5' is out of range (0.1 ... 1000 m)" },
+        { "radius 2\nradius 3\n", CORE_ERROR_FORMAT, "t.walk:2: radius given twice" },
+        { "1 2\n3 4 \x01\n", CORE_ERROR_FORMAT, "t.walk:2: unexpected byte 0x01 in column 5" },
+        { "1 2\r3 4\n", CORE_ERROR_FORMAT, "t.walk:1: unexpected byte 0x0d in column 4" },
+        { "1\t2 \xc3\xa9\n", CORE_ERROR_FORMAT, "t.walk:1: unexpected byte 0xc3 in column 5" },
+        { "", CORE_ERROR_FORMAT, "t.walk: no waypoints (a waypoint line is X Z)" },
+        { "# only a comment\n\nrelative\n", CORE_ERROR_FORMAT, "t.walk: no waypoints (a waypoint line is X Z)" },
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         game_walk walk;
-        char error[256] = "";
-        cr_expect_not(parse(cases[i].input, &walk, error), "case %zu was taken", i);
-        cr_expect_str_eq(error, cases[i].message, "case %zu", i);
+        core_error error = { 0 };
+        cr_expect_not(parse(cases[i].input, &walk, &error), "case %zu was taken", i);
+        expect_failure(&error, cases[i].code, cases[i].message, cases[i].input);
         cr_expect(walk.count == 0 && walk.points == NULL, "case %zu: output not zeroed", i);
     }
     /* a NUL byte inside the text (the size says where it ends, not the NUL) */
     game_walk walk;
-    char error[256] = "";
-    cr_expect_not(game_walk_parse_text("1 2\n3\0 4\n", 9, "t.walk", &walk, error, sizeof error));
-    cr_expect_str_eq(error, "t.walk:2: unexpected byte 0x00 in column 2");
+    core_error error = { 0 };
+    cr_expect_not(game_walk_parse_text("1 2\n3\0 4\n", 9, "t.walk", &walk, &error));
+    expect_failure(&error, CORE_ERROR_FORMAT, "t.walk:2: unexpected byte 0x00 in column 2", "NUL");
     /* comments may hold anything but a line end */
-    cr_expect(game_walk_parse_text("1 2 # \xc3\xa9\x01\0\n", 11, "t.walk", &walk, error, sizeof error), "%s", error);
+    cr_expect(game_walk_parse_text("1 2 # \xc3\xa9\x01\0\n", 11, "t.walk", &walk, &error), "%s", error.message);
     game_walk_free(&walk);
-    /* a short error buffer is cut, still terminated */
-    char small[12];
-    game_walk_parse_text("1 2\n3\n", 6, "t.walk", &walk, small, sizeof small);
-    cr_expect_str_eq(small, "t.walk:2: a");
+    /* a name too long for the message is cut, still terminated */
+    char name[400];
+    memset(name, 'n', sizeof name - 1);
+    name[sizeof name - 1] = '\0';
+    cr_expect_not(game_walk_parse_text("1 2\n3\n", 6, name, &walk, &error));
+    cr_expect_eq(strlen(error.message), sizeof error.message - 1);
 }
 
 /* Writes `text` to a temporary file; returns its path (free with free()). */
@@ -186,38 +200,40 @@ static char *temporary_file(const char *text, size_t size) {
 
 Test(game_walk_parse, files_by_path) {
     game_walk walk;
-    char error[512] = "", expected[512];
-    cr_expect_not(game_walk_parse("/nonexistent/dir/lap.walk", &walk, error, sizeof error));
-    cr_expect_str_eq(error, "/nonexistent/dir/lap.walk: cannot open (No such file or directory); a walk is "
-                            GAME_WALK_USAGE);
-    cr_expect_not(game_walk_parse("straigt:100", &walk, error, sizeof error), "a misspelt spec is a missing file");
-    cr_expect_str_eq(error, "straigt:100: cannot open (No such file or directory); a walk is " GAME_WALK_USAGE);
-    cr_expect_not(game_walk_parse("/tmp", &walk, error, sizeof error));
-    cr_expect_str_eq(error, "/tmp: cannot read (Is a directory)");
+    core_error error = { 0 };
+    char expected[512];
+    /* A file that cannot be opened or read: the message names it (and how a walk is spelt). */
+    cr_expect_not(game_walk_parse("/nonexistent/dir/lap.walk", &walk, &error));
+    expect_failure(&error, CORE_ERROR_IO, "/nonexistent/dir/lap.walk: cannot open", "missing");
+    cr_expect_not(game_walk_parse("straigt:100", &walk, &error), "a misspelt spec is a missing file");
+    expect_failure(&error, CORE_ERROR_IO, "straigt:100: cannot open", "misspelt");
+    cr_expect_not_null(strstr(error.message, GAME_WALK_USAGE), "says how a walk is spelt: %s", error.message);
+    cr_expect_not(game_walk_parse("/tmp", &walk, &error));
+    expect_failure(&error, CORE_ERROR_IO, "/tmp: cannot read", "a folder");
 
     char *good = temporary_file("relative\n10 0\n10 10 walk\n", 25);
-    cr_assert(game_walk_parse(good, &walk, error, sizeof error), "%s", error);
+    cr_assert(game_walk_parse(good, &walk, &error), "%s", error.message);
     cr_expect(walk.count == 2 && walk.frame == GAME_WALK_RELATIVE && walk.points[1].z == 10.0 && walk.points[1].walk);
     game_walk_free(&walk);
     char *bad = temporary_file("10 0\n\n10 ten\n", 13);
-    cr_expect_not(game_walk_parse(bad, &walk, error, sizeof error));
+    cr_expect_not(game_walk_parse(bad, &walk, &error));
     snprintf(expected, sizeof expected, "%s:3: z: 'ten' is not a number", bad);
-    cr_expect_str_eq(error, expected);
+    expect_failure(&error, CORE_ERROR_FORMAT, expected, bad);
     char *empty = temporary_file("", 0);
-    cr_expect_not(game_walk_parse(empty, &walk, error, sizeof error));
+    cr_expect_not(game_walk_parse(empty, &walk, &error));
     snprintf(expected, sizeof expected, "%s: no waypoints (a waypoint line is X Z)", empty);
-    cr_expect_str_eq(error, expected);
+    expect_failure(&error, CORE_ERROR_FORMAT, expected, empty);
     /* over the size limit: rejected before parsing (its lines, one waypoint and blank ones, would be fine) */
     size_t huge_size = (size_t)GAME_WALK_MAX_FILE + 1;
     char *huge_text = malloc(huge_size);
     memset(huge_text, '\n', huge_size);
     memcpy(huge_text, "1 2", 3);
     char *huge = temporary_file(huge_text, huge_size);
-    cr_expect_not(game_walk_parse(huge, &walk, error, sizeof error));
+    cr_expect_not(game_walk_parse(huge, &walk, &error));
     snprintf(expected, sizeof expected, "%s: larger than 16 MiB", huge);
-    cr_expect_str_eq(error, expected);
+    expect_failure(&error, CORE_ERROR_RANGE, expected, huge);
     char *limit = temporary_file(huge_text, huge_size - 1);                 /* exactly 16 MiB */
-    cr_expect(game_walk_parse(limit, &walk, error, sizeof error), "%s", error);
+    cr_expect(game_walk_parse(limit, &walk, &error), "%s", error.message);
     game_walk_free(&walk);
     char *paths[] = { good, bad, empty, huge, limit };
     for (int i = 0; i < 5; i++) unlink(paths[i]), free(paths[i]);
@@ -235,17 +251,17 @@ static char *many_waypoints(int n, size_t *size) {
 
 Test(game_walk_parse, limits) {
     game_walk walk;
-    char error[256] = "";
+    core_error error = { 0 };
     size_t size;
     char *text = many_waypoints(GAME_WALK_MAX_POINTS, &size);
-    cr_assert(game_walk_parse_text(text, size, "t.walk", &walk, error, sizeof error), "%s", error);
+    cr_assert(game_walk_parse_text(text, size, "t.walk", &walk, &error), "%s", error.message);
     cr_expect_eq(walk.count, 100000);
     cr_expect_eq(walk.points[99999].x, 99999.0);
     game_walk_free(&walk);
     free(text);
     text = many_waypoints(GAME_WALK_MAX_POINTS + 1, &size);
-    cr_expect_not(game_walk_parse_text(text, size, "t.walk", &walk, error, sizeof error));
-    cr_expect_str_eq(error, "t.walk:100001: more than 100000 waypoints");
+    cr_expect_not(game_walk_parse_text(text, size, "t.walk", &walk, &error));
+    expect_failure(&error, CORE_ERROR_RANGE, "t.walk:100001: more than 100000 waypoints", "100001 waypoints");
     free(text);
 
     /* 1024 bytes before the line end are fine (CR included), 1025 are not, comments too */
@@ -253,23 +269,23 @@ Test(game_walk_parse, limits) {
     memset(line, ' ', sizeof line);
     memcpy(line, "1 2 #", 5);
     line[1024] = '\n';
-    cr_expect(game_walk_parse_text(line, 1025, "t.walk", &walk, error, sizeof error), "%s", error);
+    cr_expect(game_walk_parse_text(line, 1025, "t.walk", &walk, &error), "%s", error.message);
     game_walk_free(&walk);
     line[1023] = '\r';
-    cr_expect(game_walk_parse_text(line, 1025, "t.walk", &walk, error, sizeof error), "%s", error);
+    cr_expect(game_walk_parse_text(line, 1025, "t.walk", &walk, &error), "%s", error.message);
     game_walk_free(&walk);
     line[1023] = ' ', line[1024] = ' ', line[1025] = '\n';
-    cr_expect_not(game_walk_parse_text(line, 1026, "t.walk", &walk, error, sizeof error));
-    cr_expect_str_eq(error, "t.walk:1: line longer than 1024 bytes");
+    cr_expect_not(game_walk_parse_text(line, 1026, "t.walk", &walk, &error));
+    expect_failure(&error, CORE_ERROR_RANGE, "t.walk:1: line longer than 1024 bytes", "1025 bytes");
 
-    cr_expect(parse("1e9 -1e9\n-1000000000 1000000000 fly y=1e9\n", &walk, error), "%s", error);
+    cr_expect(parse("1e9 -1e9\n-1000000000 1000000000 fly y=1e9\n", &walk, &error), "%s", error.message);
     game_walk_free(&walk);
-    cr_expect(parse("radius 0.1\n0 0\n", &walk, error), "%s", error);
+    cr_expect(parse("radius 0.1\n0 0\n", &walk, &error), "%s", error.message);
     game_walk_free(&walk);
-    cr_expect(parse("radius 1000\n0 0\n", &walk, error), "%s", error);
+    cr_expect(parse("radius 1000\n0 0\n", &walk, &error), "%s", error.message);
     game_walk_free(&walk);
-    cr_expect_not(parse("1000000000.0001 0\n", &walk, error));
-    cr_expect_str_eq(error, "t.walk:1: x: '1000000000.0001' is out of range (-1e9 ... 1e9 m)");
+    cr_expect_not(parse("1000000000.0001 0\n", &walk, &error));
+    expect_failure(&error, CORE_ERROR_RANGE, "t.walk:1: x: '1000000000.0001' is out of range (-1e9 ... 1e9 m)", "x");
 }
 
 /* ---- worlds ------------------------------------------------------------------------------------ */
@@ -357,8 +373,8 @@ static void run_walk(terrain_world *world, game_player *pl, const game_walk *wal
 
 static game_walk parsed(const char *text) {
     game_walk walk;
-    char error[256] = "";
-    cr_assert(parse(text, &walk, error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(parse(text, &walk, &error), "%s", error.message);
     return walk;
 }
 
@@ -607,8 +623,8 @@ Test(game_walker, straight_walks_ahead_of_the_start) {
     hand_world hand = { .kind = FLAT };
     terrain_world *world = hand_world_create(&hand);
     game_walk walk;
-    char error[256];
-    cr_assert(game_walk_parse("straight:50", &walk, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(game_walk_parse("straight:50", &walk, &error), "%s", error.message);
     game_player pl;
     float yaw = 2.5f;
     place(&pl, -7.25, 3.5, yaw);

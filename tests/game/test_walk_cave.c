@@ -94,8 +94,8 @@ Test(game_walk_cave, no_roof_no_cave_and_under_the_sea_is_water) {
 
 static game_walk parsed(const char *text) {
     game_walk walk;
-    char error[256] = "";
-    cr_assert(game_walk_parse_text(text, strlen(text), "t.walk", &walk, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(game_walk_parse_text(text, strlen(text), "t.walk", &walk, &error), "%s", error.message);
     return walk;
 }
 
@@ -173,23 +173,28 @@ Test(game_walk_cave, look_and_cave_words_parse_and_their_errors_name_the_problem
     cr_expect(walk.points[0].has_look && walk.points[0].look_yaw == 270.0f && walk.points[0].look_pitch == 12.5f);
     cr_expect(walk.points[1].cave_radius == 40.0f && !walk.points[1].shot);
     game_walk_free(&walk);
-    static const struct { const char *input, *message; } cases[] = {
-        { "1 2 look=10,0\n", "t.walk:1: look= needs shot (it is the picture's direction)" },
-        { "1 2 shot look=10\n", "t.walk:1: look=: '10' is not YAW,PITCH (degrees)" },
-        { "1 2 shot look=a,0\n", "t.walk:1: look=: yaw 'a' is not a number" },
-        { "1 2 shot look=0,\n", "t.walk:1: look=: pitch '' is not a number" },
-        { "1 2 shot look=0,90\n", "t.walk:1: look=: pitch '90' is out of range (-89 ... 89)" },
-        { "1 2 shot look=0,0 look=0,0\n", "t.walk:1: 'look=' given twice" },
-        { "cave\n", "t.walk:1: cave needs a radius (metres)" },
-        { "cave far\n", "t.walk:1: cave: 'far' is not a number" },
-        { "cave 0.5\n", "t.walk:1: cave: '0.5' is out of range (1 ... 1000 m)" },
-        { "cave 10 fly\n", "t.walk:1: cave: unknown word 'fly' (only shot; the flight and the view are found)" },
-        { "cave 10 shot shot\n", "t.walk:1: 'shot' given twice" },
+    static const struct { const char *input; core_error_code code; const char *message; } cases[] = {
+        { "1 2 look=10,0\n", CORE_ERROR_FORMAT, "t.walk:1: look= needs shot (it is the picture's direction)" },
+        { "1 2 shot look=10\n", CORE_ERROR_FORMAT, "t.walk:1: look=: '10' is not YAW,PITCH (degrees)" },
+        { "1 2 shot look=a,0\n", CORE_ERROR_FORMAT, "t.walk:1: look=: yaw 'a' is not a number" },
+        { "1 2 shot look=0,\n", CORE_ERROR_FORMAT, "t.walk:1: look=: pitch '' is not a number" },
+        { "1 2 shot look=0,90\n", CORE_ERROR_RANGE, "t.walk:1: look=: pitch '90' is out of range (-89 ... 89)" },
+        { "1 2 shot look=0,0 look=0,0\n", CORE_ERROR_FORMAT, "t.walk:1: 'look=' given twice" },
+        { "cave\n", CORE_ERROR_FORMAT, "t.walk:1: cave needs a radius (metres)" },
+        { "cave far\n", CORE_ERROR_FORMAT, "t.walk:1: cave: 'far' is not a number" },
+        { "cave 0.5\n", CORE_ERROR_RANGE, "t.walk:1: cave: '0.5' is out of range (1 ... 1000 m)" },
+        { "cave 10 fly\n", CORE_ERROR_FORMAT, "t.walk:1: cave: unknown word 'fly' (only shot; the flight and the view are found)" },
+        { "cave 10 shot shot\n", CORE_ERROR_FORMAT, "t.walk:1: 'shot' given twice" },
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
-        char error[256] = "";
-        cr_expect_not(game_walk_parse_text(cases[i].input, strlen(cases[i].input), "t.walk", &walk, error, sizeof error),
+        core_error error = { 0 };
+        cr_expect_not(game_walk_parse_text(cases[i].input, strlen(cases[i].input), "t.walk", &walk, &error),
                       "case %zu was taken", i);
-        cr_expect_str_eq(error, cases[i].message, "case %zu", i);
+        /* The kind of failure, and where: the message starts with the file and line. */
+        cr_expect_eq(error.code, cases[i].code, "case %zu: code %s (%s)", i, core_error_code_name(error.code),
+                     error.message);
+        size_t where = strcspn(cases[i].message, " ");
+        cr_expect(strncmp(error.message, cases[i].message, where) == 0, "case %zu: '%s' is not at '%.*s'", i,
+                  error.message, (int)where, cases[i].message);
     }
 }

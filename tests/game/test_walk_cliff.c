@@ -81,8 +81,8 @@ Test(game_walk_cliff, no_wall_a_sand_wall_a_ramp_or_a_drowned_foot_is_no_cliff) 
 
 static game_walk parsed(const char *text) {
     game_walk walk;
-    char error[256] = "";
-    cr_assert(game_walk_parse_text(text, strlen(text), "t.walk", &walk, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(game_walk_parse_text(text, strlen(text), "t.walk", &walk, &error), "%s", error.message);
     return walk;
 }
 
@@ -112,16 +112,21 @@ Test(game_walk_cliff, a_cliff_line_becomes_a_flight_facing_the_wall) {
     cr_expect_eq(game_walk_resolve_stops(&walk, world, &pl).cliffs, 0);
     cr_expect_eq(walk.count, 1);
     game_walk_free(&walk);
-    static const struct { const char *input, *message; } cases[] = {
-        { "cliff\n", "t.walk:1: cliff needs a radius (metres)" },
-        { "cliff 2000\n", "t.walk:1: cliff: '2000' is out of range (1 ... 1000 m)" },
-        { "cliff 10 walk\n", "t.walk:1: cliff: unknown word 'walk' (only shot; the flight and the view are found)" },
+    static const struct { const char *input; core_error_code code; const char *message; } cases[] = {
+        { "cliff\n", CORE_ERROR_FORMAT, "t.walk:1: cliff needs a radius (metres)" },
+        { "cliff 2000\n", CORE_ERROR_RANGE, "t.walk:1: cliff: '2000' is out of range (1 ... 1000 m)" },
+        { "cliff 10 walk\n", CORE_ERROR_FORMAT, "t.walk:1: cliff: unknown word 'walk' (only shot; the flight and the view are found)" },
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
-        char error[256] = "";
-        cr_expect_not(game_walk_parse_text(cases[i].input, strlen(cases[i].input), "t.walk", &walk, error, sizeof error),
+        core_error error = { 0 };
+        cr_expect_not(game_walk_parse_text(cases[i].input, strlen(cases[i].input), "t.walk", &walk, &error),
                       "case %zu was taken", i);
-        cr_expect_str_eq(error, cases[i].message, "case %zu", i);
+        /* The kind of failure, and where: the message starts with the file and line. */
+        cr_expect_eq(error.code, cases[i].code, "case %zu: code %s (%s)", i, core_error_code_name(error.code),
+                     error.message);
+        size_t where = strcspn(cases[i].message, " ");
+        cr_expect(strncmp(error.message, cases[i].message, where) == 0, "case %zu: '%s' is not at '%.*s'", i,
+                  error.message, (int)where, cases[i].message);
     }
     terrain_world_destroy(world);
 }

@@ -135,8 +135,8 @@ Test(game_walk_rocks, no_rocks_a_thin_sheet_one_column_or_drowned_rocks_are_no_p
 
 static game_walk parsed(const char *text) {
     game_walk walk;
-    char error[256] = "";
-    cr_assert(game_walk_parse_text(text, strlen(text), "t.walk", &walk, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(game_walk_parse_text(text, strlen(text), "t.walk", &walk, &error), "%s", error.message);
     return walk;
 }
 
@@ -199,18 +199,23 @@ Test(game_walk_rocks, rocks_lines_parse_and_their_errors_name_the_problem) {
     cr_expect(walk.points[2].shore_radius == 30.0f && walk.points[2].rocks_radius == 0.0f);
     cr_expect_not(walk.points[0].has_look_at || walk.points[1].has_look_at);
     game_walk_free(&walk);
-    static const struct { const char *input, *message; } cases[] = {
-        { "rocks\n", "t.walk:1: rocks needs a radius (metres)" },
-        { "rocks many\n", "t.walk:1: rocks: 'many' is not a number" },
-        { "rocks 0.5\n", "t.walk:1: rocks: '0.5' is out of range (1 ... 1000 m)" },
-        { "rocks 10 fly\n", "t.walk:1: rocks: unknown word 'fly' (only shot; the flight and the view are found)" },
-        { "rocks 10 shot shot\n", "t.walk:1: 'shot' given twice" },
+    static const struct { const char *input; core_error_code code; const char *message; } cases[] = {
+        { "rocks\n", CORE_ERROR_FORMAT, "t.walk:1: rocks needs a radius (metres)" },
+        { "rocks many\n", CORE_ERROR_FORMAT, "t.walk:1: rocks: 'many' is not a number" },
+        { "rocks 0.5\n", CORE_ERROR_RANGE, "t.walk:1: rocks: '0.5' is out of range (1 ... 1000 m)" },
+        { "rocks 10 fly\n", CORE_ERROR_FORMAT, "t.walk:1: rocks: unknown word 'fly' (only shot; the flight and the view are found)" },
+        { "rocks 10 shot shot\n", CORE_ERROR_FORMAT, "t.walk:1: 'shot' given twice" },
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
-        char error[256] = "";
-        cr_expect_not(game_walk_parse_text(cases[i].input, strlen(cases[i].input), "t.walk", &walk, error, sizeof error),
+        core_error error = { 0 };
+        cr_expect_not(game_walk_parse_text(cases[i].input, strlen(cases[i].input), "t.walk", &walk, &error),
                       "case %zu was taken", i);
-        cr_expect_str_eq(error, cases[i].message, "case %zu", i);
+        /* The kind of failure, and where: the message starts with the file and line. */
+        cr_expect_eq(error.code, cases[i].code, "case %zu: code %s (%s)", i, core_error_code_name(error.code),
+                     error.message);
+        size_t where = strcspn(cases[i].message, " ");
+        cr_expect(strncmp(error.message, cases[i].message, where) == 0, "case %zu: '%s' is not at '%.*s'", i,
+                  error.message, (int)where, cases[i].message);
     }
 }
 

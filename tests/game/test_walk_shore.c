@@ -79,8 +79,8 @@ Test(game_walk_shore, no_water_a_pond_or_a_cliff_is_no_shore_view) {
 
 static game_walk parsed(const char *text) {
     game_walk walk;
-    char error[256] = "";
-    cr_assert(game_walk_parse_text(text, strlen(text), "t.walk", &walk, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(game_walk_parse_text(text, strlen(text), "t.walk", &walk, &error), "%s", error.message);
     return walk;
 }
 
@@ -139,17 +139,22 @@ Test(game_walk_shore, shore_lines_parse_and_their_errors_name_the_problem) {
     cr_expect(walk.points[1].shore_radius == 12.5f && walk.points[1].shot);
     cr_expect(walk.points[2].cave_radius == 30.0f && walk.points[2].shore_radius == 0.0f);
     game_walk_free(&walk);
-    static const struct { const char *input, *message; } cases[] = {
-        { "shore\n", "t.walk:1: shore needs a radius (metres)" },
-        { "shore far\n", "t.walk:1: shore: 'far' is not a number" },
-        { "shore 1001\n", "t.walk:1: shore: '1001' is out of range (1 ... 1000 m)" },
-        { "shore 10 walk\n", "t.walk:1: shore: unknown word 'walk' (only shot; the flight and the view are found)" },
-        { "shore 10 shot shot\n", "t.walk:1: 'shot' given twice" },
+    static const struct { const char *input; core_error_code code; const char *message; } cases[] = {
+        { "shore\n", CORE_ERROR_FORMAT, "t.walk:1: shore needs a radius (metres)" },
+        { "shore far\n", CORE_ERROR_FORMAT, "t.walk:1: shore: 'far' is not a number" },
+        { "shore 1001\n", CORE_ERROR_RANGE, "t.walk:1: shore: '1001' is out of range (1 ... 1000 m)" },
+        { "shore 10 walk\n", CORE_ERROR_FORMAT, "t.walk:1: shore: unknown word 'walk' (only shot; the flight and the view are found)" },
+        { "shore 10 shot shot\n", CORE_ERROR_FORMAT, "t.walk:1: 'shot' given twice" },
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
-        char error[256] = "";
-        cr_expect_not(game_walk_parse_text(cases[i].input, strlen(cases[i].input), "t.walk", &walk, error, sizeof error),
+        core_error error = { 0 };
+        cr_expect_not(game_walk_parse_text(cases[i].input, strlen(cases[i].input), "t.walk", &walk, &error),
                       "case %zu was taken", i);
-        cr_expect_str_eq(error, cases[i].message, "case %zu", i);
+        /* The kind of failure, and where: the message starts with the file and line. */
+        cr_expect_eq(error.code, cases[i].code, "case %zu: code %s (%s)", i, core_error_code_name(error.code),
+                     error.message);
+        size_t where = strcspn(cases[i].message, " ");
+        cr_expect(strncmp(error.message, cases[i].message, where) == 0, "case %zu: '%s' is not at '%.*s'", i,
+                  error.message, (int)where, cases[i].message);
     }
 }

@@ -120,9 +120,9 @@ static int draw_quads(gfx_context *gfx, gfx_program program, bool indirect, int 
     /* DrawElementsIndirectCommand: count, instanceCount, firstIndex, baseVertex, baseInstance. */
     const uint32_t command[5] = { 6, (uint32_t)instances, 0, 0, 0 };
     gfx_buffer indirect_buffer = gfx_buffer_create(&(gfx_buffer_desc){ .size = sizeof command, .data = command });
-    gfx_framebuffer target;
-    cr_assert(gfx_framebuffer_create(&target, &(gfx_framebuffer_desc){ .width = 64, .height = 64, .depth = true }));
-    gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "quads", .target = &target, .clear_color = true,
+    gfx_framebuffer target = gfx_framebuffer_create(&(gfx_framebuffer_desc){ .width = 64, .height = 64, .depth = true });
+    cr_assert(target.id);
+    gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "quads", .target = target, .clear_color = true,
                                           .clear_depth = true });
     gfx_program_use(gfx, program);
     glDisable(GL_CULL_FACE);
@@ -131,7 +131,7 @@ static int draw_quads(gfx_context *gfx, gfx_program program, bool indirect, int 
                                .indirect = indirect ? indirect_buffer : (gfx_buffer){ 0 } });
     gfx_pass_end(gfx);
     uint8_t *pixels = malloc(64 * 64 * 4);
-    glGetTextureImage(target.color.id, 0, GL_RGBA, GL_UNSIGNED_BYTE, 64 * 64 * 4, pixels);
+    glGetTextureImage(gfx_texture_gl(gfx_framebuffer_color(target)), 0, GL_RGBA, GL_UNSIGNED_BYTE, 64 * 64 * 4, pixels);
     int red = 0;
     for (int i = 0; i < 64 * 64; i++) red += pixels[i * 4] > 200 && pixels[i * 4 + 1] < 50;
     free(pixels);
@@ -196,7 +196,7 @@ Test(render_gfx, texture_round_trip) {
     float patch[4] = { -1, -2, -3, -4 };
     gfx_texture_update(texture, 0, 1, 1, 2, 2, patch);
     float back[16];
-    glGetTextureImage(texture.id, 0, GL_RED, GL_FLOAT, sizeof back, back);
+    glGetTextureImage(gfx_texture_gl(texture), 0, GL_RED, GL_FLOAT, sizeof back, back);
     cr_assert_float_eq(back[0], 0.0f, 0);
     cr_assert_float_eq(back[5], -1.0f, 0);
     cr_assert_float_eq(back[6], -2.0f, 0);

@@ -131,7 +131,7 @@ static tuft *meadow_tufts(meadow *m, size_t *count) {
             const GrassPatch *p = &patches[i];
             if (!p->tufts) continue;
             float *data = core_alloc((size_t)p->tufts * 32);
-            glGetNamedBufferSubData(p->tuft_buffer, 0, (GLsizeiptr)p->tufts * 32, data);
+            glGetNamedBufferSubData(gfx_buffer_gl(p->tuft_buffer), 0, (GLsizeiptr)p->tufts * 32, data);
             tufts = core_grow(tufts, &capacity, total + p->tufts, sizeof *tufts);
             for (uint32_t t = 0; t < p->tufts; t++)
                 tufts[total++] = (tuft){ (float)(p->origin[0] + data[8 * t]), (float)(p->origin[1] + data[8 * t + 1]),

@@ -143,7 +143,7 @@ Test(render_rocks, edits_place_and_remove_rocks_in_their_frame) {
     for (int frame = 0; frame < 4; frame++) yard_frame(&y, true);
     uint64_t before = rocks_system_stats(y.rocks).instances;
     cr_assert(terrain_ecs_edit(y.te, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
-        .deposit = { .material = TERRAIN_ROCKS, .x = 4, .z = 16, .radius = 3, .volume = 30 } }));
+        .deposit = { .material = TERRAIN_BRUSH_ROCKS, .x = 4, .z = 16, .radius = 3, .volume = 30 } }));
     yard_frame(&y, true);
     uint64_t dropped = rocks_system_stats(y.rocks).instances;
     cr_expect_gt(dropped, before, "a rock deposit shows in its frame: %llu → %llu rocks",

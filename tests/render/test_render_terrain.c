@@ -199,12 +199,12 @@ static void gather_gpu_meshes(const terrain_gpu_mesh *meshes, int count, ring_me
     *out = (ring_meshes){ 0 };
     for (int m = 0; m < count; m++) {
         GLint bytes = 0;
-        glGetNamedBufferParameteriv(meshes[m].vertex_buffer, GL_BUFFER_SIZE, &bytes);
+        glGetNamedBufferParameteriv(gfx_buffer_gl(meshes[m].vertex_buffer), GL_BUFFER_SIZE, &bytes);
         size_t vertex_count = (size_t)bytes / sizeof(terrain_vertex);
         terrain_vertex *vertices = malloc((size_t)bytes);
         uint32_t *indices = malloc(meshes[m].index_count * sizeof *indices);
-        glGetNamedBufferSubData(meshes[m].vertex_buffer, 0, bytes, vertices);
-        glGetNamedBufferSubData(meshes[m].index_buffer, 0, meshes[m].index_count * sizeof *indices, indices);
+        glGetNamedBufferSubData(gfx_buffer_gl(meshes[m].vertex_buffer), 0, bytes, vertices);
+        glGetNamedBufferSubData(gfx_buffer_gl(meshes[m].index_buffer), 0, meshes[m].index_count * sizeof *indices, indices);
         out->points = realloc(out->points, (out->point_count + vertex_count) * sizeof *out->points);
         out->triangles = realloc(out->triangles, (out->index_count + meshes[m].index_count) * sizeof *out->triangles);
         for (size_t v = 0; v < vertex_count; v++)

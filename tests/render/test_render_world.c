@@ -48,8 +48,8 @@ static game_app_stats_info run_world(game_app_desc desc) {
 
 static game_walk parse_walk(const char *text) {
     game_walk walk;
-    char error[256];
-    cr_assert(game_walk_parse_text(text, strlen(text), "test.walk", &walk, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(game_walk_parse_text(text, strlen(text), "test.walk", &walk, &error), "%s", error.message);
     return walk;
 }
 

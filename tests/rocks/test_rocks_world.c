@@ -524,9 +524,9 @@ Test(rocks_place, placement_needs_no_meshes) {
     place(set, world, PILE_MIN, PILE_MAX, &without);
     cr_assert_eq(with.count, without.count);
     cr_expect(memcmp(with.instances, without.instances, with.count * sizeof *with.instances) == 0);
-    char error[256] = "";
-    cr_expect_not(rocks_tile_write_ply(set, 0, "/tmp/never.ply", error, sizeof error));
-    cr_expect(strstr(error, "released") != NULL, "%s", error);
+    core_error error = { 0 };
+    cr_expect_not(rocks_tile_write_ply(set, 0, "/tmp/never.ply", &error));
+    cr_expect_eq(error.code, CORE_ERROR_ARGUMENT, "the meshes were released: %s", error.message);
     rocks_placement_free(&with);
     rocks_placement_free(&without);
     terrain_world_destroy(world);

@@ -22,7 +22,8 @@ Test(terrain_brush, random_deposits_and_erosions_conserve_every_material) {
         if (n % 3 == 0) {
             terrain_material material = (h >> 40) & 1 ? TERRAIN_ROCKS : TERRAIN_SAND;
             double volume = (double)((h >> 44) % 3000) / 10.0;
-            cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .material = material, .x = x, .z = z,
+            terrain_brush_material brush = material == TERRAIN_ROCKS ? TERRAIN_BRUSH_ROCKS : TERRAIN_BRUSH_SAND;
+            cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .material = brush, .x = x, .z = z,
                                                                   .radius = radius, .volume = volume }, &q));
             cr_expect_eq(q, llround(volume * QPM));
             if (material == TERRAIN_SAND) m.sand += q;
@@ -64,7 +65,7 @@ Test(terrain_brush, deposit_drops_exactly_the_volume_with_the_falloff) {
     terrain_columns *c = region(0, 0, 40, 40);
     fill_flat(c, 10.0f);
     int64_t q;
-    cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .material = TERRAIN_ROCKS, .x = 20.5, .z = 20.5, .radius = 6,
+    cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .material = TERRAIN_BRUSH_ROCKS, .x = 20.5, .z = 20.5, .radius = 6,
                                                           .volume = 123.4 }, &q));
     cr_expect_eq(q, 3949);                                  /* 123.4 m³ · 32 = 3948.8 → 3949 */
     cr_expect_eq(terrain_columns_mass(c, TERRAIN_ROCKS), 3949);
@@ -129,6 +130,33 @@ Test(terrain_brush, surface_erosion_turns_bedrock_into_sand_and_rocks_in_place) 
     terrain_columns_destroy(c);
 }
 
+/* Zero in a brush's desc is its documented default, never a value of its own: a deposit of
+ * material 0 is sand, falloff 0 smooth; an erosion of mode 0 wears the surface. Each pair of
+ * regions gets the same edit spelt both ways and must end with the same bytes. */
+Test(terrain_brush, zero_in_a_brush_desc_is_the_documented_default) {
+    terrain_columns *zero = region(0, 0, 16, 16), *named = region(0, 0, 16, 16);
+    fill_flat(zero, 10.0f);
+    fill_flat(named, 10.0f);
+    int64_t q_zero, q_named;
+    cr_assert(terrain_deposit(zero, &(terrain_deposit_desc){ .x = 8, .z = 8, .radius = 4, .volume = 20 }, &q_zero));
+    cr_assert(terrain_deposit(named, &(terrain_deposit_desc){ .material = TERRAIN_BRUSH_SAND, .x = 8, .z = 8,
+                                                              .radius = 4, .volume = 20,
+                                                              .falloff = TERRAIN_FALLOFF_SMOOTH }, &q_named));
+    cr_expect_eq(q_zero, q_named);
+    cr_expect_eq(terrain_columns_mass(zero, TERRAIN_SAND), 640, "20 m3 = 640 quanta-columns of sand");
+    cr_expect_eq(region_hash(zero), region_hash(named));
+    /* Smooth is not flat: the centre column gets more than one at r = 3 (a flat brush would not). */
+    cr_expect_gt(column_quanta(zero, 8, 8, TERRAIN_SAND), column_quanta(zero, 11, 8, TERRAIN_SAND));
+    cr_assert(terrain_erode(zero, &(terrain_erode_desc){ .x = 4.5, .z = 4.5, .radius = 2, .depth = 1 }, NULL));
+    cr_assert(terrain_erode(named, &(terrain_erode_desc){ .mode = TERRAIN_ERODE_SURFACE, .x = 4.5, .z = 4.5,
+                                                          .radius = 2, .depth = 1, .falloff = TERRAIN_FALLOFF_SMOOTH },
+                            NULL));
+    cr_expect_eq(region_hash(zero), region_hash(named));
+    cr_expect_lt(column_quanta(zero, 4, 4, TERRAIN_BEDROCK), 320, "the surface wore down");
+    terrain_columns_destroy(zero);
+    terrain_columns_destroy(named);
+}
+
 Test(terrain_brush, collapse_erosion_drops_an_overhang_to_the_floor) {
     /* Bedrock 0–4 m, air 4–8 m, a bedrock roof 8–10 m with 1 m of sand: the ball of radius 3 m
      * around y = 9 m above the floor (world y = −247) takes the whole roof of the centre column
@@ -183,8 +211,8 @@ Test(terrain_brush, bad_parameters_are_refused_not_crashed_on) {
     uint64_t before = region_hash(c);
     const terrain_deposit_desc bad_deposits[] = {
         { .radius = -1, .volume = 1 },   { .radius = NAN, .volume = 1 },  { .radius = 2, .volume = -1 },
-        { .radius = 2, .volume = NAN },  { .x = NAN, .radius = 2 },       { .material = TERRAIN_WATER, .radius = 2 },
-        { .material = TERRAIN_BEDROCK, .radius = 2 }, { .material = 99, .radius = 2 }, { .radius = 2, .falloff = 5 },
+        { .radius = 2, .volume = NAN },  { .x = NAN, .radius = 2 },       { .material = TERRAIN_BRUSH_ROCKS + 1, .radius = 2 },
+        { .material = TERRAIN_BRUSH_BEDROCK, .radius = 2 }, { .material = 99, .radius = 2 }, { .radius = 2, .falloff = 5 },
         { .radius = 2, .volume = 1e12 },
     };
     for (size_t n = 0; n < sizeof bad_deposits / sizeof *bad_deposits; n++)

@@ -114,7 +114,8 @@ static int count_names(const char *dir, const char *part) {
 /* A new log with `key`, loaded from `dir` (the load itself must succeed). */
 static terrain_edit_log *load_new(const char *dir, uint64_t key, terrain_edit_log_load_result *result) {
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key });
-    cr_assert(terrain_edit_log_load(log, dir, result), "%s", result->first_problem);
+    core_error error = { 0 };
+    cr_assert(terrain_edit_log_load(log, dir, result, &error), "%s", error.message);
     return log;
 }
 
@@ -326,12 +327,13 @@ Test(terrain_edit_log, record_refuses_columns_no_file_could_hold) {
     cr_expect(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, most, tallest));
     expect_replay(log, coord, g, tallest);   /* column 31 back to generated, column 40 tall */
     /* And both survive a file. */
-    char dir[128], error[512];
+    char dir[128];
+    core_error error = { 0 };
     make_temp_dir(dir, sizeof dir);
-    cr_assert(terrain_edit_log_save(log, dir, error, sizeof error), "%s", error);
+    cr_assert(terrain_edit_log_save(log, dir, &error), "%s", error.message);
     terrain_edit_log_load_result result;
     terrain_edit_log *loaded = load_new(dir, key_of(SEED), &result);
-    cr_expect_eq(result.chunks_loaded, 1, "%s", result.first_problem);
+    cr_expect_eq(result.chunks_loaded, 1, "%s", result.first_problem.message);
     expect_replay(loaded, coord, g, tallest);
     terrain_edit_log_destroy(loaded);
     remove_tree(dir);
@@ -409,8 +411,9 @@ static void fixture_free(world_fixture *w) {
 Test(terrain_edit_log, save_then_load_replays_the_same_bytes) {
     world_fixture w;
     fixture_make(&w);
-    char error[512], path[512];
-    cr_assert(terrain_edit_log_save(w.log, w.dir, error, sizeof error), "%s", error);
+    char path[512];
+    core_error error = { 0 };
+    cr_assert(terrain_edit_log_save(w.log, w.dir, &error), "%s", error.message);
     for (int c = 0; c < 3; c++) {
         chunk_path(path, sizeof path, w.dir, w.coord[c]);
         cr_expect(exists(path), "%s", path);
@@ -420,7 +423,7 @@ Test(terrain_edit_log, save_then_load_replays_the_same_bytes) {
     terrain_edit_log *loaded = load_new(w.dir, key_of(SEED), &result);
     cr_expect_eq(result.chunks_loaded, 3);
     cr_expect_eq(result.files_rejected, 0);
-    cr_expect_str_eq(result.first_problem, "");
+    cr_expect_eq(result.first_problem.code, CORE_ERROR_NONE, "%s", result.first_problem.message);
     cr_expect_eq(terrain_edit_log_chunks(loaded), 3);
     cr_expect_eq(terrain_edit_log_entries(loaded, w.coord[1]), 3);
     for (int c = 0; c < 3; c++) expect_replay(loaded, w.coord[c], w.base[c], w.final[c]);
@@ -443,15 +446,16 @@ static bool rewritten(const char *path) {
 Test(terrain_edit_log, save_writes_only_chunks_changed_since) {
     world_fixture w;
     fixture_make(&w);
-    char error[512], path[3][512];
-    cr_assert(terrain_edit_log_save(w.log, w.dir, error, sizeof error), "%s", error);
+    char path[3][512];
+    core_error error = { 0 };
+    cr_assert(terrain_edit_log_save(w.log, w.dir, &error), "%s", error.message);
     for (int c = 0; c < 3; c++) chunk_path(path[c], sizeof path[c], w.dir, w.coord[c]), age(path[c]);
-    cr_assert(terrain_edit_log_save(w.log, w.dir, error, sizeof error), "%s", error);
+    cr_assert(terrain_edit_log_save(w.log, w.dir, &error), "%s", error.message);
     for (int c = 0; c < 3; c++) cr_expect_not(rewritten(path[c]), "nothing changed: %s kept", path[c]);
 
     terrain_stacks *more = edited(w.final[2], w.coord[2], 77, 3);
     cr_assert(terrain_edit_log_record(w.log, w.coord[2], TERRAIN_EDIT_SET, w.final[2], more));
-    cr_assert(terrain_edit_log_save(w.log, w.dir, error, sizeof error), "%s", error);
+    cr_assert(terrain_edit_log_save(w.log, w.dir, &error), "%s", error.message);
     cr_expect_not(rewritten(path[0]));
     cr_expect_not(rewritten(path[1]));
     cr_expect(rewritten(path[2]), "the changed chunk is written");
@@ -459,7 +463,7 @@ Test(terrain_edit_log, save_writes_only_chunks_changed_since) {
     /* Compaction changes the file of a chunk with several entries only. */
     age(path[2]);
     terrain_edit_log_compact(w.log);
-    cr_assert(terrain_edit_log_save(w.log, w.dir, error, sizeof error), "%s", error);
+    cr_assert(terrain_edit_log_save(w.log, w.dir, &error), "%s", error.message);
     cr_expect_not(rewritten(path[0]), "one entry: not compacted");
     cr_expect(rewritten(path[1]));
     cr_expect(rewritten(path[2]));
@@ -468,7 +472,7 @@ Test(terrain_edit_log, save_writes_only_chunks_changed_since) {
     for (int c = 0; c < 3; c++) age(path[c]);
     terrain_edit_log_load_result result;
     terrain_edit_log *loaded = load_new(w.dir, key_of(SEED), &result);
-    cr_assert(terrain_edit_log_save(loaded, w.dir, error, sizeof error), "%s", error);
+    cr_assert(terrain_edit_log_save(loaded, w.dir, &error), "%s", error.message);
     for (int c = 0; c < 3; c++) cr_expect_not(rewritten(path[c]));
     expect_replay(loaded, w.coord[2], w.base[2], more);
     terrain_edit_log_destroy(loaded);
@@ -479,15 +483,16 @@ Test(terrain_edit_log, save_writes_only_chunks_changed_since) {
 Test(terrain_edit_log, save_failure_keeps_chunks_for_the_next_save) {
     world_fixture w;
     fixture_make(&w);
-    char error[512], blocker[512], path[512];
+    char blocker[512], path[512];
+    core_error error = { 0 };
     /* DIR/edits is a file: the folder cannot be made. */
     snprintf(blocker, sizeof blocker, "%s/edits", w.dir);
     write_all(blocker, "x", 1);
-    cr_expect_not(terrain_edit_log_save(w.log, w.dir, error, sizeof error));
-    cr_expect(strstr(error, blocker) == error, "names the path: %s", error);
-    cr_expect_not_null(strstr(error, strerror(ENOTDIR)), "says why: %s", error);
+    cr_expect_not(terrain_edit_log_save(w.log, w.dir, &error));
+    cr_expect_eq(error.code, CORE_ERROR_IO, "%s: %s", core_error_code_name(error.code), error.message);
+    cr_expect(strstr(error.message, blocker) == error.message, "names the path: %s", error.message);
     unlink(blocker);
-    cr_assert(terrain_edit_log_save(w.log, w.dir, error, sizeof error), "%s", error);
+    cr_assert(terrain_edit_log_save(w.log, w.dir, &error), "%s", error.message);
     for (int c = 0; c < 3; c++) {
         chunk_path(path, sizeof path, w.dir, w.coord[c]);
         cr_expect(exists(path), "%s", path);
@@ -495,10 +500,10 @@ Test(terrain_edit_log, save_failure_keeps_chunks_for_the_next_save) {
     /* A folder made on the way (mkdir -p). */
     char deep[256];
     snprintf(deep, sizeof deep, "%s/a/b/c", w.dir);
-    cr_assert(terrain_edit_log_save(w.log, deep, error, sizeof error), "nothing dirty: %s", error);
+    cr_assert(terrain_edit_log_save(w.log, deep, &error), "nothing dirty: %s", error.message);
     cr_expect_not(exists(deep), "nothing to write, nothing made");
     terrain_edit_log_compact(w.log);
-    cr_assert(terrain_edit_log_save(w.log, deep, error, sizeof error), "%s", error);
+    cr_assert(terrain_edit_log_save(w.log, deep, &error), "%s", error.message);
     chunk_path(path, sizeof path, deep, w.coord[1]);
     cr_expect(exists(path), "%s", path);
     fixture_free(&w);
@@ -510,14 +515,18 @@ Test(terrain_edit_log, missing_folder_is_an_empty_world_and_a_file_is_refused) {
     terrain_edit_log_load_result result;
     snprintf(path, sizeof path, "%s/none", dir);
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
-    cr_expect(terrain_edit_log_load(log, path, &result));
+    core_error error = { 0 };
+    cr_expect(terrain_edit_log_load(log, path, &result, &error));
     cr_expect_eq(result.chunks_loaded + result.files_rejected, 0);
-    cr_expect(terrain_edit_log_load(log, dir, &result), "no edits folder yet");
+    cr_expect(terrain_edit_log_load(log, dir, &result, &error), "no edits folder yet");
+    cr_expect_eq(error.code, CORE_ERROR_NONE, "%s", error.message);
     snprintf(path, sizeof path, "%s/file", dir);
     write_all(path, "x", 1);
-    cr_expect_not(terrain_edit_log_load(log, path, &result));
-    cr_expect(strstr(result.first_problem, path) == result.first_problem, "%s", result.first_problem);
-    cr_expect_not_null(strstr(result.first_problem, "not a folder"), "%s", result.first_problem);
+    cr_expect_not(terrain_edit_log_load(log, path, &result, &error));
+    cr_expect_eq(error.code, CORE_ERROR_IO, "%s: %s", core_error_code_name(error.code), error.message);
+    cr_expect(strstr(error.message, path) == error.message, "names the path: %s", error.message);
+    cr_expect_not(terrain_edit_log_load(log, NULL, &result, &error));
+    cr_expect_eq(error.code, CORE_ERROR_ARGUMENT, "%s", error.message);
     cr_expect_eq(terrain_edit_log_chunks(log), 0);
     terrain_edit_log_destroy(log);
     remove_tree(dir);
@@ -526,8 +535,9 @@ Test(terrain_edit_log, missing_folder_is_an_empty_world_and_a_file_is_refused) {
 Test(terrain_edit_log, load_ignores_other_files_and_removes_temporaries) {
     world_fixture w;
     fixture_make(&w);
-    char error[512], path[512];
-    cr_assert(terrain_edit_log_save(w.log, w.dir, error, sizeof error), "%s", error);
+    char path[512];
+    core_error error = { 0 };
+    cr_assert(terrain_edit_log_save(w.log, w.dir, &error), "%s", error.message);
     const char *others[] = { "notes.txt", "1_2.tel.bad", "01_2.tel", "+1_2.tel", "1_2.tel~", "1_2_3.tel" };
     for (size_t n = 0; n < CORE_COUNTOF(others); n++)
         snprintf(path, sizeof path, "%s/edits/%s", w.dir, others[n]), write_all(path, "junk", 4);
@@ -536,7 +546,7 @@ Test(terrain_edit_log, load_ignores_other_files_and_removes_temporaries) {
     terrain_edit_log_load_result result;
     terrain_edit_log *loaded = load_new(w.dir, key_of(SEED), &result);
     cr_expect_eq(result.chunks_loaded, 3);
-    cr_expect_eq(result.files_rejected, 0, "%s", result.first_problem);
+    cr_expect_eq(result.files_rejected, 0, "%s", result.first_problem.message);
     cr_expect_not(exists(path), "the leftover temporary is gone");
     for (size_t n = 0; n < CORE_COUNTOF(others); n++) {
         snprintf(path, sizeof path, "%s/edits/%s", w.dir, others[n]);
@@ -559,9 +569,10 @@ Test(terrain_edit_log, file_size_and_header_follow_the_format) {
         if (changed[n]) expected += 4 + 5 * (size_t)terrain_stacks_column(a, n % N, n / N, NULL, 0);
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_DEPOSIT, g, a));
-    char dir[128], path[512], error[512];
+    char dir[128], path[512];
+    core_error error = { 0 };
     make_temp_dir(dir, sizeof dir);
-    cr_assert(terrain_edit_log_save(log, dir, error, sizeof error), "%s", error);
+    cr_assert(terrain_edit_log_save(log, dir, &error), "%s", error.message);
     chunk_path(path, sizeof path, dir, coord);
     size_t size;
     uint8_t *bytes = read_all(path, &size);
@@ -592,14 +603,15 @@ Test(terrain_edit_log, extreme_coordinates_round_trip) {
     terrain_stacks *g = generated((terrain_chunk_coord){ 0, 0 }), *a = edited(g, (terrain_chunk_coord){ 0, 0 }, 8, 10);
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, g, a));
-    char dir[128], path[512], error[512];
+    char dir[128], path[512];
+    core_error error = { 0 };
     make_temp_dir(dir, sizeof dir);
-    cr_assert(terrain_edit_log_save(log, dir, error, sizeof error), "%s", error);
+    cr_assert(terrain_edit_log_save(log, dir, &error), "%s", error.message);
     snprintf(path, sizeof path, "%s/edits/-9223372036854775808_9223372036854775807.tel", dir);
     cr_expect(exists(path), "%s", path);
     terrain_edit_log_load_result result;
     terrain_edit_log *loaded = load_new(dir, key_of(SEED), &result);
-    cr_expect_eq(result.chunks_loaded, 1, "%s", result.first_problem);
+    cr_expect_eq(result.chunks_loaded, 1, "%s", result.first_problem.message);
     expect_replay(loaded, coord, g, a);
     terrain_edit_log_destroy(loaded);
     terrain_edit_log_destroy(log);
@@ -667,12 +679,12 @@ Test(terrain_edit_log, a_file_written_by_hand_replays_as_described) {
     terrain_stacks_builder_destroy(b);
 
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
-    char error[256] = "";
-    cr_assert(terrain_edit_log_parse(log, o.data, o.size, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(terrain_edit_log_parse(log, o.data, o.size, &error), "%s", error.message);
     cr_expect_eq(terrain_edit_log_entries(log, coord), 1);
     expect_replay(log, coord, g, expected);
     /* Parsing the chunk again replaces its entries, never adds to them. */
-    cr_assert(terrain_edit_log_parse(log, o.data, o.size, error, sizeof error), "%s", error);
+    cr_assert(terrain_edit_log_parse(log, o.data, o.size, &error), "%s", error.message);
     cr_expect_eq(terrain_edit_log_entries(log, coord), 1);
     terrain_edit_log_destroy(log);
     terrain_stacks_destroy(expected);
@@ -682,7 +694,9 @@ Test(terrain_edit_log, a_file_written_by_hand_replays_as_described) {
 
 /* A file with a valid checksum but content we never write: each is refused with its reason. */
 typedef struct bad_case {
-    const char *why;                  /* expected in the message */
+    const char *why;                  /* what is wrong, for a failing case's message */
+    core_error_code code;             /* CORE_ERROR_FORMAT: content we never write; _RANGE: a value past
+                                         its limit; _CORRUPT: sizes that disagree with the bytes */
     int tool, columns;                /* entry header */
     int index[2], layer_count[2];     /* up to two columns */
     int material[3];                  /* layers of the first column */
@@ -708,38 +722,39 @@ static bytes_out bad_file(const bad_case *c) {
 
 Test(terrain_edit_log, content_we_never_write_is_refused) {
     const bad_case cases[] = {
-        { "unknown tool", 0, 1, { 0 }, { 0 }, { 0 }, { 0 }, 0, 0 },
-        { "unknown tool", 9, 1, { 0 }, { 0 }, { 0 }, { 0 }, 0, 0 },
-        { "0 columns", 1, 0, { 0 }, { 0 }, { 0 }, { 0 }, 0, 4 },
-        { "1025 columns", 1, 1025, { 0 }, { 0 }, { 0 }, { 0 }, 0, 0 },
-        { "column index 1024", 1, 1, { 1024 }, { 0 }, { 0 }, { 0 }, 0, 0 },
-        { "twice", 1, 2, { 9, 9 }, { 0, 0 }, { 0 }, { 0 }, 0, 0 },
-        { "out of order", 1, 2, { 9, 8 }, { 0, 0 }, { 0 }, { 0 }, 0, 0 },
-        { "material 16", 1, 1, { 3 }, { 1 }, { 16 }, { 5 }, 0, 0 },
-        { "0 quanta", 1, 1, { 3 }, { 2 }, { 1, 2 }, { 5, 0 }, 0, 0 },
-        { "both sand", 1, 1, { 3 }, { 3 }, { 1, 2, 2 }, { 5, 1, 1 }, 0, 0 },
-        { "ends with air", 1, 1, { 3 }, { 2 }, { 1, 0 }, { 5, 1 }, 0, 0 },
-        { "tall", 1, 1, { 3 }, { 2 }, { 1, 2 }, { 1u << 25, 1u << 25 }, 0, 0 },
-        { "1000 layers need", 1, 1, { 3 }, { 1000 }, { 1, 2 }, { 5, 1 }, 0, 0 },
-        { "after the last entry", 1, 1, { 3 }, { 1 }, { 1 }, { 5 }, 0, 1 },
-        { "cannot fit", 1, 1, { 3 }, { 1 }, { 1 }, { 5 }, 1000, 0 },
-        { "entry 1: unknown tool 171", 1, 1, { 3 }, { 1 }, { 1 }, { 5 }, 2, 7 },
-        { "no entries", 1, 1, { 3 }, { 1 }, { 1 }, { 5 }, -1, 0 },
+        { "unknown tool", CORE_ERROR_FORMAT, 0, 1, { 0 }, { 0 }, { 0 }, { 0 }, 0, 0 },
+        { "unknown tool", CORE_ERROR_FORMAT, 9, 1, { 0 }, { 0 }, { 0 }, { 0 }, 0, 0 },
+        { "0 columns", CORE_ERROR_RANGE, 1, 0, { 0 }, { 0 }, { 0 }, { 0 }, 0, 4 },
+        { "1025 columns", CORE_ERROR_RANGE, 1, 1025, { 0 }, { 0 }, { 0 }, { 0 }, 0, 0 },
+        { "column index 1024", CORE_ERROR_RANGE, 1, 1, { 1024 }, { 0 }, { 0 }, { 0 }, 0, 0 },
+        { "twice", CORE_ERROR_FORMAT, 1, 2, { 9, 9 }, { 0, 0 }, { 0 }, { 0 }, 0, 0 },
+        { "out of order", CORE_ERROR_FORMAT, 1, 2, { 9, 8 }, { 0, 0 }, { 0 }, { 0 }, 0, 0 },
+        { "material 16", CORE_ERROR_RANGE, 1, 1, { 3 }, { 1 }, { 16 }, { 5 }, 0, 0 },
+        { "0 quanta", CORE_ERROR_FORMAT, 1, 1, { 3 }, { 2 }, { 1, 2 }, { 5, 0 }, 0, 0 },
+        { "both sand", CORE_ERROR_FORMAT, 1, 1, { 3 }, { 3 }, { 1, 2, 2 }, { 5, 1, 1 }, 0, 0 },
+        { "ends with air", CORE_ERROR_FORMAT, 1, 1, { 3 }, { 2 }, { 1, 0 }, { 5, 1 }, 0, 0 },
+        { "tall", CORE_ERROR_RANGE, 1, 1, { 3 }, { 2 }, { 1, 2 }, { 1u << 25, 1u << 25 }, 0, 0 },
+        { "1000 layers need", CORE_ERROR_CORRUPT, 1, 1, { 3 }, { 1000 }, { 1, 2 }, { 5, 1 }, 0, 0 },
+        { "after the last entry", CORE_ERROR_CORRUPT, 1, 1, { 3 }, { 1 }, { 1 }, { 5 }, 0, 1 },
+        { "cannot fit", CORE_ERROR_CORRUPT, 1, 1, { 3 }, { 1 }, { 1 }, { 5 }, 1000, 0 },
+        { "entry 1: unknown tool 171", CORE_ERROR_FORMAT, 1, 1, { 3 }, { 1 }, { 1 }, { 5 }, 2, 7 },
+        { "no entries", CORE_ERROR_FORMAT, 1, 1, { 3 }, { 1 }, { 1 }, { 5 }, -1, 0 },
     };
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     for (size_t n = 0; n < CORE_COUNTOF(cases); n++) {
         bad_case c = cases[n];
         bytes_out o = bad_file(&c);
-        char error[256] = "";
-        cr_expect_not(terrain_edit_log_parse(log, o.data, o.size, error, sizeof error), "case %zu (%s)", n, c.why);
-        cr_expect_not_null(strstr(error, c.why), "case %zu: \"%s\" lacks \"%s\"", n, error, c.why);
+        core_error error = { 0 };
+        cr_expect_not(terrain_edit_log_parse(log, o.data, o.size, &error), "case %zu (%s)", n, c.why);
+        cr_expect_eq(error.code, c.code, "case %zu (%s): code %s, expected %s (%s)", n, c.why,
+                     core_error_code_name(error.code), core_error_code_name(c.code), error.message);
         free(o.data);
     }
     /* The same shape with good values is accepted (the cases differ from it in one thing). */
-    bad_case good = { "", 1, 2, { 3, 4 }, { 2, 0 }, { 1, 2 }, { 5, 1 }, 0, 0 };
+    bad_case good = { "", CORE_ERROR_NONE, 1, 2, { 3, 4 }, { 2, 0 }, { 1, 2 }, { 5, 1 }, 0, 0 };
     bytes_out o = bad_file(&good);
-    char error[256] = "";
-    cr_expect(terrain_edit_log_parse(log, o.data, o.size, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_expect(terrain_edit_log_parse(log, o.data, o.size, &error), "%s", error.message);
     free(o.data);
     cr_expect_eq(terrain_edit_log_chunks(log), 1, "only the good file got in");
     terrain_edit_log_destroy(log);
@@ -760,8 +775,8 @@ Test(terrain_edit_log, an_entry_too_big_for_stacks_is_skipped_on_replay) {
     }
     put_crc(&o);
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
-    char error[256] = "";
-    cr_assert(terrain_edit_log_parse(log, o.data, o.size, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(terrain_edit_log_parse(log, o.data, o.size, &error), "%s", error.message);
     expect_replay(log, coord, g, g);
     terrain_edit_log_destroy(log);
     terrain_stacks_destroy(g);
@@ -772,8 +787,9 @@ Test(terrain_edit_log, an_entry_too_big_for_stacks_is_skipped_on_replay) {
 
 /* The bytes of chunk 1 of the fixture, saved (three entries). */
 static uint8_t *fixture_file(world_fixture *w, size_t *size) {
-    char error[512], path[512];
-    cr_assert(terrain_edit_log_save(w->log, w->dir, error, sizeof error), "%s", error);
+    char path[512];
+    core_error error = { 0 };
+    cr_assert(terrain_edit_log_save(w->log, w->dir, &error), "%s", error.message);
     chunk_path(path, sizeof path, w->dir, w->coord[1]);
     return read_all(path, size);
 }
@@ -784,21 +800,28 @@ Test(terrain_edit_log, every_flipped_bit_and_every_truncation_is_refused) {
     size_t size;
     uint8_t *bytes = fixture_file(&w, &size);
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
-    char error[256];
-    cr_assert(terrain_edit_log_parse(log, bytes, size, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(terrain_edit_log_parse(log, bytes, size, &error), "%s", error.message);
     terrain_edit_log_destroy(log);
     log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
     for (size_t at = 0; at < size; at++)
         for (int bit = 0; bit < 8; bit++) {
             bytes[at] ^= (uint8_t)(1u << bit);
-            error[0] = '\0';
-            cr_expect_not(terrain_edit_log_parse(log, bytes, size, error, sizeof error), "byte %zu bit %d", at, bit);
-            cr_expect_neq(error[0], '\0');
+            error = (core_error){ 0 };
+            cr_expect_not(terrain_edit_log_parse(log, bytes, size, &error), "byte %zu bit %d", at, bit);
+            /* Bytes 0-7 are the magic, 8-11 the version, the rest under the checksum. */
+            core_error_code code = at < 8 ? CORE_ERROR_FORMAT : at < 12 ? CORE_ERROR_VERSION : CORE_ERROR_CORRUPT;
+            cr_expect_eq(error.code, code, "byte %zu bit %d: code %s (%s)", at, bit, core_error_code_name(error.code),
+                         error.message);
+            cr_expect_neq(error.message[0], '\0');
             bytes[at] ^= (uint8_t)(1u << bit);
         }
-    for (size_t length = 0; length < size; length++)
-        cr_expect_not(terrain_edit_log_parse(log, bytes, length, error, sizeof error), "%zu of %zu bytes", length, size);
-    cr_expect_not(terrain_edit_log_parse(log, NULL, 0, error, sizeof error));
+    for (size_t length = 0; length < size; length++) {
+        cr_expect_not(terrain_edit_log_parse(log, bytes, length, &error), "%zu of %zu bytes", length, size);
+        cr_expect_eq(error.code, CORE_ERROR_CORRUPT, "%zu of %zu bytes: %s", length, size, error.message);
+    }
+    cr_expect_not(terrain_edit_log_parse(log, NULL, 0, &error));
+    cr_expect_eq(error.code, CORE_ERROR_CORRUPT, "no bytes are a truncated file: %s", error.message);
     cr_expect_eq(terrain_edit_log_chunks(log), 0, "nothing got in");
     terrain_edit_log_destroy(log);
     free(bytes);
@@ -806,10 +829,10 @@ Test(terrain_edit_log, every_flipped_bit_and_every_truncation_is_refused) {
 }
 
 /* Writes `bytes` as chunk 1's file, loads the folder into a new log with `key`: the file must be
- * reported with its path and `why`, renamed .bad, its chunk left without entries, the others
- * loaded. */
+ * reported with its path and error `code`, renamed .bad, its chunk left without entries, the
+ * others loaded. */
 static void expect_rejected(world_fixture *w, const uint8_t *bytes, size_t size, const char *name, uint64_t key,
-                            const char *why) {
+                            core_error_code code) {
     char path[512], bad[600];
     snprintf(path, sizeof path, "%s/edits/%s", w->dir, name);
     snprintf(bad, sizeof bad, "%s.bad", path);
@@ -818,15 +841,17 @@ static void expect_rejected(world_fixture *w, const uint8_t *bytes, size_t size,
     terrain_edit_log_load_result result;
     terrain_edit_log *log = load_new(w->dir, key, &result);
     cr_expect_eq(result.files_rejected, key == key_of(SEED) ? 1 : 3, "%s", name);
-    cr_expect(strstr(result.first_problem, w->dir) == result.first_problem, "names the path: %s",
-              result.first_problem);
+    cr_expect(strstr(result.first_problem.message, w->dir) == result.first_problem.message, "names the path: %s",
+              result.first_problem.message);
     if (key == key_of(SEED)) {
-        cr_expect_not_null(strstr(result.first_problem, path), "%s", result.first_problem);
+        cr_expect_not_null(strstr(result.first_problem.message, path), "%s", result.first_problem.message);
         cr_expect_eq(result.chunks_loaded, 2);
         cr_expect(exists(bad), "%s", bad);
         cr_expect_not(exists(path), "%s renamed", path);
     }
-    cr_expect_not_null(strstr(result.first_problem, why), "\"%s\" lacks \"%s\"", result.first_problem, why);
+    cr_expect_eq(result.first_problem.code, code, "%s: code %s, expected %s (%s)", name,
+                 core_error_code_name(result.first_problem.code), core_error_code_name(code),
+                 result.first_problem.message);
     cr_expect_eq(terrain_edit_log_entries(log, w->coord[1]), 0, "chunk 1 stays as generated");
     terrain_stacks *replayed = terrain_edit_log_replay(log, w->coord[1], w->base[1]);
     cr_expect_null(replayed);
@@ -844,7 +869,7 @@ Test(terrain_edit_log, damaged_files_are_reported_renamed_and_skipped) {
     for (size_t at = 0; at < size; at += size / 13 + 1) {
         bytes[at] ^= 0x5a;
         expect_rejected(&w, bytes, size, name, key_of(SEED),
-                        at < 8 ? "magic" : at < 12 ? "version" : "checksum");
+                        at < 8 ? CORE_ERROR_FORMAT : at < 12 ? CORE_ERROR_VERSION : CORE_ERROR_CORRUPT);
         bytes[at] ^= 0x5a;
     }
     /* Many random bytes. */
@@ -855,33 +880,33 @@ Test(terrain_edit_log, damaged_files_are_reported_renamed_and_skipped) {
             uint64_t h = core_hash_u64((uint64_t)(trial * 100 + n));
             copy[12 + h % (size - 12)] ^= (uint8_t)(1 + (h >> 32) % 255);
         }
-        expect_rejected(&w, copy, size, name, key_of(SEED), "checksum");
+        expect_rejected(&w, copy, size, name, key_of(SEED), CORE_ERROR_CORRUPT);
         free(copy);
     }
     /* Truncations. */
     const size_t lengths[] = { 0, 1, 8, 43, 44, 45, 100, size / 2, size - 5, size - 4, size - 1 };
     for (size_t n = 0; n < CORE_COUNTOF(lengths); n++)
-        expect_rejected(&w, bytes, lengths[n], name, key_of(SEED), lengths[n] < 44 ? "truncated" : "checksum");
+        expect_rejected(&w, bytes, lengths[n], name, key_of(SEED), CORE_ERROR_CORRUPT);   /* too short, or its checksum */
     /* Garbage appended. */
     uint8_t *longer = malloc(size + 100);
     memcpy(longer, bytes, size);
     memset(longer + size, 0x33, 100);
-    expect_rejected(&w, longer, size + 1, name, key_of(SEED), "checksum");
-    expect_rejected(&w, longer, size + 100, name, key_of(SEED), "checksum");
+    expect_rejected(&w, longer, size + 1, name, key_of(SEED), CORE_ERROR_CORRUPT);
+    expect_rejected(&w, longer, size + 100, name, key_of(SEED), CORE_ERROR_CORRUPT);
     free(longer);
     /* Another chunk's name. */
-    expect_rejected(&w, bytes, size, "-1_8.tel", key_of(SEED), "holds chunk (-1, 7)");
+    expect_rejected(&w, bytes, size, "-1_8.tel", key_of(SEED), CORE_ERROR_MISMATCH);   /* holds chunk (-1, 7) */
     /* Back intact: loads again. */
     char path[512];
     chunk_path(path, sizeof path, w.dir, w.coord[1]);
     write_all(path, bytes, size);
     terrain_edit_log_load_result result;
     terrain_edit_log *log = load_new(w.dir, key_of(SEED), &result);
-    cr_expect_eq(result.files_rejected, 0, "%s", result.first_problem);
+    cr_expect_eq(result.files_rejected, 0, "%s", result.first_problem.message);
     expect_replay(log, w.coord[1], w.base[1], w.final[1]);
     terrain_edit_log_destroy(log);
     /* Another world: every file refused. */
-    expect_rejected(&w, bytes, size, name, key_of(SEED + 1), "saved by another world");
+    expect_rejected(&w, bytes, size, name, key_of(SEED + 1), CORE_ERROR_MISMATCH);   /* saved by another world */
     free(bytes);
     fixture_free(&w);
 }
@@ -892,12 +917,12 @@ Test(terrain_edit_log, damaged_files_are_reported_renamed_and_skipped) {
  * safeguard, after ten seconds). */
 static _Noreturn void save_forever(terrain_edit_log *log, terrain_chunk_coord coord, terrain_stacks *a,
                                    terrain_stacks *b, const char *dir) {
-    char error[512];
+    core_error error = { 0 };
     uint64_t end = core_time_ns() + 10000000000ull;
     for (int n = 0; core_time_ns() < end; n++) {
         terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, n % 2 ? b : a, n % 2 ? a : b);
         terrain_edit_log_compact(log);
-        if (!terrain_edit_log_save(log, dir, error, sizeof error)) _exit(3);
+        if (!terrain_edit_log_save(log, dir, &error)) _exit(3);
     }
     _exit(0);
 }
@@ -911,8 +936,8 @@ Test(terrain_edit_log, a_saver_killed_at_any_moment_leaves_state_a_or_b, .timeou
     for (int round = 0; round < 20; round++) {
         terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key_of(SEED) });
         cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, g, a));
-        char error[512];
-        cr_assert(terrain_edit_log_save(log, dir, error, sizeof error), "%s", error);
+        core_error error = { 0 };
+        cr_assert(terrain_edit_log_save(log, dir, &error), "%s", error.message);
         fflush(NULL);
         pid_t child = fork();
         cr_assert_geq(child, 0);
@@ -928,7 +953,7 @@ Test(terrain_edit_log, a_saver_killed_at_any_moment_leaves_state_a_or_b, .timeou
 
         terrain_edit_log_load_result result;
         terrain_edit_log *loaded = load_new(dir, key_of(SEED), &result);
-        cr_expect_eq(result.files_rejected, 0, "round %d: %s", round, result.first_problem);
+        cr_expect_eq(result.files_rejected, 0, "round %d: %s", round, result.first_problem.message);
         cr_expect_eq(result.chunks_loaded, 1, "round %d", round);
         cr_expect_eq(count_names(dir, ".tmp."), 0, "round %d: temporaries removed", round);
         terrain_stacks *got = terrain_edit_log_replay(loaded, coord, g);

@@ -1,5 +1,5 @@
 /* Field files (PREFIX.raw + PREFIX.json) and PLY meshes: round trips, and every kind of bad
- * file refused with a message that names the problem. */
+ * file refused with the error code of its kind and a message that names the file. */
 #include "../engine/test.h"
 #include "core/core.h"
 #include "terrain/terrain.h"
@@ -59,8 +59,8 @@ Test(terrain_field_file, round_trip) {
     char *dir = temp_dir(), prefix[128], path[160];
     snprintf(prefix, sizeof prefix, "%s/field", dir);
     terrain_field f = small_field();
-    char error[256];
-    cr_assert(terrain_field_write(&f, prefix, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(terrain_field_write(&f, prefix, &error), "%s", error.message);
     cr_expect_eq(count_files(dir), 2, "just .raw and .json: no temporaries left");
     /* The raw file is the values, little-endian, x fastest. */
     snprintf(path, sizeof path, "%s.raw", prefix);
@@ -74,7 +74,7 @@ Test(terrain_field_file, round_trip) {
     for (size_t s = 0; s < 3; s++) {
         snprintf(path, sizeof path, "%s%s", prefix, suffixes[s]);
         terrain_field g;
-        cr_assert(terrain_field_read(path, &g, error, sizeof error), "%s", error);
+        cr_assert(terrain_field_read(path, &g, &error), "%s", error.message);
         cr_expect_eq(g.nx, 3);
         cr_expect_eq(g.ny, 4);
         cr_expect_eq(g.nz, 5);
@@ -87,10 +87,11 @@ Test(terrain_field_file, round_trip) {
     remove_dir(dir);
 }
 
-/* Reading `json` (and a raw of `raw_bytes` bytes, NULL = none) fails with a message containing
- * `expect`. */
-static void expect_read_error(const char *json, const void *raw_bytes, size_t raw_size, const char *expect) {
-    char *dir = temp_dir(), path[160], error[320];
+/* Reading `json` (and a raw of `raw_bytes` bytes, NULL = none) fails with `code`, and the message
+ * names the file that is wrong (`file`: "f.json" or "f.raw"). */
+static void expect_read_error(const char *json, const void *raw_bytes, size_t raw_size, core_error_code code,
+                              const char *file) {
+    char *dir = temp_dir(), path[160];
     snprintf(path, sizeof path, "%s/f.json", dir);
     if (json) write_text(path, json);
     if (raw_bytes) {
@@ -101,67 +102,86 @@ static void expect_read_error(const char *json, const void *raw_bytes, size_t ra
         fclose(f);
     }
     terrain_field g;
-    error[0] = '\0';
-    cr_expect_not(terrain_field_read(path, &g, error, sizeof error), "should refuse (%s)", expect);
+    core_error error = { 0 };
+    cr_expect_not(terrain_field_read(path, &g, &error), "should refuse %s", json ? json : "(no header)");
     cr_expect_null(g.values);
-    cr_expect_not_null(strstr(error, expect), "message '%s' should mention '%s'", error, expect);
+    cr_expect_eq(error.code, code, "%s: code %s, expected %s (%s)", json ? json : "(no header)",
+                 core_error_code_name(error.code), core_error_code_name(code), error.message);
+    char named[192];
+    snprintf(named, sizeof named, "%s/%s", dir, file);
+    cr_expect_not_null(strstr(error.message, named), "message '%s' should name %s", error.message, named);
     remove_dir(dir);
 }
 
 Test(terrain_field_file, bad_headers_are_named) {
     float zeros[8] = { 0 };
-    expect_read_error(NULL, NULL, 0, "cannot open");
-    expect_read_error("not json", zeros, 32, "not JSON");
-    expect_read_error("[1,2,3]", zeros, 32, "must be a JSON object");
-    expect_read_error("{\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, "missing key \"dims\"");
-    expect_read_error("{\"dims\":[2,2,2],\"spacing\":1}", zeros, 32, "missing key \"origin\"");
-    expect_read_error("{\"dims\":[2,2,2],\"origin\":[0,0,0]}", zeros, 32, "missing key \"spacing\"");
-    expect_read_error("{\"dims\":[2,2],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, "\"dims\" must be an array of 3");
-    expect_read_error("{\"dims\":[2,\"2\",2],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, "\"dims\"[1] must be a number");
-    expect_read_error("{\"dims\":[2,2,0],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, "\"dims\"[2] = 0");
-    expect_read_error("{\"dims\":[2,-3,2],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, "\"dims\"[1] = -3");
-    expect_read_error("{\"dims\":[2.5,2,2],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, "not a whole number");
-    expect_read_error("{\"dims\":[5000,2,2],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, "\"dims\"[0] = 5000");
-    expect_read_error("{\"dims\":[4096,4096,4096],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, "over the limit");
-    expect_read_error("{\"dims\":[2,2,2],\"origin\":[0,1e999,0],\"spacing\":1}", zeros, 32, "column 29: number out of range");
-    expect_read_error("{\"dims\":[2,2,2],\"origin\":[0,null,0],\"spacing\":1}", zeros, 32, "\"origin\"[1] must be a number");
-    expect_read_error("{\"dims\":[2,2,2],\"origin\":[0,0,0],\"spacing\":0}", zeros, 32, "\"spacing\" = 0");
-    expect_read_error("{\"dims\":[2,2,2],\"origin\":[0,0,0],\"spacing\":\"1\"}", zeros, 32, "\"spacing\" must be a number");
-    expect_read_error("{\"dims\":[2,2,2],\"origin\":[0,0,0],\"spacing\":1e300}", zeros, 32, "\"spacing\"");
+    /* No header file. */
+    expect_read_error(NULL, NULL, 0, CORE_ERROR_IO, "f.json");
+    /* Malformed: not JSON (a number too big for a double is a JSON error), not an object,
+     * a key missing, a value of the wrong type. */
+    expect_read_error("not json", zeros, 32, CORE_ERROR_FORMAT, "f.json");
+    expect_read_error("[1,2,3]", zeros, 32, CORE_ERROR_FORMAT, "f.json");
+    expect_read_error("{\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, CORE_ERROR_FORMAT, "f.json");
+    expect_read_error("{\"dims\":[2,2,2],\"spacing\":1}", zeros, 32, CORE_ERROR_FORMAT, "f.json");
+    expect_read_error("{\"dims\":[2,2,2],\"origin\":[0,0,0]}", zeros, 32, CORE_ERROR_FORMAT, "f.json");
+    expect_read_error("{\"dims\":[2,2],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, CORE_ERROR_FORMAT, "f.json");
+    expect_read_error("{\"dims\":[2,\"2\",2],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, CORE_ERROR_FORMAT, "f.json");
+    expect_read_error("{\"dims\":[2,2,2],\"origin\":[0,1e999,0],\"spacing\":1}", zeros, 32, CORE_ERROR_FORMAT, "f.json");
+    expect_read_error("{\"dims\":[2,2,2],\"origin\":[0,null,0],\"spacing\":1}", zeros, 32, CORE_ERROR_FORMAT, "f.json");
+    expect_read_error("{\"dims\":[2,2,2],\"origin\":[0,0,0],\"spacing\":\"1\"}", zeros, 32, CORE_ERROR_FORMAT, "f.json");
+    /* Numbers outside what a field may have: dims not whole in 1 … 4096, too many samples,
+     * spacing not positive or too big for a float. */
+    expect_read_error("{\"dims\":[2,2,0],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, CORE_ERROR_RANGE, "f.json");
+    expect_read_error("{\"dims\":[2,-3,2],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, CORE_ERROR_RANGE, "f.json");
+    expect_read_error("{\"dims\":[2.5,2,2],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, CORE_ERROR_RANGE, "f.json");
+    expect_read_error("{\"dims\":[5000,2,2],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, CORE_ERROR_RANGE, "f.json");
+    expect_read_error("{\"dims\":[4096,4096,4096],\"origin\":[0,0,0],\"spacing\":1}", zeros, 32, CORE_ERROR_RANGE,
+                      "f.json");
+    expect_read_error("{\"dims\":[2,2,2],\"origin\":[0,0,0],\"spacing\":0}", zeros, 32, CORE_ERROR_RANGE, "f.json");
+    expect_read_error("{\"dims\":[2,2,2],\"origin\":[0,0,0],\"spacing\":1e300}", zeros, 32, CORE_ERROR_RANGE, "f.json");
 }
 
 Test(terrain_field_file, bad_raw_files_are_named) {
     const char *header = "{\"dims\":[2,2,2],\"origin\":[0,0,0],\"spacing\":1}";
     float values[9] = { 0, 1, 2, 3, 4, 5, 6, 7, 8 };
-    expect_read_error(header, NULL, 0, "f.raw");                          /* missing */
-    expect_read_error(header, values, 28, "holds 28 bytes");              /* short */
-    expect_read_error(header, values, 36, "need 32");                     /* long */
+    expect_read_error(header, NULL, 0, CORE_ERROR_IO, "f.raw");          /* missing */
+    expect_read_error(header, values, 28, CORE_ERROR_CORRUPT, "f.raw");  /* short: 2 × 2 × 2 floats are 32 bytes */
+    expect_read_error(header, values, 36, CORE_ERROR_CORRUPT, "f.raw");  /* long */
     values[5] = NAN;
-    expect_read_error(header, values, 32, "value 5 (x 1, y 0, z 1) is NaN");
+    expect_read_error(header, values, 32, CORE_ERROR_RANGE, "f.raw");
     values[5] = 5.0f, values[7] = -INFINITY;
-    expect_read_error(header, values, 32, "is infinite");
+    expect_read_error(header, values, 32, CORE_ERROR_RANGE, "f.raw");
 }
 
 Test(terrain_field_file, header_parser_alone) {
     terrain_field_header h;
-    char error[256];
+    core_error error = { 0 };
     const char *text = "{\"spacing\":2,\"origin\":[1,2,3],\"dims\":[7,8,9]}trailing";
-    cr_expect_not(terrain_field_header_parse(text, strlen(text), &h, error, sizeof error), "trailing bytes");
-    cr_expect(terrain_field_header_parse(text, strlen(text) - 8, &h, error, sizeof error), "%s", error);
+    cr_expect_not(terrain_field_header_parse(text, strlen(text), &h, &error), "trailing bytes");
+    cr_expect_eq(error.code, CORE_ERROR_FORMAT, "%s", error.message);
+    error = (core_error){ 0 };
+    cr_expect(terrain_field_header_parse(text, strlen(text) - 8, &h, &error), "%s", error.message);
+    cr_expect_eq(error.code, CORE_ERROR_NONE, "a success leaves the error as it was");
     cr_expect_eq(h.dims[0], 7);
     cr_expect_eq(h.dims[2], 9);
     cr_expect_eq(h.origin[1], 2.0);
     cr_expect_eq(h.spacing, 2.0f);
-    cr_expect_not(terrain_field_header_parse("", 0, &h, error, sizeof error));
-    cr_expect_not(terrain_field_header_parse("{}", 2, &h, NULL, 0), "no error buffer is fine");
+    cr_expect_not(terrain_field_header_parse("", 0, &h, &error));
+    cr_expect_eq(error.code, CORE_ERROR_FORMAT, "%s", error.message);
+    cr_expect_not(terrain_field_header_parse("{}", 2, &h, NULL), "no error is fine");
 }
 
 Test(terrain_field_file, unwritable_prefix) {
     terrain_field f = small_field();
-    char error[256];
-    cr_expect_not(terrain_field_write(&f, "/nonexistent-dir/field", error, sizeof error));
-    cr_expect_not_null(strstr(error, "/nonexistent-dir/field.raw"), "%s", error);
+    core_error error = { 0 };
+    cr_expect_not(terrain_field_write(&f, "/nonexistent-dir/field", &error));
+    cr_expect_eq(error.code, CORE_ERROR_IO, "%s", error.message);
+    cr_expect_not_null(strstr(error.message, "/nonexistent-dir/field.raw"), "names the file: %s", error.message);
     terrain_field_free(&f);
+    /* An empty field is the caller's mistake, not the disk's. */
+    terrain_field empty = { 0 };
+    cr_expect_not(terrain_field_write(&empty, "/tmp/never-written", &error));
+    cr_expect_eq(error.code, CORE_ERROR_ARGUMENT, "%s", error.message);
 }
 
 Test(terrain_field_file, ply_layout) {
@@ -173,9 +193,10 @@ Test(terrain_field_file, ply_layout) {
     uint32_t indices[3] = { 0, 1, 2 };
     terrain_mesh mesh = { .origin = { 10, 20, 30 }, .vertices = vertices, .indices = indices, .vertex_count = 3, .index_count = 3 };
     cr_expect_float_eq(terrain_mesh_area(&mesh), 1.0, 1e-12);
-    char *dir = temp_dir(), path[160], error[256];
+    char *dir = temp_dir(), path[160];
+    core_error error = { 0 };
     snprintf(path, sizeof path, "%s/m.ply", dir);
-    cr_assert(terrain_mesh_write_ply(&mesh, path, error, sizeof error), "%s", error);
+    cr_assert(terrain_mesh_write_ply(&mesh, path, &error), "%s", error.message);
     FILE *f = fopen(path, "rb");
     char text[1024];
     size_t size = fread(text, 1, sizeof text - 1, f);

@@ -696,8 +696,8 @@ Test(terrain_sculpt, bad_parameters_are_refused_and_change_nothing) {
         { .target = { 32, 0, 32 }, .radius = NAN },          { .target = { 32, 0, 32 }, .radius = 32.5f },
         { .target = { 32, 0, 32 }, .radius = 3, .offset = -0.1f }, { .target = { 32, 0, 32 }, .radius = 3, .offset = 1.5f },
         { .target = { 32, 0, 32 }, .radius = 3, .offset = NAN },
-        { .target = { 32, 0, 32 }, .radius = 3, .material = TERRAIN_WATER },
-        { .target = { 32, 0, 32 }, .radius = 3, .material = TERRAIN_ROCKS },
+        { .target = { 32, 0, 32 }, .radius = 3, .material = TERRAIN_BRUSH_ROCKS + 1 },
+        { .target = { 32, 0, 32 }, .radius = 3, .material = TERRAIN_BRUSH_ROCKS },
         { .target = { 32, 0, 32 }, .radius = 3, .material = 99 },
         { .target = { 4, 0, 32 }, .radius = 3 },             /* R + δ + 2 = 6.5 m: over the border */
         { .target = { 32, 0, 60 }, .radius = 3 },

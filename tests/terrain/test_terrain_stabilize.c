@@ -257,7 +257,7 @@ static terrain_columns *edited_region(int64_t x, int64_t z, int size) {
     terrain_columns_touch(c, 0, 0, size, size);   /* stabilize the generated chunks too */
     for (int n = 0; n < 6; n++) {
         double px = (double)x + 8 + n * (size - 16) / 5.0, pz = (double)z + size / 2.0 + (n % 2 ? 9 : -9);
-        cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .material = n % 2 ? TERRAIN_ROCKS : TERRAIN_SAND,
+        cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .material = n % 2 ? TERRAIN_BRUSH_ROCKS : TERRAIN_BRUSH_SAND,
                                                               .x = px, .z = pz, .radius = 6, .volume = 400 }, NULL));
     }
     return c;

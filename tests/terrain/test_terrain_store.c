@@ -115,8 +115,10 @@ static char replayed_state(terrain_edit_log *log, const corner_states *s, int64_
 }
 
 static terrain_store *open_store(const char *dir, terrain_edit_log *log, terrain_store_report *report) {
-    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, report);
-    cr_assert_not_null(store, "%s", report->error);
+    core_error error = { 0 };
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, report,
+                                                &error);
+    cr_assert_not_null(store, "%s", error.message);
     return store;
 }
 
@@ -128,8 +130,8 @@ static void save_state_a(const char *dir, const corner_states *s) {
     terrain_store_report report;
     terrain_store *store = open_store(dir, log, &report);
     record_states(log, s, (const terrain_stacks *const *)s->generated, s->a);
-    char error[512];
-    cr_assert(terrain_store_save(store, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(terrain_store_save(store, &error), "%s", error.message);
     terrain_store_destroy(store);
     terrain_edit_log_destroy(log);
 }
@@ -143,9 +145,9 @@ Test(terrain_store, a_new_world_saves_and_comes_back_byte_for_byte) {
     make_temp_dir(dir, sizeof dir);
     snprintf(nested, sizeof nested, "%s/saves/one", dir);     /* parents made as needed */
     uint64_t seed = 0;
-    cr_expect_eq(terrain_store_read_seed(nested, &seed, NULL, 0), 0, "no database yet");
+    cr_expect_eq(terrain_store_read_seed(nested, &seed, NULL), 0, "no database yet");
     save_state_a(nested, &s);
-    cr_expect_eq(terrain_store_read_seed(nested, &seed, NULL, 0), 1);
+    cr_expect_eq(terrain_store_read_seed(nested, &seed, NULL), 1);
     cr_expect_eq(seed, SEED);
 
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
@@ -158,8 +160,8 @@ Test(terrain_store, a_new_world_saves_and_comes_back_byte_for_byte) {
     cr_expect_eq(replayed_state(log, &s, &sand), 'A');
     cr_expect_eq(sand, SAND_A);
     /* Loaded chunks are clean: a save with nothing new writes nothing (and succeeds). */
-    char error[512];
-    cr_expect(terrain_store_save(store, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_expect(terrain_store_save(store, &error), "%s", error.message);
     terrain_store_destroy(store);
     terrain_edit_log_destroy(log);
     remove_tree(dir);
@@ -182,8 +184,8 @@ Test(terrain_store, named_values_are_saved_with_the_edits) {
     cr_expect(!terrain_store_put(store, long_name, pose, 8), "a 79-byte name");
     cr_expect(!terrain_store_put(store, "big", pose, ((size_t)1 << 20) + 1), "over 1 MiB");
     cr_expect(!terrain_store_put(store, "null", NULL, 4));
-    char error[512];
-    cr_assert(terrain_store_save(store, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(terrain_store_save(store, &error), "%s", error.message);
     terrain_store_destroy(store);
 
     terrain_edit_log *again = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
@@ -217,10 +219,10 @@ Test(terrain_store, saves_in_the_background_keep_what_changed_meanwhile) {
     record_states(log, &s, s.a, s.b);
     const int32_t marker = 7;
     cr_assert(terrain_store_put(store, "marker", &marker, sizeof marker));
-    char error[512];
-    cr_expect(terrain_store_wait(store, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_expect(terrain_store_wait(store, &error), "%s", error.message);
     cr_assert(terrain_store_save_async(store));
-    cr_expect(terrain_store_wait(store, error, sizeof error), "%s", error);
+    cr_expect(terrain_store_wait(store, &error), "%s", error.message);
     cr_expect(terrain_store_save_async(store), "nothing changed: true, nothing written");
     terrain_store_destroy(store);
 
@@ -246,7 +248,8 @@ Test(terrain_store, saves_in_the_background_keep_what_changed_meanwhile) {
  * each, until killed. */
 static _Noreturn void save_forever(const char *dir, const corner_states *s, int progress) {
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
-    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, NULL);
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, NULL,
+                                                NULL);
     if (!store) _exit(3);
     int64_t sand;
     bool at_a = replayed_state(log, s, &sand) == 'A';
@@ -256,7 +259,7 @@ static _Noreturn void save_forever(const char *dir, const corner_states *s, int 
             terrain_edit_log_record(log, s->coord[n], TERRAIN_EDIT_DEPOSIT, at_a ? s->a[n] : s->b[n],
                                     at_a ? s->b[n] : s->a[n]);
         terrain_edit_log_compact(log);
-        if (!terrain_store_save(store, NULL, 0)) _exit(4);
+        if (!terrain_store_save(store, NULL)) _exit(4);
         at_a = !at_a;
         if (write(progress, "s", 1) != 1) _exit(5);
     }
@@ -267,13 +270,14 @@ static _Noreturn void save_forever(const char *dir, const corner_states *s, int 
  * within about one save after the saves it was let finish). */
 static uint64_t time_one_save(const char *dir, const corner_states *s) {
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
-    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, NULL);
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, NULL,
+                                                NULL);
     cr_assert_not_null(store);
     uint64_t total = 0;
     for (int n = 0; n < 8; n++) {              /* even: the world is at A again */
         record_states(log, s, n % 2 ? s->b : s->a, n % 2 ? s->a : s->b);
         uint64_t start = core_time_ns();
-        cr_assert(terrain_store_save(store, NULL, 0));
+        cr_assert(terrain_store_save(store, NULL));
         total += core_time_ns() - start;
     }
     terrain_store_destroy(store);
@@ -351,8 +355,8 @@ Test(terrain_store, an_old_folder_is_imported_once_with_the_same_bytes_as_loadin
     terrain_edit_log *old = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     record_states(old, &s, (const terrain_stacks *const *)s.generated, s.a);
     record_states(old, &s, s.a, s.b);
-    char error[512];
-    cr_assert(terrain_edit_log_save(old, dir, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_assert(terrain_edit_log_save(old, dir, &error), "%s", error.message);
     snprintf(path, sizeof path, "%s/edits/9_9.tel", dir);
     write_all(path, "not an edit file", 16);
     snprintf(path, sizeof path, "%s/edits/.0_0.tel.tmp.123", dir);
@@ -365,10 +369,10 @@ Test(terrain_store, an_old_folder_is_imported_once_with_the_same_bytes_as_loadin
     terrain_edit_log *copied = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     record_states(copied, &s, (const terrain_stacks *const *)s.generated, s.a);
     record_states(copied, &s, s.a, s.b);
-    cr_assert(terrain_edit_log_save(copied, copy, error, sizeof error), "%s", error);
+    cr_assert(terrain_edit_log_save(copied, copy, &error), "%s", error.message);
     terrain_edit_log *today = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     terrain_edit_log_load_result loaded;
-    cr_assert(terrain_edit_log_load(today, copy, &loaded));
+    cr_assert(terrain_edit_log_load(today, copy, &loaded, NULL));
     cr_assert_eq(loaded.chunks_loaded, 4);
     terrain_edit_log_destroy(copied);
     remove_tree(copy);
@@ -403,7 +407,7 @@ Test(terrain_store, an_old_folder_is_imported_once_with_the_same_bytes_as_loadin
      * build run since) is not imported again: it would replace newer saves. It is renamed. */
     terrain_edit_log *stale = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     record_states(stale, &s, (const terrain_stacks *const *)s.generated, s.a);
-    cr_assert(terrain_edit_log_save(stale, dir, error, sizeof error), "%s", error);
+    cr_assert(terrain_edit_log_save(stale, dir, &error), "%s", error.message);
     terrain_edit_log *again = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     store = open_store(dir, again, &report);
     cr_expect_eq(report.chunks_imported, 0);
@@ -451,8 +455,8 @@ static void expect_set_aside(const char *dir, const uint8_t *bytes, size_t size,
     /* The new world works. */
     const int one = 1;
     cr_expect(terrain_store_put(store, "x", &one, sizeof one));
-    char error[512];
-    cr_expect(terrain_store_save(store, error, sizeof error), "%s", error);
+    core_error error = { 0 };
+    cr_expect(terrain_store_save(store, &error), "%s", error.message);
     terrain_store_destroy(store);
     terrain_edit_log_destroy(log);
 }
@@ -572,12 +576,14 @@ Test(terrain_store, another_worlds_database_is_refused_and_left_alone) {
     uint8_t *bytes = saved_database(dir, &s, &size);
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED + 1) });
     terrain_store_report report;
+    core_error error = { 0 };
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED + 1 },
-                                                &report);
+                                                &report, &error);
     cr_expect_null(store);
     cr_expect(report.other_world);
     cr_expect_eq(report.recorded_seed, SEED);
-    cr_expect(strstr(report.error, "world.db") && strstr(report.error, "seed 5"), "%s", report.error);
+    cr_expect_eq(error.code, CORE_ERROR_MISMATCH, "%s: %s", core_error_code_name(error.code), error.message);
+    cr_expect(strstr(error.message, "world.db"), "names the file: %s", error.message);
     cr_expect_eq(terrain_edit_log_chunks(log), 0);
     db_path(path, sizeof path, dir);
     size_t after_size;
@@ -608,14 +614,14 @@ Test(terrain_store, a_second_process_is_refused_and_the_first_goes_on_saving) {
         if (read(ready[0], &byte, 1) != 1) _exit(10);
         terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
         terrain_store_report report;
+        core_error error = { 0 }, seed_error = { 0 };
         terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED },
-                                                    &report);
+                                                    &report, &error);
         uint64_t seed;
-        char error[256];
-        int read_seed = terrain_store_read_seed(dir, &seed, error, sizeof error);
-        _exit(store ? 11 : !report.in_use ? 12 : !strstr(report.error, "in use by another process") ? 13
+        int read_seed = terrain_store_read_seed(dir, &seed, &seed_error);
+        _exit(store ? 11 : !report.in_use ? 12 : error.code != CORE_ERROR_IO || !strstr(error.message, "world.db") ? 13
               : terrain_edit_log_chunks(log) != 0 ? 14 : read_seed != -1 ? 15
-              : !strstr(error, "in use by another process") ? 16 : 0);
+              : seed_error.code != CORE_ERROR_IO ? 16 : 0);
     }
     close(ready[0]);
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
@@ -627,8 +633,8 @@ Test(terrain_store, a_second_process_is_refused_and_the_first_goes_on_saving) {
     cr_expect(WIFEXITED(status) && WEXITSTATUS(status) == 0, "the second opener: code %d (see the test)",
               WIFEXITED(status) ? WEXITSTATUS(status) : -1);
     record_states(log, &s, s.a, s.b);
-    char error[512];
-    cr_expect(terrain_store_save(store, error, sizeof error), "the first goes on saving: %s", error);
+    core_error error = { 0 };
+    cr_expect(terrain_store_save(store, &error), "the first goes on saving: %s", error.message);
     terrain_store_destroy(store);
     terrain_edit_log *again = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
     store = open_store(dir, again, &report);
@@ -644,24 +650,30 @@ Test(terrain_store, a_second_process_is_refused_and_the_first_goes_on_saving) {
 
 Test(terrain_store, bad_calls_are_refused_with_a_reason) {
     terrain_store_report report;
-    cr_expect_null(terrain_store_create(NULL, &report));
-    cr_expect(strstr(report.error, "desc"), "%s", report.error);
-    cr_expect_null(terrain_store_create(&(terrain_store_desc){ .dir = "/tmp" }, &report));
-    cr_expect(strstr(report.error, "desc.edits"), "%s", report.error);
+    core_error error = { 0 };
+    cr_expect_null(terrain_store_create(NULL, &report, &error));
+    cr_expect_eq(error.code, CORE_ERROR_ARGUMENT, "%s", error.message);
+    error = (core_error){ 0 };
+    cr_expect_null(terrain_store_create(&(terrain_store_desc){ .dir = "/tmp" }, &report, &error));
+    cr_expect_eq(error.code, CORE_ERROR_ARGUMENT, "%s", error.message);
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = 1 });
-    cr_expect_null(terrain_store_create(&(terrain_store_desc){ .dir = "", .edits = log }, &report));
-    cr_expect(strstr(report.error, "desc.dir"), "%s", report.error);
+    error = (core_error){ 0 };
+    cr_expect_null(terrain_store_create(&(terrain_store_desc){ .dir = "", .edits = log }, &report, &error));
+    cr_expect_eq(error.code, CORE_ERROR_ARGUMENT, "%s", error.message);
+    cr_expect_null(terrain_store_create(&(terrain_store_desc){ .dir = "", .edits = log }, NULL, NULL), "NULLs are fine");
     /* A folder that cannot be made: a file stands where a parent would be. */
     char dir[128], blocked[200];
     make_temp_dir(dir, sizeof dir);
     snprintf(blocked, sizeof blocked, "%s/file", dir);
     write_all(blocked, "x", 1);
     snprintf(blocked, sizeof blocked, "%s/file/world", dir);
-    cr_expect_null(terrain_store_create(&(terrain_store_desc){ .dir = blocked, .edits = log }, &report));
-    cr_expect(strstr(report.error, blocked) && strstr(report.error, "cannot create"), "%s", report.error);
+    cr_expect_null(terrain_store_create(&(terrain_store_desc){ .dir = blocked, .edits = log }, &report, &error));
+    cr_expect_eq(error.code, CORE_ERROR_IO, "%s", error.message);
+    cr_expect(strstr(error.message, blocked), "names the folder: %s", error.message);
     uint64_t seed;
-    char error[256];
-    cr_expect_eq(terrain_store_read_seed(NULL, &seed, error, sizeof error), -1);
+    error = (core_error){ 0 };
+    cr_expect_eq(terrain_store_read_seed(NULL, &seed, &error), -1);
+    cr_expect_eq(error.code, CORE_ERROR_ARGUMENT, "%s", error.message);
     terrain_edit_log_destroy(log);
     remove_tree(dir);
 }
@@ -692,20 +704,21 @@ Test(terrain_store, ten_thousand_stabilization_frames_save_as_one_entry_a_chunk)
     make_temp_dir(dir, sizeof dir);
     terrain_chunk_coord c = { 0, 0 };
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
-    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, NULL);
-    cr_assert_not_null(store);
+    core_error error = { 0 };
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = SEED }, NULL,
+                                                &error);
+    cr_assert_not_null(store, "%s", error.message);
     terrain_stacks *generated = terrain_stacks_from_columns(c, flat_column, NULL);
     terrain_stacks *before = terrain_stacks_from_columns(c, flat_column, NULL);
     slide_state slide = { 0 };
     long long first_save_bytes = 0;
-    char error[512];
     for (slide.frame = 0; slide.frame < FRAMES; slide.frame++) {
         terrain_stacks *after = terrain_stacks_from_columns(c, slide_column, &slide);
         cr_assert(terrain_edit_log_record(log, c, TERRAIN_EDIT_STABILIZE, before, after));
         terrain_stacks_destroy(before);
         before = after;
         if ((slide.frame + 1) % SAVE_EVERY) continue;
-        cr_assert(terrain_store_save(store, error, sizeof error), "%s", error);
+        cr_assert(terrain_store_save(store, &error), "%s", error.message);
         if (!first_save_bytes) first_save_bytes = folder_bytes(dir);
     }
     cr_expect_eq(terrain_edit_log_entries(log, c), 1, "the last save folded the chunk");
@@ -716,8 +729,8 @@ Test(terrain_store, ten_thousand_stabilization_frames_save_as_one_entry_a_chunk)
     terrain_edit_log_destroy(log);
 
     terrain_edit_log *reopened = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = world_key(SEED) });
-    store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = reopened, .seed = SEED }, NULL);
-    cr_assert_not_null(store);
+    store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = reopened, .seed = SEED }, NULL, &error);
+    cr_assert_not_null(store, "%s", error.message);
     cr_expect_eq(terrain_edit_log_entries(reopened, c), 1);
     terrain_stacks *replayed = terrain_edit_log_replay(reopened, c, generated);
     cr_expect(same_bytes(replayed, before), "the replay gives the last frame's columns");

@@ -306,14 +306,14 @@ static void *replay_loop(void *user) {
 /* Alternates the chunk between A and B; now and then compacts, or parses A's file over it. */
 static void record_loop(log_share *s) {
     int current = 0;
-    char error[256];
+    core_error error = { 0 };
     for (int step = 0; step < LOG_STEPS; step++) {
         cr_assert(terrain_edit_log_record(s->log, s->coord, TERRAIN_EDIT_SET, s->state[current],
                                           s->state[1 - current]));
         current = 1 - current;
         if (step % 10 == 9) terrain_edit_log_compact(s->log);
         if (step % 25 == 24) {
-            cr_assert(terrain_edit_log_parse(s->log, s->file_a, s->file_a_size, error, sizeof error), "%s", error);
+            cr_assert(terrain_edit_log_parse(s->log, s->file_a, s->file_a_size, &error), "%s", error.message);
             current = 0;
         }
     }
@@ -324,10 +324,11 @@ static void *file_of(const terrain_stacks *generated, const terrain_stacks *a, t
                      uint64_t key, size_t *size) {
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = key });
     cr_assert(terrain_edit_log_record(log, coord, TERRAIN_EDIT_SET, generated, a));
-    char dir[64], path[160], error[256];
+    char dir[64], path[160];
+    core_error error = { 0 };
     snprintf(dir, sizeof dir, "/tmp/terrain_threads_log_XXXXXX");
     cr_assert(mkdtemp(dir));
-    cr_assert(terrain_edit_log_save(log, dir, error, sizeof error), "%s", error);
+    cr_assert(terrain_edit_log_save(log, dir, &error), "%s", error.message);
     snprintf(path, sizeof path, "%s/edits/%lld_%lld.tel", dir, (long long)coord.x, (long long)coord.z);
     FILE *f = fopen(path, "rb");
     cr_assert(f);
@@ -555,7 +556,7 @@ typedef struct store_share {
 static void *store_saver(void *user) {
     store_share *s = user;
     while (!atomic_load(&s->stop)) {
-        s->failures += !terrain_store_save(s->store, NULL, 0);
+        s->failures += !terrain_store_save(s->store, NULL);
         s->saves++;
         usleep(2000);
     }
@@ -572,8 +573,10 @@ Test(terrain_threads, the_store_saves_in_the_background_while_the_main_thread_ed
     terrain_generation_desc params = terrain_generation_defaults(11);
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
     terrain_store_report report;
-    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = 11 }, &report);
-    cr_assert(store, "%s", report.error);
+    core_error error = { 0 };
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log, .seed = 11 }, &report,
+                                                &error);
+    cr_assert(store, "%s", error.message);
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = params, .edits = log });
     store_share share = { .store = store };
     pthread_t saver;
@@ -591,8 +594,7 @@ Test(terrain_threads, the_store_saves_in_the_background_while_the_main_thread_ed
     atomic_store(&share.stop, true);
     pthread_join(saver, NULL);
     cr_expect_eq(share.failures, 0, "of %d saves on the other thread", share.saves);
-    char error[256];
-    cr_expect(terrain_store_save(store, error, sizeof error), "%s", error);
+    cr_expect(terrain_store_save(store, &error), "%s", error.message);
     cr_expect_gt(async_saves, 0);
     uint64_t hash = terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 }));
     uint64_t hash_east = terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 1, 0 }));
@@ -600,8 +602,8 @@ Test(terrain_threads, the_store_saves_in_the_background_while_the_main_thread_ed
     terrain_store_destroy(store);
 
     terrain_edit_log *again = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
-    store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = again }, &report);
-    cr_assert(store, "%s", report.error);
+    store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = again }, &report, &error);
+    cr_assert(store, "%s", error.message);
     world = terrain_world_create(&(terrain_world_desc){ .generation = params, .edits = again });
     cr_expect_eq(terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 })), hash);
     cr_expect_eq(terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 1, 0 })), hash_east);

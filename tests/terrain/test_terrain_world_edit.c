@@ -154,7 +154,7 @@ Test(terrain_world_edit, with_a_log_an_evicted_chunk_comes_back_byte_for_byte) {
     terrain_world_set_max_chunks(w, 1);
     /* Two strokes on chunk (0, 0): a deposit and an erosion through it. */
     terrain_world_edit(w, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
-                                           .deposit = { .material = TERRAIN_ROCKS, .x = 10, .z = 12, .radius = 4,
+                                           .deposit = { .material = TERRAIN_BRUSH_ROCKS, .x = 10, .z = 12, .radius = 4,
                                                         .volume = 9 } }, NULL, 0);
     terrain_world_edit(w, &(terrain_edit){ .tool = TERRAIN_EDIT_ERODE,
                                            .erode = { .x = 20, .y = 0, .z = 20, .radius = 3, .depth = 1,

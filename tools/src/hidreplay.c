@@ -141,9 +141,10 @@ static bool hidreplay_run(input_decoder *decoder, const uint8_t *bytes, size_t s
         }
         const uint8_t *report = bytes + at + 2;
         at += 2 + length;
-        input_decode_result result = input_decoder_decode(decoder, report, length, &state);
+        core_error why = { 0 };
+        input_decode_result result = input_decoder_decode(decoder, report, length, &state, &why);
         if (result != INPUT_DECODE_OK) {
-            hidreplay_print_error(out, "%s", input_decoder_last_error(decoder));
+            hidreplay_print_error(out, "%s", why.message);
             continue;
         }
         input_gamepad_state shown = state;
@@ -198,13 +199,13 @@ int main(int argc, char **argv) {
     if (descriptor_path && !(descriptor = hidreplay_read_file(descriptor_path, &descriptor_size)))
         goto done;
     if (!(report_bytes = hidreplay_read_file(positional[1], &report_bytes_size))) goto done;
-    char error[256];
+    core_error error = { 0 };
     decoder = input_decoder_create(&(input_decoder_desc){ .vendor_id = vendor_id, .product_id = product_id,
                                                           .descriptor = descriptor,
                                                           .descriptor_size = descriptor_size },
-                                   error, sizeof error);
+                                   &error);
     if (!decoder) {
-        fprintf(stderr, "hidreplay: %s%s\n", error,
+        fprintf(stderr, "hidreplay: %s%s\n", error.message,
                 descriptor || known ? "" : " (pass its report descriptor with --descriptor DESCFILE)");
         goto done;
     }

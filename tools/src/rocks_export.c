@@ -71,11 +71,12 @@ static void write_straddles(FILE *f, const rocks_rock *rock, const int8_t offset
 }
 
 static int export_tiles(const rocks_tileset *set, int tiles, const char *dir) {
-    char path[4096], error[512];
+    char path[4096];
+    core_error error = { 0 };
     for (int t = 0; t < tiles; t++) {
         snprintf(path, sizeof path, "%s/tile_%03d.ply", dir, t);
-        if (!rocks_tile_write_ply(set, t, path, error, sizeof error)) {
-            fprintf(stderr, "rocks_export: %s\n", error);
+        if (!rocks_tile_write_ply(set, t, path, &error)) {
+            fprintf(stderr, "rocks_export: %s\n", error.message);
             return 1;
         }
     }

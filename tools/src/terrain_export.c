@@ -169,9 +169,9 @@ int main(int argc, char **argv) {
     bool meshed = terrain_mesh_build(&field, &(terrain_mesh_desc){ .world = world }, &mesh);
     trace_zone_end();
     if (!meshed) goto done;
-    if (!terrain_field_write(&field, out_prefix, message, sizeof message) ||
-        !terrain_mesh_write_ply(&mesh, ply, message, sizeof message)) {
-        fprintf(stderr, "terrain_export: %s\n", message);
+    core_error error = { 0 };
+    if (!terrain_field_write(&field, out_prefix, &error) || !terrain_mesh_write_ply(&mesh, ply, &error)) {
+        fprintf(stderr, "terrain_export: %s\n", error.message);
         goto done;
     }
     printf("terrain_export: %s.raw + %s.json: %d x %d x %d samples from (%" PRId64 ", %" PRId64 ", %" PRId64

@@ -69,11 +69,11 @@ int main(int argc, char **argv) {
     trace_thread_name("main");
 
     int status = 1;
-    char error[320];
+    core_error error = { 0 };
     terrain_field field;
     terrain_mesh mesh = { 0 };
-    if (!terrain_field_read(positional[0], &field, error, sizeof error)) {
-        fprintf(stderr, "terrain_mesh: %s\n", error);
+    if (!terrain_field_read(positional[0], &field, &error)) {
+        fprintf(stderr, "terrain_mesh: %s\n", error.message);
         goto done;
     }
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = common.threads });
@@ -97,8 +97,8 @@ int main(int argc, char **argv) {
         fprintf(stderr, "terrain_mesh: %s: cannot mesh this field\n", positional[0]);
         goto done;
     }
-    if (ply_path && !terrain_mesh_write_ply(&mesh, ply_path, error, sizeof error)) {
-        fprintf(stderr, "terrain_mesh: %s\n", error);
+    if (ply_path && !terrain_mesh_write_ply(&mesh, ply_path, &error)) {
+        fprintf(stderr, "terrain_mesh: %s\n", error.message);
         goto done;
     }
     printf("{\"vertices\":%u,\"triangles\":%u,\"area\":%.6g,\"ms\":%.4g,\"threads\":%d}\n", mesh.vertex_count,

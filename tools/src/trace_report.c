@@ -64,8 +64,9 @@ int main(int argc, char **argv) {
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
 
     trace_report report;
+    core_error error = { 0 };
     trace_zone_begin("load");
-    bool loaded = trace_report_load(trace_path, &report);
+    bool loaded = trace_report_load(trace_path, &report, &error);
     trace_zone_end();
     bool plotted = false;
     if (loaded) {
@@ -80,13 +81,14 @@ int main(int argc, char **argv) {
         char *default_svg = svg_path ? NULL : trace_report_svg_path_for(trace_path);
         const char *plot_path = svg_path ? svg_path : default_svg;
         trace_zone_begin("plot");
-        plotted = trace_report_write_svg(&report, plot_path);
+        plotted = trace_report_write_svg(&report, plot_path, &error);
         trace_zone_end();
         if (plotted) printf("\nframe-time plot: %s\n", plot_path);
+        else fprintf(stderr, "trace_report: %s\n", error.message);
         if (default_svg) core_free(default_svg, strlen(default_svg) + 1);
         trace_report_free(&report);
     } else {
-        fprintf(stderr, "trace_report: %s\n", report.error);
+        fprintf(stderr, "trace_report: %s\n", error.message);
     }
     trace_stop();
     return loaded && plotted ? 0 : 1;

@@ -32,9 +32,13 @@
 #ifndef TERRAIN_DATA_H
 #define TERRAIN_DATA_H
 
+#include "gfx/gfx.h"                  /* handles in terrain_gpu_mesh */
+
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+
+#include "core/core.h"   /* core_error */
 
 /* ---- materials ---------------------------------------------------------------------------- */
 
@@ -379,8 +383,12 @@ bool terrain_mesh_chunk(terrain_world *world, int64_t x, int64_t y, int64_t z, c
  *     {"dims":[NX,NY,NZ],"origin":[x,y,z],"spacing":s}
  * Both are written to a temporary beside the target and renamed over it. Reading checks
  * everything (keys, types, 1 ≤ dims ≤ TERRAIN_FIELD_FILE_MAX_DIM, finite origin, spacing > 0,
- * the .raw's size, finite values) and on failure fills `error` with a message naming the file and
- * the problem and returns false (out is then zeroed). Free a read field with terrain_field_free. */
+ * the .raw's size, finite values) and on failure returns false (out is then zeroed) with `error`
+ * (may be NULL) saying why, its message naming the file: CORE_ERROR_IO (cannot open, read or
+ * write), CORE_ERROR_FORMAT (not JSON, a missing key, a wrong type), CORE_ERROR_RANGE (dims
+ * outside 1 … TERRAIN_FIELD_FILE_MAX_DIM or over the sample limit, a spacing ≤ 0, a value or
+ * origin that is not finite), CORE_ERROR_CORRUPT (the .raw's size disagrees with the dims),
+ * CORE_ERROR_ARGUMENT (writing an empty field). Free a read field with terrain_field_free. */
 #define TERRAIN_FIELD_FILE_MAX_DIM 4096
 
 typedef struct terrain_field_header {
@@ -389,16 +397,16 @@ typedef struct terrain_field_header {
     float spacing;
 } terrain_field_header;
 
-bool terrain_field_write(const terrain_field *field, const char *prefix, char *error, size_t error_size);
+bool terrain_field_write(const terrain_field *field, const char *prefix, core_error *error);
 /* `path` is PREFIX, PREFIX.json or PREFIX.raw. */
-bool terrain_field_read(const char *path, terrain_field *out, char *error, size_t error_size);
-/* The header parser alone (text need not be NUL-terminated). */
+bool terrain_field_read(const char *path, terrain_field *out, core_error *error);
+/* The header parser alone (text need not be NUL-terminated); the message names no file. */
 bool terrain_field_header_parse(const char *text, size_t size, terrain_field_header *out,
-                                char *error, size_t error_size);
+                                core_error *error);
 
 /* Binary little-endian PLY: vertex x y z nx ny nz (float, positions in world units relative to
  * mesh->origin), faces as a uchar count and uint indices. */
-bool terrain_mesh_write_ply(const terrain_mesh *mesh, const char *path, char *error, size_t error_size);
+bool terrain_mesh_write_ply(const terrain_mesh *mesh, const char *path, core_error *error);
 /* Total area of the triangles (m²). */
 double terrain_mesh_area(const terrain_mesh *mesh);
 
@@ -447,10 +455,11 @@ int terrain_rings_half_width(int levels, double scale);
  * database with terrain_store (below), whose every save is one transaction:
  *
  *     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
+ *     core_error error = {0};
  *     terrain_store *store = terrain_store_create(&(terrain_store_desc){
- *         .dir = "saves/world1", .edits = log, .seed = params.seed }, &report);
+ *         .dir = "saves/world1", .edits = log, .seed = params.seed }, &report, &error);
  *     ... edits ...
- *     terrain_store_save(store, error, sizeof error);
+ *     terrain_store_save(store, &error);
  *
  * The per-file layout (terrain_edit_log_save and _load) is how world folders were kept before
  * world.db; terrain_store imports such a folder once. It stays for exporting and importing one
@@ -518,29 +527,37 @@ void terrain_edit_log_compact(terrain_edit_log *log);
 
 /* Writes the chunks whose entries changed since the last save (or load, or parse) as above,
  * creating DIR and DIR/edits as needed (nothing to write: nothing touched). A log loaded from one
- * folder and saved to another writes only what changed. False with "PATH: reason (strerror)" in
- * `error` when a file cannot be written (the others are still written; the chunks that failed
- * stay marked, a later save retries them). A chunk whose file would pass 1 GiB is compacted
- * first. */
-bool terrain_edit_log_save(terrain_edit_log *log, const char *dir, char *error, size_t error_size);
+ * folder and saved to another writes only what changed. False with CORE_ERROR_IO and
+ * "PATH: reason (strerror)" in `error` when a file cannot be written (the first such; each is
+ * also logged; the others are still written; the chunks that failed stay marked, a later save
+ * retries them), CORE_ERROR_ARGUMENT for a NULL log or no folder. A chunk whose file would pass
+ * 1 GiB is compacted first. */
+bool terrain_edit_log_save(terrain_edit_log *log, const char *dir, core_error *error);
 
 typedef struct terrain_edit_log_load_result {
     int chunks_loaded;                /* files read into the log */
     int files_rejected;               /* files reported and renamed to .bad */
-    char first_problem[256];          /* "DIR/edits/3_-7.tel: checksum mismatch", or "" */
+    core_error first_problem;         /* the first rejected file: its code (CORE_ERROR_CORRUPT for a
+                                         checksum mismatch, …) and "DIR/edits/3_-7.tel: checksum
+                                         mismatch …"; code CORE_ERROR_NONE when none was */
 } terrain_edit_log_load_result;
 
 /* Reads every chunk file DIR/edits/<x>_<z>.tel into the log (replacing what it held for those
  * chunks; they are then clean). A rejected file changes nothing in the log (in a fresh log its
  * chunk has no entries: it stays as generated). Leftover temporaries of a crashed save are
  * removed; other names are left alone. A missing DIR or DIR/edits is an empty world (true).
- * False (reason in result.first_problem) only when DIR or DIR/edits exists but is not a folder
- * or cannot be listed. */
-bool terrain_edit_log_load(terrain_edit_log *log, const char *dir, terrain_edit_log_load_result *result);
+ * False (CORE_ERROR_IO in `error`, naming the folder) only when DIR or DIR/edits exists but is
+ * not a folder or cannot be listed; CORE_ERROR_ARGUMENT for a NULL log or no folder. */
+bool terrain_edit_log_load(terrain_edit_log *log, const char *dir, terrain_edit_log_load_result *result,
+                           core_error *error);
 /* One file's bytes (what load reads; the fuzz target's entry point): true and the chunk's entries
  * put in the log in place of those it held (the chunk clean, as after a load), or false with
- * the reason in `error` and the log unchanged. The file name's check is load's. */
-bool terrain_edit_log_parse(terrain_edit_log *log, const void *bytes, size_t size, char *error, size_t error_size);
+ * the reason in `error` and the log unchanged: CORE_ERROR_CORRUPT (truncated, checksum
+ * mismatch, sizes that run past the end, bytes after the last entry), CORE_ERROR_FORMAT (wrong
+ * magic, unknown tool, columns out of order, unmerged layers, no entries), CORE_ERROR_VERSION
+ * (another format version), CORE_ERROR_MISMATCH (saved by another world), CORE_ERROR_RANGE (a
+ * material, column index, count or height past its limit). The file name's check is load's. */
+bool terrain_edit_log_parse(terrain_edit_log *log, const void *bytes, size_t size, core_error *error);
 
 /* ---- the world folder: one database, every save one transaction ----
  *
@@ -553,23 +570,26 @@ bool terrain_edit_log_parse(terrain_edit_log *log, const void *bytes, size_t siz
  *
  *     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
  *     terrain_store_report report;
+ *     core_error error = {0};
  *     terrain_store *store = terrain_store_create(&(terrain_store_desc){
- *         .dir = "saves/world1", .edits = log, .seed = params.seed }, &report);
- *     if (!store) fprintf(stderr, "%s\n", report.error);    // in use, another world, unwritable
+ *         .dir = "saves/world1", .edits = log, .seed = params.seed }, &report, &error);
+ *     if (!store) fprintf(stderr, "%s\n", error.message);   // in use, another world, unwritable
  *     if (report.notice[0]) printf("%s\n", report.notice);  // a damaged file set aside, an import
  *     ... a world with .edits = log ...
  *     terrain_store_put(store, "game.player", &pose, sizeof pose);   // goes with the next save
  *     terrain_store_save_async(store);       // from the frame: takes a snapshot, writes elsewhere
  *     ...
- *     terrain_store_save(store, error, sizeof error);   // at the end: waits, then saves
+ *     terrain_store_save(store, &error);     // at the end: waits, then saves
  *     terrain_store_destroy(store);
  *
  * Opening (terrain_store_create):
  *   - A missing folder or database is a new world: created, with the seed and key recorded.
- *   - Another process that has the world open makes create fail with "in use by another
- *     process" (report.in_use). The store holds SQLite's exclusive lock from create to destroy.
- *   - A database of another world (another seed or generator) makes it fail (report.other_world,
- *     report.recorded_seed). A database of a newer format makes it fail too. Neither is touched.
+ *   - Another process that has the world open makes create fail with CORE_ERROR_IO, "in use by
+ *     another process" (report.in_use). The store holds SQLite's exclusive lock from create to
+ *     destroy. A folder that cannot be made or a file that cannot be opened: CORE_ERROR_IO.
+ *   - A database of another world (another seed or generator) makes it fail with
+ *     CORE_ERROR_MISMATCH (report.other_world, report.recorded_seed). A database of a newer format
+ *     makes it fail with CORE_ERROR_VERSION. Neither is touched.
  *   - A damaged or foreign file (not SQLite, not a world database, failing SQLite's checks, or
  *     a chunk whose bytes fail their checksum) is reported in report.notice naming the file,
  *     renamed to world.db.bad (then .bad.2, …; its -wal file goes with it) and replaced by a new
@@ -608,27 +628,29 @@ typedef struct terrain_store_report {
     bool other_world;                 /* create failed: the database holds another world */
     uint64_t recorded_seed;           /* with other_world: the seed the database records */
     char notice[512];                 /* what was set aside or imported, or "" */
-    char error[512];                  /* why create returned NULL, naming the file, or "" */
 } terrain_store_report;
 
-/* The world folder's store, its edits put in desc->edits; NULL with report->error when the
- * folder cannot be made, the world is in use or is another world's. `report` may be NULL. */
-terrain_store *terrain_store_create(const terrain_store_desc *desc, terrain_store_report *report);
+/* The world folder's store, its edits put in desc->edits; NULL with `error` (naming the file)
+ * when the folder cannot be made, the world is in use or is another world's (see above), or
+ * CORE_ERROR_ARGUMENT for a desc without dir or edits. `report` and `error` may be NULL. */
+terrain_store *terrain_store_create(const terrain_store_desc *desc, terrain_store_report *report, core_error *error);
 /* Waits for a save in flight and closes the database; it does not save (call terrain_store_save). */
 void terrain_store_destroy(terrain_store *store);
 
 /* Everything changed since the last save, in one transaction; waits for a save in flight first.
  * Each changed chunk's entries are folded into one first (terrain_edit_log_compact), so a
  * folder's size follows the columns edited, not the frames played.
- * False with "DIR/world.db: reason" in `error` (nothing of this save is kept; retried next time). */
-bool terrain_store_save(terrain_store *store, char *error, size_t error_size);
+ * False with CORE_ERROR_IO and "DIR/world.db: reason" in `error` (nothing of this save is kept;
+ * retried next time). */
+bool terrain_store_save(terrain_store *store, core_error *error);
 /* A snapshot of what changed, committed on the store's thread; returns at once. False when the
  * previous save is still in flight (nothing taken: call again later). Nothing changed: true,
  * nothing written. */
 bool terrain_store_save_async(terrain_store *store);
 /* Waits for the save in flight, if any; its outcome (true when there was none), the reason in
- * `error` as terrain_store_save gives it. */
-bool terrain_store_wait(terrain_store *store, char *error, size_t error_size);
+ * `error` as terrain_store_save gives it (a failed save in flight is also logged, as nobody may
+ * wait for it). */
+bool terrain_store_wait(terrain_store *store, core_error *error);
 
 /* A named value saved with the next save (names up to 63 bytes, values up to 1 MiB); the same
  * bytes as before change nothing. False for a bad name, size or NULL bytes (message logged). */
@@ -637,9 +659,10 @@ bool terrain_store_put(terrain_store *store, const char *name, const void *bytes
 int64_t terrain_store_get(terrain_store *store, const char *name, void *bytes, size_t capacity);
 
 /* The seed DIR/world.db records, without keeping the world open: 1 and *seed set; 0 when the
- * folder has no world.db; −1 with the reason in `error` when it cannot be read (in use by
- * another process, damaged). */
-int terrain_store_read_seed(const char *dir, uint64_t *seed, char *error, size_t error_size);
+ * folder has no world.db; −1 with the reason in `error` when it cannot be read: CORE_ERROR_IO
+ * (in use by another process, unreadable), CORE_ERROR_CORRUPT (not a sound database),
+ * CORE_ERROR_FORMAT (no seed recorded), CORE_ERROR_ARGUMENT (no folder given). */
+int terrain_store_read_seed(const char *dir, uint64_t *seed, core_error *error);
 
 /* ---- commits: a chunk's stacks replaced (terrain_world.c) ----
  *

@@ -272,7 +272,7 @@ void terrain__edit_files_free(terrain__edit_files *files);
 /* One chunk's bytes into the log in place of what it held (clean), when they parse and hold
  * chunk `named`; false with the reason in `error` and the log unchanged. */
 bool terrain__edit_log_parse_chunk(terrain_edit_log *log, const void *bytes, size_t size, terrain_chunk_coord named,
-                                   char *error, size_t error_size);
+                                   core_error *error);
 /* Moves every chunk with entries from `from` into `to` (replacing to's entries for those chunks;
  * they are clean in `to`); `from` keeps its chunks, empty. */
 void terrain__edit_log_take(terrain_edit_log *to, terrain_edit_log *from);

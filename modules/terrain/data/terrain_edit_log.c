@@ -379,7 +379,7 @@ static bool builder_copy_column(entry_builder *b, const terrain_stacks *stacks, 
         layers++;
     }
     if (height < TERRAIN__COLUMN_MAX_QUANTA && layers <= EDIT_MAX_LAYERS) return true;
-    core_error("terrain", "edit log: chunk (%lld, %lld) column %d has %u layers, %.0f m (at most %u layers, under "
+    core_log_error("terrain", "edit log: chunk (%lld, %lld) column %d has %u layers, %.0f m (at most %u layers, under "
                "%d m): not recorded", (long long)coord.x, (long long)coord.z, n, layers,
                (double)height * TERRAIN_HEIGHT_QUANTUM, EDIT_MAX_LAYERS, TERRAIN__COLUMN_MAX_QUANTA / 32);
     return false;
@@ -388,11 +388,11 @@ static bool builder_copy_column(entry_builder *b, const terrain_stacks *stacks, 
 bool terrain_edit_log_record(terrain_edit_log *log, terrain_chunk_coord coord, terrain_edit_tool tool,
                              const terrain_stacks *before, const terrain_stacks *after) {
     if (!log || !before || !after) {
-        core_error("terrain", "edit log: record with a NULL %s", !log ? "log" : "stacks");
+        core_log_error("terrain", "edit log: record with a NULL %s", !log ? "log" : "stacks");
         return false;
     }
     if (!tool_valid((unsigned)tool)) {
-        core_error("terrain", "edit log: record with unknown tool %d", (int)tool);
+        core_log_error("terrain", "edit log: record with unknown tool %d", (int)tool);
         return false;
     }
     /* The diff reads only the caller's stacks: no lock yet. */
@@ -510,7 +510,7 @@ static terrain_stacks *replay_build(const replay_state *r, const terrain_stacks 
 terrain_stacks *terrain_edit_log_replay(terrain_edit_log *log, terrain_chunk_coord coord,
                                         const terrain_stacks *generated) {
     if (!log || !generated) {
-        core_error("terrain", "edit log: replay with a NULL %s", !log ? "log" : "stacks");
+        core_log_error("terrain", "edit log: replay with a NULL %s", !log ? "log" : "stacks");
         return NULL;
     }
     replay_state *r = core_alloc(sizeof *r);
@@ -522,7 +522,7 @@ terrain_stacks *terrain_edit_log_replay(terrain_edit_log *log, terrain_chunk_coo
         replay_start(r, generated);
         for (size_t n = 0; n < c->entry_count; n++)
             if (!replay_apply(r, &c->entries[n]))
-                core_error("terrain", "edit log: chunk (%lld, %lld) entry %zu (%s) makes a row of the chunk too "
+                core_log_error("terrain", "edit log: chunk (%lld, %lld) entry %zu (%s) makes a row of the chunk too "
                            "long for stacks (over %u layer words); skipped", (long long)coord.x,
                            (long long)coord.z, n, terrain_edit_tool_name((terrain_edit_tool)c->entries[n].tool),
                            TERRAIN__ROW_OFFSET_MAX);
@@ -667,11 +667,11 @@ static bool read_u64(reader *r, uint64_t *v) {
 static size_t reader_left(const reader *r) { return (size_t)(r->end - r->at); }
 
 /* One column's layers into the builder, each checked; the column index was read already. */
-static bool parse_layers(reader *r, entry_builder *b, const char *where, char *error, size_t error_size) {
+static bool parse_layers(reader *r, entry_builder *b, const char *where, core_error *error) {
     uint16_t count;
-    if (!read_u16(r, &count)) return core_error_format(error, error_size, "%s: ends before its layer count", where);
+    if (!read_u16(r, &count)) return core_error_set(error, CORE_ERROR_CORRUPT, "%s: ends before its layer count", where);
     if (reader_left(r) < 5 * (size_t)count)
-        return core_error_format(error, error_size, "%s: %u layers need %zu bytes, %zu are left", where, count,
+        return core_error_set(error, CORE_ERROR_CORRUPT, "%s: %u layers need %zu bytes, %zu are left", where, count,
                                  5 * (size_t)count, reader_left(r));
     uint64_t height = 0;
     for (uint32_t l = 0; l < count; l++) {
@@ -680,48 +680,47 @@ static bool parse_layers(reader *r, entry_builder *b, const char *where, char *e
         read_u8(r, &material);                    /* the size was checked above */
         read_u32(r, &quanta);
         if (material >= TERRAIN_MATERIAL_MAX)
-            return core_error_format(error, error_size, "%s: layer %u has material %u (at most %d)", where, l,
+            return core_error_set(error, CORE_ERROR_RANGE, "%s: layer %u has material %u (at most %d)", where, l,
                                      material, TERRAIN_MATERIAL_MAX - 1);
-        if (quanta == 0) return core_error_format(error, error_size, "%s: layer %u is 0 quanta thick", where, l);
+        if (quanta == 0) return core_error_set(error, CORE_ERROR_FORMAT, "%s: layer %u is 0 quanta thick", where, l);
         if (l > 0 && b->layers[b->layer_count - 1].material == material)
-            return core_error_format(error, error_size, "%s: layers %u and %u are both %s (unmerged)", where, l - 1,
+            return core_error_set(error, CORE_ERROR_FORMAT, "%s: layers %u and %u are both %s (unmerged)", where, l - 1,
                                      l, terrain_material_name((terrain_material)material));
         height += quanta;
         if (height >= TERRAIN__COLUMN_MAX_QUANTA)
-            return core_error_format(error, error_size, "%s: over %d m tall", where, TERRAIN__COLUMN_MAX_QUANTA / 32);
+            return core_error_set(error, CORE_ERROR_RANGE, "%s: over %d m tall", where, TERRAIN__COLUMN_MAX_QUANTA / 32);
         builder_push_layer(b, (terrain__qlayer){ material, quanta });
     }
     if (count > 0 && b->layers[b->layer_count - 1].material == TERRAIN_AIR)
-        return core_error_format(error, error_size, "%s: ends with air (air on top is implicit)", where);
+        return core_error_set(error, CORE_ERROR_FORMAT, "%s: ends with air (air on top is implicit)", where);
     return true;
 }
 
-static bool parse_entry(reader *r, uint32_t index, entry_builder *b, edit_entry *out, char *error,
-                        size_t error_size) {
+static bool parse_entry(reader *r, uint32_t index, entry_builder *b, edit_entry *out, core_error *error) {
     uint8_t tool;
     uint16_t columns;
     if (!read_u8(r, &tool) || !read_u16(r, &columns))
-        return core_error_format(error, error_size, "entry %u: ends inside its header", index);
-    if (!tool_valid(tool)) return core_error_format(error, error_size, "entry %u: unknown tool %u", index, tool);
+        return core_error_set(error, CORE_ERROR_CORRUPT, "entry %u: ends inside its header", index);
+    if (!tool_valid(tool)) return core_error_set(error, CORE_ERROR_FORMAT, "entry %u: unknown tool %u", index, tool);
     if (columns == 0 || columns > TERRAIN__COLUMNS)
-        return core_error_format(error, error_size, "entry %u: %u columns (1 … %d)", index, columns, TERRAIN__COLUMNS);
+        return core_error_set(error, CORE_ERROR_RANGE, "entry %u: %u columns (1 … %d)", index, columns, TERRAIN__COLUMNS);
     if (reader_left(r) < 4 * (size_t)columns)
-        return core_error_format(error, error_size, "entry %u: %u columns need at least %zu bytes, %zu are left",
+        return core_error_set(error, CORE_ERROR_CORRUPT, "entry %u: %u columns need at least %zu bytes, %zu are left",
                                  index, columns, 4 * (size_t)columns, reader_left(r));
     b->column_count = b->layer_count = 0;
     for (uint32_t p = 0; p < columns; p++) {
         uint16_t column = 0;
         read_u16(r, &column);                     /* at least 4 bytes per column are left */
         if (column >= TERRAIN__COLUMNS)
-            return core_error_format(error, error_size, "entry %u: column index %u (at most %d)", index, column,
+            return core_error_set(error, CORE_ERROR_RANGE, "entry %u: column index %u (at most %d)", index, column,
                                      TERRAIN__COLUMNS - 1);
         if (p > 0 && column <= b->columns[p - 1])
-            return core_error_format(error, error_size, "entry %u: column %u %s", index, column,
+            return core_error_set(error, CORE_ERROR_FORMAT, "entry %u: column %u %s", index, column,
                                      column == b->columns[p - 1] ? "twice" : "out of order (indices increase)");
         char where[64];
         snprintf(where, sizeof where, "entry %u, column %u", index, column);
         builder_begin_column(b, column);
-        if (!parse_layers(r, b, where, error, error_size)) return false;
+        if (!parse_layers(r, b, where, error)) return false;
     }
     *out = builder_finish(b, (terrain_edit_tool)tool);
     return true;
@@ -729,56 +728,55 @@ static bool parse_entry(reader *r, uint32_t index, entry_builder *b, edit_entry 
 
 /* The header up to the entry count, checksum included; the reader is left at the first entry. */
 static bool parse_header(reader *r, uint64_t world_key, terrain_chunk_coord *coord, uint32_t *entry_count,
-                         char *error, size_t error_size) {
+                         core_error *error) {
     size_t size = reader_left(r);
     if (size < EDIT_HEADER_BYTES + EDIT_CHECKSUM_BYTES)
-        return core_error_format(error, error_size, "truncated: %zu bytes, a file has at least %u", size,
+        return core_error_set(error, CORE_ERROR_CORRUPT, "truncated: %zu bytes, a file has at least %u", size,
                                  EDIT_HEADER_BYTES + EDIT_CHECKSUM_BYTES);
-    if (memcmp(r->at, EDIT_MAGIC, 8) != 0) return core_error_format(error, error_size, "not an edit file (wrong magic)");
+    if (memcmp(r->at, EDIT_MAGIC, 8) != 0) return core_error_set(error, CORE_ERROR_FORMAT, "not an edit file (wrong magic)");
     uint32_t version = get_u32(r->at + 8);
     if (version != EDIT_FORMAT_VERSION)
-        return core_error_format(error, error_size, "format version %u (this build reads %u)", version,
+        return core_error_set(error, CORE_ERROR_VERSION, "format version %u (this build reads %u)", version,
                                  EDIT_FORMAT_VERSION);
     r->end -= EDIT_CHECKSUM_BYTES;
     uint32_t stored = get_u32(r->end), computed = terrain__crc32(0, r->at, size - EDIT_CHECKSUM_BYTES);
     if (stored != computed)
-        return core_error_format(error, error_size, "checksum mismatch (stored %08x, computed %08x: damaged or "
+        return core_error_set(error, CORE_ERROR_CORRUPT, "checksum mismatch (stored %08x, computed %08x: damaged or "
                                  "truncated)", stored, computed);
     r->at += 12;
     uint64_t key = 0, x = 0, z = 0;
     read_u64(r, &key), read_u64(r, &x), read_u64(r, &z), read_u32(r, entry_count);
     if (key != world_key)
-        return core_error_format(error, error_size, "saved by another world (key %016" PRIx64 ", this world's is %016"
+        return core_error_set(error, CORE_ERROR_MISMATCH, "saved by another world (key %016" PRIx64 ", this world's is %016"
                                  PRIx64 ")", key, world_key);
     *coord = (terrain_chunk_coord){ (int64_t)x, (int64_t)z };
-    if (*entry_count == 0) return core_error_format(error, error_size, "no entries");
+    if (*entry_count == 0) return core_error_set(error, CORE_ERROR_FORMAT, "no entries");
     if (*entry_count > reader_left(r) / EDIT_MIN_ENTRY_BYTES)
-        return core_error_format(error, error_size, "%u entries cannot fit in the %zu bytes left", *entry_count,
+        return core_error_set(error, CORE_ERROR_CORRUPT, "%u entries cannot fit in the %zu bytes left", *entry_count,
                                  reader_left(r));
     return true;
 }
 
 /* A whole file into `out` (a chunk outside any map; free with chunk_free); false with the
  * reason in `error`, nothing allocated. */
-static bool parse_file(const void *bytes, size_t size, uint64_t world_key, edit_chunk **out, char *error,
-                       size_t error_size) {
+static bool parse_file(const void *bytes, size_t size, uint64_t world_key, edit_chunk **out, core_error *error) {
     reader r = { bytes, (const uint8_t *)bytes + size };
     terrain_chunk_coord coord = { 0, 0 };
     uint32_t entry_count = 0;
-    if (!bytes && size > 0) return core_error_format(error, error_size, "no bytes");
+    if (!bytes && size > 0) return core_error_set(error, CORE_ERROR_ARGUMENT, "no bytes");
     if (!bytes) r.at = r.end = (const uint8_t *)"";
-    if (!parse_header(&r, world_key, &coord, &entry_count, error, error_size)) return false;
+    if (!parse_header(&r, world_key, &coord, &entry_count, error)) return false;
     edit_chunk *c = core_calloc(1, sizeof *c);
     c->coord = coord;
     entry_builder b = { 0 };
     bool ok = true;
     for (uint32_t e = 0; e < entry_count && ok; e++) {
         edit_entry entry;
-        ok = parse_entry(&r, e, &b, &entry, error, error_size);
+        ok = parse_entry(&r, e, &b, &entry, error);
         if (ok) chunk_append(c, entry);
     }
     if (ok && reader_left(&r) > 0)
-        ok = core_error_format(error, error_size, "%zu bytes after the last entry", reader_left(&r));
+        ok = core_error_set(error, CORE_ERROR_CORRUPT, "%zu bytes after the last entry", reader_left(&r));
     builder_free(&b);
     if (!ok) {
         chunk_free(c);
@@ -800,10 +798,10 @@ static void install(terrain_edit_log *log, edit_chunk *parsed) {
     chunk_free(parsed);
 }
 
-bool terrain_edit_log_parse(terrain_edit_log *log, const void *bytes, size_t size, char *error, size_t error_size) {
-    if (!log) return core_error_format(error, error_size, "edit log: parse with a NULL log");
+bool terrain_edit_log_parse(terrain_edit_log *log, const void *bytes, size_t size, core_error *error) {
+    if (!log) return core_error_set(error, CORE_ERROR_ARGUMENT, "edit log: parse with a NULL log");
     edit_chunk *parsed;
-    if (!parse_file(bytes, size, log->world_key, &parsed, error, error_size)) return false;
+    if (!parse_file(bytes, size, log->world_key, &parsed, error)) return false;
     install(log, parsed);
     return true;
 }
@@ -845,8 +843,7 @@ static bool name_coord(const char *name, terrain_chunk_coord *coord) {
 /* ---- saving ----------------------------------------------------------------------------- */
 
 /* Writes `bytes` to folder/name through a temporary beside it (see the top of the file). */
-static bool write_atomic(const char *folder, const char *name, const uint8_t *bytes, size_t size, char *error,
-                         size_t error_size) {
+static bool write_atomic(const char *folder, const char *name, const uint8_t *bytes, size_t size, core_error *error) {
     char *path = terrain__text_format("%s/%s", folder, name);
     char *temporary = terrain__text_format("%s/.%s.tmp.%ld", folder, name, (long)getpid());
     const char *step = "cannot create the temporary";
@@ -860,7 +857,7 @@ static bool write_atomic(const char *folder, const char *name, const uint8_t *by
         if (ok) step = "cannot rename the temporary over it", ok = rename(temporary, path) == 0;
     }
     if (!ok) {
-        core_error_format(error, error_size, "%s: %s (%s)", path, step, strerror(errno));
+        core_error_set(error, CORE_ERROR_IO, "%s: %s (%s)", path, step, strerror(errno));
         remove(temporary);
     }
     terrain__text_free(temporary);
@@ -870,10 +867,10 @@ static bool write_atomic(const char *folder, const char *name, const uint8_t *by
 
 /* fsync on the folder makes its renames durable; file systems that cannot (EINVAL) are taken
  * at their word. */
-static bool sync_folder(const char *folder, char *error, size_t error_size) {
+static bool sync_folder(const char *folder, core_error *error) {
     int fd = open(folder, O_RDONLY | O_DIRECTORY);
     bool ok = fd >= 0 && (fsync(fd) == 0 || errno == EINVAL);
-    if (!ok) core_error_format(error, error_size, "%s: cannot flush the folder to disk (%s)", folder, strerror(errno));
+    if (!ok) core_error_set(error, CORE_ERROR_IO, "%s: cannot flush the folder to disk (%s)", folder, strerror(errno));
     if (fd >= 0) close(fd);
     return ok;
 }
@@ -941,11 +938,11 @@ void terrain__edit_log_take(terrain_edit_log *to, terrain_edit_log *from) {
 }
 
 bool terrain__edit_log_parse_chunk(terrain_edit_log *log, const void *bytes, size_t size, terrain_chunk_coord named,
-                                   char *error, size_t error_size) {
+                                   core_error *error) {
     edit_chunk *parsed;
-    if (!parse_file(bytes, size, log->world_key, &parsed, error, error_size)) return false;
+    if (!parse_file(bytes, size, log->world_key, &parsed, error)) return false;
     if (parsed->coord.x != named.x || parsed->coord.z != named.z) {
-        core_error_format(error, error_size, "holds chunk (%lld, %lld), not (%lld, %lld)", (long long)parsed->coord.x,
+        core_error_set(error, CORE_ERROR_MISMATCH, "holds chunk (%lld, %lld), not (%lld, %lld)", (long long)parsed->coord.x,
                           (long long)parsed->coord.z, (long long)named.x, (long long)named.z);
         chunk_free(parsed);
         return false;
@@ -954,44 +951,42 @@ bool terrain__edit_log_parse_chunk(terrain_edit_log *log, const void *bytes, siz
     return true;
 }
 
-/* Logs a failure and keeps the first in the caller's buffer. */
-static void save_failed(const char *reason, bool *failed, char *error, size_t error_size) {
-    core_error("terrain", "edit log: %s", reason);
-    if (!*failed && error && error_size) snprintf(error, error_size, "%s", reason);
+/* Logs a failure (a save may meet several) and keeps the first in the caller's error. */
+static void save_failed(const core_error *reason, bool *failed, core_error *error) {
+    core_log_error("terrain", "edit log: %s", reason->message);
+    if (!*failed && error) *error = *reason;
     *failed = true;
 }
 
 /* Writes every file; each that fails is logged, the rest go on (save what can be saved). */
-static void write_files(const char *folder, terrain__edit_files *files, bool *failed, char *error,
-                        size_t error_size) {
-    char reason[512];
+static void write_files(const char *folder, terrain__edit_files *files, bool *failed, core_error *error) {
+    core_error reason = { 0 };
     for (size_t n = 0; n < files->count; n++) {
         terrain__edit_file *f = &files->items[n];
         char name[64];
         snprintf(name, sizeof name, "%lld_%lld" EDIT_SUFFIX, (long long)f->coord.x, (long long)f->coord.z);
-        f->written = write_atomic(folder, name, f->bytes, f->size, reason, sizeof reason);
-        if (!f->written) save_failed(reason, failed, error, error_size);
+        f->written = write_atomic(folder, name, f->bytes, f->size, &reason);
+        if (!f->written) save_failed(&reason, failed, error);
     }
-    if (!sync_folder(folder, reason, sizeof reason)) {
-        save_failed(reason, failed, error, error_size);
+    if (!sync_folder(folder, &reason)) {
+        save_failed(&reason, failed, error);
         for (size_t n = 0; n < files->count; n++) files->items[n].written = false;   /* not durable: write again */
     }
 }
 
-bool terrain_edit_log_save(terrain_edit_log *log, const char *dir, char *error, size_t error_size) {
-    if (error && error_size) error[0] = '\0';
+bool terrain_edit_log_save(terrain_edit_log *log, const char *dir, core_error *error) {
     if (!log || !dir || !dir[0])
-        return core_error_format(error, error_size, "edit log: save with no %s", !log ? "log" : "folder");
+        return core_error_set(error, CORE_ERROR_ARGUMENT, "edit log: save with no %s", !log ? "log" : "folder");
     pthread_mutex_lock(&log->io_lock);
     terrain__edit_files files = terrain__edit_log_dirty_files(log, EDIT_FILE_MAX_BYTES);
     char *folder = terrain__text_format("%s/edits", dir);
     bool failed = false;
-    char reason[512];
+    core_error reason = { 0 };
     if (files.count > 0 && !core_make_dirs(folder)) {
-        core_error_format(reason, sizeof reason, "%s: cannot create the folder (%s)", folder, strerror(errno));
-        save_failed(reason, &failed, error, error_size);
+        core_error_set(&reason, CORE_ERROR_IO, "%s: cannot create the folder (%s)", folder, strerror(errno));
+        save_failed(&reason, &failed, error);
     }
-    else if (files.count > 0) write_files(folder, &files, &failed, error, error_size);
+    else if (files.count > 0) write_files(folder, &files, &failed, error);
     terrain__edit_log_mark_saved(log, &files);
     terrain__edit_files_free(&files);
     terrain__text_free(folder);
@@ -1002,22 +997,22 @@ bool terrain_edit_log_save(terrain_edit_log *log, const char *dir, char *error, 
 /* ---- loading ---------------------------------------------------------------------------- */
 
 /* The whole file, checked to be a regular file of at most EDIT_FILE_MAX_BYTES. */
-static bool read_file(const char *path, uint8_t **bytes, size_t *size, char *error, size_t error_size) {
+static bool read_file(const char *path, uint8_t **bytes, size_t *size, core_error *error) {
     FILE *file = fopen(path, "rb");
-    if (!file) return core_error_format(error, error_size, "cannot open (%s)", strerror(errno));
+    if (!file) return core_error_set(error, CORE_ERROR_IO, "cannot open (%s)", strerror(errno));
     struct stat info;
     bool ok = fstat(fileno(file), &info) == 0;
-    if (!ok) core_error_format(error, error_size, "cannot read (%s)", strerror(errno));
-    else if (!S_ISREG(info.st_mode)) ok = core_error_format(error, error_size, "not a regular file");
+    if (!ok) core_error_set(error, CORE_ERROR_IO, "cannot read (%s)", strerror(errno));
+    else if (!S_ISREG(info.st_mode)) ok = core_error_set(error, CORE_ERROR_FORMAT, "not a regular file");
     else if ((uint64_t)info.st_size > EDIT_FILE_MAX_BYTES)
-        ok = core_error_format(error, error_size, "%lld bytes, over the limit of %zu", (long long)info.st_size,
+        ok = core_error_set(error, CORE_ERROR_RANGE, "%lld bytes, over the limit of %zu", (long long)info.st_size,
                                EDIT_FILE_MAX_BYTES);
     if (ok) {
         *size = (size_t)info.st_size;
         *bytes = core_alloc(*size + 1);           /* + 1: the file may have grown meanwhile */
         size_t got = fread(*bytes, 1, *size + 1, file);
         if (got != *size) {
-            ok = core_error_format(error, error_size, "cannot read (%s)", ferror(file) ? strerror(errno) : "its size changed");
+            ok = core_error_set(error, CORE_ERROR_IO, "cannot read (%s)", ferror(file) ? strerror(errno) : "its size changed");
             core_free(*bytes, *size + 1);
         }
     }
@@ -1026,23 +1021,22 @@ static bool read_file(const char *path, uint8_t **bytes, size_t *size, char *err
 }
 
 /* One chunk file into the log; false with the reason (without the path) in `error`. */
-static bool load_file(terrain_edit_log *log, const char *path, terrain_chunk_coord named, char *error,
-                      size_t error_size) {
+static bool load_file(terrain_edit_log *log, const char *path, terrain_chunk_coord named, core_error *error) {
     uint8_t *bytes = NULL;
     size_t size = 0;
-    if (!read_file(path, &bytes, &size, error, error_size)) return false;
-    bool ok = terrain__edit_log_parse_chunk(log, bytes, size, named, error, error_size);
+    if (!read_file(path, &bytes, &size, error)) return false;
+    bool ok = terrain__edit_log_parse_chunk(log, bytes, size, named, error);
     core_free(bytes, size + 1);
     return ok;
 }
 
 /* A file that failed: reported, renamed to <name>.bad for a human to look at. */
-static void reject(const char *path, const char *reason, terrain_edit_log_load_result *result) {
-    core_error("terrain", "edit log: %s: %s; renamed to .bad, the chunk stays as generated", path, reason);
+static void reject(const char *path, const core_error *reason, terrain_edit_log_load_result *result) {
+    core_log_error("terrain", "edit log: %s: %s; renamed to .bad, the chunk stays as generated", path, reason->message);
     if (result->files_rejected++ == 0)
-        snprintf(result->first_problem, sizeof result->first_problem, "%s: %s", path, reason);
+        core_error_set(&result->first_problem, reason->code, "%s: %s", path, reason->message);
     char *bad = terrain__text_format("%s.bad", path);
-    if (rename(path, bad) != 0) core_error("terrain", "edit log: cannot rename %s to %s: %s", path, bad, strerror(errno));
+    if (rename(path, bad) != 0) core_log_error("terrain", "edit log: cannot rename %s to %s: %s", path, bad, strerror(errno));
     terrain__text_free(bad);
 }
 
@@ -1058,51 +1052,43 @@ static void load_entry(terrain_edit_log *log, const char *folder, const char *na
     }
     if (!name_coord(name, &coord)) return;
     char *path = terrain__text_format("%s/%s", folder, name);
-    char reason[200];
-    if (load_file(log, path, coord, reason, sizeof reason)) result->chunks_loaded++;
-    else reject(path, reason, result);
+    core_error reason = { 0 };
+    if (load_file(log, path, coord, &reason)) result->chunks_loaded++;
+    else reject(path, &reason, result);
     terrain__text_free(path);
 }
 
 /* Whether `path` is a folder: true and *exists false when it is missing. */
-static bool check_folder(const char *path, bool *exists, terrain_edit_log_load_result *result) {
+static bool check_folder(const char *path, bool *exists, core_error *error) {
     struct stat info;
     *exists = stat(path, &info) == 0;
     if (!*exists && errno == ENOENT) return true;
-    if (!*exists)
-        snprintf(result->first_problem, sizeof result->first_problem, "%s: cannot look at it (%s)", path,
-                 strerror(errno));
-    else if (!S_ISDIR(info.st_mode))
-        snprintf(result->first_problem, sizeof result->first_problem, "%s: not a folder", path);
+    if (!*exists) core_error_set(error, CORE_ERROR_IO, "%s: cannot look at it (%s)", path, strerror(errno));
+    else if (!S_ISDIR(info.st_mode)) core_error_set(error, CORE_ERROR_IO, "%s: not a folder", path);
     return *exists && S_ISDIR(info.st_mode);
 }
 
-bool terrain_edit_log_load(terrain_edit_log *log, const char *dir, terrain_edit_log_load_result *result) {
+bool terrain_edit_log_load(terrain_edit_log *log, const char *dir, terrain_edit_log_load_result *result,
+                           core_error *error) {
     terrain_edit_log_load_result ignored;
     if (!result) result = &ignored;
     memset(result, 0, sizeof *result);
-    if (!log || !dir || !dir[0]) {
-        snprintf(result->first_problem, sizeof result->first_problem, "edit log: load with no %s",
-                 !log ? "log" : "folder");
-        return false;
-    }
+    if (!log || !dir || !dir[0])
+        return core_error_set(error, CORE_ERROR_ARGUMENT, "edit log: load with no %s", !log ? "log" : "folder");
     bool exists;
-    if (!check_folder(dir, &exists, result)) return false;
+    if (!check_folder(dir, &exists, error)) return false;
     if (!exists) return true;                     /* a new world */
     char *folder = terrain__text_format("%s/edits", dir);
-    bool ok = check_folder(folder, &exists, result);
+    bool ok = check_folder(folder, &exists, error);
     DIR *listing = ok && exists ? opendir(folder) : NULL;
-    if (ok && exists && !listing) {
-        snprintf(result->first_problem, sizeof result->first_problem, "%s: cannot list (%s)", folder, strerror(errno));
-        ok = false;
-    }
+    if (ok && exists && !listing)
+        ok = core_error_set(error, CORE_ERROR_IO, "%s: cannot list (%s)", folder, strerror(errno));
     if (listing) {
         pthread_mutex_lock(&log->io_lock);
         for (struct dirent *entry; (entry = readdir(listing));) load_entry(log, folder, entry->d_name, result);
         pthread_mutex_unlock(&log->io_lock);
         closedir(listing);
     }
-    if (!ok) core_error("terrain", "edit log: %s", result->first_problem);
     terrain__text_free(folder);
     return ok;
 }

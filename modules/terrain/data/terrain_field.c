@@ -204,22 +204,22 @@ static float field_sigma(float sigma) { return sigma == 0.0f ? TERRAIN_COLUMN_SI
 static bool field_desc_valid(const terrain_field_desc *desc, float sigma) {
     for (int a = 0; a < 3; a++) {
         if (desc->size[a] <= 0 || desc->size[a] > TERRAIN_FIELD_MAX_SIZE) {
-            core_error("terrain", "field: size[%d] = %d is outside 1 … %d", a, desc->size[a], TERRAIN_FIELD_MAX_SIZE);
+            core_log_error("terrain", "field: size[%d] = %d is outside 1 … %d", a, desc->size[a], TERRAIN_FIELD_MAX_SIZE);
             return false;
         }
         /* Keep every index (and the kernel's reach) far from int64 overflow. */
         int64_t last = desc->first[a] + (int64_t)(desc->size[a] - 1) * (desc->step > 0 ? desc->step : 1);
         if (desc->first[a] < -((int64_t)1 << 52) || desc->first[a] > ((int64_t)1 << 52) || last > ((int64_t)1 << 52)) {
-            core_error("terrain", "field: first[%d] = %lld is too far out", a, (long long)desc->first[a]);
+            core_log_error("terrain", "field: first[%d] = %lld is too far out", a, (long long)desc->first[a]);
             return false;
         }
     }
     if (desc->step < 0 || desc->step > TERRAIN_FIELD_MAX_STEP) {
-        core_error("terrain", "field: step = %d is outside 0 … %d", desc->step, TERRAIN_FIELD_MAX_STEP);
+        core_log_error("terrain", "field: step = %d is outside 0 … %d", desc->step, TERRAIN_FIELD_MAX_STEP);
         return false;
     }
     if (!(sigma > 0.0f) || sigma > TERRAIN_FIELD_MAX_SIGMA_COLUMNS * TERRAIN_COLUMN_SIZE) {
-        core_error("terrain", "field: sigma = %g is outside (0, %g]", (double)sigma,
+        core_log_error("terrain", "field: sigma = %g is outside (0, %g]", (double)sigma,
                    (double)(TERRAIN_FIELD_MAX_SIGMA_COLUMNS * TERRAIN_COLUMN_SIZE));
         return false;
     }

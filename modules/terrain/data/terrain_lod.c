@@ -496,7 +496,7 @@ static bool lod_mesh_chunk(terrain__field_sampler sample, void *user, terrain_wo
     memset(out, 0, sizeof *out);
     if (lod.level < 0 || lod.level > LOD_MAX_LEVEL || (lod.finer_neighbours >> 26) != 0 ||
         (lod.level == 0 && lod.finer_neighbours != 0)) {
-        core_error("terrain", "mesh chunk: bad level %d or finer-neighbour mask 0x%x", lod.level,
+        core_log_error("terrain", "mesh chunk: bad level %d or finer-neighbour mask 0x%x", lod.level,
                    (unsigned)lod.finer_neighbours);
         return false;
     }
@@ -504,7 +504,7 @@ static bool lod_mesh_chunk(terrain__field_sampler sample, void *user, terrain_wo
     int64_t first[3];
     for (int a = 0; a < 3; a++) {
         if (coord[a] < -((int64_t)1 << 40) || coord[a] > ((int64_t)1 << 40)) {
-            core_error("terrain", "mesh chunk: coordinate %lld is too far out", (long long)coord[a]);
+            core_log_error("terrain", "mesh chunk: coordinate %lld is too far out", (long long)coord[a]);
             return false;
         }
         first[a] = coord[a] * LOD_CELLS * step;

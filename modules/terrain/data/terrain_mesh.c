@@ -698,7 +698,7 @@ static bool fe_mesh(mesh_builder *b, job_system *jobs, bool *too_big) {
             if (vertices > UINT32_MAX - 1 || indices > UINT32_MAX) break;
         }
         if (vertices > UINT32_MAX - 1 || indices > UINT32_MAX) {
-            core_error("terrain", "mesh: over 32-bit indices (%" PRIu64 "+ vertices, %" PRIu64 "+ indices)", vertices,
+            core_log_error("terrain", "mesh: over 32-bit indices (%" PRIu64 "+ vertices, %" PRIu64 "+ indices)", vertices,
                        indices);
             *too_big = true;
             surface = false;
@@ -760,7 +760,7 @@ bool terrain_mesh_build(const terrain_field *field, const terrain_mesh_desc *des
     for (int a = 0; a < 3; a++) out->origin[a] = field->origin[a];
     if (!field->values || field->nx <= 0 || field->ny <= 0 || field->nz <= 0 || desc.apron < 0 ||
         !(field->spacing > 0.0f)) {
-        core_error("terrain", "mesh: bad field (%d × %d × %d samples, spacing %g, apron %d)", field->nx,
+        core_log_error("terrain", "mesh: bad field (%d × %d × %d samples, spacing %g, apron %d)", field->nx,
                    field->ny, field->nz, (double)field->spacing, desc.apron);
         return false;
     }
@@ -787,7 +787,7 @@ uint32_t terrain__mesh_add_vertex(terrain__mesh_builder *b, int x, int y, int z,
 
 bool terrain__mesh_finish(terrain__mesh_builder *b, const terrain_mesh_desc *desc, const double origin[3], terrain_mesh *out) {
     if (b->vertex_count > UINT32_MAX - 1 || b->index_count > UINT32_MAX) {
-        core_error("terrain", "mesh: %zu vertices, %zu indices: over 32-bit indices", b->vertex_count, b->index_count);
+        core_log_error("terrain", "mesh: %zu vertices, %zu indices: over 32-bit indices", b->vertex_count, b->index_count);
         core_free(b->vertices, b->vertex_capacity * sizeof *b->vertices);
         core_free(b->indices, b->index_capacity * sizeof *b->indices);
         return false;

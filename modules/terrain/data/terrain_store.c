@@ -100,7 +100,7 @@ struct terrain_store {
     store_snapshot *queued;           /* handed to the thread, NULL when none */
     bool busy;                        /* a snapshot queued or being written */
     bool last_ok;
-    char last_error[512];
+    core_error last_error;            /* of the last save, for terrain_store_wait */
     store_value *values;
     size_t value_count, value_capacity;
 };
@@ -176,13 +176,14 @@ static bool damaged_code(int rc) {
 typedef enum open_outcome {
     OPEN_OK,
     OPEN_DAMAGED,                     /* set it aside and start a new world */
-    OPEN_REFUSED,                     /* report.error says why; touch nothing */
+    OPEN_REFUSED,                     /* opening.error says why; touch nothing */
 } open_outcome;
 
 typedef struct opening {
     terrain_store *store;
     terrain_store_report *report;
     terrain_edit_log *staging;        /* chunks read, moved to the store's log once all are good */
+    core_error *error;                /* with OPEN_REFUSED: why (may be NULL) */
     char problem[400];                /* with OPEN_DAMAGED: what is wrong with the file */
 } opening;
 
@@ -190,11 +191,11 @@ static open_outcome refuse(opening *o, int rc, const char *what) {
     terrain_store_report *r = o->report;
     if ((rc & 0xff) == SQLITE_BUSY || (rc & 0xff) == SQLITE_LOCKED) {
         r->in_use = true;
-        snprintf(r->error, sizeof r->error, "%s: in use by another process (close the other program first)",
-                 o->store->path);
+        core_error_set(o->error, CORE_ERROR_IO, "%s: in use by another process (close the other program first)",
+                       o->store->path);
     } else
-        snprintf(r->error, sizeof r->error, "%s: %s (%s)", o->store->path, what,
-                 o->store->db ? sqlite3_errmsg(o->store->db) : sqlite3_errstr(rc));
+        core_error_set(o->error, CORE_ERROR_IO, "%s: %s (%s)", o->store->path, what,
+                       o->store->db ? sqlite3_errmsg(o->store->db) : sqlite3_errstr(rc));
     return OPEN_REFUSED;
 }
 
@@ -237,9 +238,9 @@ static open_outcome check_identity(opening *o, int64_t application_id, int64_t f
     if (application_id != STORE_APPLICATION_ID)
         return damaged(o, "not a world database (application id %" PRId64 ")", application_id);
     if (format > STORE_FORMAT) {
-        snprintf(o->report->error, sizeof o->report->error,
-                 "%s: made by a newer build (format %" PRId64 "; this one reads %d); left as it is", o->store->path,
-                 format, STORE_FORMAT);
+        core_error_set(o->error, CORE_ERROR_VERSION,
+                       "%s: made by a newer build (format %" PRId64 "; this one reads %d); left as it is",
+                       o->store->path, format, STORE_FORMAT);
         return OPEN_REFUSED;
     }
     int rc = query_int(o->store->db, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name IN"
@@ -282,9 +283,9 @@ static open_outcome check_world(opening *o) {
     r->other_world = true;
     r->recorded_seed = seed_known ? seed : 0;
     if (seed_known)
-        snprintf(r->error, sizeof r->error, "%s: holds the world of seed %" PRIu64 " (or of another generator); left "
-                 "as it is", o->store->path, seed);
-    else snprintf(r->error, sizeof r->error, "%s: holds another world; left as it is", o->store->path);
+        core_error_set(o->error, CORE_ERROR_MISMATCH, "%s: holds the world of seed %" PRIu64 " (or of another "
+                       "generator); left as it is", o->store->path, seed);
+    else core_error_set(o->error, CORE_ERROR_MISMATCH, "%s: holds another world; left as it is", o->store->path);
     return OPEN_REFUSED;
 }
 
@@ -298,9 +299,9 @@ static open_outcome read_chunks(opening *o) {
         terrain_chunk_coord coord = { sqlite3_column_int64(statement, 0), sqlite3_column_int64(statement, 1) };
         const void *bytes = sqlite3_column_blob(statement, 2);
         size_t size = (size_t)sqlite3_column_bytes(statement, 2);
-        char reason[200];
-        if (!terrain__edit_log_parse_chunk(o->staging, bytes, size, coord, reason, sizeof reason))
-            outcome = damaged(o, "chunk (%lld, %lld): %s", (long long)coord.x, (long long)coord.z, reason);
+        core_error reason = { 0 };
+        if (!terrain__edit_log_parse_chunk(o->staging, bytes, size, coord, &reason))
+            outcome = damaged(o, "chunk (%lld, %lld): %s", (long long)coord.x, (long long)coord.z, reason.message);
         else o->report->chunks_loaded++;
     }
     if (outcome == OPEN_OK && rc != SQLITE_DONE) outcome = failed(o, rc, "cannot read its chunks");
@@ -411,8 +412,8 @@ static bool set_aside(opening *o) {
     bool ok = rename(s->path, target) == 0;
     terrain_store_report *r = o->report;
     if (!ok) {
-        snprintf(r->error, sizeof r->error, "%s: %s; cannot set it aside as %s (%s)", s->path, o->problem, target,
-                 strerror(errno));
+        core_error_set(o->error, CORE_ERROR_IO, "%s: %s; cannot set it aside as %s (%s)", s->path, o->problem,
+                       target, strerror(errno));
     } else {
         const char *suffixes[] = { "-wal", "-journal" };
         for (int n = 0; n < 2; n++) {
@@ -426,20 +427,20 @@ static bool set_aside(opening *o) {
         r->set_aside = true;
         snprintf(r->notice, sizeof r->notice, "%s: %s; set aside as %s, the world opens as generated", s->path,
                  o->problem, target);
-        core_error("terrain", "store: %s", r->notice);
+        core_log_error("terrain", "store: %s", r->notice);
     }
     terrain__text_free(target);
     return ok;
 }
 
-static bool prepare_statements(terrain_store *s, terrain_store_report *r) {
+static bool prepare_statements(terrain_store *s, core_error *error) {
     int rc = sqlite3_prepare_v2(s->db, "INSERT OR REPLACE INTO chunks(x, z, edits) VALUES (?1, ?2, ?3)", -1,
                                 &s->put_chunk, NULL);
     if (rc == SQLITE_OK)
         rc = sqlite3_prepare_v2(s->db, "INSERT OR REPLACE INTO data(name, value) VALUES (?1, ?2)", -1, &s->put_value,
                                 NULL);
     if (rc != SQLITE_OK)
-        snprintf(r->error, sizeof r->error, "%s: cannot prepare its statements (%s)", s->path, sqlite3_errmsg(s->db));
+        core_error_set(error, CORE_ERROR_IO, "%s: cannot prepare its statements (%s)", s->path, sqlite3_errmsg(s->db));
     return rc == SQLITE_OK;
 }
 
@@ -464,29 +465,29 @@ static void rename_old_folder(terrain_store *s, const char *folder, terrain_stor
     terrain__text_free(target);
 }
 
-static bool write_snapshot(terrain_store *s, store_snapshot *snap, char *error, size_t error_size);
+static bool write_snapshot(terrain_store *s, store_snapshot *snap, core_error *error);
 
 /* The old DIR/edits folder of .tel files into the database in one transaction, once; then the folder is renamed. */
-static bool import_old_layout(terrain_store *s, terrain_store_report *r) {
+static bool import_old_layout(terrain_store *s, terrain_store_report *r, core_error *error) {
     char *folder = terrain__text_format("%s/edits", s->dir);
     char marker[32];
     bool ok = true;
     if (!is_folder(folder)) goto done;
     if (setting_get(s->db, "imported_edits", marker, sizeof marker) != SQLITE_OK) {
-        snprintf(r->error, sizeof r->error, "%s: cannot read its settings (%s)", s->path, sqlite3_errmsg(s->db));
+        core_error_set(error, CORE_ERROR_IO, "%s: cannot read its settings (%s)", s->path, sqlite3_errmsg(s->db));
         ok = false;
         goto done;
     }
     if (!marker[0]) {
         terrain_edit_log *staging = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain__edit_log_key(s->edits) });
         terrain_edit_log_load_result loaded;
-        terrain_edit_log_load(staging, s->dir, &loaded);
+        terrain_edit_log_load(staging, s->dir, &loaded, NULL);   /* a folder that cannot be listed: nothing to import */
         /* Every chunk read is clean in the staging log: written as "all", marked by the import. */
         store_snapshot snap = { .chunks = terrain__edit_log_all_files(staging, STORE_COMPACT_ABOVE) };
-        char reason[512];
+        core_error reason = { 0 };
         snprintf(snap.imported_edits, sizeof snap.imported_edits, "%d", loaded.chunks_loaded);
-        if (!write_snapshot(s, &snap, reason, sizeof reason)) {
-            core_error_format(r->error, sizeof r->error, "cannot import %s: %s", folder, reason);
+        if (!write_snapshot(s, &snap, &reason)) {
+            core_error_set(error, reason.code, "cannot import %s: %s", folder, reason.message);
             ok = false;
         } else {
             terrain__edit_log_take(s->edits, staging);
@@ -519,23 +520,20 @@ static void store_free(terrain_store *s) {
     core_free(s, sizeof *s);
 }
 
-static bool desc_valid(const terrain_store_desc *desc, terrain_store_report *r) {
-    if (!desc || !desc->dir || !desc->dir[0] || !desc->edits) {
-        snprintf(r->error, sizeof r->error, "store: create needs %s",
-                 !desc ? "a desc" : !desc->dir || !desc->dir[0] ? "a folder (desc.dir)" : "a log (desc.edits)");
-        return false;
-    }
-    if (!core_make_dirs(desc->dir)) {
-        snprintf(r->error, sizeof r->error, "%s: cannot create the world folder (%s)", desc->dir, strerror(errno));
-        return false;
-    }
+static bool desc_valid(const terrain_store_desc *desc, core_error *error) {
+    if (!desc || !desc->dir || !desc->dir[0] || !desc->edits)
+        return core_error_set(error, CORE_ERROR_ARGUMENT, "store: create needs %s",
+                              !desc ? "a desc" : !desc->dir || !desc->dir[0] ? "a folder (desc.dir)" : "a log (desc.edits)");
+    if (!core_make_dirs(desc->dir))
+        return core_error_set(error, CORE_ERROR_IO, "%s: cannot create the world folder (%s)", desc->dir, strerror(errno));
     return true;
 }
 
-/* Opens the database, setting a damaged one aside once; false with r->error. */
-static bool store_open(terrain_store *s, uint64_t seed, terrain_store_report *r) {
+/* Opens the database, setting a damaged one aside once; false with `error`. */
+static bool store_open(terrain_store *s, uint64_t seed, terrain_store_report *r, core_error *error) {
     for (int attempt = 0; attempt < 2; attempt++) {
-        opening o = { .store = s, .report = r, .staging = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain__edit_log_key(s->edits) }) };
+        opening o = { .store = s, .report = r, .error = error,
+                      .staging = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain__edit_log_key(s->edits) }) };
         open_outcome outcome = open_db(&o, seed);
         if (outcome == OPEN_OK) terrain__edit_log_take(s->edits, o.staging);
         terrain_edit_log_destroy(o.staging);
@@ -545,23 +543,19 @@ static bool store_open(terrain_store *s, uint64_t seed, terrain_store_report *r)
         r->chunks_loaded = 0;
         if (outcome == OPEN_REFUSED) return false;
         if (attempt == 1) {
-            snprintf(r->error, sizeof r->error, "%s: a new database is damaged as soon as it is made: %s", s->path,
-                     o.problem);
-            return false;
+            return core_error_set(error, CORE_ERROR_CORRUPT, "%s: a new database is damaged as soon as it is made: %s",
+                                  s->path, o.problem);
         }
         if (!set_aside(&o)) return false;
     }
     return false;
 }
 
-terrain_store *terrain_store_create(const terrain_store_desc *desc, terrain_store_report *report) {
+terrain_store *terrain_store_create(const terrain_store_desc *desc, terrain_store_report *report, core_error *error) {
     terrain_store_report ignored;
     terrain_store_report *r = report ? report : &ignored;
     memset(r, 0, sizeof *r);
-    if (!desc_valid(desc, r)) {
-        core_error("terrain", "%s", r->error);
-        return NULL;
-    }
+    if (!desc_valid(desc, error)) return NULL;
     terrain_store *s = core_calloc(1, sizeof *s);
     s->dir = terrain__text_format("%s", desc->dir);
     s->path = terrain__text_format("%s/" STORE_FILE, desc->dir);
@@ -572,9 +566,8 @@ terrain_store *terrain_store_create(const terrain_store_desc *desc, terrain_stor
     pthread_mutex_init(&s->lock, NULL);
     pthread_cond_init(&s->wake, NULL);
     pthread_cond_init(&s->done, NULL);
-    bool ok = store_open(s, desc->seed, r) && prepare_statements(s, r) && import_old_layout(s, r);
+    bool ok = store_open(s, desc->seed, r, error) && prepare_statements(s, error) && import_old_layout(s, r, error);
     if (!ok) {
-        core_error("terrain", "store: %s", r->error);
         store_free(s);
         return NULL;
     }
@@ -625,7 +618,7 @@ static void value_set(terrain_store *s, const char *name, const void *bytes, siz
 
 bool terrain_store_put(terrain_store *store, const char *name, const void *bytes, size_t size) {
     if (!store || !name || !name[0] || strlen(name) > STORE_NAME_MAX || (!bytes && size) || size > STORE_VALUE_MAX) {
-        core_error("terrain", "store: put of %s refused (names of 1 to %d bytes, values up to %zu bytes)",
+        core_log_error("terrain", "store: put of %s refused (names of 1 to %d bytes, values up to %zu bytes)",
                    name ? name : "(no name)", STORE_NAME_MAX, STORE_VALUE_MAX);
         return false;
     }
@@ -711,13 +704,13 @@ static int write_rows(terrain_store *s, const store_snapshot *snap) {
 }
 
 /* One transaction; db_lock held. On success every file is marked written. */
-static bool write_snapshot(terrain_store *s, store_snapshot *snap, char *error, size_t error_size) {
+static bool write_snapshot(terrain_store *s, store_snapshot *snap, core_error *error) {
     int rc = exec(s->db, "BEGIN IMMEDIATE");
     if (rc == SQLITE_OK) rc = write_rows(s, snap);
     if (rc == SQLITE_OK) rc = exec(s->db, "COMMIT");
     if (rc != SQLITE_OK) {
         const char *message = sqlite3_errmsg(s->db);
-        core_error_format(error, error_size, "%s: cannot save (%s)", s->path, message ? message : sqlite3_errstr(rc));
+        core_error_set(error, CORE_ERROR_IO, "%s: cannot save (%s)", s->path, message ? message : sqlite3_errstr(rc));
         if (!sqlite3_get_autocommit(s->db)) exec(s->db, "ROLLBACK");
         return false;
     }
@@ -737,21 +730,20 @@ static void snapshot_mark_saved(terrain_store *s, const store_snapshot *snap) {
 }
 
 /* Writes and marks a snapshot, in a trace zone; any thread. */
-static bool commit_snapshot(terrain_store *s, store_snapshot *snap, char *error, size_t error_size) {
+static bool commit_snapshot(terrain_store *s, store_snapshot *snap, core_error *error) {
     TRACE_ZONE("terrain.store.save");
     pthread_mutex_lock(&s->db_lock);
-    bool ok = write_snapshot(s, snap, error, error_size);
+    bool ok = write_snapshot(s, snap, error);
     pthread_mutex_unlock(&s->db_lock);
     if (ok) snapshot_mark_saved(s, snap);
-    else core_error("terrain", "store: %s; the changes stay for the next save", error);
     return ok;
 }
 
 /* What terrain_store_wait reports next. */
-static void record_outcome(terrain_store *s, bool ok, const char *error) {
+static void record_outcome(terrain_store *s, bool ok, const core_error *error) {
     pthread_mutex_lock(&s->lock);
     s->last_ok = ok;
-    snprintf(s->last_error, sizeof s->last_error, "%s", ok || !error ? "" : error);
+    s->last_error = ok || !error ? (core_error){ 0 } : *error;
     s->busy = false;
     pthread_cond_broadcast(&s->done);
     pthread_mutex_unlock(&s->lock);
@@ -767,39 +759,41 @@ static void *save_thread(void *arg) {
         store_snapshot *snap = s->queued;
         s->queued = NULL;
         pthread_mutex_unlock(&s->lock);
-        char error[512] = "";
-        bool ok = commit_snapshot(s, snap, error, sizeof error);
+        core_error error = { 0 };
+        bool ok = commit_snapshot(s, snap, &error);
+        /* Nobody waits on this thread: the failure is logged here, and kept for terrain_store_wait. */
+        if (!ok) core_log_error("terrain", "store: %s; the changes stay for the next save", error.message);
         snapshot_free(snap);
-        record_outcome(s, ok, error);
+        record_outcome(s, ok, &error);
         pthread_mutex_lock(&s->lock);
     }
     pthread_mutex_unlock(&s->lock);
     return NULL;
 }
 
-bool terrain_store_wait(terrain_store *store, char *error, size_t error_size) {
-    if (error && error_size) error[0] = '\0';
-    if (!store) return core_error_format(error, error_size, "store: wait with no store");
+bool terrain_store_wait(terrain_store *store, core_error *error) {
+    if (!store) return core_error_set(error, CORE_ERROR_ARGUMENT, "store: wait with no store");
     pthread_mutex_lock(&store->lock);
     while (store->busy) pthread_cond_wait(&store->done, &store->lock);
     bool ok = store->last_ok;
-    if (!ok && error && error_size) snprintf(error, error_size, "%s", store->last_error);
+    if (!ok && error) *error = store->last_error;
     pthread_mutex_unlock(&store->lock);
     return ok;
 }
 
-bool terrain_store_save(terrain_store *store, char *error, size_t error_size) {
-    if (error && error_size) error[0] = '\0';
-    if (!store) return core_error_format(error, error_size, "store: save with no store");
+bool terrain_store_save(terrain_store *store, core_error *error) {
+    if (!store) return core_error_set(error, CORE_ERROR_ARGUMENT, "store: save with no store");
     /* An older snapshot committed after a newer one would put old bytes in the file while the
      * chunks read as saved: snapshots are taken and committed in one order. */
     pthread_mutex_lock(&store->order);
-    terrain_store_wait(store, NULL, 0);
+    terrain_store_wait(store, NULL);
     store_snapshot *snap = snapshot_take(store);
-    bool ok = snapshot_empty(snap) || commit_snapshot(store, snap, error, error_size);
+    core_error failure = { 0 };
+    bool ok = snapshot_empty(snap) || commit_snapshot(store, snap, &failure);
     pthread_mutex_unlock(&store->order);
     snapshot_free(snap);
-    record_outcome(store, ok, error);
+    record_outcome(store, ok, &failure);
+    if (!ok && error) *error = failure;
     return ok;
 }
 
@@ -836,10 +830,9 @@ bool terrain_store_save_async(terrain_store *store) {
 
 /* ---- reading the seed without opening the world ------------------------------------------- */
 
-int terrain_store_read_seed(const char *dir, uint64_t *seed, char *error, size_t error_size) {
-    if (error && error_size) error[0] = '\0';
+int terrain_store_read_seed(const char *dir, uint64_t *seed, core_error *error) {
     if (!dir || !dir[0]) {
-        core_error_format(error, error_size, "store: no folder");
+        core_error_set(error, CORE_ERROR_ARGUMENT, "store: no folder");
         return -1;
     }
     char *path = terrain__text_format("%s/" STORE_FILE, dir);
@@ -855,11 +848,11 @@ int terrain_store_read_seed(const char *dir, uint64_t *seed, char *error, size_t
     if (rc == SQLITE_OK) rc = setting_get(db, "seed", text, sizeof text);
     char *end;
     unsigned long long value = strtoull(text, &end, 10);
-    if ((rc & 0xff) == SQLITE_BUSY) core_error_format(error, error_size, "%s: in use by another process", path);
+    if ((rc & 0xff) == SQLITE_BUSY) core_error_set(error, CORE_ERROR_IO, "%s: in use by another process", path);
     else if (rc != SQLITE_OK)
-        core_error_format(error, error_size, "%s: cannot be read (%s)", path,
+        core_error_set(error, damaged_code(rc) ? CORE_ERROR_CORRUPT : CORE_ERROR_IO, "%s: cannot be read (%s)", path,
                           db ? sqlite3_errmsg(db) : sqlite3_errstr(rc));
-    else if (!text[0] || *end) core_error_format(error, error_size, "%s: records no seed", path);
+    else if (!text[0] || *end) core_error_set(error, CORE_ERROR_FORMAT, "%s: records no seed", path);
     else *seed = value, result = 1;
 done:
     sqlite3_close(db);

@@ -86,7 +86,7 @@ int terrain_water_planes_find(terrain_world *world, int64_t x, int64_t y, int64_
     const int64_t limit = (int64_t)1 << 30;   /* y·32·2^16 quanta stay well inside 64 bits */
     if (!world || (capacity > 0 && !out) || capacity < 0 || level < 0 || level > WATER_LEVEL_MAX || x < -limit ||
         x > limit || y < -limit || y > limit || z < -limit || z > limit) {
-        core_error("terrain", "water planes: bad request (chunk %lld, %lld, %lld at level %d, capacity %d)",
+        core_log_error("terrain", "water planes: bad request (chunk %lld, %lld, %lld at level %d, capacity %d)",
                    (long long)x, (long long)y, (long long)z, level, capacity);
         return -1;
     }

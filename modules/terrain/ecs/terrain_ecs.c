@@ -61,7 +61,7 @@ static void terrain_cull_system(ecs_iter *it) {
         TerrainMeshChunk *chunks = ecs_field(it, 0);
         for (int i = 0; i < it->count; i++) {
             TerrainMeshChunk *c = &chunks[i];
-            bool on_gpu = c->gpu.vertex_array != 0;
+            bool on_gpu = c->gpu.vertex_array.id != 0;
             const double *origin = on_gpu ? c->gpu.origin : c->mesh.origin;
             const float *lo = on_gpu ? c->gpu.bounds_min : c->mesh.bounds_min;
             const float *hi = on_gpu ? c->gpu.bounds_max : c->mesh.bounds_max;
@@ -98,7 +98,7 @@ static void terrain_upload_system(ecs_iter *it) {
             size_t old_bytes = c->gpu_bytes, cpu_bytes = terrain__mesh_bytes(c->mesh.vertex_count, c->mesh.index_count);
             terrain_gpu_mesh_destroy(&c->gpu);
             c->gpu = terrain_gpu_mesh_upload(&c->mesh);
-            c->gpu_bytes = c->gpu.vertex_array ? cpu_bytes : 0;
+            c->gpu_bytes = c->gpu.vertex_array.id ? cpu_bytes : 0;
             terrain_mesh_free(&c->mesh);
             terrain_upload_water(te, it->commands, it->entities[i], c);
             c->state = TERRAIN_MESH_UPLOADED;
@@ -120,14 +120,14 @@ static void terrain_mesh_chunk_removed(ecs_world *world, ecs_entity entity, void
     TerrainMeshChunk *c = data;
     terrain_mesh_free(&c->mesh);
     terrain__water_free(&c->water);
-    if (te->stream && c->gpu.vertex_array) terrain__stream_free_later(te, c->gpu);
+    if (te->stream && c->gpu.vertex_array.id) terrain__stream_free_later(te, c->gpu);
     else terrain_gpu_mesh_destroy(&c->gpu);
     c->gpu = (terrain_gpu_mesh){ 0 };
 }
 
 terrain_ecs *terrain_ecs_create(const terrain_ecs_desc *desc) {
     if (!desc || !desc->ecs || !desc->terrain) {
-        core_error("terrain", "terrain_ecs_create needs .ecs and .terrain");
+        core_log_error("terrain", "terrain_ecs_create needs .ecs and .terrain");
         return NULL;
     }
     ecs_world *ecs = desc->ecs;

@@ -94,14 +94,14 @@ static bool edit_copy(terrain_edit *out, const terrain_edit *in) {
 bool terrain_ecs_edit(terrain_ecs *te, const terrain_edit *edit) {
     terrain__editor *ed = editor_get(te);
     if (!edit || edit->tool < TERRAIN_EDIT_SCULPT_ADD || edit->tool > TERRAIN_EDIT_ERODE) {
-        core_error("terrain", "terrain_ecs_edit: tool %d is not a brush (sculpt, sweep, deposit, erode)",
+        core_log_error("terrain", "terrain_ecs_edit: tool %d is not a brush (sculpt, sweep, deposit, erode)",
                    edit ? (int)edit->tool : -1);
         ed->stats.edits_refused++;
         return false;
     }
     terrain_edit copy;
     if (!edit_copy(&copy, edit)) {
-        core_error("terrain", "terrain_ecs_edit: a sweep needs 1 … 4096 points and its segments");
+        core_log_error("terrain", "terrain_ecs_edit: a sweep needs 1 … 4096 points and its segments");
         ed->stats.edits_refused++;
         return false;
     }

@@ -30,7 +30,7 @@ struct terrain_water {
     gfx_program surface, under, probe;
     gfx_texture dudv, normals;
     gfx_vertex_array empty;
-    GLuint color_copy, depth_copy;        /* the opaque frame, copied each draw */
+    gfx_texture color_copy, depth_copy;   /* the opaque frame, copied each draw */
     int copy_width, copy_height;
     gfx_framebuffer reflection, refraction;   /* high: half the frame's size */
     ecs_component plane_component;
@@ -134,11 +134,11 @@ static bool water_quality_valid(terrain_water_quality quality) { return (unsigne
 
 terrain_water *terrain_water_create(const terrain_water_desc *desc) {
     if (!desc || !desc->gfx || !desc->world) {
-        core_error("terrain", "terrain_water_create: gfx and world are required");
+        core_log_error("terrain", "terrain_water_create: gfx and world are required");
         return NULL;
     }
     if (!water_quality_valid(desc->quality)) {
-        core_error("terrain", "terrain_water_create: unknown quality %d", (int)desc->quality);
+        core_log_error("terrain", "terrain_water_create: unknown quality %d", (int)desc->quality);
         return NULL;
     }
     gfx_program surface = gfx_program_load(desc->gfx, "water.vert", "water.frag");
@@ -150,7 +150,7 @@ terrain_water *terrain_water_create(const terrain_water_desc *desc) {
     glCreateQueries(GL_ANY_SAMPLES_PASSED, 2, w->queries);
     if (w->desc.quality == TERRAIN_WATER_DEFAULT) w->desc.quality = TERRAIN_WATER_LOW;
     water_maps(w);
-    glCreateVertexArrays(1, &w->empty.id);
+    w->empty = gfx_vertex_array_create(&(gfx_vertex_array_desc){ 0 });
     if (desc->ecs) {
         /* Registering by the same name again returns the same component: whichever of this and
          * the mesh phase comes first makes it. */
@@ -161,9 +161,8 @@ terrain_water *terrain_water_create(const terrain_water_desc *desc) {
 }
 
 static void water_free_copies(terrain_water *w) {
-    if (w->color_copy) glDeleteTextures(1, &w->color_copy);
-    if (w->depth_copy) glDeleteTextures(1, &w->depth_copy);
-    w->color_copy = w->depth_copy = 0;
+    gfx_texture_destroy(&w->color_copy);
+    gfx_texture_destroy(&w->depth_copy);
     w->copy_width = w->copy_height = 0;
 }
 
@@ -187,7 +186,7 @@ void terrain_water_destroy(terrain_water *w) {
 
 bool terrain_water_set_quality(terrain_water *w, terrain_water_quality quality) {
     if (!water_quality_valid(quality)) {
-        core_error("terrain", "terrain_water_set_quality: unknown quality %d", (int)quality);
+        core_log_error("terrain", "terrain_water_set_quality: unknown quality %d", (int)quality);
         return false;
     }
     if (quality == TERRAIN_WATER_DEFAULT) quality = TERRAIN_WATER_LOW;
@@ -201,15 +200,9 @@ terrain_water_stats_info terrain_water_stats(const terrain_water *w) { return w-
 
 /* ---- targets ------------------------------------------------------------------------------- */
 
-static GLuint water_copy_texture(GLenum format, int width, int height, GLenum filter) {
-    GLuint id;
-    glCreateTextures(GL_TEXTURE_2D, 1, &id);
-    glTextureStorage2D(id, 1, format, width, height);
-    glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, filter);
-    glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, filter);
-    glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    return id;
+static gfx_texture water_copy_texture(gfx_format format, int width, int height, bool nearest) {
+    return gfx_texture_create(&(gfx_texture_desc){ .width = width, .height = height, .format = format,
+                                                   .nearest = nearest, .clamp = true });
 }
 
 /* The copies of the opaque frame, (re)made at its size. The depth copy is 24-bit like the
@@ -218,22 +211,28 @@ static GLuint water_copy_texture(GLenum format, int width, int height, GLenum fi
 static void water_copy_frame(terrain_water *w, int width, int height) {
     if (w->copy_width != width || w->copy_height != height) {
         water_free_copies(w);
-        w->color_copy = water_copy_texture(GL_RGBA8, width, height, GL_LINEAR);
-        w->depth_copy = water_copy_texture(GL_DEPTH_COMPONENT24, width, height, GL_NEAREST);
+        w->color_copy = water_copy_texture(GFX_FORMAT_RGBA8, width, height, false);
+        w->depth_copy = water_copy_texture(GFX_FORMAT_DEPTH24, width, height, true);
         w->copy_width = width, w->copy_height = height;
     }
-    glCopyTextureSubImage2D(w->color_copy, 0, 0, 0, 0, 0, width, height);
-    glCopyTextureSubImage2D(w->depth_copy, 0, 0, 0, 0, 0, width, height);
+    glCopyTextureSubImage2D(gfx_texture_gl(w->color_copy), 0, 0, 0, 0, 0, width, height);
+    glCopyTextureSubImage2D(gfx_texture_gl(w->depth_copy), 0, 0, 0, 0, 0, width, height);
 }
 
 /* High: the reflection and refraction targets at half the frame's size; false (logged) when
  * the driver refuses them. */
 static bool water_pass_targets(terrain_water *w, int width, int height) {
     int half_width = width / 2 > 1 ? width / 2 : 1, half_height = height / 2 > 1 ? height / 2 : 1;
-    if (w->reflection.id && w->reflection.width == half_width && w->reflection.height == half_height) return true;
+    if (w->reflection.id) {
+        int made_width, made_height;
+        gfx_framebuffer_size(w->reflection, &made_width, &made_height);
+        if (made_width == half_width && made_height == half_height) return true;
+    }
     water_free_passes(w);
     gfx_framebuffer_desc fb = { .width = half_width, .height = half_height, .depth = true };
-    if (gfx_framebuffer_create(&w->reflection, &fb) && gfx_framebuffer_create(&w->refraction, &fb)) return true;
+    w->reflection = gfx_framebuffer_create(&fb);
+    w->refraction = gfx_framebuffer_create(&fb);
+    if (w->reflection.id && w->refraction.id) return true;
     water_free_passes(w);
     return false;
 }
@@ -271,14 +270,14 @@ static void water_sea_passes(terrain_water *w, terrain_ecs *te, terrain_renderer
     terrain_frustum frustum = terrain_frustum_from_view(&mirrored);
     int count = water_gather_meshes(w, te, &frustum);
     const float clear[4] = { 0, 0, 0, 1 };
-    gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "water.reflection", .target = &w->reflection, .clear_color = true,
+    gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "water.reflection", .target = w->reflection, .clear_color = true,
                                           .color = { clear[0], clear[1], clear[2], clear[3] }, .clear_depth = true });
     float above[4] = { 0, 1, 0, (float)(mirrored.camera[1] - sea_level) + WATER_CLIP_MARGIN };
     terrain__renderer_draw_clipped(renderer, &mirrored, w->meshes, count, above);
     gfx_pass_end(gfx);
 
     count = water_gather_meshes(w, te, NULL);
-    gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "water.refraction", .target = &w->refraction, .clear_color = true,
+    gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "water.refraction", .target = w->refraction, .clear_color = true,
                                           .color = { clear[0], clear[1], clear[2], clear[3] }, .clear_depth = true });
     float below[4] = { 0, -1, 0, (float)(sea_level - view->camera[1]) + WATER_CLIP_MARGIN };
     terrain__renderer_draw_clipped(renderer, view, w->meshes, count, below);
@@ -294,8 +293,6 @@ typedef struct water_frame {
     float under_surface;                  /* the surface the camera is under; NAN: none */
     bool high;                            /* the sea samples the passes */
 } water_frame;
-
-static void water_bind(GLuint texture, int unit) { glBindTextureUnit((GLuint)unit, texture); }
 
 /* A camera coordinate modulo the maps' common period, in double: small floats for the shader. */
 static float water_wrap(double value) { return (float)(value - floor(value / WATER_MAP_PERIOD) * WATER_MAP_PERIOD); }
@@ -331,9 +328,9 @@ static void water_surface_uniforms(terrain_water *w, const water_frame *f, terra
 /* The frame under a surface: the copies, or the sea's refraction pass (and its reflection). */
 static void water_sources(terrain_water *w, bool passes) {
     gfx_program p = w->surface;
-    water_bind(passes ? w->refraction.color.id : w->color_copy, UNIT_SCENE_COLOR);
-    water_bind(passes ? w->refraction.depth.id : w->depth_copy, UNIT_SCENE_DEPTH);
-    water_bind(passes ? w->reflection.color.id : w->color_copy, UNIT_REFLECTION);
+    gfx_texture_bind(passes ? gfx_framebuffer_color(w->refraction) : w->color_copy, UNIT_SCENE_COLOR);
+    gfx_texture_bind(passes ? gfx_framebuffer_depth(w->refraction) : w->depth_copy, UNIT_SCENE_DEPTH);
+    gfx_texture_bind(passes ? gfx_framebuffer_color(w->reflection) : w->color_copy, UNIT_REFLECTION);
     gfx_uniform_int(w->desc.gfx, p, "u_use_reflection", passes ? 1 : 0);
 }
 
@@ -400,7 +397,7 @@ static void water_draw_fog(terrain_water *w, const water_frame *f) {
     gfx_uniform_float(gfx, p, "u_surface_above", (float)(f->under_surface - f->view->camera[1]));
     gfx_uniform_float(gfx, p, "u_water_density", WATER_UNDER_DENSITY);
     gfx_uniform_int(gfx, p, "u_scene_depth", UNIT_SCENE_DEPTH);
-    water_bind(w->depth_copy, UNIT_SCENE_DEPTH);
+    gfx_texture_bind(w->depth_copy, UNIT_SCENE_DEPTH);
     glDisable(GL_DEPTH_TEST);
     gfx_draw(&(gfx_draw_desc){ .vertex_array = w->empty, .count = 3 });
     glEnable(GL_DEPTH_TEST);

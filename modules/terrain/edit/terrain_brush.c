@@ -54,7 +54,9 @@ static double brush_weight(const terrain_columns *c, double x, double z, double 
     return falloff == TERRAIN_FALLOFF_FLAT ? 1.0 : (1.0 - t) * (1.0 - t);   /* 000 §4.1's g(r) */
 }
 
-static bool valid_falloff(terrain_falloff f) { return f == TERRAIN_FALLOFF_SMOOTH || f == TERRAIN_FALLOFF_FLAT; }
+static bool valid_falloff(terrain_falloff f) {
+    return f == TERRAIN_FALLOFF_DEFAULT || f == TERRAIN_FALLOFF_SMOOTH || f == TERRAIN_FALLOFF_FLAT;
+}
 
 /* ---- deposit (000 §4.3) --------------------------------------------------------------------- */
 
@@ -72,21 +74,21 @@ static int by_remainder(const void *a, const void *b) {
 
 static bool valid_deposit(const terrain_deposit_desc *d, terrain_material material) {
     if (material != TERRAIN_SAND && material != TERRAIN_ROCKS) {
-        core_error("terrain", "deposit: material %d (%s) is not sand or rocks", (int)d->material,
-                   terrain_material_name(d->material));
+        core_log_error("terrain", "deposit: brush material %d (%s) is not sand or rocks", (int)d->material,
+                   terrain_material_name(material));
         return false;
     }
     if (!isfinite(d->x) || !isfinite(d->z) || !(d->radius > 0.0f) || d->radius > MAX_RADIUS) {
-        core_error("terrain", "deposit: centre (%g, %g), radius %g m (finite, 0 < radius <= %g)", d->x, d->z,
+        core_log_error("terrain", "deposit: centre (%g, %g), radius %g m (finite, 0 < radius <= %g)", d->x, d->z,
                    (double)d->radius, (double)MAX_RADIUS);
         return false;
     }
     if (!(d->volume >= 0.0) || d->volume > MAX_VOLUME) {
-        core_error("terrain", "deposit: volume %g m3 (0 ... %g)", d->volume, MAX_VOLUME);
+        core_log_error("terrain", "deposit: volume %g m3 (0 ... %g)", d->volume, MAX_VOLUME);
         return false;
     }
     if (!valid_falloff(d->falloff)) {
-        core_error("terrain", "deposit: unknown falloff %d", (int)d->falloff);
+        core_log_error("terrain", "deposit: unknown falloff %d", (int)d->falloff);
         return false;
     }
     return true;
@@ -120,10 +122,10 @@ static int deposit_shares(const terrain_columns *c, const terrain_deposit_desc *
 bool terrain_deposit(terrain_columns *c, const terrain_deposit_desc *desc, int64_t *quanta) {
     if (quanta) *quanta = 0;
     if (!c || !desc) {
-        core_error("terrain", "deposit: no region or no description");
+        core_log_error("terrain", "deposit: no region or no description");
         return false;
     }
-    terrain_material material = desc->material == TERRAIN_AIR ? TERRAIN_SAND : desc->material;
+    terrain_material material = terrain__brush_material(desc->material, TERRAIN_SAND);
     if (!valid_deposit(desc, material)) return false;
     int64_t total = llround(desc->volume * TERRAIN__QUANTA_PER_METRE);
     if (total == 0) return true;
@@ -133,7 +135,7 @@ bool terrain_deposit(terrain_columns *c, const terrain_deposit_desc *desc, int64
     int64_t weight_sum;
     int count = deposit_shares(c, desc, &shares, &capacity, &weight_sum);
     if (count == 0) {
-        core_error("terrain", "deposit: the brush at (%g, %g), radius %g m, covers no column centre of the region",
+        core_log_error("terrain", "deposit: the brush at (%g, %g), radius %g m, covers no column centre of the region",
                    desc->x, desc->z, (double)desc->radius);
         core_free(shares, capacity * sizeof *shares);
         return false;
@@ -152,7 +154,7 @@ bool terrain_deposit(terrain_columns *c, const terrain_deposit_desc *desc, int64
     for (int n = 0; n < count && fits; n++)
         fits = c->ground[terrain__cell(c, shares[n].i, shares[n].k)] + shares[n].quanta < TERRAIN__COLUMN_MAX_QUANTA;
     if (!fits) {
-        core_error("terrain", "deposit: %g m3 on a radius of %g m would pile a column over %d m", desc->volume,
+        core_log_error("terrain", "deposit: %g m3 on a radius of %g m would pile a column over %d m", desc->volume,
                    (double)desc->radius, TERRAIN__COLUMN_MAX_QUANTA / 32);
     } else {
         for (int n = 0; n < count; n++) {
@@ -175,27 +177,27 @@ bool terrain_deposit(terrain_columns *c, const terrain_deposit_desc *desc, int64
 /* ---- erosion (000 §4.4) --------------------------------------------------------------------- */
 
 static bool valid_erode(const terrain_erode_desc *d) {
-    if (d->mode != TERRAIN_ERODE_SURFACE && d->mode != TERRAIN_ERODE_COLLAPSE) {
-        core_error("terrain", "erode: unknown mode %d", (int)d->mode);
+    if (d->mode != TERRAIN_ERODE_DEFAULT && d->mode != TERRAIN_ERODE_SURFACE && d->mode != TERRAIN_ERODE_COLLAPSE) {
+        core_log_error("terrain", "erode: unknown mode %d", (int)d->mode);
         return false;
     }
     bool collapse = d->mode == TERRAIN_ERODE_COLLAPSE;
     if (!isfinite(d->x) || !isfinite(d->z) || (collapse && !isfinite(d->y)) || !(d->radius > 0.0f) ||
         d->radius > MAX_RADIUS) {
-        core_error("terrain", "erode: centre (%g, %g, %g), radius %g m (finite, 0 < radius <= %g)", d->x, d->y, d->z,
+        core_log_error("terrain", "erode: centre (%g, %g, %g), radius %g m (finite, 0 < radius <= %g)", d->x, d->y, d->z,
                    (double)d->radius, (double)MAX_RADIUS);
         return false;
     }
     if (!(d->depth >= 0.0f) || d->depth > MAX_RADIUS) {
-        core_error("terrain", "erode: depth %g m (0 ... %g)", (double)d->depth, (double)MAX_RADIUS);
+        core_log_error("terrain", "erode: depth %g m (0 ... %g)", (double)d->depth, (double)MAX_RADIUS);
         return false;
     }
     if (!(d->rocks_ratio >= 0.0f && d->rocks_ratio <= 1.0f)) {
-        core_error("terrain", "erode: rocks_ratio %g (0 ... 1)", (double)d->rocks_ratio);
+        core_log_error("terrain", "erode: rocks_ratio %g (0 ... 1)", (double)d->rocks_ratio);
         return false;
     }
     if (!valid_falloff(d->falloff)) {
-        core_error("terrain", "erode: unknown falloff %d", (int)d->falloff);
+        core_log_error("terrain", "erode: unknown falloff %d", (int)d->falloff);
         return false;
     }
     return true;
@@ -285,7 +287,7 @@ static void erode_span(eroder *e, int i, int k, int64_t lo, int64_t hi) {
 bool terrain_erode(terrain_columns *c, const terrain_erode_desc *desc, int64_t *quanta) {
     if (quanta) *quanta = 0;
     if (!c || !desc) {
-        core_error("terrain", "erode: no region or no description");
+        core_log_error("terrain", "erode: no region or no description");
         return false;
     }
     if (!valid_erode(desc)) return false;
@@ -297,7 +299,7 @@ bool terrain_erode(terrain_columns *c, const terrain_erode_desc *desc, int64_t *
             for (int i = i0; i <= i1; i++) {
                 double w = brush_weight(c, desc->x, desc->z, r, desc->falloff, i, k);
                 if (w <= 0.0) continue;
-                if (desc->mode == TERRAIN_ERODE_SURFACE) {
+                if (desc->mode != TERRAIN_ERODE_COLLAPSE) {   /* surface, the default */
                     erode_surface(&e, i, k, llround((double)desc->depth * w * TERRAIN__QUANTA_PER_METRE));
                     continue;
                 }

@@ -50,13 +50,13 @@ static size_t flat(const terrain_columns *c, int i, int k) {
 static bool valid_desc(const terrain_columns_desc *d) {
     if (d->width < 1 || d->depth < 1 || d->width > TERRAIN__MAX_SIDE || d->depth > TERRAIN__MAX_SIDE ||
         (int64_t)d->width * d->depth > TERRAIN__MAX_REGION_COLUMNS) {
-        core_error("terrain", "columns: a region of %d x %d columns (each side 1 ... %d, at most %d in all)",
+        core_log_error("terrain", "columns: a region of %d x %d columns (each side 1 ... %d, at most %d in all)",
                    d->width, d->depth, TERRAIN__MAX_SIDE, TERRAIN__MAX_REGION_COLUMNS);
         return false;
     }
     const int64_t limit = (int64_t)1 << 52;
     if (d->x < -limit || d->x > limit || d->z < -limit || d->z > limit) {
-        core_error("terrain", "columns: a region at column (%lld, %lld), beyond +-2^52",
+        core_log_error("terrain", "columns: a region at column (%lld, %lld), beyond +-2^52",
                    (long long)d->x, (long long)d->z);
         return false;
     }
@@ -300,7 +300,7 @@ bool terrain_columns_load(terrain_columns *c, terrain_chunk_coord coord, const t
     int64_t i1 = CORE_MIN(cx + TERRAIN_CHUNK_COLUMNS, (int64_t)c->width);
     int64_t k1 = CORE_MIN(cz + TERRAIN_CHUNK_COLUMNS, (int64_t)c->depth);
     if (cx >= c->width || cz >= c->depth || i1 <= 0 || k1 <= 0) {
-        core_error("terrain", "columns: chunk (%lld, %lld) does not overlap the region", (long long)coord.x,
+        core_log_error("terrain", "columns: chunk (%lld, %lld) does not overlap the region", (long long)coord.x,
                    (long long)coord.z);
         return false;
     }
@@ -319,7 +319,7 @@ bool terrain_columns_load(terrain_columns *c, terrain_chunk_coord coord, const t
                 top += layer.quanta;
             }
             if (top >= TERRAIN__COLUMN_MAX_QUANTA) {
-                core_error("terrain", "columns: column (%d, %d) of chunk (%lld, %lld) is %.0f m tall (over %d m)",
+                core_log_error("terrain", "columns: column (%d, %d) of chunk (%lld, %lld) is %.0f m tall (over %d m)",
                            (int)(i - cx), (int)(k - cz), (long long)coord.x, (long long)coord.z,
                            (double)top * TERRAIN_HEIGHT_QUANTUM, TERRAIN__COLUMN_MAX_QUANTA / 32);
                 ok = false;
@@ -338,7 +338,7 @@ bool terrain_columns_load(terrain_columns *c, terrain_chunk_coord coord, const t
 terrain_stacks *terrain_columns_to_stacks(const terrain_columns *c, terrain_chunk_coord coord) {
     int64_t cx = coord.x * TERRAIN_CHUNK_COLUMNS - c->x0, cz = coord.z * TERRAIN_CHUNK_COLUMNS - c->z0;
     if (cx < 0 || cz < 0 || cx + TERRAIN_CHUNK_COLUMNS > c->width || cz + TERRAIN_CHUNK_COLUMNS > c->depth) {
-        core_error("terrain", "columns: chunk (%lld, %lld) is not inside the region", (long long)coord.x,
+        core_log_error("terrain", "columns: chunk (%lld, %lld) is not inside the region", (long long)coord.x,
                    (long long)coord.z);
         return NULL;
     }
@@ -380,11 +380,11 @@ int terrain_columns_get(const terrain_columns *c, int i, int k, terrain_layer *l
 
 bool terrain_columns_set(terrain_columns *c, int i, int k, const terrain_layer *layers, int count) {
     if (!inside(c, i, k)) {
-        core_error("terrain", "columns: set column (%d, %d) outside the %d x %d region", i, k, c->width, c->depth);
+        core_log_error("terrain", "columns: set column (%d, %d) outside the %d x %d region", i, k, c->width, c->depth);
         return false;
     }
     if (count < 0 || (count > 0 && !layers)) {
-        core_error("terrain", "columns: set column (%d, %d) with %d layers", i, k, count);
+        core_log_error("terrain", "columns: set column (%d, %d) with %d layers", i, k, count);
         return false;
     }
     terrain__clayer *q = core_alloc(((size_t)count + 1) * sizeof *q);
@@ -397,17 +397,17 @@ bool terrain_columns_set(terrain_columns *c, int i, int k, const terrain_layer *
     for (int l = 0; l < count && ok; l++) {
         float t = layers[l].thickness;
         if ((unsigned)layers[l].material >= TERRAIN_MATERIAL_MAX) {
-            core_error("terrain", "columns: set column (%d, %d): layer %d has unknown material %d", i, k, l,
+            core_log_error("terrain", "columns: set column (%d, %d): layer %d has unknown material %d", i, k, l,
                        (int)layers[l].material);
             ok = false;
         } else if (!(t >= 0.0f) || !isfinite(t)) {
-            core_error("terrain", "columns: set column (%d, %d): layer %d has thickness %g", i, k, l, (double)t);
+            core_log_error("terrain", "columns: set column (%d, %d): layer %d has thickness %g", i, k, l, (double)t);
             ok = false;
         } else {
             exact += t;
             int64_t top = llround(exact * (double)TERRAIN__QUANTA_PER_METRE);
             if (top >= TERRAIN__COLUMN_MAX_QUANTA) {
-                core_error("terrain", "columns: set column (%d, %d) over %d m tall", i, k,
+                core_log_error("terrain", "columns: set column (%d, %d) over %d m tall", i, k,
                            TERRAIN__COLUMN_MAX_QUANTA / 32);
                 ok = false;
             } else {

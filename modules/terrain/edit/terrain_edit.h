@@ -165,16 +165,27 @@ bool terrain_stabilize_regions(terrain_columns *const *regions, int count, const
 /* ---- brushes (000 §4.3, §4.4) ---- */
 
 typedef enum terrain_falloff {
+    TERRAIN_FALLOFF_DEFAULT = 0,      /* smooth */
     TERRAIN_FALLOFF_SMOOTH,           /* (1 − r²/R²)², 000 §4.1's g(r) */
     TERRAIN_FALLOFF_FLAT,             /* the same everywhere inside R */
 } terrain_falloff;
+
+/* What a brush adds, as a desc names it. Zero is the tool's default (CONVENTIONS.md: no zero is
+ * also a real value), so these are not terrain_material's values: the stored material (bytes in
+ * stacks and edit files) stays as it is; each tool maps these onto it. */
+typedef enum terrain_brush_material {
+    TERRAIN_BRUSH_DEFAULT = 0,        /* the tool's own: sand for a deposit, bedrock for a sculpt */
+    TERRAIN_BRUSH_BEDROCK,
+    TERRAIN_BRUSH_SAND,
+    TERRAIN_BRUSH_ROCKS,
+} terrain_brush_material;
 
 /* Drops `volume` m³ of sand or rocks on the columns whose centres lie within `radius` of (x, z)
  * (world metres), distributed by the falloff and rounded so that the total is exact (to the
  * quantum·column): a brush that overhangs the region's border puts it all on the columns inside.
  * It lands on each column's pile (sorted: sand goes under rocks, both under water). */
 typedef struct terrain_deposit_desc {
-    terrain_material material;        /* TERRAIN_SAND or TERRAIN_ROCKS; 0 (air) = sand */
+    terrain_brush_material material;  /* TERRAIN_BRUSH_SAND or _ROCKS; 0 = sand */
     double x, z;
     float radius;                     /* metres, > 0 */
     double volume;                    /* m³, ≥ 0 */
@@ -182,6 +193,7 @@ typedef struct terrain_deposit_desc {
 } terrain_deposit_desc;
 
 typedef enum terrain_erode_mode {
+    TERRAIN_ERODE_DEFAULT = 0,        /* surface */
     TERRAIN_ERODE_SURFACE,            /* each column under the disc whose highest stable layer is
                                          bedrock loses depth·falloff from its top */
     TERRAIN_ERODE_COLLAPSE,           /* all bedrock inside the ball of radius R around (x, y, z)
@@ -244,8 +256,8 @@ typedef struct terrain_sculpt_desc {
     float radius;                     /* R, metres, 0 < R ≤ 32 */
     float offset;                     /* δ / R, 0 … 1; 0 = 0.5 (000: δ = R/2 works well) */
     bool carve;                       /* false: add material; true: carve it away */
-    terrain_material material;        /* what added material is: bedrock or sand (in the field);
-                                         0 (air) = bedrock */
+    terrain_brush_material material;  /* what added material is: TERRAIN_BRUSH_BEDROCK or _SAND
+                                         (in the field); 0 = bedrock */
 } terrain_sculpt_desc;
 
 bool terrain_sculpt(terrain_columns *columns, const terrain_sculpt_desc *desc, int64_t *changed);

@@ -169,4 +169,18 @@ int terrain__columns_cap_water(terrain_columns *columns, terrain_chunk_coord coo
 
 /* ==== end of the edits-in-the-world section ================================================ */
 
+/* ---- brush materials (terrain_brush.c, terrain_sculpt.c) ---- */
+
+/* A desc's brush material as the stored material: DEFAULT is `fallback`; an unknown value is
+ * TERRAIN_MATERIAL_MAX (which no tool accepts). */
+static inline terrain_material terrain__brush_material(terrain_brush_material material, terrain_material fallback) {
+    switch (material) {
+    case TERRAIN_BRUSH_DEFAULT: return fallback;
+    case TERRAIN_BRUSH_BEDROCK: return TERRAIN_BEDROCK;
+    case TERRAIN_BRUSH_SAND: return TERRAIN_SAND;
+    case TERRAIN_BRUSH_ROCKS: return TERRAIN_ROCKS;
+    }
+    return TERRAIN_MATERIAL_MAX;
+}
+
 #endif

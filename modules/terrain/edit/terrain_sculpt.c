@@ -444,20 +444,20 @@ static void sculpt_column(sculptor *s, int i, int k) {
 static bool valid_sculpt(const terrain_sculpt_desc *d, terrain_material material) {
     const double *v = d->target;
     if (!isfinite(v[0]) || !isfinite(v[1]) || !isfinite(v[2]) || !valid_height(v[1])) {
-        core_error("terrain", "sculpt: target (%g, %g, %g) (finite, y within %g ... %g)", v[0], v[1], v[2], LOWEST_Y,
+        core_log_error("terrain", "sculpt: target (%g, %g, %g) (finite, y within %g ... %g)", v[0], v[1], v[2], LOWEST_Y,
                    HIGHEST_Y);
         return false;
     }
     if (!valid_radius(d->radius)) {
-        core_error("terrain", "sculpt: radius %g m (0 < radius <= %g)", (double)d->radius, (double)MAX_RADIUS);
+        core_log_error("terrain", "sculpt: radius %g m (0 < radius <= %g)", (double)d->radius, (double)MAX_RADIUS);
         return false;
     }
     if (!(d->offset >= 0.0f && d->offset <= 1.0f)) {
-        core_error("terrain", "sculpt: offset %g (0 ... 1, a share of the radius)", (double)d->offset);
+        core_log_error("terrain", "sculpt: offset %g (0 ... 1, a share of the radius)", (double)d->offset);
         return false;
     }
     if (material != TERRAIN_BEDROCK && material != TERRAIN_SAND) {
-        core_error("terrain", "sculpt: material %d (%s) is not in the field (bedrock or sand)", (int)d->material,
+        core_log_error("terrain", "sculpt: brush material %d (%s) is not in the field (bedrock or sand)", (int)d->material,
                    terrain_material_name(material));
         return false;
     }
@@ -467,10 +467,10 @@ static bool valid_sculpt(const terrain_sculpt_desc *d, terrain_material material
 bool terrain_sculpt(terrain_columns *c, const terrain_sculpt_desc *desc, int64_t *changed) {
     if (changed) *changed = 0;
     if (!c || !desc) {
-        core_error("terrain", "sculpt: no region or no description");
+        core_log_error("terrain", "sculpt: no region or no description");
         return false;
     }
-    terrain_material material = desc->material == TERRAIN_AIR ? TERRAIN_BEDROCK : desc->material;
+    terrain_material material = terrain__brush_material(desc->material, TERRAIN_BEDROCK);
     if (!valid_sculpt(desc, material)) return false;
     const double radius = desc->radius, delta = (desc->offset == 0.0f ? 0.5 : (double)desc->offset) * radius;
     /* The ball's centre lies within δ (+ the projection's half metre) of the target, the columns
@@ -478,7 +478,7 @@ bool terrain_sculpt(terrain_columns *c, const terrain_sculpt_desc *desc, int64_t
     const double reach = radius + delta + REGION_MARGIN;
     double v[3] = { desc->target[0], desc->target[1], desc->target[2] };
     if (!region_holds(c, v[0] - reach, v[0] + reach, v[2] - reach, v[2] + reach)) {
-        core_error("terrain",
+        core_log_error("terrain",
                    "sculpt: the region (columns %lld ... %lld, %lld ... %lld) does not hold every column within "
                    "%g m of the target (%g, %g)",
                    (long long)c->x0, (long long)(c->x0 + c->width - 1), (long long)c->z0,
@@ -491,7 +491,7 @@ bool terrain_sculpt(terrain_columns *c, const terrain_sculpt_desc *desc, int64_t
     terrain__region_field_init(&s.field, c, i0, k0, i1, k1);
     double n[3];
     if (!project_to_surface(&s.field, v, n)) {
-        core_error("terrain", "sculpt: no surface within %g m of the target (%g, %g, %g)", PROJECT_REACH,
+        core_log_error("terrain", "sculpt: no surface within %g m of the target (%g, %g, %g)", PROJECT_REACH,
                    desc->target[0], desc->target[1], desc->target[2]);
         terrain__region_field_free(&s.field);
         return false;
@@ -611,33 +611,33 @@ static int by_column_then_height(const void *x, const void *y) {
 
 static bool valid_sweep(const terrain_sweep_desc *d) {
     if (!d->points || d->point_count < 1 || d->point_count > MAX_POINTS) {
-        core_error("terrain", "sweep: %d points%s (1 ... %d)", d->point_count, d->points ? "" : " (none given)",
+        core_log_error("terrain", "sweep: %d points%s (1 ... %d)", d->point_count, d->points ? "" : " (none given)",
                    MAX_POINTS);
         return false;
     }
     for (int p = 0; p < d->point_count; p++) {
         const double *v = d->points[p];
         if (!isfinite(v[0]) || !isfinite(v[1]) || !isfinite(v[2]) || !valid_height(v[1])) {
-            core_error("terrain", "sweep: point %d at (%g, %g, %g) (finite, y within %g ... %g)", p, v[0], v[1], v[2],
+            core_log_error("terrain", "sweep: point %d at (%g, %g, %g) (finite, y within %g ... %g)", p, v[0], v[1], v[2],
                        LOWEST_Y, HIGHEST_Y);
             return false;
         }
         float r = d->radii ? d->radii[p] : d->radius;
         if (!valid_radius(r)) {
-            core_error("terrain", "sweep: radius %g m at point %d (0 < radius <= %g)", (double)r, p,
+            core_log_error("terrain", "sweep: radius %g m at point %d (0 < radius <= %g)", (double)r, p,
                        (double)MAX_RADIUS);
             return false;
         }
     }
     if (d->segments) {
         if (d->segment_count < 1 || d->segment_count > MAX_SEGMENTS) {
-            core_error("terrain", "sweep: %d segments (1 ... %d)", d->segment_count, MAX_SEGMENTS);
+            core_log_error("terrain", "sweep: %d segments (1 ... %d)", d->segment_count, MAX_SEGMENTS);
             return false;
         }
         for (int s = 0; s < d->segment_count; s++)
             for (int e = 0; e < 2; e++)
                 if (d->segments[s][e] < 0 || d->segments[s][e] >= d->point_count) {
-                    core_error("terrain", "sweep: segment %d names point %d of %d", s, d->segments[s][e],
+                    core_log_error("terrain", "sweep: segment %d names point %d of %d", s, d->segments[s][e],
                                d->point_count);
                     return false;
                 }
@@ -663,7 +663,7 @@ static int sweep_segments(const terrain_sweep_desc *d, sweep_segment **out) {
 bool terrain_sweep(terrain_columns *c, const terrain_sweep_desc *desc, int64_t *changed) {
     if (changed) *changed = 0;
     if (!c || !desc) {
-        core_error("terrain", "sweep: no region or no description");
+        core_log_error("terrain", "sweep: no region or no description");
         return false;
     }
     if (!valid_sweep(desc)) return false;
@@ -681,7 +681,7 @@ bool terrain_sweep(terrain_columns *c, const terrain_sweep_desc *desc, int64_t *
     }
     double reach = r_max + REGION_MARGIN;
     if (!region_holds(c, lo[0] - reach, hi[0] + reach, lo[2] - reach, hi[2] + reach)) {
-        core_error("terrain",
+        core_log_error("terrain",
                    "sweep: the region (columns %lld ... %lld, %lld ... %lld) does not hold every column within %g m "
                    "of the skeleton (x %g ... %g, z %g ... %g)",
                    (long long)c->x0, (long long)(c->x0 + c->width - 1), (long long)c->z0,
@@ -777,14 +777,14 @@ static void fill_hit(terrain_world *world, const double origin[3], const double 
 bool terrain_raycast(terrain_world *world, const double origin[3], const float direction[3], float max_distance,
                      terrain_ray_hit *hit) {
     if (!world || !origin || !direction) {
-        core_error("terrain", "raycast: no world, origin or direction");
+        core_log_error("terrain", "raycast: no world, origin or direction");
         return false;
     }
     double dir[3] = { direction[0], direction[1], direction[2] };
     double length = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
     if (!isfinite(origin[0]) || !isfinite(origin[1]) || !isfinite(origin[2]) || !isfinite(length) ||
         !(length > 1e-12) || !(max_distance > 0.0f) || max_distance > RAY_MAX_DISTANCE) {
-        core_error("terrain",
+        core_log_error("terrain",
                    "raycast: origin (%g, %g, %g), direction (%g, %g, %g), max_distance %g (finite, a direction "
                    "of non-zero length, 0 < max_distance <= %g)",
                    origin[0], origin[1], origin[2], (double)direction[0], (double)direction[1],

@@ -91,7 +91,7 @@ static int64_t floor_div(int64_t a, int64_t b) {
 static bool angle_rule(const char *name, float degrees, float fallback, int64_t tolerance, material_rule *rule) {
     if (degrees == 0.0f) degrees = fallback;
     if (!(degrees > 0.0f && degrees < 90.0f)) {
-        core_error("terrain", "stabilize: %s %g degrees (0 < angle < 90)", name, (double)degrees);
+        core_log_error("terrain", "stabilize: %s %g degrees (0 < angle < 90)", name, (double)degrees);
         return false;
     }
     double t = tan((double)degrees * (M_PI / 180.0)) * TERRAIN__QUANTA_PER_METRE * FIXED;
@@ -106,13 +106,13 @@ static bool angle_rule(const char *name, float degrees, float fallback, int64_t 
 
 static bool make_rules(const terrain_stabilize_desc *p, stabilize_rules *r) {
     if (!p) {
-        core_error("terrain", "stabilize: no parameters");
+        core_log_error("terrain", "stabilize: no parameters");
         return false;
     }
     *r = (stabilize_rules){ .max_iterations = p->max_iterations, .budget_ns = p->budget_ns,
                             .wake = p->edge == TERRAIN_EDGE_WAKE };
     if (!(p->tolerance >= 0.0f) || p->tolerance > 1e6f) {
-        core_error("terrain", "stabilize: tolerance %g m (0 ... 1e6)", (double)p->tolerance);
+        core_log_error("terrain", "stabilize: tolerance %g m (0 ... 1e6)", (double)p->tolerance);
         return false;
     }
     r->tolerance = llround((double)p->tolerance * TERRAIN__QUANTA_PER_METRE * FIXED);
@@ -121,17 +121,17 @@ static bool make_rules(const terrain_stabilize_desc *p, stabilize_rules *r) {
         return false;
     float step = p->step == 0.0f ? 1.0f : p->step;
     if (!(step > 0.0f) || step > (float)TERRAIN__FLOW_MAX / TERRAIN__QUANTA_PER_METRE) {
-        core_error("terrain", "stabilize: step %g m (0 < step <= %g)", (double)step,
+        core_log_error("terrain", "stabilize: step %g m (0 < step <= %g)", (double)step,
                    (double)TERRAIN__FLOW_MAX / TERRAIN__QUANTA_PER_METRE);
         return false;
     }
     r->step = (int32_t)CORE_MAX(1, llround((double)step * TERRAIN__QUANTA_PER_METRE));
     if (p->max_iterations < 0) {
-        core_error("terrain", "stabilize: max_iterations %d (0 = no limit)", p->max_iterations);
+        core_log_error("terrain", "stabilize: max_iterations %d (0 = no limit)", p->max_iterations);
         return false;
     }
     if (p->edge != TERRAIN_EDGE_WALL && p->edge != TERRAIN_EDGE_WAKE) {
-        core_error("terrain", "stabilize: unknown edge mode %d", (int)p->edge);
+        core_log_error("terrain", "stabilize: unknown edge mode %d", (int)p->edge);
         return false;
     }
     return true;
@@ -412,12 +412,12 @@ static bool link_regions(terrain_columns *const *regions, int count) {
     for (int r = 0; r < count; r++) {
         terrain_columns *c = regions[r];
         if (c->width != first->width || c->depth != first->depth) {
-            core_error("terrain", "stabilize: region %d is %d x %d columns, region 0 %d x %d (one size for all)", r,
+            core_log_error("terrain", "stabilize: region %d is %d x %d columns, region 0 %d x %d (one size for all)", r,
                        c->width, c->depth, first->width, first->depth);
             return false;
         }
         if ((c->x0 - first->x0) % first->width || (c->z0 - first->z0) % first->depth) {
-            core_error("terrain", "stabilize: region %d at column (%lld, %lld) is off region 0's grid", r,
+            core_log_error("terrain", "stabilize: region %d at column (%lld, %lld) is off region 0's grid", r,
                        (long long)c->x0, (long long)c->z0);
             return false;
         }
@@ -428,7 +428,7 @@ static bool link_regions(terrain_columns *const *regions, int count) {
         for (int s = 0; s < count; s++) {
             const terrain_columns *o = regions[s];
             if (s != r && o->x0 == c->x0 && o->z0 == c->z0) {
-                core_error("terrain", "stabilize: regions %d and %d are both at column (%lld, %lld)", r, s,
+                core_log_error("terrain", "stabilize: regions %d and %d are both at column (%lld, %lld)", r, s,
                            (long long)c->x0, (long long)c->z0);
                 return false;
             }
@@ -604,12 +604,12 @@ static void sort_flagged(terrain_columns *c) {
 
 static bool check_regions(terrain_columns *const *regions, int count) {
     if (count < 1 || !regions) {
-        core_error("terrain", "stabilize: %d regions", count);
+        core_log_error("terrain", "stabilize: %d regions", count);
         return false;
     }
     for (int r = 0; r < count; r++)
         if (!regions[r]) {
-            core_error("terrain", "stabilize: region %d is NULL", r);
+            core_log_error("terrain", "stabilize: region %d is NULL", r);
             return false;
         }
     return link_regions(regions, count);

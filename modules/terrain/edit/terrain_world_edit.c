@@ -75,11 +75,11 @@ static bool edit_apply(terrain_columns *region, const terrain_edit *edit) {
 int terrain_world_edit(terrain_world *world, const terrain_edit *edit, terrain_chunk_coord *changed, int capacity) {
     double x0, x1, z0, z1;
     if (!edit) {
-        core_error("terrain", "edit: no edit given");
+        core_log_error("terrain", "edit: no edit given");
         return -1;
     }
     if (!edit_extent(edit, &x0, &x1, &z0, &z1)) {
-        core_error("terrain", "edit: %s (tool %d): not a brush, or its position is not finite: ignored",
+        core_log_error("terrain", "edit: %s (tool %d): not a brush, or its position is not finite: ignored",
                    terrain_edit_tool_name(edit->tool), (int)edit->tool);
         return -1;
     }
@@ -87,7 +87,7 @@ int terrain_world_edit(terrain_world *world, const terrain_edit *edit, terrain_c
     double cx0 = floor(x0 / chunk), cx1 = floor(x1 / chunk), cz0 = floor(z0 / chunk), cz1 = floor(z1 / chunk);
     if (cx1 - cx0 >= EDIT_MAX_CHUNKS_PER_SIDE || cz1 - cz0 >= EDIT_MAX_CHUNKS_PER_SIDE ||
         fabs(cx0) > 1e15 || fabs(cz0) > 1e15) {
-        core_error("terrain", "edit: %s reaches %.0f × %.0f chunks (at most %d × %d): ignored",
+        core_log_error("terrain", "edit: %s reaches %.0f × %.0f chunks (at most %d × %d): ignored",
                    terrain_edit_tool_name(edit->tool), cx1 - cx0 + 1, cz1 - cz0 + 1, EDIT_MAX_CHUNKS_PER_SIDE,
                    EDIT_MAX_CHUNKS_PER_SIDE);
         return -1;

@@ -114,7 +114,9 @@ struct terrain_clipmap {
     row_task *tasks;
     size_t task_count, task_capacity;
     terrain_clipmap_stats_info stats;
-    GLuint texture, index_buffer, vertex_array;
+    gfx_texture texture;            /* one layer per level; { 0 } until the first upload */
+    gfx_buffer index_buffer;
+    gfx_vertex_array vertex_array;
 };
 
 /* ---- integer helpers ---- */
@@ -261,9 +263,9 @@ terrain_clipmap *terrain_clipmap_create(const terrain_clipmap_desc *desc) {
 
 /* Everything clipmap_init made and what the updates and uploads added, GL objects included. */
 static void clipmap_fini(terrain_clipmap *c) {
-    if (c->texture) glDeleteTextures(1, &c->texture);
-    if (c->index_buffer) glDeleteBuffers(1, &c->index_buffer);
-    if (c->vertex_array) glDeleteVertexArrays(1, &c->vertex_array);
+    gfx_vertex_array_destroy(&c->vertex_array);
+    gfx_buffer_destroy(&c->index_buffer);
+    gfx_texture_destroy(&c->texture);
     size_t texels = (size_t)c->size * (size_t)c->size;
     for (int l = 0; l < c->level_count; l++) {
         core_free(c->levels[l].heights, texels * sizeof(float));
@@ -707,25 +709,22 @@ static void upload_runs(terrain_clipmap *c, int level, uint8_t *flags, bool rows
         for (int n = 0; n < count; n++)
             for (int m = 0; m < size; m++)
                 packed_texel(lv, size, rows ? m : a + n, rows ? a + n : m, texels[rows ? (size_t)n * size + m : (size_t)m * count + n]);
-        if (rows) glTextureSubImage3D(c->texture, 0, 0, a, level, size, count, 1, GL_RGBA, GL_FLOAT, texels);
-        else glTextureSubImage3D(c->texture, 0, a, 0, level, count, size, 1, GL_RGBA, GL_FLOAT, texels);
+        if (rows) gfx_texture_update(c->texture, level, 0, a, size, count, texels);
+        else gfx_texture_update(c->texture, level, a, 0, count, size, texels);
         a = b;
     }
 }
 
 static void create_gpu_objects(terrain_clipmap *c) {
-    glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &c->texture);
-    glTextureStorage3D(c->texture, 1, GL_RGBA32F, c->size, c->size, c->level_count);
+    /* texelFetch only: the shader wraps the toroidal indices itself. */
+    c->texture = gfx_texture_create(&(gfx_texture_desc){ .width = c->size, .height = c->size,
+        .layers = c->level_count, .array = true, .format = GFX_FORMAT_RGBA32F, .nearest = true });
     c->upload_flags = core_calloc((size_t)c->size, 1);
     c->upload_texels = core_calloc((size_t)c->size * (size_t)c->size, sizeof *c->upload_texels);
-    /* texelFetch only: the shader wraps the toroidal indices itself. */
-    glTextureParameteri(c->texture, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTextureParameteri(c->texture, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glCreateBuffers(1, &c->index_buffer);
-    glNamedBufferStorage(c->index_buffer, (GLsizeiptr)(c->index_count * sizeof *c->indices), c->indices, 0);
+    c->index_buffer = gfx_buffer_create(&(gfx_buffer_desc){
+        .size = c->index_count * sizeof *c->indices, .data = c->indices });
     /* No vertex attributes: clipmap.vert makes (i, k) from gl_VertexID. */
-    glCreateVertexArrays(1, &c->vertex_array);
-    glVertexArrayElementBuffer(c->vertex_array, c->index_buffer);
+    c->vertex_array = gfx_vertex_array_create(&(gfx_vertex_array_desc){ .indices = c->index_buffer });
     core_free(c->indices, c->index_count * sizeof *c->indices);
     c->indices = NULL;
     for (int l = 0; l < c->level_count; l++) memset(c->levels[l].dirty_columns, 1, (size_t)c->size);
@@ -733,7 +732,7 @@ static void create_gpu_objects(terrain_clipmap *c) {
 
 void terrain_clipmap_upload(terrain_clipmap *c) {
     TRACE_ZONE("terrain_clipmap_upload");
-    if (!c->texture) create_gpu_objects(c);
+    if (!c->texture.id) create_gpu_objects(c);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     for (int l = 0; l < c->level_count; l++) {
         if (!c->levels[l].valid) continue;
@@ -778,11 +777,11 @@ void terrain__clipmap_draw(terrain_clipmap *c, gfx_context *gfx, uint32_t progra
     c->stats.triangles = 0;
     if (!c->has_camera) return;
     /* Levels placed by an update whose heights are not on the GPU yet would draw stale ones. */
-    if (!c->texture || c->upload_pending) terrain_clipmap_upload(c);
+    if (!c->texture.id || c->upload_pending) terrain_clipmap_upload(c);
     gfx_program program = { program_handle };
     GLuint gl_program = gfx_program_gl(gfx, program);
     draw_shared_uniforms(c, gfx, program, view);
-    glBindTextureUnit(1, c->texture);
+    gfx_texture_bind(c->texture, 1);
     for (int l = 0; l < c->level_count; l++) {
         level_uniforms u = uniforms_for(c, l, view->camera);
         gfx_uniform_int(gfx, program, "u_layer", l);
@@ -796,7 +795,7 @@ void terrain__clipmap_draw(terrain_clipmap *c, gfx_context *gfx, uint32_t progra
         uniform_ivec2(gl_program, "u_coarse_start", u.coarse_start);
         for (int b = 0; b < BLOCKS; b++) {
             if (!terrain__clipmap_block(c, l, b).visible) continue;
-            gfx_draw(&(gfx_draw_desc){ .vertex_array = { c->vertex_array }, .first = c->block_first[b],
+            gfx_draw(&(gfx_draw_desc){ .vertex_array = c->vertex_array, .first = c->block_first[b],
                                        .count = c->block_count[b], .index_type = GFX_INDEX_U32 });
             c->stats.blocks_drawn++;
             c->stats.triangles += c->block_count[b] / 3;

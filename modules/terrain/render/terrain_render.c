@@ -49,7 +49,7 @@ static void terrain_material_textures(terrain_renderer *r) {
         .data = texels.detail, .mipmaps = true });
     /* The detail within one mip level (bilinear, not trilinear): half its fetches on llvmpipe,
      * and a step between levels is hidden where it shows at all, the detail fading out. */
-    glTextureParameteri(r->detail.id, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
+    glTextureParameteri(gfx_texture_gl(r->detail), GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
     memcpy(r->material_means, texels.means, sizeof r->material_means);
     memcpy(r->material_tints, texels.tints, sizeof r->material_tints);
     terrain__material_texels_free(&texels);
@@ -102,7 +102,7 @@ terrain_renderer *terrain_renderer_create(gfx_context *gfx, const terrain_render
         terrain_renderer_destroy(r);
         return NULL;
     }
-    glCreateVertexArrays(1, &r->empty.id);
+    r->empty = gfx_vertex_array_create(&(gfx_vertex_array_desc){ 0 });
     return r;
 }
 
@@ -140,28 +140,25 @@ terrain_gpu_mesh terrain_gpu_mesh_upload(const terrain_mesh *mesh) {
         gpu.bounds_max[a] = mesh->bounds_max[a];
     }
     if (mesh->index_count == 0) return gpu;
-    gfx_buffer vertices = gfx_buffer_create(&(gfx_buffer_desc){
+    gpu.vertex_buffer = gfx_buffer_create(&(gfx_buffer_desc){
         .size = mesh->vertex_count * sizeof(terrain_vertex), .data = mesh->vertices });
-    gfx_buffer indices = gfx_buffer_create(&(gfx_buffer_desc){
+    gpu.index_buffer = gfx_buffer_create(&(gfx_buffer_desc){
         .size = mesh->index_count * sizeof(uint32_t), .data = mesh->indices });
-    gfx_vertex_array array = gfx_vertex_array_create(&(gfx_vertex_array_desc){
-        .vertices = vertices, .vertex_stride = sizeof(terrain_vertex), .indices = indices,
+    gpu.vertex_array = gfx_vertex_array_create(&(gfx_vertex_array_desc){
+        .vertices = gpu.vertex_buffer, .vertex_stride = sizeof(terrain_vertex), .indices = gpu.index_buffer,
         .attributes = { { .components = 3, .offset = offsetof(terrain_vertex, position) },
                         { .components = 3, .offset = offsetof(terrain_vertex, normal) },
                         { .components = 4, .type = GL_UNSIGNED_BYTE, .normalized = true,
                           .offset = offsetof(terrain_vertex, weights) },
                         { .components = 1, .type = GL_UNSIGNED_BYTE, .normalized = true,
                           .offset = offsetof(terrain_vertex, occlusion) } } });
-    gpu.vertex_buffer = vertices.id;
-    gpu.index_buffer = indices.id;
-    gpu.vertex_array = array.id;
     return gpu;
 }
 
 void terrain_gpu_mesh_destroy(terrain_gpu_mesh *mesh) {
-    gfx_vertex_array_destroy(&(gfx_vertex_array){ mesh->vertex_array });
-    gfx_buffer_destroy(&(gfx_buffer){ mesh->vertex_buffer, 0 });
-    gfx_buffer_destroy(&(gfx_buffer){ mesh->index_buffer, 0 });
+    gfx_vertex_array_destroy(&mesh->vertex_array);
+    gfx_buffer_destroy(&mesh->vertex_buffer);
+    gfx_buffer_destroy(&mesh->index_buffer);
     *mesh = (terrain_gpu_mesh){ 0 };
 }
 
@@ -304,7 +301,7 @@ static void terrain_draw_scene(terrain_renderer *r, const terrain_view *view, co
         gfx_uniform_vec3(gfx, r->terrain, "u_offset", offset);
         gfx_uniform_vec3(gfx, r->terrain, "u_texture_offset", texture_offset);
         gfx_uniform_float(gfx, r->terrain, "u_mesh_y", (float)m->origin[1]);
-        gfx_draw(&(gfx_draw_desc){ .vertex_array = { m->vertex_array }, .count = m->index_count,
+        gfx_draw(&(gfx_draw_desc){ .vertex_array = m->vertex_array, .count = m->index_count,
                                    .index_type = GFX_INDEX_U32 });
     }
     if (r->far_terrain) terrain_draw_clipmap(r, view, view_projection, shadows);

@@ -73,10 +73,11 @@ double terrain_renderer_texture_ms(const terrain_renderer *renderer);
 
 /* A mesh on the GPU. */
 typedef struct terrain_gpu_mesh {
-    uint32_t vertex_buffer, index_buffer, vertex_array;   /* GL names */
+    gfx_buffer vertex_buffer, index_buffer;
+    gfx_vertex_array vertex_array;    /* { 0 } for an empty mesh (nothing to draw) */
     uint32_t index_count;
-    uint64_t serial;                  /* unique per upload (GL reuses freed names): what was
-                                         derived from a mesh (grass) knows when it changed */
+    uint64_t serial;                  /* unique per upload: what was derived from a mesh (grass)
+                                         knows when it changed */
     double origin[3];
     float bounds_min[3], bounds_max[3];
 } terrain_gpu_mesh;

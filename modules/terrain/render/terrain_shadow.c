@@ -46,7 +46,7 @@ static const shadow_settings shadow_high = { 3, 2048, 3, { 16.0f, 64.0f, 300.0f 
 #define SHADOW_REACH_ABOVE 1.0
 
 typedef struct shadow_cascade {
-    GLuint framebuffer;
+    gfx_framebuffer framebuffer;             /* depth into the map's layer of this cascade */
     /* Where the box is in the world: its centre on the light's axes, snapped to texels. The map
      * holds what was drawn there; the matrices below follow the camera every frame. */
     double light[3];
@@ -65,7 +65,7 @@ struct terrain__shadows {
     gfx_context *gfx;
     float forward[3];                        /* the view's axis: receivers pick a cascade by depth */
     gfx_program program;
-    GLuint texture;
+    gfx_texture texture;                     /* one depth layer per cascade */
     shadow_settings settings;
     shadow_cascade cascades[SHADOW_MAX_CASCADES];
     double right[3], up[3], sun[3];          /* the light's axes (world = camera-relative) */
@@ -100,24 +100,15 @@ terrain__shadows *terrain__shadows_create(gfx_context *gfx, terrain_shadow_quali
     s->program = program;
     s->settings = quality == TERRAIN_SHADOWS_HIGH ? shadow_high : shadow_low;
     int size = s->settings.size;
-    glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &s->texture);
-    glTextureStorage3D(s->texture, 1, GL_DEPTH_COMPONENT32F, size, size, s->settings.cascades);
     /* Linear filtering on a comparing sampler: each lookup is a bilinear 2 × 2 PCF for free. */
-    glTextureParameteri(s->texture, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTextureParameteri(s->texture, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTextureParameteri(s->texture, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTextureParameteri(s->texture, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTextureParameteri(s->texture, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
-    glTextureParameteri(s->texture, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    s->texture = gfx_texture_create(&(gfx_texture_desc){ .width = size, .height = size,
+        .layers = s->settings.cascades, .array = true, .format = GFX_FORMAT_DEPTH32F, .clamp = true,
+        .compare = true });
     for (int c = 0; c < s->settings.cascades; c++) {
-        GLuint fb;
-        glCreateFramebuffers(1, &fb);
-        glNamedFramebufferTextureLayer(fb, GL_DEPTH_ATTACHMENT, s->texture, 0, c);
-        glNamedFramebufferDrawBuffer(fb, GL_NONE);
-        glNamedFramebufferReadBuffer(fb, GL_NONE);
-        s->cascades[c].framebuffer = fb;
-        if (glCheckNamedFramebufferStatus(fb, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
-            core_error("terrain", "the shadow map's depth target is incomplete; shadows off");
+        s->cascades[c].framebuffer = gfx_framebuffer_create(&(gfx_framebuffer_desc){
+            .width = size, .height = size, .depth_only = true, .depth_texture = s->texture, .depth_layer = c });
+        if (!s->cascades[c].framebuffer.id) {
+            core_log_error("terrain", "the shadow map's depth target is incomplete; shadows off");
             terrain__shadows_destroy(s);
             return NULL;
         }
@@ -127,9 +118,8 @@ terrain__shadows *terrain__shadows_create(gfx_context *gfx, terrain_shadow_quali
 
 void terrain__shadows_destroy(terrain__shadows *s) {
     if (!s) return;
-    for (int c = 0; c < s->settings.cascades; c++)
-        if (s->cascades[c].framebuffer) glDeleteFramebuffers(1, &s->cascades[c].framebuffer);
-    glDeleteTextures(1, &s->texture);
+    for (int c = 0; c < s->settings.cascades; c++) gfx_framebuffer_destroy(&s->cascades[c].framebuffer);
+    gfx_texture_destroy(&s->texture);
     core_free(s, sizeof *s);
 }
 
@@ -297,7 +287,7 @@ static uint64_t shadow_cascade_key(const terrain__shadows *s, const shadow_casca
 
 static void shadow_draw_cascade(terrain__shadows *s, shadow_cascade *cascade, const double camera[3],
                                 const terrain_gpu_mesh *casters, int caster_count) {
-    glBindFramebuffer(GL_FRAMEBUFFER, cascade->framebuffer);
+    glBindFramebuffer(GL_FRAMEBUFFER, gfx_framebuffer_gl(cascade->framebuffer));
     glDepthMask(GL_TRUE);
     glClear(GL_DEPTH_BUFFER_BIT);
     gfx_uniform_mat4(s->gfx, s->program, "u_light_projection", cascade->clip_matrix);
@@ -309,7 +299,7 @@ static void shadow_draw_cascade(terrain__shadows *s, shadow_cascade *cascade, co
         float offset[3];
         for (int a = 0; a < 3; a++) offset[a] = (float)(m->origin[a] - camera[a]);
         glProgramUniform3fv(gl, offset_location, 1, offset);
-        gfx_draw(&(gfx_draw_desc){ .vertex_array = { m->vertex_array }, .count = m->index_count,
+        gfx_draw(&(gfx_draw_desc){ .vertex_array = m->vertex_array, .count = m->index_count,
                                    .index_type = GFX_INDEX_U32 });
     }
     cascade->drawn = true;
@@ -351,8 +341,7 @@ void terrain__shadows_render(terrain__shadows *s, const terrain_view *view, cons
         }
     }
     if (first >= 0) {
-        gfx_framebuffer target = { .id = s->cascades[first].framebuffer, .width = set->size, .height = set->size };
-        gfx_pass_begin(s->gfx, &(gfx_pass_desc){ .name = "shadows", .target = &target });
+        gfx_pass_begin(s->gfx, &(gfx_pass_desc){ .name = "shadows", .target = s->cascades[first].framebuffer });
         glEnable(GL_DEPTH_CLAMP);
         glEnable(GL_POLYGON_OFFSET_FILL);
         glPolygonOffset(1.5f, 2.0f);
@@ -392,5 +381,5 @@ void terrain__shadows_bind(const terrain__shadows *s, gfx_context *gfx, uint32_t
     gfx_uniform_vec3(gfx, program, "u_shadow_forward", s->forward);
     gfx_uniform_float(gfx, program, "u_shadow_texel", 1.0f / (float)s->settings.size);
     gfx_uniform_int(gfx, program, "u_shadow_taps", s->settings.taps);
-    glBindTextureUnit((GLuint)unit, s->texture);
+    gfx_texture_bind(s->texture, unit);
 }

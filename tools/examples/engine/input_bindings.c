@@ -77,7 +77,7 @@ int main(int argc, char **argv) {
      * sticks lx ly rx ry (0 … 255, 128 centred), the face buttons over the d-pad (8 = released;
      * cross 0x20, circle 0x40), two more button bytes, then the triggers l2 r2. */
     input_decoder *pad = input_decoder_create(&(input_decoder_desc){ .vendor_id = 0x054c, .product_id = 0x09cc },
-                                              NULL, 0);
+                                              NULL);
     if (!pad) return 1;
     static const struct { uint8_t bytes[10]; size_t size; } script[] = {
         { { 0x01, 0x80, 0x80, 0x80, 0x80, 0x08, 0x00, 0x00, 0x00, 0x00 }, 10 },   /* at rest */
@@ -87,9 +87,10 @@ int main(int argc, char **argv) {
     };
     input_gamepad_state state = { 0 };
     for (int i = 0; i < (int)CORE_COUNTOF(script); i++) {
-        input_decode_result result = input_decoder_decode(pad, script[i].bytes, script[i].size, &state);
+        core_error why = { 0 };                    /* NULL instead: no text is formatted */
+        input_decode_result result = input_decoder_decode(pad, script[i].bytes, script[i].size, &state, &why);
         if (result != INPUT_DECODE_OK) {           /* state is left as it was */
-            printf("input_bindings: report %d: %s\n", i + 1, input_decoder_last_error(pad));
+            printf("input_bindings: report %d: %s\n", i + 1, why.message);
             continue;
         }
         input_apply_dead_zone(&state, 0.15f);

@@ -68,8 +68,9 @@ int main(int argc, char **argv) {
 
     /* 2. Read back. */
     trace_report report;
-    if (!trace_report_load(file, &report)) {
-        fprintf(stderr, "trace_capture: %s\n", report.error);
+    core_error error = { 0 };
+    if (!trace_report_load(file, &report, &error)) {
+        fprintf(stderr, "trace_capture: %s\n", error.message);
         return 1;
     }
     printf("trace_capture: %zu frames, p50 %.2f ms\n", report.frame_count, report.frame_p50_ms);

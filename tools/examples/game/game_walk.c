@@ -69,9 +69,9 @@ int main(int argc, char **argv) {
 
     /* The script, parsed: it names its own lines in errors ("lap.walk:3: ..."). */
     game_walk walk;
-    char error[256];
-    if (!game_walk_parse_text(lap, sizeof lap - 1, "lap.walk", &walk, error, sizeof error)) {
-        fprintf(stderr, "game_walk: %s\n", error);
+    core_error error = { 0 };
+    if (!game_walk_parse_text(lap, sizeof lap - 1, "lap.walk", &walk, &error)) {
+        fprintf(stderr, "game_walk: %s\n", error.message);
         return 1;
     }
     printf("game_walk: lap.walk has %d waypoints, %s\n", walk.count,

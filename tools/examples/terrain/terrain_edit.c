@@ -77,10 +77,11 @@ int main(int argc, char **argv) {
     /* The world folder: its earlier edits (if any) come into the log, and it is held until
      * destroyed (a second program opening it is refused). */
     terrain_store_report report;
+    core_error error = { 0 };   /* .code says what kind of failure (CORE_ERROR_MISMATCH: another world's) */
     terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log,
-                                                                       .seed = (uint64_t)seed }, &report);
+                                                                       .seed = (uint64_t)seed }, &report, &error);
     if (!store) {
-        fprintf(stderr, "terrain_edit: %s\n", report.error);
+        fprintf(stderr, "terrain_edit: %s\n", error.message);
         return 1;
     }
     if (report.notice[0]) printf("%s\n", report.notice);
@@ -111,16 +112,16 @@ int main(int argc, char **argv) {
 
     /* Save (every changed chunk in one transaction), close, then a fresh world from the folder:
      * the same chunk, byte for byte. */
-    char error[512];
-    bool saved = terrain_store_save(store, error, sizeof error);
+    bool saved = terrain_store_save(store, &error);
     terrain_store_destroy(store);
     if (!saved) {
-        fprintf(stderr, "terrain_edit: %s\n", error);
+        fprintf(stderr, "terrain_edit: %s\n", error.message);
         return 1;
     }
     uint64_t edited = terrain_stacks_hash(terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 }));
     terrain_edit_log *loaded = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&params) });
-    terrain_store *reopened = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = loaded }, &report);
+    terrain_store *reopened = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = loaded }, &report,
+                                                   NULL);
     terrain_world *again = terrain_world_create(&(terrain_world_desc){ .generation = params, .edits = loaded });
     uint64_t reloaded = terrain_stacks_hash(terrain_world_stacks(again, (terrain_chunk_coord){ 0, 0 }));
     printf("saved %d chunk(s) to %s/world.db; reloaded: %s\n", terrain_edit_log_chunks(log), dir,

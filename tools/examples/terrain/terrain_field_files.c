@@ -62,11 +62,12 @@ int main(int argc, char **argv) {
     printf("terrain_field_files: sampled %d x %d x %d, %.0f%% solid\n", field.nx, field.ny, field.nz,
            100.0 * (double)solid / (double)count);
 
-    /* 2. Written and read back. Errors are messages naming the file and the problem. */
-    char error[256];
+    /* 2. Written and read back. Errors are a code (CORE_ERROR_IO, CORE_ERROR_FORMAT, …) and a
+     * message naming the file and the problem. */
+    core_error error = { 0 };
     terrain_field back;
-    if (!terrain_field_write(&field, out, error, sizeof error) || !terrain_field_read(out, &back, error, sizeof error)) {
-        fprintf(stderr, "terrain_field_files: %s\n", error);
+    if (!terrain_field_write(&field, out, &error) || !terrain_field_read(out, &back, &error)) {
+        fprintf(stderr, "terrain_field_files: %s (%s)\n", error.message, core_error_code_name(error.code));
         return 1;
     }
     bool same = back.nx == field.nx && back.ny == field.ny && back.nz == field.nz &&
@@ -82,8 +83,8 @@ int main(int argc, char **argv) {
     if (!terrain_mesh_build(&back, &(terrain_mesh_desc){ .world = world, .jobs = jobs }, &mesh)) return 1;
     printf("terrain_field_files: mesh of %u vertices, %u triangles, %.0f m2\n", mesh.vertex_count,
            mesh.index_count / 3, terrain_mesh_area(&mesh));
-    if (ply && !terrain_mesh_write_ply(&mesh, ply, error, sizeof error)) {
-        fprintf(stderr, "terrain_field_files: %s\n", error);
+    if (ply && !terrain_mesh_write_ply(&mesh, ply, &error)) {
+        fprintf(stderr, "terrain_field_files: %s\n", error.message);
         rc = 1;
     } else if (ply) {
         printf("terrain_field_files: wrote %s\n", ply);

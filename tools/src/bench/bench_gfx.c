@@ -40,7 +40,7 @@ static void bench_frame_size(bench_context *ctx, const char *name, int width, in
     gfx_bench b = { .camera = gfx_scene_default_camera() };
     b.gfx = gfx_context_create(&(gfx_context_desc){ .width = width, .height = height, .headless = true });
     if (!b.gfx || (scene && !(b.scene = gfx_scene_create(b.gfx)))) {
-        core_error("bench", "%s: no OpenGL context or scene; row skipped", name);
+        core_log_error("bench", "%s: no OpenGL context or scene; row skipped", name);
         gfx_context_destroy(b.gfx);
         return;
     }

@@ -58,7 +58,7 @@ static void bench_world_view(bench_context *ctx) {
     double frames[3][RUNS], grass[3][RUNS], median[3];
     for (int q = 0; q < 3; q++) {
         if (!world_frames(ctx, qualities[q], RUNS, frames[q], grass[q])) {
-            core_error("bench", "grass: the world did not start; rows skipped");
+            core_log_error("bench", "grass: the world did not start; rows skipped");
             return;
         }
         median[q] = bench_median(frames[q], RUNS);
@@ -145,7 +145,7 @@ static void bench_instances(bench_context *ctx) {
     meadow m;
     /* 64 tufts a m², out to 200 m, seen from 60 m up, looking 70° down. */
     if (!meadow_open(&m, ctx, 8, 200.0f, 60.0, -1.22f)) {
-        core_error("bench", "grass.instances: no context; rows skipped");
+        core_log_error("bench", "grass.instances: no context; rows skipped");
         meadow_close(&m);
         return;
     }

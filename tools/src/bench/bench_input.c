@@ -110,7 +110,7 @@ static double bench_sample(void *user) {
     uint64_t start = core_time_ns();
     for (int pass = 0; pass < BENCH_PASSES; pass++) {
         for (int i = 0; i < BENCH_REPORTS; i++) {
-            input_decoder_decode(bench->decoder, bench->reports[i], bench->report_size, &state);
+            input_decoder_decode(bench->decoder, bench->reports[i], bench->report_size, &state, NULL);
             sink += state.buttons;
         }
     }
@@ -123,20 +123,20 @@ static void input_bench_row(bench_context *ctx, const char *name, uint16_t vendo
                       bench_layout layout, size_t report_size) {
     if (!bench_wants(ctx, name)) return;
     input_bench *bench = core_calloc(1, sizeof *bench);
-    char error[200];
+    core_error error = { 0 };
     bool generic = layout == BENCH_GENERIC;
     bench->decoder = input_decoder_create(
         &(input_decoder_desc){ .vendor_id = vendor_id, .product_id = product_id,
                                .descriptor = generic ? bench_generic_descriptor : NULL,
                                .descriptor_size = generic ? sizeof bench_generic_descriptor : 0 },
-        error, sizeof error);
-    if (!bench->decoder) core_fatal("bench", "%s: %s", name, error);
+        &error);
+    if (!bench->decoder) core_fatal("bench", "%s: %s", name, error.message);
     bench->report_size = report_size;
     for (uint32_t i = 0; i < BENCH_REPORTS; i++) bench_fill(bench->reports[i], layout, i);
     /* Every report must decode, or the row would time the rejection path. */
     input_gamepad_state state = { 0 };
     for (int i = 0; i < BENCH_REPORTS; i++)
-        if (input_decoder_decode(bench->decoder, bench->reports[i], report_size, &state) != INPUT_DECODE_OK)
+        if (input_decoder_decode(bench->decoder, bench->reports[i], report_size, &state, NULL) != INPUT_DECODE_OK)
             core_fatal("bench", "%s: report %d does not decode", name, i);
     bench_run(ctx, name, "ns", BENCH_RUNS, bench_sample, bench);
     input_decoder_destroy(bench->decoder);

@@ -125,13 +125,13 @@ int main(int argc, char **argv) {
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
     rocks_quality rocks_on = ROCKS_ON;
     if (rocks && !rocks_parse_quality(rocks, &rocks_on)) {
-        core_error("bench", "--rocks %s: expected on or off", rocks);
+        core_log_error("bench", "--rocks %s: expected on or off", rocks);
         return 2;
     }
 
     if (json_path) { /* find an unwritable path now, not after minutes of measuring */
         FILE *probe = fopen(json_path, "a");
-        if (!probe) { core_error("bench", "cannot write --json %s", json_path); return 2; }
+        if (!probe) { core_log_error("bench", "cannot write --json %s", json_path); return 2; }
         fclose(probe);
     }
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
@@ -156,7 +156,7 @@ int main(int argc, char **argv) {
     if (common.trace_path) trace_stop();
     if (ctx.row_count == 0) core_warn("bench", "no row matches --filter %s", filter ? filter : "");
     if (json_path && !write_json(&ctx, json_path)) {
-        core_error("bench", "could not write %s", json_path);
+        core_log_error("bench", "could not write %s", json_path);
         return 1;
     }
     core_free(ctx.rows, ctx.row_capacity * sizeof *ctx.rows);

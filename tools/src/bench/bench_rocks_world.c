@@ -156,7 +156,7 @@ static void bench_draw(bench_context *ctx) {
         desc.rocks_cache_path = bench_rocks_cache_path();
         game_app *app = bench_start_view_open(&desc);
         if (!app) {
-            core_error("bench", "rocks: the world did not start; rows skipped");
+            core_log_error("bench", "rocks: the world did not start; rows skipped");
             return;
         }
         for (int r = 0; r < RUNS; r++) frames[on][r] = bench_start_view_frames(app, NULL, NULL);
@@ -175,7 +175,7 @@ void bench_group_rocks_world(bench_context *ctx) {
     if (bench_wants(ctx, "rocks.instance")) {
         rocks_tileset *set = rocks_tileset_create(&(rocks_tileset_desc){ .cache_path = bench_rocks_cache_path() });
         if (!set) {
-            core_error("bench", "rocks: no tile set; rows skipped");
+            core_log_error("bench", "rocks: no tile set; rows skipped");
             return;
         }
         rocks_place_index *index = NULL;

@@ -25,7 +25,7 @@ void bench_group_shadows(bench_context *ctx) {
     game_app_desc desc = bench_start_view_desc(ctx);
     game_app *app = bench_start_view_open(&desc);
     if (!app) {
-        core_error("bench", "shadows: the world did not start; rows skipped");
+        core_log_error("bench", "shadows: the world did not start; rows skipped");
         return;
     }
     double frames[3][RUNS], added[2][RUNS];

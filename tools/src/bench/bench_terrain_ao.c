@@ -38,7 +38,7 @@ void bench_group_terrain_ao(bench_context *ctx) {
                                                       .grass = GRASS_OFF, .no_hud = true,
                                                       .look_set = true, .look = { 0, -0.1 * 180 / M_PI } });
     if (!app) {
-        core_error("bench", "gfx.ao: the world did not start; rows skipped");
+        core_log_error("bench", "gfx.ao: the world did not start; rows skipped");
         return;
     }
     while (!game_app_loaded(app)) game_app_frame(app);

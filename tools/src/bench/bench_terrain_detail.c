@@ -135,7 +135,7 @@ static void bench_view(bench_context *ctx, const char *name, double pitch_degree
                                                       .no_terrain_detail = !detail,
                                                       .look_set = true, .look = { 0, pitch_degrees } });
     if (!app) {
-        core_error("bench", "terrain.detail: the world did not start; row %s skipped", name);
+        core_log_error("bench", "terrain.detail: the world did not start; row %s skipped", name);
         return;
     }
     while (!game_app_loaded(app)) game_app_frame(app);

@@ -84,7 +84,7 @@ void bench_group_terrain_edit(bench_context *ctx) {
     if (!bench_wants(ctx, "terrain.edit.brush")) return;
     gfx_context *gfx = gfx_context_create(&(gfx_context_desc){ .width = 64, .height = 64, .headless = true, .title = "bench" });
     if (!gfx) {
-        core_error("bench", "terrain.edit.brush: no offscreen context; rows skipped");
+        core_log_error("bench", "terrain.edit.brush: no offscreen context; rows skipped");
         return;
     }
     job_system *jobs = job_system_create(&(job_system_desc){ .threads = bench_threads(ctx) });
@@ -100,7 +100,7 @@ void bench_group_terrain_edit(bench_context *ctx) {
         bench_run(ctx, "terrain.edit.brush", "ms", 15, sample_stroke, &b);
         bench_record(ctx, "terrain.edit.brush.chunks", "chunks", b.chunks + 1, 15);
     } else {
-        core_error("bench", "terrain.edit.brush: the world never settled; rows skipped");
+        core_log_error("bench", "terrain.edit.brush: the world never settled; rows skipped");
     }
     terrain_ecs_destroy(b.te);
     ecs_world_destroy(b.ecs);

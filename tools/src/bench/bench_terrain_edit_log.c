@@ -122,9 +122,9 @@ static terrain_edit_log *recorded_log(const edit_log_bench *b) {
 static double sample_save_files(void *user) {
     edit_log_bench *b = user;
     terrain_edit_log *log = recorded_log(b);
-    char error[512];
+    core_error error = { 0 };
     uint64_t start = core_time_ns();
-    if (!terrain_edit_log_save(log, b->files_dir, error, sizeof error)) core_fatal("bench", "%s", error);
+    if (!terrain_edit_log_save(log, b->files_dir, &error)) core_fatal("bench", "%s", error.message);
     double ms = core_ns_to_ms(core_time_ns() - start);
     terrain_edit_log_destroy(log);
     return ms;
@@ -134,9 +134,10 @@ static void open_store(edit_log_bench *b) {
     if (b->store) return;
     b->store_log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
     terrain_store_report report;
+    core_error error = { 0 };
     b->store = terrain_store_create(&(terrain_store_desc){ .dir = b->store_dir, .edits = b->store_log, .seed = 42 },
-                                    &report);
-    if (!b->store) core_fatal("bench", "%s", report.error);
+                                    &report, &error);
+    if (!b->store) core_fatal("bench", "%s", error.message);
 }
 
 /* Every chunk of the open store's log flipped between edited and generated, one entry each. */
@@ -152,9 +153,9 @@ static void dirty_all(edit_log_bench *b) {
 static double sample_save(void *user) {
     edit_log_bench *b = user;
     dirty_all(b);
-    char error[512];
+    core_error error = { 0 };
     uint64_t start = core_time_ns();
-    if (!terrain_store_save(b->store, error, sizeof error)) core_fatal("bench", "%s", error);
+    if (!terrain_store_save(b->store, &error)) core_fatal("bench", "%s", error.message);
     return core_ns_to_ms(core_time_ns() - start);
 }
 
@@ -164,8 +165,8 @@ static double sample_save_frame(void *user) {
     uint64_t start = core_time_ns();
     if (!terrain_store_save_async(b->store)) core_fatal("bench", "a save still in flight");
     double ms = core_ns_to_ms(core_time_ns() - start);
-    char error[512];
-    if (!terrain_store_wait(b->store, error, sizeof error)) core_fatal("bench", "%s", error);
+    core_error error = { 0 };
+    if (!terrain_store_wait(b->store, &error)) core_fatal("bench", "%s", error.message);
     return ms;
 }
 
@@ -173,11 +174,13 @@ static double sample_load(void *user) {
     edit_log_bench *b = user;
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
     terrain_store_report report;
+    core_error error = { 0 };
     uint64_t start = core_time_ns();
-    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = b->store_dir, .edits = log }, &report);
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = b->store_dir, .edits = log }, &report,
+                                                &error);
     double ms = core_ns_to_ms(core_time_ns() - start);
     if (!store || report.chunks_loaded != SAVE_CHUNKS || report.set_aside)
-        core_fatal("bench", "store load: %d loaded, %s%s", report.chunks_loaded, report.error, report.notice);
+        core_fatal("bench", "store load: %d loaded, %s%s", report.chunks_loaded, error.message, report.notice);
     terrain_store_destroy(store);
     terrain_edit_log_destroy(log);
     return ms;
@@ -187,11 +190,13 @@ static double sample_load_files(void *user) {
     edit_log_bench *b = user;
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
     terrain_edit_log_load_result result;
+    core_error error = { 0 };
     uint64_t start = core_time_ns();
-    bool ok = terrain_edit_log_load(log, b->files_dir, &result);
+    bool ok = terrain_edit_log_load(log, b->files_dir, &result, &error);
     double ms = core_ns_to_ms(core_time_ns() - start);
     if (!ok || result.chunks_loaded != SAVE_CHUNKS || result.files_rejected)
-        core_fatal("bench", "edit log load: %d loaded, %s", result.chunks_loaded, result.first_problem);
+        core_fatal("bench", "edit log load: %d loaded, %s%s", result.chunks_loaded, error.message,
+                   result.first_problem.message);
     terrain_edit_log_destroy(log);
     return ms;
 }
@@ -216,15 +221,15 @@ static double sample_soak_bytes(void *user) {
     char dir[160];
     snprintf(dir, sizeof dir, "%s/soak", b->dir);
     terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = b->key });
-    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log }, NULL);
-    if (!store) core_fatal("bench", "cannot open a world in %s", dir);
+    core_error error = { 0 };
+    terrain_store *store = terrain_store_create(&(terrain_store_desc){ .dir = dir, .edits = log }, NULL, &error);
+    if (!store) core_fatal("bench", "%s", error.message);
     terrain_chunk_coord coord = b->coord[0];
     terrain_columns *region = terrain_columns_create(&(terrain_columns_desc){
         .x = coord.x * TERRAIN_CHUNK_COLUMNS, .z = coord.z * TERRAIN_CHUNK_COLUMNS,
         .width = TERRAIN_CHUNK_COLUMNS, .depth = TERRAIN_CHUNK_COLUMNS });
     terrain_columns_load(region, coord, b->generated[0]);
     terrain_stacks *before = terrain_columns_to_stacks(region, coord);
-    char error[512];
     for (int frame = 0; frame < FRAMES; frame++) {
         for (int k = 0; k < SIDE; k++)
             for (int i = 0; i < SIDE; i++) {
@@ -236,8 +241,8 @@ static double sample_soak_bytes(void *user) {
         terrain_edit_log_record(log, coord, TERRAIN_EDIT_STABILIZE, before, after);
         terrain_stacks_destroy(before);
         before = after;
-        if ((frame + 1) % SAVE_EVERY == 0 && !terrain_store_save(store, error, sizeof error))
-            core_fatal("bench", "%s", error);
+        if ((frame + 1) % SAVE_EVERY == 0 && !terrain_store_save(store, &error))
+            core_fatal("bench", "%s", error.message);
     }
     terrain_store_destroy(store);
     terrain_edit_log_destroy(log);
@@ -271,8 +276,8 @@ void bench_group_terrain_edit_log(bench_context *ctx) {
     if (bench_wants(ctx, "terrain.edit_log.load")) {
         /* What to load, whatever the filter: the store closed (its WAL checkpointed) and the files. */
         dirty_all(b);
-        char error[512];
-        if (!terrain_store_save(b->store, error, sizeof error)) core_fatal("bench", "%s", error);
+        core_error error = { 0 };
+        if (!terrain_store_save(b->store, &error)) core_fatal("bench", "%s", error.message);
         terrain_store_destroy(b->store);
         b->store = NULL;
         sample_save_files(b);

@@ -153,10 +153,11 @@ static double sample_mesh_big(void *user) {
 static int run_vtk_peer(const terrain_field *field, int threads, int runs, double *ms, uint64_t *triangles) {
     if (access("/usr/bin/python3", X_OK) != 0 || access("tools/peers/vtk_flying_edges.py", R_OK) != 0) return 0;
     const char *tmp = getenv("TMPDIR");
-    char prefix[512], command[1200], error[256];
+    char prefix[512], command[1200];
+    core_error error = { 0 };
     snprintf(prefix, sizeof prefix, "%s/bench_mesh_256_%ld", tmp && *tmp ? tmp : "/tmp", (long)getpid());
-    if (!terrain_field_write(field, prefix, error, sizeof error)) {
-        fprintf(stderr, "bench: the VTK peer's field: %s\n", error);
+    if (!terrain_field_write(field, prefix, &error)) {
+        fprintf(stderr, "bench: the VTK peer's field: %s\n", error.message);
         return 0;
     }
     snprintf(command, sizeof command, "/usr/bin/python3 tools/peers/vtk_flying_edges.py '%s.json' %d %d 2>/dev/null", prefix,

@@ -72,7 +72,7 @@ void bench_group_terrain_sculpt(bench_context *ctx) {
     double centre = REGION_COLUMNS / 2 + 0.3;
     if (!terrain_raycast(b.world, (const double[3]){ centre, 400.0, centre }, (const float[3]){ 0.0f, -1.0f, 0.0f },
                          1000.0f, &hit)) {
-        core_error("bench", "terrain.edit: no ground under the region's centre");
+        core_log_error("bench", "terrain.edit: no ground under the region's centre");
         terrain_world_destroy(b.world);
         return;
     }

@@ -80,7 +80,7 @@ static void edit(const stabilize_bench *b, terrain_columns *region) {
         terrain_erode(region, &(terrain_erode_desc){ .mode = TERRAIN_ERODE_COLLAPSE, .x = centre, .y = ground,
                                                      .z = centre, .radius = 12.0f, .rocks_ratio = 0.3f }, NULL);
     } else {
-        terrain_deposit(region, &(terrain_deposit_desc){ .material = TERRAIN_SAND, .x = centre, .z = centre,
+        terrain_deposit(region, &(terrain_deposit_desc){ .material = TERRAIN_BRUSH_SAND, .x = centre, .z = centre,
                                                          .radius = PILE_RADIUS, .volume = PILE_VOLUME }, NULL);
     }
 }

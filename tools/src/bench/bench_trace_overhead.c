@@ -104,14 +104,15 @@ void bench_group_trace_overhead(bench_context *ctx) {
         return;
     }
     game_walk walk;
-    char error[256], path[] = "/tmp/bench_trace_overhead_XXXXXX.json";
-    if (!game_walk_parse_text(overhead_walk, strlen(overhead_walk), "bench", &walk, error, sizeof error)) {
-        core_error("bench", "trace.frame_overhead: %s", error);
+    char path[] = "/tmp/bench_trace_overhead_XXXXXX.json";
+    core_error error = { 0 };
+    if (!game_walk_parse_text(overhead_walk, strlen(overhead_walk), "bench", &walk, &error)) {
+        core_log_error("bench", "trace.frame_overhead: %s", error.message);
         return;
     }
     int fd = mkstemps(path, 5);
     if (fd < 0) {
-        core_error("bench", "trace.frame_overhead: no temporary file");
+        core_log_error("bench", "trace.frame_overhead: no temporary file");
         game_walk_free(&walk);
         return;
     }
@@ -128,7 +129,7 @@ void bench_group_trace_overhead(bench_context *ctx) {
     remove(path);
     game_walk_free(&walk);
     if (runs == 0) {
-        core_error("bench", "trace.frame_overhead: the walk did not run; rows skipped");
+        core_log_error("bench", "trace.frame_overhead: the walk did not run; rows skipped");
         return;
     }
     bench_record(ctx, "trace.frame_overhead", "ratio", ratios, runs);

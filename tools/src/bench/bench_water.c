@@ -98,7 +98,7 @@ void bench_group_water(bench_context *ctx) {
     enum { RUNS = 7 };
     coast c;
     if (!coast_open(&c, ctx)) {
-        core_error("bench", "water: no context; rows skipped");
+        core_log_error("bench", "water: no context; rows skipped");
         if (c.gfx) coast_close(&c);
         return;
     }

@@ -54,11 +54,11 @@ static const char stream_text[] = "ahead\n0 1 fly y=230\n0 401 fly walk y=230\n"
 void bench_group_world(bench_context *ctx) {
     if (!bench_wants(ctx, "world.walk") && !bench_wants(ctx, "world.stream")) return;   /* not world.save */
     game_walk walk;
-    char error[256];
+    core_error error = { 0 };
     const bool full = bench_wants(ctx, "world.walk");   /* else only the stream rows: the short path */
     const char *text = full ? walk_text : stream_text;
-    if (!game_walk_parse_text(text, strlen(text), "bench", &walk, error, sizeof error)) {
-        core_error("bench", "world: %s", error);
+    if (!game_walk_parse_text(text, strlen(text), "bench", &walk, &error)) {
+        core_log_error("bench", "world: %s", error.message);
         return;
     }
     rocks_quality rocks = bench_rocks_off(ctx) ? ROCKS_OFF : ROCKS_ON;
@@ -70,7 +70,7 @@ void bench_group_world(bench_context *ctx) {
                                                       .frames = 20000, .rocks = rocks,
                                                       .rocks_cache_path = rocks_cache });
     if (!app) {
-        core_error("bench", "world: the world did not start; rows skipped");
+        core_log_error("bench", "world: the world did not start; rows skipped");
         game_walk_free(&walk);
         return;
     }
