@@ -126,11 +126,11 @@ typedef struct terrain_stream_desc {
     int viewport_height;              /* pixels, for pixel_error; 0 = 720. The window's size
                                          changes: terrain_ecs_stream_set_screen */
     float fov_y;                      /* radians, for pixel_error; 0 = 60° */
-    double y_min, y_max;              /* metres the mesh layers cover at first; equal = the
-                                         generation parameters' relief ± 48 m (base ± relief ±
-                                         48). The layers grow, never shrink, to reach every
-                                         interface of the column chunks generated or edited, so
-                                         no peak or tower is cut off */
+    double y_min, y_max;              /* metres the mesh layers cover. Equal (the default):
+                                         the generation parameters' base ± relief ± 48 m at
+                                         first, then grown (never shrunk) to reach every
+                                         interface of the column chunks generated or edited,
+                                         so no peak or tower is cut off. Given: exactly that */
     int collision_radius;             /* column chunks each way kept generated; 0 = 2 */
     float upload_budget_ms;           /* main-thread GPU uploads and frees a frame; 0 = 2 ms */
     size_t memory_budget;             /* bytes of stacks and meshes kept (CPU + GPU); 0 = 384 MB */

@@ -91,6 +91,7 @@ struct terrain__streamer {
     size_t cpu_mesh_bytes, gpu_mesh_bytes; /* meshes held: made and not uploaded, uploaded */
     uint64_t frame;
     int64_t y_first[16], y_last[16];       /* mesh layers per level */
+    bool grow_layers;                      /* no range was asked for: fit the ground found */
     bool layout_ready;                     /* every wanted chunk of the current layout is ready */
     terrain_clipmap *clipmap;              /* far terrain around viewer 0, or NULL */
     int hole_count;                        /* the rings' squares of the last layout that was ready, */
@@ -499,8 +500,10 @@ static void terrain_stream_generate_system(ecs_iter *it) {
 /* The mesh layers reach every interface the column chunks hold, with the kernel and a column of
  * margin: the range stream_defaults takes from the generator's parameters is a first guess
  * (its ground can rise far above base + relief), and edits can build above it. Grown layers are
- * wanted from the next layout on; they never shrink. */
+ * wanted from the next layout on; they never shrink. A range asked for (terrain_stream_desc's
+ * y_min < y_max) is kept as it is. */
 static void stream_fit_layers(terrain__streamer *s, float low, float high) {
+    if (!s->grow_layers) return;
     double top = (double)TERRAIN_MESH_CELLS * (double)(1 << (s->desc.levels - 1));
     double pad = 2.0 * TERRAIN_COLUMN_SIZE + 1.0;
     double y_min = floor(((double)low - pad) / top) * top, y_max = ceil(((double)high + pad) / top) * top;
@@ -759,6 +762,7 @@ void terrain_ecs_stream(terrain_ecs *te, const terrain_stream_desc *desc) {
     te->stream = s;
     s->asked = desc ? *desc : (terrain_stream_desc){ 0 };
     s->desc = stream_defaults(te, desc);
+    s->grow_layers = !(s->asked.y_max > s->asked.y_min);
     double top = (double)TERRAIN_MESH_CELLS * (double)(1 << (s->desc.levels - 1));
     double y_min = floor(s->desc.y_min / top) * top, y_max = ceil(s->desc.y_max / top) * top;
     for (int level = 0; level < s->desc.levels; level++) {
