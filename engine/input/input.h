@@ -182,8 +182,10 @@ typedef struct input_actions {
  * core_warn, and counted in *bad_lines) and skips it; the rest of the file still applies. */
 typedef struct input_bindings input_bindings;
 input_bindings *input_bindings_default(void);
-/* NULL only when the file cannot be read (message logged); bad lines are skipped. */
-input_bindings *input_bindings_load(const char *path, int *bad_lines);
+/* NULL only when the file cannot be read: CORE_ERROR_IO (missing, unreadable) or CORE_ERROR_RANGE
+ * (larger than 1 MiB), with a message naming the file; not logged. Bad lines
+ * are warnings that skip the line, not a failure. */
+input_bindings *input_bindings_load(const char *path, int *bad_lines, core_error *error);
 input_bindings *input_bindings_parse(const char *text, size_t size, const char *name, int *bad_lines);
 void input_bindings_destroy(input_bindings *bindings);
 
@@ -204,8 +206,12 @@ typedef struct input_system_desc {
 
 typedef struct input_system input_system;
 
-/* NULL on failure (an unreadable replay, an unwritable record file), after a message naming it. */
-input_system *input_system_create(const input_system_desc *desc);
+/* NULL on failure, with the error naming the file (not logged): CORE_ERROR_IO for a replay or
+ * --gamepad-mappings file that cannot be read or a record file that cannot be written;
+ * CORE_ERROR_FORMAT (bad magic, a bad source in the header), _RANGE (settings out of range),
+ * _VERSION (another recording version) or _CORRUPT (a short or damaged header) for a bad replay;
+ * CORE_ERROR_RANGE for a mappings file over 4 MiB. */
+input_system *input_system_create(const input_system_desc *desc, core_error *error);
 void input_system_destroy(input_system *input);
 
 /* Once per frame on the main thread: polls GLFW events (glfwPollEvents; the input system owns
