@@ -22,8 +22,10 @@
  *      hidapi cannot read (the xpad driver's, or a hidraw node this user may not open: the log
  *      names the node and data/input/70-gamepads.rules) are read through GLFW's gamepad API while a
  *      window exists, with SDL's mappings and the lines of input_system_desc.gamepad_mappings_path:
- *          input_system_create(&(input_system_desc){ .glfw_window = window,
- *                                      .gamepad_mappings_path = "gamecontrollerdb.txt" });
+ *          core_error error = { 0 };
+ *          input_system *input = input_system_create(&(input_system_desc){ .glfw_window = window,
+ *                                      .gamepad_mappings_path = "gamecontrollerdb.txt" }, &error);
+ *          if (!input) fprintf(stderr, "%s\n", error.message);   // names the file that failed
  *
  *   3. Actions (move, look, jump, sprint, crouch, tool, toggle fly) are what a game reads. They
  *      are fed by both devices through bindings loaded from a small text file the user can edit
