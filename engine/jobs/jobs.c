@@ -533,14 +533,14 @@ bool job_is_done(job_system *jobs, job_handle job) {
 }
 
 static bool handle_done(job_system *jobs, const void *arg) { return job_is_done(jobs, *(const job_handle *)arg); }
-static uint64_t sum_completed(job_system *jobs) {
+static uint64_t sum_completed(const job_system *jobs) {
     uint64_t total = atomic_load_explicit(&jobs->foreign_completed, memory_order_acquire);
     for (int i = 0; i < jobs->thread_count; i++)
         total += atomic_load_explicit(&jobs->threads[i].completed, memory_order_acquire);
     return total;
 }
 
-static uint64_t sum_submitted(job_system *jobs) {
+static uint64_t sum_submitted(const job_system *jobs) {
     uint64_t total = atomic_load_explicit(&jobs->foreign_submitted, memory_order_acquire);
     for (int i = 0; i < jobs->thread_count; i++)
         total += atomic_load_explicit(&jobs->threads[i].submitted, memory_order_acquire);
@@ -656,7 +656,7 @@ void job_parallel_for(job_system *jobs, size_t count, size_t batch, job_range_fn
     job_wait(jobs, job_parallel_for_async(jobs, count, batch, fn, user, name));
 }
 
-job_system_stats_info job_system_stats(job_system *jobs) {
+job_system_stats_info job_system_stats(const job_system *jobs) {
     job_system_stats_info stats = {
         .completed = sum_completed(jobs),
         .submitted = sum_submitted(jobs),

@@ -120,7 +120,7 @@ typedef struct job_system_stats_info {
     uint64_t wakes;          /* sleepers woken for a new job or a finished one */
     int queued;              /* ready jobs not yet started */
 } job_system_stats_info;
-job_system_stats_info job_system_stats(job_system *jobs);
+job_system_stats_info job_system_stats(const job_system *jobs);
 /* Records the TRACES counters above for the frame since the last call (one caller, once a
  * frame, from the thread that ends frames). Nothing when no capture runs. */
 void job_system_trace_counters(job_system *jobs);
