@@ -146,10 +146,15 @@ static bool app_open_rocks(game_app *app, float fog_density) {
 
 static bool app_open_input(game_app *app) {
     const game_app_desc *d = &app->desc;
-    if (d->bindings_path && !(app->bindings = input_bindings_load(d->bindings_path, NULL))) return false;
+    core_error error = { 0 };
+    if (d->bindings_path && !(app->bindings = input_bindings_load(d->bindings_path, NULL, &error))) {
+        core_log_error("input", "%s", error.message);
+        return false;
+    }
     app->input = input_system_create(&(input_system_desc){ .glfw_window = gfx_glfw_window(app->gfx), .bindings = app->bindings,
                                              .record_path = d->record_path, .replay_path = d->replay_path,
-                                             .gamepad_mappings_path = d->gamepad_mappings_path });
+                                             .gamepad_mappings_path = d->gamepad_mappings_path }, &error);
+    if (!app->input) core_log_error("input", "%s", error.message);
     app->ids.input = ecs_resource_register(app->ecs, &(ecs_resource_desc){ .name = "input", .object = app->input });
     return app->input != NULL;
 }

@@ -149,6 +149,7 @@ int gfx_pass_timings(const gfx_context *gfx, gfx_pass_timing *timings, int capac
 /* ---- buffers ------------------------------------------------------------------------------ */
 
 typedef enum gfx_buffer_usage {
+    GFX_BUFFER_DEFAULT = 0,    /* = GFX_BUFFER_STATIC */
     GFX_BUFFER_STATIC,         /* written once (meshes) */
     GFX_BUFFER_DYNAMIC,        /* rewritten often (per-frame uniforms, instances) */
 } gfx_buffer_usage;
@@ -159,7 +160,7 @@ typedef struct gfx_buffer { uint32_t id; } gfx_buffer;
 typedef struct gfx_buffer_desc {
     size_t size;               /* bytes */
     const void *data;          /* NULL = uninitialised */
-    gfx_buffer_usage usage;
+    gfx_buffer_usage usage;    /* DEFAULT = STATIC */
 } gfx_buffer_desc;
 
 /* { 0 } (logged) when no context is current or its pool is full. */
@@ -205,7 +206,8 @@ GLuint gfx_vertex_array_gl(gfx_vertex_array vertex_array);
 /* ---- textures and framebuffers ------------------------------------------------------------ */
 
 typedef enum gfx_format {
-    GFX_FORMAT_RGBA8,          /* 0: the default */
+    GFX_FORMAT_DEFAULT = 0,    /* = GFX_FORMAT_RGBA8 */
+    GFX_FORMAT_RGBA8,
     GFX_FORMAT_R8,
     GFX_FORMAT_R32F,
     GFX_FORMAT_RG32F,
@@ -219,7 +221,7 @@ typedef struct gfx_texture_desc {
     int width, height;
     int layers;                /* > 1 makes a 2D array texture (one layer per material, …) */
     bool array;                /* a 2D array texture even with one layer */
-    gfx_format format;
+    gfx_format format;         /* DEFAULT = RGBA8 */
     const void *data;          /* NULL = uninitialised; all layers, tightly packed */
     bool mipmaps;              /* generate a full chain, trilinear filtering */
     bool nearest;              /* nearest filtering (default linear) */
@@ -243,7 +245,7 @@ GLuint gfx_texture_gl(gfx_texture texture);
 
 typedef struct gfx_framebuffer_desc {
     int width, height;
-    gfx_format color_format;   /* one colour attachment */
+    gfx_format color_format;   /* one colour attachment; DEFAULT = RGBA8 */
     bool depth_only;           /* no colour attachment (shadow maps) */
     bool depth;                /* add a DEPTH32F attachment */
     gfx_texture depth_texture; /* instead: draw depth into this texture's layer .depth_layer; the
@@ -293,12 +295,17 @@ void gfx_uniform_mat4(gfx_context *gfx, gfx_program program, const char *name, c
 
 /* ---- draws -------------------------------------------------------------------------------- */
 
-typedef enum gfx_index_type { GFX_INDEX_NONE, GFX_INDEX_U16, GFX_INDEX_U32 } gfx_index_type;
+typedef enum gfx_index_type {
+    GFX_INDEX_DEFAULT = 0,     /* = GFX_INDEX_NONE */
+    GFX_INDEX_NONE,            /* no index buffer: glDrawArrays */
+    GFX_INDEX_U16,
+    GFX_INDEX_U32,
+} gfx_index_type;
 
 typedef struct gfx_draw_desc {
     gfx_vertex_array vertex_array;
     GLenum primitive;          /* 0 = GL_TRIANGLES */
-    gfx_index_type index_type; /* NONE = glDrawArrays */
+    gfx_index_type index_type; /* DEFAULT = NONE = glDrawArrays */
     uint32_t first;            /* first vertex, or first index */
     uint32_t count;            /* vertices or indices */
     uint32_t instances;        /* 0 = 1, not instanced */

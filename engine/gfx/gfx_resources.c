@@ -238,6 +238,7 @@ static gfx_format_info gfx_format_get(gfx_format format) {
     case GFX_FORMAT_RGBA32F:  return (gfx_format_info){ GL_RGBA32F, GL_RGBA, GL_FLOAT, 16 };
     case GFX_FORMAT_DEPTH32F: return (gfx_format_info){ GL_DEPTH_COMPONENT32F, GL_DEPTH_COMPONENT, GL_FLOAT, 4 };
     case GFX_FORMAT_DEPTH24:  return (gfx_format_info){ GL_DEPTH_COMPONENT24, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, 4 };
+    case GFX_FORMAT_DEFAULT:
     case GFX_FORMAT_RGBA8:
     default:                  return (gfx_format_info){ GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, 4 };
     }
@@ -266,7 +267,7 @@ gfx_texture gfx_texture_create(const gfx_texture_desc *desc) {
     int layers = desc->layers > 1 ? desc->layers : 1;
     *entry = (gfx__texture_entry){ .target = layers > 1 || desc->array ? GL_TEXTURE_2D_ARRAY : GL_TEXTURE_2D,
                                    .width = desc->width, .height = desc->height, .layers = layers,
-                                   .format = desc->format };
+                                   .format = desc->format ? desc->format : GFX_FORMAT_RGBA8 };
     int levels = desc->mipmaps ? gfx_mip_levels(desc->width, desc->height) : 1;
     GLuint name;
     glCreateTextures(entry->target, 1, &name);
@@ -426,15 +427,16 @@ void gfx_draw(const gfx_draw_desc *desc) {
     if (indirect) gfx__frame_counts.indirect_draws++;
     else if (primitive == GL_TRIANGLES) gfx__frame_counts.triangles += (uint64_t)(desc->count / 3) * (uint64_t)instances;
     glBindVertexArray(array->name);
+    bool indexed = desc->index_type == GFX_INDEX_U16 || desc->index_type == GFX_INDEX_U32;  /* DEFAULT = NONE */
     GLenum index_type = desc->index_type == GFX_INDEX_U16 ? GL_UNSIGNED_SHORT : GL_UNSIGNED_INT;
     size_t index_size = desc->index_type == GFX_INDEX_U16 ? 2 : 4;
     if (indirect) {
         glBindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect);
         const void *offset = (const void *)(uintptr_t)desc->indirect_offset;
-        if (desc->index_type == GFX_INDEX_NONE) glDrawArraysIndirect(primitive, offset);
+        if (!indexed) glDrawArraysIndirect(primitive, offset);
         else glDrawElementsIndirect(primitive, index_type, offset);
         glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
-    } else if (desc->index_type == GFX_INDEX_NONE) {
+    } else if (!indexed) {
         glDrawArraysInstanced(primitive, (GLint)desc->first, (GLsizei)desc->count, instances);
     } else {
         const void *offset = (const void *)(uintptr_t)(desc->first * index_size);

@@ -22,8 +22,10 @@
  *      hidapi cannot read (the xpad driver's, or a hidraw node this user may not open: the log
  *      names the node and data/input/70-gamepads.rules) are read through GLFW's gamepad API while a
  *      window exists, with SDL's mappings and the lines of input_system_desc.gamepad_mappings_path:
- *          input_system_create(&(input_system_desc){ .glfw_window = window,
- *                                      .gamepad_mappings_path = "gamecontrollerdb.txt" });
+ *          core_error error = { 0 };
+ *          input_system *input = input_system_create(&(input_system_desc){ .glfw_window = window,
+ *                                      .gamepad_mappings_path = "gamecontrollerdb.txt" }, &error);
+ *          if (!input) fprintf(stderr, "%s\n", error.message);   // names the file that failed
  *
  *   3. Actions (move, look, jump, sprint, crouch, tool, toggle fly) are what a game reads. They
  *      are fed by both devices through bindings loaded from a small text file the user can edit
@@ -182,8 +184,10 @@ typedef struct input_actions {
  * core_warn, and counted in *bad_lines) and skips it; the rest of the file still applies. */
 typedef struct input_bindings input_bindings;
 input_bindings *input_bindings_default(void);
-/* NULL only when the file cannot be read (message logged); bad lines are skipped. */
-input_bindings *input_bindings_load(const char *path, int *bad_lines);
+/* NULL only when the file cannot be read: CORE_ERROR_IO (missing, unreadable) or CORE_ERROR_RANGE
+ * (larger than 1 MiB), with a message naming the file; not logged. Bad lines
+ * are warnings that skip the line, not a failure. */
+input_bindings *input_bindings_load(const char *path, int *bad_lines, core_error *error);
 input_bindings *input_bindings_parse(const char *text, size_t size, const char *name, int *bad_lines);
 void input_bindings_destroy(input_bindings *bindings);
 
@@ -204,8 +208,12 @@ typedef struct input_system_desc {
 
 typedef struct input_system input_system;
 
-/* NULL on failure (an unreadable replay, an unwritable record file), after a message naming it. */
-input_system *input_system_create(const input_system_desc *desc);
+/* NULL on failure, with the error naming the file (not logged): CORE_ERROR_IO for a replay or
+ * --gamepad-mappings file that cannot be read or a record file that cannot be written;
+ * CORE_ERROR_FORMAT (bad magic, a bad source in the header), _RANGE (settings out of range),
+ * _VERSION (another recording version) or _CORRUPT (a short or damaged header) for a bad replay;
+ * CORE_ERROR_RANGE for a mappings file over 4 MiB. */
+input_system *input_system_create(const input_system_desc *desc, core_error *error);
 void input_system_destroy(input_system *input);
 
 /* Once per frame on the main thread: polls GLFW events (glfwPollEvents; the input system owns

@@ -477,11 +477,12 @@ input_bindings *input_bindings_parse(const char *text, size_t size, const char *
     return p.bindings;
 }
 
-char *input__file_read(const char *path, const char *what, size_t max_bytes, size_t *size, size_t *capacity) {
+char *input__file_read(const char *path, const char *what, size_t max_bytes, size_t *size, size_t *capacity,
+                       core_error *error) {
     *size = *capacity = 0;
     FILE *file = fopen(path, "rb");
     if (!file) {
-        core_log_error("input", "cannot open %s %s: %s", what, path, strerror(errno));
+        core_error_set(error, CORE_ERROR_IO, "cannot open %s %s: %s", what, path, strerror(errno));
         return NULL;
     }
     char *text = NULL;
@@ -491,13 +492,13 @@ char *input__file_read(const char *path, const char *what, size_t max_bytes, siz
         size_t got = fread(text + *size, 1, *capacity - *size, file);
         *size += got;
         if (*size > max_bytes) {
-            core_log_error("input", "cannot load %s %s: larger than %zu bytes", what, path, max_bytes);
+            core_error_set(error, CORE_ERROR_RANGE, "cannot load %s %s: larger than %zu bytes", what, path, max_bytes);
             failed = true;
             break;
         }
         if (got == 0) {
             if (ferror(file)) {
-                core_log_error("input", "cannot read %s %s: %s", what, path, strerror(errno));
+                core_error_set(error, CORE_ERROR_IO, "cannot read %s %s: %s", what, path, strerror(errno));
                 failed = true;
             }
             break;
@@ -512,10 +513,10 @@ char *input__file_read(const char *path, const char *what, size_t max_bytes, siz
     return text;
 }
 
-input_bindings *input_bindings_load(const char *path, int *bad_lines) {
+input_bindings *input_bindings_load(const char *path, int *bad_lines, core_error *error) {
     if (bad_lines) *bad_lines = 0;
     size_t size, capacity;
-    char *text = input__file_read(path, "bindings", INPUT_BINDINGS_MAX_FILE, &size, &capacity);
+    char *text = input__file_read(path, "bindings", INPUT_BINDINGS_MAX_FILE, &size, &capacity, error);
     if (!text) return NULL;
     input_bindings *bindings = input_bindings_parse(text, size, path, bad_lines);
     core_free(text, capacity);

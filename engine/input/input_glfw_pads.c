@@ -49,12 +49,12 @@ bool input__glfw_pad_is_duplicate(const input_pad_slot slots[INPUT_MAX_GAMEPADS]
     return ids && same_ids_before < hidraw_with_ids;
 }
 
-bool input__glfw_pads_init(input_glfw_pads *g, const char *mappings_path, bool active) {
+bool input__glfw_pads_init(input_glfw_pads *g, const char *mappings_path, bool active, core_error *error) {
     *g = (input_glfw_pads){ .active = active };
     for (int i = 0; i < INPUT_GLFW_JOYSTICKS; i++) g->slot[i] = -1;
     if (mappings_path) {
         int bad = 0;
-        if (!input__sdl_mappings_load(&g->mappings, mappings_path, &bad)) return false;
+        if (!input__sdl_mappings_load(&g->mappings, mappings_path, &bad, error)) return false;
         core_info("input", "gamepad mappings %s: %zu for this platform, %d bad line%s skipped", mappings_path,
                   g->mappings.count, bad, bad == 1 ? "" : "s");
     }

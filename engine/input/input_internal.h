@@ -285,12 +285,14 @@ typedef struct input_sdl_mappings {
  * another platform are kept out of `text` and `items` without complaint. Never fails. */
 void input__sdl_mappings_parse(input_sdl_mappings *mappings, const char *text, size_t size, const char *name,
                                int *bad_lines);
-/* false (logged) when the file cannot be read. */
-bool input__sdl_mappings_load(input_sdl_mappings *mappings, const char *path, int *bad_lines);
+/* false (CORE_ERROR_IO, or _RANGE when larger than INPUT_SDL_MAX_FILE) when the file cannot be
+ * read; bad lines are not a failure. */
+bool input__sdl_mappings_load(input_sdl_mappings *mappings, const char *path, int *bad_lines, core_error *error);
 /* A whole text file of at most max_bytes (the bindings, the gamepad mappings), for a parser;
- * free it with core_free(text, *capacity). NULL with a message naming `what` and the path when
- * it cannot be opened or read or is larger. */
-char *input__file_read(const char *path, const char *what, size_t max_bytes, size_t *size, size_t *capacity);
+ * free it with core_free(text, *capacity). NULL when it cannot be opened or read
+ * (CORE_ERROR_IO) or is larger (CORE_ERROR_RANGE), with a message naming `what` and the path. */
+char *input__file_read(const char *path, const char *what, size_t max_bytes, size_t *size, size_t *capacity,
+                       core_error *error);
 void input__sdl_mappings_free(input_sdl_mappings *mappings);
 /* The mapping for a GUID (32 hex digits, any case), or NULL. */
 const input_sdl_mapping *input__sdl_mappings_find(const input_sdl_mappings *mappings, const char *guid);
@@ -315,8 +317,8 @@ typedef struct input_glfw_pads {
 } input_glfw_pads;
 
 /* Loads the mappings file (when given) and hands its good lines to GLFW (when `active`); false
- * (logged) only when the file cannot be read. */
-bool input__glfw_pads_init(input_glfw_pads *pads, const char *mappings_path, bool active);
+ * (error filled, as input__sdl_mappings_load) only when the file cannot be read. */
+bool input__glfw_pads_init(input_glfw_pads *pads, const char *mappings_path, bool active, core_error *error);
 /* Once a frame, main thread, before the slots are gathered: joysticks that are gamepads and not
  * read by the hidraw thread are read and published into `shared`'s slots. */
 void input__glfw_pads_poll(input_glfw_pads *pads, input_pads_shared *shared, bool wait_for_hid);
@@ -343,16 +345,20 @@ typedef struct input_frame {
     input_actions actions;
 } input_frame;
 
-/* Opens PATH.part for writing and writes the header; NULL (logged) when it cannot. */
-input_recorder *input__recorder_open(const char *path, const input_bindings *bindings, float dead_zone);
+/* Opens PATH.part for writing and writes the header; NULL (CORE_ERROR_IO) when it cannot. */
+input_recorder *input__recorder_open(const char *path, const input_bindings *bindings, float dead_zone,
+                                     core_error *error);
 void input__recorder_write(input_recorder *recorder, float dt, const input_event *events, uint32_t count,
                            const input_actions *actions);
 /* Writes the end record, closes, renames PATH.part over PATH. */
 void input__recorder_close(input_recorder *recorder);
 
-/* Reads and checks the header; NULL (logged, naming the file) when it is missing or bad. The
- * bindings and dead zone the recording was made with come back in *bindings and *dead_zone. */
-input_replayer *input__replayer_open(const char *path, input_bindings *bindings, float *dead_zone);
+/* Reads and checks the header; NULL when it is missing (CORE_ERROR_IO) or bad (CORE_ERROR_FORMAT
+ * for a bad magic or header content, _VERSION for another recording version, _CORRUPT for a short,
+ * truncated or damaged header), with a message naming the file. The bindings and dead zone the
+ * recording was made with come back in *bindings and *dead_zone. */
+input_replayer *input__replayer_open(const char *path, input_bindings *bindings, float *dead_zone,
+                                     core_error *error);
 /* The next frame (events valid until the next call), or false at the end or on a bad record
  * (logged with the file name and frame). */
 bool input__replayer_next(input_replayer *replayer, input_frame *frame);

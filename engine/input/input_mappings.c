@@ -320,10 +320,10 @@ void input__sdl_mappings_parse(input_sdl_mappings *ms, const char *text, size_t 
     if (bad_lines) *bad_lines = bad;
 }
 
-bool input__sdl_mappings_load(input_sdl_mappings *ms, const char *path, int *bad_lines) {
+bool input__sdl_mappings_load(input_sdl_mappings *ms, const char *path, int *bad_lines, core_error *error) {
     if (bad_lines) *bad_lines = 0;
     size_t size, capacity;
-    char *text = input__file_read(path, "gamepad mappings", INPUT_SDL_MAX_FILE, &size, &capacity);
+    char *text = input__file_read(path, "gamepad mappings", INPUT_SDL_MAX_FILE, &size, &capacity, error);
     if (!text) return false;
     input__sdl_mappings_parse(ms, text, size, path, bad_lines);
     core_free(text, capacity);

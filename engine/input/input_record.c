@@ -307,7 +307,8 @@ static void input_record_begin(input_bytes *b) {
     input_put(b, "\0\0\0\0\0\0\0\0", 8);
 }
 
-input_recorder *input__recorder_open(const char *path, const input_bindings *bindings, float dead_zone) {
+input_recorder *input__recorder_open(const char *path, const input_bindings *bindings, float dead_zone,
+                                     core_error *error) {
     input_recorder *r = core_calloc(1, sizeof *r);
     r->path = core_strdup(path);
     size_t size = strlen(path) + sizeof ".part";
@@ -315,7 +316,7 @@ input_recorder *input__recorder_open(const char *path, const input_bindings *bin
     snprintf(r->part_path, size, "%s.part", path);
     r->file = fopen(r->part_path, "wb");
     if (!r->file) {
-        core_log_error("input", "cannot write the recording %s: %s", r->part_path, strerror(errno));
+        core_error_set(error, CORE_ERROR_IO, "cannot write the recording %s: %s", r->part_path, strerror(errno));
         core_free(r->part_path, size);
         core_free(r->path, strlen(r->path) + 1);
         core_free(r, sizeof *r);
@@ -329,7 +330,7 @@ input_recorder *input__recorder_open(const char *path, const input_bindings *bin
     input_patch_u32(b, 12, (uint32_t)(b->size - 16));
     input_put_u32(b, input_checksum(b->data, b->size));
     if (fwrite(b->data, 1, b->size, r->file) != b->size || fflush(r->file) != 0) {
-        core_log_error("input", "cannot write the recording %s: %s", r->part_path, strerror(errno));
+        core_error_set(error, CORE_ERROR_IO, "cannot write the recording %s: %s", r->part_path, strerror(errno));
         fclose(r->file);
         remove(r->part_path);
         input_bytes_free(b);
@@ -409,44 +410,45 @@ static void input_replayer_free(input_replayer *r) {
     core_free(r, sizeof *r);
 }
 
-input_replayer *input__replayer_open(const char *path, input_bindings *bindings, float *dead_zone) {
+input_replayer *input__replayer_open(const char *path, input_bindings *bindings, float *dead_zone,
+                                     core_error *error) {
     input_replayer *r = core_calloc(1, sizeof *r);
     r->path = core_strdup(path);
     r->file = fopen(path, "rb");
     if (!r->file) {
-        core_log_error("input", "cannot open the replay %s: %s", path, strerror(errno));
+        core_error_set(error, CORE_ERROR_IO, "cannot open the replay %s: %s", path, strerror(errno));
         input_replayer_free(r);
         return NULL;
     }
     uint8_t head[16];
-    char error[320] = "";   /* "bad header: " and a core_error message */
+    core_error why = { 0 };
     input_bytes *b = &r->record;
     if (!input_read_exact(r, head, sizeof head)) {
-        snprintf(error, sizeof error, "too short for a header (truncated or empty)");
+        core_error_set(&why, CORE_ERROR_CORRUPT, "too short for a header (truncated or empty)");
     } else if (memcmp(head, input_record_magic, 8) != 0) {
-        snprintf(error, sizeof error, "not an input recording (bad magic)");
+        core_error_set(&why, CORE_ERROR_FORMAT, "not an input recording (bad magic)");
     } else if (input_read_u32(head + 8) != INPUT_RECORD_VERSION) {
-        snprintf(error, sizeof error, "recording version %u; this build reads version %d", input_read_u32(head + 8),
-                 INPUT_RECORD_VERSION);
+        core_error_set(&why, CORE_ERROR_VERSION, "recording version %u; this build reads version %d",
+                       input_read_u32(head + 8), INPUT_RECORD_VERSION);
     } else if (input_read_u32(head + 12) > INPUT_RECORD_MAX_HEADER) {
-        snprintf(error, sizeof error, "header length %u is corrupt", input_read_u32(head + 12));
+        core_error_set(&why, CORE_ERROR_CORRUPT, "header length %u is corrupt", input_read_u32(head + 12));
     } else {
         size_t length = input_read_u32(head + 12);
         input_put(b, head, sizeof head);
         b->data = core_grow(b->data, &b->capacity, b->size + length + 4, 1);
         if (!input_read_exact(r, b->data + b->size, length + 4)) {
-            snprintf(error, sizeof error, "header truncated");
+            core_error_set(&why, CORE_ERROR_CORRUPT, "header truncated");
         } else if (input_checksum(b->data, 16 + length) != input_read_u32(b->data + 16 + length)) {
-            snprintf(error, sizeof error, "header checksum mismatch (corrupt)");
+            core_error_set(&why, CORE_ERROR_CORRUPT, "header checksum mismatch (corrupt)");
         } else {
-            core_error why = { 0 };
-            if (!input__record_decode_header(b->data + 16, length, bindings, dead_zone, &why))
-                snprintf(error, sizeof error, "bad header: %s", why.message);
+            core_error bad = { 0 };
+            if (!input__record_decode_header(b->data + 16, length, bindings, dead_zone, &bad))
+                core_error_set(&why, bad.code ? bad.code : CORE_ERROR_FORMAT, "bad header: %s", bad.message);
             r->offset = 16 + length + 4;
         }
     }
-    if (error[0]) {
-        core_log_error("input", "cannot replay %s: %s", path, error);
+    if (why.code) {
+        core_error_set(error, why.code, "cannot replay %s: %s", path, why.message);
         input_replayer_free(r);
         return NULL;
     }

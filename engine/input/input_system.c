@@ -198,7 +198,7 @@ static void input_gather_gamepads(input_system *in) {
 
 /* ---- create, destroy ------------------------------------------------------------------------ */
 
-input_system *input_system_create(const input_system_desc *desc) {
+input_system *input_system_create(const input_system_desc *desc, core_error *error) {
     input_system_desc d = desc ? *desc : (input_system_desc){ 0 };
     input_bindings bindings;
     if (d.bindings && input__bindings_valid(d.bindings)) {
@@ -219,13 +219,13 @@ input_system *input_system_create(const input_system_desc *desc) {
     input__pads_shared_init(&in->pads);
     /* GLFW's pads need its joystick API, so a window (GLFW initialised); a replay opens no device. */
     bool glfw_pads = d.glfw_window && !d.no_gamepads && !d.replay_path;
-    if (!input__glfw_pads_init(&in->glfw_pads, d.gamepad_mappings_path, glfw_pads)) {
+    if (!input__glfw_pads_init(&in->glfw_pads, d.gamepad_mappings_path, glfw_pads, error)) {
         input_system_destroy(in);
         return NULL;
     }
     if (d.replay_path) {
         in->replay_path = core_strdup(d.replay_path);
-        in->replayer = input__replayer_open(d.replay_path, &bindings, &dead_zone);
+        in->replayer = input__replayer_open(d.replay_path, &bindings, &dead_zone, error);
         if (!in->replayer) {
             input_system_destroy(in);
             return NULL;
@@ -234,7 +234,7 @@ input_system *input_system_create(const input_system_desc *desc) {
             core_info("input", "replay %s: using the bindings it was recorded with", d.replay_path);
     }
     if (d.record_path) {
-        in->recorder = input__recorder_open(d.record_path, &bindings, dead_zone);
+        in->recorder = input__recorder_open(d.record_path, &bindings, dead_zone, error);
         if (!in->recorder) {
             input_system_destroy(in);
             return NULL;

@@ -67,12 +67,15 @@ static void min_image(const float a[3], const float b[3], float s, float d[3]) {
 }
 
 const char *rocks_block_type_name(rocks_block_type type) {
-    static const char *names[] = { "equidimensional", "rhombohedral", "polyhedral", "tabular", "columnar" };
-    return (unsigned)type < ROCKS_BLOCK_TYPE_COUNT ? names[type] : NULL;
+    static const char *names[ROCKS_BLOCK_TYPE_END] = {
+        [ROCKS_BLOCK_EQUIDIMENSIONAL] = "equidimensional", [ROCKS_BLOCK_RHOMBOHEDRAL] = "rhombohedral",
+        [ROCKS_BLOCK_POLYHEDRAL] = "polyhedral", [ROCKS_BLOCK_TABULAR] = "tabular", [ROCKS_BLOCK_COLUMNAR] = "columnar",
+    };
+    return (unsigned)type < ROCKS_BLOCK_TYPE_END ? names[type] : NULL;
 }
 
 bool rocks_parse_block_type(const char *text, rocks_block_type *out) {
-    for (int t = 0; text && t < ROCKS_BLOCK_TYPE_COUNT; t++)
+    for (int t = ROCKS_BLOCK_EQUIDIMENSIONAL; text && t < ROCKS_BLOCK_TYPE_END; t++)
         if (strcmp(text, rocks_block_type_name((rocks_block_type)t)) == 0) {
             *out = (rocks_block_type)t;
             return true;
@@ -242,7 +245,7 @@ static void parallel_set(rng *r, disc_list *l, float s, const int ijk[3], float 
 
 /* The type's defaults (metres), for a desc left at zero. */
 static void type_defaults(rocks_block_type type, float *spacing, float *radius) {
-    static const float table[ROCKS_BLOCK_TYPE_COUNT][2] = {
+    static const float table[ROCKS_BLOCK_TYPE_END][2] = {
         [ROCKS_BLOCK_EQUIDIMENSIONAL] = { 4.5f, 5.0f },   /* 003 §4.1: radii ≈ 5 m */
         [ROCKS_BLOCK_RHOMBOHEDRAL] = { 4.5f, 5.0f },      /* the same, in an oblique frame */
         [ROCKS_BLOCK_POLYHEDRAL] = { 3.0f, 3.0f },        /* closer centres, more discs */
@@ -694,8 +697,9 @@ float rocks_block_field(const rocks_block_tile *tile, uint32_t block, const floa
 
 static bool desc_make(const rocks_block_tile_desc *in, rocks_block_tile_desc *d) {
     *d = in ? *in : (rocks_block_tile_desc){ 0 };
-    if ((unsigned)d->type >= ROCKS_BLOCK_TYPE_COUNT) {
-        core_log_error("rocks", "block tile: type %d is not a block type (0 … %d)", (int)d->type, ROCKS_BLOCK_TYPE_COUNT - 1);
+    if (d->type == ROCKS_BLOCK_DEFAULT) d->type = ROCKS_BLOCK_EQUIDIMENSIONAL;
+    if ((unsigned)d->type >= ROCKS_BLOCK_TYPE_END) {
+        core_log_error("rocks", "block tile: type %d is not a block type (0 … %d)", (int)d->type, ROCKS_BLOCK_TYPE_END - 1);
         return false;
     }
     float spacing, radius;
@@ -877,7 +881,9 @@ static rocks_block_tile *build_tile(const rocks_block_tile_desc *desc) {
         memcpy(copy, d.custom, (size_t)d.custom_count * sizeof *copy);
         t->desc.custom = copy;
     }
-    rng r = { core_hash_combine(d.seed, (uint64_t)d.type) };
+    /* The type's number counted from equidimensional = 0, as before DEFAULT took the zero: the
+     * same seed and type make the same blocks as they did. */
+    rng r = { core_hash_combine(d.seed, (uint64_t)(d.type - ROCKS_BLOCK_EQUIDIMENSIONAL)) };
 
     disc_list discs = { 0 };
     make_discs(&d, &r, &discs);

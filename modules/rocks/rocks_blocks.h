@@ -48,15 +48,19 @@
 
 /* 003 §4.1, Fig. 2 and Fig. 5: how the fracture discs are laid out. */
 typedef enum rocks_block_type {
-    ROCKS_BLOCK_EQUIDIMENSIONAL = 0,  /* three orthogonal sets (axis-aligned normals): near-cubes */
+    ROCKS_BLOCK_DEFAULT = 0,          /* = ROCKS_BLOCK_EQUIDIMENSIONAL */
+    ROCKS_BLOCK_EQUIDIMENSIONAL,      /* three orthogonal sets (axis-aligned normals): near-cubes */
     ROCKS_BLOCK_RHOMBOHEDRAL,         /* three oblique sets (a sheared frame): rhombic blocks */
     ROCKS_BLOCK_POLYHEDRAL,           /* random normals, denser discs: irregular smaller blocks */
     ROCKS_BLOCK_TABULAR,              /* bedding planes across the tile, short cross joints: slabs */
     ROCKS_BLOCK_COLUMNAR,             /* continuous vertical sets, rare cross joints: tall prisms */
-    ROCKS_BLOCK_TYPE_COUNT
+    ROCKS_BLOCK_TYPE_END              /* one past the last: an array indexed by type is this long */
 } rocks_block_type;
+/* How many real types there are: they are ROCKS_BLOCK_EQUIDIMENSIONAL + i for i < this. */
+#define ROCKS_BLOCK_TYPE_COUNT (ROCKS_BLOCK_TYPE_END - ROCKS_BLOCK_EQUIDIMENSIONAL)
 
-const char *rocks_block_type_name(rocks_block_type type);   /* "equidimensional", …; NULL if bad */
+/* "equidimensional", …; NULL for DEFAULT (not a type of its own) and values out of range. */
+const char *rocks_block_type_name(rocks_block_type type);
 bool rocks_parse_block_type(const char *text, rocks_block_type *out);
 
 /* A block given by the developer (003 §4, user control: "directly placing several authored
@@ -74,7 +78,7 @@ typedef struct rocks_block_custom {
 
 /* Zero means the default for every field. */
 typedef struct rocks_block_tile_desc {
-    rocks_block_type type;            /* 0 = equidimensional */
+    rocks_block_type type;            /* DEFAULT = equidimensional */
     uint64_t seed;                    /* 0 = 1 */
     float size;                       /* s, the tile's side in metres; 0 = 16; 4 … 64 */
     float point_spacing;              /* Poisson radius of the sample points; 0 = s / 24 */
@@ -191,7 +195,7 @@ bool rocks_block_on_walls(void *wall_presence, uint32_t block, const double anch
 typedef struct rocks_cliffs_desc {
     uint64_t seed;                    /* 0 = 1 */
     rocks_block_type strata[8];       /* bottom up, repeating; all zero with count 0 = tabular,
-                                         columnar, equidimensional */
+                                         columnar, equidimensional; a DEFAULT one = equidimensional */
     int strata_count;                 /* 0 = 3 */
     float stratum_height;             /* metres; 0 = 20 */
     float tile_size;                  /* s; 0 = 16 */

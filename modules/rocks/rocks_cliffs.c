@@ -32,8 +32,8 @@ typedef struct cell_entry {
 
 struct rocks_cliffs {
     rocks_cliffs_desc desc;
-    rocks_block_tile *tiles[ROCKS_BLOCK_TYPE_COUNT];   /* NULL for types no stratum uses */
-    size_t words[ROCKS_BLOCK_TYPE_COUNT];              /* 64-bit words of a cell's bits */
+    rocks_block_tile *tiles[ROCKS_BLOCK_TYPE_END];     /* by type; NULL for types no stratum uses */
+    size_t words[ROCKS_BLOCK_TYPE_END];                /* 64-bit words of a cell's bits */
     pthread_mutex_t lock;
     cell_entry *cache;
     size_t used;
@@ -54,8 +54,10 @@ static bool cliffs_desc_make(const rocks_cliffs_desc *in, rocks_cliffs_desc *d) 
     if (d->max_spacing == 0) d->max_spacing = 1.0f;
     const char *bad = NULL;
     if (d->strata_count < 1 || d->strata_count > 8) bad = "strata_count (1 … 8)";
-    for (int i = 0; !bad && i < d->strata_count; i++)
-        if ((unsigned)d->strata[i] >= ROCKS_BLOCK_TYPE_COUNT) bad = "strata (a block type each)";
+    for (int i = 0; !bad && i < d->strata_count; i++) {
+        if (d->strata[i] == ROCKS_BLOCK_DEFAULT) d->strata[i] = ROCKS_BLOCK_EQUIDIMENSIONAL;
+        if ((unsigned)d->strata[i] >= ROCKS_BLOCK_TYPE_END) bad = "strata (a block type each)";
+    }
     if (!bad && !(d->stratum_height >= 2.0f && d->stratum_height <= 1000.0f)) bad = "stratum_height (2 … 1000 m)";
     if (!bad && !(d->max_spacing > 0.0f && d->max_spacing <= 64.0f)) bad = "max_spacing (0 … 64 m)";
     if (bad) core_log_error("rocks", "cliffs: bad %s", bad);
@@ -85,7 +87,8 @@ static void make_tiles(void *user, size_t begin, size_t end) {
         /* no relief: its 8 cm are below the metre the world samples at (the renderer's detail
          * layer shades the faces) and it would double the cost of every sample */
         jobs->tiles[i] = rocks_block_tile_create(&(rocks_block_tile_desc){
-            .type = type, .seed = core_hash_combine(d->seed, (uint64_t)type), .size = d->tile_size, .joint = d->joint,
+            .type = type, .seed = core_hash_combine(d->seed, (uint64_t)(type - ROCKS_BLOCK_EQUIDIMENSIONAL)),
+            .size = d->tile_size, .joint = d->joint,
             .relief = -1.0f, .cache_path = path });
         if (path) core_free(path, path_size);
     }
@@ -102,7 +105,7 @@ rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc) {
     uint64_t start = core_time_ns();
     tile_jobs jobs = { .desc = &d };
     size_t count = 0;
-    bool used[ROCKS_BLOCK_TYPE_COUNT] = { false };
+    bool used[ROCKS_BLOCK_TYPE_END] = { false };
     for (int i = 0; i < d.strata_count; i++)
         if (!used[d.strata[i]]) used[d.strata[i]] = true, jobs.types[count++] = d.strata[i];
     if (d.jobs) job_parallel_for(d.jobs, count, 1, make_tiles, &jobs, "rocks_block_tile");
@@ -133,7 +136,7 @@ void rocks_cliffs_destroy(rocks_cliffs *c) {
     if (!c) return;
     cache_clear(c);
     core_free(c->cache, CACHE_CAPACITY * sizeof *c->cache);
-    for (int t = 0; t < ROCKS_BLOCK_TYPE_COUNT; t++) rocks_block_tile_destroy(c->tiles[t]);
+    for (int t = 0; t < ROCKS_BLOCK_TYPE_END; t++) rocks_block_tile_destroy(c->tiles[t]);
     pthread_mutex_destroy(&c->lock);
     core_free(c, sizeof *c);
 }
@@ -370,9 +373,9 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
     const int n[3] = { field->nx, field->ny, field->nz };
     double lo[3], hi[3];
     for (int a = 0; a < 3; a++) lo[a] = field->origin[a], hi[a] = field->origin[a] + (n[a] - 1) * (double)field->spacing;
-    int64_t c0[ROCKS_BLOCK_TYPE_COUNT][3], c1[ROCKS_BLOCK_TYPE_COUNT][3];
+    int64_t c0[ROCKS_BLOCK_TYPE_END][3], c1[ROCKS_BLOCK_TYPE_END][3];
     double reach_lo[3] = { INFINITY, INFINITY, INFINITY }, reach_hi[3] = { -INFINITY, -INFINITY, -INFINITY };
-    for (int type = 0; type < ROCKS_BLOCK_TYPE_COUNT; type++) {
+    for (int type = 0; type < ROCKS_BLOCK_TYPE_END; type++) {
         const rocks_block_tile *tile = c->tiles[type];
         if (!tile) continue;
         rocks__cell_range(tile, lo, hi, c0[type], c1[type]);
@@ -385,7 +388,7 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
     version_table versions;
     version_table_make(&versions, world, reach_lo, reach_hi);
     uint64_t present = 0, bits[64];
-    for (int type = 0; type < ROCKS_BLOCK_TYPE_COUNT; type++) {
+    for (int type = 0; type < ROCKS_BLOCK_TYPE_END; type++) {
         const rocks_block_tile *tile = c->tiles[type];
         if (!tile || c->words[type] > CORE_COUNTOF(bits)) continue;
         const double s = tile->desc.size;

@@ -185,7 +185,7 @@ void rocks__set_free_arrays(rocks__set *set);
 /* Bump it with ANY change to what a block tile's build makes (points, discs, clusters, planes,
  * bounds, the lookup grid) or to the file's layout: a cache holds a build's output under its
  * desc, so an old one would read as valid. */
-#define ROCKS__BLOCK_CACHE_VERSION 1u
+#define ROCKS__BLOCK_CACHE_VERSION 2u   /* 2: block types numbered from 1 (ROCKS_BLOCK_DEFAULT = 0) */
 #define ROCKS__BLOCK_CACHE_CHECKSUM_SEED 0x726f636b626c6b73ull   /* core_hash_bytes' seed */
 
 /* Writes `tile` (one without custom blocks) to `path`: a temporary beside it, renamed over it,

@@ -15,7 +15,7 @@
 #define BIT(action) INPUT_ACTION_BIT(INPUT_ACTION_##action)
 
 static input_system *make(void) {
-    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true }, NULL);
     cr_assert_not_null(in);
     return in;
 }
@@ -198,7 +198,7 @@ Test(input_actions, left_stick_moves_after_the_dead_zone) {
 
 Test(input_actions, dead_zone_from_the_desc) {
     const input_actions *a;
-    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .dead_zone = 0.3f });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .dead_zone = 0.3f }, NULL);
     cr_assert_not_null(in);
     input_feed_gamepad(in, 0, &(input_gamepad_state){ .lx = -0.5f });
     /* (0.5 − 0.3) / 0.7 = 0.28571429, to the left */
@@ -279,7 +279,7 @@ Test(input_actions, invert_y_flips_mouse_and_stick) {
     const input_actions *a;
     const char text[] = "invert_y = true\nlook_speed = 0.01\nstick_look_speed = 2\n";
     input_bindings *b = input_bindings_parse(text, sizeof text - 1, "invert", NULL);
-    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = b });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = b }, NULL);
     input_bindings_destroy(b);
     cr_assert_not_null(in);
     capture_by_click(in);
@@ -295,7 +295,7 @@ Test(input_actions, invert_y_flips_mouse_and_stick) {
 Test(input_actions, keys_bound_to_look_turn_like_a_full_stick) {
     const char text[] = "look_right = key:l\nlook_up = key:i\n";
     input_bindings *b = input_bindings_parse(text, sizeof text - 1, "keys", NULL);
-    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = b });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = b }, NULL);
     input_bindings_destroy(b);
     key_tap(in, GLFW_KEY_L, true);
     key_tap(in, GLFW_KEY_I, true);

@@ -51,7 +51,7 @@ static int lines_in(const char *log) {
 
 Test(input_bindings, shipped_file_equals_the_defaults) {
     int bad = -1;
-    input_bindings *file = input_bindings_load("data/input/bindings.txt", &bad);
+    input_bindings *file = input_bindings_load("data/input/bindings.txt", &bad, NULL);
     cr_assert_not_null(file, "run the tests from the repository root");
     cr_expect_eq(bad, 0);
     input_bindings *defaults = input_bindings_default();
@@ -100,7 +100,7 @@ Test(input_bindings, a_line_replaces_the_defaults_of_its_action) {
     cr_expect(has_source(b, INPUT_ACTION_SPRINT, INPUT_SOURCE_KEY, GLFW_KEY_LEFT_SHIFT), "other actions keep theirs");
 
     /* Through the input system: space no longer jumps, j does. */
-    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = b });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = b }, NULL);
     input_bindings_destroy(b);
     input_feed_key(in, GLFW_KEY_SPACE, true);
     cr_assert(input_update(in, 0.016f));
@@ -280,8 +280,27 @@ Test(input_bindings, line_numbers_count_every_line) {
 
 Test(input_bindings, load_reports_missing_files) {
     int bad = -1;
-    cr_expect_null(input_bindings_load("/nonexistent/bindings.txt", &bad));
+    core_error error = { 0 };
+    cr_expect_null(input_bindings_load("/nonexistent/bindings.txt", &bad, &error));
     cr_expect_eq(bad, 0);
+    cr_expect_eq(error.code, CORE_ERROR_IO, "%s", error.message);
+    cr_expect_not_null(strstr(error.message, "/nonexistent/bindings.txt"), "names the file: %s", error.message);
+    cr_expect_null(input_bindings_load("/nonexistent/bindings.txt", NULL, NULL), "a NULL error is allowed");
+}
+
+Test(input_bindings, load_refuses_a_file_over_a_mebibyte) {
+    char path[] = "/tmp/test_input_bindings_XXXXXX";
+    int fd = mkstemp(path);
+    cr_assert_geq(fd, 0);
+    static char comment[(1 << 20) + 1];  /* one byte past the 1 MiB limit, all one comment line */
+    memset(comment, ' ', sizeof comment);
+    comment[0] = '#';
+    cr_assert_eq(write(fd, comment, sizeof comment), (ssize_t)sizeof comment);
+    close(fd);
+    core_error error = { 0 };
+    cr_expect_null(input_bindings_load(path, NULL, &error));
+    cr_expect_eq(error.code, CORE_ERROR_RANGE, "%s", error.message);
+    unlink(path);
 }
 
 Test(input_bindings, load_names_the_file_in_messages) {
@@ -296,7 +315,8 @@ Test(input_bindings, load_names_the_file_in_messages) {
     int saved = dup(2);
     dup2(fileno(sink), 2);
     int bad = -1;
-    input_bindings *b = input_bindings_load(path, &bad);
+    core_error error = { 0 };
+    input_bindings *b = input_bindings_load(path, &bad, &error);
     fflush(stderr);
     dup2(saved, 2);
     close(saved);

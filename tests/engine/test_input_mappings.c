@@ -55,7 +55,7 @@ Test(input_mappings, hand_built_line_maps_a_raw_joystick_to_the_pad) {
     /* Through the default bindings, dt 0.1: south is jump; rt 0.6 is past half way, so tool is
      * down; the left stick at 0.8 up gives move_y (0.8 − 0.15)/(1 − 0.15) = 0.764706; the right
      * stick fully right turns 3 rad/s · 0.1 s = 0.3 rad. */
-    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true }, NULL);
     cr_assert_not_null(in);
     input_feed_gamepad(in, 0, &s);
     cr_assert(input_update(in, 0.1f));
@@ -131,6 +131,22 @@ Test(input_mappings, bad_lines_are_reported_with_their_line_number_and_skipped) 
     cr_expect_not_null(input__sdl_mappings_find(&ms, "030000005e0400008e02000014010005"));
     cr_expect_str_eq(ms.text, "030000005e0400008e02000014010000,Good,a:b0,leftx:a0,platform:Linux,\n"
                               "030000005e0400008e02000014010005,Last,b:b1\n");
+    input__sdl_mappings_free(&ms);
+}
+
+Test(input_mappings, an_unreadable_mappings_file_fails_create_with_an_io_error) {
+    core_error error = { 0 };
+    cr_expect_null(input_system_create(&(input_system_desc){ .no_gamepads = true,
+                                                             .gamepad_mappings_path = "/nonexistent/pads.txt" },
+                                       &error));
+    cr_expect_eq(error.code, CORE_ERROR_IO, "%s", error.message);
+    cr_expect_not_null(strstr(error.message, "/nonexistent/pads.txt"), "names the file: %s", error.message);
+    input_sdl_mappings ms = { 0 };
+    int bad = -1;
+    error = (core_error){ 0 };
+    cr_expect(!input__sdl_mappings_load(&ms, "/nonexistent/pads.txt", &bad, &error));
+    cr_expect_eq(error.code, CORE_ERROR_IO);
+    cr_expect_eq(bad, 0);
     input__sdl_mappings_free(&ms);
 }
 

@@ -131,7 +131,7 @@ static input_bindings *session_bindings(void) {
 /* Records `frames` frames to `path`; returns the actions and dts computed live (caller frees). */
 static input_actions *record_session(const char *path, int frames, float **dts) {
     input_bindings *b = session_bindings();
-    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = b, .record_path = path });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = b, .record_path = path }, NULL);
     input_bindings_destroy(b);
     cr_assert_not_null(in);
     input_actions *actions = malloc((size_t)frames * sizeof *actions);
@@ -151,7 +151,7 @@ static bool same_bits(const input_actions *a, const input_actions *b) { return m
 
 /* Replays `path` to its end; returns the frames delivered. */
 static int replay_count(const char *path, bool *failed) {
-    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path });
+    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path }, NULL);
     if (!in) return -1;
     int frames = 0;
     while (input_update(in, 0.0f) && frames < 100000) frames++;
@@ -185,7 +185,7 @@ Test(input_record, replay_reproduces_every_frame_bit_for_bit) {
     cr_expect(any_move);
 
     /* Replay with the default bindings and no-pads left out: the file's bindings apply, no device opens. */
-    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path });
+    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path }, NULL);
     cr_assert_not_null(in);
     cr_expect_not(input__gamepad_thread_running(in));
     for (int f = 0; f < FRAMES; f++) {
@@ -266,7 +266,7 @@ Test(input_record, a_changed_recorded_action_is_a_determinism_warning) {
         for (int i = 0; i < 4; i++) rec[8 + length + (size_t)i] = (uint8_t)(sum >> (8 * i));
     }
     write_all(path, b.data, b.size);
-    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path });
+    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path }, NULL);
     cr_assert_not_null(in);
     for (int f = 0; f < 20; f++) {
         cr_assert(input_update(in, 0.0f));
@@ -287,9 +287,14 @@ Test(input_record, a_changed_recorded_action_is_a_determinism_warning) {
 Test(input_record, missing_empty_wrong_magic_and_version_are_refused) {
     char path[256];
     temp_path(path, sizeof path, "bad.rec");
-    cr_expect_null(input_system_create(&(input_system_desc){ .replay_path = "/nonexistent/replay.rec" }));
+    core_error error = { 0 };
+    cr_expect_null(input_system_create(&(input_system_desc){ .replay_path = "/nonexistent/replay.rec" }, &error));
+    cr_expect_eq(error.code, CORE_ERROR_IO, "missing: %s", error.message);
+    cr_expect_not_null(strstr(error.message, "/nonexistent/replay.rec"), "names the file: %s", error.message);
     write_all(path, (const uint8_t *)"", 0);
-    cr_expect_null(input_system_create(&(input_system_desc){ .replay_path = path }));
+    error = (core_error){ 0 };
+    cr_expect_null(input_system_create(&(input_system_desc){ .replay_path = path }, &error));
+    cr_expect_eq(error.code, CORE_ERROR_CORRUPT, "empty: %s", error.message);
 
     float *dts;
     free(record_session(path, 3, &dts));
@@ -297,15 +302,27 @@ Test(input_record, missing_empty_wrong_magic_and_version_are_refused) {
     bytes b = read_all(path);
     b.data[0] = 'X';
     write_all(path, b.data, b.size);
-    cr_expect_null(input_system_create(&(input_system_desc){ .replay_path = path }), "wrong magic");
+    error = (core_error){ 0 };
+    cr_expect_null(input_system_create(&(input_system_desc){ .replay_path = path }, &error), "wrong magic");
+    cr_expect_eq(error.code, CORE_ERROR_FORMAT, "wrong magic: %s", error.message);
     b.data[0] = 'I';
     b.data[8] = 2;
     write_all(path, b.data, b.size);
-    cr_expect_null(input_system_create(&(input_system_desc){ .replay_path = path }), "unknown version");
+    error = (core_error){ 0 };
+    cr_expect_null(input_system_create(&(input_system_desc){ .replay_path = path }, &error), "unknown version");
+    cr_expect_eq(error.code, CORE_ERROR_VERSION, "unknown version: %s", error.message);
     b.data[8] = 1;
+    b.data[16] ^= 0x40;  /* a byte of the header's payload: its checksum no longer matches */
     write_all(path, b.data, b.size);
-    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path });
+    error = (core_error){ 0 };
+    cr_expect_null(input_system_create(&(input_system_desc){ .replay_path = path }, &error), "damaged header");
+    cr_expect_eq(error.code, CORE_ERROR_CORRUPT, "damaged header: %s", error.message);
+    b.data[16] ^= 0x40;
+    write_all(path, b.data, b.size);
+    error = (core_error){ 0 };
+    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path }, &error);
     cr_expect_not_null(in, "restored, it replays");
+    cr_expect_eq(error.code, CORE_ERROR_NONE);
     input_system_destroy(in);
     free(b.data);
     unlink(path);
@@ -394,7 +411,7 @@ Test(input_record, an_interrupted_recording_replays_up_to_the_crash) {
     temp_path(path, sizeof path, "crash.rec");
     temp_path(copy, sizeof copy, "crash_copy.rec");
     snprintf(part, sizeof part, "%s.part", path);
-    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .record_path = path });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .record_path = path }, NULL);
     cr_assert_not_null(in);
     script s = { .rng = 77 };
     input_actions live[5];
@@ -409,7 +426,7 @@ Test(input_record, an_interrupted_recording_replays_up_to_the_crash) {
     input_system_destroy(in);
     cr_expect(exists(path));
 
-    input_system *replay = input_system_create(&(input_system_desc){ .replay_path = copy });
+    input_system *replay = input_system_create(&(input_system_desc){ .replay_path = copy }, NULL);
     cr_assert_not_null(replay);
     for (int f = 0; f < 5; f++) {
         cr_assert(input_update(replay, 0.0f));
@@ -424,7 +441,11 @@ Test(input_record, an_interrupted_recording_replays_up_to_the_crash) {
 }
 
 Test(input_record, unwritable_record_path_fails_at_create) {
-    cr_expect_null(input_system_create(&(input_system_desc){ .no_gamepads = true, .record_path = "/nonexistent/dir/x.rec" }));
+    core_error error = { 0 };
+    cr_expect_null(input_system_create(&(input_system_desc){ .no_gamepads = true, .record_path = "/nonexistent/dir/x.rec" },
+                                       &error));
+    cr_expect_eq(error.code, CORE_ERROR_IO, "%s", error.message);
+    cr_expect_not_null(strstr(error.message, "/nonexistent/dir/x.rec"), "names the file: %s", error.message);
 }
 
 Test(input_record, a_replay_can_be_recorded_again_identically) {
@@ -434,7 +455,7 @@ Test(input_record, a_replay_can_be_recorded_again_identically) {
     float *dts;
     free(record_session(first, 50, &dts));
     free(dts);
-    input_system *in = input_system_create(&(input_system_desc){ .replay_path = first, .record_path = second });
+    input_system *in = input_system_create(&(input_system_desc){ .replay_path = first, .record_path = second }, NULL);
     cr_assert_not_null(in);
     while (input_update(in, 0.0f)) {}
     input_system_destroy(in);

@@ -16,7 +16,7 @@ static double ms_since(uint64_t t0) { return (double)(core_time_ns() - t0) * 1e-
  * sleeps, and input_system_destroy wakes and joins it at once — not after its one-second period. */
 Test(input_threads, gamepad_thread_starts_and_stops_quickly) {
     uint64_t t0 = core_time_ns();
-    input_system *in = input_system_create(&(input_system_desc){ 0 });
+    input_system *in = input_system_create(&(input_system_desc){ 0 }, NULL);
     cr_assert_not_null(in);
     cr_expect(input__gamepad_thread_running(in), "hid_init succeeds on Linux's hidraw backend");
     for (int i = 0; i < 3; i++) cr_assert(input_update(in, 0.016f));
@@ -25,7 +25,7 @@ Test(input_threads, gamepad_thread_starts_and_stops_quickly) {
     cr_expect_lt(whole, 100.0, "create, 3 frames, destroy took %.1f ms", whole);
 
     /* Once the thread sleeps between scans, stopping still takes no more than a moment. */
-    in = input_system_create(&(input_system_desc){ 0 });
+    in = input_system_create(&(input_system_desc){ 0 }, NULL);
     cr_assert_not_null(in);
     nanosleep(&(struct timespec){ .tv_nsec = 30 * 1000 * 1000 }, NULL);
     t0 = core_time_ns();
@@ -35,7 +35,7 @@ Test(input_threads, gamepad_thread_starts_and_stops_quickly) {
 }
 
 Test(input_threads, no_thread_without_gamepads) {
-    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true }, NULL);
     cr_assert_not_null(in);
     cr_expect_not(input__gamepad_thread_running(in));
     input_system_destroy(in);
@@ -56,7 +56,7 @@ static void *publisher(void *arg) {
 /* A thread publishing as the reader thread does, while the main thread updates: every frame sees
  * a state the publisher wrote (never a torn one), in order, and the last one in the end. */
 Test(input_threads, published_states_arrive_whole_and_in_order) {
-    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .dead_zone = 0.01f });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .dead_zone = 0.01f }, NULL);
     cr_assert_not_null(in);
     pthread_t thread;
     cr_assert_eq(pthread_create(&thread, NULL, publisher, input__pads(in)), 0);

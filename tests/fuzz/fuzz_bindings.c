@@ -21,7 +21,7 @@ int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size);
 
 /* A few frames of events made from the input's bytes, through the bindings just parsed. */
 static void fuzz_drive(const input_bindings *bindings, const unsigned char *bytes, size_t size) {
-    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = bindings });
+    input_system *in = input_system_create(&(input_system_desc){ .no_gamepads = true, .bindings = bindings }, NULL);
     if (!in) __builtin_trap();
     for (size_t i = 0; i + 1 < size && i < 64; i += 2) {
         input_feed_key(in, bytes[i] + 256 * (bytes[i + 1] & 1), bytes[i + 1] & 2);

@@ -36,7 +36,7 @@ static void fuzz_file(const unsigned char *bytes, size_t size) {
         snprintf(path, sizeof path, "/proc/self/fd/%d", fd);
     }
     if (ftruncate(fd, 0) != 0 || (size && pwrite(fd, bytes, size, 0) != (ssize_t)size)) __builtin_trap();
-    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path });
+    input_system *in = input_system_create(&(input_system_desc){ .replay_path = path }, NULL);
     if (!in) return;
     for (int frame = 0; frame < 100000 && input_update(in, 0.016f); frame++) {
         fuzz_check_move(input_actions_get(in));

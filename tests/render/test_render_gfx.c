@@ -207,6 +207,59 @@ Test(render_gfx, texture_round_trip) {
     gfx_context_destroy(gfx);
 }
 
+Test(render_gfx, zeroed_desc_enums_give_the_documented_defaults) {
+    gfx_context *gfx = render_offscreen(32, 32);
+    /* gfx_buffer_usage: DEFAULT is STATIC (GL_STATIC_DRAW); DYNAMIC still asks for GL_DYNAMIC_DRAW. */
+    const float corners[] = { -0.25f, -0.25f, 0.25f, -0.25f, 0.25f, 0.25f,
+                              -0.25f, -0.25f, 0.25f, 0.25f, -0.25f, 0.25f };
+    gfx_buffer plain = gfx_buffer_create(&(gfx_buffer_desc){ .size = sizeof corners, .data = corners });
+    gfx_buffer dynamic = gfx_buffer_create(&(gfx_buffer_desc){ .size = 16, .usage = GFX_BUFFER_DYNAMIC });
+    GLint usage = 0;
+    glGetNamedBufferParameteriv(gfx_buffer_gl(plain), GL_BUFFER_USAGE, &usage);
+    cr_expect_eq(usage, GL_STATIC_DRAW);
+    glGetNamedBufferParameteriv(gfx_buffer_gl(dynamic), GL_BUFFER_USAGE, &usage);
+    cr_expect_eq(usage, GL_DYNAMIC_DRAW);
+
+    /* gfx_format: DEFAULT is RGBA8, for a texture and for a framebuffer's colour attachment. */
+    gfx_texture texture = gfx_texture_create(&(gfx_texture_desc){ .width = 4, .height = 4 });
+    GLint internal = 0;
+    glGetTextureLevelParameteriv(gfx_texture_gl(texture), 0, GL_TEXTURE_INTERNAL_FORMAT, &internal);
+    cr_expect_eq(internal, GL_RGBA8);
+    gfx_framebuffer target = gfx_framebuffer_create(&(gfx_framebuffer_desc){ .width = 64, .height = 64 });
+    cr_assert(target.id);
+    internal = 0;
+    glGetTextureLevelParameteriv(gfx_texture_gl(gfx_framebuffer_color(target)), 0, GL_TEXTURE_INTERNAL_FORMAT,
+                                 &internal);
+    cr_expect_eq(internal, GL_RGBA8);
+
+    /* gfx_index_type: DEFAULT is NONE, a glDrawArrays of .count vertices: two triangles, a quad
+     * 0.5 × 0.5 of the 2 × 2 clip square, 1/16 of 64 × 64 = 256 pixels (an indexed draw with no
+     * index buffer would draw nothing). */
+    gfx_vertex_array array = gfx_vertex_array_create(&(gfx_vertex_array_desc){
+        .vertices = plain, .vertex_stride = 8, .attributes = { { .components = 2 } } });
+    gfx_program program = red_program(gfx);
+    cr_assert(program.id);
+    gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "defaults", .target = target, .clear_color = true });
+    gfx_program_use(gfx, program);
+    glDisable(GL_CULL_FACE);
+    glDisable(GL_DEPTH_TEST);
+    gfx_draw(&(gfx_draw_desc){ .vertex_array = array, .count = 6 });
+    gfx_pass_end(gfx);
+    uint8_t *pixels = malloc(64 * 64 * 4);
+    glGetTextureImage(gfx_texture_gl(gfx_framebuffer_color(target)), 0, GL_RGBA, GL_UNSIGNED_BYTE, 64 * 64 * 4, pixels);
+    int red = 0;
+    for (int i = 0; i < 64 * 64; i++) red += pixels[i * 4] > 200 && pixels[i * 4 + 1] < 50;
+    free(pixels);
+    cr_expect_eq(red, 256);
+
+    gfx_vertex_array_destroy(&array);
+    gfx_framebuffer_destroy(&target);
+    gfx_texture_destroy(&texture);
+    gfx_buffer_destroy(&plain);
+    gfx_buffer_destroy(&dynamic);
+    gfx_context_destroy(gfx);
+}
+
 static void touch_later(const char *folder, const char *name, const char *text) {
     render_write_file(folder, name, text);
     /* Make sure the time differs from the first write, whatever the file system's resolution. */

@@ -212,7 +212,7 @@ static bool any_copy_cuts(const rocks_block_tile *t, const rocks_block_disc *d, 
 
 /* 003 §4.1: "all the points in a given cluster are visible to each other". */
 Test(rocks_blocks, no_fracture_inside_a_block) {
-    for (int type = 0; type < ROCKS_BLOCK_TYPE_COUNT; type++) {
+    for (int type = ROCKS_BLOCK_EQUIDIMENSIONAL; type < ROCKS_BLOCK_TYPE_END; type++) {
         rocks_block_tile *t = small_tile((rocks_block_type)type, 9, 0.0f);
         uint64_t state = 14;
         for (int pair = 0; pair < 400; pair++) {
@@ -230,7 +230,7 @@ Test(rocks_blocks, no_fracture_inside_a_block) {
 /* Every plane of a block supports its cluster (a hull face pushed out, or a fracture past the
  * cluster's last point): each point is inside every plane. And the anchor is in the tile. */
 Test(rocks_blocks, every_point_inside_its_block) {
-    for (int type = 0; type < ROCKS_BLOCK_TYPE_COUNT; type++) {
+    for (int type = ROCKS_BLOCK_EQUIDIMENSIONAL; type < ROCKS_BLOCK_TYPE_END; type++) {
         rocks_block_tile *t = small_tile((rocks_block_type)type, 4, 0.0f);
         cr_assert_gt(t->block_count, 5);
         for (uint32_t i = 0; i < t->block_count; i++) {
@@ -270,8 +270,8 @@ static void mean_extent(const rocks_block_tile *t, double out[3]) {
  * ones tall (continuous vertical sets, rare cross joints), equidimensional ones about as deep
  * as wide and tall (three orthogonal sets). The types' own defaults, on a 12 m tile. */
 Test(rocks_blocks, shapes_follow_the_type) {
-    double e[ROCKS_BLOCK_TYPE_COUNT][3] = { { 0 } };
-    for (int type = 0; type < ROCKS_BLOCK_TYPE_COUNT; type++) {
+    double e[ROCKS_BLOCK_TYPE_END][3] = { { 0 } };
+    for (int type = ROCKS_BLOCK_EQUIDIMENSIONAL; type < ROCKS_BLOCK_TYPE_END; type++) {
         /* a 12 m tile holds a dozen of the equidimensional type's discs: average a few tiles,
          * so one tile's chance layout does not decide */
         int seeds = type == ROCKS_BLOCK_EQUIDIMENSIONAL ? 4 : 1;
@@ -306,7 +306,7 @@ Test(rocks_blocks, deterministic_and_seeded) {
 }
 
 Test(rocks_blocks, bad_input_is_refused) {
-    cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .type = ROCKS_BLOCK_TYPE_COUNT }));
+    cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .type = ROCKS_BLOCK_TYPE_END }));
     cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .size = 2 }));
     cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .size = 1e6f }));
     cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .size = NAN }));
@@ -315,13 +315,15 @@ Test(rocks_blocks, bad_input_is_refused) {
     cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .rounding = -1 }));
     cr_assert_null(rocks_block_tile_create(&(rocks_block_tile_desc){ .relief_scale = -1 }));
     rocks_block_type type;
-    for (int t = 0; t < ROCKS_BLOCK_TYPE_COUNT; t++) {
+    for (int t = ROCKS_BLOCK_EQUIDIMENSIONAL; t < ROCKS_BLOCK_TYPE_END; t++) {
         cr_assert(rocks_parse_block_type(rocks_block_type_name((rocks_block_type)t), &type));
         cr_assert_eq((int)type, t);
     }
     cr_assert_not(rocks_parse_block_type("granite", &type));
     cr_assert_not(rocks_parse_block_type(NULL, &type));
-    cr_assert_null(rocks_block_type_name(ROCKS_BLOCK_TYPE_COUNT));
+    cr_assert_null(rocks_block_type_name(ROCKS_BLOCK_TYPE_END));
+    cr_assert_null(rocks_block_type_name(ROCKS_BLOCK_DEFAULT), "DEFAULT is not a type of its own");
+    cr_assert_not(rocks_parse_block_type("default", &type));
 }
 
 /* ---- a block placed by hand (003 §4, user control) ------------------------------------------- */
@@ -1033,5 +1035,31 @@ Test(rocks_blocks, cliffs_cache_dir_and_jobs) {
         free(da);
         free(db);
     }
+    remove_tree(dir);
+}
+
+/* ROCKS_BLOCK_DEFAULT, a zeroed desc's type, is equidimensional: the tile is the one asked for by
+ * name, plane for plane, and its desc says so; a zeroed stratum (with strata_count set) makes an
+ * equidimensional tile too, the file named after it. */
+Test(rocks_blocks, a_zeroed_type_is_equidimensional) {
+    rocks_block_tile *zero = small_tile(ROCKS_BLOCK_DEFAULT, 5, 0.0f);
+    rocks_block_tile *named = small_tile(ROCKS_BLOCK_EQUIDIMENSIONAL, 5, 0.0f);
+    cr_assert_eq(zero->desc.type, ROCKS_BLOCK_EQUIDIMENSIONAL);
+    cr_assert_eq(zero->block_count, named->block_count);
+    cr_assert_eq(zero->plane_count, named->plane_count);
+    cr_assert_eq(memcmp(zero->planes, named->planes, zero->plane_count * sizeof *zero->planes), 0);
+    rocks_block_tile_destroy(zero);
+    rocks_block_tile_destroy(named);
+
+    char dir[] = "/tmp/test_blocks_XXXXXX";
+    cr_assert_not_null(mkdtemp(dir));
+    rocks_cliffs *cliffs = rocks_cliffs_create(&(rocks_cliffs_desc){ .seed = 42, .strata_count = 1, .tile_size = 8,
+                                                                      .cache_dir = dir });
+    cr_assert_not_null(cliffs);
+    char path[400];
+    snprintf(path, sizeof path, "%s/blocks-equidimensional-000000000000002a.bin", dir);
+    cr_expect(file_exists(path), "a zeroed stratum is equidimensional");
+    cr_expect_eq(files_in(dir), 1);
+    rocks_cliffs_destroy(cliffs);
     remove_tree(dir);
 }

@@ -91,10 +91,17 @@ int main(int argc, char **argv) {
     gfx_scene *scene = gfx_scene_create(gfx);
     if (!scene) return 1;                 /* the shader errors are printed at file:line */
     input_bindings *bindings = NULL;
-    if (o.bindings && !(bindings = input_bindings_load(o.bindings, NULL))) return 1;
+    core_error error = { 0 };
+    if (o.bindings && !(bindings = input_bindings_load(o.bindings, NULL, &error))) {
+        fprintf(stderr, "gfx_scene: %s\n", error.message);
+        return 1;
+    }
     input_system *input = input_system_create(&(input_system_desc){ .bindings = bindings, .glfw_window = gfx_glfw_window(gfx),
-                                                      .record_path = o.record, .replay_path = o.replay });
-    if (!input) return 1;
+                                                      .record_path = o.record, .replay_path = o.replay }, &error);
+    if (!input) {
+        fprintf(stderr, "gfx_scene: %s\n", error.message);
+        return 1;
+    }
     bool windowed = gfx_backend_get(gfx) == GFX_BACKEND_WINDOW;
     int frames = o.frames ? o.frames : (windowed || o.replay ? 0 : 120);
 

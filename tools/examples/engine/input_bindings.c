@@ -64,7 +64,7 @@ int main(int argc, char **argv) {
     printf("input_bindings: bindings read, %d bad line skipped\n", bad_lines);
 
     /* 2. An input system with them and no device: nothing is down. */
-    input_system *input = input_system_create(&(input_system_desc){ .bindings = bindings, .no_gamepads = true });
+    input_system *input = input_system_create(&(input_system_desc){ .bindings = bindings, .no_gamepads = true }, NULL);
     input_bindings_destroy(bindings);              /* the system keeps a copy */
     if (!input) return 1;
     input_update(input, 1.0f / 60.0f);

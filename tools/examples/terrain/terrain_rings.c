@@ -90,7 +90,7 @@ int main(int argc, char **argv) {
     terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){ .sea_level = params.sea_level });
     gfx_text *hud = gfx_text_create(gfx);
     /* Input only to notice Escape and the window closing. */
-    input_system *input = input_system_create(&(input_system_desc){ .glfw_window = gfx_glfw_window(gfx) });
+    input_system *input = input_system_create(&(input_system_desc){ .glfw_window = gfx_glfw_window(gfx) }, NULL);
     if (!renderer || !hud || !input) return 1;
     terrain_ecs *te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });
     /* Mesh layers that cover the relief, with a margin for overhangs. */
