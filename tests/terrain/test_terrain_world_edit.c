@@ -168,6 +168,7 @@ Test(terrain_world_edit, with_a_log_an_evicted_chunk_comes_back_byte_for_byte) {
     for (int64_t x = 1; x < 6; x++) terrain_world_stacks(w, (terrain_chunk_coord){ x, 0 });
     terrain_world_trim(w);
     cr_assert(!terrain_world_has(w, (terrain_chunk_coord){ 0, 0 }), "evicted: the log keeps its edits");
+    cr_expect_eq(terrain_world_chunk_version(w, (terrain_chunk_coord){ 0, 0 }), version, "evicted, the version kept");
     const terrain_stacks *again = terrain_world_stacks(w, (terrain_chunk_coord){ 0, 0 });
     cr_expect_eq(terrain_stacks_hash(again), hash);
     cr_expect_eq(terrain_stacks_bytes(again), bytes);

@@ -481,7 +481,7 @@ int terrain_world_take_changes(terrain_world *world, terrain_world_change *out, 
 uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord coord) {
     pthread_mutex_lock(&world->lock);
     world_entry *e = *find_slot(world, coord);
-    uint32_t version = e ? e->version : 0;
+    uint32_t version = e ? e->version : stamp_of(world, coord);   /* evicted: the stamp it kept */
     pthread_mutex_unlock(&world->lock);
     return version;
 }
