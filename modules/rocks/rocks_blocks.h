@@ -228,6 +228,6 @@ typedef struct rocks_cliffs_stats_info {
     double build_seconds;             /* the tiles, built or read from cache_dir */
     uint32_t tiles_from_cache;        /* of the tiles, those read from cache_dir */
 } rocks_cliffs_stats_info;
-rocks_cliffs_stats_info rocks_cliffs_stats(rocks_cliffs *cliffs);
+rocks_cliffs_stats_info rocks_cliffs_stats(const rocks_cliffs *cliffs);
 
 #endif

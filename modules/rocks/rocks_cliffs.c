@@ -141,10 +141,11 @@ void rocks_cliffs_destroy(rocks_cliffs *c) {
     core_free(c, sizeof *c);
 }
 
-rocks_cliffs_stats_info rocks_cliffs_stats(rocks_cliffs *c) {
-    pthread_mutex_lock(&c->lock);
+rocks_cliffs_stats_info rocks_cliffs_stats(const rocks_cliffs *c) {
+    pthread_mutex_t *lock = (pthread_mutex_t *)&c->lock;   /* a lock is not the cliffs' state */
+    pthread_mutex_lock(lock);
     rocks_cliffs_stats_info s = c->stats;
-    pthread_mutex_unlock(&c->lock);
+    pthread_mutex_unlock(lock);
     return s;
 }
 

@@ -308,7 +308,7 @@ void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain
     terrain_world_trim(te->terrain);
 }
 
-terrain_ecs_stats_info terrain_ecs_stats(terrain_ecs *te) {
+terrain_ecs_stats_info terrain_ecs_stats(const terrain_ecs *te) {
     terrain_ecs_stats_info stats = { 0 };
     ecs_iter it = ecs_query_iter(te->ecs, te->chunks);
     while (ecs_query_next(&it)) {

@@ -169,7 +169,7 @@ typedef struct terrain_ecs_stream_stats_info {
     size_t cpu_mesh_bytes;            /* meshes made and not uploaded yet */
     size_t gpu_mesh_bytes;            /* meshes uploaded (their vertex and index buffers) */
 } terrain_ecs_stream_stats_info;
-terrain_ecs_stream_stats_info terrain_ecs_stream_stats(terrain_ecs *te);
+terrain_ecs_stream_stats_info terrain_ecs_stream_stats(const terrain_ecs *te);
 /* Far terrain (after terrain_ecs_stream; the clipmap is not owned): the lod phase
  * ("terrain_clipmap") re-centres it on viewer 0 and sinks it under the squares every viewer's
  * rings cover (one hole each, duplicates dropped; terrain_clipmap_set_holes) once all their
@@ -183,7 +183,7 @@ void terrain_ecs_set_clipmap(terrain_ecs *te, terrain_clipmap *clipmap);
 void terrain_ecs_set_view(terrain_ecs *te, const terrain_view *view);
 /* Draws the uploaded chunks the cull phase found visible. */
 void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view);
-terrain_ecs_stats_info terrain_ecs_stats(terrain_ecs *te);
+terrain_ecs_stats_info terrain_ecs_stats(const terrain_ecs *te);
 
 /* ---- editing in the ECS ----
  *
@@ -218,7 +218,7 @@ typedef struct terrain_ecs_edit_stats_info {
  * brush or a sweep without points. */
 bool terrain_ecs_edit(terrain_ecs *te, const terrain_edit *edit);
 void terrain_ecs_set_editing(terrain_ecs *te, const terrain_editing_desc *settings);
-terrain_ecs_edit_stats_info terrain_ecs_edit_stats(terrain_ecs *te);
+terrain_ecs_edit_stats_info terrain_ecs_edit_stats(const terrain_ecs *te);
 
 /* ---- drawing water (terrain_water.c; 002 §3.4, 004 §4.3) ----------------------------------
  *

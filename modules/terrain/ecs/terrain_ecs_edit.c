@@ -329,8 +329,9 @@ void terrain_ecs_set_editing(terrain_ecs *te, const terrain_editing_desc *settin
     editor_get(te)->settings = edit_defaults(settings);
 }
 
-terrain_ecs_edit_stats_info terrain_ecs_edit_stats(terrain_ecs *te) {
-    terrain__editor *ed = editor_get(te);
+terrain_ecs_edit_stats_info terrain_ecs_edit_stats(const terrain_ecs *te) {
+    const terrain__editor *ed = te->editor;
+    if (!ed) return (terrain_ecs_edit_stats_info){ 0 };   /* nothing edited yet */
     terrain_ecs_edit_stats_info stats = ed->stats;
     stats.queued = (int)ed->queue_count;
     stats.stabilizing_chunks = (int)ed->region_count;

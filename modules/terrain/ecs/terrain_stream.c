@@ -826,7 +826,7 @@ bool terrain_ecs_region_ready(terrain_ecs *te, const double min[3], const double
     return true;
 }
 
-terrain_ecs_stream_stats_info terrain_ecs_stream_stats(terrain_ecs *te) {
+terrain_ecs_stream_stats_info terrain_ecs_stream_stats(const terrain_ecs *te) {
     return te->stream ? te->stream->stats : (terrain_ecs_stream_stats_info){ 0 };
 }
 
