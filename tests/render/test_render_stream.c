@@ -8,6 +8,7 @@
 #include "ecs/ecs.h"
 #include "jobs/jobs.h"
 #include "terrain/terrain.h"
+#include "../terrain/terrain_quanta_test.h"
 #include "terrain/terrain_internal.h"
 
 #include <criterion/criterion.h>
@@ -376,27 +377,6 @@ static TerrainMeshChunk *mesh_at(streamed *s, int64_t x, int64_t y, int64_t z) {
     return found;
 }
 
-static int64_t chunk_sand_quanta(terrain_world *w, int64_t cx, int64_t cz) {
-    int64_t q = 0;
-    terrain_layer layers[64];
-    const terrain_stacks *st = terrain_world_stacks(w, (terrain_chunk_coord){ cx, cz });
-    for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
-        for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
-            int n = terrain_stacks_column(st, i, k, layers, 64);
-            for (int l = 0; l < n && l < 64; l++)
-                if (layers[l].material == TERRAIN_SAND) q += llroundf(layers[l].thickness * 32.0f);
-        }
-    return q;
-}
-
-/* Sand in chunks [lo, hi]² (quanta·column). */
-static int64_t sand_quanta(terrain_world *w, int64_t lo, int64_t hi) {
-    int64_t q = 0;
-    for (int64_t cz = lo; cz <= hi; cz++)
-        for (int64_t cx = lo; cx <= hi; cx++) q += chunk_sand_quanta(w, cx, cz);
-    return q;
-}
-
 /* 000's tools are interactive: the frame that applies a stroke meshes and uploads what it
  * changed (the issue asks for "within two frames"). The ground under (16, 16) lies between −6 and
  * 6 m, in mesh layer y = 0 (0 … 32 m) and y = −1. */
@@ -447,11 +427,11 @@ Test(render_stream, stabilization_spreads_a_pile_across_chunks_and_keeps_its_mas
     terrain_ecs_edit_stats_info st = terrain_ecs_edit_stats(s.te);
     cr_expect_gt(st.iterations, 8, "took several frames of 8 iterations");
     cr_expect_geq(st.chunks_committed, 4);
-    cr_expect_eq(sand_quanta(s.world, -3, 2), 300 * 32, "sand in the world: exactly the deposit");
+    cr_expect_eq(world_quanta(s.world, -3, 2, -3, 2, TERRAIN_SAND), 300 * 32, "sand in the world: exactly the deposit");
     /* Every chunk of the four spread some sand: a 300 m³ cone at 33° reaches ~7.5 m out. */
     for (int c = 0; c < 4; c++) {
         int64_t cx = c & 1 ? 0 : -1, cz = c & 2 ? 0 : -1;
-        cr_expect_gt(chunk_sand_quanta(s.world, cx, cz), 1000, "chunk (%lld, %lld)", (long long)cx, (long long)cz);
+        cr_expect_gt(chunk_quanta(terrain_world_stacks(s.world, (terrain_chunk_coord){ cx, cz }), TERRAIN_SAND), 1000, "chunk (%lld, %lld)", (long long)cx, (long long)cz);
     }
     cr_assert(streamed_settle(&s, eye, 1, 200) > 0, "every chunk ready again after the last commit");
     streamed_close(&s);

@@ -7,6 +7,7 @@
  * terrain.h "brushes"), and stabilization moves material without making or losing any (§3.4). */
 #include "../engine/test.h"
 #include "terrain/terrain.h"
+#include "terrain_quanta_test.h"
 
 #include "core/core.h"
 #include "ecs/ecs.h"
@@ -50,29 +51,6 @@ static void running_close(running *r) {
     job_system_destroy(r->jobs);
 }
 
-/* Sand in one chunk, in quanta·column (32 quanta a metre). */
-static int64_t chunk_sand_quanta(terrain_world *w, int64_t cx, int64_t cz) {
-    int64_t q = 0;
-    terrain_layer layers[64];
-    const terrain_stacks *st = terrain_world_stacks(w, (terrain_chunk_coord){ cx, cz });
-    for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++)
-        for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
-            int n = terrain_stacks_column(st, i, k, layers, 64);
-            cr_assert_leq(n, 64);
-            for (int l = 0; l < n; l++)
-                if (layers[l].material == TERRAIN_SAND) q += llroundf(layers[l].thickness * 32.0f);
-        }
-    return q;
-}
-
-/* Sand in chunks [lo, hi]². */
-static int64_t sand_quanta(terrain_world *w, int64_t lo, int64_t hi) {
-    int64_t q = 0;
-    for (int64_t cz = lo; cz <= hi; cz++)
-        for (int64_t cx = lo; cx <= hi; cx++) q += chunk_sand_quanta(w, cx, cz);
-    return q;
-}
-
 /* Two strokes queued: nothing changes until the next frame's stabilize phase, which applies
  * both; 10 m³ each is 320 quanta each, all of it in the world (a pile of 10 m³ in the middle of
  * chunk (0, 0) cannot slide further than its neighbours). */
@@ -85,14 +63,14 @@ Test(terrain_ecs_edit, edits_wait_in_the_queue_and_the_next_frame_applies_them) 
     terrain_ecs_edit_stats_info st = terrain_ecs_edit_stats(r.te);
     cr_expect_eq(st.queued, 2);
     cr_expect_eq(st.edits_applied, 0);
-    cr_expect_eq(sand_quanta(r.world, -1, 1), 0, "queued, not applied");
+    cr_expect_eq(world_quanta(r.world, -1, 1, -1, 1, TERRAIN_SAND), 0, "queued, not applied");
     ecs_progress(r.ecs, DT);
     terrain_world_trim(r.world);
     st = terrain_ecs_edit_stats(r.te);
     cr_expect_eq(st.queued, 0);
     cr_expect_eq(st.edits_applied, 2);
     cr_expect_eq(st.edits_refused, 0);
-    cr_expect_eq(sand_quanta(r.world, -1, 1), 2 * 320, "applied in the frame after they were queued");
+    cr_expect_eq(world_quanta(r.world, -1, 1, -1, 1, TERRAIN_SAND), 2 * 320, "applied in the frame after they were queued");
     running_close(&r);
 }
 
@@ -116,10 +94,10 @@ Test(terrain_ecs_edit, a_pile_on_a_chunk_corner_spreads_into_four_chunks_and_kee
     cr_expect_eq(st.edits_applied, 1);
     cr_expect_gt(st.iterations, 8, "took several frames of 8 iterations");
     cr_expect_geq(st.chunks_committed, 4);
-    cr_expect_eq(sand_quanta(r.world, -3, 2), 300 * 32, "sand in the world: exactly the deposit");
+    cr_expect_eq(world_quanta(r.world, -3, 2, -3, 2, TERRAIN_SAND), 300 * 32, "sand in the world: exactly the deposit");
     for (int c = 0; c < 4; c++) {
         int64_t cx = c & 1 ? 0 : -1, cz = c & 2 ? 0 : -1;
-        cr_expect_gt(chunk_sand_quanta(r.world, cx, cz), 1000, "chunk (%lld, %lld)", (long long)cx, (long long)cz);
+        cr_expect_gt(chunk_quanta(terrain_world_stacks(r.world, (terrain_chunk_coord){ cx, cz }), TERRAIN_SAND), 1000, "chunk (%lld, %lld)", (long long)cx, (long long)cz);
     }
     running_close(&r);
 }
@@ -140,7 +118,7 @@ Test(terrain_ecs_edit, what_is_not_a_brush_is_refused_and_nothing_is_queued) {
     cr_expect_eq(st.queued, 0);
     ecs_progress(r.ecs, DT);
     cr_expect_eq(terrain_ecs_edit_stats(r.te).edits_applied, 0);
-    cr_expect_eq(sand_quanta(r.world, -1, 1), 0);
+    cr_expect_eq(world_quanta(r.world, -1, 1, -1, 1, TERRAIN_SAND), 0);
     running_close(&r);
 }
 
@@ -175,7 +153,7 @@ Test(terrain_ecs_edit, budgeted_in_iterations_a_slide_is_the_same_bytes_every_fr
             hashes[run][f] = corner_hash(r.world);
             sliding[run][f] = terrain_ecs_edit_stats(r.te).stabilizing_chunks;
         }
-        cr_expect_eq(sand_quanta(r.world, -3, 2), (200 + 60) * 32, "mass kept");
+        cr_expect_eq(world_quanta(r.world, -3, 2, -3, 2, TERRAIN_SAND), (200 + 60) * 32, "mass kept");
         running_close(&r);
     }
     cr_expect_gt(sliding[0][FRAMES - 1], 0, "still sliding after %d frames of 2 iterations: the budget bound", FRAMES);

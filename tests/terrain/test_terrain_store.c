@@ -6,6 +6,7 @@
 #include "../engine/test.h"
 #include "test_files.h"
 #include "terrain/terrain.h"
+#include "terrain_quanta_test.h"
 
 #include "core/core.h"
 
@@ -34,18 +35,6 @@ static terrain_stacks *flat_chunk(void *user, terrain_chunk_coord coord) {
 static uint64_t world_key(uint64_t seed) {
     terrain_generation_desc params = terrain_generation_defaults(seed);
     return terrain_generation_key(&params);
-}
-
-static int64_t chunk_quanta(const terrain_stacks *stacks, terrain_material material) {
-    int64_t q = 0;
-    terrain_layer layers[64];
-    for (int k = 0; k < N; k++)
-        for (int i = 0; i < N; i++) {
-            int n = terrain_stacks_column(stacks, i, k, layers, 64);
-            for (int l = 0; l < n && l < 64; l++)
-                if (layers[l].material == material) q += llroundf(layers[l].thickness * QPM);
-        }
-    return q;
 }
 
 static bool same_bytes(const terrain_stacks *a, const terrain_stacks *b) {

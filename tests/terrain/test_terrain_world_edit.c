@@ -4,6 +4,7 @@
  * (a deposit adds exactly its volume, a flat world has a known top) and from invariants. */
 #include "../engine/test.h"
 #include "terrain/terrain.h"
+#include "terrain_quanta_test.h"
 
 #include "core/core.h"
 
@@ -26,26 +27,6 @@ static terrain_stacks *flat_chunk(void *user, terrain_chunk_coord coord) {
 static terrain_world *flat_world(terrain_edit_log *log) {
     return terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(5),
                                                        .generate = flat_chunk, .edits = log });
-}
-
-/* Quanta of `material` in the chunk. */
-static int64_t chunk_quanta(const terrain_stacks *stacks, terrain_material material) {
-    int64_t q = 0;
-    terrain_layer layers[64];
-    for (int k = 0; k < N; k++)
-        for (int i = 0; i < N; i++) {
-            int n = terrain_stacks_column(stacks, i, k, layers, 64);
-            for (int l = 0; l < n && l < 64; l++)
-                if (layers[l].material == material) q += llroundf(layers[l].thickness * QPM);
-        }
-    return q;
-}
-
-static int64_t world_quanta(terrain_world *w, int64_t x0, int64_t x1, int64_t z0, int64_t z1, terrain_material m) {
-    int64_t q = 0;
-    for (int64_t z = z0; z <= z1; z++)
-        for (int64_t x = x0; x <= x1; x++) q += chunk_quanta(terrain_world_stacks(w, (terrain_chunk_coord){ x, z }), m);
-    return q;
 }
 
 static bool coords_contain(const terrain_chunk_coord *list, int n, int64_t x, int64_t z) {
