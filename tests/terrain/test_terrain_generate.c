@@ -226,6 +226,38 @@ Test(terrain_generate, not_periodic) {
     }
 }
 
+/* Not periodic, by the heights themselves (issue 16: equal chunk hashes would miss a period the
+ * chunks do not line up with). A field with period P has h(x) = h(x + P) everywhere, so the
+ * correlation of h(x) and h(x + P) over many x is 1. Noise built on a 256- or 4096-entry table
+ * repeats after that many lattice cells: lags of 256 and 4096 wavelengths of the relief (1200 m)
+ * and of the perturbation (48 m), plus an unrelated lag, must all show a correlation well under
+ * 1. For an aperiodic field at lags far beyond its wavelengths it is near 0 (±1/√N ≈ 0.04 for
+ * N = 600 samples); 0.5 leaves room for the relief's long reach. */
+static double height_correlation(const terrain_generation_desc *p, double lag) {
+    enum { SAMPLES = 600 };
+    double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+    for (int i = 0; i < SAMPLES; i++) {
+        double x = -20000.0 + 53.7 * i, z = 1234.5 + 11.3 * (i % 7);
+        double a = terrain__ground_height(p, x, z), b = terrain__ground_height(p, x + lag, z);
+        sa += a, sb += b, saa += a * a, sbb += b * b, sab += a * b;
+    }
+    double n = SAMPLES, cov = sab / n - (sa / n) * (sb / n);
+    double va = saa / n - (sa / n) * (sa / n), vb = sbb / n - (sb / n) * (sb / n);
+    return cov / sqrt(va * vb);
+}
+
+Test(terrain_generate, heights_do_not_repeat_at_a_tables_period) {
+    terrain_generation_desc p = terrain_generation_defaults(42);
+    cr_assert_eq(p.relief_wavelength, 1200.0f, "the lags below assume the defaults' wavelengths");
+    cr_assert_eq(p.perturbation_wavelength, 48.0f);
+    cr_expect_gt(height_correlation(&p, 0.0), 0.999, "a lag of 0 correlates fully (the measure works)");
+    const double lags[] = { 256 * 48.0, 4096 * 48.0, 256 * 1200.0, 4096 * 1200.0, 1000003.0 };
+    for (int n = 0; n < 5; n++) {
+        double r = height_correlation(&p, lags[n]);
+        cr_expect_lt(fabs(r), 0.5, "heights %g m apart correlate at %.3f: a period?", lags[n], r);
+    }
+}
+
 Test(terrain_generate, continuous_across_chunk_borders) {
     /* The step in ground height between the last column of one chunk and the first of the next
      * is no larger on average than steps between neighbours inside a chunk. */
