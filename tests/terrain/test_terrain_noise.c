@@ -126,37 +126,47 @@ static void check_column_bits(uint32_t seed, float x, float y0, float dy, float 
 }
 
 /* A random row through the path in use: the 2D row batch against the portable path's row
- * (noise2_row is unclamped, so terrain__noise2 is its reference only inside [-1, 1], checked
- * too), and the multifractal's row against terrain__multifractal2, bit for bit. */
+ * (noise2_row is unclamped, so terrain__noise2_cell is its reference only inside [-1, 1],
+ * checked too), and the multifractal's row against terrain__multifractal2, bit for bit. Origins
+ * near 0, around ±10⁵ and ±10⁷ lattice units (cells past 2^23, where a float has no fraction
+ * left, and the cell wraps modulo 2^32 in the multifractal's finer octaves), negative ones. */
 static void check_rows_bits(uint64_t *state, int count, const char *path) {
     enum { MAX_COUNT = 80 };
-    float xs[MAX_COUNT], out[MAX_COUNT + 1], portable[MAX_COUNT];
-    float extent = next_choice(state, 4) ? 40.0f : 1e5f, z = next_coordinate(state, extent);
+    static const float extents[] = { 40.0f, 40.0f, 40.0f, 1e5f, 1e7f };
+    float dxs[MAX_COUNT], out[MAX_COUNT + 1], portable[MAX_COUNT];
+    float extent = extents[next_choice(state, 5)];
+    double x0 = (double)next_coordinate(state, extent) + 0.37, z = (double)next_coordinate(state, extent) - 0.61;
     float scale = next_choice(state, 3) ? 1.0f : 2.5f;
-    for (int j = 0; j < count; j++) xs[j] = next_coordinate(state, extent);
+    for (int j = 0; j < count; j++) dxs[j] = next_coordinate(state, 40.0f);
     uint32_t seed = (uint32_t)(*state >> 32);
     out[count] = 12345.0f;
-    terrain__noise2_row(seed, xs, scale, z, count, out);
+    terrain__noise2_row(seed, x0, dxs, scale, z, count, out);
     cr_assert_eq(out[count], 12345.0f, "%s path: noise2_row wrote past count %d", path, count);
     terrain__noise_path path_in_use = terrain__noise_get_path();
     terrain__noise_set_path(TERRAIN__NOISE_PORTABLE);
-    terrain__noise2_row(seed, xs, scale, z, count, portable);
+    terrain__noise2_row(seed, x0, dxs, scale, z, count, portable);
     terrain__noise_set_path(path_in_use);
+    terrain__lattice sx = terrain__lattice_split(x0), sz = terrain__lattice_split(z);
     for (int j = 0; j < count; j++) {
-        cr_assert_eq(bits_of(out[j]), bits_of(portable[j]), "%s path: noise2_row seed %u at (%.9g·%g, %.9g): %.9g, portable %.9g",
-                     path, seed, xs[j], scale, z, out[j], portable[j]);
+        cr_assert_eq(bits_of(out[j]), bits_of(portable[j]),
+                     "%s path: noise2_row seed %u at (%.17g + %.9g·%g, %.17g): %.9g, portable %.9g", path, seed, x0, dxs[j],
+                     scale, z, out[j], portable[j]);
         if (fabsf(out[j]) < 1.0f)
-            cr_assert_eq(bits_of(out[j]), bits_of(terrain__noise2(seed, xs[j] * scale, z)), "%s path: noise2 at %d", path, j);
+            cr_assert_eq(bits_of(out[j]), bits_of(terrain__noise2_cell(seed, sx.cell, sx.offset + dxs[j] * scale, sz.cell,
+                                                                       sz.offset)),
+                         "%s path: noise2 at %d", path, j);
     }
     terrain__multifractal mf = { .seed = seed, .lacunarity = 2.0f, .hurst = 0.85f,
                                  .octaves = 1.0f + (float)next_choice(state, 12) * 0.7f,
                                  .warp = next_choice(state, 4) ? 1.0f : 0.0f };
+    for (int j = 0; j < count; j++) dxs[j] *= 0.01f;   /* a row's width, in wavelengths */
     out[count] = 12345.0f;
-    terrain__multifractal2_row(&mf, xs, z, count, out);
+    terrain__multifractal2_row(&mf, x0, dxs, z, count, out);
     cr_assert_eq(out[count], 12345.0f, "%s path: multifractal2_row wrote past count %d", path, count);
     for (int j = 0; j < count; j++)
-        cr_assert_eq(bits_of(out[j]), bits_of(terrain__multifractal2(&mf, xs[j], z)),
-                     "%s path: multifractal2_row (%g octaves) at (%.9g, %.9g): %.9g", path, mf.octaves, xs[j], z, out[j]);
+        cr_assert_eq(bits_of(out[j]), bits_of(terrain__multifractal2(&mf, x0, dxs[j], z)),
+                     "%s path: multifractal2_row (%g octaves) at (%.17g + %.9g, %.17g): %.9g", path, mf.octaves, x0, dxs[j],
+                     z, out[j]);
 }
 
 Test(terrain_noise, every_dispatch_path_equals_scalar_bit_for_bit) {
@@ -270,25 +280,25 @@ Test(terrain_noise, multifractal_fractional_octave_interpolates) {
     for (int n = 0; n < 200; n++) {
         float x = next_coordinate(&state, 20.0f), z = next_coordinate(&state, 20.0f);
         mf.octaves = 2.0f;
-        float u2 = terrain__multifractal2(&mf, x, z) * t2;
+        float u2 = terrain__multifractal2(&mf, x, 0.0f, z) * t2;
         mf.octaves = 3.0f;
-        float u3 = terrain__multifractal2(&mf, x, z) * t3;
+        float u3 = terrain__multifractal2(&mf, x, 0.0f, z) * t3;
         mf.octaves = 2.5f;
-        float u25 = terrain__multifractal2(&mf, x, z) * t25;
+        float u25 = terrain__multifractal2(&mf, x, 0.0f, z) * t25;
         cr_assert_float_eq(u25, 0.5f * (u2 + u3), 1e-5f, "at (%g, %g)", x, z);
     }
 }
 
 Test(terrain_noise, multifractal_row_equals_scalar_and_is_bounded) {
     terrain__multifractal mf = { .seed = 3, .lacunarity = 2.0f, .hurst = 0.85f, .octaves = 8.5f, .warp = 1.0f };
-    float xs[37], out[37];
+    float dxs[37], out[37];
     uint64_t state = 8;
     for (int trial = 0; trial < 10; trial++) {
-        float z = next_coordinate(&state, 50.0f);
-        for (int j = 0; j < 37; j++) xs[j] = next_coordinate(&state, 50.0f);
-        terrain__multifractal2_row(&mf, xs, z, 37, out);
+        double x0 = next_coordinate(&state, 50.0f), z = next_coordinate(&state, 50.0f);
+        for (int j = 0; j < 37; j++) dxs[j] = next_coordinate(&state, 0.5f);
+        terrain__multifractal2_row(&mf, x0, dxs, z, 37, out);
         for (int j = 0; j < 37; j++) {
-            cr_assert_eq(out[j], terrain__multifractal2(&mf, xs[j], z), "point %d", j);
+            cr_assert_eq(out[j], terrain__multifractal2(&mf, x0, dxs[j], z), "point %d", j);
             /* Each octave's noise is within ±1 and the sum is normalised by its amplitudes. */
             cr_assert(fabsf(out[j]) <= 1.0f + 1e-5f);
         }
@@ -303,11 +313,11 @@ Test(terrain_noise, multifractal_warp_changes_it_continuously) {
     int differ = 0;
     for (int n = 0; n < 500; n++) {
         float x = next_coordinate(&state, 20.0f), z = next_coordinate(&state, 20.0f);
-        float v = terrain__multifractal2(&warped, x, z);
-        if (v != terrain__multifractal2(&plain, x, z)) differ++;
+        float v = terrain__multifractal2(&warped, x, 0.0f, z);
+        if (v != terrain__multifractal2(&plain, x, 0.0f, z)) differ++;
         /* The warp is a continuous offset: no jumps at a step of 10⁻⁴ wavelengths. With 6
          * octaves at r = 2 the steepest octave has slope about 2⁵·8·r^(−5H) per wavelength. */
-        float step = terrain__multifractal2(&warped, x + 1e-4f, z) - v;
+        float step = terrain__multifractal2(&warped, x, 1e-4f, z) - v;
         cr_assert(fabsf(step) < 0.05f, "jump %g at (%g, %g)", step, x, z);
     }
     cr_expect_gt(differ, 450);

@@ -51,15 +51,31 @@ bool terrain__cursor_next(terrain__column_cursor *cursor, terrain__qlayer *out);
  * Seeds are folded to 32 bits once (terrain__seed32) so that the hot loops hash with 32-bit
  * integer operations, which SSE2 vectorises. */
 uint32_t terrain__seed32(uint64_t seed);
-/* Improved gradient noise (Perlin 2002 gradients, quintic fade) with a 32-bit seed; in [-1, 1]. */
-float terrain__noise3(uint32_t seed, float x, float y, float z);
+/* A coordinate in lattice units split into its cell ⌊v⌋ (modulo 2^32, as the lattice hash
+ * reads it) and the offset v − ⌊v⌋ in [0, 1], computed in double and then rounded to float.
+ * The noises take horizontal positions this way, so that a point 10 000 km out is resolved
+ * as finely as one at the origin (a float v would be quantised to its ulp: 1 m steps at
+ * 10 000 km in the macro relief's finest octave). */
+typedef struct terrain__lattice {
+    uint32_t cell;
+    float offset;
+} terrain__lattice;
+terrain__lattice terrain__lattice_split(double v);
+/* Improved gradient noise (Perlin 2002 gradients, quintic fade) with a 32-bit seed; in [-1, 1].
+ * x and z are split by terrain__lattice_split (a float argument gives its old value exactly). */
+float terrain__noise3(uint32_t seed, double x, float y, double z);
 /* 2D gradient noise in [-1, 1] (the macro relief is a height field: 2D is half the work). */
 float terrain__noise2(uint32_t seed, float x, float z);
-/* A row of 2D noise at (xs[j]·scale, z), vectorised; unclamped (measured within ±0.99), else
- * equal to terrain__noise2. */
-void terrain__noise2_row(uint32_t seed, const float *xs, float scale, float z, int count, float *out);
+/* The same at (cell_x + x, cell_z + z): x, z are float offsets (any sign, a few hundred cells
+ * at most for full precision) from the cells; terrain__noise2 is cells 0. */
+float terrain__noise2_cell(uint32_t seed, uint32_t cell_x, float x, uint32_t cell_z, float z);
+/* A row of 2D noise at (x0 + dxs[j]·scale, z) in lattice units, vectorised: x0 and z are split
+ * once (terrain__lattice_split), then lane j is the noise at offset x0's offset + dxs[j]·scale
+ * from x0's cell, so the row is as precise anywhere as at the origin while dxs[j]·scale stays
+ * small. Unclamped (measured within ±0.99), else equal to terrain__noise2_cell there. */
+void terrain__noise2_row(uint32_t seed, double x0, const float *dxs, float scale, double z, int count, float *out);
 /* The column batch: out[j] = terrain__noise3(seed, x, y0 + j·dy, z) for j < count. */
-void terrain__noise3_column(uint32_t seed, float x, float y0, float dy, float z, int count, float *out);
+void terrain__noise3_column(uint32_t seed, double x, float y0, float dy, double z, int count, float *out);
 /* The code path of the batches above and terrain__multifractal2_row. AUTO picks, on first use,
  * the widest the CPU has (AVX-512, else AVX2, else SSE2, x86-64's baseline; PORTABLE, plain C,
  * off x86-64). Every path gives the scalar functions' bits exactly, so forcing one (tests,
@@ -92,10 +108,14 @@ typedef struct terrain__multifractal {
 /* Octave count for sampling spacing `spacing` (same unit as the first octave's amplitude):
  * ν = log(spacing) / log(r^−H) (004 §4), capped to [1, max_octaves]. */
 float terrain__multifractal_octaves(float lacunarity, float hurst, float spacing, int max_octaves);
-/* Σ_k r^(−kH)·S(r^k·x_k), the sum normalised by Σ_k r^(−kH) so the result lies in [-1, 1]. */
-float terrain__multifractal2(const terrain__multifractal *mf, float x, float z);
-/* The same at (xs[j], z) for j < count, several points per instruction; equal to the scalar. */
-void terrain__multifractal2_row(const terrain__multifractal *mf, const float *xs, float z, int count, float *out);
+/* Σ_k r^(−kH)·S(r^k·x_k), the sum normalised by Σ_k r^(−kH) so the result lies in [-1, 1], at
+ * (x0 + dx, z): each octave turns and scales the origin (x0, z) in double and splits it into
+ * its lattice's cell and offset, and adds the float part from dx (small: a row's width). */
+float terrain__multifractal2(const terrain__multifractal *mf, double x0, float dx, double z);
+/* The same at (x0 + dxs[j], z) for j < count, several points per instruction; lane j equals
+ * terrain__multifractal2(mf, x0, dxs[j], z) bit for bit. */
+void terrain__multifractal2_row(const terrain__multifractal *mf, double x0, const float *dxs, double z, int count,
+                                float *out);
 
 /* Ridged multifractal (Musgrave) of `octaves` octaves at lacunarity 2, octave k's amplitude
  * gain^k, in [0, 1]; 1 on the ridges, where the underlying noise crosses zero. Scalar

@@ -281,24 +281,32 @@ static ground_model ground_model_make(const terrain_generation_desc *p) {
 }
 
 #define GROUND_ROW_MAX 256
+/* Positions reach the 2D noises as a world-aligned origin, a multiple of this many metres, and
+ * float offsets from it; the noises split the origin into lattice cell and offset in double
+ * (terrain__lattice_split). So G is as precise 10 000 km out as within a kilometre of the
+ * origin, and a point's value depends on the point alone, not on where its row starts (the
+ * clipmap's rows and a chunk's grid agree bit for bit). */
+#define NOISE_ORIGIN_BLOCK 1024.0
 
-/* G without lakes at (xs[j], z) for j < count (count ≤ GROUND_ROW_MAX). */
-static void ground_row_natural(const ground_model *g, const double *xs, double z, int count, float *out) {
+/* ground_row_natural for points whose origin block starts at `origin`. */
+static void ground_row_from(const ground_model *g, double origin, const double *xs, double z, int count, float *out) {
     float relief_x[GROUND_ROW_MAX] = { 0 }, relief[GROUND_ROW_MAX];
     float perturbation_x[GROUND_ROW_MAX] = { 0 }, perturbation[GROUND_ROW_MAX], octave[GROUND_ROW_MAX];
     for (int j = 0; j < count; j++) {
-        relief_x[j] = (float)(xs[j] * g->inverse_relief_wavelength);
-        perturbation_x[j] = (float)(xs[j] * g->inverse_perturbation_wavelength);
+        relief_x[j] = (float)((xs[j] - origin) * g->inverse_relief_wavelength);
+        perturbation_x[j] = (float)((xs[j] - origin) * g->inverse_perturbation_wavelength);
         perturbation[j] = 0.0f;
     }
-    terrain__multifractal2_row(&g->multifractal, relief_x, (float)(z * g->inverse_relief_wavelength), count, relief);
+    terrain__multifractal2_row(&g->multifractal, origin * g->inverse_relief_wavelength, relief_x,
+                               z * g->inverse_relief_wavelength, count, relief);
     /* 002 §3.1.3.1: the y perturbation, a fractal sampled at y = 0, i.e. a height map. */
-    float pz = (float)(z * g->inverse_perturbation_wavelength), amplitude = 1.0f, total = 0.0f, scale = 1.0f;
+    double px = origin * g->inverse_perturbation_wavelength, pz = z * g->inverse_perturbation_wavelength;
+    float amplitude = 1.0f, total = 0.0f, scale = 1.0f;
     for (int k = 0; k < g->perturbation_octaves; k++) {
         float weight = amplitude * g->perturbation_weight[k];
         if (weight > 0.0f) {
-            terrain__noise2_row(g->perturbation_seed + (uint32_t)k * 0x9e3779b9u, perturbation_x, scale, pz * scale,
-                                count, octave);
+            terrain__noise2_row(g->perturbation_seed + (uint32_t)k * 0x9e3779b9u, px * scale, perturbation_x, scale,
+                                pz * scale, count, octave);
             for (int j = 0; j < count; j++) perturbation[j] += weight * octave[j];
         }
         total += amplitude;
@@ -307,8 +315,9 @@ static void ground_row_natural(const ground_model *g, const double *xs, double z
     }
     /* Where cliffs are: a low-frequency mask, 0 over about half the land. */
     float cliff_x[GROUND_ROW_MAX], cliffs[GROUND_ROW_MAX];
-    for (int j = 0; j < count; j++) cliff_x[j] = (float)(xs[j] * (1.0 / CLIFF_WAVELENGTH));
-    terrain__noise2_row(g->cliff_seed, cliff_x, 1.0f, (float)(z * (1.0 / CLIFF_WAVELENGTH)), count, cliffs);
+    for (int j = 0; j < count; j++) cliff_x[j] = (float)((xs[j] - origin) * (1.0 / CLIFF_WAVELENGTH));
+    terrain__noise2_row(g->cliff_seed, origin * (1.0 / CLIFF_WAVELENGTH), cliff_x, 1.0f, z * (1.0 / CLIFF_WAVELENGTH), count,
+                        cliffs);
     for (int j = 0; j < count; j++) {
         /* The normalised multifractal spans about ±0.4 (1st–99th percentile); 2.5 maps that
          * onto ±1. The shape keeps slope 0.6 at m = 0 on both sides but makes the highs convex
@@ -334,6 +343,16 @@ static void ground_row_natural(const ground_model *g, const double *xs, double z
         float h = macro + g->vertical_perturbation * perturbation[j] / total;
         /* Keep every height well inside what a column can hold above the floor. */
         out[j] = clampf(h, TERRAIN_FLOOR_Y + 16.0f, TERRAIN_FLOOR_Y + 4000.0f);
+    }
+}
+
+/* G without lakes at (xs[j], z) for j < count (count ≤ GROUND_ROW_MAX): runs of points in one
+ * origin block at a time. */
+static void ground_row_natural(const ground_model *g, const double *xs, double z, int count, float *out) {
+    for (int start = 0, end; start < count; start = end) {
+        double origin = floor(xs[start] / NOISE_ORIGIN_BLOCK) * NOISE_ORIGIN_BLOCK;
+        for (end = start + 1; end < count && floor(xs[end] / NOISE_ORIGIN_BLOCK) * NOISE_ORIGIN_BLOCK == origin; end++) {}
+        ground_row_from(g, origin, xs + start, z, end - start, out + start);
     }
 }
 
@@ -677,9 +696,9 @@ static void coarse_lattice(chunk_gen *g, float y_lo, float y_hi, float ring_lo, 
         float dy = COARSE_Y * frequency * g->field_y_squeeze[f];
         float y0 = g->y_base * frequency * g->field_y_squeeze[f];
         for (int c = -1; c <= COARSE_NODES; c++) {
-            float z = (float)((g->z0 + (double)(c * COARSE)) * frequency);
+            double z = (g->z0 + (double)(c * COARSE)) * frequency;   /* in double: the noise splits it */
             for (int a = -1; a <= COARSE_NODES; a++) {
-                float x = (float)((g->x0 + (double)(a * COARSE)) * frequency);
+                double x = (g->x0 + (double)(a * COARSE)) * frequency;
                 float *out = (float *)lattice_node(g, f, a, c);
                 if (a >= 0 && c >= 0 && a < COARSE_NODES && c < COARSE_NODES)
                     terrain__noise3_column(g->field_seeds[f], x, y0, dy, z, g->levels, out);
@@ -977,17 +996,19 @@ static void rock_layers(const chunk_gen *g, const float *top, const float *lake,
     /* Scree in patches, stones in a noisy ring at a lake's waterline. */
     uint32_t scree_seed = field_seed(p, 5), lake_seed = field_seed(p, 6);
     float xs[ROCK_SIDE], scree_noise[ROCK_SIDE], lake_noise[ROCK_SIDE];
-    for (int i = 0; i < n; i++) xs[i] = (float)((g->x0 + (double)(i - ROCK_RING) + 0.5) * (1.0 / SCREE_WAVELENGTH));
+    /* Offsets from the chunk's corner, which the noise splits in double (terrain__lattice_split). */
+    double x0 = g->x0 * (1.0 / SCREE_WAVELENGTH);
+    for (int i = 0; i < n; i++) xs[i] = (float)(((double)(i - ROCK_RING) + 0.5) * (1.0 / SCREE_WAVELENGTH));
     for (int k = 0; k < n; k++) {
-        float z = (float)((g->z0 + (double)(k - ROCK_RING) + 0.5) * (1.0 / SCREE_WAVELENGTH));
+        double z = (g->z0 + (double)(k - ROCK_RING) + 0.5) * (1.0 / SCREE_WAVELENGTH);
         bool stony = false, lakeside = false;            /* the noise only where it is read */
         for (int i = 0; i < n; i++) {
             stony |= rock[k * n + i] > 0.0f || surface[k * n + i] > 0.0f;
             lakeside |= !isnan(lake[k * n + i]);
         }
         if (!stony && !(lakeside && lake_rocks > 0.0f)) continue;
-        terrain__noise2_row(scree_seed, xs, 1.0f, z, n, scree_noise);
-        if (lakeside) terrain__noise2_row(lake_seed, xs, 2.0f, 2.0f * z, n, lake_noise);
+        terrain__noise2_row(scree_seed, x0, xs, 1.0f, z, n, scree_noise);
+        if (lakeside) terrain__noise2_row(lake_seed, 2.0 * x0, xs, 2.0f, 2.0 * z, n, lake_noise);
         for (int i = 0; i < n; i++) {
             int at = k * n + i;
             float r = rock[at] * smoothstep(0.0f, 0.3f, scree_noise[i]);

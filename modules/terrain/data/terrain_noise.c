@@ -63,24 +63,40 @@ static inline __attribute__((always_inline)) uint32_t mix32(uint32_t h) {
     return h;
 }
 
-static inline __attribute__((always_inline)) uint32_t mix32_y(uint32_t column_hash, int yi) {
-    uint32_t h = column_hash ^ ((uint32_t)yi * HASH_Y);
+static inline __attribute__((always_inline)) uint32_t mix32_y(uint32_t column_hash, uint32_t yi) {
+    uint32_t h = column_hash ^ (yi * HASH_Y);
     h ^= h >> 15;
     h *= 0x2c1b3c6du;
     h ^= h >> 12;
     return h;
 }
 
-static inline __attribute__((always_inline)) uint32_t hash_x(uint32_t seed, int xi) {
-    return mix32(seed ^ ((uint32_t)xi * HASH_X));
+/* Lattice indices are read modulo 2^32 (the hash multiplies them as uint32_t), so cells are
+ * passed as uint32_t and added with wrap-around: cell + offset's floor names the same lattice
+ * point whichever way a coordinate was split. */
+static inline __attribute__((always_inline)) uint32_t hash_x(uint32_t seed, uint32_t xi) {
+    return mix32(seed ^ (xi * HASH_X));
 }
-static inline __attribute__((always_inline)) uint32_t hash_xz(uint32_t x_hash, int zi) {
-    return mix32(x_hash ^ ((uint32_t)zi * HASH_Z));
+static inline __attribute__((always_inline)) uint32_t hash_xz(uint32_t x_hash, uint32_t zi) {
+    return mix32(x_hash ^ (zi * HASH_Z));
 }
 
 uint32_t terrain__seed32(uint64_t seed) {
     uint64_t h = core_hash_u64(seed ^ 0x6e6f697365ull);   /* "noise" */
     return (uint32_t)(h ^ (h >> 32));
+}
+
+/* The cell of a floored double, modulo 2^32 as the hash reads it: exact while |v| < 2^53. */
+static inline uint32_t lattice_cell(double floored) {
+    return (uint32_t)(uint64_t)(int64_t)floored;
+}
+
+terrain__lattice terrain__lattice_split(double v) {
+    /* Why the split: far out, v itself as a float has a coarse ulp (0.06 cells at 10⁶ cells),
+     * which would quantise the noise into steps; v − ⌊v⌋ taken in double is exact, and as a
+     * float it keeps 2⁻²⁴ of a cell wherever the cell lies. */
+    double floored = floor(v);
+    return (terrain__lattice){ lattice_cell(floored), (float)(v - floored) };
 }
 
 static inline __attribute__((always_inline)) int floor_to_int(float v) {
@@ -144,16 +160,18 @@ typedef struct column_cell {
     float fx, fz, u, w;                             /* offsets in the cell and their fades */
 } column_cell;
 
-static inline column_cell cell_xz(uint32_t seed, float x, float z) {
-    int xi = floor_to_int(x), zi = floor_to_int(z);
+/* x and z in double, split into cell and offset once per column (terrain__lattice_split): for a
+ * float argument the offset is x − ⌊x⌋ exactly, as the float form computed it. */
+static inline column_cell cell_xz(uint32_t seed, double x, double z) {
+    terrain__lattice sx = terrain__lattice_split(x), sz = terrain__lattice_split(z);
     column_cell c;
-    uint32_t hx0 = hash_x(seed, xi), hx1 = hash_x(seed, xi + 1);
-    c.h00 = hash_xz(hx0, zi);
-    c.h10 = hash_xz(hx1, zi);
-    c.h01 = hash_xz(hx0, zi + 1);
-    c.h11 = hash_xz(hx1, zi + 1);
-    c.fx = x - (float)xi;
-    c.fz = z - (float)zi;
+    uint32_t hx0 = hash_x(seed, sx.cell), hx1 = hash_x(seed, sx.cell + 1u);
+    c.h00 = hash_xz(hx0, sz.cell);
+    c.h10 = hash_xz(hx1, sz.cell);
+    c.h01 = hash_xz(hx0, sz.cell + 1u);
+    c.h11 = hash_xz(hx1, sz.cell + 1u);
+    c.fx = sx.offset;
+    c.fz = sz.offset;
     c.u = fade(c.fx);
     c.w = fade(c.fz);
     return c;
@@ -165,14 +183,15 @@ static inline __attribute__((always_inline)) float noise3_in_column(const column
     int yi = floor_to_int(y);
     float fy = y - (float)yi;
     float fx = c->fx, fz = c->fz, fx1 = fx - 1.0f, fy1 = fy - 1.0f, fz1 = fz - 1.0f;
-    float n000 = grad3(mix32_y(c->h00, yi), fx, fy, fz);
-    float n100 = grad3(mix32_y(c->h10, yi), fx1, fy, fz);
-    float n010 = grad3(mix32_y(c->h00, yi + 1), fx, fy1, fz);
-    float n110 = grad3(mix32_y(c->h10, yi + 1), fx1, fy1, fz);
-    float n001 = grad3(mix32_y(c->h01, yi), fx, fy, fz1);
-    float n101 = grad3(mix32_y(c->h11, yi), fx1, fy, fz1);
-    float n011 = grad3(mix32_y(c->h01, yi + 1), fx, fy1, fz1);
-    float n111 = grad3(mix32_y(c->h11, yi + 1), fx1, fy1, fz1);
+    uint32_t y0 = (uint32_t)yi, y1 = y0 + 1u;
+    float n000 = grad3(mix32_y(c->h00, y0), fx, fy, fz);
+    float n100 = grad3(mix32_y(c->h10, y0), fx1, fy, fz);
+    float n010 = grad3(mix32_y(c->h00, y1), fx, fy1, fz);
+    float n110 = grad3(mix32_y(c->h10, y1), fx1, fy1, fz);
+    float n001 = grad3(mix32_y(c->h01, y0), fx, fy, fz1);
+    float n101 = grad3(mix32_y(c->h11, y0), fx1, fy, fz1);
+    float n011 = grad3(mix32_y(c->h01, y1), fx, fy1, fz1);
+    float n111 = grad3(mix32_y(c->h11, y1), fx1, fy1, fz1);
     float v = fade(fy);
     float x00 = lerp(n000, n100, c->u), x10 = lerp(n010, n110, c->u);
     float x01 = lerp(n001, n101, c->u), x11 = lerp(n011, n111, c->u);
@@ -181,7 +200,7 @@ static inline __attribute__((always_inline)) float noise3_in_column(const column
     return n < -1.0f ? -1.0f : n;
 }
 
-float terrain__noise3(uint32_t seed, float x, float y, float z) {
+float terrain__noise3(uint32_t seed, double x, float y, double z) {
     column_cell c = cell_xz(seed, x, z);
     return noise3_in_column(&c, y);
 }
@@ -204,39 +223,59 @@ static void noise3_column_portable(const column_cell *c, float y0, float dy, int
 }
 
 /* Unclamped (raw values stay within ±0.99 after scaling; the multifractal, which normalises its
- * sum anyway, uses this form: a clamp is a branch its vectorised loop cannot take). */
-static inline __attribute__((always_inline)) float noise2_raw(uint32_t seed, float x, float z) {
+ * sum anyway, uses this form: a clamp is a branch its vectorised loop cannot take). The point
+ * is (cell_x + x, cell_z + z): x and z are offsets from a cell, of any sign or size, whose
+ * floors move the cell (terrain__lattice_split says why). */
+static inline __attribute__((always_inline)) float noise2_raw(uint32_t seed, uint32_t cell_x, uint32_t cell_z, float x,
+                                                              float z) {
     int xi = floor_to_int(x), zi = floor_to_int(z);
     float fx = x - (float)xi, fz = z - (float)zi;
-    uint32_t hx0 = hash_x(seed, xi), hx1 = hash_x(seed, xi + 1);
+    uint32_t cx = cell_x + (uint32_t)xi, cz = cell_z + (uint32_t)zi;
+    uint32_t hx0 = hash_x(seed, cx), hx1 = hash_x(seed, cx + 1u);
     /* The same one-round mix for the last coordinate as the 3D batch uses for y. */
-    float n00 = grad2(mix32_y(hx0, zi), fx, fz);
-    float n10 = grad2(mix32_y(hx1, zi), fx - 1.0f, fz);
-    float n01 = grad2(mix32_y(hx0, zi + 1), fx, fz - 1.0f);
-    float n11 = grad2(mix32_y(hx1, zi + 1), fx - 1.0f, fz - 1.0f);
+    float n00 = grad2(mix32_y(hx0, cz), fx, fz);
+    float n10 = grad2(mix32_y(hx1, cz), fx - 1.0f, fz);
+    float n01 = grad2(mix32_y(hx0, cz + 1u), fx, fz - 1.0f);
+    float n11 = grad2(mix32_y(hx1, cz + 1u), fx - 1.0f, fz - 1.0f);
     float u = fade(fx), w = fade(fz);
     return lerp(lerp(n00, n10, u), lerp(n01, n11, u), w) * NOISE2_SCALE;
 }
 
-float terrain__noise2(uint32_t seed, float x, float z) {
-    float n = noise2_raw(seed, x, z);
+float terrain__noise2_cell(uint32_t seed, uint32_t cell_x, float x, uint32_t cell_z, float z) {
+    float n = noise2_raw(seed, cell_x, cell_z, x, z);
     n = n > 1.0f ? 1.0f : n;
     return n < -1.0f ? -1.0f : n;
 }
 
 #define NOISE2_BLOCK 8
 
-static void noise2_block(uint32_t seed, const float *restrict xs, float scale, float z, float *restrict out) {
-    for (int j = 0; j < NOISE2_BLOCK; j++) out[j] = noise2_raw(seed, xs[j] * scale, z);
+float terrain__noise2(uint32_t seed, float x, float z) {
+    return terrain__noise2_cell(seed, 0, x, 0, z);
 }
 
-static void noise2_row_portable(uint32_t seed, const float *xs, float scale, float z, int count, float *out) {
+/* A row's origin and z, split once (terrain__noise2_row). */
+typedef struct noise2_origin {
+    uint32_t cell_x, cell_z;
+    float offset_x, offset_z;
+} noise2_origin;
+
+static noise2_origin noise2_origin_make(double x0, double z) {
+    terrain__lattice sx = terrain__lattice_split(x0), sz = terrain__lattice_split(z);
+    return (noise2_origin){ sx.cell, sz.cell, sx.offset, sz.offset };
+}
+
+static void noise2_block(uint32_t seed, noise2_origin o, const float *restrict dxs, float scale, float *restrict out) {
+    for (int j = 0; j < NOISE2_BLOCK; j++)
+        out[j] = noise2_raw(seed, o.cell_x, o.cell_z, o.offset_x + dxs[j] * scale, o.offset_z);
+}
+
+static void noise2_row_portable(uint32_t seed, noise2_origin o, const float *dxs, float scale, int count, float *out) {
     int j = 0;
-    for (; j + NOISE2_BLOCK <= count; j += NOISE2_BLOCK) noise2_block(seed, xs + j, scale, z, out + j);
+    for (; j + NOISE2_BLOCK <= count; j += NOISE2_BLOCK) noise2_block(seed, o, dxs + j, scale, out + j);
     if (j < count) {
         float x_tail[NOISE2_BLOCK], tail[NOISE2_BLOCK];
-        for (int t = 0; t < NOISE2_BLOCK; t++) x_tail[t] = xs[j + (j + t < count ? t : 0)];
-        noise2_block(seed, x_tail, scale, z, tail);
+        for (int t = 0; t < NOISE2_BLOCK; t++) x_tail[t] = dxs[j + (j + t < count ? t : 0)];
+        noise2_block(seed, o, x_tail, scale, tail);
         for (int t = 0; j + t < count; t++) out[j + t] = tail[t];
     }
 }
@@ -248,7 +287,7 @@ float terrain_noise3(uint64_t seed, float x, float y, float z) {
 }
 
 void terrain_noise3_column(uint64_t seed, float x, float y0, float dy, float z, int count, float *out) {
-    terrain__noise3_column(terrain__seed32(seed), x, y0, dy, z, count, out);
+    terrain__noise3_column(terrain__seed32(seed), (double)x, y0, dy, (double)z, count, out);
 }
 
 /* Octave k's seed: a different lattice per octave, so octaves do not all vanish together at
@@ -263,7 +302,8 @@ float terrain_fbm3(uint64_t seed, float x, float y, float z, int octaves) {
     uint32_t s = terrain__seed32(seed);
     float sum = 0.0f, amplitude = 1.0f, frequency = 1.0f;
     for (int k = 0; k < octaves; k++) {
-        sum += amplitude * terrain__noise3(octave_seed(s, k), x * frequency, y * frequency, z * frequency);
+        sum += amplitude * terrain__noise3(octave_seed(s, k), (double)(x * frequency), y * frequency,
+                                           (double)(z * frequency));
         amplitude *= 0.5f;
         frequency *= 2.0f;
     }
@@ -296,7 +336,7 @@ float terrain__ridged3(uint32_t seed, float x, float y, float z, int octaves, fl
     if (octaves > 16) octaves = 16;
     float frequency = 1.0f;
     for (int k = 0; k < octaves; k++, frequency *= 2.0f)
-        n[k] = terrain__noise3(octave_seed(seed, k), x * frequency, y * frequency, z * frequency);
+        n[k] = terrain__noise3(octave_seed(seed, k), (double)(x * frequency), y * frequency, (double)(z * frequency));
     return terrain__ridged_from_octaves(n, octaves, gain);
 }
 
@@ -338,10 +378,14 @@ static const float OCTAVE_ROTATION[17][2] = {
     { 0.764648993f, 0.644446986f }
 };
 
-/* What one octave of the multifractal shares across points. */
+/* What one octave of the multifractal shares across points. The row's origin (x0, z), turned
+ * and scaled into the octave's lattice in double and split there (cell, offset), so that the
+ * points' own float parts are only their small distances dx from it (mf_place). */
 typedef struct mf_octave {
     uint32_t seed;
     float cos_b, sin_b, frequency, amplitude, r0, warp;
+    uint32_t cell_x, cell_z;
+    float offset_x, offset_z;
 } mf_octave;
 
 /* 1/√v for v > 0 without sqrtf (which, under C's errno rules, is a call the vectoriser must
@@ -354,13 +398,14 @@ static inline __attribute__((always_inline)) float inverse_sqrt(float v) {
 
 /* One octave at one point; the point's warp state (height so far, rotation ρ, translation t)
  * is updated in place. The row form runs this over a block of points, so it vectorises. */
-static inline __attribute__((always_inline)) void mf_step(const mf_octave *o, float x, float z, float *sum,
-                                                          float *rho_x, float *rho_z, float *t_x, float *t_z) {
+static inline __attribute__((always_inline)) void mf_step(const mf_octave *o, float dx, float *sum, float *rho_x,
+                                                          float *rho_z, float *t_x, float *t_z) {
     float wx = (*rho_x * *t_x - *rho_z * *t_z) * o->warp;
     float wz = (*rho_z * *t_x + *rho_x * *t_z) * o->warp;
-    float px = (o->cos_b * x - o->sin_b * z + wx) * o->frequency;
-    float pz = (o->sin_b * x + o->cos_b * z + wz) * o->frequency;
-    float h = *sum + o->amplitude * noise2_raw(o->seed, px, pz);
+    /* B·(x0 + dx, z) + warp, scaled: the origin's part is in the cell and offset (mf_place). */
+    float px = o->offset_x + (o->cos_b * dx + wx) * o->frequency;
+    float pz = o->offset_z + (o->sin_b * dx + wz) * o->frequency;
+    float h = *sum + o->amplitude * noise2_raw(o->seed, o->cell_x, o->cell_z, px, pz);
     float roughness = o->r0 - h;
     float rx = *rho_x + WARP_E1[0] * roughness + WARP_E2[0];
     float rz = *rho_z + WARP_E1[1] * roughness + WARP_E2[1];
@@ -386,7 +431,7 @@ static int mf_octaves(const terrain__multifractal *mf, mf_octave *octaves, float
         float weight = k < full ? 1.0f : fraction;
         if (weight <= 0.0f) break;
         octaves[count++] = (mf_octave){ octave_seed(mf->seed, k), OCTAVE_ROTATION[k][0], OCTAVE_ROTATION[k][1],
-                                        frequency, weight * amplitude, r0, mf->warp };
+                                        frequency, weight * amplitude, r0, mf->warp, 0, 0, 0.0f, 0.0f };
         *total += weight * amplitude;
         amplitude *= r0;
         frequency *= r;
@@ -394,7 +439,20 @@ static int mf_octaves(const terrain__multifractal *mf, mf_octave *octaves, float
     return count;
 }
 
-float terrain__multifractal2(const terrain__multifractal *mf, float x, float z) {
+/* Each octave's image of the row's origin (x0, z): B_k·(x0, z)·r^k in double, then split. */
+static void mf_place(mf_octave *octaves, int count, double x0, double z) {
+    for (int k = 0; k < count; k++) {
+        mf_octave *o = &octaves[k];
+        double c = o->cos_b, s = o->sin_b, f = o->frequency;
+        terrain__lattice px = terrain__lattice_split((c * x0 - s * z) * f), pz = terrain__lattice_split((s * x0 + c * z) * f);
+        o->cell_x = px.cell;
+        o->cell_z = pz.cell;
+        o->offset_x = px.offset;
+        o->offset_z = pz.offset;
+    }
+}
+
+float terrain__multifractal2(const terrain__multifractal *mf, double x0, float dx, double z) {
     /* Equation (1): H(x) = Σ_k r^(−kH) S(r^k x), k = 0 … ν, the last octave weighted by frac(ν).
      *
      * Domain warping (§2.2), our reading of the scrambled formulas:
@@ -414,15 +472,16 @@ float terrain__multifractal2(const terrain__multifractal *mf, float x, float z) 
     mf_octave octaves[17];
     float total;
     int count = mf_octaves(mf, octaves, &total);
+    mf_place(octaves, count, x0, z);
     float sum = 0.0f, rho_x = 1.0f, rho_z = 0.0f, t_x = 0.0f, t_z = 0.0f;
-    for (int k = 0; k < count; k++) mf_step(&octaves[k], x, z, &sum, &rho_x, &rho_z, &t_x, &t_z);
+    for (int k = 0; k < count; k++) mf_step(&octaves[k], dx, &sum, &rho_x, &rho_z, &t_x, &t_z);
     return sum * (total > 0.0f ? 1.0f / total : 0.0f);   /* as the row form computes it */
 }
 
 #define MF_BLOCK 8
 
 /* MF_BLOCK points at once: each loop over the block has a constant trip count (vectorised). */
-static void mf_block(const mf_octave *octaves, int count, float total, const float *restrict xs, float z,
+static void mf_block(const mf_octave *octaves, int count, float total, const float *restrict dxs,
                      float *restrict out) {
     float sum[MF_BLOCK], rho_x[MF_BLOCK], rho_z[MF_BLOCK], t_x[MF_BLOCK], t_z[MF_BLOCK];
     for (int j = 0; j < MF_BLOCK; j++) {
@@ -434,20 +493,20 @@ static void mf_block(const mf_octave *octaves, int count, float total, const flo
     }
     for (int k = 0; k < count; k++) {
         mf_octave o = octaves[k];
-        for (int j = 0; j < MF_BLOCK; j++) mf_step(&o, xs[j], z, &sum[j], &rho_x[j], &rho_z[j], &t_x[j], &t_z[j]);
+        for (int j = 0; j < MF_BLOCK; j++) mf_step(&o, dxs[j], &sum[j], &rho_x[j], &rho_z[j], &t_x[j], &t_z[j]);
     }
     float inverse_total = total > 0.0f ? 1.0f / total : 0.0f;
     for (int j = 0; j < MF_BLOCK; j++) out[j] = sum[j] * inverse_total;
 }
 
-static void multifractal2_row_portable(const mf_octave *octaves, int octave_count, float total, const float *xs,
-                                       float z, int count, float *out) {
+static void multifractal2_row_portable(const mf_octave *octaves, int octave_count, float total, const float *dxs,
+                                       int count, float *out) {
     int j = 0;
-    for (; j + MF_BLOCK <= count; j += MF_BLOCK) mf_block(octaves, octave_count, total, xs + j, z, out + j);
+    for (; j + MF_BLOCK <= count; j += MF_BLOCK) mf_block(octaves, octave_count, total, dxs + j, out + j);
     if (j < count) {
         float x_tail[MF_BLOCK], tail[MF_BLOCK];
-        for (int t = 0; t < MF_BLOCK; t++) x_tail[t] = xs[j + (j + t < count ? t : 0)];
-        mf_block(octaves, octave_count, total, x_tail, z, tail);
+        for (int t = 0; t < MF_BLOCK; t++) x_tail[t] = dxs[j + (j + t < count ? t : 0)];
+        mf_block(octaves, octave_count, total, x_tail, tail);
         for (int t = 0; j + t < count; t++) out[j + t] = tail[t];
     }
 }
@@ -553,7 +612,7 @@ terrain__noise_path terrain__noise_get_path(void) {
     return noise_current_path();
 }
 
-void terrain__noise3_column(uint32_t seed, float x, float y0, float dy, float z, int count, float *out) {
+void terrain__noise3_column(uint32_t seed, double x, float y0, float dy, double z, int count, float *out) {
     column_cell c = cell_xz(seed, x, z);
     switch (noise_current_path()) {
 #if defined(__x86_64__)
@@ -565,27 +624,30 @@ void terrain__noise3_column(uint32_t seed, float x, float y0, float dy, float z,
     }
 }
 
-void terrain__noise2_row(uint32_t seed, const float *xs, float scale, float z, int count, float *out) {
+void terrain__noise2_row(uint32_t seed, double x0, const float *dxs, float scale, double z, int count, float *out) {
+    noise2_origin o = noise2_origin_make(x0, z);
     switch (noise_current_path()) {
 #if defined(__x86_64__)
-    case TERRAIN__NOISE_SSE2: noise2_row_sse2(seed, xs, scale, z, count, out); return;
-    case TERRAIN__NOISE_AVX2: noise2_row_avx2(seed, xs, scale, z, count, out); return;
-    case TERRAIN__NOISE_AVX512: noise2_row_avx512(seed, xs, scale, z, count, out); return;
+    case TERRAIN__NOISE_SSE2: noise2_row_sse2(seed, &o, dxs, scale, count, out); return;
+    case TERRAIN__NOISE_AVX2: noise2_row_avx2(seed, &o, dxs, scale, count, out); return;
+    case TERRAIN__NOISE_AVX512: noise2_row_avx512(seed, &o, dxs, scale, count, out); return;
 #endif
-    default: noise2_row_portable(seed, xs, scale, z, count, out); return;
+    default: noise2_row_portable(seed, o, dxs, scale, count, out); return;
     }
 }
 
-void terrain__multifractal2_row(const terrain__multifractal *mf, const float *xs, float z, int count, float *out) {
+void terrain__multifractal2_row(const terrain__multifractal *mf, double x0, const float *dxs, double z, int count,
+                                float *out) {
     mf_octave octaves[17];
     float total;
     int octave_count = mf_octaves(mf, octaves, &total);
+    mf_place(octaves, octave_count, x0, z);
     switch (noise_current_path()) {
 #if defined(__x86_64__)
-    case TERRAIN__NOISE_SSE2: multifractal2_row_sse2(octaves, octave_count, total, xs, z, count, out); return;
-    case TERRAIN__NOISE_AVX2: multifractal2_row_avx2(octaves, octave_count, total, xs, z, count, out); return;
-    case TERRAIN__NOISE_AVX512: multifractal2_row_avx512(octaves, octave_count, total, xs, z, count, out); return;
+    case TERRAIN__NOISE_SSE2: multifractal2_row_sse2(octaves, octave_count, total, dxs, count, out); return;
+    case TERRAIN__NOISE_AVX2: multifractal2_row_avx2(octaves, octave_count, total, dxs, count, out); return;
+    case TERRAIN__NOISE_AVX512: multifractal2_row_avx512(octaves, octave_count, total, dxs, count, out); return;
 #endif
-    default: multifractal2_row_portable(octaves, octave_count, total, xs, z, count, out); return;
+    default: multifractal2_row_portable(octaves, octave_count, total, dxs, count, out); return;
     }
 }

@@ -280,13 +280,15 @@ INLINE VF FN(grad2)(VU h, VF x, VF z) {
     return (VF)u + FN(splat_f)(2.0f) * (VF)v;
 }
 
-/* noise2_raw, lane by lane. */
-INLINE VF FN(noise2_raw)(uint32_t seed, VF x, VF z) {
+/* noise2_raw, lane by lane; cell_x_product and cell_z_product are the cells times HASH_X and
+ * HASH_Y. */
+INLINE VF FN(noise2_raw)(uint32_t seed, VU cell_x_product, VU cell_z_product, VF x, VF z) {
     VI xi = FN(floor_to_int)(x), zi = FN(floor_to_int)(z);
     VF fx = x - __builtin_convertvector(xi, VF), fz = z - __builtin_convertvector(zi, VF);
     VF one = FN(splat_f)(1.0f);
-    /* (xi + 1)·HASH_X = xi·HASH_X + HASH_X, and so for z, in 32-bit unsigned arithmetic. */
-    VU kx0 = (VU)xi * FN(splat_u)(HASH_X), kz0 = (VU)zi * FN(splat_u)(HASH_Y);
+    /* (cell + xi + 1)·HASH_X = xi·HASH_X + cell·HASH_X + HASH_X, and so for z, in 32-bit
+     * unsigned arithmetic: noise2_raw's lattice indices. */
+    VU kx0 = (VU)xi * FN(splat_u)(HASH_X) + cell_x_product, kz0 = (VU)zi * FN(splat_u)(HASH_Y) + cell_z_product;
     VU kx1 = kx0 + FN(splat_u)(HASH_X), kz1 = kz0 + FN(splat_u)(HASH_Y);
     VU seeds = FN(splat_u)(seed);
     VU hx0 = FN(mix32)(seeds ^ kx0), hx1 = FN(mix32)(seeds ^ kx1);
@@ -315,12 +317,15 @@ INLINE void FN(store_partial)(float *out, VF v, int available) {
     memcpy(out, &v, (size_t)(available < LANES ? available : LANES) * sizeof(float));
 }
 
-/* noise2_row: out[j] = noise2_raw(seed, xs[j]·scale, z). */
-static TARGET void FN(noise2_row)(uint32_t seed, const float *xs, float scale, float z, int count, float *out) {
-    VF scale_v = FN(splat_f)(scale), z_v = FN(splat_f)(z);
+/* noise2_row: out[j] = noise2_raw at the origin o's cells, offsets o->offset_x + dxs[j]·scale and
+ * o->offset_z. */
+static TARGET void FN(noise2_row)(uint32_t seed, const noise2_origin *o, const float *dxs, float scale, int count,
+                                  float *out) {
+    VF scale_v = FN(splat_f)(scale), x0 = FN(splat_f)(o->offset_x), z_v = FN(splat_f)(o->offset_z);
+    VU cell_x = FN(splat_u)(o->cell_x * HASH_X), cell_z = FN(splat_u)(o->cell_z * HASH_Y);
     for (int j = 0; j < count; j += LANES) {
-        VF x = FN(load_padded)(xs + j, count - j) * scale_v;
-        FN(store_partial)(out + j, FN(noise2_raw)(seed, x, z_v), count - j);
+        VF x = x0 + FN(load_padded)(dxs + j, count - j) * scale_v;
+        FN(store_partial)(out + j, FN(noise2_raw)(seed, cell_x, cell_z, x, z_v), count - j);
     }
 }
 
@@ -333,28 +338,28 @@ INLINE VF FN(inverse_sqrt)(VF v) {
 }
 
 /* mf_block over the row: each lane carries one point's warp state through the octaves. */
-static TARGET void FN(multifractal2_row)(const mf_octave *octaves, int octave_count, float total, const float *xs,
-                                         float z, int count, float *out) {
-    VF z_v = FN(splat_f)(z);
+static TARGET void FN(multifractal2_row)(const mf_octave *octaves, int octave_count, float total, const float *dxs,
+                                         int count, float *out) {
     VF e1x = FN(splat_f)(WARP_E1[0]), e1z = FN(splat_f)(WARP_E1[1]);
     VF e2x = FN(splat_f)(WARP_E2[0]), e2z = FN(splat_f)(WARP_E2[1]);
     VF e3x = FN(splat_f)(WARP_E3[0]), e3z = FN(splat_f)(WARP_E3[1]);
     VF tiny = FN(splat_f)(1e-12f);
     VF inverse_total = FN(splat_f)(total > 0.0f ? 1.0f / total : 0.0f);
     for (int j = 0; j < count; j += LANES) {
-        VF x = FN(load_padded)(xs + j, count - j);
+        VF dx = FN(load_padded)(dxs + j, count - j);
         VF sum = FN(splat_f)(0.0f), rho_x = FN(splat_f)(1.0f), rho_z = FN(splat_f)(0.0f);
         VF t_x = FN(splat_f)(0.0f), t_z = FN(splat_f)(0.0f);
         for (int k = 0; k < octave_count; k++) {
             const mf_octave *o = &octaves[k];
             VF warp = FN(splat_f)(o->warp), cos_b = FN(splat_f)(o->cos_b), sin_b = FN(splat_f)(o->sin_b);
             VF frequency = FN(splat_f)(o->frequency);
+            VU cell_x = FN(splat_u)(o->cell_x * HASH_X), cell_z = FN(splat_u)(o->cell_z * HASH_Y);
             /* mf_step, term for term */
             VF wx = (rho_x * t_x - rho_z * t_z) * warp;
             VF wz = (rho_z * t_x + rho_x * t_z) * warp;
-            VF px = (cos_b * x - sin_b * z_v + wx) * frequency;
-            VF pz = (sin_b * x + cos_b * z_v + wz) * frequency;
-            VF h = sum + FN(splat_f)(o->amplitude) * FN(noise2_raw)(o->seed, px, pz);
+            VF px = FN(splat_f)(o->offset_x) + (cos_b * dx + wx) * frequency;
+            VF pz = FN(splat_f)(o->offset_z) + (sin_b * dx + wz) * frequency;
+            VF h = sum + FN(splat_f)(o->amplitude) * FN(noise2_raw)(o->seed, cell_x, cell_z, px, pz);
             VF roughness = FN(splat_f)(o->r0) - h;
             VF rx = rho_x + e1x * roughness + e2x;
             VF rz = rho_z + e1z * roughness + e2z;
