@@ -162,6 +162,12 @@
 #define ROCK_MIN 0.1f                              /* thinner rock layers are dropped */
 #define ROCK_CLIP_PASSES 16
 #define RING_LEVELS_AROUND 8.0f                    /* metres around the ring's G its lattice covers */
+/* Positions reach the 2D noises as a world-aligned origin, a multiple of this many metres, and
+ * float offsets from it; the noises split the origin into lattice cell and offset in double
+ * (terrain__lattice_split). So G is as precise 10 000 km out as within a kilometre of the
+ * origin, and a point's value depends on the point alone, not on where its row starts (the
+ * clipmap's rows and a chunk's grid agree bit for bit). */
+#define NOISE_ORIGIN_BLOCK 1024.0
 
 terrain_generation_desc terrain_generation_defaults(uint64_t seed) {
     return (terrain_generation_desc){
@@ -230,6 +236,8 @@ typedef struct ground_model {
     float lake_spacing, lake_probability, lake_radius_min, lake_radius_max, lake_depth, lake_shear;
     lake_cache *lakes;                                     /* sites found so far, or NULL */
     uint64_t key;                                          /* terrain_generation_key: whose sites */
+    double origin_block;                                   /* metres: NOISE_ORIGIN_BLOCK, wider
+                                                              on coarse grids */
 } ground_model;
 
 static uint32_t field_seed(const terrain_generation_desc *p, uint64_t field) {
@@ -277,16 +285,11 @@ static ground_model ground_model_make(const terrain_generation_desc *p) {
     g.lake_shear = clampf(p->horizontal_perturbation, 0.0f, 64.0f);
     g.lakes = NULL;
     g.key = terrain_generation_key(p);
+    g.origin_block = NOISE_ORIGIN_BLOCK;
     return g;
 }
 
 #define GROUND_ROW_MAX 256
-/* Positions reach the 2D noises as a world-aligned origin, a multiple of this many metres, and
- * float offsets from it; the noises split the origin into lattice cell and offset in double
- * (terrain__lattice_split). So G is as precise 10 000 km out as within a kilometre of the
- * origin, and a point's value depends on the point alone, not on where its row starts (the
- * clipmap's rows and a chunk's grid agree bit for bit). */
-#define NOISE_ORIGIN_BLOCK 1024.0
 
 /* ground_row_natural for points whose origin block starts at `origin`. */
 static void ground_row_from(const ground_model *g, double origin, const double *xs, double z, int count, float *out) {
@@ -350,8 +353,8 @@ static void ground_row_from(const ground_model *g, double origin, const double *
  * origin block at a time. */
 static void ground_row_natural(const ground_model *g, const double *xs, double z, int count, float *out) {
     for (int start = 0, end; start < count; start = end) {
-        double origin = floor(xs[start] / NOISE_ORIGIN_BLOCK) * NOISE_ORIGIN_BLOCK;
-        for (end = start + 1; end < count && floor(xs[end] / NOISE_ORIGIN_BLOCK) * NOISE_ORIGIN_BLOCK == origin; end++) {}
+        double origin = floor(xs[start] / g->origin_block) * g->origin_block;
+        for (end = start + 1; end < count && floor(xs[end] / g->origin_block) * g->origin_block == origin; end++) {}
         ground_row_from(g, origin, xs + start, z, end - start, out + start);
     }
 }
@@ -502,6 +505,10 @@ static float multifractal_weight_sum(const terrain__multifractal *mf) {
 static ground_model ground_model_spaced(const terrain_generation_desc *p, float spacing) {
     ground_model g = ground_model_make(p);
     if (!(spacing > TERRAIN_COLUMN_SIZE)) return g;        /* the columns' own G, bit for bit */
+    /* Rows of 64 points or more between origins (short runs cost the SIMD rows their speed); the
+     * octaves kept have wavelengths of 2 spacings or more (default parameters), so an offset of
+     * up to 64 spacings is a few dozen cells of the finest: float keeps 10⁻⁵ of a cell. */
+    g.origin_block = fmax(NOISE_ORIGIN_BLOCK, 64.0 * spacing);
     float relief = g.relief > 1.0f ? g.relief : 1.0f;
     float full_octaves = g.multifractal.octaves;
     /* 004 §4.1: ν = log σ / log r^−H with σ the grid spacing in units of the first octave's
