@@ -511,3 +511,78 @@ Test(render_stream, the_layers_grow_to_a_peak_above_the_generations_range_and_me
     cr_expect_eq(top_chunks, 1, "the mesa's top is meshed");
     streamed_close(&s);
 }
+
+/* Nothing cut off (issue 16), with the real generator: the highest ground of seed 42's default
+ * world in the 64 km square around the origin is G = 406.2 m at (−17 237.5, −18 686.5) (G every
+ * 16 m over the square, then every 1 m around the best; the generator's own bound is 625 m, a
+ * relief of 4·relief_height over base that these octaves do not reach here). The default
+ * streaming range, base ± relief ± 48 m, stops at 224 m; streamed with it from a viewer on the
+ * summit, the layers must grow to the stacks' interfaces, so that every level-0 chunk column
+ * around the summit ends in a layer whose top face no surface crosses: its mesh (the same
+ * terrain_mesh_chunk the streamer makes) has no edge open on that face, and the summit lies
+ * under it. */
+static size_t open_edges_on_top_face(const terrain_mesh *mesh, double top) {
+    size_t count = mesh->index_count, open = 0;
+    for (size_t i = 0; i < count; i++) {
+        uint32_t a = mesh->indices[i], b = mesh->indices[i / 3 * 3 + (i % 3 + 1) % 3];
+        double ya = mesh->origin[1] + mesh->vertices[a].position[1], yb = mesh->origin[1] + mesh->vertices[b].position[1];
+        if (ya < top - 1e-3 || yb < top - 1e-3) continue;
+        bool reversed = false;   /* the edge b → a in another triangle: few edges lie on the face */
+        for (size_t j = 0; j < count && !reversed; j++)
+            reversed = mesh->indices[j] == b && mesh->indices[j / 3 * 3 + (j % 3 + 1) % 3] == a;
+        open += !reversed;
+    }
+    return open;
+}
+
+Test(render_stream, the_real_generators_highest_ground_is_meshed_with_a_closed_top) {
+    const double summit[2] = { -17237.5, -18686.5 };
+    streamed s = { .gfx = render_offscreen(64, 64) };
+    s.jobs = job_system_create(&(job_system_desc){ .threads = 2 });
+    s.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = s.jobs });
+    s.world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(42) });
+    s.te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = s.ecs, .terrain = s.world });
+    terrain_ecs_stream(s.te, &(terrain_stream_desc){ .half_width = 1, .levels = 1 });   /* the default y range */
+    float top = terrain_world_top(s.world, summit[0], summit[1]);
+    cr_assert_gt(top, 390.0f, "the summit's column tops out at %.1f m", (double)top);
+    const double eye[1][3] = { { summit[0], top + 10.0, summit[1] } };
+    cr_assert(streamed_settle(&s, eye, 1, 3000) > 0, "streaming never settled");
+    /* The highest level-0 layer of each chunk column streamed. */
+    enum { SIDE = 8 };
+    int64_t cx = (int64_t)floor(summit[0] / TERRAIN_MESH_CELLS), cz = (int64_t)floor(summit[1] / TERRAIN_MESH_CELLS);
+    int64_t highest[SIDE][SIDE];
+    for (int a = 0; a < SIDE; a++)
+        for (int b = 0; b < SIDE; b++) highest[a][b] = INT64_MIN;
+    ecs_query *q = ecs_query_create(s.ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(s.ecs, "TerrainMeshChunk") } });
+    ecs_iter it = ecs_query_iter(s.ecs, q);
+    while (ecs_query_next(&it)) {
+        const TerrainMeshChunk *c = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++) {
+            int64_t a = c[i].x - cx + SIDE / 2, b = c[i].z - cz + SIDE / 2;
+            if (c[i].lod.level == 0 && a >= 0 && b >= 0 && a < SIDE && b < SIDE && c[i].y > highest[b][a]) highest[b][a] = c[i].y;
+        }
+    }
+    ecs_query_destroy(s.ecs, q);
+    cr_assert_neq(highest[SIDE / 2][SIDE / 2], INT64_MIN, "no level-0 chunk over the summit");
+    double range_top = (double)(highest[SIDE / 2][SIDE / 2] + 1) * TERRAIN_MESH_CELLS;
+    cr_expect_gt(range_top, top + 2.0, "the layers end at %.0f m, the summit is at %.1f m", range_top, (double)top);
+    terrain_mesh summit_mesh;   /* the summit's own surface is drawn */
+    cr_assert(terrain_mesh_chunk(s.world, cx, (int64_t)floorf(top / TERRAIN_MESH_CELLS), cz, NULL, &summit_mesh));
+    cr_expect_gt(summit_mesh.index_count, 0, "the chunk holding the summit has no triangles");
+    terrain_mesh_free(&summit_mesh);
+    int columns = 0;
+    for (int b = 0; b < SIDE; b++)
+        for (int a = 0; a < SIDE; a++) {
+            if (highest[b][a] == INT64_MIN) continue;
+            columns++;
+            int64_t x = cx + a - SIDE / 2, y = highest[b][a], z = cz + b - SIDE / 2;
+            terrain_mesh mesh;
+            cr_assert(terrain_mesh_chunk(s.world, x, y, z, NULL, &mesh));
+            size_t open = open_edges_on_top_face(&mesh, (double)(y + 1) * TERRAIN_MESH_CELLS);
+            cr_expect_eq(open, 0, "chunk (%lld, %lld, %lld): %zu open edges on its top face at %lld m", (long long)x,
+                         (long long)y, (long long)z, open, (long long)((y + 1) * TERRAIN_MESH_CELLS));
+            terrain_mesh_free(&mesh);
+        }
+    cr_expect_geq(columns, 4, "the rings around the summit");
+    streamed_close(&s);
+}
