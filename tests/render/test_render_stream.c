@@ -546,7 +546,9 @@ Test(render_stream, the_real_generators_highest_ground_is_meshed_with_a_closed_t
     float top = terrain_world_top(s.world, summit[0], summit[1]);
     cr_assert_gt(top, 390.0f, "the summit's column tops out at %.1f m", (double)top);
     const double eye[1][3] = { { summit[0], top + 10.0, summit[1] } };
-    cr_assert(streamed_settle(&s, eye, 1, 3000) > 0, "streaming never settled");
+    /* Real chunks take a while in a debug build on a busy machine: a high limit costs nothing
+     * once everything is in. */
+    cr_assert(streamed_settle(&s, eye, 1, 20000) > 0, "streaming never settled");
     /* The highest level-0 layer of each chunk column streamed. */
     enum { SIDE = 8 };
     int64_t cx = (int64_t)floor(summit[0] / TERRAIN_MESH_CELLS), cz = (int64_t)floor(summit[1] / TERRAIN_MESH_CELLS);
