@@ -1,5 +1,6 @@
 /* Geometry clipmaps for the far terrain (002 §3.2, §3.5): heights are the generator's ground at
- * the level's spacing and lie within the generator's own bound of the stacks' top; incremental
+ * the level's spacing and lie within the generator's own bound of the stacks' top, and under the
+ * sea within what the octaves the spacing drops can change of the columns' ground; incremental
  * updates equal fresh builds; finer borders lie on coarser edges (no T-junction gaps); levels
  * nest on each other's vertex lines anywhere in the world; culling keeps what can be seen. */
 #include "../engine/test.h"
@@ -86,12 +87,61 @@ static float ground_slope_max(const terrain_generation_desc *p, double x, double
     return slope;
 }
 
+/* Σ of the multifractal's octave weights r^(−kH) for ν octaves, the last weighted by frac ν. */
+static double octave_weights(const terrain_generation_desc *p, float octaves) {
+    double r0 = pow(p->lacunarity, -p->hurst), sum = 0.0;
+    int full = (int)octaves;
+    for (int k = 0; k < full; k++) sum += pow(r0, k);
+    return sum + (octaves - (float)full) * pow(r0, full);
+}
+
+/* How far the clipmap's G at 4 m can be from the columns' G under the sea, from the octaves the
+ * spacing drops (004 §4.1). The 4 m ground keeps octaves 0 … ⌊ν₄⌋ (the last weighted frac ν₄)
+ * of the columns' 0 … ⌊ν₁⌋, each the same noise under the same warp (an octave's warp comes from
+ * the octaves before it), and rescales the sum by Σ kept / Σ all: the normalised relief M moves
+ * by at most (Σ all − Σ kept) / Σ all, |noise| ≤ 1. At 4 m the y perturbation's two octaves
+ * (48 and 24 m, ≥ 4 spacings) and the cliffs stay whole. Where the macro height lies under the
+ * sea at both spacings there are no cliffs and the shape is linear, 0.6·m with m = 2.5·M, so
+ *     |G₄ − G₁| ≤ relief · 0.6 · 2.5 · (Σ all − Σ kept) / Σ all.
+ * G = macro + V·fbm with |fbm| ≤ 1, so G₁ < sea − V − that bound puts both macro heights under
+ * the sea. On land the terraces can steepen M's change ninefold: no bound worth testing. */
+static float dropped_octaves_bound_under_sea(const terrain_generation_desc *p) {
+    double all = octave_weights(p, terrain__ground_octaves(p, TERRAIN_COLUMN_SIZE));
+    double kept = octave_weights(p, terrain__ground_octaves(p, 4.0f));
+    return (float)(p->relief_height * 0.6 * 2.5 * (all - kept) / all) + 1e-3f;   /* + float rounding */
+}
+
+static bool deep_under_the_sea(const terrain_generation_desc *p, float g1, float dropped) {
+    return g1 < p->sea_level - p->vertical_perturbation - dropped;
+}
+
+Test(terrain_clipmap, under_the_sea_the_4m_ground_differs_only_by_the_octaves_it_drops) {
+    terrain_generation_desc p = terrain_generation_defaults(42);
+    float dropped = dropped_octaves_bound_under_sea(&p), worst = 0.0f;
+    int sea = 0;
+    for (int k = 0; k < 32; k++)
+        for (int i = 0; i < 32; i++) {
+            double x = -2003.7 + 121.3 * i, z = 1501.1 - 109.9 * k;
+            float g1, g4;
+            terrain__ground_row_spaced(&p, x, 1.0, z, 1, 1.0f, &g1, NULL);
+            terrain__ground_row_spaced(&p, x, 4.0, z, 1, 4.0f, &g4, NULL);
+            if (!deep_under_the_sea(&p, g1, dropped)) continue;
+            sea++;
+            worst = fmaxf(worst, fabsf(g4 - g1));
+            cr_expect_leq(fabsf(g4 - g1), dropped, "(%.1f, %.1f): G₁ %.3f, G₄ %.3f, bound %.3f", x, z, (double)g1, (double)g4,
+                          (double)dropped);
+        }
+    printf("under the sea (%d of 1024 points): |G4 - G1| at most %.3f m, bound %.3f m\n", sea, (double)worst, (double)dropped);
+    cr_expect_geq(sea, 60, "too few points under the sea for the test to say anything");
+}
+
 /* The stacks' top is G at the sample point moved sideways by A·(u, w), |u|, |w| ≤ 1 (002 Fig. 8;
  * terrain_generate.c), so |top − G| ≤ A·√2·max|∇G| within A·√2, plus half a height quantum for
  * the packing and a few centimetres for the generator's linear placement of the crossing
  * between 1 m density samples. 1 m differences under-estimate the steepest gradient by the
  * detail finer than a metre: a margin of 25 % on the slope. The clipmap's G at spacing s
- * differs from the columns' G by the octaves the spacing drops (004 §4.1), added as measured.
+ * differs from the columns' G by the octaves the spacing drops (004 §4.1): bounded from their
+ * weights where the ground lies deep under the sea (above), a regression guard elsewhere.
  * Caves are switched off: a cave mouth cuts the top, and the clipmap does not draw caves. */
 Test(terrain_clipmap, heights_match_the_stacks_top_within_the_generators_bound) {
     terrain_generation_desc p = terrain_generation_defaults(42);
@@ -102,6 +152,7 @@ Test(terrain_clipmap, heights_match_the_stacks_top_within_the_generators_bound) 
     float errors_1m[CHUNKS * PER_CHUNK], errors_4m[CHUNKS * PER_CHUNK], errors_drawn[CHUNKS * PER_CHUNK];
     float slopes[CHUNKS * PER_CHUNK], worst_ratio = 0, worst_gentle_1m = 0, worst_gentle_4m = 0;
     int count = 0;
+    const float dropped = dropped_octaves_bound_under_sea(&p);
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = p });
     /* What is drawn: level 0 of a clipmap of the default spacing around each chunk. */
     terrain_clipmap *level0 = terrain_clipmap_create(&(terrain_clipmap_desc){ .levels = 1, .cells = 32, .generation = p });
@@ -121,7 +172,10 @@ Test(terrain_clipmap, heights_match_the_stacks_top_within_the_generators_bound) 
             errors_4m[count] = fabsf(top - g4);
             errors_drawn[count] = fabsf(top - terrain_clipmap_height(level0, x, z));
             cr_expect_leq(errors_1m[count], bound, "(%.1f, %.1f): top %.3f, G %.3f, bound %.3f", x, z, top, g1, bound);
-            cr_expect_leq(errors_4m[count], bound + fabsf(g4 - g1), "(%.1f, %.1f) at 4 m", x, z);
+            /* The 4 m ground within the dropped octaves' reach of the 1 m ground where that has a
+             * bound (|top − G₄| ≤ bound + it then follows). */
+            if (deep_under_the_sea(&p, g1, dropped))
+                cr_expect_leq(fabsf(g4 - g1), dropped, "(%.1f, %.1f) at 4 m: %.3f from the 1 m ground", x, z, (double)fabsf(g4 - g1));
             worst_ratio = fmaxf(worst_ratio, errors_1m[count] / bound);
         }
     }
