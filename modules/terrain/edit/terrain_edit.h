@@ -49,18 +49,23 @@
  *
  * Layer order (000 §3.4): between two stable layers (bedrock, or a custom material) granular
  * material is merged and sorted sand, rocks, water, air — what lies over a cave falls to its
- * floor. Only the pile above a column's highest stable layer flows; sand and rocks on a cave's
- * floor stay there (a cave roof holds what lies on it). Stabilization moves each material on its
- * own surface, bottom layer first (sand on the sand surface, rocks on the ground), so a stable
- * column has no neighbour lower than d·tan(angle) + tolerance below either surface, d the
- * distance between column centres (1 m, or √2 m diagonally).
+ * floor, and a cave roof holds what lies on it. Both the pile above a column's highest stable
+ * layer and the piles on cave floors flow (000 §3.4 stabilizes "all material layers located
+ * between two stable bedrock layers"). Stabilization moves each material on its own surface,
+ * bottom layer first (sand on the sand surface, rocks on the ground), so a stable column has no
+ * neighbour lower than d·tan(angle) + tolerance below either surface, d the distance between
+ * column centres (1 m, or √2 m diagonally). A cave pile's neighbour is the space of the next
+ * column at the height the material slides at (the same cave, or the open ground outside its
+ * mouth); rock at that height is a wall, and a space under a roof takes no more than its air, so
+ * a pile spreads on the cave's floor and never grows into the roof.
  *
  * Determinism: an iteration is nine passes, one per colour of a 3 × 3 pattern of columns (by
  * world column index); columns of one colour are three apart, so their moves never touch the
  * same column and a pass can move them all at once, in integer quanta. The result does not
  * depend on the thread count, on how a pass is split into jobs, or on how the columns are split
  * into regions (terrain_stabilize_regions), and a call that stops on its budget continues exactly
- * where it stopped. Only columns next to a change are looked at: edits (brushes,
+ * where it stopped. One exception: a pile on a cave floor does not cross a region's border (the
+ * regions share only their top piles), so it stops at the edge of its region. Only columns next to a change are looked at: edits (brushes,
  * terrain_columns_set, terrain_columns_touch) are changes, and so is every moved quantum.
  *
  * Threads: a region is plain data; one call at a time on it. Errors (a bad size, NaN, an unknown
@@ -183,19 +188,33 @@ typedef enum terrain_brush_material {
 /* Drops `volume` m³ of sand or rocks on the columns whose centres lie within `radius` of (x, z)
  * (world metres), distributed by the falloff and rounded so that the total is exact (to the
  * quantum·column): a brush that overhangs the region's border puts it all on the columns inside.
- * It lands on each column's pile (sorted: sand goes under rocks, both under water). */
+ * It lands on each column's pile (sorted: sand goes under rocks, both under water).
+ *
+ * At a height (at_height): in each column it lands in the space nearest y — the run between a
+ * stable layer and the next one above (a cave), or the open pile on top — on that space's floor,
+ * so that sand dropped in a cave lies on the cave's floor and the rock above is unchanged. The
+ * layers below and above that space stay as they were; within it the material goes under the
+ * water (which it displaces, as on open ground) and takes the air's place. A space under a roof
+ * takes no more than its air and water: a cave filled to its roof takes nothing more, and
+ * `quanta` then reports less than the volume (the region gains exactly what it reports). Where
+ * the nearest space is the open top, the deposit is the same as without at_height. */
 typedef struct terrain_deposit_desc {
     terrain_brush_material material;  /* TERRAIN_BRUSH_SAND or _ROCKS; 0 = sand */
     double x, z;
     float radius;                     /* metres, > 0 */
     double volume;                    /* m³, ≥ 0 */
     terrain_falloff falloff;
+    bool at_height;                   /* false (default): each column's top pile; true: the
+                                         space of each column nearest y */
+    double y;                         /* world metres; read only with at_height */
 } terrain_deposit_desc;
 
 typedef enum terrain_erode_mode {
     TERRAIN_ERODE_DEFAULT = 0,        /* surface */
     TERRAIN_ERODE_SURFACE,            /* each column under the disc whose highest stable layer is
-                                         bedrock loses depth·falloff from its top */
+                                         bedrock loses depth·falloff from its top (with at_height:
+                                         the stable layer under the column's space nearest y, a
+                                         cave's floor when y is on it) */
     TERRAIN_ERODE_COLLAPSE,           /* all bedrock inside the ball of radius R around (x, y, z)
                                          turns granular; with what lay on it, it falls to the next
                                          stable layer below (bedrock above stays: it is stable) */
@@ -206,11 +225,14 @@ typedef enum terrain_erode_mode {
  * rocks quanta added). The material stays in its column until stabilization moves it. */
 typedef struct terrain_erode_desc {
     terrain_erode_mode mode;
-    double x, y, z;                   /* centre, world metres (y: collapse only) */
+    double x, y, z;                   /* centre, world metres (y: collapse, or surface with
+                                         at_height) */
     float radius;                     /* metres, > 0 */
     float depth;                      /* surface: metres eroded at the centre, ≥ 0 */
     float rocks_ratio;                /* ρ ∈ [0, 1]; 0 = all sand */
     terrain_falloff falloff;          /* surface only */
+    bool at_height;                   /* surface only: false (default) the highest stable layer;
+                                         true the floor of the space nearest y */
 } terrain_erode_desc;
 
 /* Both return false (message logged, region unchanged) for bad parameters or a deposit that
