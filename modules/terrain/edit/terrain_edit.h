@@ -304,6 +304,20 @@ typedef struct terrain_sweep_desc {
                                          polyline 0-1-2-… */
     int segment_count;                /* with segments: 1 … 16384; ignored without */
     float radius;                     /* when radii is NULL */
+    /* Profile curve (000 §4.2: "piecewise cubic spline curves [that] may define non convex ...
+     * cross sections"): the cross-section swept along each segment, as a radius scale ρ(θ) around
+     * the skeleton, a periodic Catmull-Rom cubic through profile[j] at θ_j = 2πj/profile_count,
+     * θ = 0 along the surface's normal (−∇f, into the air) taken perpendicular to the segment and
+     * θ = 90° along tangent × normal; where the field is flat (deep in rock) θ = 0 is up. A point
+     * p is carved when, with t its position along the segment (0 … 1, the ends cut flat: a
+     * prism, no round caps) and w its offset from the axis, |w| < r(t)·ρ(θ). NULL (the default):
+     * no profile, the round sweep above, exactly as before. A segment of no length stays a ball. */
+    const float *profile;             /* profile_count scales, each 0 … 4 */
+    int profile_count;                /* with profile: 3 … 64 */
+    /* 000 §4.2 step 1: project the graph onto the surface — every point is first moved down (or
+     * up) its column onto the ground, the top of the column's highest solid (cracks and ravines
+     * drawn over the terrain); false (the default): the graph is where it is (tunnels, caves). */
+    bool project;
 } terrain_sweep_desc;
 
 bool terrain_sweep(terrain_columns *columns, const terrain_sweep_desc *desc, int64_t *changed);
