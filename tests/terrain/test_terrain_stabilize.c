@@ -465,6 +465,45 @@ Test(terrain_stabilize, two_by_two_chunk_regions_equal_one_big_region) {
     terrain_columns_destroy(big);
 }
 
+Test(terrain_stabilize, a_cave_heap_over_a_chunk_corner_spreads_as_in_one_big_region) {
+    /* A 6 m cave (floor 10 m, roof 5 m) under 64 × 64 columns, a 6 m sand heap on the four
+     * columns around the corner (32, 32) of four chunks, and a 5 m one on a chunk's side: split
+     * into chunk regions, the heaps spread into every region they touch, and the bytes, the
+     * iterations and the volume moved equal one big region's. */
+    terrain_columns *big = region(0, 0, 64, 64);
+    terrain_layer cave[3] = { { TERRAIN_BEDROCK, 10.0f }, { TERRAIN_AIR, 6.0f }, { TERRAIN_BEDROCK, 5.0f } };
+    terrain_layer heap[3] = { { TERRAIN_BEDROCK, 10.0f }, { TERRAIN_SAND, 6.0f }, { TERRAIN_BEDROCK, 5.0f } };
+    terrain_layer side[4] = { { TERRAIN_BEDROCK, 10.0f }, { TERRAIN_SAND, 5.0f }, { TERRAIN_AIR, 1.0f },
+                              { TERRAIN_BEDROCK, 5.0f } };
+    for (int k = 0; k < 64; k++)
+        for (int i = 0; i < 64; i++) cr_assert(terrain_columns_set(big, i, k, cave, 3));
+    for (int n = 0; n < 4; n++) cr_assert(terrain_columns_set(big, 31 + n % 2, 31 + n / 2, heap, 3));
+    cr_assert(terrain_columns_set(big, 12, 31, side, 4));
+    terrain_columns *chunks[4];
+    for (int n = 0; n < 4; n++) {
+        chunks[n] = chunk_region(big, (terrain_chunk_coord){ n % 2, n / 2 });
+        terrain_columns_touch(chunks[n], 0, 0, N, N);
+    }
+    terrain_columns_touch(big, 0, 0, 64, 64);
+    masses before = mass_of(big);
+    terrain_stabilize_result rb = stabilize(big, &(terrain_stabilize_desc){ 0 }, NULL);
+    terrain_stabilize_result rs;
+    cr_assert(terrain_stabilize_regions(chunks, 4, &(terrain_stabilize_desc){ 0 }, NULL, &rs));
+    cr_expect(rb.converged && rs.converged);
+    cr_expect_gt(rb.moved, 0);
+    cr_expect_eq(rb.iterations, rs.iterations);
+    cr_expect_eq(rb.moved, rs.moved);
+    expect_regions_equal_big(big, chunks, 4);
+    expect_same_mass(before, mass_of(big));
+    for (int n = 0; n < 4; n++) {
+        int64_t sand = terrain_columns_mass(chunks[n], TERRAIN_SAND);
+        cr_expect_gt(sand, 4 * 192 / 8, "region %d holds part of the heap (%lld)", n, (long long)sand);
+    }
+    cr_expect_gt(column_quanta(big, 12, 32, TERRAIN_SAND), 0, "the side heap crossed into chunk (0, 1)");
+    for (int n = 0; n < 4; n++) terrain_columns_destroy(chunks[n]);
+    terrain_columns_destroy(big);
+}
+
 /* Flat bedrock with a step and a cave, pure functions of the column, for regions made on demand. */
 static void waking_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
     (void)user;

@@ -64,8 +64,8 @@
  * same column and a pass can move them all at once, in integer quanta. The result does not
  * depend on the thread count, on how a pass is split into jobs, or on how the columns are split
  * into regions (terrain_stabilize_regions), and a call that stops on its budget continues exactly
- * where it stopped. One exception: a pile on a cave floor does not cross a region's border (the
- * regions share only their top piles), so it stops at the edge of its region. Only columns next to a change are looked at: edits (brushes,
+ * where it stopped. A pile on a cave floor crosses regions' borders alike; where no region
+ * continues it stops as at a wall and wakes nothing (TERRAIN_EDGE_WAKE reports top piles only). Only columns next to a change are looked at: edits (brushes,
  * terrain_columns_set, terrain_columns_touch) are changes, and so is every moved quantum.
  *
  * Threads: a region is plain data; one call at a time on it. Errors (a bad size, NaN, an unknown

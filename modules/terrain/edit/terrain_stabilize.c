@@ -556,10 +556,11 @@ static size_t list_rows(stabilizer *s, const pass_work *w, size_t *columns) {
  *   - The giver's own space gains the air it lost: the roof does not move.
  *   - The same nine colours as the top pile, in the same pass, after it: a column's 3 × 3 moves
  *     never meet another's of its colour, so the order within a pass does not matter and the
- *     result does not depend on the thread count. Columns beyond the region's border are walls
- *     for these piles (the halo holds only top piles), so a cave pile stops at a region's edge:
- *     terrain_stabilize_regions then differs from one big region where such a pile reaches a
- *     border (terrain_edit.h says so). */
+ *     result does not depend on the thread count. Beyond a region's border the pile reads and
+ *     writes the neighbouring region's columns themselves (the halo holds only top piles); the
+ *     pass runs on one thread over all regions, and colours come from world coordinates, so
+ *     regions side by side give the bytes one big region gives. Where no region continues is a
+ *     wall for these piles, in either edge mode (they wake no region). */
 
 typedef struct cave_scratch {
     terrain__clayer *layers, *other, *rewritten;
@@ -598,12 +599,24 @@ static void gap_add(terrain_columns *c, int i, int k, int64_t height, int m, int
     terrain__columns_rewrite_gap(c, i, k, s->other, count, gap, amount, &s->rewritten, &s->rewritten_capacity);
 }
 
+/* The region and column that column (i, k) of region c is — c's own, or beyond its border the
+ * neighbouring region's (regions side by side have one size); NULL at the edge. */
+static terrain_columns *locate(terrain_columns *c, int i, int k, int *ri, int *rk) {
+    int rx = i < 0 ? -1 : i >= c->width, rz = k < 0 ? -1 : k >= c->depth;
+    *ri = i - rx * c->width, *rk = k - rz * c->depth;
+    if (!rx && !rz) return c;
+    for (int d = 0; d < 8; d++)
+        if (terrain__dir[d][0] == rx && terrain__dir[d][1] == rz) return c->neighbour[d];
+    return NULL;
+}
+
 /* Surface of material m in the space of column (i, k) that holds `probe`, and the room the space
- * has; TERRAIN__WALL_HEIGHT where rock (or the region's border) is at that height. */
-static int32_t cave_neighbour(const terrain_columns *c, int i, int k, int64_t probe, int m, cave_scratch *s,
+ * has; TERRAIN__WALL_HEIGHT where rock (or the edge) is at that height. */
+static int32_t cave_neighbour(terrain_columns *c, int i, int k, int64_t probe, int m, cave_scratch *s,
                               int64_t *room) {
     *room = 0;
-    if (i < 0 || k < 0 || i >= c->width || k >= c->depth) return TERRAIN__WALL_HEIGHT;
+    c = locate(c, i, k, &i, &k);
+    if (!c) return TERRAIN__WALL_HEIGHT;
     int count;
     int gap_count = read_gaps(c, i, k, &s->other, &s->other_capacity, &s->other_gaps, &s->other_gaps_capacity, &count);
     int g = terrain__gap_holding(s->other_gaps, gap_count, probe);
@@ -643,9 +656,11 @@ static int32_t settle_caves(terrain_columns *c, const stabilize_rules *rules, in
             gap_add(c, i, k, probe, m, -given, s);
             for (int d = 0; d < 8; d++) {
                 if (!out[d]) continue;
-                int ni = i + terrain__dir[d][0], nk = k + terrain__dir[d][1];
-                gap_add(c, ni, nk, probe, m, out[d], s);
-                mark(c, ni, nk, terrain__cell(c, ni, nk), pass);
+                int ni, nk;
+                terrain_columns *to = locate(c, i + terrain__dir[d][0], k + terrain__dir[d][1], &ni, &nk);
+                gap_add(to, ni, nk, probe, m, out[d], s);
+                mark(to, ni, nk, terrain__cell(to, ni, nk), pass);
+                to->last_change = pass;   /* a neighbouring region's change: its halos follow */
             }
             mark(c, i, k, terrain__cell(c, i, k), pass);
             moved += given;
