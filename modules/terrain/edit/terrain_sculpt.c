@@ -728,12 +728,14 @@ static bool segment_frame(sweep_segment *s, const terrain__region_field *field) 
     return true;
 }
 
-/* Whether p lies inside the segment's profiled prism: 0 ≤ t ≤ 1 along it and |w| < r(t)·ρ(θ). */
-static bool profile_inside(const sweep_segment *s, const float *profile, int count, const double p[3]) {
+/* Whether p lies inside the segment's profiled prism: 0 ≤ t ≤ 1 along it and |w| < r(t)·ρ(θ);
+ * `bound` ≥ every ρ rejects most points before the angle is taken. */
+static bool profile_inside(const sweep_segment *s, const float *profile, int count, double bound, const double p[3]) {
     double w[3] = { p[0] - s->a[0], p[1] - s->a[1], p[2] - s->a[2] };
     double along = dot3(w, s->t), t = along / s->length;
     if (t < 0.0 || t > 1.0) return false;
     double x = dot3(w, s->u), y = dot3(w, s->v), r = s->ra + t * (s->rb - s->ra);
+    if (x * x + y * y >= r * r * bound * bound) return false;
     double limit = r * profile_at(profile, count, atan2(y, x));
     return limit > 0.0 && x * x + y * y < limit * limit;
 }
@@ -746,10 +748,13 @@ static void profile_spans(const sweep_segment *s, const float *profile, int coun
     double y_lo = fmin(s->a[1], s->b[1]) - reach, y_hi = fmax(s->a[1], s->b[1]) + reach;
     int64_t q0 = CORE_MAX((int64_t)floor((y_lo - floor_y) * QPM) - 1, (int64_t)0);
     int64_t q1 = CORE_MIN((int64_t)ceil((y_hi - floor_y) * QPM) + 1, (int64_t)TERRAIN__COLUMN_MAX_QUANTA - 1);
+    double bound = 0.0;
+    for (int j = 0; j < count; j++) bound = fmax(bound, profile[j]);
+    bound *= CATMULL_ROM_OVERSHOOT;
     int64_t run = -1;
     for (int64_t q = q0; q <= q1; q++) {
         double p[3] = { x, quantum_centre(q), z };
-        bool inside = q < q1 && profile_inside(s, profile, count, p);
+        bool inside = q < q1 && profile_inside(s, profile, count, bound, p);
         if (inside && run < 0) run = q;
         if (!inside && run >= 0) {
             *spans = core_grow(*spans, span_capacity, *span_count + 1, sizeof **spans);
