@@ -153,6 +153,9 @@ static inline bool terrain__gap_open(const terrain__gap *g) { return g->ceiling 
 /* The spaces of a column's layer list (terrain__columns_layers), bottom-up, into `gaps` (at most
  * `capacity`); returns how many there are. Spaces of no height (two stable layers touching) are
  * left out; the open top space is always there, last. */
+/* How far a sweep reaches from its skeleton, in radii: 1, or more with a profile curve. */
+double terrain__sweep_reach_scale(const terrain_sweep_desc *desc);
+
 int terrain__column_gaps(const terrain__clayer *layers, int count, terrain__gap *gaps, int capacity);
 /* The space nearest the height (0 when the height lies inside it); ties go to the higher. */
 int terrain__gap_nearest(const terrain__gap *gaps, int count, int64_t height);

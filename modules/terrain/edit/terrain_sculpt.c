@@ -742,6 +742,14 @@ static bool profile_inside(const sweep_segment *s, const float *profile, int cou
 
 /* The carved runs of the column axis (x, z) for one profiled segment, as spans (each maximal run
  * of quantum centres inside); appended to *spans. */
+/* A profile may reach beyond the radius (scales up to 4, and the cubic's overshoot). */
+double terrain__sweep_reach_scale(const terrain_sweep_desc *desc) {
+    if (!desc->profile) return 1.0;
+    double profile_max = 0.0;
+    for (int j = 0; j < desc->profile_count; j++) profile_max = fmax(profile_max, desc->profile[j]);
+    return fmax(profile_max * CATMULL_ROM_OVERSHOOT, 1.0);
+}
+
 static void profile_spans(const sweep_segment *s, const float *profile, int count, double reach, double x, double z,
                           int64_t column, sweep_span **spans, size_t *span_count, size_t *span_capacity) {
     double floor_y = TERRAIN_FLOOR_Y;
@@ -807,11 +815,8 @@ bool terrain_sweep(terrain_columns *c, const terrain_sweep_desc *desc, int64_t *
         }
         r_max = fmax(r_max, fmax(segments[n].ra, segments[n].rb));
     }
-    /* A profile may reach beyond the radius (scales up to 4, and the cubic's overshoot). */
-    double profile_max = 0.0;
-    for (int j = 0; desc->profile && j < desc->profile_count; j++) profile_max = fmax(profile_max, desc->profile[j]);
-    double profile_reach = r_max * fmax(profile_max * CATMULL_ROM_OVERSHOOT, 1.0);
-    double reach = (desc->profile ? profile_reach : r_max) + REGION_MARGIN;
+    double profile_reach = r_max * terrain__sweep_reach_scale(desc);
+    double reach = profile_reach + REGION_MARGIN;
     if (!region_holds(c, lo[0] - reach, hi[0] + reach, lo[2] - reach, hi[2] + reach)) {
         core_log_error("terrain",
                    "sweep: the region (columns %lld ... %lld, %lld ... %lld) does not hold every column within %g m "
