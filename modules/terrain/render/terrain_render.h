@@ -182,6 +182,17 @@ typedef struct terrain_clipmap_desc {
                                          0 = below the generator's caves (156 m by default) */
     terrain_generation_desc generation;  /* copied; the world whose ground is drawn */
     job_system *jobs;                 /* computes new heights in parallel; NULL = the caller */
+    /* The stacks where they exist (002 §3.5). With a world, a grid point whose four columns lie
+     * in chunks the world has cached (generated or edited; never generated for this) takes the
+     * height the chunks' meshes draw there instead of G, and the texels of chunks that are
+     * generated, committed or evicted are recomputed at the next update: edits show from afar
+     * and the clipmap meets the chunks along the holes' border. Not owned; one clipmap per
+     * world; update where terrain_world_stacks may be called (no trim meanwhile). */
+    terrain_world *world;             /* NULL = G everywhere */
+    float mesh_step;                  /* metres between the vertical samples of the meshes along
+                                         the holes' border: the streamed rings' outermost level,
+                                         2^(levels − 1) (terrain_rings_clearance's level); the
+                                         heights are those such a mesh draws; 0 = 1 */
     /* Detail from a screen-space error (data/terrain_data.h): with pixel_error > 0 the fields
      * left 0 among cells, finest_spacing and levels are derived from K = terrain_screen_error_scale(
      * viewport_height, fov_y, pixel_error): cells ≥ 4·(ε(s)/s·K + 2) (level L is drawn from
