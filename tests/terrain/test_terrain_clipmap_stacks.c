@@ -244,3 +244,88 @@ Test(terrain_clipmap_stacks, the_seam_gap_along_a_holes_border_is_within_a_quart
     terrain_clipmap_destroy(c);
     terrain_world_destroy(world);
 }
+
+/* ---- level 0 on the rings' grid, and the seam's own heights ---- */
+
+/* Bedrock rolling by ±3 m over 10 m (hand-made: cheap to cache hundreds of chunks). */
+static void rolling_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
+    (void)user;
+    float top = 10.0f + 3.0f * sinf((float)x / 7.0f) * cosf((float)z / 5.0f);
+    terrain_stacks_builder_push(b, TERRAIN_BEDROCK, top - TERRAIN_FLOOR_Y);
+}
+
+static terrain_stacks *rolling_generate(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, rolling_column, user);
+}
+
+/* With centre_snap 128 m (the default rings' coarsest chunk) level 0 is centred on the camera
+ * snapped to 128 m, and still every finer border vertex lies on the coarser level's drawn
+ * surface (which is unmorphed there), for cameras anywhere in the snap cell. */
+Test(terrain_clipmap_stacks, a_coarse_centre_snap_keeps_the_levels_crack_free) {
+    terrain_clipmap *c = terrain_clipmap_create(&(terrain_clipmap_desc){
+        .levels = 4, .cells = 64, .finest_spacing = 4.0f, .centre_snap = 64.0f, .generation = terrain_generation_defaults(5) });
+    const double cameras[][2] = { { 31.9, -31.9 }, { 1000.0 + 31.0, 1000.0 - 30.0 }, { -5000.0, 777.0 }, { 95.0, 96.9 } };
+    for (size_t n = 0; n < sizeof cameras / sizeof cameras[0]; n++) {
+        double camera[3] = { cameras[n][0], 40.0, cameras[n][1] };
+        terrain_clipmap_update(c, camera);
+        terrain__clipmap_level_info level0 = terrain__clipmap_level(c, 0);
+        for (int a = 0; a < 2; a++) {
+            double centre = (double)(level0.first[a] + 32) * 4.0;
+            cr_assert_eq(centre, 64.0 * floor(cameras[n][a] / 64.0 + 0.5), "camera %zu axis %d: level 0 centred on the snap", n, a);
+        }
+        for (int l = 0; l + 1 < 4; l++) {
+            terrain__clipmap_level_info fine = terrain__clipmap_level(c, l), coarse = terrain__clipmap_level(c, l + 1);
+            for (int j = 0; j <= 64; j++)
+                for (int side = 0; side < 4; side++) {
+                    int i = side == 0 ? j : side == 1 ? j : side == 2 ? 0 : 64, k = side == 0 ? 0 : side == 1 ? 64 : j;
+                    float position[2], height;
+                    terrain__clipmap_vertex(c, l, i, k, camera, position, &height);
+                    /* The coarser vertices at or before and after it (fine index parity). */
+                    /* first is even, so grid index first + i halves to first/2 + i/2. */
+                    int ci = (int)(fine.first[0] / 2 + i / 2 - coarse.first[0]), ck = (int)(fine.first[1] / 2 + k / 2 - coarse.first[1]);
+                    float p0[2], p1[2], h0, h1;
+                    terrain__clipmap_vertex(c, l + 1, ci, ck, camera, p0, &h0);
+                    terrain__clipmap_vertex(c, l + 1, ci + (i & 1), ck + (k & 1), camera, p1, &h1);
+                    cr_assert_eq(h0, terrain__clipmap_texel(c, l + 1, coarse.first[0] + ci, coarse.first[1] + ck),
+                                 "camera %zu level %d: the coarser level is unmorphed under the finer border", n, l + 1);
+                    cr_assert_eq(height, 0.5f * (h0 + h1), "camera %zu level %d vertex (%d, %d) on the coarser edge", n, l, i, k);
+                }
+        }
+    }
+    terrain_clipmap_destroy(c);
+}
+
+/* On the hole's border every vertex keeps its own texel — the chunks' height — even where the
+ * level morphs (there: level 0's own border, the hole's border with the rings' snap), so the
+ * clipmap meets the meshes at every one of its border vertices. */
+Test(terrain_clipmap_stacks, on_the_holes_border_vertices_keep_the_chunks_height) {
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(3),
+                                                                       .generate = rolling_generate });
+    for (int64_t cz = -10; cz < 10; cz++)
+        for (int64_t cx = -10; cx < 10; cx++) terrain_world_stacks(world, (terrain_chunk_coord){ cx, cz });
+    terrain_clipmap *c = terrain_clipmap_create(&(terrain_clipmap_desc){
+        .levels = 3, .cells = 64, .finest_spacing = 4.0f, .centre_snap = 64.0f, .generation = terrain_generation_defaults(3),
+        .world = world, .mesh_step = 1.0f });
+    /* The camera 30 m off the snap's centre (0, 0); the hole the rings' square there, ±128 m. */
+    double camera[3] = { 30.0, 20.0, -30.0 };
+    terrain_clipmap_update(c, camera);
+    terrain_clipmap_set_hole(c, (double[2]){ -128, -128 }, (double[2]){ 128, 128 });
+    int checked = 0, morphing = 0;
+    for (double t = -128; t <= 128; t += 4.0)
+        for (int side = 0; side < 4; side++) {
+            double x = side < 2 ? t : (side == 2 ? -128 : 128), z = side < 2 ? (side == 0 ? -128 : 128) : t;
+            /* Level 0's vertex there: its own border, where the morph is complete. */
+            int64_t i = (int64_t)llround(x / 4.0), k = (int64_t)llround(z / 4.0);
+            terrain__clipmap_level_info info = terrain__clipmap_level(c, 0);
+            float texel = terrain__clipmap_texel(c, 0, i, k), position[2], height;
+            terrain__clipmap_vertex(c, 0, (int)(i - info.first[0]), (int)(k - info.first[1]), camera, position, &height);
+            cr_assert_eq(height, texel, "(%g, %g) keeps its texel", x, z);
+            cr_assert_float_eq(terrain_clipmap_height(c, x, z), texel, 1e-4, "(%g, %g) as drawn", x, z);
+            morphing += (i & 1) || (k & 1);
+            checked++;
+        }
+    cr_assert_gt(morphing, 100, "odd vertices, which a full morph would move onto the coarser edges");
+    (void)checked;
+    terrain_clipmap_destroy(c);
+    terrain_world_destroy(world);
+}

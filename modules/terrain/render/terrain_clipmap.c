@@ -183,6 +183,19 @@ static terrain_clipmap_desc clipmap_defaults(const terrain_clipmap_desc *in) {
     if (!(d.finest_spacing > 0.0f)) d.finest_spacing = 4.0f;
     if (!(d.hole_band > 0.0f)) d.hole_band = 2.0f * d.finest_spacing;
     if (!(d.mesh_step > 0.0f)) d.mesh_step = TERRAIN_COLUMN_SIZE;
+    /* Level 0's centre on a grid of an even number of its spacings, no coarser than keeps each
+     * coarser level's morph outside the finer level: the finer border lies up to half_L + b_L
+     * from the camera (b_L = centre_offset_bound), the coarser morph starts at 2·half_L − b_L −
+     * 2·s_L − w_{L+1}, so 2·b_L ≤ s_L·(n/2 − 2 − 2⌊n/10⌋); level 0 (b_0 = snap/2) is the tightest
+     * for every n ≥ 16. */
+    double unit = 2.0 * d.finest_spacing, widest = d.finest_spacing * (0.5 * d.cells - 2.0 - 2.0 * (d.cells / 10));
+    double snap = d.centre_snap > 0.0f ? unit * floor(d.centre_snap / unit + 0.5) : unit;
+    if (snap > widest) {
+        core_warn("terrain", "clipmap: centre_snap %g m is over %g m for %d cells of %g m; clamped", d.centre_snap, widest,
+                  d.cells, d.finest_spacing);
+        snap = unit * floor(widest / unit);
+    }
+    d.centre_snap = (float)fmax(snap, unit);
     /* The pit's floor below every cave the generator carves (they end cave_fade_height + 1.5
      * cave wavelengths below G, 108 m by default), with room to spare. */
     if (!(d.hole_depth > 0.0f))
@@ -327,19 +340,22 @@ bool terrain_clipmap_set_screen(terrain_clipmap *c, int viewport_height, float f
 
 /* ---- placement ---- */
 
-/* Where every level goes for a camera (see the file comment). */
+/* Where every level goes for a camera (see the file comment): level 0's centre is the camera
+ * snapped to desc.centre_snap (2·s_0 by default). */
 static void clipmap_place(const terrain_clipmap *c, const double camera[3], int64_t first[][2]) {
     int n = c->cells;
+    int64_t snap = (int64_t)llround(c->desc.centre_snap / c->levels[0].spacing);   /* even, in s_0 */
     for (int axis = 0; axis < 2; axis++) {
         double s0 = c->levels[0].spacing, p = camera[axis ? 2 : 0];
-        first[0][axis] = 2 * (int64_t)floor(p / (2.0 * s0) + 0.5) - n / 2;
+        first[0][axis] = snap * (int64_t)floor(p / (snap * s0) + 0.5) - n / 2;
         for (int l = 1; l < c->level_count; l++) first[l][axis] = 2 * floor_div(first[l - 1][axis] / 2 - n / 4, 2);
     }
 }
 
-/* How far level L's centre can be from the camera of the update that placed it. */
+/* How far level L's centre can be from the camera of the update that placed it: half the snap
+ * for level 0, and each coarser level's centre at most s_L behind the finer one's. */
 static double centre_offset_bound(const terrain_clipmap *c, int level) {
-    return c->levels[0].spacing * (ldexp(1.0, level + 1) - 1.0);
+    return 0.5 * c->desc.centre_snap + c->levels[0].spacing * (ldexp(1.0, level + 1) - 2.0);
 }
 
 /* Where the finer level starts inside level L, in L's cells (n/4 or n/4 + 1). */
@@ -863,8 +879,23 @@ static level_uniforms uniforms_for(const terrain_clipmap *c, int level, const do
     return u;
 }
 
+/* Whether a camera-relative vertex position lies on a hole's border (clipmap.vert's `seam`):
+ * with the world's heights there, the vertex keeps its own (002 §3.5: where near and far meet the
+ * clipmap takes the chunks' height), however the level morphs around it. */
+static bool on_hole_border(const terrain_clipmap *c, const double camera[3], const float position[2], float spacing) {
+    if (!c->desc.world) return false;
+    float holes[TERRAIN_CLIPMAP_MAX_HOLES][4];
+    int count = terrain__clipmap_holes(c, camera, holes);
+    for (int h = 0; h < count; h++) {
+        const float *u = holes[h];
+        float inside = fminf(fminf(position[0] - u[0], u[2] - position[0]), fminf(position[1] - u[1], u[3] - position[1]));
+        if (fabsf(inside) <= 1e-3f * spacing) return true;
+    }
+    return false;
+}
+
 static float level_vertex_height(const terrain_clipmap *c, int level, int i, int k, const level_uniforms *u,
-                                 const float position[2]) {
+                                 const float position[2], const double camera[3]) {
     const clipmap_level *lv = &c->levels[level];
     float fine = terrain__clipmap_texel(c, level, lv->first[0] + i, lv->first[1] + k);
     if (level + 1 >= c->level_count) return fine;
@@ -874,6 +905,7 @@ static float level_vertex_height(const terrain_clipmap *c, int level, int i, int
     bool border = i == 0 || k == 0 || i == c->cells || k == c->cells;
     float alpha = terrain__clipmap_morph(position[0] - u->morph_centre[0], position[1] - u->morph_centre[1], u->morph_start,
                                          u->morph_inverse_width, border);
+    if (on_hole_border(c, camera, position, u->spacing)) alpha = 0.0f;
     return (1.0f - alpha) * fine + alpha * coarse;
 }
 
@@ -882,7 +914,7 @@ void terrain__clipmap_vertex(const terrain_clipmap *c, int level, int i, int k, 
     level_uniforms u = uniforms_for(c, level, camera);
     position[0] = u.anchor[0] + (float)(u.offset[0] + i) * u.spacing;
     position[1] = u.anchor[1] + (float)(u.offset[1] + k) * u.spacing;
-    *height = level_vertex_height(c, level, i, k, &u, position);
+    *height = level_vertex_height(c, level, i, k, &u, position, camera);
 }
 
 float terrain_clipmap_height(const terrain_clipmap *c, double x, double z) {
@@ -995,6 +1027,7 @@ static void draw_shared_uniforms(terrain_clipmap *c, gfx_context *gfx, gfx_progr
     if (holes_location >= 0 && hole_count > 0) glUniform4fv(holes_location, hole_count, &holes[0][0]);
     gfx_uniform_float(gfx, program, "u_hole_band", c->desc.hole_band);
     gfx_uniform_float(gfx, program, "u_hole_depth", c->desc.hole_depth);
+    gfx_uniform_int(gfx, program, "u_seam_exact", c->desc.world != NULL);
     /* 002 §4.4: the outermost level's last 15 % and the last 15 % before the far plane fade into
      * the sky, so neither the clipmap's square edge nor the far plane's cut is ever seen. */
     float reach = (float)c->stats.reach, far_distance = view->far_distance > 0 ? view->far_distance : 4000.0f;

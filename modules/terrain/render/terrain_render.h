@@ -193,6 +193,13 @@ typedef struct terrain_clipmap_desc {
                                          the holes' border: the streamed rings' outermost level,
                                          2^(levels − 1) (terrain_rings_clearance's level); the
                                          heights are those such a mesh draws; 0 = 1 */
+    float centre_snap;                /* metres: level 0 is centred on the camera snapped to
+                                         this grid (rounded to an even number of finest
+                                         spacings; at most finest_spacing·(cells/2 − 2 −
+                                         2·⌊cells/10⌋): 152 m for the defaults).
+                                         The streamed rings' own snap (their coarsest chunk,
+                                         32·2^(levels − 1)) puts level 0 on their hole, so the
+                                         finest level draws the hole's border; 0 = 2·finest */
     /* Detail from a screen-space error (data/terrain_data.h): with pixel_error > 0 the fields
      * left 0 among cells, finest_spacing and levels are derived from K = terrain_screen_error_scale(
      * viewport_height, fov_y, pixel_error): cells ≥ 4·(ε(s)/s·K + 2) (level L is drawn from
