@@ -3,21 +3,32 @@
  *
  * Levels. Level L is a square grid of n × n cells of s_L = finest·2^L metres; its vertex (i, k)
  * is the world point ((first_x + i)·s_L, (first_z + k)·s_L). Level 0 is centred on the camera,
- * snapped to 2·s_0, and every coarser level is placed from the finer one inside it:
+ * snapped to desc.centre_snap (2·s_0 by default; the streamed rings' coarsest chunk in the game,
+ * so that level 0 lies on their hole), and every coarser level is placed from the finer one
+ * inside it:
  *     first_L = 2·⌊(first_{L−1}/2 − n/4) / 2⌋
  * so first_L is even (its border lies on level L + 1's vertex lines), the finer level starts
  * h = first_{L−1}/2 − first_L ∈ {n/4, n/4 + 1} cells in (only two cases per axis, see the
  * blocks below), and a level's centre is at most s_L behind the finer one's: the camera is
- * within s_0·(2^{L+1} − 1) of level L's centre.
+ * within snap/2 + s_0·(2^{L+1} − 2) of level L's centre (s_0·(2^{L+1} − 1) with the default).
  *
  * Heights. Each level keeps the heights of its vertices plus one ring (for normals) in a
  * toroidal array of (n + 4)² floats: grid point (i, k) lives at (i mod T, k mod T), so when the
  * level moves only the rows and columns that came in are computed (terrain__ground_row_spaced:
- * G with the octaves the spacing carries, 004 §4.1) and uploaded, at the same toroidal place in
+ * G with the octaves the spacing carries, 004 §4.1; with desc.world, the chunks' surface where
+ * they are cached, below) and uploaded, at the same toroidal place in
  * one RGBA32F texture layer per level (the height, its normal's x and z, and the level of a lake
  * whose water holds the point, terrain__lake_row_spaced, packed at upload: one read per
- * vertex). A height depends only on its grid point, so an incremental
- * update gives exactly the array a fresh build at the new place would (tested).
+ * vertex). A height depends only on its grid point and the chunks cached, so an incremental
+ * update gives exactly the array a fresh build at the new place would (tested); when chunks are
+ * generated, committed or evicted (the world's surface watch) a second pass recomputes the
+ * texels whose columns they hold, in every level's window, and uploads their rows.
+ *
+ * Stacks. 002 §3.5 builds the clipmap's height map from the stacks. Where the four columns
+ * around a grid point are cached, its height is the one the chunks' meshes draw there: the
+ * topmost crossing of the mesher's field on the point's vertical line, sampled at the outermost
+ * ring's vertical step (desc.mesh_step) and interpolated as the mesher does (corner_surface).
+ * So edits show from afar, and along the hole's border the clipmap meets the meshes.
  *
  * Far lakes. The vertex shader stands a lake's vertices at its level (the drawn surface is
  * max(ground, lake), morphed as a whole) and clipmap.frag shades them as water; block bounds
@@ -38,9 +49,10 @@
  *
  * The hole. The volumetric chunks replace the clipmap's centre (002 §3.5). The paper bends the
  * meso mesh's border to the clipmap's height; our chunks are meshed by another system, with open
- * borders, and G leaves out the overhang shear and the finest octaves, so along the hole's
- * border the chunks' surface lies above or below the clipmap (typically by a metre, rarely by
- * 10 m). The clipmap goes under them instead: inside the hole it sinks, over hole_band metres
+ * borders. On G alone the chunks' surface lies above or below the clipmap along the border
+ * (typically by a metre, up to 19 m: world.seam.max_gap.g_only); with the stacks' heights it
+ * meets it at every border sample of the meshes (the seam, below). Either way the clipmap goes
+ * under them inside the border, so no remaining gap shows sky: inside the hole it sinks, over hole_band metres
  * from the border, to hole_depth below the ground and stays there, a pit whose walls are a
  * skirt for the chunks' open border and whose floor lies deeper than the generator's caves.
  * A ray heading down through a gap at the border therefore meets the wall or, having passed
@@ -51,6 +63,15 @@
  * which the depth test drops early (the shader never discards). Its one condition: the hole's
  * border lies on the finest level's vertex lines inside it (chunk borders do, at 4 m), else a
  * triangle straddling the border starts sinking outside it.
+ *
+ * The seam. With the stacks' heights, a vertex on a hole's border keeps its own texel (α = 0)
+ * whatever its level's morph (on_hole_border, clipmap.vert's `seam`): in the game level 0 lies on
+ * the rings' hole (centre_snap), so its border is the hole's, where the morph would otherwise
+ * put its odd vertices on the 8 m level's edges. Where a level's border runs along the hole's,
+ * that opens a T-junction crack against the coarser level in the border's vertical plane; a ray
+ * through it from outside runs under the chunks' edge into the pit (ground), and one from inside
+ * has gone under the chunks' surface first. The pit's band starts at the border vertex, at the
+ * meshes' height, so its wall stays hidden under the chunks.
  *
  * Several holes. Every viewer's rings replace the clipmap where they are, so there is one hole
  * per viewer (up to TERRAIN_CLIPMAP_MAX_HOLES), and the pit is their union's: a point sinks by
@@ -698,12 +719,10 @@ static void level_bounds(terrain_clipmap *c, int level) {
 /* ---- update ---- */
 
 /* Runs the planned tasks; returns how many texels they computed. */
-static uint64_t run_tasks(terrain_clipmap *c) {
+static uint64_t run_tasks(terrain_clipmap *c, uint64_t parallel_from) {
     uint64_t texels = 0;
     for (size_t t = 0; t < c->task_count; t++) texels += (uint64_t)c->tasks[t].count;
-    /* A walk's step (a band two texels wide: about a microsecond a row) is not worth waking the
-     * workers for; a jump or the first build is. */
-    if (c->desc.jobs && texels > 4096)
+    if (c->desc.jobs && texels > parallel_from)
         job_parallel_for(c->desc.jobs, c->task_count, 0, run_task_range, c, "terrain.clipmap.heights");
     else
         run_task_range(c, 0, c->task_count);
@@ -723,11 +742,14 @@ uint64_t terrain_clipmap_update(terrain_clipmap *c, const double camera[3]) {
     for (int l = 0; l < c->level_count; l++) full[l] = plan_level(c, l, next[l]);
     /* Two passes, each computing any texel once: what the move brought in, then what changed
      * in the world (002 §3.5), which may overlap it. */
-    uint64_t texels = run_tasks(c);
+    /* A walk's step (a band two texels wide: about a microsecond a row) is not worth waking the
+     * workers for; a jump or the first build is. A texel of the stacks costs about 0.6 µs
+     * (release, against 0.15 for G's): new chunks' texels fan out from 1024. */
+    uint64_t texels = run_tasks(c, 4096);
     if (take_surface_changes(c, full)) {
         c->task_count = 0;
         for (int l = 0; l < c->level_count; l++) plan_stale(c, l);
-        texels += run_tasks(c);
+        texels += run_tasks(c, 1024);
     }
     for (int l = 0; l < c->level_count; l++)
         if (c->levels[l].bounds_dirty) level_bounds(c, l);
