@@ -189,8 +189,9 @@ typedef struct terrain_clipmap_desc {
      * in chunks the world has cached (generated or edited; never generated for this) takes the
      * height the chunks' meshes draw there instead of G, and the texels of chunks that are
      * generated, committed or evicted are recomputed at the next update: edits show from afar
-     * and the clipmap meets the chunks along the holes' border. Not owned; one clipmap per
-     * world; update where terrain_world_stacks may be called (no trim meanwhile). */
+     * and the clipmap meets the chunks along the holes' border. Not owned: it must outlive the
+     * clipmap; one clipmap per world; update where no trim runs meanwhile (as for the pointers
+     * terrain_world_stacks returns). A chunk evicted from the cache falls back to G. */
     terrain_world *world;             /* NULL = G everywhere */
     float mesh_step;                  /* metres between the vertical samples of the meshes along
                                          the holes' border: the streamed rings' outermost level,
