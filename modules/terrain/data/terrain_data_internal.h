@@ -296,6 +296,17 @@ void terrain__world_amplify(terrain_world *world, terrain_field *field);
 void terrain__world_on_generated(terrain_world *world, void (*fn)(void *user, terrain_chunk_coord coord),
                                   void *user);
 
+/* The far terrain's view of the cache (render/terrain_clipmap.c draws the stacks' surface
+ * wherever chunks are cached, 002 §3.5). terrain__world_cached: the chunk's stacks if it is
+ * cached now, else NULL; never generates, and does not count as a use (the LRU order stays).
+ * The pointer lasts as terrain_world_stacks's do (until the next trim). While watched
+ * (one watcher per world: the clipmap made with it), every chunk inserted, committed with a
+ * change or evicted is queued once per event; take_surface_changes hands them over in order
+ * (at most `capacity`, the rest stay). Turning the watch on or off empties the queue. */
+const terrain_stacks *terrain__world_cached(terrain_world *world, terrain_chunk_coord coord);
+void terrain__world_watch_surface(terrain_world *world, bool on);
+int terrain__world_take_surface_changes(terrain_world *world, terrain_chunk_coord *out, int capacity);
+
 /* ==== end of the edits-in-the-world section (edit/terrain_edit_internal.h has the rest) ==== */
 
 #endif
