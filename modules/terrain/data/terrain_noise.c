@@ -26,6 +26,11 @@
  * column rather than once per point and corner, read back with lane permutes (the tables in
  * terrain_noise_lanes.h). The portable blocks are the earlier form: fixed NOISE_BLOCK loops
  * with selects instead of branches, which GCC's -O2 vectorises with SSE2 on its own.
+ *
+ * The scattered-point batch (terrain__noise3_points: the perturbed cave map's lookups, each point
+ * in a cell of its own, so nothing is hoisted) is such a block, compiled twice: as is, and with
+ * target("avx2") for 8 lanes where the dispatch picked AVX2 or AVX-512. The same C either way,
+ * no FMA, so the bits are the scalar terrain__noise3's (test_terrain_generate_shape.c checks).
  */
 #include "terrain/data/terrain_data_internal.h"
 
