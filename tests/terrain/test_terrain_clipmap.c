@@ -36,11 +36,11 @@ Test(terrain_clipmap, texels_are_the_ground_at_the_levels_spacing) {
     for (int l = 0; l < 4; l++) {
         terrain__clipmap_level_info info = terrain__clipmap_level(c, l);
         cr_assert_eq(info.spacing, 4.0 * (1 << l));
-        /* 004 §4.1: ν = log(λ/2s) / log r, no octave shorter than two texels; one octave fewer
-         * at every coarser level (7.23, 6.23, 5.23, 4.23 from 4 m). */
-        float expected = logf(p.relief_wavelength / (2.0f * (float)info.spacing)) / logf(p.lacunarity);
+        /* 004 §4.1 as terrain_generate.c reads it: ν = log(λ/4s) / log r, no octave shorter than
+         * four texels; one octave fewer at every coarser level (6.23, 5.23, 4.23, 3.23 from 4 m). */
+        float expected = logf(p.relief_wavelength / (4.0f * (float)info.spacing)) / logf(p.lacunarity);
         cr_assert_float_eq(info.octaves, fmaxf(expected, 1.0f), 1e-4, "level %d: %f octaves", l, info.octaves);
-        cr_assert_float_eq(info.octaves, 7.2288f - (float)l, 1e-3, "level %d: %f octaves", l, info.octaves);
+        cr_assert_float_eq(info.octaves, 6.2288f - (float)l, 1e-3, "level %d: %f octaves", l, info.octaves);
         cr_assert_lt(info.octaves, previous_octaves);
         previous_octaves = info.octaves;
         float row[64];
@@ -341,8 +341,8 @@ Test(terrain_clipmap, culling_drops_blocks_behind_and_keeps_the_one_under_the_ca
     int visible = terrain_clipmap_cull(c, &frustum);
     cr_assert_gt(visible, 0);
     /* Fewer than those not wholly behind the camera: the ~90° wide view drops blocks to the sides
-     * too. (About half of all; "under half" failed by one block, 59 of 117, once the coarse
-     * levels kept the octaves their spacing carries, 004 §4.1: their bounds grew taller.) */
+     * too. (About half of all: "under half" failed by one block, 59 of 117, once the coarse levels
+     * kept the octaves their spacing carries, 004 §4.1, and their bounds grew taller.) */
     int ahead = 0;
     for (int l = 0; l < levels; l++)
         for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) {

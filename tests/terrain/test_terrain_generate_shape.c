@@ -128,7 +128,8 @@ static run_area area_generate(const terrain_generation_desc *p, int64_t x0, int6
     a.first = malloc(((size_t)a.side * a.side + 1) * sizeof *a.first);
     terrain_stacks **row = malloc((size_t)chunks * sizeof *row);
     for (int cz = 0; cz < chunks; cz++) {
-        for (int cx = 0; cx < chunks; cx++) row[cx] = terrain_generate_chunk(p, (terrain_chunk_coord){ x0 + cx, z0 + cz });
+        for (int cx = 0; cx < chunks; cx++)
+            row[cx] = terrain_generate_chunk(p, (terrain_chunk_coord){ x0 + cx, z0 + cz });
         for (int k = 0; k < N; k++) {
             for (int gx = 0; gx < a.side; gx++) {
                 a.first[(cz * N + k) * a.side + gx] = a.run_count;
@@ -235,10 +236,11 @@ Test(terrain_generate_shape, no_island_inside_a_chunk_even_where_islands_are_lik
 /* With relief_height 600 (four times the default) no octave of the macro relief is shorter than
  * twice the spacing it is sampled at, for the generator's 1 m columns and the clipmap's coarser
  * grids. Octave k of the rescale-and-add multifractal has wavelength λ·r^−k; with ν octaves,
- * k = 0 … ⌈ν⌉ − 1 are summed (the last weighted by frac ν). Worked out from the parameters: the
- * finest allowed octave is k = log_r(λ / 2σ), so ν = log2(1200 / 2σ) at r = 2: 9.23 at 1 m, 7.23
- * at 4 m, 4.23 at 32 m; the relief's height plays no part. (Before, ν came from the amplitudes:
- * 10.85 at 1 m for a 600 m relief, octave 10 1.2 m long; 7.33 at 8 m, octave 7 9.4 m long.) */
+ * k = 0 … ⌈ν⌉ − 1 are summed (the last weighted by frac ν). Before, ν came from the amplitudes
+ * (004 §4.1's formula): 10.85 at 1 m for a 600 m relief (octave 10 is 1.2 m long) and 7.33 at
+ * 8 m (octave 7 is 9.4 m long, under two 8 m texels). The generator keeps four samples a
+ * wavelength (terrain_generate.c, relief_octaves): ν = log2(1200 / 4σ), worked out by hand:
+ * 8.23 at 1 m, 6.23 at 4 m, 3.23 at 32 m; the relief's height plays no part. */
 Test(terrain_generate_shape, no_octave_finer_than_twice_the_spacing) {
     terrain_generation_desc p = terrain_generation_defaults(1);
     p.relief_height = 600.0f;
@@ -252,9 +254,9 @@ Test(terrain_generate_shape, no_octave_finer_than_twice_the_spacing) {
         double wavelength = p.relief_wavelength / pow(p.lacunarity, finest);
         cr_expect_geq(wavelength, 2.0 * spacing, "spacing %g m: %g octaves, the finest %.2f m long", spacing, octaves,
                       wavelength);
-        /* Not fewer than the rule allows: ν = log2(λ / 2σ) (by hand above). */
-        cr_expect_float_eq(octaves, (float)log2(p.relief_wavelength / (2.0 * spacing)), 1e-4f, "spacing %g m", spacing);
+        cr_expect_float_eq(octaves, (float)log2(p.relief_wavelength / (4.0 * spacing)), 1e-4f, "spacing %g m", spacing);
     }
+    cr_expect_float_eq(terrain__ground_octaves(&p, 1.0f), 8.2288f, 1e-3f);
     /* The same counts whatever the relief: the count follows the wavelength alone. */
     terrain_generation_desc low = p;
     low.relief_height = 20.0f;
@@ -327,7 +329,8 @@ Test(terrain_generate_shape, the_cave_map_is_perturbed_like_the_surface) {
             int ca = terrain_stacks_column(bent, c % N, c / N, a, 256);
             int cb = terrain_stacks_column(straight, c % N, c / N, b, 256);
             bool same = ca == cb;
-            for (int l = 0; same && l < ca; l++) same = a[l].material == b[l].material && a[l].thickness == b[l].thickness;
+            for (int l = 0; same && l < ca; l++)
+                same = a[l].material == b[l].material && a[l].thickness == b[l].thickness;
             differ += !same;
         }
         terrain_stacks_destroy(bent);

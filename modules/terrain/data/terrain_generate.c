@@ -4,13 +4,13 @@
  *     d(x, y, z) = min(d_ground, d_cave), solid where d > 0
  *     d_ground   = G(x + A·u(x, y, z), z + A·w(x, y, z)) − y                       (002 §3.1.3.1)
  *     G(x, z)    = cliffs(base + relief·shape(M(x, z))) + V·fbm2(x, z)        (M: 004 §2)
- *     d_cave     = (1 − t·a(y) − R₁(p)·R₂(p))·scale                               (002 §3.1.3.2)
+ *     d_cave     = (1 − t·a(y) − R₁(Φ(p))·R₂(Φ(p)))·scale        (002 §3.1.3.2, Fig. 11)
  *
  *  - The ground/sky split is the height gradient G − y (002 Fig. 3). Its y perturbation V·fbm2
  *    is a 2D fBm: the paper samples the perturbing fractal "along 0 in the y axis" so that it
  *    acts like a height map and leaves no floating islands (002 Fig. 6, 7). It is added to the
  *    macro relief M, a rescale-and-add multifractal with domain warping (004 §2.1, §2.2; octave
- *    count from the relief's wavelength against the column spacing, no octave shorter than two
+ *    count from the relief's wavelength against the column spacing, no octave shorter than four
  *    columns, fractional last octave, 004 §4.1: relief_octaves), shaped so that peaks rise
  *    faster than seas sink.
  *  - Cliffs (ours, not the papers'): where a low-frequency mask says so, and above the sea, the
@@ -24,20 +24,6 @@
  *    squeeze u and w by 3 along y: steeper shear, more overhangs. An overhang needs
  *    |∇G|·A·|∂u/∂y| > 1, which is why they sit on the cliffs' risers. Nothing bounds A/λ, though,
  *    and caves and the 1 m sampling cut slivers off anyway: islands are removed (below).
- *  - Caves are looked up where the same displacement moves the point (002 Fig. 11, "distort the
- *    map ... with the perturbing techniques covered in the previous section"): d_cave reads
- *    R₁R₂ at Φ(p), so the caves are pulled back through the same Φ as the ground and bend with
- *    it (cave_lattice).
- *  - Islands (002 §3.1.3: "floating islands which we do not want"): after its columns are made,
- *    a chunk joins its solid runs that share a face (face-adjacent columns whose runs overlap by
- *    two quanta or more as the stacks round them) and turns into air every run that no chain
- *    joins to the floor or to the chunk's outermost columns (islands_remove). What it removes
- *    touches no other chunk's column, so neighbours agree; an island that crosses a chunk border
- *    is beyond one chunk's sight and stays. Measured: none left in 405 chunks of the defaults
- *    (10 floating runs, 3.4 m³, without the removal); with a 30 m shear over 24 m and wide
- *    caves, 6 runs (1.7 m³) across borders in 2 × 2 chunks, from 59 (31 m³). Cost: a union-find
- *    over the chunk's few thousand runs, small next to a chunk's milliseconds (not measured
- *    apart).
  *  - Caves: R₁, R₂ are ridged multifractals (1 on their ridges, where their noise crosses zero);
  *    one alone cuts sheets through the ground, so, as the paper does, two with different seeds
  *    are combined: both near 1 only along the curves where two sheets meet, i.e. tunnels. The
@@ -50,6 +36,20 @@
  *    never under the sea), full from cave_fade_height below that, fading out again at the
  *    bottom of the cave band (fade + 1.5 cave wavelengths deep). Nothing above G is ever cut,
  *    so overhang lips stay whole and caves make no floating islands there.
+ *  - The cave map is read where the same displacement moves the point (002 Fig. 11, "distort
+ *    the map ... with the perturbing techniques covered in the previous section"): d_cave reads
+ *    R₁R₂ at Φ(p), so the caves are pulled back through the same Φ as the ground and bend with
+ *    it (cave_lattice).
+ *  - Islands (002 §3.1.3: "floating islands which we do not want"): after its columns are made,
+ *    a chunk joins its solid runs that share a face (face-adjacent columns whose runs overlap by
+ *    two quanta or more as the stacks round them) and turns into air every run that no chain
+ *    joins to the floor or to the chunk's outermost columns (islands_remove). What it removes
+ *    touches no other chunk's column, so neighbours agree; an island that crosses a chunk border
+ *    is beyond one chunk's sight and stays. Measured: none left in 405 chunks of the defaults
+ *    (10 floating runs, 3.4 m³, without the removal); with a 30 m shear over 24 m and wide
+ *    caves, 6 runs (1.7 m³) across borders in 2 × 2 chunks, from 59 (31 m³). Cost: a union-find
+ *    over the chunk's few thousand runs, small next to a chunk's milliseconds (not measured
+ *    apart).
  *
  * Evaluation, per chunk:
  *  1. G on a grid of the chunk's columns plus a margin of ⌈A⌉ + 2, a row at a time with the
@@ -96,7 +96,7 @@
  *   surface may stand higher over a neighbour's ground (rocks included) than d·ROCK_HOLD_SLOPE
  *   (40°, d = 1 or √2 m): passes in a fixed order thin the columns that do until none does.
  *   The stabilizer lets rocks rest at 42°, so it leaves them where they are, save where a
- *   ring estimate was off (tested: about 2 % of the rocks move). Cost: the ring's tops, extra
+ *   ring estimate was off (tested: about 1 % of the rocks move). Cost: the ring's tops, extra
  *   lattice nodes and these passes, about +8 % of a chunk's generation.
  *
  * Lakes (ours; issue 15: "generation should make some lakes in basins"). A lattice of cells
@@ -269,12 +269,19 @@ static float relief_wavelength(const terrain_generation_desc *p) {
  * The paper's ν = −log σ / (H log r) measures σ against the octaves' amplitudes (r^−kH), which
  * ties the count to relief_height: a 600 m relief sampled every metre would sum octaves 1.2 m
  * long, finer than the samples can carry (aliasing), and an 8 m clipmap texel would get octaves
- * of 9 m. Our reading measures σ against their wavelengths, λ·r^−k: octaves while the wavelength
- * spans two samples or more (Nyquist), ν = log(λ / 2σ) / log r, at most relief_octaves. Every
- * octave summed (indices below ⌈ν⌉) is then at least 2σ long, whatever the relief. */
+ * of 9 m. Our reading measures σ against their wavelengths, λ·r^−k: ν = log(λ / 4σ) / log r, at
+ * most relief_octaves. Every octave summed (indices below ⌈ν⌉) then spans OCTAVE_MIN_SAMPLES
+ * samples or more, whatever the relief: the last fades in as its wavelength grows from 4 to 8
+ * samples (r = 2), the others span 8 or more. Four, not Nyquist's two, as for every noise this
+ * file interpolates (header comment, step 3): the ground between samples is linear (bilinear G,
+ * the clipmap's triangles), and octaves of 2–4 samples drawn that way left cracks between the
+ * clipmap's levels (a render test saw sky through the ground at 2) and tipped more generated
+ * rocks over (the stabilizer moved 2.0 % of them, 1.2 % before). */
+#define OCTAVE_MIN_SAMPLES 4.0f
+
 static float relief_octaves(const terrain_generation_desc *p, float lacunarity, float spacing) {
     /* terrain__multifractal_octaves(r, H = 1, s) is log s / −log r, clamped to [1, max]. */
-    return terrain__multifractal_octaves(lacunarity, 1.0f, 2.0f * spacing / relief_wavelength(p),
+    return terrain__multifractal_octaves(lacunarity, 1.0f, OCTAVE_MIN_SAMPLES * spacing / relief_wavelength(p),
                                          clamp_int(p->relief_octaves, 1, 16));
 }
 

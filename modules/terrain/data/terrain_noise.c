@@ -600,8 +600,9 @@ void terrain__multifractal2_row(const terrain__multifractal *mf, const float *xs
 /* NOISE_BLOCK points, each with its own cell: the loop has a constant trip count and no branch
  * (cell_xz and noise3_in_column are selects and arithmetic), so -O2 vectorises it; every lane is
  * terrain__noise3's scalar code, so the bits are the same on any CPU. */
-static inline __attribute__((always_inline)) void noise3_points_body(uint32_t seed, const float *restrict xs, const float *restrict ys,
-                                const float *restrict zs, float *restrict out) {
+static inline __attribute__((always_inline)) void noise3_points_body(uint32_t seed, const float *restrict xs,
+                                                                    const float *restrict ys,
+                                                                    const float *restrict zs, float *restrict out) {
     for (int j = 0; j < NOISE_BLOCK; j++) {
         /* cell_xz's body, spelt out: a call would stop the vectoriser. */
         int xi = floor_to_int(xs[j]), zi = floor_to_int(zs[j]);
