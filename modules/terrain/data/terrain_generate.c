@@ -47,9 +47,8 @@
  *    touches no other chunk's column, so neighbours agree; an island that crosses a chunk border
  *    is beyond one chunk's sight and stays. Measured: none left in 405 chunks of the defaults
  *    (10 floating runs, 3.4 m³, without the removal); with a 30 m shear over 24 m and wide
- *    caves, 6 runs (1.7 m³) across borders in 2 × 2 chunks, from 59 (31 m³). Cost: a union-find
- *    over the chunk's few thousand runs, small next to a chunk's milliseconds (not measured
- *    apart).
+ *    caves, 6 runs (1.7 m³) across borders in 2 × 2 chunks, from 59 (31 m³). Cost, with the
+ *    perturbed caves: +5 % instructions a chunk (callgrind, terrain.generate.128, one thread).
  *
  * Evaluation, per chunk:
  *  1. G on a grid of the chunk's columns plus a margin of ⌈A⌉ + 2, a row at a time with the
@@ -58,7 +57,7 @@
  *     points a displaced sample can read. Below it d_ground > 0, above it d_ground < 0, surely.
  *  3. The 3D noises (u, w and the caves' raw octaves) on a coarse lattice, 4 m apart in x and z
  *     and 2 m in y, u and w with the column batch (terrain__noise3_column), the caves' at each
- *     node's displaced point (terrain__noise3_points: about +7 % of a chunk); per column they are
+ *     node's displaced point (terrain__noise3_points); per column they are
  *     interpolated bilinearly to its centre, then linearly along y. Every noise's wavelength is
  *     at least 4 lattice spacings along each axis (u, w: 24 m across, 8 m up; caves 32 m, 21 m),
  *     and the ridge (|n|, a kink) is applied after interpolation, at full resolution.
@@ -943,16 +942,6 @@ static void column_generate(const chunk_gen *g, int i, int k, const float *field
 
 /* ---- floating islands (header comment, "Islands") ------------------------------------------ */
 
-/* Run r of a column with `count` transitions: solid from its bottom to its top, in quanta as the
- * stacks builder rounds them (run 0 starts at the floor). */
-static int64_t run_quanta_lo(const float *t, int r) {
-    return llroundf((r == 0 ? TERRAIN_FLOOR_Y : t[2 * r - 1]) * TERRAIN__QUANTA_PER_METRE);
-}
-
-static int64_t run_quanta_hi(const float *t, int r) {
-    return llroundf(t[2 * r] * TERRAIN__QUANTA_PER_METRE);
-}
-
 static int island_root(int *parent, int r) {
     while (parent[r] != r) r = parent[r] = parent[parent[r]];
     return r;
@@ -963,19 +952,25 @@ static void island_join(int *parent, int a, int b) {
     if (a != b) parent[CORE_MAX(a, b)] = CORE_MIN(a, b);
 }
 
+/* The chunk's solid runs for the island pass: run r spans quanta [lo[r], hi[r]) as the stacks
+ * builder rounds them; a column's runs are first[c] … first[c + 1] − 1, bottom-up. */
+typedef struct island_runs {
+    int first[TERRAIN__COLUMNS + 1];
+    int32_t *lo, *hi;
+    int *parent;
+    int count;
+} island_runs;
+
 /* Joins the runs of face-adjacent columns c0, c1 whose voxels share a face: y ranges that
  * overlap once rounded as the builder rounds them. Two quanta, not one: the builder rounds sums of
  * thicknesses, which may land a quantum off ours; a contact that thin counts as none, so the
  * removal errs towards air (what it keeps is held by firm contacts). */
-static void island_join_columns(const float *pool, const int *start, const int *first_run, int *parent, int c0,
-                                int c1) {
-    const float *t0 = pool + start[c0], *t1 = pool + start[c1];
-    int runs0 = first_run[c0 + 1] - first_run[c0], runs1 = first_run[c1 + 1] - first_run[c1];
-    for (int a = 0, b = 0; a < runs0 && b < runs1;) {
-        int64_t lo = CORE_MAX(run_quanta_lo(t0, a), run_quanta_lo(t1, b));
-        int64_t hi0 = run_quanta_hi(t0, a), hi1 = run_quanta_hi(t1, b);
-        if (CORE_MIN(hi0, hi1) - lo >= 2) island_join(parent, first_run[c0] + a, first_run[c1] + b);
-        if (hi0 < hi1) a++;
+static void island_join_columns(island_runs *runs, int c0, int c1) {
+    int a = runs->first[c0], a_end = runs->first[c0 + 1], b = runs->first[c1], b_end = runs->first[c1 + 1];
+    while (a < a_end && b < b_end) {
+        int32_t lo = CORE_MAX(runs->lo[a], runs->lo[b]), hi = CORE_MIN(runs->hi[a], runs->hi[b]);
+        if (hi - lo >= 2) island_join(runs->parent, a, b);
+        if (runs->hi[a] < runs->hi[b]) a++;
         else b++;
     }
 }
@@ -987,41 +982,52 @@ static void island_join_columns(const float *pool, const int *start, const int *
  * columns' transitions in place, from pool[start[c]], counts start[c + 1] − start[c]. Returns
  * the number of runs removed. */
 static int islands_remove(float *pool, int *start) {
-    int first_run[TERRAIN__COLUMNS + 1], runs = 0;
-    for (int c = 0; c < TERRAIN__COLUMNS; c++) first_run[c] = runs, runs += (start[c + 1] - start[c] + 1) / 2;
-    first_run[TERRAIN__COLUMNS] = runs;
-    if (runs == TERRAIN__COLUMNS) return 0;            /* a height field: every run is on the floor */
-    int held = runs;                                   /* the floor and the chunk's border */
-    int *parent = core_alloc((size_t)(runs + 1) * sizeof(int));
-    for (int r = 0; r <= runs; r++) parent[r] = r;
+    island_runs runs;
+    runs.count = 0;
+    for (int c = 0; c < TERRAIN__COLUMNS; c++)
+        runs.first[c] = runs.count, runs.count += (start[c + 1] - start[c] + 1) / 2;
+    runs.first[TERRAIN__COLUMNS] = runs.count;
+    if (runs.count == TERRAIN__COLUMNS) return 0;      /* a height field: every run is on the floor */
+    size_t bytes = (size_t)runs.count * sizeof(int32_t), parent_bytes = (size_t)(runs.count + 1) * sizeof(int);
+    runs.lo = core_alloc(bytes), runs.hi = core_alloc(bytes), runs.parent = core_alloc(parent_bytes);
+    for (int c = 0; c < TERRAIN__COLUMNS; c++) {
+        const float *t = pool + start[c];
+        for (int r = 0, n = runs.first[c]; n < runs.first[c + 1]; r++, n++) {
+            runs.lo[n] = (int32_t)llroundf((r == 0 ? TERRAIN_FLOOR_Y : t[2 * r - 1]) * TERRAIN__QUANTA_PER_METRE);
+            runs.hi[n] = (int32_t)llroundf(t[2 * r] * TERRAIN__QUANTA_PER_METRE);
+        }
+    }
+    int held = runs.count;                             /* the floor and the chunk's border */
+    for (int r = 0; r <= runs.count; r++) runs.parent[r] = r;
     for (int k = 0; k < TERRAIN_CHUNK_COLUMNS; k++) {
         for (int i = 0; i < TERRAIN_CHUNK_COLUMNS; i++) {
             int c = k * TERRAIN_CHUNK_COLUMNS + i;
             bool border = i == 0 || k == 0 || i == TERRAIN_CHUNK_COLUMNS - 1 || k == TERRAIN_CHUNK_COLUMNS - 1;
-            for (int r = first_run[c]; r < first_run[c + 1]; r++)
-                if (border || r == first_run[c]) island_join(parent, r, held);
-            if (i + 1 < TERRAIN_CHUNK_COLUMNS) island_join_columns(pool, start, first_run, parent, c, c + 1);
-            if (k + 1 < TERRAIN_CHUNK_COLUMNS)
-                island_join_columns(pool, start, first_run, parent, c, c + TERRAIN_CHUNK_COLUMNS);
+            for (int r = runs.first[c]; r < runs.first[c + 1]; r++)
+                if (border || r == runs.first[c]) island_join(runs.parent, r, held);
+            if (i + 1 < TERRAIN_CHUNK_COLUMNS) island_join_columns(&runs, c, c + 1);
+            if (k + 1 < TERRAIN_CHUNK_COLUMNS) island_join_columns(&runs, c, c + TERRAIN_CHUNK_COLUMNS);
         }
     }
-    int removed = 0, write = 0, held_root = island_root(parent, held);
+    int removed = 0, write = 0, held_root = island_root(runs.parent, held);
     for (int c = 0; c < TERRAIN__COLUMNS; c++) {
         const float *t = pool + start[c];
         int count = start[c + 1] - start[c], begin = write;
         for (int r = 0; 2 * r < count; r++) {
-            if (island_root(parent, first_run[c] + r) != held_root) {
+            if (island_root(runs.parent, runs.first[c] + r) != held_root) {
                 removed++;
                 continue;                              /* its bottom and top go: air joins air */
             }
-            float bottom = r == 0 ? 0.0f : t[2 * r - 1], top = t[2 * r];
+            float bottom = r == 0 ? 0.0f : t[2 * r - 1], top = t[2 * r];   /* read before written */
             if (r > 0) pool[write++] = bottom;
             pool[write++] = top;
         }
         start[c] = begin;
     }
     start[TERRAIN__COLUMNS] = write;
-    core_free(parent, (size_t)(runs + 1) * sizeof(int));
+    core_free(runs.lo, bytes);
+    core_free(runs.hi, bytes);
+    core_free(runs.parent, parent_bytes);
     return removed;
 }
 
