@@ -771,6 +771,43 @@ static void draw_shared_uniforms(terrain_clipmap *c, gfx_context *gfx, gfx_progr
     gfx_uniform_float(gfx, program, "u_sand_depth", c->desc.generation.sand_depth);
 }
 
+/* The heights for water_ground.glsl (the ground under a point, for water's depth): each level's
+ * vertex (0, 0) camera-relative (in double here, small there), its spacing and its toroidal
+ * start texel, and the texture on `unit`. 0 levels until the first upload. */
+int terrain__clipmap_ground_levels(const terrain_clipmap *c) {
+    return c->has_camera && c->texture.id && !c->upload_pending ? c->level_count : 0;
+}
+
+int terrain__clipmap_bind_ground(terrain_clipmap *c, gfx_context *gfx, uint32_t program_handle, const double camera[3],
+                                 int unit) {
+    gfx_program program = { program_handle };
+    GLuint gl_program = gfx_program_gl(gfx, program);
+    int levels = terrain__clipmap_ground_levels(c);
+    gfx_uniform_int(gfx, program, "u_ground_levels", levels);
+    gfx_uniform_int(gfx, program, "u_ground_heights", unit);
+    if (levels == 0) return 0;
+    gfx_uniform_int(gfx, program, "u_ground_size", c->size);
+    gfx_uniform_int(gfx, program, "u_ground_cells", c->cells);
+    float origin[TERRAIN_CLIPMAP_MAX_LEVELS][2], spacing[TERRAIN_CLIPMAP_MAX_LEVELS];
+    int start[TERRAIN_CLIPMAP_MAX_LEVELS][2];
+    for (int l = 0; l < levels; l++) {
+        const clipmap_level *lv = &c->levels[l];
+        spacing[l] = (float)lv->spacing;
+        for (int a = 0; a < 2; a++) {
+            origin[l][a] = (float)((double)lv->first[a] * lv->spacing - camera[a ? 2 : 0]);
+            start[l][a] = floor_mod(lv->first[a], c->size);
+        }
+    }
+    GLint at = glGetUniformLocation(gl_program, "u_ground_origin");
+    if (at >= 0) glProgramUniform2fv(gl_program, at, levels, &origin[0][0]);
+    at = glGetUniformLocation(gl_program, "u_ground_spacing");
+    if (at >= 0) glProgramUniform1fv(gl_program, at, levels, spacing);
+    at = glGetUniformLocation(gl_program, "u_ground_start");
+    if (at >= 0) glProgramUniform2iv(gl_program, at, levels, &start[0][0]);
+    gfx_texture_bind(c->texture, unit);
+    return levels;
+}
+
 void terrain__clipmap_draw(terrain_clipmap *c, gfx_context *gfx, uint32_t program_handle, const terrain_view *view) {
     TRACE_ZONE("terrain_clipmap_draw");
     c->stats.blocks_drawn = 0;
