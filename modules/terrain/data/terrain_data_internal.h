@@ -60,6 +60,9 @@ float terrain__noise2(uint32_t seed, float x, float z);
 void terrain__noise2_row(uint32_t seed, const float *xs, float scale, float z, int count, float *out);
 /* The column batch: out[j] = terrain__noise3(seed, x, y0 + j·dy, z) for j < count. */
 void terrain__noise3_column(uint32_t seed, float x, float y0, float dy, float z, int count, float *out);
+/* Scattered points: out[j] = terrain__noise3(seed, xs[j], ys[j], zs[j]) for j < count, bit for bit
+ * (a portable block the compiler vectorises; the perturbed cave map's lookups). */
+void terrain__noise3_points(uint32_t seed, const float *xs, const float *ys, const float *zs, int count, float *out);
 /* The code path of the batches above and terrain__multifractal2_row. AUTO picks, on first use,
  * the widest the CPU has (AVX-512, else AVX2, else SSE2, x86-64's baseline; PORTABLE, plain C,
  * off x86-64). Every path gives the scalar functions' bits exactly, so forcing one (tests,

@@ -26,6 +26,11 @@
  * column rather than once per point and corner, read back with lane permutes (the tables in
  * terrain_noise_lanes.h). The portable blocks are the earlier form: fixed NOISE_BLOCK loops
  * with selects instead of branches, which GCC's -O2 vectorises with SSE2 on its own.
+ *
+ * The scattered-point batch (terrain__noise3_points: the perturbed cave map's lookups, each point
+ * in a cell of its own, so nothing is hoisted) is such a block, compiled twice: as is, and with
+ * target("avx2") for 8 lanes where the dispatch picked AVX2 or AVX-512. The same C either way,
+ * no FMA, so the bits are the scalar terrain__noise3's (test_terrain_generate_shape.c checks).
  */
 #include "terrain/data/terrain_data_internal.h"
 
@@ -587,5 +592,64 @@ void terrain__multifractal2_row(const terrain__multifractal *mf, const float *xs
     case TERRAIN__NOISE_AVX512: multifractal2_row_avx512(octaves, octave_count, total, xs, z, count, out); return;
 #endif
     default: multifractal2_row_portable(octaves, octave_count, total, xs, z, count, out); return;
+    }
+}
+
+/* ---- scattered points: the perturbed cave map (002 §3.1.3.2, Fig. 11) ---------------------- */
+
+/* NOISE_BLOCK points, each with its own cell: the loop has a constant trip count and no branch
+ * (cell_xz and noise3_in_column are selects and arithmetic), so -O2 vectorises it; every lane is
+ * terrain__noise3's scalar code, so the bits are the same on any CPU. */
+static inline __attribute__((always_inline)) void noise3_points_body(uint32_t seed, const float *restrict xs,
+                                                                    const float *restrict ys,
+                                                                    const float *restrict zs, float *restrict out) {
+    for (int j = 0; j < NOISE_BLOCK; j++) {
+        /* cell_xz's body, spelt out: a call would stop the vectoriser. */
+        int xi = floor_to_int(xs[j]), zi = floor_to_int(zs[j]);
+        uint32_t hx0 = hash_x(seed, xi), hx1 = hash_x(seed, xi + 1);
+        column_cell c;
+        c.h00 = hash_xz(hx0, zi);
+        c.h10 = hash_xz(hx1, zi);
+        c.h01 = hash_xz(hx0, zi + 1);
+        c.h11 = hash_xz(hx1, zi + 1);
+        c.fx = xs[j] - (float)xi;
+        c.fz = zs[j] - (float)zi;
+        c.u = fade(c.fx);
+        c.w = fade(c.fz);
+        out[j] = noise3_in_column(&c, ys[j]);
+    }
+}
+
+static void noise3_points_block(uint32_t seed, const float *restrict xs, const float *restrict ys,
+                                const float *restrict zs, float *restrict out) {
+    noise3_points_body(seed, xs, ys, zs, out);
+}
+
+#if defined(__x86_64__)
+/* The same body with AVX2's 8 lanes (no FMA: "fma" is not a target, so the bits are the same). */
+__attribute__((target("avx2"))) static void noise3_points_block_avx2(uint32_t seed, const float *restrict xs,
+                                                                     const float *restrict ys,
+                                                                     const float *restrict zs, float *restrict out) {
+    noise3_points_body(seed, xs, ys, zs, out);
+}
+#endif
+
+void terrain__noise3_points(uint32_t seed, const float *xs, const float *ys, const float *zs, int count, float *out) {
+    void (*block)(uint32_t, const float *restrict, const float *restrict, const float *restrict, float *restrict) =
+        noise3_points_block;
+#if defined(__x86_64__)
+    terrain__noise_path path = noise_current_path();
+    if (path == TERRAIN__NOISE_AVX2 || path == TERRAIN__NOISE_AVX512) block = noise3_points_block_avx2;
+#endif
+    int j = 0;
+    for (; j + NOISE_BLOCK <= count; j += NOISE_BLOCK) block(seed, xs + j, ys + j, zs + j, out + j);
+    if (j < count) {
+        float x[NOISE_BLOCK], y[NOISE_BLOCK], z[NOISE_BLOCK], tail[NOISE_BLOCK];
+        for (int t = 0; t < NOISE_BLOCK; t++) {
+            int from = j + t < count ? j + t : j;
+            x[t] = xs[from], y[t] = ys[from], z[t] = zs[from];
+        }
+        block(seed, x, y, z, tail);
+        for (int t = 0; j + t < count; t++) out[j + t] = tail[t];
     }
 }
