@@ -475,8 +475,13 @@ game_app *game_app_create(const game_app_desc *desc) {
     if (!app->renderer || !app_open_input(app) || !(app->hud = gfx_text_create(app->gfx))) goto fail;
     if (!d->no_clipmap) {
         terrain_stream_desc rings = terrain_ecs_stream_desc(app->terrain);
+        /* The stacks' surface where chunks are cached, sampled as the outermost ring meshes it,
+         * and level 0 snapped as the rings are, so that it draws their hole's border: the far
+         * terrain meets the chunks there and shows edits from afar (002 §3.5). */
+        float outermost = (float)(1 << (rings.levels - 1));
         app->clipmap = terrain_clipmap_create(&(terrain_clipmap_desc){
             .generation = *terrain_world_generation(app->world), .jobs = app->jobs,
+            .world = app->world, .mesh_step = outermost, .centre_snap = TERRAIN_MESH_CELLS * outermost,
             .pixel_error = d->pixel_error, .viewport_height = d->height,
             .inner_distance = (float)terrain_rings_clearance(rings.half_width, rings.levels, rings.levels - 1) });
         terrain_ecs_set_clipmap(app->terrain, app->clipmap);

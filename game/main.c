@@ -3,7 +3,7 @@
  *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT | --tour] [--record FILE]
  *         [--replay FILE] [--bindings FILE] [--gamepad-mappings FILE] [--screenshot FILE] [--pixel-error P]
  *         [--radius R] [--levels N]
- *         [--memory MB] [--grass off|low|high] [--water off|low|high] [--shadows off|low|high]
+ *         [--memory MB] [--grass off|low|high] [--water off|low|medium|high] [--shadows off|low|high]
  *         [--detail on|off] [--rocks on|off] [--threads N]
  *         [--trace FILE [--trace-frames N]] [--world DIR] [--at X,Y,Z] [--look YAW,PITCH]
  *
@@ -111,7 +111,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
           "--pixel-error; with --radius or --levels the rings are fixed, radius 2)", 1, 32 },
         { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
         { "grass", CORE_OPTION_STRING, &o->grass, "off|low|high", "grass patches (default low)" },
-        { "water", CORE_OPTION_STRING, &o->water, "off|low|high", "the sea and lakes (default low)" },
+        { "water", CORE_OPTION_STRING, &o->water, "off|low|medium|high", "the sea and lakes (default low: blended, the frame never read back)" },
         { "rocks", CORE_OPTION_STRING, &o->rocks, "on|off", "rock piles (default on; the tile set is cached "
           "in out/rocks_tiles.bin when out/ exists)" },
         { "cliffs", CORE_OPTION_STRING, &o->cliffs, "on|off", "fractured blocks on steep bedrock walls (default on; their tiles are cached in out/ when it exists)" },
@@ -143,7 +143,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         return bad_value(&cli, "grass", error);
     }
     if (o->water && !terrain_water_parse_quality(o->water, &desc->water)) {
-        snprintf(error, sizeof error, "'%s' is not off, low or high", o->water);
+        snprintf(error, sizeof error, "'%s' is not off, low, medium or high", o->water);
         return bad_value(&cli, "water", error);
     }
     if (o->rocks && !rocks_parse_quality(o->rocks, &desc->rocks)) {

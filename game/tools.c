@@ -42,12 +42,16 @@ terrain_edit game_tools_edit(game_tool tool, bool alt, float radius, const terra
     case GAME_TOOL_SAND:
         return (terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
                                .deposit = { .material = alt ? TERRAIN_BRUSH_ROCKS : TERRAIN_BRUSH_SAND, .x = p[0], .z = p[2],
-                                            .radius = r, .volume = TOOL_DEPOSIT_VOLUME } };
+                                            .radius = r, .volume = TOOL_DEPOSIT_VOLUME,
+                                            /* where the view met the ground: a cave's floor
+                                               inside a cave, not the hill above it */
+                                            .at_height = true, .y = p[1] } };
     case GAME_TOOL_ERODE:
         return (terrain_edit){ .tool = TERRAIN_EDIT_ERODE,
                                .erode = { .mode = alt ? TERRAIN_ERODE_COLLAPSE : TERRAIN_ERODE_SURFACE,
                                           .x = p[0], .y = p[1], .z = p[2], .radius = r,
-                                          .depth = TOOL_ERODE_DEPTH, .rocks_ratio = TOOL_ROCKS_RATIO } };
+                                          .depth = TOOL_ERODE_DEPTH, .rocks_ratio = TOOL_ROCKS_RATIO,
+                                          .at_height = true } };
     default:
         return (terrain_edit){ 0 };
     }

@@ -25,6 +25,7 @@ const int MAX_HOLES = 8;           // TERRAIN_CLIPMAP_MAX_HOLES: one per viewer'
 uniform vec4 u_holes[MAX_HOLES];   // the holes, camera-relative: min x, min z, max x, max z
 uniform int u_hole_count;          // how many of them are set
 uniform float u_hole_band, u_hole_depth;
+uniform int u_seam_exact;          // 1: the heights are the chunks' where they are (a world)
 uniform vec4 u_clip_plane;         // camera-relative: keeps dot((p, 1), plane) ≥ 0; zero = off
 
 out vec3 v_relative_position;      // to the camera
@@ -64,6 +65,13 @@ void main() {
     // lakes; the near ones are WaterPlane components that terrain_water draws). It morphs as a
     // whole, so a finer border vertex lies on the coarser level's drawn edge, shore or not.
     precise float surface = max(fine, lake);
+    // On a hole's border, with the chunks' heights in the texels, the vertex keeps its own
+    // height whatever the morph: there the clipmap meets the chunks' meshes (002 §3.5). A crack
+    // this opens against a coarser level lies in the border's plane, over the pit: ground shows
+    // through it, never sky (terrain_clipmap.c, "The seam").
+    bool seam = false;
+    for (int h = 0; h < min(u_hole_count, MAX_HOLES); h++)
+        seam = seam || (u_seam_exact != 0 && abs(hole_depth_inside(u_holes[h], position)) <= 1e-3 * u_spacing);
     if (u_coarse_layer >= 0) {
         bool border = grid.x == 0 || grid.y == 0 || grid.x == u_cells || grid.y == u_cells;
         // Measured from the camera the levels were placed for, so that the transition always
@@ -71,6 +79,7 @@ void main() {
         vec2 from_centre = position - u_morph_centre;
         float alpha = clamp((max(abs(from_centre.x), abs(from_centre.y)) - u_morph.x) * u_morph.y, 0.0, 1.0);
         alpha = border ? 1.0 : alpha;
+        alpha = seam ? 0.0 : alpha;
         if (alpha > 0.0) {
             // The coarser triangles under the vertex: its vertex, an edge's midpoint, or the
             // midpoint of the cell's (0, 0)–(1, 1) diagonal.

@@ -10,10 +10,15 @@
 // and green); its depth under the surface sets, as 004 §4.3 asks, the bumps' strength and the
 // reflectivity, and fades the surface out towards the shore, where it goes to zero (no hard
 // line; Crest #10, #262).
+// Low quality (u_blend) reads nothing of the frame: on a software rasteriser a read waits until
+// the whole frame is drawn. The surface is blended over the frame instead (dual-source: the
+// water's own light added, the frame under it scaled per channel), the depth under the surface
+// from the far terrain's heights (water_ground.glsl), so the bottom shows through undistorted.
 
 #include "common.glsl"
 #include "sky.glsl"
 #include "water.glsl"
+#include "water_ground.glsl"
 
 // The depth test before the shader: the sea behind hills costs nothing. Water writes no depth,
 // so the row mask's discard loses nothing by it.
@@ -30,10 +35,13 @@ uniform int u_use_reflection;      // 1: u_reflection holds the mirrored view (h
 uniform vec2 u_screen_size;        // pixels of the frame
 uniform vec2 u_texture_offset;     // camera x, z modulo the maps' common period
 uniform int u_under;               // 1: the camera is below this surface
+uniform int u_blend;               // 1: low, blended over the frame, none of it read
+uniform float u_camera_y;          // world height of the camera (the ground's heights are world's)
 uniform int u_use_rows;            // 1: cells outside u_rows are no water (lakes)
 uniform uint u_rows[32];           // bit i of u_rows[k]: cell (i, k) holds this water
 
-out vec4 frag_color;
+layout(location = 0, index = 0) out vec4 frag_color;
+layout(location = 0, index = 1) out vec4 frag_factor;   // low: what the frame under is kept by
 
 // Repeats (terrain_water.c's WATER_MAP_PERIOD, 120 m, is a multiple of each): normals 8 and 20 m,
 // dudv 12 and 10 m.
@@ -89,7 +97,34 @@ vec4 seen_from_below(vec3 view_dir, vec2 uv, vec2 world) {
     return vec4(mix(through * 0.75, inside, water_fresnel(cos_t)), 1.0);
 }
 
+// Low: with the frame's colour D under the surface, medium's colour is D·T·(1 − R) + own, with
+// T the transmittance, R the reflectance and own = body·(1 − T)·(1 − R) + sky·R. Dual-source
+// blending (ONE, SRC1_COLOR) forms exactly that, per channel, without reading D: frag_color
+// is own and frag_factor is T·(1 − R), both through the fog (apply_fog mixes linearly) and the
+// shore's fade, which mixes towards D.
+vec4 blended_over_frame(vec3 view_dir, float surface_distance, vec2 world, out vec4 factor) {
+    float ground;
+    // Deep where no far terrain level reaches (past its outermost level, the far plane's fade).
+    bool known = ground_height(v_relative_position.xz, ground);
+    float depth = known ? max(v_relative_position.y + u_camera_y - ground, 0.0) : 1e3;
+    float thickness = depth / max(-view_dir.y, 1e-3);
+    float deep = 1.0 - exp(-depth / SHALLOW_METRES);
+    vec3 normal = wave_normal(world, mix(0.15, 1.0, deep) / (1.0 + surface_distance / 60.0));
+    vec3 transmittance = exp(-WATER_EXTINCTION * thickness);
+    vec3 reflected_dir = reflect(view_dir, normal);
+    reflected_dir.y = abs(reflected_dir.y);
+    float fresnel = water_fresnel(dot(-view_dir, normal)) * mix(0.4, 1.0, deep);
+    vec3 own = water_body_color() * (1.0 - transmittance) * (1.0 - fresnel) + sky_with_clouds(reflected_dir, 3) * fresnel;
+    own += SUN_COLOR * pow(max(dot(reflected_dir, u_sun_direction), 0.0), 400.0) * 4.0 * deep;
+    vec3 fog_color = apply_fog(vec3(0.0), v_relative_position);
+    vec3 clear = apply_fog(vec3(1.0), v_relative_position) - fog_color;     // 1 − the fog's share
+    float shore = smoothstep(0.0, SHORE_METRES, depth);
+    factor = vec4(1.0 - shore + shore * transmittance * (1.0 - fresnel) * clear, 1.0);
+    return vec4(shore * (own * clear + fog_color), 1.0);
+}
+
 void main() {
+    frag_factor = vec4(0.0);             // only low's blending reads it
     if (u_use_rows != 0 && !near_plane_cells(ivec2(floor(v_cell)))) discard;
     float surface_distance = length(v_relative_position);
     vec3 view_dir = v_relative_position / max(surface_distance, 1e-4);
@@ -97,6 +132,12 @@ void main() {
     vec2 world = v_relative_position.xz + u_texture_offset;
     if (u_under != 0) {
         frag_color = seen_from_below(view_dir, uv, world);
+        return;
+    }
+    if (u_blend != 0) {
+        vec4 factor;
+        frag_color = blended_over_frame(view_dir, surface_distance, world, factor);
+        frag_factor = factor;
         return;
     }
     // The water straight behind the surface; this fragment passed the depth test, so the scene

@@ -351,7 +351,7 @@ for source in "${example_sources[@]}"; do
 done
 expect "world: bad --grass" 2 "bad value for '--grass': 'lush' is not off, low or high" -- "$bin/world" --grass lush
 expect "world: --grass without value" 2 "option '--grass' needs a value" -- "$bin/world" --grass
-expect "world: bad --water" 2 "bad value for '--water': 'deep' is not off, low or high" -- "$bin/world" --water deep
+expect "world: bad --water" 2 "bad value for '--water': 'deep' is not off, low, medium or high" -- "$bin/world" --water deep
 expect "world: bad --detail" 2 "bad value for '--detail': 'high' is not on or off" -- "$bin/world" --detail high
 expect "world: bad --cliffs" 2 "bad value for '--cliffs': 'tall' is not on or off" -- "$bin/world" --cliffs tall
 expect "world: bad --shadows" 2 "bad value for '--shadows': 'soft' is not off, low or high" -- "$bin/world" --shadows soft

@@ -51,12 +51,16 @@ Test(game_tools, sand_drops_sand_or_rocks_and_erode_wears_or_collapses) {
     cr_expect_gt(sand.deposit.volume, 0.0);
     cr_expect_eq(sand.deposit.x, 10.0);
     cr_expect_eq(sand.deposit.z, -30.0);
+    cr_expect(sand.deposit.at_height && rocks.deposit.at_height, "deposits land at the hit's height");
+    cr_expect_eq(sand.deposit.y, 20.0);
     terrain_edit wear = game_tools_edit(GAME_TOOL_ERODE, false, 0, &hit, forward, points);
     terrain_edit collapse = game_tools_edit(GAME_TOOL_ERODE, true, 0, &hit, forward, points);
     cr_expect_eq(wear.tool, TERRAIN_EDIT_ERODE);
     cr_expect_eq(wear.erode.mode, TERRAIN_ERODE_SURFACE);
     cr_expect_eq(collapse.erode.mode, TERRAIN_ERODE_COLLAPSE);
     cr_expect_eq(collapse.erode.y, 20.0, "the ball sits where the view met the rock");
+    cr_expect(wear.erode.at_height, "surface erosion wears the floor the view met");
+    cr_expect_eq(wear.erode.y, 20.0);
     cr_expect(wear.erode.rocks_ratio > 0 && wear.erode.rocks_ratio < 1);
 }
 
@@ -68,6 +72,54 @@ static void flat_column(void *user, int64_t x, int64_t z, terrain_stacks_builder
 
 static terrain_stacks *flat_chunk(void *user, terrain_chunk_coord coord) {
     return terrain_stacks_from_columns(coord, flat_column, user);
+}
+
+/* A cave everywhere: bedrock up to y = 0, air up to y = 4, a roof of bedrock up to y = 10. */
+static void cave_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
+    (void)user, (void)x, (void)z;
+    terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, -TERRAIN_FLOOR_Y);
+    terrain_stacks_builder_push(builder, TERRAIN_AIR, 4.0f);
+    terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, 6.0f);
+}
+
+static terrain_stacks *cave_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, cave_column, user);
+}
+
+/* Standing in the cave and looking down: the view meets the cave's floor at y = 0, and the sand
+ * a stroke drops lies there, under the roof (000 §4.3 at the hit's height), not on the hill's top
+ * at y = 10; a surface erosion stroke wears that floor, not the roof. */
+Test(game_tools, sand_and_erosion_act_at_the_height_the_view_met_in_a_cave) {
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = cave_chunk });
+    const double eye[3] = { 16.5, 2, 16.5 };
+    const float down[3] = { 0, -1, 0 };
+    terrain_ray_hit aim;
+    cr_assert(terrain_raycast(world, eye, down, 16, &aim));
+    cr_expect_float_eq(aim.position[1], 0.0, 0.05);
+    double points[2][3];
+    terrain_edit sand = game_tools_edit(GAME_TOOL_SAND, false, 0, &aim, down, points);
+    terrain_chunk_coord changed[16];
+    cr_assert_gt(terrain_world_edit(world, &sand, changed, 16), 0);
+    const terrain_stacks *stacks = terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 });
+    terrain_layer layers[8];
+    int n = terrain_stacks_column(stacks, 16, 16, layers, 8);
+    cr_assert_eq(n, 4, "floor, sand, air, roof");
+    cr_expect_eq(layers[1].material, TERRAIN_SAND);
+    cr_expect_gt(layers[1].thickness, 0.0f);
+    cr_expect_float_eq(layers[1].thickness + layers[2].thickness, 4.0f, 1e-5, "the cave keeps its height");
+    cr_expect_eq(layers[3].material, TERRAIN_BEDROCK);
+    cr_expect_float_eq(layers[3].thickness, 6.0f, 1e-5, "the roof is untouched");
+    cr_expect_float_eq(terrain_stacks_top(stacks, 16, 16), 10.0f, 1e-5, "nothing on the hill above");
+    terrain_edit wear = game_tools_edit(GAME_TOOL_ERODE, false, 0, &aim, down, points);
+    cr_assert_gt(terrain_world_edit(world, &wear, changed, 16), 0);
+    stacks = terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 });
+    n = terrain_stacks_column(stacks, 16, 16, layers, 8);
+    cr_assert_gt(n, 2);
+    cr_expect_lt(layers[0].thickness, -TERRAIN_FLOOR_Y, "the floor wore down");
+    cr_expect_eq(layers[n - 1].material, TERRAIN_BEDROCK);
+    cr_expect_float_eq(layers[n - 1].thickness, 6.0f, 1e-5, "the roof is untouched");
+    cr_expect_float_eq(terrain_stacks_top(stacks, 16, 16), 10.0f, 1e-5);
+    terrain_world_destroy(world);
 }
 
 /* Looking straight down from 5 m over flat ground: the tool aims at the ground 5 m below; Tab

@@ -56,6 +56,7 @@ typedef struct sea {
     terrain_world *world;
     terrain_ecs *te;
     terrain_renderer *renderer;
+    terrain_clipmap *far;            /* NULL: no far terrain (sea_add_far_terrain) */
     terrain_view view;
 } sea;
 
@@ -85,12 +86,27 @@ static void sea_open_scaled(sea *s, sea_kind kind, terrain_view view, int scale,
 static void sea_open(sea *s, sea_kind kind, terrain_view view) { sea_open_scaled(s, kind, view, 1, true); }
 
 static void sea_close(sea *s) {
+    terrain_clipmap_destroy(s->far);
     terrain_ecs_destroy(s->te);
     terrain_renderer_destroy(s->renderer);
     ecs_world_destroy(s->ecs);
     terrain_world_destroy(s->world);
     job_system_destroy(s->jobs);
     gfx_context_destroy(s->gfx);
+}
+
+/* Far terrain under the sea: a generated world made flat at `ground` (the height of the hand-made
+ * sea bed), so its heights, which low water takes its depth from, are the bed's. */
+static void sea_add_far_terrain(sea *s, float ground) {
+    terrain_generation_desc flat = terrain_generation_defaults(5);
+    flat.sea_level = 0;
+    flat.relief_height = 0;
+    flat.base_height = ground;
+    flat.vertical_perturbation = flat.horizontal_perturbation = 0;
+    flat.cave_threshold = 0;
+    flat.lake_spacing = 0;
+    s->far = terrain_clipmap_create(&(terrain_clipmap_desc){ .generation = flat, .levels = 3, .cells = 32 });
+    terrain_renderer_set_clipmap(s->renderer, s->far);
 }
 
 static terrain_water *sea_water(sea *s, terrain_water_quality quality) {
@@ -105,6 +121,7 @@ static terrain_water *sea_water(sea *s, terrain_water_quality quality) {
 static render_image sea_frame(sea *s, terrain_water *water) {
     for (int frame = 0; frame < 3; frame++) {
         gfx_frame_begin(s->gfx);
+        if (s->far) terrain_clipmap_update(s->far, s->view.camera);
         terrain_ecs_set_view(s->te, &s->view);
         ecs_progress(s->ecs, DT);
         terrain_ecs_draw(s->te, s->renderer, &s->view);
@@ -203,6 +220,50 @@ Test(render_water, shallow_water_shows_the_bottom_deep_water_is_dark_and_green) 
     cr_expect_gt(deep[1], deep[0], "deep water is greener than red: %.3f %.3f", deep[1], deep[0]);
     terrain_water_destroy(water);
     render_image_free(&wet);
+    sea_close(&s);
+}
+
+/* Low blends the water over the frame and reads none of it; medium copies the frame and
+ * refracts the copy. Over a flat bed the two compute the same light (the same transmittance
+ * through the same thickness: the depth under the surface over the view ray's slope equals the
+ * scene's distance behind the surface), so their mean colours over the sea agree; what differs
+ * is medium's distortion of the bed by the waves, which averages out. Through 1 m at 25° below
+ * the horizon (a factor 0.8 off in low's blending fails it), and 30 m looking down. Without far terrain, low has no depth to go by and
+ * reads the frame as medium does. */
+Test(render_water, low_reads_nothing_and_looks_as_medium_does) {
+    const sea_kind kinds[2] = { SEA_SHALLOW, SEA_DEEP };
+    const float grounds[2] = { -1.0f, -30.0f };
+    const terrain_view views[2] = { { .camera = { 16, 6, 16 }, .pitch = -1.5f },
+                                { .camera = { 16, 6, 0 }, .pitch = -0.44f } };
+    for (int k = 0; k < 2; k++) {
+        int v = 1 - k;                               /* 1 m at a slant, 30 m looking down */
+        sea s;
+        sea_open(&s, kinds[k], views[v]);
+        sea_add_far_terrain(&s, grounds[k]);
+        terrain_water *water = sea_water(&s, TERRAIN_WATER_MEDIUM);
+        render_image medium = sea_frame(&s, water);
+        cr_expect(terrain_water_stats(water).frame_read);
+        cr_assert(terrain_water_set_quality(water, TERRAIN_WATER_LOW));
+        render_image low = sea_frame(&s, water);
+        cr_expect_not(terrain_water_stats(water).frame_read, "low read the frame");
+        cr_expect_eq(terrain_water_stats(water).planes_drawn, 1);
+        float a[3], b[3];
+        mean_color(&medium, 20, 50, 140, 85, a);
+        mean_color(&low, 20, 50, 140, 85, b);
+        for (int c = 0; c < 3; c++)
+            cr_expect_leq(fabsf(a[c] - b[c]), 0.04f, "kind %d view %d channel %d: medium %.3f, low %.3f", k, v, c, a[c], b[c]);
+        terrain_water_destroy(water);
+        render_image_free(&medium);
+        render_image_free(&low);
+        sea_close(&s);
+    }
+    sea s;
+    sea_open(&s, SEA_SHALLOW, views[0]);
+    terrain_water *water = sea_water(&s, TERRAIN_WATER_LOW);
+    render_image image = sea_frame(&s, water);
+    cr_expect(terrain_water_stats(water).frame_read, "low without far terrain did not read the frame");
+    terrain_water_destroy(water);
+    render_image_free(&image);
     sea_close(&s);
 }
 
@@ -415,10 +476,12 @@ Test(render_water, qualities_parse_and_bad_input_is_refused) {
     terrain_water_quality q = TERRAIN_WATER_DEFAULT;
     cr_expect(terrain_water_parse_quality("off", &q) && q == TERRAIN_WATER_OFF);
     cr_expect(terrain_water_parse_quality("low", &q) && q == TERRAIN_WATER_LOW);
+    cr_expect(terrain_water_parse_quality("medium", &q) && q == TERRAIN_WATER_MEDIUM);
     cr_expect(terrain_water_parse_quality("high", &q) && q == TERRAIN_WATER_HIGH);
     cr_expect(!terrain_water_parse_quality("ultra", &q));
     cr_expect(!terrain_water_parse_quality(NULL, &q));
     cr_expect_str_eq(terrain_water_quality_name(TERRAIN_WATER_DEFAULT), "low");
+    cr_expect_str_eq(terrain_water_quality_name(TERRAIN_WATER_MEDIUM), "medium");
     cr_expect_str_eq(terrain_water_quality_name(TERRAIN_WATER_HIGH), "high");
     render_capture_begin();
     cr_expect_null(terrain_water_create(&(terrain_water_desc){ 0 }));

@@ -23,9 +23,15 @@ Test(terrain_brush, random_deposits_and_erosions_conserve_every_material) {
             terrain_material material = (h >> 40) & 1 ? TERRAIN_ROCKS : TERRAIN_SAND;
             double volume = (double)((h >> 44) % 3000) / 10.0;
             terrain_brush_material brush = material == TERRAIN_ROCKS ? TERRAIN_BRUSH_ROCKS : TERRAIN_BRUSH_SAND;
+            /* Every other deposit at a height some metres under the ground there: into a cave
+             * where one is, on the top elsewhere; a cave that fills takes less (never more). */
+            bool at_height = (h >> 50) & 1;
+            double y = terrain_columns_top(c, (int)x, (int)z) - (double)((h >> 52) % 24);
             cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .material = brush, .x = x, .z = z,
-                                                                  .radius = radius, .volume = volume }, &q));
-            cr_expect_eq(q, llround(volume * QPM));
+                                                                  .radius = radius, .volume = volume,
+                                                                  .at_height = at_height, .y = y }, &q));
+            if (at_height) cr_expect(q >= 0 && q <= llround(volume * QPM));
+            else cr_expect_eq(q, llround(volume * QPM));
             if (material == TERRAIN_SAND) m.sand += q;
             else m.rocks += q;
             /* The deposit displaces the water standing on the pile (terrain.h, "the sea after
@@ -41,7 +47,8 @@ Test(terrain_brush, random_deposits_and_erosions_conserve_every_material) {
             float ground = terrain_columns_top(c, (int)x, (int)z);
             cr_assert(terrain_erode(c, &(terrain_erode_desc){ .mode = collapse ? TERRAIN_ERODE_COLLAPSE : TERRAIN_ERODE_SURFACE,
                                                                .x = x, .y = ground - 2.0f, .z = z, .radius = radius,
-                                                               .depth = 3.0f, .rocks_ratio = rho }, &q));
+                                                               .depth = 3.0f, .rocks_ratio = rho,
+                                                               .at_height = (h >> 50) & 1 }, &q));
             m.bedrock -= q;
             if (rho == 0.0f) m.sand += q;
             else m.rocks += q;
@@ -201,6 +208,147 @@ Test(terrain_brush, collapse_inside_rock_leaves_rubble_under_the_rock_above) {
     terrain_columns_destroy(c);
 }
 
+/* ---- at the hit point's height (000 §4.3, §4.4) ------------------------------------------- */
+
+/* A synthetic cave in every column: bedrock floor up to 10 m, `cave` metres of air, a bedrock
+ * roof 5 m thick above it. */
+static void fill_cave(terrain_columns *c, float cave) {
+    terrain_columns_desc e = terrain_columns_extent(c);
+    terrain_layer layers[3] = { { TERRAIN_BEDROCK, 10.0f }, { TERRAIN_AIR, cave }, { TERRAIN_BEDROCK, 5.0f } };
+    for (int k = 0; k < e.depth; k++)
+        for (int i = 0; i < e.width; i++) cr_assert(terrain_columns_set(c, i, k, layers, 3));
+}
+
+/* Column (i, k) is floor 10 m, then `sand` quanta of sand (if any), then air, then the 5 m roof
+ * from 10 + cave metres up: the roof exactly where it was. */
+static void expect_cave_column(const terrain_columns *c, int i, int k, float cave, int64_t sand) {
+    terrain_layer layers[8];
+    int n = terrain_columns_get(c, i, k, layers, 8);
+    int64_t air = llroundf(cave * QPM) - sand;
+    terrain_layer want[4] = { { TERRAIN_BEDROCK, 10.0f } };
+    int m = 1;
+    if (sand) want[m++] = (terrain_layer){ TERRAIN_SAND, (float)sand / QPM };
+    if (air) want[m++] = (terrain_layer){ TERRAIN_AIR, (float)air / QPM };
+    want[m++] = (terrain_layer){ TERRAIN_BEDROCK, 5.0f };
+    cr_assert_eq(n, m, "column (%d, %d): %d layers, %d expected", i, k, n, m);
+    for (int l = 0; l < m; l++) {
+        cr_expect_eq(layers[l].material, want[l].material, "column (%d, %d) layer %d", i, k, l);
+        cr_expect_float_eq(layers[l].thickness, want[l].thickness, 1e-6, "column (%d, %d) layer %d", i, k, l);
+    }
+}
+
+Test(terrain_brush, deposit_at_a_height_in_a_cave_lands_on_its_floor_under_the_roof) {
+    /* The hit lies on the cave floor (10 m above the world's floor). 8 m³ = 256 quanta·column on
+     * the columns within 3 m of (10.5, 10.5), each on the cave's floor: the roof (16 … 21 m) and
+     * the column tops stay where they were; without at_height the sand would lie on the roof. */
+    terrain_columns *c = region(0, 0, 21, 21);
+    fill_cave(c, 6.0f);
+    masses before = mass_of(c);
+    int64_t q;
+    cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .x = 10.5, .z = 10.5, .radius = 3, .volume = 8,
+                                                          .at_height = true, .y = TERRAIN_FLOOR_Y + 10.0 }, &q));
+    cr_expect_eq(q, 256);
+    before.sand += 256;
+    expect_same_mass(before, mass_of(c));
+    int64_t on_floor = 0;
+    for (int k = 0; k < 21; k++)
+        for (int i = 0; i < 21; i++) {
+            int64_t sand = column_quanta(c, i, k, TERRAIN_SAND);
+            int r2 = (i - 10) * (i - 10) + (k - 10) * (k - 10);
+            if (r2 >= 9) cr_expect_eq(sand, 0, "(%d, %d) is outside the brush", i, k);
+            expect_cave_column(c, i, k, 6.0f, sand);
+            cr_expect_float_eq(terrain_columns_top(c, i, k), TERRAIN_FLOOR_Y + 21.0f, 0.0f);
+            on_floor += sand;
+        }
+    cr_expect_eq(on_floor, 256);
+    cr_expect_gt(column_quanta(c, 10, 10, TERRAIN_SAND), 0);
+    /* The same hit height a little inside the floor (a sloped floor's hit) still means the cave;
+     * one over the roof means the roof's top, as without at_height. */
+    cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .x = 3.5, .z = 3.5, .radius = 1, .volume = 1,
+                                                          .at_height = true, .y = TERRAIN_FLOOR_Y + 9.7 }, &q));
+    cr_expect_eq(q, 32);
+    expect_cave_column(c, 3, 3, 6.0f, 32);
+    cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .x = 17.5, .z = 17.5, .radius = 1, .volume = 1,
+                                                          .at_height = true, .y = TERRAIN_FLOOR_Y + 21.2 }, &q));
+    cr_expect_eq(q, 32);
+    cr_expect_float_eq(terrain_columns_top(c, 17, 17), TERRAIN_FLOOR_Y + 22.0f, 0.0f);
+    cr_expect_eq(column_quanta(c, 17, 17, TERRAIN_SAND), 32);
+    expect_cave_column(c, 16, 17, 6.0f, 0);
+    terrain_columns_destroy(c);
+}
+
+Test(terrain_brush, deposit_at_a_height_stops_at_the_roof) {
+    /* A cave of ½ m (16 quanta) under five columns (flat brush of radius 1.2): 5 m³ asks for 32
+     * quanta a column, 16 fit; the region gains exactly the 80 reported. */
+    terrain_columns *c = region(0, 0, 11, 11);
+    fill_cave(c, 0.5f);
+    int64_t q;
+    cr_assert(terrain_deposit(c, &(terrain_deposit_desc){ .x = 5.5, .z = 5.5, .radius = 1.2f, .volume = 5,
+                                                          .falloff = TERRAIN_FALLOFF_FLAT, .at_height = true,
+                                                          .y = TERRAIN_FLOOR_Y + 10.25 }, &q));
+    cr_expect_eq(q, 80);
+    cr_expect_eq(terrain_columns_mass(c, TERRAIN_SAND), 80);
+    const int at[5][2] = { { 5, 5 }, { 4, 5 }, { 6, 5 }, { 5, 4 }, { 5, 6 } };
+    for (int n = 0; n < 5; n++) expect_cave_column(c, at[n][0], at[n][1], 0.5f, 16);
+    terrain_columns_destroy(c);
+}
+
+Test(terrain_brush, deposit_at_a_height_on_open_ground_is_the_deposit_on_top) {
+    /* Open ground: the only space is the top, so at_height changes nothing (same bytes). Water on
+     * the ground too: it is displaced alike. */
+    terrain_columns *top = region(0, 0, 16, 16), *at = region(0, 0, 16, 16);
+    terrain_layer wet[2] = { { TERRAIN_BEDROCK, 10.0f }, { TERRAIN_WATER, 0.5f } };
+    for (int k = 0; k < 16; k++)
+        for (int i = 0; i < 16; i++) {
+            cr_assert(terrain_columns_set(top, i, k, wet, i < 8 ? 2 : 1));
+            cr_assert(terrain_columns_set(at, i, k, wet, i < 8 ? 2 : 1));
+        }
+    int64_t q_top, q_at;
+    cr_assert(terrain_deposit(top, &(terrain_deposit_desc){ .x = 8, .z = 8, .radius = 5, .volume = 30 }, &q_top));
+    cr_assert(terrain_deposit(at, &(terrain_deposit_desc){ .x = 8, .z = 8, .radius = 5, .volume = 30, .at_height = true,
+                                                           .y = TERRAIN_FLOOR_Y + 10.0 }, &q_at));
+    cr_expect_eq(q_top, 960);
+    cr_expect_eq(q_at, 960);
+    cr_expect_eq(region_hash(top), region_hash(at));
+    cr_assert(terrain_erode(top, &(terrain_erode_desc){ .x = 4, .z = 4, .radius = 3, .depth = 1, .rocks_ratio = 0.5f }, NULL));
+    cr_assert(terrain_erode(at, &(terrain_erode_desc){ .x = 4, .z = 4, .radius = 3, .depth = 1, .rocks_ratio = 0.5f,
+                                                       .at_height = true, .y = TERRAIN_FLOOR_Y + 10.0 }, NULL));
+    cr_expect_eq(region_hash(top), region_hash(at));
+    terrain_columns_destroy(top);
+    terrain_columns_destroy(at);
+}
+
+Test(terrain_brush, surface_erosion_at_a_height_wears_the_cave_floor_not_the_roof) {
+    /* Flat brush of radius 1.2 (five columns), 2 m = 64 quanta, ρ = 0.25 → 16 rocks, 48 sand on
+     * the cave floor; the roof keeps its 5 m and the cave its 6 m of air above the rubble (the
+     * floor went down by as much as the rubble is thick). Without at_height the roof wears. */
+    terrain_columns *c = region(0, 0, 11, 11), *roof = region(0, 0, 11, 11);
+    fill_cave(c, 6.0f);
+    fill_cave(roof, 6.0f);
+    int64_t q;
+    terrain_erode_desc desc = { .x = 5.5, .z = 5.5, .radius = 1.2f, .depth = 2, .rocks_ratio = 0.25f,
+                                .falloff = TERRAIN_FALLOFF_FLAT, .at_height = true, .y = TERRAIN_FLOOR_Y + 10.0 };
+    cr_assert(terrain_erode(c, &desc, &q));
+    cr_expect_eq(q, 5 * 64);
+    terrain_layer want[5] = { { TERRAIN_BEDROCK, 8.0f }, { TERRAIN_SAND, 1.5f }, { TERRAIN_ROCKS, 0.5f },
+                              { TERRAIN_AIR, 6.0f }, { TERRAIN_BEDROCK, 5.0f } };
+    terrain_layer layers[8];
+    cr_assert_eq(terrain_columns_get(c, 5, 4, layers, 8), 5);
+    for (int l = 0; l < 5; l++) {
+        cr_expect_eq(layers[l].material, want[l].material, "layer %d", l);
+        cr_expect_float_eq(layers[l].thickness, want[l].thickness, 1e-6, "layer %d", l);
+    }
+    expect_cave_column(c, 4, 4, 6.0f, 0);
+    desc.at_height = false;
+    cr_assert(terrain_erode(roof, &desc, &q));
+    cr_expect_eq(column_quanta(roof, 5, 4, TERRAIN_BEDROCK), (10 + 5 - 2) * QPM);
+    expect_cave_column(roof, 4, 4, 6.0f, 0);
+    cr_assert_eq(terrain_columns_get(roof, 5, 4, layers, 8), 5);
+    cr_expect_float_eq(layers[2].thickness, 3.0f, 1e-6, "the roof wore down to 3 m");
+    terrain_columns_destroy(c);
+    terrain_columns_destroy(roof);
+}
+
 /* ---- bad input ------------------------------------------------------------------------------ */
 
 Test(terrain_brush, bad_parameters_are_refused_not_crashed_on) {
@@ -213,7 +361,7 @@ Test(terrain_brush, bad_parameters_are_refused_not_crashed_on) {
         { .radius = -1, .volume = 1 },   { .radius = NAN, .volume = 1 },  { .radius = 2, .volume = -1 },
         { .radius = 2, .volume = NAN },  { .x = NAN, .radius = 2 },       { .material = TERRAIN_BRUSH_ROCKS + 1, .radius = 2 },
         { .material = TERRAIN_BRUSH_BEDROCK, .radius = 2 }, { .material = 99, .radius = 2 }, { .radius = 2, .falloff = 5 },
-        { .radius = 2, .volume = 1e12 },
+        { .radius = 2, .volume = 1e12 },    { .radius = 2, .volume = 1, .at_height = true, .y = NAN },
     };
     for (size_t n = 0; n < sizeof bad_deposits / sizeof *bad_deposits; n++)
         cr_expect_not(terrain_deposit(c, &bad_deposits[n], NULL), "deposit %zu", n);
@@ -224,6 +372,7 @@ Test(terrain_brush, bad_parameters_are_refused_not_crashed_on) {
     const terrain_erode_desc bad_erosions[] = {
         { .radius = -1 }, { .radius = 2, .depth = -1 }, { .radius = 2, .rocks_ratio = 1.5f }, { .radius = 2, .rocks_ratio = NAN },
         { .radius = 2, .mode = 9 }, { .radius = 2, .mode = TERRAIN_ERODE_COLLAPSE, .y = NAN }, { .z = INFINITY, .radius = 2 },
+        { .radius = 2, .depth = 1, .at_height = true, .y = INFINITY },
     };
     for (size_t n = 0; n < sizeof bad_erosions / sizeof *bad_erosions; n++)
         cr_expect_not(terrain_erode(c, &bad_erosions[n], NULL), "erosion %zu", n);

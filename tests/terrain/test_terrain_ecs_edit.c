@@ -163,3 +163,32 @@ Test(terrain_ecs_edit, budgeted_in_iterations_a_slide_is_the_same_bytes_every_fr
         if (f) cr_expect_neq(hashes[0][f], hashes[0][f - 1], "frame %d moved sand", f);
     }
 }
+
+/* A profiled sweep queued through the ECS carves what the same sweep applied at once carves: the
+ * queue keeps its own copy of the profile (the caller's array is overwritten before the frame),
+ * and the region it loads holds the profile's reach (a scale of 2.5 here: up to 6.25 m, with
+ * the cubic's overshoot, from an axis 4.5 m from a chunk border; the round sweep's reach, 2 m
+ * and a margin of 2, would load chunk (0, 0) alone, and the sweep would be refused). */
+Test(terrain_ecs_edit, a_profiled_sweep_is_copied_into_the_queue_and_reaches_as_far_as_its_profile) {
+    double line[2][3] = { { 4, -6, 4.5 }, { 28, -6, 4.5 } };
+    float profile[4] = { 2.5f, 1.0f, 1.0f, 1.0f };
+    const terrain_edit sweep = { .tool = TERRAIN_EDIT_SWEEP,
+                                 .sweep = { .points = (const double (*)[3])line, .point_count = 2, .radius = 2,
+                                            .profile = profile, .profile_count = 4 } };
+    running direct = running_open();
+    cr_assert_geq(terrain_world_edit(direct.world, &sweep, NULL, 0), 1);
+    running queued = running_open();
+    cr_assert(terrain_ecs_edit(queued.te, &sweep));
+    for (int j = 0; j < 4; j++) profile[j] = 0.1f;          /* the caller's array, reused */
+    ecs_progress(queued.ecs, DT);
+    cr_expect_eq(terrain_ecs_edit_stats(queued.te).edits_applied, 1);
+    for (int c = -1; c <= 0; c++) {
+        terrain_chunk_coord coord = { 0, c };
+        cr_expect_eq(terrain_stacks_hash(terrain_world_stacks(queued.world, coord)),
+                     terrain_stacks_hash(terrain_world_stacks(direct.world, coord)), "chunk (0, %d)", c);
+    }
+    cr_expect_lt(chunk_quanta(terrain_world_stacks(direct.world, (terrain_chunk_coord){ 0, 0 }), TERRAIN_BEDROCK),
+                 32 * 32 * (int64_t)(-TERRAIN_FLOOR_Y * 32), "the sweep carved");
+    running_close(&direct);
+    running_close(&queued);
+}

@@ -553,6 +553,103 @@ Test(terrain_sculpt, a_swept_tunnel_through_a_hill_connects_its_ends_and_carves_
     terrain_world_destroy(world);
 }
 
+/* ---- profile curves and projection (000 §4.2) ---------------------------------------------- */
+
+/* Air quanta of column (i, k) (region indices) whose centres lie in [y0, y1). */
+static int air_quanta(const terrain_columns *c, int i, int k, double y0, double y1) {
+    int air = 0;
+    for (int64_t q = (int64_t)floor((y0 - TERRAIN_FLOOR_Y) * 32); q < (int64_t)ceil((y1 - TERRAIN_FLOOR_Y) * 32); q++) {
+        double y = TERRAIN_FLOOR_Y + ((double)q + 0.5) / 32;
+        if (y >= y0 && y < y1) air += region_material(c, i + 0.5, y, k + 0.5) == TERRAIN_AIR;
+    }
+    return air;
+}
+
+Test(terrain_sculpt, a_profile_shapes_the_cross_section_by_hand) {
+    /* Deep in rock (ground at 40, skeleton at y = 20 along x from 20 to 36 at z = 24.5): the field
+     * is flat, so θ = 0 is up, and along +x the frame's v = t × u is +z. Profile {0.5, 1, 0.5, 1}
+     * at θ = 0°, 90°, 180°, 270° with zero Catmull-Rom slopes at every point: ρ(θ) = 0.5 +
+     * 0.5·(3s² − 2s³), s = θ/90° from the top. Radius 2:
+     *   on the axis (k = 24): ρ = 0.5 up and down, air exactly where |dy| < 1: 64 quanta (a round
+     *   sweep: |dy| < 2, 128);
+     *   1 m to the side (k = 25): at dy = ±1.0, θ = 45°, ρ = 0.75, 1.414 < 1.5: air; at dy = ±1.1,
+     *   θ = 42.3°, ρ = 0.727, 1.487 > 1.455: rock (a round sweep: air to ±1.73);
+     *   2 m to the side (k = 26): ρ ≤ 1, |w| ≥ 2: untouched;
+     *   the prism's ends are flat: x = 19.5 and 36.5 untouched (a round sweep's caps reach them). */
+    hand_world hand = { .ground = 40.0 };
+    terrain_world *world = hand_world_create(&hand);
+    terrain_columns *c = load_region(world, 0, 0, 2, 2);
+    const double points[2][3] = { { 20.0, 20.0, 24.5 }, { 36.0, 20.0, 24.5 } };
+    const float profile[4] = { 0.5f, 1.0f, 0.5f, 1.0f };
+    cr_assert(terrain_sweep(c, &(terrain_sweep_desc){ .points = points, .point_count = 2, .radius = 2,
+                                                      .profile = profile, .profile_count = 4 }, NULL));
+    for (int i = 20; i <= 35; i++) {
+        cr_expect_eq(air_quanta(c, i, 24, 10, 30), 64, "column (%d, 24)", i);
+        cr_expect_eq(air_quanta(c, i, 24, 19, 21), 64, "column (%d, 24): the air centred on the skeleton", i);
+        cr_expect_eq(region_material(c, i + 0.5, 21.0, 25.5), TERRAIN_AIR, "(%d, 25) at +1.0", i);
+        cr_expect_eq(region_material(c, i + 0.5, 19.0, 25.5), TERRAIN_AIR, "(%d, 25) at -1.0", i);
+        cr_expect_eq(region_material(c, i + 0.5, 21.1, 25.5), TERRAIN_BEDROCK, "(%d, 25) at +1.1", i);
+        cr_expect_eq(region_material(c, i + 0.5, 18.9, 25.5), TERRAIN_BEDROCK, "(%d, 25) at -1.1", i);
+        cr_expect_eq(region_material(c, i + 0.5, 21.0, 23.5), TERRAIN_AIR, "(%d, 23): the other side alike", i);
+        cr_expect_eq(region_material(c, i + 0.5, 21.1, 23.5), TERRAIN_BEDROCK, "(%d, 23)", i);
+        cr_expect_eq(air_quanta(c, i, 26, 10, 30), 0, "column (%d, 26)", i);
+    }
+    cr_expect_eq(air_quanta(c, 19, 24, 10, 30), 0, "before the flat start");
+    cr_expect_eq(air_quanta(c, 36, 24, 10, 30), 0, "after the flat end");
+    terrain_columns_destroy(c);
+    terrain_world_destroy(world);
+}
+
+Test(terrain_sculpt, a_profile_turns_with_the_surface_normal) {
+    /* A wall: ground at 30 for x < 26, at 10 from x = 26 on. A crack along the wall's face (x =
+     * 26, y = 20, z from 20.5 to 28.5): ∇f there is horizontal (the tops are 10 m away), so θ = 0
+     * points out of the wall (+x), v = t × u = +y. Profile {0.3, 0.3, 1, 0.3}: deep at θ = 180°,
+     * into the wall; radius 4. At x = 22.5 (3.5 m in) and y = 20: θ = 180°, ρ = 1, 3.5 < 4: air;
+     * at x = 21.5 (4.5 m in): rock. At x = 25.5 (0.5 m in), y = 18: θ = 256°, s = 0.84 from 180°,
+     * ρ = 1 − 0.7·(3s² − 2s³) = 0.35, 2.06 > 1.38: rock — an upright profile (θ = 0 up) would
+     * reach 4 m down and carve it. */
+    hand_world hand = { .ground = 30.0, .step = true, .step_x = 26, .step_ground = 10.0 };
+    terrain_world *world = hand_world_create(&hand);
+    terrain_columns *c = load_region(world, 0, 0, 2, 2);
+    const double points[2][3] = { { 26.0, 20.0, 20.5 }, { 26.0, 20.0, 28.5 } };
+    const float profile[4] = { 0.3f, 0.3f, 1.0f, 0.3f };
+    cr_assert(terrain_sweep(c, &(terrain_sweep_desc){ .points = points, .point_count = 2, .radius = 4,
+                                                      .profile = profile, .profile_count = 4 }, NULL));
+    for (int k = 21; k <= 27; k++) {
+        cr_expect_eq(region_material(c, 22.5, 20.0, k + 0.5), TERRAIN_AIR, "3.5 m into the wall, row %d", k);
+        cr_expect_eq(region_material(c, 21.5, 20.0, k + 0.5), TERRAIN_BEDROCK, "4.5 m into the wall, row %d", k);
+        cr_expect_eq(region_material(c, 25.5, 20.0, k + 0.5), TERRAIN_AIR, "at the face, row %d", k);
+        cr_expect_eq(region_material(c, 25.5, 18.0, k + 0.5), TERRAIN_BEDROCK, "2 m below, row %d", k);
+        cr_expect_eq(region_material(c, 25.5, 22.0, k + 0.5), TERRAIN_BEDROCK, "2 m above, row %d", k);
+    }
+    terrain_columns_destroy(c);
+    terrain_world_destroy(world);
+}
+
+Test(terrain_sculpt, a_projected_graph_runs_on_the_ground) {
+    /* Ground at 40. A graph drawn 20 m up (y = 60) carves nothing; projected, it lies on the
+     * ground and a round sweep of radius 2 cuts a trench: on the axis (z = 20.5) the ground
+     * drops to 38; 1 m aside to the quanta whose centres lie within √3 m of y = 40: 55 of
+     * them ((j + ½)/32 < 1.732 for j ≤ 54), the top at 40 − 55/32. */
+    hand_world hand = { .ground = 40.0 };
+    terrain_world *world = hand_world_create(&hand);
+    terrain_columns *c = load_region(world, 0, 0, 2, 2);
+    const double points[2][3] = { { 8.5, 60.0, 20.5 }, { 40.5, 60.0, 20.5 } };
+    int64_t changed;
+    cr_assert(terrain_sweep(c, &(terrain_sweep_desc){ .points = points, .point_count = 2, .radius = 2 }, &changed));
+    cr_expect_eq(changed, 0, "in the air: nothing to carve");
+    cr_assert(terrain_sweep(c, &(terrain_sweep_desc){ .points = points, .point_count = 2, .radius = 2, .project = true },
+                            &changed));
+    cr_expect_gt(changed, 0);
+    for (int i = 10; i <= 38; i++) {
+        cr_expect_float_eq(terrain_columns_top(c, i, 20), 38.0f, 1e-6, "column (%d, 20)", i);
+        cr_expect_float_eq(terrain_columns_top(c, i, 21), 40.0f - 55.0f / 32.0f, 1e-6, "column (%d, 21)", i);
+        cr_expect_float_eq(terrain_columns_top(c, i, 23), 40.0f, 0.0f, "column (%d, 23)", i);
+    }
+    terrain_columns_destroy(c);
+    terrain_world_destroy(world);
+}
+
 Test(terrain_sculpt, a_branching_graph_carves_every_arm) {
     hand_world hand = { .ground = 40.0 };
     terrain_world *world = hand_world_create(&hand);
@@ -717,6 +814,7 @@ Test(terrain_sculpt, bad_parameters_are_refused_and_change_nothing) {
     const float bad_radii[2] = { 2.0f, 0.0f };
     const int out_of_range[1][2] = { { 0, 2 } }, negative[1][2] = { { -1, 1 } };
     const double near_border[2][3] = { { 2, -5, 20 }, { 40, -5, 40 } };
+    const float bad_profile[65] = { -1.0f, NAN, 5.0f, 1.0f, 1.0f };
     const terrain_sweep_desc bad_sweeps[] = {
         { .points = NULL, .point_count = 2, .radius = 2 },
         { .points = points, .point_count = 0, .radius = 2 },
@@ -731,6 +829,11 @@ Test(terrain_sculpt, bad_parameters_are_refused_and_change_nothing) {
         { .points = points, .point_count = 2, .radius = 2, .segments = negative, .segment_count = 1 },
         { .points = points, .point_count = 2, .radius = 2, .segments = negative, .segment_count = 0 },
         { .points = near_border, .point_count = 2, .radius = 2 },       /* 4 m of margin, 2 m to the edge */
+        { .points = points, .point_count = 2, .radius = 2, .profile = bad_profile, .profile_count = 2 },
+        { .points = points, .point_count = 2, .radius = 2, .profile = bad_profile, .profile_count = 65 },
+        { .points = points, .point_count = 2, .radius = 2, .profile = bad_profile, .profile_count = 3 },  /* −1 */
+        { .points = points, .point_count = 2, .radius = 2, .profile = bad_profile + 1, .profile_count = 3 }, /* NaN */
+        { .points = points, .point_count = 2, .radius = 2, .profile = bad_profile + 2, .profile_count = 3 }, /* 5 */
     };
     for (size_t n = 0; n < CORE_COUNTOF(bad_sweeps); n++) {
         int64_t changed = 7;

@@ -217,6 +217,111 @@ Test(terrain_stabilize, tall_sand_column_spreads_to_the_angle_of_repose) {
     terrain_columns_destroy(c);
 }
 
+/* ---- piles on cave floors (000 §3.4: "all material layers located between two stable bedrock
+ * layers") ----------------------------------------------------------------------------------- */
+
+/* The sand of column (i, k) between its 10 m floor and its roof, after checking that the column
+ * is still floor 10 m, a 6 m cave (sand and air) and a 5 m roof: the roof never moves. */
+static int64_t cave_sand(const terrain_columns *c, int i, int k) {
+    terrain_layer layers[8];
+    int n = terrain_columns_get(c, i, k, layers, 8);
+    cr_assert(n >= 3 && n <= 4, "column (%d, %d): %d layers", i, k, n);
+    cr_expect_eq(layers[0].material, TERRAIN_BEDROCK);
+    cr_expect_eq(layers[0].thickness, 10.0f, "column (%d, %d): the floor", i, k);
+    cr_expect_eq(layers[n - 1].material, TERRAIN_BEDROCK);
+    cr_expect_eq(layers[n - 1].thickness, 5.0f, "column (%d, %d): the roof", i, k);
+    int64_t sand = 0, cave = 0;
+    for (int l = 1; l < n - 1; l++) {
+        cr_expect(layers[l].material == TERRAIN_SAND || layers[l].material == TERRAIN_AIR);
+        if (layers[l].material == TERRAIN_SAND) sand += llroundf(layers[l].thickness * QPM);
+        cave += llroundf(layers[l].thickness * QPM);
+    }
+    cr_expect_eq(cave, 6 * QPM, "column (%d, %d): the roof starts 16 m up", i, k);
+    return sand;
+}
+
+Test(terrain_stabilize, a_sand_heap_on_a_cave_floor_spreads_under_the_roof) {
+    /* Every column: bedrock 10 m, a 6 m cave, a 5 m roof. One column's cave is full of sand to
+     * the roof (6 m = 192 quanta·column): it spreads over the floor until no slope of the sand
+     * surface exceeds d·tan 33° (checked from the layers read back, in metres), conserving the
+     * sand; the roof and the column tops stay. At rest it is a cone of V = π r³ tan α / 3:
+     * r ≈ 2.1 m, h ≈ 1.4 m — far below the 6 m it started at, and within a few metres. */
+    terrain_columns *c = region(0, 0, 25, 25);
+    terrain_layer cave[3] = { { TERRAIN_BEDROCK, 10.0f }, { TERRAIN_AIR, 6.0f }, { TERRAIN_BEDROCK, 5.0f } };
+    for (int k = 0; k < 25; k++)
+        for (int i = 0; i < 25; i++) cr_assert(terrain_columns_set(c, i, k, cave, 3));
+    terrain_layer heap[3] = { { TERRAIN_BEDROCK, 10.0f }, { TERRAIN_SAND, 6.0f }, { TERRAIN_BEDROCK, 5.0f } };
+    cr_assert(terrain_columns_set(c, 12, 12, heap, 3));
+    masses before = mass_of(c);
+    terrain_stabilize_result r = stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL);
+    cr_expect(r.converged);
+    cr_expect_gt(r.moved, 0);
+    expect_same_mass(before, mass_of(c));
+    double tan_s = tan(33.0 * PI / 180.0), worst = -1e9;
+    int64_t total = 0;
+    for (int k = 0; k < 25; k++)
+        for (int i = 0; i < 25; i++) {
+            int64_t h = cave_sand(c, i, k);
+            total += h;
+            cr_expect_float_eq(terrain_columns_top(c, i, k), TERRAIN_FLOOR_Y + 21.0f, 0.0f);
+            if ((i - 12) * (i - 12) + (k - 12) * (k - 12) > 6 * 6)
+                cr_expect_eq(h, 0, "sand at (%d, %d)", i, k);
+            if (!h) continue;
+            for (int dz = -1; dz <= 1; dz++)
+                for (int dx = -1; dx <= 1; dx++)
+                    if ((dx || dz) && i + dx >= 0 && k + dz >= 0 && i + dx < 25 && k + dz < 25) {
+                        double d = dx && dz ? sqrt(2.0) : 1.0;
+                        worst = fmax(worst, (double)(h - cave_sand(c, i + dx, k + dz)) / QPM - d * tan_s);
+                    }
+        }
+    cr_expect_eq(total, 192);
+    cr_expect_leq(worst, 0.0, "a slope exceeds tan 33 degrees by %g m", worst);
+    double peak = (double)cave_sand(c, 12, 12) / QPM;
+    cr_expect(peak > 0.8 && peak < 2.5, "peak %g m", peak);
+    cr_expect(stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL).moved == 0, "at rest");
+    /* Stopping after every iteration and going on gives the same bytes, as for top piles. */
+    terrain_columns *steps = region(0, 0, 25, 25);
+    for (int k = 0; k < 25; k++)
+        for (int i = 0; i < 25; i++) cr_assert(terrain_columns_set(steps, i, k, cave, 3));
+    cr_assert(terrain_columns_set(steps, 12, 12, heap, 3));
+    int calls = 0;
+    while (!stabilize(steps, &(terrain_stabilize_desc){ .max_iterations = 1 }, NULL).converged && calls < 1000) calls++;
+    cr_expect_gt(calls, 1);
+    cr_expect_eq(region_hash(steps), region_hash(c));
+    terrain_columns_destroy(steps);
+    terrain_columns_destroy(c);
+}
+
+Test(terrain_stabilize, a_cave_pile_flows_out_of_the_mouth_and_not_into_rock) {
+    /* A 1 × 5 strip: columns 0 … 2 a cave (floor 10 m, 2 m of air, 5 m roof), column 3 open
+     * ground at 10 m (the mouth), column 4 solid rock up to 20 m. 1 m of sand on column 2 (at the
+     * mouth) slides out: column 3's open pile takes its share; the rock at column 4 takes none.
+     * Rocks at rest by tan 42°, sand by tan 33° (one metre apart: 0.65 m). */
+    terrain_columns *c = region(0, 0, 5, 1);
+    terrain_layer cave[3] = { { TERRAIN_BEDROCK, 10.0f }, { TERRAIN_AIR, 2.0f }, { TERRAIN_BEDROCK, 5.0f } };
+    terrain_layer pile[4] = { { TERRAIN_BEDROCK, 10.0f }, { TERRAIN_SAND, 1.0f }, { TERRAIN_AIR, 1.0f },
+                              { TERRAIN_BEDROCK, 5.0f } };
+    terrain_layer open = { TERRAIN_BEDROCK, 10.0f }, rock = { TERRAIN_BEDROCK, 20.0f };
+    cr_assert(terrain_columns_set(c, 0, 0, cave, 3));
+    cr_assert(terrain_columns_set(c, 1, 0, cave, 3));
+    cr_assert(terrain_columns_set(c, 2, 0, pile, 4));
+    cr_assert(terrain_columns_set(c, 3, 0, &open, 1));
+    cr_assert(terrain_columns_set(c, 4, 0, &rock, 1));
+    masses before = mass_of(c);
+    cr_expect(stabilize(c, &(terrain_stabilize_desc){ 0 }, NULL).converged);
+    expect_same_mass(before, mass_of(c));
+    int64_t s[5];
+    for (int i = 0; i < 5; i++) s[i] = column_quanta(c, i, 0, TERRAIN_SAND);
+    cr_expect_eq(s[0] + s[1] + s[2] + s[3], 32);
+    cr_expect_eq(s[4], 0, "rock takes nothing");
+    cr_expect_gt(s[3], 0, "the open ground outside the mouth took some");
+    cr_expect_gt(s[1], 0, "the cave floor inside took some");
+    for (int i = 0; i < 3; i++)
+        cr_expect_leq((double)llabs(s[i] - s[i + 1]) / QPM, tan(33.0 * PI / 180.0) + 1e-9, "slope %d-%d", i, i + 1);
+    cr_expect_float_eq(terrain_columns_top(c, 4, 0), TERRAIN_FLOOR_Y + 20.0f, 0.0f);
+    terrain_columns_destroy(c);
+}
+
 Test(terrain_stabilize, tolerance_and_angles_bound_the_slopes_at_rest) {
     terrain_columns *c = region(0, 0, 31, 31);
     fill_flat(c, 50.0f);
@@ -356,6 +461,45 @@ Test(terrain_stabilize, two_by_two_chunk_regions_equal_one_big_region) {
     cr_expect_eq(rb.iterations, rs.iterations);
     cr_expect_eq(rb.moved, rs.moved);
     expect_regions_equal_big(big, chunks, 4);
+    for (int n = 0; n < 4; n++) terrain_columns_destroy(chunks[n]);
+    terrain_columns_destroy(big);
+}
+
+Test(terrain_stabilize, a_cave_heap_over_a_chunk_corner_spreads_as_in_one_big_region) {
+    /* A 6 m cave (floor 10 m, roof 5 m) under 64 × 64 columns, a 6 m sand heap on the four
+     * columns around the corner (32, 32) of four chunks, and a 5 m one on a chunk's side: split
+     * into chunk regions, the heaps spread into every region they touch, and the bytes, the
+     * iterations and the volume moved equal one big region's. */
+    terrain_columns *big = region(0, 0, 64, 64);
+    terrain_layer cave[3] = { { TERRAIN_BEDROCK, 10.0f }, { TERRAIN_AIR, 6.0f }, { TERRAIN_BEDROCK, 5.0f } };
+    terrain_layer heap[3] = { { TERRAIN_BEDROCK, 10.0f }, { TERRAIN_SAND, 6.0f }, { TERRAIN_BEDROCK, 5.0f } };
+    terrain_layer side[4] = { { TERRAIN_BEDROCK, 10.0f }, { TERRAIN_SAND, 5.0f }, { TERRAIN_AIR, 1.0f },
+                              { TERRAIN_BEDROCK, 5.0f } };
+    for (int k = 0; k < 64; k++)
+        for (int i = 0; i < 64; i++) cr_assert(terrain_columns_set(big, i, k, cave, 3));
+    for (int n = 0; n < 4; n++) cr_assert(terrain_columns_set(big, 31 + n % 2, 31 + n / 2, heap, 3));
+    cr_assert(terrain_columns_set(big, 12, 31, side, 4));
+    terrain_columns *chunks[4];
+    for (int n = 0; n < 4; n++) {
+        chunks[n] = chunk_region(big, (terrain_chunk_coord){ n % 2, n / 2 });
+        terrain_columns_touch(chunks[n], 0, 0, N, N);
+    }
+    terrain_columns_touch(big, 0, 0, 64, 64);
+    masses before = mass_of(big);
+    terrain_stabilize_result rb = stabilize(big, &(terrain_stabilize_desc){ 0 }, NULL);
+    terrain_stabilize_result rs;
+    cr_assert(terrain_stabilize_regions(chunks, 4, &(terrain_stabilize_desc){ 0 }, NULL, &rs));
+    cr_expect(rb.converged && rs.converged);
+    cr_expect_gt(rb.moved, 0);
+    cr_expect_eq(rb.iterations, rs.iterations);
+    cr_expect_eq(rb.moved, rs.moved);
+    expect_regions_equal_big(big, chunks, 4);
+    expect_same_mass(before, mass_of(big));
+    for (int n = 0; n < 4; n++) {
+        int64_t sand = terrain_columns_mass(chunks[n], TERRAIN_SAND);
+        cr_expect_gt(sand, 4 * 192 / 8, "region %d holds part of the heap (%lld)", n, (long long)sand);
+    }
+    cr_expect_gt(column_quanta(big, 12, 32, TERRAIN_SAND), 0, "the side heap crossed into chunk (0, 1)");
     for (int n = 0; n < 4; n++) terrain_columns_destroy(chunks[n]);
     terrain_columns_destroy(big);
 }

@@ -115,6 +115,53 @@ Test(terrain_threads, clipmap_heights_on_jobs_equal_a_lone_threads) {
     job_system_destroy(jobs);
 }
 
+/* A hand-made world (cheap to generate under ThreadSanitizer): bedrock rolling by ±3 m. */
+static void threads_rolling_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
+    (void)user;
+    terrain_stacks_builder_push(b, TERRAIN_BEDROCK, 10.0f + 3.0f * sinf((float)x / 7.0f) * cosf((float)z / 5.0f) - TERRAIN_FLOOR_Y);
+}
+
+static terrain_stacks *threads_rolling_chunk(void *user, terrain_chunk_coord coord) {
+    return terrain_stacks_from_columns(coord, threads_rolling_column, user);
+}
+
+/* With a world (002 §3.5): the jobs read the cached stacks under the world's lock, the first
+ * build and the pass over the texels of chunks generated since both fan out, and the heights
+ * are those of a lone thread on a world with the same chunks. */
+Test(terrain_threads, clipmap_heights_from_the_stacks_on_jobs_equal_a_lone_threads) {
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
+    terrain_world *worlds[2];
+    terrain_clipmap *clipmaps[2];
+    for (int w = 0; w < 2; w++) {
+        worlds[w] = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(5),
+                                                                .generate = threads_rolling_chunk });
+        for (int64_t cz = -2; cz < 2; cz++)
+            for (int64_t cx = -2; cx < 0; cx++) terrain_world_stacks(worlds[w], (terrain_chunk_coord){ cx, cz });
+        clipmaps[w] = terrain_clipmap_create(&(terrain_clipmap_desc){ .levels = 2, .cells = 96, .finest_spacing = 1.0f,
+            .generation = terrain_generation_defaults(5), .jobs = w ? jobs : NULL, .world = worlds[w] });
+    }
+    const double camera[3] = { 10, 20, -10 };
+    for (int round = 0; round < 2; round++) {
+        if (round == 1)   /* 8 more chunks: about 61 × 99 texels of level 0 to redo, over 4096 */
+            for (int w = 0; w < 2; w++)
+                for (int64_t cz = -2; cz < 2; cz++)
+                    for (int64_t cx = 0; cx < 2; cx++) terrain_world_stacks(worlds[w], (terrain_chunk_coord){ cx, cz });
+        cr_assert_eq(terrain_clipmap_update(clipmaps[1], camera), terrain_clipmap_update(clipmaps[0], camera));
+        for (int l = 0; l < 2; l++) {
+            terrain__clipmap_level_info info = terrain__clipmap_level(clipmaps[0], l);
+            for (int64_t k = info.first[1] - 1; k <= info.first[1] + info.cells + 1; k++)
+                for (int64_t i = info.first[0] - 1; i <= info.first[0] + info.cells + 1; i++)
+                    cr_assert(terrain__clipmap_texel(clipmaps[1], l, i, k) == terrain__clipmap_texel(clipmaps[0], l, i, k),
+                              "round %d level %d texel (%lld, %lld)", round, l, (long long)i, (long long)k);
+        }
+    }
+    for (int w = 0; w < 2; w++) {
+        terrain_clipmap_destroy(clipmaps[w]);
+        terrain_world_destroy(worlds[w]);
+    }
+    job_system_destroy(jobs);
+}
+
 /* Stabilization's passes split into row jobs (000 §3.4): rows of one colour are three apart, so
  * their 3 × 3 writes never meet. Under ThreadSanitizer this checks that claim; everywhere it
  * checks that four threads give the bytes of one. */

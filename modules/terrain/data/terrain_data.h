@@ -124,7 +124,8 @@ typedef struct terrain_generation_desc {
     float relief_wavelength;          /* metres of the lowest octave */
     float lacunarity;                 /* r */
     float hurst;                      /* H */
-    int relief_octaves;
+    int relief_octaves;               /* at most: the count stops where an octave would be shorter
+                                         than two samples (004 §4.1) */
     float warp_strength;
     /* 3D detail: ground/sky split by the height gradient, perturbed by fBm (002 §3.1.3). */
     float vertical_perturbation;      /* metres the fBm moves the ground up and down */

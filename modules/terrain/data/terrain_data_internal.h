@@ -76,6 +76,16 @@ float terrain__noise2_cell(uint32_t seed, uint32_t cell_x, float x, uint32_t cel
 void terrain__noise2_row(uint32_t seed, double x0, const float *dxs, float scale, double z, int count, float *out);
 /* The column batch: out[j] = terrain__noise3(seed, x, y0 + j·dy, z) for j < count. */
 void terrain__noise3_column(uint32_t seed, double x, float y0, float dy, double z, int count, float *out);
+/* The noise at (cell_x + x, y, cell_z + z): x, z float offsets from the cells (as for
+ * terrain__noise2_cell); terrain__noise3 is this at x's and z's split. */
+float terrain__noise3_cell(uint32_t seed, uint32_t cell_x, float x, float y, uint32_t cell_z, float z);
+/* Scattered points around an origin: out[j] = the noise at (x0 + dxs[j], ys[j], z0 + dzs[j]) for
+ * j < count, x0 and z0 split once (terrain__lattice_split), so that lane j equals
+ * terrain__noise3_cell(seed, x0's cell, x0's offset + dxs[j], ys[j], z0's cell, z0's offset +
+ * dzs[j]) bit for bit; with x0 = z0 = 0 that is terrain__noise3(seed, dxs[j], ys[j], dzs[j]). A
+ * portable block the compiler vectorises (the perturbed cave map's lookups). */
+void terrain__noise3_points(uint32_t seed, double x0, double z0, const float *dxs, const float *ys, const float *dzs,
+                            int count, float *out);
 /* The code path of the batches above and terrain__multifractal2_row. AUTO picks, on first use,
  * the widest the CPU has (AVX-512, else AVX2, else SSE2, x86-64's baseline; PORTABLE, plain C,
  * off x86-64). Every path gives the scalar functions' bits exactly, so forcing one (tests,
@@ -315,6 +325,17 @@ void terrain__world_amplify(terrain_world *world, terrain_field *field);
  * generated and replayed, before it is inserted (set before any thread uses the world). */
 void terrain__world_on_generated(terrain_world *world, void (*fn)(void *user, terrain_chunk_coord coord),
                                   void *user);
+
+/* The far terrain's view of the cache (render/terrain_clipmap.c draws the stacks' surface
+ * wherever chunks are cached, 002 §3.5). terrain__world_cached: the chunk's stacks if it is
+ * cached now, else NULL; never generates, and does not count as a use (the LRU order stays).
+ * The pointer lasts as terrain_world_stacks's do (until the next trim). While watched
+ * (one watcher per world: the clipmap made with it), every chunk inserted, committed with a
+ * change or evicted is queued once per event; take_surface_changes hands them over in order
+ * (at most `capacity`, the rest stay). Turning the watch on or off empties the queue. */
+const terrain_stacks *terrain__world_cached(terrain_world *world, terrain_chunk_coord coord);
+void terrain__world_watch_surface(terrain_world *world, bool on);
+int terrain__world_take_surface_changes(terrain_world *world, terrain_chunk_coord *out, int capacity);
 
 /* ==== end of the edits-in-the-world section (edit/terrain_edit_internal.h has the rest) ==== */
 

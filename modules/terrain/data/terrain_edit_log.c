@@ -99,8 +99,10 @@ _Static_assert(sizeof(terrain_generation_desc) == 112,
 
 /* Bumped whenever terrain_generate_chunk's output changes for the same parameters, so that edit
  * logs of the old generator are refused instead of replayed over different ground. */
-#define EDIT_GENERATOR_REVISION 4u          /* 2: lakes; 3: rock layers; 4: noise positions as lattice cell
-                                               and offset (terrain_generate.c, terrain_noise.c) */
+#define EDIT_GENERATOR_REVISION 5u          /* 2: lakes; 3: rock layers; 4: perturbed caves, no islands,
+                                               octaves from the wavelength (terrain_generate.c);
+                                               5: noise positions as lattice cell and offset
+                                               (terrain_generate.c, terrain_noise.c) */
 
 static uint64_t key_float(uint64_t h, float value) {
     uint32_t bits;

@@ -26,6 +26,11 @@
  * column rather than once per point and corner, read back with lane permutes (the tables in
  * terrain_noise_lanes.h). The portable blocks are the earlier form: fixed NOISE_BLOCK loops
  * with selects instead of branches, which GCC's -O2 vectorises with SSE2 on its own.
+ *
+ * The scattered-point batch (terrain__noise3_points: the perturbed cave map's lookups, each point
+ * in a cell of its own, so nothing is hoisted) is such a block, compiled twice: as is, and with
+ * target("avx2") for 8 lanes where the dispatch picked AVX2 or AVX-512. The same C either way,
+ * no FMA, so the bits are the scalar terrain__noise3_cell's (test_terrain_generate_shape.c checks).
  */
 #include "terrain/data/terrain_data_internal.h"
 
@@ -649,5 +654,78 @@ void terrain__multifractal2_row(const terrain__multifractal *mf, double x0, cons
     case TERRAIN__NOISE_AVX512: multifractal2_row_avx512(octaves, octave_count, total, dxs, count, out); return;
 #endif
     default: multifractal2_row_portable(octaves, octave_count, total, dxs, count, out); return;
+    }
+}
+
+/* ---- scattered points: the perturbed cave map (002 §3.1.3.2, Fig. 11) ---------------------- */
+
+/* NOISE_BLOCK points, each with its own cell: the loop has a constant trip count and no branch
+ * (cell_xz and noise3_in_column are selects and arithmetic), so -O2 vectorises it; every lane is
+ * terrain__noise3's scalar code, so the bits are the same on any CPU. */
+/* The point (cell_x + x, y, cell_z + z), x and z float offsets from the cells: cell_xz's body with
+ * the floors of the offsets added to the cells, spelt out (a call would stop the vectoriser). */
+static inline __attribute__((always_inline)) float noise3_at_cell(uint32_t seed, uint32_t cell_x, float x, float y,
+                                                                  uint32_t cell_z, float z) {
+    int xi = floor_to_int(x), zi = floor_to_int(z);
+    uint32_t cx = cell_x + (uint32_t)xi, cz = cell_z + (uint32_t)zi;
+    uint32_t hx0 = hash_x(seed, cx), hx1 = hash_x(seed, cx + 1u);
+    column_cell c;
+    c.h00 = hash_xz(hx0, cz);
+    c.h10 = hash_xz(hx1, cz);
+    c.h01 = hash_xz(hx0, cz + 1u);
+    c.h11 = hash_xz(hx1, cz + 1u);
+    c.fx = x - (float)xi;
+    c.fz = z - (float)zi;
+    c.u = fade(c.fx);
+    c.w = fade(c.fz);
+    return noise3_in_column(&c, y);
+}
+
+float terrain__noise3_cell(uint32_t seed, uint32_t cell_x, float x, float y, uint32_t cell_z, float z) {
+    return noise3_at_cell(seed, cell_x, x, y, cell_z, z);
+}
+
+static inline __attribute__((always_inline)) void noise3_points_body(uint32_t seed, noise2_origin o,
+                                                                    const float *restrict dxs,
+                                                                    const float *restrict ys,
+                                                                    const float *restrict dzs, float *restrict out) {
+    for (int j = 0; j < NOISE_BLOCK; j++)
+        out[j] = noise3_at_cell(seed, o.cell_x, o.offset_x + dxs[j], ys[j], o.cell_z, o.offset_z + dzs[j]);
+}
+
+static void noise3_points_block(uint32_t seed, noise2_origin o, const float *restrict dxs, const float *restrict ys,
+                                const float *restrict dzs, float *restrict out) {
+    noise3_points_body(seed, o, dxs, ys, dzs, out);
+}
+
+#if defined(__x86_64__)
+/* The same body with AVX2's 8 lanes (no FMA: "fma" is not a target, so the bits are the same). */
+__attribute__((target("avx2"))) static void noise3_points_block_avx2(uint32_t seed, noise2_origin o,
+                                                                     const float *restrict dxs,
+                                                                     const float *restrict ys,
+                                                                     const float *restrict dzs, float *restrict out) {
+    noise3_points_body(seed, o, dxs, ys, dzs, out);
+}
+#endif
+
+void terrain__noise3_points(uint32_t seed, double x0, double z0, const float *dxs, const float *ys, const float *dzs,
+                            int count, float *out) {
+    void (*block)(uint32_t, noise2_origin, const float *restrict, const float *restrict, const float *restrict,
+                  float *restrict) = noise3_points_block;
+#if defined(__x86_64__)
+    terrain__noise_path path = noise_current_path();
+    if (path == TERRAIN__NOISE_AVX2 || path == TERRAIN__NOISE_AVX512) block = noise3_points_block_avx2;
+#endif
+    noise2_origin o = noise2_origin_make(x0, z0);
+    int j = 0;
+    for (; j + NOISE_BLOCK <= count; j += NOISE_BLOCK) block(seed, o, dxs + j, ys + j, dzs + j, out + j);
+    if (j < count) {
+        float x[NOISE_BLOCK], y[NOISE_BLOCK], z[NOISE_BLOCK], tail[NOISE_BLOCK];
+        for (int t = 0; t < NOISE_BLOCK; t++) {
+            int from = j + t < count ? j + t : j;
+            x[t] = dxs[from], y[t] = ys[from], z[t] = dzs[from];
+        }
+        block(seed, o, x, y, z, tail);
+        for (int t = 0; j + t < count; t++) out[j + t] = tail[t];
     }
 }

@@ -65,6 +65,11 @@ struct terrain_world {
     size_t bucket_count;                  /* a power of two */
     size_t count, bytes;
     world_entry *lru_head, *lru_tail;
+    /* The far terrain's watch (terrain__world_watch_surface): chunks inserted, committed or
+     * evicted since it last took them, while watched. */
+    bool surface_watched;
+    terrain_chunk_coord *surface_changes;
+    size_t surface_change_count, surface_change_capacity;
     /* Readers that span trims (background jobs): how many began in each epoch, and the stacks
      * trimmed while any of them may still hold a pointer. */
     uint64_t epoch;                       /* trims so far */
@@ -103,6 +108,7 @@ void terrain_world_destroy(terrain_world *world) {
     for (size_t i = 0; i < world->graveyard_count; i++) terrain_stacks_destroy(world->graveyard[i].stacks);
     core_free(world->graveyard, world->graveyard_capacity * sizeof *world->graveyard);
     core_free(world->changes, world->change_capacity * sizeof *world->changes);
+    core_free(world->surface_changes, world->surface_change_capacity * sizeof *world->surface_changes);
     core_free(world->stamps, world->stamp_capacity * sizeof *world->stamps);
     for (world_entry *e = world->lru_head, *next; e; e = next) {
         next = e->lru_next;
@@ -186,6 +192,14 @@ static void keep_stamp(terrain_world *w, terrain_chunk_coord coord, uint32_t ver
     w->stamps[i].version = version;
 }
 
+/* Lock held: a chunk whose stacks came, changed or went, for the far terrain's watch. */
+static void note_surface(terrain_world *w, terrain_chunk_coord coord) {
+    if (!w->surface_watched) return;
+    w->surface_changes = core_grow(w->surface_changes, &w->surface_change_capacity, w->surface_change_count + 1,
+                                   sizeof *w->surface_changes);
+    w->surface_changes[w->surface_change_count++] = coord;
+}
+
 /* Inserts a freshly generated chunk unless another thread got there first; returns the entry
  * that is in the map (ours or theirs; a losing copy is freed), or NULL when the chunk was
  * committed after `started` (the commit count when our generation began): our copy may lack
@@ -204,6 +218,7 @@ static world_entry *insert_or_get(terrain_world *w, terrain_chunk_coord coord, t
     e->version = version;
     *slot = e;
     lru_push_front(w, e);
+    note_surface(w, coord);
     w->bytes += terrain_stacks_bytes(stacks);
     if (++w->count > w->bucket_count) grow_buckets(w);
     return e;
@@ -298,6 +313,7 @@ static void evict(terrain_world *w, world_entry *e) {
     lru_unlink(w, e);
     w->bytes -= terrain_stacks_bytes(e->stacks);
     keep_stamp(w, e->coord, e->version);
+    note_surface(w, e->coord);
     /* Eviction runs in a trim, where no frame reader is left: only spanning readers matter. */
     if (w->reader_epochs > 0) bury(w, e->stacks);
     else terrain_stacks_destroy(e->stacks);
@@ -462,6 +478,7 @@ void terrain_world_commit(terrain_world *world, terrain_chunk_coord coord, terra
     e->version = ++world->commits;
     bury(world, before);       /* a job of this frame may still read it: freed at a later trim */
     if (differs) queue_change(world, &change);
+    if (differs) note_surface(world, coord);
     pthread_mutex_unlock(&world->lock);
 }
 
@@ -494,4 +511,35 @@ void terrain__world_on_generated(terrain_world *world, void (*fn)(void *user, te
 
 void terrain__world_amplify(terrain_world *world, terrain_field *field) {
     if (world->amplify) world->amplify(world->amplify_user, world, field);
+}
+
+/* ---- the far terrain's view of the cache ------------------------------------------------- */
+
+const terrain_stacks *terrain__world_cached(terrain_world *world, terrain_chunk_coord coord) {
+    pthread_mutex_lock(&world->lock);
+    world_entry *e = *find_slot(world, coord);
+    const terrain_stacks *stacks = e ? e->stacks : NULL;   /* not touched: looking keeps nothing */
+    pthread_mutex_unlock(&world->lock);
+    return stacks;
+}
+
+void terrain__world_watch_surface(terrain_world *world, bool on) {
+    pthread_mutex_lock(&world->lock);
+    world->surface_watched = on;
+    world->surface_change_count = 0;
+    pthread_mutex_unlock(&world->lock);
+}
+
+int terrain__world_take_surface_changes(terrain_world *world, terrain_chunk_coord *out, int capacity) {
+    pthread_mutex_lock(&world->lock);
+    size_t n = capacity > 0 ? (size_t)capacity : 0;
+    if (n > world->surface_change_count) n = world->surface_change_count;
+    if (n) {
+        memcpy(out, world->surface_changes, n * sizeof *out);
+        memmove(world->surface_changes, world->surface_changes + n,
+                (world->surface_change_count - n) * sizeof *world->surface_changes);
+    }
+    world->surface_change_count -= n;
+    pthread_mutex_unlock(&world->lock);
+    return (int)n;
 }

@@ -234,7 +234,13 @@ terrain_ecs_edit_stats_info terrain_ecs_edit_stats(const terrain_ecs *te);
  *         terrain_water_draw(water, te, renderer, &view);
  *     terrain_water_destroy(water);                    // main thread, before gfx_context_destroy
  *
- * Low (the default: no extra scene pass, for llvmpipe): the opaque frame's colour and depth are
+ * Low (the default): nothing of the frame is read back, since on a software rasteriser
+ * (llvmpipe) any read of the frame waits until all of it is drawn. Each surface is blended over
+ * the frame: its opacity comes from the water's thickness along the view ray, the depth under
+ * the surface taken from the far terrain's heights (terrain_renderer_set_clipmap), and the
+ * reflection is the sky's, so the bottom shows through shallow water undistorted. Under water,
+ * or with no far terrain to give the depth, it reads the frame as medium does.
+ * Medium: the opaque frame's colour and depth are
  * copied to textures, and each surface samples them. Refraction is the copy at a position
  * distorted by a dudv map, masked by depth: where the scene at the distorted position lies in
  * front of the surface (something above the water), the undistorted position is used, so
@@ -243,7 +249,7 @@ terrain_ecs_edit_stats_info terrain_ecs_edit_stats(const terrain_ecs *te);
  * High: the sea's reflection comes from a pass of its own (the camera mirrored about the sea,
  * what lies under it clipped, half resolution; pass "water.reflection"), and its refraction
  * from another (what lies above it clipped, half resolution; "water.refraction"); lakes keep
- * the low path. A Schlick Fresnel term blends the two; the thickness of water along the view
+ * the medium path. A Schlick Fresnel term blends the two; the thickness of water along the view
  * ray (from the scene's depth) darkens and greens deep water, keeps shallow water clear and
  * less reflective, and fades the surface out towards the shore (no hard line). Below the
  * surface (terrain_world_water_at at the camera) the surface is seen from underneath (total
@@ -259,11 +265,12 @@ terrain_ecs_edit_stats_info terrain_ecs_edit_stats(const terrain_ecs *te);
 typedef enum terrain_water_quality {
     TERRAIN_WATER_DEFAULT = 0,        /* low */
     TERRAIN_WATER_OFF,                /* nothing drawn */
-    TERRAIN_WATER_LOW,                /* the frame's copy refracted; the sky reflected */
+    TERRAIN_WATER_LOW,                /* blended over the frame, none of it read; the sky reflected */
+    TERRAIN_WATER_MEDIUM,             /* the frame's copy refracted; the sky reflected */
     TERRAIN_WATER_HIGH,               /* the sea's reflection and refraction passes */
 } terrain_water_quality;
 
-/* Parses "off", "low" or "high" (--water); false for anything else. */
+/* Parses "off", "low", "medium" or "high" (--water); false for anything else. */
 bool terrain_water_parse_quality(const char *text, terrain_water_quality *out);
 const char *terrain_water_quality_name(terrain_water_quality quality);
 
@@ -294,6 +301,8 @@ void terrain_water_draw(terrain_water *water, terrain_ecs *te, terrain_renderer 
 typedef struct terrain_water_stats_info {
     int planes_drawn;                 /* surfaces the last draw drew (the sea counts one) */
     bool under_water;                 /* the last draw's camera was below a surface */
+    bool frame_read;                  /* the last draw copied the frame (medium, high, or under
+                                         water): on llvmpipe, a wait for all of it */
     double cpu_ms;                    /* CPU ms of the last draw; on llvmpipe its GPU work too,
                                          and the frame's before it (the copy waits for it) */
 } terrain_water_stats_info;

@@ -64,6 +64,7 @@ static void edit_free_copy(terrain_edit *e) {
     core_free((void *)e->sweep.points, (size_t)e->sweep.point_count * sizeof *e->sweep.points);
     core_free((void *)e->sweep.radii, e->sweep.radii ? (size_t)e->sweep.point_count * sizeof *e->sweep.radii : 0);
     core_free((void *)e->sweep.segments, (size_t)e->sweep.segment_count * sizeof *e->sweep.segments);
+    core_free((void *)e->sweep.profile, e->sweep.profile ? (size_t)e->sweep.profile_count * sizeof *e->sweep.profile : 0);
 }
 
 /* The sweep's arrays are the caller's: the queue keeps copies. */
@@ -72,7 +73,8 @@ static bool edit_copy(terrain_edit *out, const terrain_edit *in) {
     if (in->tool != TERRAIN_EDIT_SWEEP) return true;
     const terrain_sweep_desc *s = &in->sweep;
     if (!s->points || s->point_count <= 0 || s->point_count > 4096 || s->segment_count < 0 ||
-        s->segment_count > 65536 || (s->segment_count > 0 && !s->segments)) return false;
+        s->segment_count > 65536 || (s->segment_count > 0 && !s->segments) ||
+        (s->profile && (s->profile_count < 3 || s->profile_count > 64))) return false;
     void *points = core_calloc((size_t)s->point_count, sizeof *s->points);
     memcpy(points, s->points, (size_t)s->point_count * sizeof *s->points);
     out->sweep.points = points;
@@ -87,6 +89,11 @@ static bool edit_copy(terrain_edit *out, const terrain_edit *in) {
         out->sweep.segments = segments;
     } else {
         out->sweep.segments = NULL;
+    }
+    if (s->profile) {
+        float *profile = core_calloc((size_t)s->profile_count, sizeof *profile);
+        memcpy(profile, s->profile, (size_t)s->profile_count * sizeof *profile);
+        out->sweep.profile = profile;
     }
     return true;
 }

@@ -23,7 +23,7 @@
 #define WATER_LAKE_ABOVE_SEA 0.05f        /* a WaterPlane this far above the sea is a lake */
 
 /* Texture units of the surface program. */
-enum { UNIT_SCENE_COLOR, UNIT_SCENE_DEPTH, UNIT_REFLECTION, UNIT_DUDV, UNIT_NORMALS };
+enum { UNIT_SCENE_COLOR, UNIT_SCENE_DEPTH, UNIT_REFLECTION, UNIT_DUDV, UNIT_NORMALS, UNIT_GROUND };
 
 struct terrain_water {
     terrain_water_desc desc;
@@ -48,8 +48,8 @@ struct terrain_water {
 };
 
 bool terrain_water_parse_quality(const char *text, terrain_water_quality *out) {
-    static const char *const names[] = { "off", "low", "high" };
-    for (int q = 0; q < 3; q++)
+    static const char *const names[] = { "off", "low", "medium", "high" };
+    for (int q = 0; q < 4; q++)
         if (text && strcmp(text, names[q]) == 0) {
             *out = (terrain_water_quality)(TERRAIN_WATER_OFF + q);
             return true;
@@ -60,6 +60,7 @@ bool terrain_water_parse_quality(const char *text, terrain_water_quality *out) {
 const char *terrain_water_quality_name(terrain_water_quality quality) {
     switch (quality) {
     case TERRAIN_WATER_OFF: return "off";
+    case TERRAIN_WATER_MEDIUM: return "medium";
     case TERRAIN_WATER_HIGH: return "high";
     default: return "low";
     }
@@ -292,6 +293,8 @@ typedef struct water_frame {
     float sun[3];
     float under_surface;                  /* the surface the camera is under; NAN: none */
     bool high;                            /* the sea samples the passes */
+    bool read_frame;                      /* the frame is copied (medium, high, under water);
+                                             else low blends over it (water.frag's u_blend) */
 } water_frame;
 
 /* A camera coordinate modulo the maps' common period, in double: small floats for the shader. */
@@ -323,6 +326,9 @@ static void water_surface_uniforms(terrain_water *w, const water_frame *f, terra
     gfx_uniform_int(gfx, p, "u_normals", UNIT_NORMALS);
     gfx_texture_bind(w->dudv, UNIT_DUDV);
     gfx_texture_bind(w->normals, UNIT_NORMALS);
+    gfx_uniform_int(gfx, p, "u_blend", f->read_frame ? 0 : 1);
+    gfx_uniform_float(gfx, p, "u_camera_y", (float)f->view->camera[1]);
+    terrain__renderer_bind_ground(renderer, p.id, f->view->camera, UNIT_GROUND);
 }
 
 /* The frame under a surface: the copies, or the sea's refraction pass (and its reflection). */
@@ -358,14 +364,14 @@ static void water_draw_quad(terrain_water *w, gfx_program p, const water_frame *
 /* The surfaces with program `p`: the surface program (shaded), or the probe's. */
 static void water_draw_sea(terrain_water *w, gfx_program p, const water_frame *f, float sea_level) {
     double reach = f->view->far_distance > 0 ? f->view->far_distance : 4000.0;
-    if (p.id == w->surface.id) water_sources(w, f->high);
+    if (p.id == w->surface.id && f->read_frame) water_sources(w, f->high);
     float extent[2] = { (float)(2 * reach), (float)(2 * reach) };
     water_draw_quad(w, p, f, f->view->camera[0] - reach, f->view->camera[2] - reach, sea_level, extent, 1, NULL);
 }
 
 static void water_draw_lakes(terrain_water *w, gfx_program p, const water_frame *f, float sea_level) {
     if (!w->planes) return;
-    if (p.id == w->surface.id) water_sources(w, false);
+    if (p.id == w->surface.id && f->read_frame) water_sources(w, false);
     terrain_frustum frustum = terrain_frustum_from_view(f->view);
     ecs_iter it = ecs_query_iter(w->desc.ecs, w->planes);
     while (ecs_query_next(&it)) {
@@ -465,13 +471,19 @@ void terrain_water_draw(terrain_water *w, terrain_ecs *te, terrain_renderer *ren
     f.high = shade && terrain_world_has_sea(w->desc.world) && w->desc.quality == TERRAIN_WATER_HIGH && !w->stats.under_water &&
              view->camera[1] > sea_level && water_pass_targets(w, width, height);
     if (f.high) water_sea_passes(w, te, renderer, view, sea_level);
+    /* Low reads nothing of the frame above water; under water (the fog needs the frame's depth)
+     * or without far terrain (no heights for the depth) it reads it as medium does. */
+    f.read_frame = shade && (w->desc.quality >= TERRAIN_WATER_MEDIUM || w->stats.under_water ||
+                             !terrain__renderer_has_ground(renderer));
+    w->stats.frame_read = f.read_frame;
 
     gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "water" });
-    if (shade) water_copy_frame(w, width, height);
+    if (f.read_frame) water_copy_frame(w, width, height);
     /* Blended over the frame; no depth written (nothing drawn later needs it, and the shader's
      * early depth test then skips the hidden sea at no cost); both faces (seen from below). */
     glEnable(GL_BLEND);
-    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    if (f.read_frame) glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    else glBlendFunc(GL_ONE, GL_SRC1_COLOR);      /* low: water.frag's two outputs */
     glDepthMask(GL_FALSE);
     glDisable(GL_CULL_FACE);
     water_draw_surfaces(w, &f, renderer, sea_level, shade);

@@ -54,6 +54,12 @@ static double brush_weight(const terrain_columns *c, double x, double z, double 
     return falloff == TERRAIN_FALLOFF_FLAT ? 1.0 : (1.0 - t) * (1.0 - t);   /* 000 §4.1's g(r) */
 }
 
+/* A world height as quanta above the floor, clamped to the columns' range. */
+static int64_t height_quanta(double y) {
+    double q = (y - (double)TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE;
+    return llround(fmin(fmax(q, -1.0), (double)TERRAIN__COLUMN_MAX_QUANTA));
+}
+
 static bool valid_falloff(terrain_falloff f) {
     return f == TERRAIN_FALLOFF_DEFAULT || f == TERRAIN_FALLOFF_SMOOTH || f == TERRAIN_FALLOFF_FLAT;
 }
@@ -78,9 +84,10 @@ static bool valid_deposit(const terrain_deposit_desc *d, terrain_material materi
                    terrain_material_name(material));
         return false;
     }
-    if (!isfinite(d->x) || !isfinite(d->z) || !(d->radius > 0.0f) || d->radius > MAX_RADIUS) {
-        core_log_error("terrain", "deposit: centre (%g, %g), radius %g m (finite, 0 < radius <= %g)", d->x, d->z,
-                   (double)d->radius, (double)MAX_RADIUS);
+    if (!isfinite(d->x) || !isfinite(d->z) || (d->at_height && !isfinite(d->y)) || !(d->radius > 0.0f) ||
+        d->radius > MAX_RADIUS) {
+        core_log_error("terrain", "deposit: centre (%g, %g), height %g, radius %g m (finite, 0 < radius <= %g)",
+                   d->x, d->z, d->y, (double)d->radius, (double)MAX_RADIUS);
         return false;
     }
     if (!(d->volume >= 0.0) || d->volume > MAX_VOLUME) {
@@ -150,6 +157,16 @@ bool terrain_deposit(terrain_columns *c, const terrain_deposit_desc *desc, int64
     qsort(shares, (size_t)count, sizeof *shares, by_remainder);
     for (int64_t n = 0; n < total - given; n++) shares[n].quanta++;
 
+    if (desc->at_height) {
+        /* Each column's share goes into its space nearest y (terrain__columns_insert). */
+        int64_t placed = 0, height = height_quanta(desc->y);
+        for (int n = 0; n < count; n++)
+            placed += terrain__columns_insert(c, shares[n].i, shares[n].k, height, (uint32_t)material,
+                                              (int32_t)CORE_MIN(shares[n].quanta, (int64_t)INT32_MAX));
+        if (quanta) *quanta = placed;
+        core_free(shares, capacity * sizeof *shares);
+        return true;
+    }
     bool fits = true;
     for (int n = 0; n < count && fits; n++)
         fits = c->ground[terrain__cell(c, shares[n].i, shares[n].k)] + shares[n].quanta < TERRAIN__COLUMN_MAX_QUANTA;
@@ -182,7 +199,7 @@ static bool valid_erode(const terrain_erode_desc *d) {
         return false;
     }
     bool collapse = d->mode == TERRAIN_ERODE_COLLAPSE;
-    if (!isfinite(d->x) || !isfinite(d->z) || (collapse && !isfinite(d->y)) || !(d->radius > 0.0f) ||
+    if (!isfinite(d->x) || !isfinite(d->z) || ((collapse || d->at_height) && !isfinite(d->y)) || !(d->radius > 0.0f) ||
         d->radius > MAX_RADIUS) {
         core_log_error("terrain", "erode: centre (%g, %g, %g), radius %g m (finite, 0 < radius <= %g)", d->x, d->y, d->z,
                    (double)d->radius, (double)MAX_RADIUS);
@@ -208,6 +225,8 @@ typedef struct eroder {
     const terrain_erode_desc *desc;
     terrain__clayer *scratch;
     size_t capacity;
+    terrain__gap *gaps;
+    size_t gap_capacity;
     int64_t eroded;
 } eroder;
 
@@ -233,29 +252,31 @@ static int push_granular(eroder *e, terrain__clayer *out, int n, int64_t bedrock
     return n;
 }
 
-/* Surface: the highest bedrock layer loses `depth` quanta from its top, turned into granular
- * material added to the pile right above it. */
-static void erode_surface(eroder *e, int i, int k, int64_t depth) {
+/* Surface: the stable layer under a space of the column — the open top space (the highest
+ * stable layer), or with a height the space nearest it (a cave's floor) — loses `depth` quanta
+ * from its top if it is bedrock, turned into granular material at the bottom of that space
+ * (sorted into it: sand, rocks, water, air). Layers above the space stay as they were. */
+static void erode_surface(eroder *e, int i, int k, int64_t depth, bool at_height, int64_t height) {
     terrain_columns *c = e->c;
     if (c->flags[(size_t)k * (size_t)c->width + (size_t)i] & TERRAIN__COLUMN_UNSORTED)
         terrain__columns_sort(c, i, k, &e->scratch, &e->capacity);
     int count = terrain__columns_layers(c, i, k, &e->scratch, &e->capacity);
-    int top = count - 1;
-    while (top >= 0 && !terrain__stable_material(e->scratch[top].material)) top--;
-    if (top < 0 || e->scratch[top].material != TERRAIN_BEDROCK || depth <= 0) return;
+    e->gaps = core_grow(e->gaps, &e->gap_capacity, (size_t)count + 1, sizeof *e->gaps);
+    int gap_count = terrain__column_gaps(e->scratch, count, e->gaps, count + 1);
+    const terrain__gap *g = &e->gaps[at_height ? terrain__gap_nearest(e->gaps, gap_count, height) : gap_count - 1];
+    int under = g->first - 1;
+    if (under < 0 || e->scratch[under].material != TERRAIN_BEDROCK || depth <= 0) return;
     terrain__clayer *out = output_room(e, count), *in = e->scratch;
-    int64_t eroded = CORE_MIN(depth, (int64_t)in[top].quanta);
+    int64_t eroded = CORE_MIN(depth, (int64_t)in[under].quanta);
     int n = 0;
-    for (int l = 0; l < top; l++) out[n++] = in[l];
-    n = push(out, n, TERRAIN_BEDROCK, in[top].quanta - eroded);
-    /* The pile above a sorted column is sand, rocks, water: add to it in that order. */
-    int64_t pile[3] = { 0, 0, 0 };
-    for (int l = top + 1; l < count; l++)
-        pile[in[l].material == TERRAIN_SAND ? 0 : in[l].material == TERRAIN_ROCKS ? 1 : 2] += in[l].quanta;
+    for (int l = 0; l < under; l++) out[n++] = in[l];
+    n = push(out, n, TERRAIN_BEDROCK, in[under].quanta - eroded);
     int64_t rocks = llround((double)eroded * (double)e->desc->rocks_ratio);
-    n = push(out, n, TERRAIN_SAND, pile[0] + eroded - rocks);
-    n = push(out, n, TERRAIN_ROCKS, pile[1] + rocks);
-    n = push(out, n, TERRAIN_WATER, pile[2]);
+    n = push(out, n, TERRAIN_SAND, g->amount[0] + eroded - rocks);
+    n = push(out, n, TERRAIN_ROCKS, g->amount[1] + rocks);
+    n = push(out, n, TERRAIN_WATER, g->amount[2]);
+    n = push(out, n, TERRAIN_AIR, g->amount[3]);
+    for (int l = g->end; l < count; l++) out[n++] = in[l];
     e->eroded += eroded;
     terrain__columns_store(c, i, k, out, n);
     terrain__columns_touch(c, i, k);
@@ -300,7 +321,8 @@ bool terrain_erode(terrain_columns *c, const terrain_erode_desc *desc, int64_t *
                 double w = brush_weight(c, desc->x, desc->z, r, desc->falloff, i, k);
                 if (w <= 0.0) continue;
                 if (desc->mode != TERRAIN_ERODE_COLLAPSE) {   /* surface, the default */
-                    erode_surface(&e, i, k, llround((double)desc->depth * w * TERRAIN__QUANTA_PER_METRE));
+                    erode_surface(&e, i, k, llround((double)desc->depth * w * TERRAIN__QUANTA_PER_METRE),
+                                  desc->at_height, desc->at_height ? height_quanta(desc->y) : 0);
                     continue;
                 }
                 /* The ball's chord along the column's axis. */
@@ -315,6 +337,7 @@ bool terrain_erode(terrain_columns *c, const terrain_erode_desc *desc, int64_t *
         }
     }
     core_free(e.scratch, e.capacity * sizeof *e.scratch);
+    core_free(e.gaps, e.gap_capacity * sizeof *e.gaps);
     if (quanta) *quanta = e.eroded;
     return true;
 }

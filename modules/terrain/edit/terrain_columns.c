@@ -212,6 +212,11 @@ void terrain__columns_store(terrain_columns *c, int i, int k, const terrain__cla
     bool unsorted = !lower_sorted(lower, stored);
     c->flags[n] = (uint8_t)((c->flags[n] & ~TERRAIN__COLUMN_UNSORTED) | (unsorted ? TERRAIN__COLUMN_UNSORTED : 0));
     c->unsorted = c->unsorted - was_unsorted + unsorted;
+    /* Sand or rocks among the lower layers lie under a stable layer: a pile on a cave floor. */
+    bool was_cave = c->flags[n] & TERRAIN__COLUMN_CAVE_PILE, cave = false;
+    for (int l = 0; l < stored && !cave; l++) cave = lower[l].material == TERRAIN_SAND || lower[l].material == TERRAIN_ROCKS;
+    c->flags[n] = (uint8_t)((c->flags[n] & ~TERRAIN__COLUMN_CAVE_PILE) | (cave ? TERRAIN__COLUMN_CAVE_PILE : 0));
+    c->cave_piles = c->cave_piles - was_cave + cave;
 
     size_t cell = terrain__cell(c, i, k);
     c->base[cell] = (int32_t)base;
@@ -290,6 +295,102 @@ void terrain__columns_sort(terrain_columns *c, int i, int k, terrain__clayer **s
     bool same = sorted == count && memcmp(in, out, (size_t)count * sizeof *in) == 0;
     terrain__columns_store(c, i, k, out, sorted);
     if (!same) terrain__columns_touch(c, i, k);
+}
+
+/* ---- spaces inside a column (terrain_edit_internal.h, terrain__gap) ------------------------ */
+
+int terrain__column_gaps(const terrain__clayer *layers, int count, terrain__gap *gaps, int capacity) {
+    int n = 0, first = 0;
+    int64_t bottom = 0, floor = 0;
+    terrain__gap g = { 0 };
+    for (int l = 0; l <= count; l++) {
+        bool stable = l < count && terrain__stable_material(layers[l].material);
+        if (l == count || stable) {
+            /* The space [floor, bottom) ends here: at a stable layer, or open at the top. */
+            g.first = first, g.end = l, g.floor = floor;
+            g.ceiling = l == count ? INT64_MAX : bottom;
+            if ((l == count || bottom > floor) && n < capacity) gaps[n++] = g;
+            g = (terrain__gap){ 0 };
+            if (l < count) {
+                bottom += layers[l].quanta;
+                floor = bottom;
+                first = l + 1;
+            }
+            continue;
+        }
+        g.amount[run_rank(layers[l].material)] += layers[l].quanta;
+        bottom += layers[l].quanta;
+    }
+    return n;
+}
+
+int terrain__gap_nearest(const terrain__gap *gaps, int count, int64_t height) {
+    int best = count - 1;
+    int64_t best_distance = INT64_MAX;
+    for (int g = 0; g < count; g++) {
+        int64_t d = height < gaps[g].floor ? gaps[g].floor - height
+                    : height >= gaps[g].ceiling ? height - gaps[g].ceiling + 1 : 0;
+        if (d <= best_distance) best = g, best_distance = d;
+    }
+    return best;
+}
+
+int terrain__gap_holding(const terrain__gap *gaps, int count, int64_t height) {
+    for (int g = 0; g < count; g++)
+        if (height >= gaps[g].floor && height < gaps[g].ceiling) return g;
+    return -1;
+}
+
+void terrain__columns_rewrite_gap(terrain_columns *c, int i, int k, const terrain__clayer *layers, int count,
+                                  const terrain__gap *gap, const int64_t amount[4], terrain__clayer **scratch,
+                                  size_t *capacity) {
+    /* 000 §3.4's order inside the space; air on top of the open space is implicit. */
+    const uint32_t materials[4] = { TERRAIN_SAND, TERRAIN_ROCKS, TERRAIN_WATER, TERRAIN_AIR };
+    size_t room = (size_t)count + 4;
+    *scratch = core_grow(*scratch, capacity, room, sizeof **scratch);
+    terrain__clayer *out = *scratch;
+    int n = 0;
+    for (int l = 0; l < gap->first; l++) n = push_layer(out, n, layers[l].material, layers[l].quanta);
+    for (int r = 0; r < 4; r++) n = push_layer(out, n, materials[r], (int32_t)amount[r]);
+    for (int l = gap->end; l < count; l++) n = push_layer(out, n, layers[l].material, layers[l].quanta);
+    terrain__columns_store(c, i, k, out, n);
+}
+
+int32_t terrain__columns_insert(terrain_columns *c, int i, int k, int64_t height, uint32_t material, int32_t quanta) {
+    if (quanta <= 0) return 0;
+    terrain__clayer *scratch = NULL, *rewritten = NULL;
+    size_t capacity = 0, rewritten_capacity = 0;
+    if (c->flags[flat(c, i, k)] & TERRAIN__COLUMN_UNSORTED) terrain__columns_sort(c, i, k, &scratch, &capacity);
+    int count = terrain__columns_layers(c, i, k, &scratch, &capacity);
+    /* Every space follows a stable layer but the first: at most count + 1 of them. */
+    terrain__gap *gaps = core_alloc(((size_t)count + 1) * sizeof *gaps);
+    int gap_count = terrain__column_gaps(scratch, count, gaps, count + 1);
+    const terrain__gap *g = &gaps[terrain__gap_nearest(gaps, gap_count, height)];
+    int64_t room;
+    if (terrain__gap_open(g)) {
+        int64_t top = 0;
+        for (int l = 0; l < count; l++) top += scratch[l].quanta;
+        /* Water on the pile is displaced (terrain_deposit): the column grows by what exceeds it. */
+        int64_t growth_room = TERRAIN__COLUMN_MAX_QUANTA - 1 - top;
+        room = CORE_MAX(growth_room + g->amount[2], (int64_t)0);
+    } else {
+        room = g->amount[2] + g->amount[3];
+    }
+    int32_t placed = (int32_t)CORE_MIN((int64_t)quanta, room);
+    if (placed > 0) {
+        int64_t amount[4] = { g->amount[0], g->amount[1], g->amount[2], g->amount[3] };
+        amount[material == TERRAIN_ROCKS ? 1 : 0] += placed;
+        /* The water goes first (it flows off, as on open ground), then the air. */
+        int64_t displaced = CORE_MIN(amount[2], (int64_t)placed);
+        amount[2] -= displaced;
+        if (!terrain__gap_open(g)) amount[3] -= placed - displaced;
+        terrain__columns_rewrite_gap(c, i, k, scratch, count, g, amount, &rewritten, &rewritten_capacity);
+        terrain__columns_touch(c, i, k);
+    }
+    core_free(gaps, ((size_t)count + 1) * sizeof *gaps);
+    core_free(scratch, capacity * sizeof *scratch);
+    core_free(rewritten, rewritten_capacity * sizeof *rewritten);
+    return placed;
 }
 
 /* ---- public: load, write back, read, set ------------------------------------------------- */

@@ -49,18 +49,23 @@
  *
  * Layer order (000 §3.4): between two stable layers (bedrock, or a custom material) granular
  * material is merged and sorted sand, rocks, water, air — what lies over a cave falls to its
- * floor. Only the pile above a column's highest stable layer flows; sand and rocks on a cave's
- * floor stay there (a cave roof holds what lies on it). Stabilization moves each material on its
- * own surface, bottom layer first (sand on the sand surface, rocks on the ground), so a stable
- * column has no neighbour lower than d·tan(angle) + tolerance below either surface, d the
- * distance between column centres (1 m, or √2 m diagonally).
+ * floor, and a cave roof holds what lies on it. Both the pile above a column's highest stable
+ * layer and the piles on cave floors flow (000 §3.4 stabilizes "all material layers located
+ * between two stable bedrock layers"). Stabilization moves each material on its own surface,
+ * bottom layer first (sand on the sand surface, rocks on the ground), so a stable column has no
+ * neighbour lower than d·tan(angle) + tolerance below either surface, d the distance between
+ * column centres (1 m, or √2 m diagonally). A cave pile's neighbour is the space of the next
+ * column at the height the material slides at (the same cave, or the open ground outside its
+ * mouth); rock at that height is a wall, and a space under a roof takes no more than its air, so
+ * a pile spreads on the cave's floor and never grows into the roof.
  *
  * Determinism: an iteration is nine passes, one per colour of a 3 × 3 pattern of columns (by
  * world column index); columns of one colour are three apart, so their moves never touch the
  * same column and a pass can move them all at once, in integer quanta. The result does not
  * depend on the thread count, on how a pass is split into jobs, or on how the columns are split
  * into regions (terrain_stabilize_regions), and a call that stops on its budget continues exactly
- * where it stopped. Only columns next to a change are looked at: edits (brushes,
+ * where it stopped. A pile on a cave floor crosses regions' borders alike; where no region
+ * continues it stops as at a wall and wakes nothing (TERRAIN_EDGE_WAKE reports top piles only). Only columns next to a change are looked at: edits (brushes,
  * terrain_columns_set, terrain_columns_touch) are changes, and so is every moved quantum.
  *
  * Threads: a region is plain data; one call at a time on it. Errors (a bad size, NaN, an unknown
@@ -183,19 +188,33 @@ typedef enum terrain_brush_material {
 /* Drops `volume` m³ of sand or rocks on the columns whose centres lie within `radius` of (x, z)
  * (world metres), distributed by the falloff and rounded so that the total is exact (to the
  * quantum·column): a brush that overhangs the region's border puts it all on the columns inside.
- * It lands on each column's pile (sorted: sand goes under rocks, both under water). */
+ * It lands on each column's pile (sorted: sand goes under rocks, both under water).
+ *
+ * At a height (at_height): in each column it lands in the space nearest y — the run between a
+ * stable layer and the next one above (a cave), or the open pile on top — on that space's floor,
+ * so that sand dropped in a cave lies on the cave's floor and the rock above is unchanged. The
+ * layers below and above that space stay as they were; within it the material goes under the
+ * water (which it displaces, as on open ground) and takes the air's place. A space under a roof
+ * takes no more than its air and water: a cave filled to its roof takes nothing more, and
+ * `quanta` then reports less than the volume (the region gains exactly what it reports). Where
+ * the nearest space is the open top, the deposit is the same as without at_height. */
 typedef struct terrain_deposit_desc {
     terrain_brush_material material;  /* TERRAIN_BRUSH_SAND or _ROCKS; 0 = sand */
     double x, z;
     float radius;                     /* metres, > 0 */
     double volume;                    /* m³, ≥ 0 */
     terrain_falloff falloff;
+    bool at_height;                   /* false (default): each column's top pile; true: the
+                                         space of each column nearest y */
+    double y;                         /* world metres; read only with at_height */
 } terrain_deposit_desc;
 
 typedef enum terrain_erode_mode {
     TERRAIN_ERODE_DEFAULT = 0,        /* surface */
     TERRAIN_ERODE_SURFACE,            /* each column under the disc whose highest stable layer is
-                                         bedrock loses depth·falloff from its top */
+                                         bedrock loses depth·falloff from its top (with at_height:
+                                         the stable layer under the column's space nearest y, a
+                                         cave's floor when y is on it) */
     TERRAIN_ERODE_COLLAPSE,           /* all bedrock inside the ball of radius R around (x, y, z)
                                          turns granular; with what lay on it, it falls to the next
                                          stable layer below (bedrock above stays: it is stable) */
@@ -206,11 +225,14 @@ typedef enum terrain_erode_mode {
  * rocks quanta added). The material stays in its column until stabilization moves it. */
 typedef struct terrain_erode_desc {
     terrain_erode_mode mode;
-    double x, y, z;                   /* centre, world metres (y: collapse only) */
+    double x, y, z;                   /* centre, world metres (y: collapse, or surface with
+                                         at_height) */
     float radius;                     /* metres, > 0 */
     float depth;                      /* surface: metres eroded at the centre, ≥ 0 */
     float rocks_ratio;                /* ρ ∈ [0, 1]; 0 = all sand */
     terrain_falloff falloff;          /* surface only */
+    bool at_height;                   /* surface only: false (default) the highest stable layer;
+                                         true the floor of the space nearest y */
 } terrain_erode_desc;
 
 /* Both return false (message logged, region unchanged) for bad parameters or a deposit that
@@ -282,6 +304,20 @@ typedef struct terrain_sweep_desc {
                                          polyline 0-1-2-… */
     int segment_count;                /* with segments: 1 … 16384; ignored without */
     float radius;                     /* when radii is NULL */
+    /* Profile curve (000 §4.2: "piecewise cubic spline curves [that] may define non convex ...
+     * cross sections"): the cross-section swept along each segment, as a radius scale ρ(θ) around
+     * the skeleton, a periodic Catmull-Rom cubic through profile[j] at θ_j = 2πj/profile_count,
+     * θ = 0 along the surface's normal (−∇f, into the air) taken perpendicular to the segment and
+     * θ = 90° along tangent × normal; where the field is flat (deep in rock) θ = 0 is up. A point
+     * p is carved when, with t its position along the segment (0 … 1, the ends cut flat: a
+     * prism, no round caps) and w its offset from the axis, |w| < r(t)·ρ(θ). NULL (the default):
+     * no profile, the round sweep above, exactly as before. A segment of no length stays a ball. */
+    const float *profile;             /* profile_count scales, each 0 … 4 */
+    int profile_count;                /* with profile: 3 … 64 */
+    /* 000 §4.2 step 1: project the graph onto the surface — every point is first moved down (or
+     * up) its column onto the ground, the top of the column's highest solid (cracks and ravines
+     * drawn over the terrain); false (the default): the graph is where it is (tunnels, caves). */
+    bool project;
 } terrain_sweep_desc;
 
 bool terrain_sweep(terrain_columns *columns, const terrain_sweep_desc *desc, int64_t *changed);

@@ -80,6 +80,7 @@ struct terrain_columns {
     terrain__clayer *pool;
     size_t pool_count, pool_capacity, pool_garbage;
     size_t unsorted;                  /* columns flagged TERRAIN__COLUMN_UNSORTED */
+    size_t cave_piles;                /* columns flagged TERRAIN__COLUMN_CAVE_PILE */
     /* Set by the stabilizer for the duration of a call. */
     struct terrain_columns *neighbour[8];      /* by direction (terrain__dir); NULL = edge */
     uint8_t edge_sides;                        /* bit d: no neighbour in direction d */
@@ -129,6 +130,49 @@ void terrain__columns_sort(terrain_columns *c, int i, int k, terrain__clayer **s
 /* Moves the region's clock forward to `clock`; changes the old clock's next nine passes would
  * still have looked at become changes at the new one. */
 void terrain__columns_set_clock(terrain_columns *c, uint32_t clock);
+
+/* ==== spaces inside a column: deposits and erosion at a height, flow on cave floors
+ * (terrain_columns.c, terrain_brush.c, terrain_stabilize.c) ================================== */
+
+/* Column flag: granular material (sand or rocks) lies in the lower layers, on a floor under a
+ * roof (000 §3.4's "material layers located between two stable bedrock layers"). */
+#define TERRAIN__COLUMN_CAVE_PILE 4u
+
+/* A space of a column: the run of layers between a stable layer (or the floor of the world) and
+ * the next stable layer above it (or the open sky), which 000 §3.4 keeps sorted sand, rocks,
+ * water, air. Heights in quanta above TERRAIN_FLOOR_Y. */
+typedef struct terrain__gap {
+    int first, end;                   /* its layers [first, end) of the column's list; first − 1
+                                         is the stable layer it lies on (none when first = 0) */
+    int64_t floor, ceiling;           /* ceiling INT64_MAX for the top space (open sky) */
+    int64_t amount[4];                /* sand, rocks, water, air (air 0 in the top space) */
+} terrain__gap;
+
+static inline bool terrain__gap_open(const terrain__gap *g) { return g->ceiling == INT64_MAX; }
+
+/* The spaces of a column's layer list (terrain__columns_layers), bottom-up, into `gaps` (at most
+ * `capacity`); returns how many there are. Spaces of no height (two stable layers touching) are
+ * left out; the open top space is always there, last. */
+/* How far a sweep reaches from its skeleton, in radii: 1, or more with a profile curve. */
+double terrain__sweep_reach_scale(const terrain_sweep_desc *desc);
+
+int terrain__column_gaps(const terrain__clayer *layers, int count, terrain__gap *gaps, int capacity);
+/* The space nearest the height (0 when the height lies inside it); ties go to the higher. */
+int terrain__gap_nearest(const terrain__gap *gaps, int count, int64_t height);
+/* The space that holds the height, or −1 where a stable layer does (or below the floor). */
+int terrain__gap_holding(const terrain__gap *gaps, int count, int64_t height);
+/* Rewrites the space's contents (amounts given, sorted sand, rocks, water, air) into column
+ * (i, k) whose current list is `layers`: layers below and above the space unchanged. Does not
+ * mark the column changed. `scratch` is grown for the new list. */
+void terrain__columns_rewrite_gap(terrain_columns *c, int i, int k, const terrain__clayer *layers, int count,
+                                  const terrain__gap *gap, const int64_t amount[4], terrain__clayer **scratch,
+                                  size_t *capacity);
+/* Drops `quanta` of sand or rocks into the space of column (i, k) nearest `height` (quanta above
+ * the floor): it lands on that space's floor, under its water (which it displaces first) and
+ * takes the place of its air; a space under a roof takes no more than its water and air, and
+ * the open top space no more than the column's height limit. Returns the quanta placed; marks
+ * the column changed when some were. */
+int32_t terrain__columns_insert(terrain_columns *c, int i, int k, int64_t height, uint32_t material, int32_t quanta);
 
 /* ==== end of the editing section ========================================================== */
 

@@ -41,7 +41,10 @@
  * convex hull of its two end balls, so along a column axis it is a single interval: its deepest
  * point comes from a golden-section search of the convex φ(y) = min_t |p(y) − s(t)| − r(t) (the
  * t in closed form), its ends from bisection to the quantum. A column's carved span is the union
- * over segments.
+ * over segments. With a profile curve (terrain_sweep_desc.profile) a segment is a prism whose
+ * cross-section is ρ(θ)·r(t) in a frame turned by the surface normal; that volume need not be
+ * convex, so its quanta are tested one by one. With `project` the points first go onto the ground
+ * of their columns (§4.2 step 1).
  *
  * Picking marches terrain_field_at along the ray in steps of at most half a metre and bisects the
  * first crossing into the solid.
@@ -58,6 +61,9 @@
 #define MAX_RADIUS 32.0f
 #define MAX_POINTS 4096
 #define MAX_SEGMENTS 16384
+#define MAX_PROFILE 64                  /* profile radii */
+#define MAX_PROFILE_SCALE 4.0f
+#define CATMULL_ROM_OVERSHOOT 1.25      /* max over s of the Catmull-Rom weights' absolute sum */
 #define SAMPLE_QUANTA 8                 /* sign samples a quarter metre apart */
 #define GRADIENT_STEP 0.5               /* metres, central differences of f */
 #define PROJECT_REACH 0.5               /* metres the target may move to reach the surface */
@@ -516,6 +522,9 @@ bool terrain_sculpt(terrain_columns *c, const terrain_sculpt_desc *desc, int64_t
 typedef struct sweep_segment {
     double a[3], b[3];
     double ra, rb;
+    /* With a profile: the unit tangent t, θ = 0 direction u (the surface normal ⊥ t) and
+     * v = t × u, and the length. */
+    double t[3], u[3], v[3], length;
 } sweep_segment;
 
 /* φ(p) = min over t ∈ [0, 1] of |p − s(t)| − r(t), s(t) = a + t(b − a), r(t) = ra + t(rb − ra):
@@ -629,6 +638,18 @@ static bool valid_sweep(const terrain_sweep_desc *d) {
             return false;
         }
     }
+    if (d->profile) {
+        if (d->profile_count < 3 || d->profile_count > MAX_PROFILE) {
+            core_log_error("terrain", "sweep: a profile of %d radii (3 ... %d)", d->profile_count, MAX_PROFILE);
+            return false;
+        }
+        for (int j = 0; j < d->profile_count; j++)
+            if (!(d->profile[j] >= 0.0f && d->profile[j] <= MAX_PROFILE_SCALE)) {
+                core_log_error("terrain", "sweep: profile radius %d is %g (0 ... %g)", j, (double)d->profile[j],
+                           (double)MAX_PROFILE_SCALE);
+                return false;
+            }
+    }
     if (d->segments) {
         if (d->segment_count < 1 || d->segment_count > MAX_SEGMENTS) {
             core_log_error("terrain", "sweep: %d segments (1 ... %d)", d->segment_count, MAX_SEGMENTS);
@@ -646,18 +667,125 @@ static bool valid_sweep(const terrain_sweep_desc *d) {
 }
 
 /* The sweep's segments (a lone point is a ball: a segment from it to itself). */
-static int sweep_segments(const terrain_sweep_desc *d, sweep_segment **out) {
+static int sweep_segments(const terrain_sweep_desc *d, const double (*points)[3], sweep_segment **out) {
     int count = d->segments ? d->segment_count : CORE_MAX(d->point_count - 1, 1);
-    sweep_segment *s = core_alloc((size_t)count * sizeof *s);
+    sweep_segment *s = core_calloc((size_t)count, sizeof *s);
     for (int n = 0; n < count; n++) {
         int a = d->segments ? d->segments[n][0] : CORE_MIN(n, d->point_count - 1);
         int b = d->segments ? d->segments[n][1] : CORE_MIN(n + 1, d->point_count - 1);
-        for (int e = 0; e < 3; e++) s[n].a[e] = d->points[a][e], s[n].b[e] = d->points[b][e];
+        for (int e = 0; e < 3; e++) s[n].a[e] = points[a][e], s[n].b[e] = points[b][e];
         s[n].ra = d->radii ? d->radii[a] : d->radius;
         s[n].rb = d->radii ? d->radii[b] : d->radius;
     }
     *out = s;
     return count;
+}
+
+/* ---- profile curves (000 §4.2) ----------------------------------------------------------------- */
+
+/* ρ(θ): the periodic Catmull-Rom cubic through profile[j] at θ_j = 2πj/count (piecewise cubic, C¹,
+ * through every given radius). */
+static double profile_at(const float *profile, int count, double theta) {
+    double x = theta / (2.0 * M_PI) * count;
+    x -= floor(x / count) * count;
+    int j = (int)floor(x);
+    double s = x - j;
+    double p0 = profile[(j + count - 1) % count], p1 = profile[j % count], p2 = profile[(j + 1) % count],
+           p3 = profile[(j + 2) % count];
+    return 0.5 * (2.0 * p1 + (p2 - p0) * s + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s * s +
+                  (3.0 * p1 - p0 - 3.0 * p2 + p3) * s * s * s);
+}
+
+static double dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/* The segment's frame: t along it, u the surface normal at its ends (averaged; up where the field
+ * is flat) made perpendicular to t, v = t × u. Our reading of "orienting them according to the
+ * local normal ∇f of the surface of the object and the tangent to the skeleton curve": one frame
+ * per segment, from the normals at both ends. False for a segment of no length (a ball). */
+static bool segment_frame(sweep_segment *s, const terrain__region_field *field) {
+    double d[3] = { s->b[0] - s->a[0], s->b[1] - s->a[1], s->b[2] - s->a[2] };
+    s->length = sqrt(dot3(d, d));
+    if (s->length < 1e-9) return false;
+    for (int a = 0; a < 3; a++) s->t[a] = d[a] / s->length;
+    double n[3] = { 0, 0, 0 }, end[3];
+    if (region_field_normal(field, s->a, end))
+        for (int a = 0; a < 3; a++) n[a] += end[a];
+    if (region_field_normal(field, s->b, end))
+        for (int a = 0; a < 3; a++) n[a] += end[a];
+    const double up[3] = { 0, 1, 0 }, across[3] = { 1, 0, 0 };
+    const double *candidates[3] = { n, up, across };
+    for (int c = 0; c < 3; c++) {
+        double along = dot3(candidates[c], s->t), u[3];
+        for (int a = 0; a < 3; a++) u[a] = candidates[c][a] - along * s->t[a];
+        double length = sqrt(dot3(u, u));
+        if (length < 1e-6) continue;
+        for (int a = 0; a < 3; a++) s->u[a] = u[a] / length;
+        break;
+    }
+    s->v[0] = s->t[1] * s->u[2] - s->t[2] * s->u[1];
+    s->v[1] = s->t[2] * s->u[0] - s->t[0] * s->u[2];
+    s->v[2] = s->t[0] * s->u[1] - s->t[1] * s->u[0];
+    return true;
+}
+
+/* Whether p lies inside the segment's profiled prism: 0 ≤ t ≤ 1 along it and |w| < r(t)·ρ(θ);
+ * `bound` ≥ every ρ rejects most points before the angle is taken. */
+static bool profile_inside(const sweep_segment *s, const float *profile, int count, double bound, const double p[3]) {
+    double w[3] = { p[0] - s->a[0], p[1] - s->a[1], p[2] - s->a[2] };
+    double along = dot3(w, s->t), t = along / s->length;
+    if (t < 0.0 || t > 1.0) return false;
+    double x = dot3(w, s->u), y = dot3(w, s->v), r = s->ra + t * (s->rb - s->ra);
+    if (x * x + y * y >= r * r * bound * bound) return false;
+    double limit = r * profile_at(profile, count, atan2(y, x));
+    return limit > 0.0 && x * x + y * y < limit * limit;
+}
+
+/* The carved runs of the column axis (x, z) for one profiled segment, as spans (each maximal run
+ * of quantum centres inside); appended to *spans. */
+/* A profile may reach beyond the radius (scales up to 4, and the cubic's overshoot). */
+double terrain__sweep_reach_scale(const terrain_sweep_desc *desc) {
+    if (!desc->profile) return 1.0;
+    double profile_max = 0.0;
+    for (int j = 0; j < desc->profile_count; j++) profile_max = fmax(profile_max, desc->profile[j]);
+    return fmax(profile_max * CATMULL_ROM_OVERSHOOT, 1.0);
+}
+
+static void profile_spans(const sweep_segment *s, const float *profile, int count, double reach, double x, double z,
+                          int64_t column, sweep_span **spans, size_t *span_count, size_t *span_capacity) {
+    double floor_y = TERRAIN_FLOOR_Y;
+    double y_lo = fmin(s->a[1], s->b[1]) - reach, y_hi = fmax(s->a[1], s->b[1]) + reach;
+    int64_t q0 = CORE_MAX((int64_t)floor((y_lo - floor_y) * QPM) - 1, (int64_t)0);
+    int64_t q1 = CORE_MIN((int64_t)ceil((y_hi - floor_y) * QPM) + 1, (int64_t)TERRAIN__COLUMN_MAX_QUANTA - 1);
+    double bound = 0.0;
+    for (int j = 0; j < count; j++) bound = fmax(bound, profile[j]);
+    bound *= CATMULL_ROM_OVERSHOOT;
+    int64_t run = -1;
+    for (int64_t q = q0; q <= q1; q++) {
+        double p[3] = { x, quantum_centre(q), z };
+        bool inside = q < q1 && profile_inside(s, profile, count, bound, p);
+        if (inside && run < 0) run = q;
+        if (!inside && run >= 0) {
+            *spans = core_grow(*spans, span_capacity, *span_count + 1, sizeof **spans);
+            (*spans)[(*span_count)++] = (sweep_span){ column, run, q };
+            run = -1;
+        }
+    }
+}
+
+/* 000 §4.2 step 1 (our reading for a terrain of columns): each point goes down or up its column
+ * onto the ground, the top of its highest solid. False when a point's column is not in the
+ * region. */
+static bool project_points(const terrain_columns *c, double (*points)[3], int count) {
+    for (int p = 0; p < count; p++) {
+        int64_t i = (int64_t)floor(points[p][0]) - c->x0, k = (int64_t)floor(points[p][2]) - c->z0;
+        if (i < 0 || k < 0 || i >= c->width || k >= c->depth) {
+            core_log_error("terrain", "sweep: point %d at (%g, %g) lies outside the region to project it", p,
+                       points[p][0], points[p][2]);
+            return false;
+        }
+        points[p][1] = terrain_columns_top(c, (int)i, (int)k);
+    }
+    return true;
 }
 
 bool terrain_sweep(terrain_columns *c, const terrain_sweep_desc *desc, int64_t *changed) {
@@ -667,8 +795,16 @@ bool terrain_sweep(terrain_columns *c, const terrain_sweep_desc *desc, int64_t *
         return false;
     }
     if (!valid_sweep(desc)) return false;
+    size_t points_bytes = (size_t)desc->point_count * sizeof *desc->points;
+    double (*points)[3] = core_alloc(points_bytes);
+    memcpy(points, desc->points, points_bytes);
+    if (desc->project && !project_points(c, points, desc->point_count)) {
+        core_free(points, points_bytes);
+        return false;
+    }
     sweep_segment *segments;
-    int segment_count = sweep_segments(desc, &segments);
+    int segment_count = sweep_segments(desc, (const double (*)[3])points, &segments);
+    core_free(points, points_bytes);
     /* Same rule as sculpting: the region holds every column within the largest radius + 2 of
      * the skeleton (its bounding box grown by that, for a rectangle the same thing). */
     double lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY }, r_max = 0.0;
@@ -679,7 +815,8 @@ bool terrain_sweep(terrain_columns *c, const terrain_sweep_desc *desc, int64_t *
         }
         r_max = fmax(r_max, fmax(segments[n].ra, segments[n].rb));
     }
-    double reach = r_max + REGION_MARGIN;
+    double profile_reach = r_max * terrain__sweep_reach_scale(desc);
+    double reach = profile_reach + REGION_MARGIN;
     if (!region_holds(c, lo[0] - reach, hi[0] + reach, lo[2] - reach, hi[2] + reach)) {
         core_log_error("terrain",
                    "sweep: the region (columns %lld ... %lld, %lld ... %lld) does not hold every column within %g m "
@@ -689,19 +826,35 @@ bool terrain_sweep(terrain_columns *c, const terrain_sweep_desc *desc, int64_t *
         core_free(segments, (size_t)segment_count * sizeof *segments);
         return false;
     }
+    /* With a profile, the frames come from the field of the region's columns before the edit. */
+    bool *profiled = core_calloc((size_t)segment_count, sizeof *profiled);
+    if (desc->profile) {
+        terrain__region_field field;
+        int fi0 = (int)((int64_t)floor(lo[0] - reach) - c->x0), fi1 = (int)((int64_t)floor(hi[0] + reach) - c->x0) + 1;
+        int fk0 = (int)((int64_t)floor(lo[2] - reach) - c->z0), fk1 = (int)((int64_t)floor(hi[2] + reach) - c->z0) + 1;
+        terrain__region_field_init(&field, c, fi0, fk0, fi1, fk1);
+        for (int n = 0; n < segment_count; n++) profiled[n] = segment_frame(&segments[n], &field);
+        terrain__region_field_free(&field);
+    }
     /* Every (column, segment) interval, then per column their union carved. */
     sweep_span *spans = NULL;
     size_t span_count = 0, span_capacity = 0;
     for (int n = 0; n < segment_count; n++) {
         const sweep_segment *s = &segments[n];
-        double x_lo = fmin(s->a[0] - s->ra, s->b[0] - s->rb), x_hi = fmax(s->a[0] + s->ra, s->b[0] + s->rb);
-        double z_lo = fmin(s->a[2] - s->ra, s->b[2] - s->rb), z_hi = fmax(s->a[2] + s->ra, s->b[2] + s->rb);
+        double ra = profiled[n] ? profile_reach : s->ra, rb = profiled[n] ? profile_reach : s->rb;
+        double x_lo = fmin(s->a[0] - ra, s->b[0] - rb), x_hi = fmax(s->a[0] + ra, s->b[0] + rb);
+        double z_lo = fmin(s->a[2] - ra, s->b[2] - rb), z_hi = fmax(s->a[2] + ra, s->b[2] + rb);
         int i0 = (int)ceil(x_lo - 0.5 - (double)c->x0), i1 = (int)floor(x_hi - 0.5 - (double)c->x0);
         int k0 = (int)ceil(z_lo - 0.5 - (double)c->z0), k1 = (int)floor(z_hi - 0.5 - (double)c->z0);
         for (int k = CORE_MAX(k0, 0); k <= k1 && k < c->depth; k++) {
             for (int i = CORE_MAX(i0, 0); i <= i1 && i < c->width; i++) {
                 int64_t q_lo, q_hi;
                 double x = (double)(c->x0 + i) + 0.5, z = (double)(c->z0 + k) + 0.5;
+                if (profiled[n]) {
+                    profile_spans(s, desc->profile, desc->profile_count, profile_reach, x, z, (int64_t)k * c->width + i,
+                                  &spans, &span_count, &span_capacity);
+                    continue;
+                }
                 if (!segment_span(s, x, z, &q_lo, &q_hi)) continue;
                 spans = core_grow(spans, &span_capacity, span_count + 1, sizeof *spans);
                 spans[span_count++] = (sweep_span){ (int64_t)k * c->width + i, q_lo, q_hi };
@@ -731,6 +884,7 @@ bool terrain_sweep(terrain_columns *c, const terrain_sweep_desc *desc, int64_t *
     column_scratch_free(&scratch);
     core_free(spans, span_capacity * sizeof *spans);
     core_free(segments, (size_t)segment_count * sizeof *segments);
+    core_free(profiled, (size_t)segment_count * sizeof *profiled);
     if (changed) *changed = columns_changed;
     return true;
 }

@@ -537,6 +537,164 @@ static size_t list_rows(stabilizer *s, const pass_work *w, size_t *columns) {
     return n;
 }
 
+/* ---- piles on cave floors (000 §3.4) ---------------------------------------------------------- */
+
+/* 000 §3.4 stabilizes "all material layers located between two stable bedrock layers", not only
+ * the pile on top: sand and rocks lying on a cave's floor under its roof flow too. Such piles are
+ * rare, so they are not in the padded height arrays: a column flagged TERRAIN__COLUMN_CAVE_PILE is
+ * read as its list of spaces (terrain__gap), and each of its spaces under a roof is settled with
+ * the same rule as the top pile (material_flow: sand on the sand surface, then rocks on the
+ * ground). Readings we take:
+ *   - The material that slides is the top quantum of the layer, at height `probe` = surface − 1.
+ *     A neighbour receives into its space that holds that height — the same cave, a cave next to
+ *     it, or the open pile outside a cave's mouth — and its surface there is that space's floor
+ *     plus its sand (plus its rocks, for rocks). Where a stable layer fills the neighbour at that
+ *     height it is a wall: nothing goes into rock.
+ *   - A space under a roof takes no more than its air (its water keeps its thickness, as water on
+ *     the top pile does while stabilization runs): what the flow rule gives beyond that stays
+ *     with the giver, so a pile never grows into a roof and a full cave stops taking material.
+ *   - The giver's own space gains the air it lost: the roof does not move.
+ *   - The same nine colours as the top pile, in the same pass, after it: a column's 3 × 3 moves
+ *     never meet another's of its colour, so the order within a pass does not matter and the
+ *     result does not depend on the thread count. Beyond a region's border the pile reads and
+ *     writes the neighbouring region's columns themselves (the halo holds only top piles); the
+ *     pass runs on one thread over all regions, and colours come from world coordinates, so
+ *     regions side by side give the bytes one big region gives. Where no region continues is a
+ *     wall for these piles, in either edge mode (they wake no region). */
+
+typedef struct cave_scratch {
+    terrain__clayer *layers, *other, *rewritten;
+    size_t layers_capacity, other_capacity, rewritten_capacity;
+    terrain__gap *gaps, *other_gaps;
+    size_t gaps_capacity, other_gaps_capacity;
+} cave_scratch;
+
+static void cave_scratch_free(cave_scratch *s) {
+    core_free(s->layers, s->layers_capacity * sizeof *s->layers);
+    core_free(s->other, s->other_capacity * sizeof *s->other);
+    core_free(s->rewritten, s->rewritten_capacity * sizeof *s->rewritten);
+    core_free(s->gaps, s->gaps_capacity * sizeof *s->gaps);
+    core_free(s->other_gaps, s->other_gaps_capacity * sizeof *s->other_gaps);
+}
+
+/* Column (i, k)'s layers and spaces; returns the count of spaces. */
+static int read_gaps(const terrain_columns *c, int i, int k, terrain__clayer **layers, size_t *layers_capacity,
+                     terrain__gap **gaps, size_t *gaps_capacity, int *count) {
+    *count = terrain__columns_layers(c, i, k, layers, layers_capacity);
+    *gaps = core_grow(*gaps, gaps_capacity, (size_t)*count + 1, sizeof **gaps);
+    return terrain__column_gaps(*layers, *count, *gaps, *count + 1);
+}
+
+/* Adds `delta` quanta (negative: takes) of sand (m = 0) or rocks (m = 1) to the space of column
+ * (i, k) that holds `height`; under a roof the air gives or takes the room. */
+static void gap_add(terrain_columns *c, int i, int k, int64_t height, int m, int32_t delta, cave_scratch *s) {
+    int count;
+    int gap_count = read_gaps(c, i, k, &s->other, &s->other_capacity, &s->other_gaps, &s->other_gaps_capacity, &count);
+    int g = terrain__gap_holding(s->other_gaps, gap_count, height);
+    if (g < 0) return;                        /* never: the caller found this space */
+    const terrain__gap *gap = &s->other_gaps[g];
+    int64_t amount[4] = { gap->amount[0], gap->amount[1], gap->amount[2], gap->amount[3] };
+    amount[m] += delta;
+    if (!terrain__gap_open(gap)) amount[3] -= delta;
+    terrain__columns_rewrite_gap(c, i, k, s->other, count, gap, amount, &s->rewritten, &s->rewritten_capacity);
+}
+
+/* The region and column that column (i, k) of region c is — c's own, or beyond its border the
+ * neighbouring region's (regions side by side have one size); NULL at the edge. */
+static terrain_columns *locate(terrain_columns *c, int i, int k, int *ri, int *rk) {
+    int rx = i < 0 ? -1 : i >= c->width, rz = k < 0 ? -1 : k >= c->depth;
+    *ri = i - rx * c->width, *rk = k - rz * c->depth;
+    if (!rx && !rz) return c;
+    for (int d = 0; d < 8; d++)
+        if (terrain__dir[d][0] == rx && terrain__dir[d][1] == rz) return c->neighbour[d];
+    return NULL;
+}
+
+/* Surface of material m in the space of column (i, k) that holds `probe`, and the room the space
+ * has; TERRAIN__WALL_HEIGHT where rock (or the edge) is at that height. */
+static int32_t cave_neighbour(terrain_columns *c, int i, int k, int64_t probe, int m, cave_scratch *s,
+                              int64_t *room) {
+    *room = 0;
+    c = locate(c, i, k, &i, &k);
+    if (!c) return TERRAIN__WALL_HEIGHT;
+    int count;
+    int gap_count = read_gaps(c, i, k, &s->other, &s->other_capacity, &s->other_gaps, &s->other_gaps_capacity, &count);
+    int g = terrain__gap_holding(s->other_gaps, gap_count, probe);
+    if (g < 0) return TERRAIN__WALL_HEIGHT;
+    const terrain__gap *gap = &s->other_gaps[g];
+    *room = terrain__gap_open(gap) ? INT64_MAX : gap->amount[3];
+    return (int32_t)(gap->floor + gap->amount[0] + (m ? gap->amount[1] : 0));
+}
+
+/* Settles the piles in column (i, k)'s spaces under a roof, bottom space first, sand then rocks
+ * in each; returns the quanta moved. */
+static int32_t settle_caves(terrain_columns *c, const stabilize_rules *rules, int i, int k, uint32_t pass,
+                            cave_scratch *s) {
+    static const ptrdiff_t local[8] = { -4, -3, -2, -1, 1, 2, 3, 4 };   /* terrain__dir in a 3 × 3 array */
+    int32_t moved = 0;
+    for (int g = 0;; g++) {
+        for (int m = 0; m < 2; m++) {
+            int count;
+            int gap_count = read_gaps(c, i, k, &s->layers, &s->layers_capacity, &s->gaps, &s->gaps_capacity, &count);
+            if (g >= gap_count - 1) return moved;   /* the last space is the open top: not here */
+            const terrain__gap *gap = &s->gaps[g];
+            if (gap->amount[m] <= 0) continue;
+            int64_t surface = gap->floor + gap->amount[0] + (m ? gap->amount[1] : 0), probe = surface - 1;
+            int32_t h[9], out[8];
+            int64_t room[8];
+            h[4] = (int32_t)surface;
+            for (int d = 0; d < 8; d++)
+                h[4 + local[d]] = cave_neighbour(c, i + terrain__dir[d][0], k + terrain__dir[d][1], probe, m, s, &room[d]);
+            int32_t available = (int32_t)CORE_MIN(gap->amount[m], (int64_t)INT32_MAX);
+            if (!material_flow(h, 4, local, available, &rules->material[m], rules, out)) continue;
+            int32_t given = 0;
+            for (int d = 0; d < 8; d++) {
+                out[d] = (int32_t)CORE_MIN((int64_t)out[d], room[d]);
+                given += out[d];
+            }
+            if (!given) continue;
+            gap_add(c, i, k, probe, m, -given, s);
+            for (int d = 0; d < 8; d++) {
+                if (!out[d]) continue;
+                int ni, nk;
+                terrain_columns *to = locate(c, i + terrain__dir[d][0], k + terrain__dir[d][1], &ni, &nk);
+                gap_add(to, ni, nk, probe, m, out[d], s);
+                mark(to, ni, nk, terrain__cell(to, ni, nk), pass);
+                to->last_change = pass;   /* a neighbouring region's change: its halos follow */
+            }
+            mark(c, i, k, terrain__cell(c, i, k), pass);
+            moved += given;
+        }
+    }
+}
+
+/* The cave piles of the pass's colour near a change, in every region (one thread: they are rare). */
+static int64_t cave_pass(terrain_columns *const *regions, int count, const stabilize_rules *rules, uint32_t pass,
+                         int colour_x, int colour_z) {
+    int64_t moved = 0;
+    cave_scratch scratch = { 0 };
+    for (int r = 0; r < count; r++) {
+        terrain_columns *c = regions[r];
+        if (!c->cave_piles || !region_awake(c, pass)) continue;
+        ptrdiff_t offset[8];
+        neighbour_offsets(c, offset);
+        for (int k = (int)floor_mod(colour_z - c->z0, 3); k < c->depth; k += 3) {
+            int lo, hi;
+            if (!row_range(c, k, pass, &lo, &hi)) continue;
+            for (int i = lo + (int)floor_mod(colour_x - (c->x0 + lo), 3); i <= hi; i += 3) {
+                if (!(c->flags[(size_t)k * (size_t)c->width + (size_t)i] & TERRAIN__COLUMN_CAVE_PILE) ||
+                    !active(c, terrain__cell(c, i, k), offset, pass))
+                    continue;
+                int32_t m = settle_caves(c, rules, i, k, pass, &scratch);
+                if (m) c->last_change = pass;
+                moved += m;
+            }
+        }
+    }
+    cave_scratch_free(&scratch);
+    return moved;
+}
+
 static pass_outcome run_pass(stabilizer *s) {
     uint32_t pass = s->regions[0]->clock + 1;
     int colour = (int)(pass % TERRAIN__COLOURS);
@@ -580,6 +738,7 @@ static pass_outcome run_pass(stabilizer *s) {
         for (int d = 0; d < 8; d++)
             if (c->neighbour[d]) deliver_side(c, d, pass);
     }
+    moved += cave_pass(s->regions, s->count, s->rules, pass, w.colour_x, w.colour_z);
     for (int r = 0; r < s->count; r++) s->regions[r]->clock = pass;
     if (moved && s->count > 1) {
         /* Refresh the halos next to every region that changed, with what changed. */

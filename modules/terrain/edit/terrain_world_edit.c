@@ -33,7 +33,7 @@ static bool edit_extent(const terrain_edit *edit, double *x0, double *x1, double
         if (!d->points || d->point_count <= 0) return false;
         float largest = d->radius;
         for (int i = 0; d->radii && i < d->point_count; i++) largest = fmaxf(largest, d->radii[i]);
-        reach = (double)largest + EDIT_MARGIN_COLUMNS;
+        reach = (double)largest * terrain__sweep_reach_scale(d) + EDIT_MARGIN_COLUMNS;
         *x0 = *z0 = INFINITY, *x1 = *z1 = -INFINITY;
         for (int i = 0; i < d->point_count; i++) {
             *x0 = fmin(*x0, d->points[i][0] - reach), *x1 = fmax(*x1, d->points[i][0] + reach);

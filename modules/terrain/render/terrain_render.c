@@ -108,6 +108,17 @@ terrain_renderer *terrain_renderer_create(gfx_context *gfx, const terrain_render
 
 void terrain_renderer_set_clipmap(terrain_renderer *r, terrain_clipmap *clipmap) { r->far_terrain = clipmap; }
 
+bool terrain__renderer_has_ground(const terrain_renderer *r) {
+    return r->far_terrain && terrain__clipmap_ground_levels(r->far_terrain) > 0;
+}
+
+int terrain__renderer_bind_ground(terrain_renderer *r, uint32_t program, const double camera[3], int unit) {
+    if (r->far_terrain) return terrain__clipmap_bind_ground(r->far_terrain, r->gfx, program, camera, unit);
+    gfx_uniform_int(r->gfx, (gfx_program){ program }, "u_ground_levels", 0);
+    gfx_uniform_int(r->gfx, (gfx_program){ program }, "u_ground_heights", unit);
+    return 0;
+}
+
 void terrain_renderer_set_occlusion(terrain_renderer *r, bool on) { r->desc.no_occlusion = !on; }
 
 bool terrain_renderer_set_shadows(terrain_renderer *r, terrain_shadow_quality quality) {

@@ -139,17 +139,20 @@ void terrain_renderer_draw_shadows(terrain_renderer *renderer, const terrain_vie
  * recomputed only where a level moved (Losasso & Hoppe's geometry clipmaps, 002 §3.2). The
  * heights are the generator's macro ground G (the stacks' top surface before the overhang shear
  * and the caves) with the octave count the level's spacing can carry (004 §4.1), so distant
- * levels do not alias. Each level's vertices morph towards the next coarser level's surface
- * near its border and meet it exactly there: no cracks between levels. Where the volumetric
- * chunks are drawn (terrain_clipmap_set_holes: one square per viewer's rings) the clipmap sinks
- * into a pit under them, deeper than any cave, whose walls skirt the chunks' open border:
- * whatever the mismatch between the two surfaces, a gap shows ground, never sky, from any side
- * (002 §3.5 bends the meso mesh to the clipmap instead; that would be the chunks' mesher's
- * work). The outermost level and the
+ * levels do not alias — and, given the world (desc.world), the surface the chunks' meshes draw
+ * wherever chunks are cached (002 §3.5), recomputed as chunks come, change and go: edits show
+ * from afar. Each level's vertices morph towards the next coarser level's surface near its
+ * border and meet it exactly there: no cracks between levels. Where the volumetric chunks are
+ * drawn (terrain_clipmap_set_holes: one square per viewer's rings) the clipmap sinks into a pit
+ * under them, deeper than any cave, whose walls skirt the chunks' open border: a gap shows
+ * ground, never sky, from any side. With the world's heights the vertices on a hole's border
+ * keep the chunks' height, so the clipmap meets the meshes there (002 §3.5 bends the meso mesh
+ * to the clipmap instead; we bend the clipmap to the mesh). The outermost level and the
  * far plane fade into the sky (002 §4.4), so the world has no visible end.
  *
  *     terrain_clipmap *far = terrain_clipmap_create(&(terrain_clipmap_desc){
- *         .generation = terrain_generation_defaults(42), .jobs = jobs });
+ *         .generation = terrain_generation_defaults(42), .jobs = jobs,
+ *         .world = world, .mesh_step = 4, .centre_snap = 128 });   // rings of 3 levels
  *     terrain_renderer_set_clipmap(renderer, far);
  *     each frame:
  *         terrain_clipmap_update(far, camera);                 // CPU: recentre, new heights
@@ -182,6 +185,25 @@ typedef struct terrain_clipmap_desc {
                                          0 = below the generator's caves (156 m by default) */
     terrain_generation_desc generation;  /* copied; the world whose ground is drawn */
     job_system *jobs;                 /* computes new heights in parallel; NULL = the caller */
+    /* The stacks where they exist (002 §3.5). With a world, a grid point whose four columns lie
+     * in chunks the world has cached (generated or edited; never generated for this) takes the
+     * height the chunks' meshes draw there instead of G, and the texels of chunks that are
+     * generated, committed or evicted are recomputed at the next update: edits show from afar
+     * and the clipmap meets the chunks along the holes' border. Not owned: it must outlive the
+     * clipmap; one clipmap per world; update where no trim runs meanwhile (as for the pointers
+     * terrain_world_stacks returns). A chunk evicted from the cache falls back to G. */
+    terrain_world *world;             /* NULL = G everywhere */
+    float mesh_step;                  /* metres between the vertical samples of the meshes along
+                                         the holes' border: the streamed rings' outermost level,
+                                         2^(levels − 1) (terrain_rings_clearance's level); the
+                                         heights are those such a mesh draws; 0 = 1 */
+    float centre_snap;                /* metres: level 0 is centred on the camera snapped to
+                                         this grid (rounded to an even number of finest
+                                         spacings; at most finest_spacing·(cells/2 − 2 −
+                                         2·⌊cells/10⌋): 152 m for the defaults).
+                                         The streamed rings' own snap (their coarsest chunk,
+                                         32·2^(levels − 1)) puts level 0 on their hole, so the
+                                         finest level draws the hole's border; 0 = 2·finest */
     /* Detail from a screen-space error (data/terrain_data.h): with pixel_error > 0 the fields
      * left 0 among cells, finest_spacing and levels are derived from K = terrain_screen_error_scale(
      * viewport_height, fov_y, pixel_error): cells ≥ 4·(ε(s)/s·K + 2) (level L is drawn from
@@ -243,8 +265,8 @@ int terrain_clipmap_cull(terrain_clipmap *clipmap, const terrain_frustum *frustu
  * behind, so calling it is only a way to choose when the upload's time is spent. */
 void terrain_clipmap_upload(terrain_clipmap *clipmap);
 /* The ground height drawn at (x, z) by the finest level around it (its triangles, morphed as
- * for the camera of the last update; the hole's sinking not included); NAN outside every level
- * or before the first update. */
+ * for the camera of the last update, vertices on a hole's border kept as the draw keeps them;
+ * the hole's sinking not included); NAN outside every level or before the first update. */
 float terrain_clipmap_height(const terrain_clipmap *clipmap, double x, double z);
 terrain_clipmap_stats_info terrain_clipmap_stats(const terrain_clipmap *clipmap);
 

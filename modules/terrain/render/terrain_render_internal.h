@@ -88,6 +88,12 @@ terrain__clipmap_block_info terrain__clipmap_block(const terrain_clipmap *clipma
 /* Draws the visible blocks with `program` (shaders/clipmap.*), which terrain_renderer_draw has
  * made current with the shared uniforms set; sets the draw counters and stats. Main thread. */
 void terrain__clipmap_draw(terrain_clipmap *clipmap, gfx_context *gfx, uint32_t program, const terrain_view *view);
+/* Sets water_ground.glsl's uniforms on `program` (in use) and binds the heights to texture
+ * `unit`: the levels bound, 0 (u_ground_levels = 0) before the first upload. Main thread. */
+int terrain__clipmap_bind_ground(terrain_clipmap *clipmap, gfx_context *gfx, uint32_t program, const double camera[3],
+                                 int unit);
+/* The levels terrain__clipmap_bind_ground would bind now (0 before the first upload). */
+int terrain__clipmap_ground_levels(const terrain_clipmap *clipmap);
 
 /* ==== end of the clipmap section ========================================================== */
 
@@ -123,6 +129,11 @@ void terrain__renderer_draw_clipped(terrain_renderer *renderer, const terrain_vi
 void terrain__renderer_set_water_drawn(terrain_renderer *renderer, bool drawn);
 float terrain__renderer_fog_density(const terrain_renderer *renderer);
 float terrain__renderer_cloud_cover(const terrain_renderer *renderer);   /* 0 = a clear sky */
+/* The far terrain's heights for water_ground.glsl (terrain__clipmap_bind_ground); without far
+ * terrain u_ground_levels = 0. Returns the levels bound. */
+int terrain__renderer_bind_ground(terrain_renderer *renderer, uint32_t program, const double camera[3], int unit);
+/* Whether the renderer has far terrain whose heights terrain__renderer_bind_ground can bind. */
+bool terrain__renderer_has_ground(const terrain_renderer *renderer);
 
 /* ==== end of the water section ============================================================ */
 

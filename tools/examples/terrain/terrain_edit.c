@@ -1,6 +1,7 @@
 /* terrain_edit — terrain editing in one short program, no window: pick a point on the ground, carve
- * a tunnel and a crater, drop sand, let it slide to its angle of repose, save the edits in a world
- * folder (one transaction), and see them come back in a fresh world.
+ * a crater and an arched tunnel (a sweep with a profile curve), drop sand on the rim and inside the
+ * tunnel (on its floor, not on the hill above), let it slide to its angle of repose, save the edits
+ * in a world folder (one transaction), and see them come back in a fresh world.
  *
  *   terrain_edit [--seed S] [--world DIR] [--threads N] [--trace FILE]
  *
@@ -97,16 +98,29 @@ int main(int argc, char **argv) {
     printf("ground at (%.1f, %.2f, %.1f), %s\n", hit.position[0], hit.position[1], hit.position[2],
            terrain_material_name(hit.material));
 
-    /* A crater, a 20 m tunnel into the ground beside it, and 60 m³ of sand on the crater's rim. */
+    /* A crater, a 20 m tunnel into the ground beside it, and 60 m³ of sand on the crater's rim. The
+     * tunnel's cross-section is a profile curve (radius scales around the axis, the first one
+     * towards the surface, up here): an arch half as high again as it is wide, and a lower floor. */
     int crater = terrain_world_edit(world, &(terrain_edit){ .tool = TERRAIN_EDIT_SCULPT_CARVE,
         .sculpt = { .target = { hit.position[0], hit.position[1], hit.position[2] }, .radius = 4 } }, NULL, 0);
     double tunnel[2][3] = { { 10, hit.position[1] - 3, 4 }, { 30, hit.position[1] - 8, 4 } };
+    const float arch[4] = { 1.5f, 1.0f, 0.8f, 1.0f };   /* up, side, down, side */
     int tunnelled = terrain_world_edit(world, &(terrain_edit){ .tool = TERRAIN_EDIT_SWEEP,
-        .sweep = { .points = (const double (*)[3])tunnel, .point_count = 2, .radius = 2 } }, NULL, 0);
+        .sweep = { .points = (const double (*)[3])tunnel, .point_count = 2, .radius = 2,
+                   .profile = arch, .profile_count = 4 } }, NULL, 0);
     int sanded = terrain_world_edit(world, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
         .deposit = { .x = hit.position[0] + 4, .z = hit.position[2], .radius = 3, .volume = 60 } }, NULL, 0);
     printf("crater: %d chunk(s), tunnel: %d, sand: %d; sand in chunk (0, 0): %.1f m³\n", crater, tunnelled, sanded,
            chunk_sand(world, (terrain_chunk_coord){ 0, 0 }));
+    /* 4 m³ of sand dropped at the tunnel's axis height (as the game's sand tool does at the hit
+     * point): it lands on the tunnel's floor, 1.6 m below the axis, and the hill above keeps its
+     * ground. */
+    double axis = hit.position[1] - 5.5, floor = axis - 0.8 * 2;
+    terrain_world_edit(world, &(terrain_edit){ .tool = TERRAIN_EDIT_DEPOSIT,
+        .deposit = { .x = 20, .z = 4, .radius = 1, .volume = 4, .at_height = true, .y = axis } }, NULL, 0);
+    printf("in the tunnel at x = 20: %s on the floor, %s at the axis\n",
+           terrain_material_name(terrain_world_material_at(world, 20, floor + 0.1, 4)),
+           terrain_material_name(terrain_world_material_at(world, 20, axis, 4)));
     printf("stabilized in %d iterations; the tunnel's axis at x = 20 is %s\n", settle(world, jobs, 0, 0),
            terrain_material_name(terrain_world_material_at(world, 20, hit.position[1] - 5.5, 4)));
 
@@ -141,6 +155,7 @@ int main(int argc, char **argv) {
  * Run: --threads 2 --world $TMP/terrain_edit
  * ^ground at \([0-9.-]+, [0-9.-]+, [0-9.-]+\), 
  * ^crater: [1-9][0-9]* chunk\(s\), tunnel: [1-9][0-9]*, sand: [1-9][0-9]*; 
+ * ^in the tunnel at x = 20: sand on the floor, air at the axis$
  * ^stabilized in [0-9]+ iterations; the tunnel.s axis at x = 20 is air$
  * ^saved [1-9][0-9]* chunk\(s\) to [^ ]+world\.db; reloaded: the same bytes$
  */

@@ -2,7 +2,7 @@
  * chunks meshed by the terrain module and its surface drawn by terrain_water, seen from a camera
  * that circles the shore.
  *
- *   terrain_water [--water off|low|high] [--size WxH] [--headless] [--frames N] [--screenshot FILE]
+ *   terrain_water [--water off|low|medium|high] [--size WxH] [--headless] [--frames N] [--screenshot FILE]
  *               [--threads N] [--trace FILE]
  */
 #include "core/core.h"
@@ -43,7 +43,7 @@ int main(int argc, char **argv) {
     bool headless = false;
     const core_option options[] = {
         CORE_COMMON_OPTIONS(common),
-        { "water", CORE_OPTION_STRING, &quality, "off|low|high", "water quality (default low)" },
+        { "water", CORE_OPTION_STRING, &quality, "off|low|medium|high", "water quality (default low)" },
         { "size", CORE_OPTION_STRING, &size, "WxH", "framebuffer size (default 1280x720)" },
         { "headless", CORE_OPTION_FLAG, &headless, NULL, "render offscreen with OSMesa" },
         { "frames", CORE_OPTION_INT, &frames, "N", "stop after N frames (0 = when closed)", 0, 100000000 },

@@ -48,6 +48,7 @@ void bench_group_terrain_generate(bench_context *ctx);
 void bench_group_terrain_mesh(bench_context *ctx);
 void bench_group_terrain_clipmap(bench_context *ctx);
 void bench_group_world(bench_context *ctx);
+void bench_group_world_seam(bench_context *ctx);
 void bench_group_terrain_stabilize(bench_context *ctx);
 void bench_group_terrain_sculpt(bench_context *ctx);
 void bench_group_terrain_edit(bench_context *ctx);

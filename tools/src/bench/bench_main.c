@@ -146,7 +146,7 @@ int main(int argc, char **argv) {
                                    bench_group_terrain_clipmap, bench_group_terrain_stabilize,
                                    bench_group_terrain_sculpt, bench_group_terrain_edit,
                                    bench_group_terrain_edit_log,
-                                   bench_group_world, bench_group_grass, bench_group_terrain_ao,
+                                   bench_group_world, bench_group_world_seam, bench_group_grass, bench_group_terrain_ao,
                                    bench_group_terrain_detail,
                                    bench_group_shadows, bench_group_water, bench_group_rocks,
                                    bench_group_rocks_world,

@@ -8,6 +8,8 @@
  *   terrain.edit.sculpt.carve   the same stroke carving.
  *   terrain.edit.sweep    ms for terrain_sweep of a straight 30 m tunnel of radius 2 m, 6 m under
  *       that point, across the region's centre; region loaded afresh per run.
+ *   terrain.edit.sweep.profile   the same tunnel with a profile curve {1, 0.6, 1, 0.6} (000 §4.2:
+ *       a cross-section 4 m high and 2.4 m wide): its quanta tested one by one.
  *   terrain.edit.raycast  µs for a ray from 30 m above that point, 45° down towards it (the march
  *       of terrain_field_at samples half a metre apart and the bisection).
  */
@@ -21,7 +23,7 @@ enum { REGION_CHUNKS = 3, REGION_COLUMNS = REGION_CHUNKS * TERRAIN_CHUNK_COLUMNS
 typedef struct sculpt_bench {
     terrain_world *world;
     double target[3];
-    bool sweep, carve;
+    bool sweep, carve, profile;
 } sculpt_bench;
 
 static terrain_columns *fresh_region(const sculpt_bench *b) {
@@ -43,7 +45,10 @@ static double sample_edit(void *user) {
     if (b->sweep) {
         const double *t = b->target;
         const double points[2][3] = { { t[0] - 15.0, t[1] - 6.0, t[2] - 1.0 }, { t[0] + 15.0, t[1] - 6.0, t[2] + 1.0 } };
-        ok = terrain_sweep(region, &(terrain_sweep_desc){ .points = points, .point_count = 2, .radius = 2.0f }, &changed);
+        static const float profile[4] = { 1.0f, 0.6f, 1.0f, 0.6f };
+        ok = terrain_sweep(region, &(terrain_sweep_desc){ .points = points, .point_count = 2, .radius = 2.0f,
+                                                          .profile = b->profile ? profile : NULL,
+                                                          .profile_count = b->profile ? 4 : 0 }, &changed);
     } else {
         ok = terrain_sculpt(region, &(terrain_sculpt_desc){ .target = { b->target[0], b->target[1], b->target[2] },
                                                            .radius = 3.0f, .carve = b->carve }, &changed);
@@ -85,6 +90,10 @@ void bench_group_terrain_sculpt(bench_context *ctx) {
     }
     b.sweep = true;
     if (bench_wants(ctx, "terrain.edit.sweep")) bench_run(ctx, "terrain.edit.sweep", "ms", EDIT_RUNS, sample_edit, &b);
+    b.profile = true;
+    if (bench_wants(ctx, "terrain.edit.sweep.profile"))
+        bench_run(ctx, "terrain.edit.sweep.profile", "ms", EDIT_RUNS, sample_edit, &b);
+    b.profile = false;
     if (bench_wants(ctx, "terrain.edit.raycast"))
         bench_run(ctx, "terrain.edit.raycast", "us", EDIT_RUNS, sample_raycast, &b);
     terrain_world_destroy(b.world);
