@@ -482,17 +482,24 @@ void terrain_world_commit(terrain_world *world, terrain_chunk_coord coord, terra
     pthread_mutex_unlock(&world->lock);
 }
 
+/* Moves up to `capacity` of the `*count` queued items of `size` bytes at `queue` to `out`, oldest
+ * first, and closes the gap: under the world's lock. */
+static int take_queued(void *out, int capacity, void *queue, size_t *count, size_t size) {
+    size_t n = capacity > 0 ? (size_t)capacity : 0;
+    if (n > *count) n = *count;
+    if (n) {
+        memcpy(out, queue, n * size);
+        memmove(queue, (char *)queue + n * size, (*count - n) * size);
+    }
+    *count -= n;
+    return (int)n;
+}
+
 int terrain_world_take_changes(terrain_world *world, terrain_world_change *out, int capacity) {
     pthread_mutex_lock(&world->lock);
-    size_t n = capacity > 0 ? (size_t)capacity : 0;
-    if (n > world->change_count) n = world->change_count;
-    if (n) {
-        memcpy(out, world->changes, n * sizeof *out);
-        memmove(world->changes, world->changes + n, (world->change_count - n) * sizeof *world->changes);
-    }
-    world->change_count -= n;
+    int n = take_queued(out, capacity, world->changes, &world->change_count, sizeof *out);
     pthread_mutex_unlock(&world->lock);
-    return (int)n;
+    return n;
 }
 
 uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord coord) {
@@ -532,14 +539,7 @@ void terrain__world_watch_surface(terrain_world *world, bool on) {
 
 int terrain__world_take_surface_changes(terrain_world *world, terrain_chunk_coord *out, int capacity) {
     pthread_mutex_lock(&world->lock);
-    size_t n = capacity > 0 ? (size_t)capacity : 0;
-    if (n > world->surface_change_count) n = world->surface_change_count;
-    if (n) {
-        memcpy(out, world->surface_changes, n * sizeof *out);
-        memmove(world->surface_changes, world->surface_changes + n,
-                (world->surface_change_count - n) * sizeof *world->surface_changes);
-    }
-    world->surface_change_count -= n;
+    int n = take_queued(out, capacity, world->surface_changes, &world->surface_change_count, sizeof *out);
     pthread_mutex_unlock(&world->lock);
-    return (int)n;
+    return n;
 }
