@@ -244,7 +244,7 @@ static void parallel_set(rng *r, disc_list *l, float s, const int ijk[3], float 
 }
 
 /* The type's defaults (metres), for a desc left at zero. */
-static void type_defaults(rocks_block_type type, float *spacing, float *radius) {
+void rocks__block_type_defaults(rocks_block_type type, float *spacing, float *radius) {
     static const float table[ROCKS_BLOCK_TYPE_END][2] = {
         [ROCKS_BLOCK_EQUIDIMENSIONAL] = { 4.5f, 5.0f },   /* 003 §4.1: radii ≈ 5 m */
         [ROCKS_BLOCK_RHOMBOHEDRAL] = { 4.5f, 5.0f },      /* the same, in an oblique frame */
@@ -703,7 +703,7 @@ static bool desc_make(const rocks_block_tile_desc *in, rocks_block_tile_desc *d)
         return false;
     }
     float spacing, radius;
-    type_defaults(d->type, &spacing, &radius);
+    rocks__block_type_defaults(d->type, &spacing, &radius);
     if (!d->seed) d->seed = 1;
     if (d->size == 0) d->size = 16.0f;
     if (d->point_spacing == 0) d->point_spacing = d->size / 24.0f;

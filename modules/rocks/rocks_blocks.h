@@ -205,6 +205,14 @@ typedef struct rocks_cliffs_desc {
                                          anchor in [−0.6, 1.0] (up to the field's clamp) */
     float max_spacing;                /* 0 = 1 m (level of detail 0: at 2 m a block of a few
                                          metres aliases into spikes) */
+    float block_scale;                /* 0 = 1: the blocks' size. The tiles' side (tile_size),
+                                         their points' spacing and the types' fracture spacings
+                                         and disc radii all scale by it, so the blocks keep their
+                                         shapes and grow. Bigger blocks show more at the world's
+                                         1 m sampling, but fewer have their anchor within the
+                                         presence band, so a low wall gets fewer (a 20 m wall of
+                                         columnar blocks: none at 2). 0.5 … 4, the scaled side at
+                                         most 64 m */
     /* A folder for the tiles' cache files (rocks_block_tile_desc.cache_path), one a type:
      * blocks-<type>-<seed as 16 hex digits>.bin (the seed above, with its default), so worlds of
      * other seeds keep their own; made if missing. NULL = the tiles are built each run. */
@@ -227,6 +235,8 @@ typedef struct rocks_cliffs_stats_info {
     double presence_seconds;          /* of which working out presence (cells_computed) */
     double build_seconds;             /* the tiles, built or read from cache_dir */
     uint32_t tiles_from_cache;        /* of the tiles, those read from cache_dir */
+    uint32_t blocks;                  /* blocks in the tiles, all types */
+    float tile_size;                  /* metres, the tiles' side: tile_size · block_scale */
 } rocks_cliffs_stats_info;
 rocks_cliffs_stats_info rocks_cliffs_stats(const rocks_cliffs *cliffs);
 

@@ -52,6 +52,7 @@ static bool cliffs_desc_make(const rocks_cliffs_desc *in, rocks_cliffs_desc *d) 
     if (d->tile_size == 0) d->tile_size = 16.0f;
     if (d->joint == 0) d->joint = fminf(0.6f, d->tile_size / 24.0f);   /* at most the points' spacing */
     if (d->max_spacing == 0) d->max_spacing = 1.0f;
+    if (d->block_scale == 0) d->block_scale = 1.0f;
     const char *bad = NULL;
     if (d->strata_count < 1 || d->strata_count > 8) bad = "strata_count (1 … 8)";
     for (int i = 0; !bad && i < d->strata_count; i++) {
@@ -60,6 +61,8 @@ static bool cliffs_desc_make(const rocks_cliffs_desc *in, rocks_cliffs_desc *d) 
     }
     if (!bad && !(d->stratum_height >= 2.0f && d->stratum_height <= 1000.0f)) bad = "stratum_height (2 … 1000 m)";
     if (!bad && !(d->max_spacing > 0.0f && d->max_spacing <= 64.0f)) bad = "max_spacing (0 … 64 m)";
+    if (!bad && !(d->block_scale >= 0.5f && d->block_scale <= 4.0f && d->tile_size * d->block_scale <= 64.0f))
+        bad = "block_scale (0.5 … 4, tile_size · block_scale at most 64 m)";
     if (bad) core_log_error("rocks", "cliffs: bad %s", bad);
     return bad == NULL;
 }
@@ -81,14 +84,22 @@ static void make_tiles(void *user, size_t begin, size_t end) {
         if (d->cache_dir) {   /* one file per type and seed: worlds of other seeds keep theirs */
             path_size = strlen(d->cache_dir) + 64;
             path = core_alloc(path_size);
-            snprintf(path, path_size, "%s/blocks-%s-%016llx.bin", d->cache_dir, rocks_block_type_name(type),
-                     (unsigned long long)d->seed);
+            /* a scaled set keeps its own file beside the default one */
+            char scale[16] = "";
+            if (d->block_scale != 1.0f) snprintf(scale, sizeof scale, "-x%.2f", (double)d->block_scale);
+            snprintf(path, path_size, "%s/blocks-%s-%016llx%s.bin", d->cache_dir, rocks_block_type_name(type),
+                     (unsigned long long)d->seed, scale);
         }
+        /* Scaled blocks: the side, the fractures' spacing and radius together (the points'
+         * spacing follows the side), so the shapes stay and only their size changes. */
+        float spacing, radius;
+        rocks__block_type_defaults(type, &spacing, &radius);
         /* no relief: its 8 cm are below the metre the world samples at (the renderer's detail
          * layer shades the faces) and it would double the cost of every sample */
         jobs->tiles[i] = rocks_block_tile_create(&(rocks_block_tile_desc){
             .type = type, .seed = core_hash_combine(d->seed, (uint64_t)(type - ROCKS_BLOCK_EQUIDIMENSIONAL)),
-            .size = d->tile_size, .joint = d->joint,
+            .size = d->tile_size * d->block_scale, .joint = d->joint,
+            .fracture_spacing = spacing * d->block_scale, .fracture_radius = radius * d->block_scale,
             .relief = -1.0f, .cache_path = path });
         if (path) core_free(path, path_size);
     }
@@ -115,6 +126,7 @@ rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc) {
         c->tiles[jobs.types[i]] = jobs.tiles[i];
         if (!jobs.tiles[i]) ok = false;
         else c->words[jobs.types[i]] = (jobs.tiles[i]->block_count + 63) / 64;
+        if (jobs.tiles[i]) c->stats.blocks += jobs.tiles[i]->block_count;
         if (jobs.tiles[i] && jobs.tiles[i]->from_cache) c->stats.tiles_from_cache++;
     }
     if (!ok) {
@@ -122,6 +134,7 @@ rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc) {
         return NULL;
     }
     c->stats.build_seconds = (double)(core_time_ns() - start) * 1e-9;
+    c->stats.tile_size = d.tile_size * d.block_scale;
     return c;
 }
 

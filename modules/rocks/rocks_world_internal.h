@@ -32,5 +32,8 @@ void rocks__cell_range(const rocks_block_tile *tile, const double lo[3], const d
 /* rocks_block_on_walls, with the field's gradient at the anchor in g (unnormalised; written
  * whenever the anchor is near the surface): the cliffs read the wall's inside from it. */
 bool rocks__wall_at(const rocks_wall_presence *walls, const double anchor[3], float g[3]);
+/* A block type's default fracture spacing and main disc radius (rocks_blocks.c), metres; the
+ * cliffs scale both by their block_scale. */
+void rocks__block_type_defaults(rocks_block_type type, float *spacing, float *radius);
 
 #endif

@@ -1063,3 +1063,33 @@ Test(rocks_blocks, a_zeroed_type_is_equidimensional) {
     rocks_cliffs_destroy(cliffs);
     remove_tree(dir);
 }
+
+/* block_scale grows the blocks and keeps their shapes: scaled by 1.5, the tile's side and its
+ * fractures' spacing grow alike, so a tile holds about as many blocks (each 3.4 times the
+ * volume), and the 20 m wall still gets them. Scales outside 0.5 … 4, or a scaled side over
+ * 64 m, are refused. */
+Test(rocks_blocks, cliffs_block_scale_grows_the_blocks) {
+    rocks_cliffs_desc desc = { .strata_count = 1, .strata = { ROCKS_BLOCK_COLUMNAR }, .tile_size = 12 };
+    rocks_cliffs *plain = rocks_cliffs_create(&desc);
+    desc.block_scale = 1.5f;
+    rocks_cliffs *big = rocks_cliffs_create(&desc);
+    cr_assert_not_null(plain);
+    cr_assert_not_null(big);
+    rocks_cliffs_stats_info a = rocks_cliffs_stats(plain), b = rocks_cliffs_stats(big);
+    cr_expect_float_eq(a.tile_size, 12.0f, 1e-6f);
+    cr_expect_float_eq(b.tile_size, 18.0f, 1e-6f);
+    cr_expect_gt(a.blocks, 0);
+    cr_expect(b.blocks * 10 >= a.blocks * 9 && b.blocks * 10 <= a.blocks * 11, "blocks a tile: %u at scale 1, %u at 1.5",
+              a.blocks, b.blocks);
+    terrain_world *world = cliff_world(wall_chunk, big);
+    cr_expect_gt(raised_samples(wall_chunk, world, 1), 20);
+    terrain_world_destroy(world);
+    rocks_cliffs_destroy(plain);
+    rocks_cliffs_destroy(big);
+    core_log_level level = core_log_get_level();
+    core_log_set_level(CORE_LOG_OFF);
+    cr_expect_null(rocks_cliffs_create(&(rocks_cliffs_desc){ .block_scale = 0.25f }));
+    cr_expect_null(rocks_cliffs_create(&(rocks_cliffs_desc){ .block_scale = 5 }));
+    cr_expect_null(rocks_cliffs_create(&(rocks_cliffs_desc){ .tile_size = 32, .block_scale = 4 }));
+    core_log_set_level(level);
+}
