@@ -329,3 +329,37 @@ Test(terrain_clipmap_stacks, on_the_holes_border_vertices_keep_the_chunks_height
     terrain_clipmap_destroy(c);
     terrain_world_destroy(world);
 }
+
+/* With an edit log, an edited chunk is evictable (the log can make it again), and the clipmap
+ * makes it again when its texels are asked for after it left the cache: the pit dug in it shows
+ * from afar whenever it is in the clipmap, not only while the chunk is cached. Unedited chunks
+ * evicted are G again, as without a log. */
+Test(terrain_clipmap_stacks, an_evicted_edited_chunk_is_made_again_from_the_log) {
+    flat_world w = { .step = false };
+    terrain_generation_desc generation = terrain_generation_defaults(3);
+    terrain_edit_log *log = terrain_edit_log_create(&(terrain_edit_log_desc){ .world_key = terrain_generation_key(&generation) });
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = generation, .generate = flat_generate,
+                                                                       .generate_user = &w, .edits = log });
+    terrain_clipmap *c = world_clipmap(world, 1.0f, 64, 2, 1.0f);
+    for (int64_t cz = -1; cz <= 0; cz++)
+        for (int64_t cx = -1; cx <= 0; cx++) terrain_world_stacks(world, (terrain_chunk_coord){ cx, cz });
+    cr_assert_gt(terrain_world_edit(world, &(terrain_edit){ .tool = TERRAIN_EDIT_SCULPT_CARVE,
+                                                            .sculpt = { .target = { 16, 10.5, 16 }, .radius = 8 } },
+                                    NULL, 0), 0);
+    terrain_clipmap_update(c, (double[3]){ 0, 20, 0 });
+    float pit = terrain__clipmap_texel(c, 0, 16, 16);
+    cr_assert_lt(pit, 10.25f, "the pit shows: %f", pit);
+    terrain__clipmap_level_info info = terrain__clipmap_level(c, 0);
+    /* A chunk far away used last, so that it is the one the cache keeps. */
+    terrain_world_stacks(world, (terrain_chunk_coord){ 40, 40 });
+    terrain_world_set_max_chunks(world, 1);
+    terrain_world_trim(world);
+    cr_assert_null(terrain__world_cached(world, (terrain_chunk_coord){ 0, 0 }), "the edited chunk was evicted");
+    terrain_clipmap_update(c, (double[3]){ 0, 20, 0 });
+    cr_assert_eq(terrain__clipmap_texel(c, 0, 16, 16), pit, "the evicted pit is made again from the log");
+    cr_assert_eq(terrain__clipmap_texel(c, 0, -16, -16), ground_at(terrain_world_generation(world), &info, -16, -16),
+                 "an unedited chunk evicted: G");
+    terrain_clipmap_destroy(c);
+    terrain_world_destroy(world);
+    terrain_edit_log_destroy(log);
+}

@@ -334,6 +334,10 @@ void terrain__world_on_generated(terrain_world *world, void (*fn)(void *user, te
  * change or evicted is queued once per event; take_surface_changes hands them over in order
  * (at most `capacity`, the rest stay). Turning the watch on or off empties the queue. */
 const terrain_stacks *terrain__world_cached(terrain_world *world, terrain_chunk_coord coord);
+/* terrain__world_cached, or for a chunk the edit log holds edits of, the chunk itself, made
+ * again (generated and replayed, and cached) when it was evicted: edits show from afar however
+ * long ago they were made. Unedited chunks are never made here. */
+const terrain_stacks *terrain__world_surface_stacks(terrain_world *world, terrain_chunk_coord coord);
 void terrain__world_watch_surface(terrain_world *world, bool on);
 int terrain__world_take_surface_changes(terrain_world *world, terrain_chunk_coord *out, int capacity);
 

@@ -530,6 +530,12 @@ const terrain_stacks *terrain__world_cached(terrain_world *world, terrain_chunk_
     return stacks;
 }
 
+const terrain_stacks *terrain__world_surface_stacks(terrain_world *world, terrain_chunk_coord coord) {
+    const terrain_stacks *stacks = terrain__world_cached(world, coord);
+    if (stacks || !world->edits || terrain_edit_log_entries(world->edits, coord) == 0) return stacks;
+    return terrain_world_stacks(world, coord);
+}
+
 void terrain__world_watch_surface(terrain_world *world, bool on) {
     pthread_mutex_lock(&world->lock);
     world->surface_watched = on;

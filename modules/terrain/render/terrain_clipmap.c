@@ -463,7 +463,7 @@ typedef struct chunk_memo {
 static const terrain_stacks *memo_stacks(terrain_world *world, chunk_memo *memo, terrain_chunk_coord coord) {
     for (int m = 0; m < memo->count; m++)
         if (memo->coord[m].x == coord.x && memo->coord[m].z == coord.z) return memo->stacks[m];
-    const terrain_stacks *stacks = terrain__world_cached(world, coord);
+    const terrain_stacks *stacks = terrain__world_surface_stacks(world, coord);
     int slot = memo->count < 4 ? memo->count++ : (memo->next++ & 3);
     memo->coord[slot] = coord;
     memo->stacks[slot] = stacks;

@@ -186,12 +186,14 @@ typedef struct terrain_clipmap_desc {
     terrain_generation_desc generation;  /* copied; the world whose ground is drawn */
     job_system *jobs;                 /* computes new heights in parallel; NULL = the caller */
     /* The stacks where they exist (002 §3.5). With a world, a grid point whose four columns lie
-     * in chunks the world has cached (generated or edited; never generated for this) takes the
+     * in chunks the world has cached, or has edits of in its log, takes the
      * height the chunks' meshes draw there instead of G, and the texels of chunks that are
      * generated, committed or evicted are recomputed at the next update: edits show from afar
      * and the clipmap meets the chunks along the holes' border. Not owned: it must outlive the
      * clipmap; one clipmap per world; update where no trim runs meanwhile (as for the pointers
-     * terrain_world_stacks returns). A chunk evicted from the cache falls back to G. */
+     * terrain_world_stacks returns). An unedited chunk is never generated for this, and falls
+     * back to G once evicted; an edited one evicted is made again from the log (generated and
+     * replayed, on the update's jobs), so edits show from afar however old. */
     terrain_world *world;             /* NULL = G everywhere */
     float mesh_step;                  /* metres between the vertical samples of the meshes along
                                          the holes' border: the streamed rings' outermost level,
