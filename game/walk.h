@@ -193,8 +193,9 @@ typedef struct game_cave_view {
 /* Searches the columns within `radius` metres of (x, z) for a sheltered floor (an air gap above
  * the sea with ground under it and a roof over it: a cave, an arch, an overhang) that a level
  * path leads out of onto open ground, and a view from that ground into it with a clear line of
- * sight and the roof low enough in the picture to leave sky at its top. The deepest shelter wins,
- * then the nearest. False when there is none. Generates the chunks it reads (walk_cave.c). */
+ * sight and the roof low enough in the picture to leave sky at its top. The view nearest its
+ * mouth wins (the cave fills more of the picture), then the deepest shelter, then the nearest to
+ * (x, z). False when there is none. Generates the chunks it reads (walk_cave.c). */
 bool game_find_cave_view(terrain_world *world, double x, double z, double radius, game_cave_view *out);
 
 /* A look out over water from its shore: where to stand and which way to face. */

@@ -151,7 +151,7 @@ bool game_find_cave_view(terrain_world *world, double centre_x, double centre_z,
     float sea_level = params ? params->sea_level : 0.0f;
     static const int directions[8][2] = { { 1, 0 }, { 1, 1 }, { 0, 1 }, { -1, 1 }, { -1, 0 }, { -1, -1 }, { 0, -1 }, { 1, -1 } };
     bool found = false;
-    double best_depth = 0.0, best_distance = INFINITY;
+    double best_reach = INFINITY, best_depth = 0.0, best_distance = INFINITY;
     int cells = (int)ceil(radius / CAVE_GRID);
     terrain_layer layers[64];
     for (int k = -cells; k <= cells; k++)
@@ -168,10 +168,16 @@ bool game_find_cave_view(terrain_world *world, double centre_x, double centre_z,
                 game_cave_view view;
                 double depth;
                 if (!cave_view_along(world, x, z, &gap, dx / norm, dz / norm, &view, &depth)) continue;
-                /* deeper wins; within a grid step of the deepest, the nearer */
-                bool better = !found || depth > best_depth + CAVE_GRID ||
-                              (depth > best_depth - CAVE_GRID && distance < best_distance);
-                if (better) *out = view, best_depth = depth, best_distance = distance, found = true;
+                /* the view nearest its mouth wins (the cave fills more of the picture, the
+                 * ground before it less); within a grid step of that, the deeper, then the
+                 * nearer to the search's centre */
+                double reach = hypot(view.eye[0] - view.mouth[0], view.eye[2] - view.mouth[2]) - depth;
+                bool better = !found || reach < best_reach - CAVE_GRID ||
+                              (reach < best_reach + CAVE_GRID &&
+                               (depth > best_depth + CAVE_GRID ||
+                                (depth > best_depth - CAVE_GRID && distance < best_distance)));
+                if (better)
+                    *out = view, best_reach = reach, best_depth = depth, best_distance = distance, found = true;
             }
         }
     return found;
