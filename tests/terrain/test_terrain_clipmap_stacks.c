@@ -16,12 +16,12 @@
 
 /* Bedrock up to 10.5 m everywhere, except that with `step` columns at x ≥ 0 reach 11 m and 10 m
  * at x < 0. */
-typedef struct flat_world { bool step; } flat_world;
+typedef struct flat_world { bool step; float wall; } flat_world;   /* wall > 0: tops 10 and 10 + wall */
 
 static void flat_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
     (void)z;
     const flat_world *w = user;
-    float top = w->step ? (x >= 0 ? 11.0f : 10.0f) : 10.5f;
+    float top = w->wall > 0 ? (x >= 0 ? 10.0f + w->wall : 10.0f) : w->step ? (x >= 0 ? 11.0f : 10.0f) : 10.5f;
     terrain_stacks_builder_push(b, TERRAIN_BEDROCK, top - TERRAIN_FLOOR_Y);
 }
 
@@ -135,6 +135,26 @@ Test(terrain_clipmap_stacks, heights_are_what_a_mesh_of_the_steps_spacing_draws)
     cr_assert_float_eq(mesh_top_at(world, 0, 0, 3, 10.5f), 10.5f, 1e-4);
     cr_assert_float_eq(mesh_top_at(world, 0, 4, 3, 11.0f), 11.0f, 1e-4);
     cr_assert_float_eq(mesh_top_at(world, 2, 4, 4, 10.0f), 10.0f, 1e-4);
+    terrain_world_destroy(world);
+}
+
+/* A 4 m wall through the corner x = 0 (tops 10 m for x < 0, 14 m for x ≥ 0): there two of the
+ * four columns are solid and two are air from 11 to 13 m, so f = L/4 − 1 is exactly 0 all along
+ * that stretch (f(10) = (2·1 + 2·2)/4 − 1 = 0.5, f(14) = (2·1)/4 − 1 = −0.5). The mesh draws the
+ * wall's face through the corner, up to 13 m: vertices on the x-edges from the corner (f = 0,
+ * air) to x = 1 (f = 1) at t = 0. The texel is the face's top, 13 m, as the mesh's topmost
+ * vertex there; reading f = 0 as air, it was 11 m (the crossing between 10 and 11). */
+Test(terrain_clipmap_stacks, a_wall_through_the_corner_takes_its_top) {
+    flat_world w = { .wall = 4.0f };
+    terrain_world *world = flat_world_create(&w);
+    for (int64_t cz = -1; cz <= 0; cz++)
+        for (int64_t cx = -1; cx <= 0; cx++) terrain_world_stacks(world, (terrain_chunk_coord){ cx, cz });
+    terrain_clipmap *c = world_clipmap(world, 1.0f, 32, 1, 1.0f);
+    terrain_clipmap_update(c, (double[3]){ 0, 20, 0 });
+    cr_expect_eq(terrain__clipmap_texel(c, 0, 0, 3), 13.0f);
+    cr_expect_float_eq(mesh_top_at(world, 0, 0, 3, 12.0f), 13.0f, 1e-4);
+    cr_expect_eq(terrain__clipmap_texel(c, 0, 4, 3), 14.0f, "on the high side, its top");
+    terrain_clipmap_destroy(c);
     terrain_world_destroy(world);
 }
 

@@ -544,14 +544,17 @@ static bool corner_surface(const terrain_clipmap *c, chunk_memo *memo, int64_t x
         if (runs->count > 0) highest = fmax(highest, runs->top[runs->count - 1]);
         water = fmax(water, runs->lake);
     }
-    /* From the first sample above every solid (f = −1) down to the first solid one. */
+    /* From the first sample above every solid (f = −1) down to the first one not in air. A sample
+     * with f = 0 exactly lies on the surface itself: where two of the four columns are solid and
+     * two are air over a stretch (a wall through the corner), f is 0 all along it, and the mesh
+     * draws that vertical face up to its topmost such sample; the height is that sample's. */
     double step = c->desc.mesh_step;
     double y = step * ceil((highest + 1.0) / step);
     float above = corner_field(columns, y);
     *height = TERRAIN_FLOOR_Y;
     for (int guard = 0; guard < 4096 && y > TERRAIN_FLOOR_Y - step; guard++) {
         float below = corner_field(columns, y - step);
-        if (below > 0.0f) {
+        if (below >= 0.0f) {
             *height = (float)(y - step + (double)terrain__mesh_edge_t(below, above) * step);
             break;
         }
