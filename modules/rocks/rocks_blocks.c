@@ -943,9 +943,85 @@ static rocks_block_tile *build_tile(const rocks_block_tile_desc *desc) {
     return t;
 }
 
+/* ---- a block's smallest width (what a coarse field can show of it) ------------------------- */
+
+/* The extent of points `v` along unit normal n: max − min of n·v. */
+static double extent_along(const float n[3], const double (*v)[3], size_t count) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (size_t i = 0; i < count; i++) {
+        double d = (double)n[0] * v[i][0] + (double)n[1] * v[i][1] + (double)n[2] * v[i][2];
+        lo = fmin(lo, d), hi = fmax(hi, d);
+    }
+    return hi - lo;
+}
+
+/* The corners of a convex block: the points where three of its planes meet inside all the others
+ * (n·v ≤ d + 1 mm), into `out` (room for `capacity`); returns how many. */
+static size_t block_corners(const float (*planes)[4], uint32_t count, double (*out)[3], size_t capacity) {
+    size_t corners = 0;
+    for (uint32_t i = 0; i < count; i++)
+        for (uint32_t j = i + 1; j < count; j++)
+            for (uint32_t k = j + 1; k < count && corners < capacity; k++) {
+                const float *a = planes[i], *b = planes[j], *c = planes[k];
+                double bc[3] = { (double)b[1] * c[2] - (double)b[2] * c[1], (double)b[2] * c[0] - (double)b[0] * c[2],
+                                 (double)b[0] * c[1] - (double)b[1] * c[0] };
+                double ca[3] = { (double)c[1] * a[2] - (double)c[2] * a[1], (double)c[2] * a[0] - (double)c[0] * a[2],
+                                 (double)c[0] * a[1] - (double)c[1] * a[0] };
+                double ab[3] = { (double)a[1] * b[2] - (double)a[2] * b[1], (double)a[2] * b[0] - (double)a[0] * b[2],
+                                 (double)a[0] * b[1] - (double)a[1] * b[0] };
+                double det = a[0] * bc[0] + a[1] * bc[1] + a[2] * bc[2];
+                if (fabs(det) < 1e-6) continue;   /* two of them (nearly) parallel: no corner */
+                double v[3];
+                for (int e = 0; e < 3; e++) v[e] = ((double)a[3] * bc[e] + (double)b[3] * ca[e] + (double)c[3] * ab[e]) / det;
+                bool inside = true;
+                for (uint32_t m = 0; inside && m < count; m++)
+                    inside = planes[m][0] * v[0] + planes[m][1] * v[1] + planes[m][2] * v[2] <= planes[m][3] + 1e-3;
+                if (inside) memcpy(out[corners++], v, sizeof v);
+            }
+    return corners;
+}
+
+/* A block's smallest width: the least, over its planes' normals, of its extent along the normal
+ * (between its corners). For a box or a prism that is its thickness; for other shapes the true
+ * least width may lie between two edges and be smaller (a regular tetrahedron: 0.71 against 0.82
+ * of its edge), so the coarse fields' rule errs towards keeping a block, by that much at most.
+ * The smooth intersection (R/6 at an edge) and the relief (±8 cm) are left out: centimetres
+ * against the metres the rule compares. A block without corners (never seen: every block is
+ * closed by close_block) takes its points' extent instead. A block placed by hand: the smallest
+ * side of its box (the developer's bounds, which hold its solid part). */
+float rocks__block_width(const rocks_block_tile *t, uint32_t index) {
+    const rocks_block *b = &t->blocks[index];
+    if (b->custom) {
+        const rocks_block_custom *c = &t->desc.custom[b->custom - 1];
+        return fminf(fminf(c->bounds_max[0] - c->bounds_min[0], c->bounds_max[1] - c->bounds_min[1]),
+                     c->bounds_max[2] - c->bounds_min[2]);
+    }
+    const float (*planes)[4] = (const float(*)[4])t->planes + b->plane_first;
+    enum { MAX_CORNERS = 512 };
+    double corners[MAX_CORNERS][3];
+    size_t count = block_corners(planes, b->plane_count, corners, MAX_CORNERS);
+    if (count < 4) {   /* not a solid: measure its points */
+        count = b->point_count < MAX_CORNERS ? b->point_count : MAX_CORNERS;
+        for (size_t i = 0; i < count; i++)
+            for (int a = 0; a < 3; a++) corners[i][a] = t->points[b->point_first + i][a];
+    }
+    double width = INFINITY;
+    for (uint32_t k = 0; k < b->plane_count; k++)
+        width = fmin(width, extent_along(planes[k], (const double(*)[3])corners, count));
+    return count ? (float)width : 0.0f;
+}
+
+float rocks__coarse_erosion(float width, float spacing) {
+    if (spacing <= TERRAIN_COLUMN_SIZE) return 0.0f;       /* level 0: every block as it is */
+    if (width <= spacing) return INFINITY;                 /* gone under a kernel of ±h */
+    return fmaxf(0.0f, spacing - 0.5f * width);            /* h − w/2: 2(w − h) of w left */
+}
+
 /* The tile copies a box can meet come from the union of the blocks' bounds (rocks__cell_range):
- * worked out once, not per field. */
+ * worked out once, not per field; so are the blocks' widths (derived, so not in the cache file). */
 static rocks_block_tile *tile_finish(rocks_block_tile *t) {
+    t->widths = core_alloc((t->block_count + 1) * sizeof *t->widths);
+    for (uint32_t b = 0; b < t->block_count; b++) t->widths[b] = rocks__block_width(t, b);
     for (int a = 0; a < 3; a++) t->reach_min[a] = 0.0f, t->reach_max[a] = 0.0f;
     for (uint32_t b = 0; b < t->block_count; b++)
         for (int a = 0; a < 3; a++) {
@@ -987,8 +1063,9 @@ void rocks__block_tile_free_arrays(rocks_block_tile *t) {
     if (t->discs) core_free(t->discs, (t->disc_count + 1) * sizeof *t->discs);
     if (t->grid_first) core_free(t->grid_first, (cells + 1) * sizeof *t->grid_first);
     if (t->grid_entries) core_free(t->grid_entries, (t->grid_entry_count + 1) * sizeof *t->grid_entries);
+    if (t->widths) core_free(t->widths, (t->block_count + 1) * sizeof *t->widths);
     t->blocks = NULL, t->planes = NULL, t->points = NULL, t->discs = NULL;
-    t->grid_first = NULL, t->grid_entries = NULL;
+    t->grid_first = NULL, t->grid_entries = NULL, t->widths = NULL;
 }
 
 void rocks_block_tile_destroy(rocks_block_tile *t) {
@@ -1065,6 +1142,9 @@ static bool may_exceed(const rocks_block_tile *tile, const rocks_block *b, const
 
 /* One present copy (block `b` moved by `cell` tiles) raised into the samples its bounds cover. */
 bool rocks__amplify_copy(const rocks_block_tile *tile, uint32_t b, const double cell[3], terrain_field *field) {
+    /* a coarse field: the block thinned as a box filter of ±h thins it, or gone (rocks_blocks.h) */
+    const float erosion = rocks__coarse_erosion(tile->widths[b], field->spacing);
+    if (erosion == INFINITY) return false;
     const rocks_block *block = &tile->blocks[b];
     const double s = tile->desc.size;
     int first[3], last[3];
@@ -1081,8 +1161,8 @@ bool rocks__amplify_copy(const rocks_block_tile *tile, uint32_t b, const double 
                 float local[3];
                 for (int a = 0; a < 3; a++)
                     local[a] = (float)(field->origin[a] + index[a] * (double)field->spacing - cell[a] * s);
-                if (!block->custom && !may_exceed(tile, block, local, *v)) continue;
-                float t = fminf(1.0f, rocks_block_field(tile, b, local, NULL));
+                if (!block->custom && !may_exceed(tile, block, local, *v + erosion)) continue;
+                float t = fminf(1.0f, rocks_block_field(tile, b, local, NULL) - erosion);
                 if (t > *v) *v = t;
             }
     return true;

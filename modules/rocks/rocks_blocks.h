@@ -129,6 +129,8 @@ typedef struct rocks_block_tile {
     uint32_t *grid_entries;           /* block << 5 | image (0 … 26: offset ∈ {−1, 0, 1}³) */
     uint32_t grid_entry_count;
     float reach_min[3], reach_max[3]; /* the union of the blocks' bounds with the tile's origin */
+    float *widths;                    /* per block: its smallest width (metres), which decides
+                                         whether a coarse field shows it (rocks_block_tile_amplify) */
 } rocks_block_tile;
 
 /* NULL with a message naming the field for a bad desc. With desc->cache_path (and no custom

@@ -19,7 +19,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#define CACHE_CAPACITY 16384          /* entries (a power of two); emptied when 3/4 full */
+#define CACHE_CAPACITY 65536          /* entries (a power of two); emptied when 3/4 full */
 #define VERSION_MARGIN 2.0            /* metres past a cell that its presence reads */
 
 typedef struct cell_entry {
@@ -27,13 +27,16 @@ typedef struct cell_entry {
     int64_t cell[3];
     int type;
     uint64_t versions;                /* hash of the versions of the column chunks it read */
-    uint64_t *bits;                   /* present blocks, one bit each */
+    float known_above;                /* presence is worked out for the blocks wider than this */
+    uint64_t *bits;                   /* present blocks, one bit each (0 for those not worked out) */
 } cell_entry;
 
 struct rocks_cliffs {
     rocks_cliffs_desc desc;
     rocks_block_tile *tiles[ROCKS_BLOCK_TYPE_END];     /* by type; NULL for types no stratum uses */
     size_t words[ROCKS_BLOCK_TYPE_END];                /* 64-bit words of a cell's bits */
+    float widest[ROCKS_BLOCK_TYPE_END];                /* its widest block (coarse fields skip a
+                                                          type none of whose blocks they show) */
     pthread_mutex_t lock;
     cell_entry *cache;
     size_t used;
@@ -51,7 +54,7 @@ static bool cliffs_desc_make(const rocks_cliffs_desc *in, rocks_cliffs_desc *d) 
     if (d->stratum_height == 0) d->stratum_height = 20.0f;
     if (d->tile_size == 0) d->tile_size = 16.0f;
     if (d->joint == 0) d->joint = fminf(0.6f, d->tile_size / 24.0f);   /* at most the points' spacing */
-    if (d->max_spacing == 0) d->max_spacing = 1.0f;
+    if (d->max_spacing == 0) d->max_spacing = 4.0f;
     if (d->block_scale == 0) d->block_scale = 1.0f;
     const char *bad = NULL;
     if (d->strata_count < 1 || d->strata_count > 8) bad = "strata_count (1 … 8)";
@@ -126,6 +129,8 @@ rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc) {
         c->tiles[jobs.types[i]] = jobs.tiles[i];
         if (!jobs.tiles[i]) ok = false;
         else c->words[jobs.types[i]] = (jobs.tiles[i]->block_count + 63) / 64;
+        for (uint32_t b = 0; jobs.tiles[i] && b < jobs.tiles[i]->block_count; b++)
+            c->widest[jobs.types[i]] = fmaxf(c->widest[jobs.types[i]], jobs.tiles[i]->widths[b]);
         if (jobs.tiles[i]) c->stats.blocks += jobs.tiles[i]->block_count;
         if (jobs.tiles[i] && jobs.tiles[i]->from_cache) c->stats.tiles_from_cache++;
     }
@@ -323,28 +328,38 @@ static uint64_t cell_key(int type, const int64_t cell[3]) {
     return h ? h : 1;
 }
 
-/* The present blocks of `type`'s tile copy at `cell`, into bits (c->words[type] words): from the
- * cache when its versions still hold, else worked out and kept. */
-static void cell_presence(rocks_cliffs *c, const version_table *table, int type, const int64_t cell[3], uint64_t *bits) {
+/* The present blocks of `type`'s tile copy at `cell` among those wider than `above` metres, into
+ * bits (c->words[type] words; the others' bits 0): from the cache when its versions still hold
+ * and it knows those blocks, else worked out and kept. A coarse field shows only blocks wider
+ * than its spacing (rocks__coarse_erosion), so the far rings ask about a few of a cell's blocks,
+ * and a finer field later adds the rest to the same entry. Presence is per block, so a block's
+ * bit is the same whichever field asked first. */
+static void cell_presence(rocks_cliffs *c, const version_table *table, int type, const int64_t cell[3], float above,
+                          uint64_t *bits) {
     terrain_world *world = table->world;
     const rocks_block_tile *tile = c->tiles[type];
     const size_t words = c->words[type];
     const uint64_t key = cell_key(type, cell), versions = cell_versions(table, cell, tile->desc.size);
+    float known = INFINITY;           /* the blocks wider than this are in bits already */
+    memset(bits, 0, words * sizeof *bits);
     pthread_mutex_lock(&c->lock);
     for (size_t i = key & (CACHE_CAPACITY - 1);; i = (i + 1) & (CACHE_CAPACITY - 1)) {
         cell_entry *e = &c->cache[i];
         if (!e->key) break;
         if (e->key == key && e->type == type && !memcmp(e->cell, cell, sizeof e->cell) && e->versions == versions) {
             memcpy(bits, e->bits, words * sizeof *bits);
-            c->stats.cells_reused++;
-            pthread_mutex_unlock(&c->lock);
-            return;
+            known = e->known_above;
+            if (known <= above) {
+                c->stats.cells_reused++;
+                pthread_mutex_unlock(&c->lock);
+                return;
+            }
+            break;   /* it knows the wider blocks only: add the others */
         }
     }
     pthread_mutex_unlock(&c->lock);
 
     const uint64_t presence_start = core_time_ns();
-    memset(bits, 0, words * sizeof *bits);
     const double s = tile->desc.size;
     surface_bounds bounds;
     int shortcut = -1;                /* made at the first anchor in a stratum of `type` */
@@ -352,6 +367,7 @@ static void cell_presence(rocks_cliffs *c, const version_table *table, int type,
         double anchor[3];
         for (int a = 0; a < 3; a++) anchor[a] = (double)cell[a] * s + tile->blocks[b].anchor[a];
         if (stratum_type(&c->desc, anchor[1]) != type) continue;
+        if (!(tile->widths[b] > above && tile->widths[b] <= known)) continue;   /* not asked, or known */
         if (shortcut < 0) shortcut = surface_bounds_make(world, cell, s, &bounds);
         if (!(shortcut && far_from_surface(&bounds, anchor)) && on_bedrock_wall(c, world, anchor) &&
             mostly_in_the_wall(world, &tile->blocks[b], tile->points, (double)cell[0] * s, (double)cell[1] * s,
@@ -374,6 +390,7 @@ static void cell_presence(rocks_cliffs *c, const version_table *table, int type,
         c->used++;
     }
     e->versions = versions;   /* an older entry for the cell is brought up to date */
+    e->known_above = above;
     memcpy(e->bits, bits, words * sizeof *bits);
     pthread_mutex_unlock(&c->lock);
 }
@@ -384,6 +401,8 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
     rocks_cliffs *c = user;
     if (field->spacing > c->desc.max_spacing) return;   /* the same for every field at a spacing */
     const uint64_t start = core_time_ns();
+    /* a coarse field shows only the blocks wider than its spacing (rocks__coarse_erosion) */
+    const float above = field->spacing > TERRAIN_COLUMN_SIZE ? field->spacing : -INFINITY;
     const int n[3] = { field->nx, field->ny, field->nz };
     double lo[3], hi[3];
     for (int a = 0; a < 3; a++) lo[a] = field->origin[a], hi[a] = field->origin[a] + (n[a] - 1) * (double)field->spacing;
@@ -391,7 +410,7 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
     double reach_lo[3] = { INFINITY, INFINITY, INFINITY }, reach_hi[3] = { -INFINITY, -INFINITY, -INFINITY };
     for (int type = 0; type < ROCKS_BLOCK_TYPE_END; type++) {
         const rocks_block_tile *tile = c->tiles[type];
-        if (!tile) continue;
+        if (!tile || !(c->widest[type] > above)) continue;
         rocks__cell_range(tile, lo, hi, c0[type], c1[type]);
         for (int a = 0; a < 3; a++) {
             reach_lo[a] = fmin(reach_lo[a], (double)c0[type][a] * tile->desc.size);
@@ -404,7 +423,7 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
     uint64_t present = 0, bits[64];
     for (int type = 0; type < ROCKS_BLOCK_TYPE_END; type++) {
         const rocks_block_tile *tile = c->tiles[type];
-        if (!tile || c->words[type] > CORE_COUNTOF(bits)) continue;
+        if (!tile || !(c->widest[type] > above) || c->words[type] > CORE_COUNTOF(bits)) continue;
         const double s = tile->desc.size;
         for (int64_t z = c0[type][2]; z <= c1[type][2]; z++)
             for (int64_t y = c0[type][1]; y <= c1[type][1]; y++)
@@ -414,7 +433,7 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
                     /* every cell the blocks' union reaches is asked once and kept (asking which
                      * block reaches the box cost more than the cached answer, for the small
                      * fields of collision and picking) */
-                    cell_presence(c, &versions, type, cell, bits);
+                    cell_presence(c, &versions, type, cell, above, bits);
                     const double at[3] = { (double)x, (double)y, (double)z };
                     for (size_t w = 0; w < c->words[type]; w++)
                         for (uint64_t m = bits[w]; m; m &= m - 1) {

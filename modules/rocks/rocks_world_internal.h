@@ -25,6 +25,15 @@ uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const
  * hold none of them. */
 bool rocks__amplify_copy(const rocks_block_tile *tile, uint32_t block, const double cell[3], terrain_field *field);
 
+/* Coarse fields (003 §5 at a level of detail; rocks_blocks.h, rocks_block_tile_amplify, says
+ * why): in a field sampled every `spacing` = h > 1 m a block of smallest width w
+ * (rocks_block_tile.widths) is lowered by this many metres, h − w/2 when w < 2h (0 when w ≥ 2h),
+ * and INFINITY (not shown at all) when w ≤ h. 0 for fields at 1 m: every block as it is. */
+float rocks__coarse_erosion(float width, float spacing);
+/* A block's smallest width, metres: the least extent along its planes' normals (rocks_blocks.c
+ * says where that errs); a block placed by hand, its box's smallest side. */
+float rocks__block_width(const rocks_block_tile *tile, uint32_t block);
+
 /* The tile copies (their tile coordinates c0 … c1, inclusive) some block of which can reach the
  * box [lo, hi]: the union of the blocks' bounds, moved by whole tiles, meets it. */
 void rocks__cell_range(const rocks_block_tile *tile, const double lo[3], const double hi[3], int64_t c0[3],

@@ -10,6 +10,7 @@
 #include "jobs/jobs.h"
 #include "rocks/rocks.h"
 #include "rocks/rocks_internal.h"
+#include "rocks/rocks_world_internal.h"
 
 #include <dirent.h>
 #include <math.h>
@@ -486,6 +487,134 @@ Test(rocks_blocks, chunks_with_blocks_meet_exactly) {
     rocks_block_tile_destroy(w.tile);
 }
 
+/* ---- coarse fields: what a level of detail shows of a block ---------------------------------- */
+
+/* A block's smallest width by hand: a 3 × 1.5 × 5 box is 1.5 wide; the cube [0, 3]³ with its
+ * corner cut by x + y + z ≤ 4.5 is 4.5/√3 = 2.598 wide along (1, 1, 1) (corners (0, 0, 0) and the
+ * cut's plane) and 3 along each axis; an equilateral triangle of side 2 drawn out 5 m along y
+ * is a prism √3 = 1.732 wide (a side to the opposite corner). */
+Test(rocks_blocks, block_width_by_hand) {
+    const float r3 = 0.57735027f;   /* 1/√3 */
+    float box[6][4] = { { 1, 0, 0, 3 }, { -1, 0, 0, 0 }, { 0, 1, 0, 1.5f }, { 0, -1, 0, 0 }, { 0, 0, 1, 5 }, { 0, 0, -1, 0 } };
+    float cut[7][4] = { { 1, 0, 0, 3 }, { -1, 0, 0, 0 }, { 0, 1, 0, 3 }, { 0, -1, 0, 0 }, { 0, 0, 1, 3 }, { 0, 0, -1, 0 },
+                        { r3, r3, r3, 4.5f * r3 } };
+    /* sides through (0, 0), (2, 0), (1, √3) in x, z, normals pointing out */
+    const float h = 1.7320508f;
+    float prism[5][4] = { { 0, 0, -1, 0 }, { h / 2, 0, 0.5f, h }, { -h / 2, 0, 0.5f, 0 }, { 0, 1, 0, 5 }, { 0, -1, 0, 0 } };
+    const struct { float (*planes)[4]; uint32_t count; float width; } cases[] = {
+        { box, 6, 1.5f }, { cut, 7, 4.5f * r3 }, { prism, 5, h } };
+    for (size_t i = 0; i < CORE_COUNTOF(cases); i++) {
+        rocks_block block = { .plane_first = 0, .plane_count = cases[i].count };
+        rocks_block_tile tile = { .desc = { .rounding = 0.25f, .relief = -1.0f }, .blocks = &block, .block_count = 1,
+                                  .planes = cases[i].planes, .plane_count = cases[i].count };
+        cr_assert_float_eq(rocks__block_width(&tile, 0), cases[i].width, 1e-4f, "case %zu", i);
+    }
+    /* the rule itself: level 0 keeps all; at h = 2 a block 2 m wide or less is gone, 3 m is
+     * thinned by 2 − 1.5 = 0.5, 4 m and more kept as it is */
+    cr_assert_eq(rocks__coarse_erosion(0.5f, 1.0f), 0.0f);
+    cr_assert_eq(rocks__coarse_erosion(2.0f, 2.0f), INFINITY);
+    cr_assert_float_eq(rocks__coarse_erosion(3.0f, 2.0f), 0.5f, 1e-6f);
+    cr_assert_eq(rocks__coarse_erosion(4.0f, 2.0f), 0.0f);
+    cr_assert_eq(rocks__coarse_erosion(9.0f, 4.0f), 0.0f);
+}
+
+/* Boxes given by hand: > 0 inside, the distance to the nearest face inside. */
+typedef struct hand_box { float lo[3], hi[3]; } hand_box;
+
+static float hand_box_field(void *user, const float p[3]) {
+    const hand_box *b = user;
+    float v = INFINITY;
+    for (int a = 0; a < 3; a++) v = fminf(v, fminf(p[a] - b->lo[a], b->hi[a] - p[a]));
+    return v;
+}
+
+/* Only the hand-made blocks (the first `custom_count`) of the tile copy at the origin. */
+static bool hand_blocks_at_origin(void *user, uint32_t block, const double anchor[3]) {
+    const rocks_block_tile *t = user;
+    bool origin = true;
+    for (int a = 0; a < 3; a++) origin &= anchor[a] >= 0 && anchor[a] < t->desc.size;
+    return origin && block < (uint32_t)t->desc.custom_count;
+}
+
+static void amplify_hand_blocks(void *user, terrain_world *world, terrain_field *field) {
+    (void)world;
+    rocks_block_tile_amplify(user, field, hand_blocks_at_origin, user);
+}
+
+/* The coarse fields' rule on the wall x = 0, with three boxes standing out of it, 1.5, 3 and 5 m
+ * at their thinnest: at 1 m every box raises the field (level 0 unchanged); at 2 m the 1.5 m box
+ * leaves the base field as it was, the 3 m one is thinned by 0.5 m (h − w/2), the 5 m one is as
+ * at 1 m; at 4 m the 3 m box is gone too and the 5 m one thinned by 1.5 m. Values worked out from
+ * the boxes' own fields, not read from the code. */
+Test(rocks_blocks, coarse_fields_drop_thin_blocks) {
+    hand_box boxes[3] = { { { -1, 3, 2 }, { 2, 4.5f, 8 } },        /* 1.5 m (y) */
+                          { { -1, 7, 2 }, { 2, 11, 8 } },          /* 3 m (x) */
+                          { { -2, 13, 2 }, { 3, 18.5f, 8 } } };    /* 5 m (x) */
+    rocks_block_custom custom[3];
+    for (int i = 0; i < 3; i++) {
+        custom[i] = (rocks_block_custom){ .field = hand_box_field, .user = &boxes[i] };
+        memcpy(custom[i].bounds_min, boxes[i].lo, sizeof boxes[i].lo);
+        memcpy(custom[i].bounds_max, boxes[i].hi, sizeof boxes[i].hi);
+    }
+    rocks_block_tile *t = rocks_block_tile_create(&(rocks_block_tile_desc){
+        .type = ROCKS_BLOCK_EQUIDIMENSIONAL, .size = 24, .point_spacing = 2, .fracture_spacing = 6, .fracture_radius = 6,
+        .custom = custom, .custom_count = 3 });
+    cr_assert_not_null(t);
+    for (uint32_t i = 0; i < 3; i++) cr_assert_eq(t->blocks[i].custom, i + 1);
+    cr_assert_float_eq(t->widths[0], 1.5f, 1e-6f);
+    cr_assert_float_eq(t->widths[1], 3.0f, 1e-6f);
+    cr_assert_float_eq(t->widths[2], 5.0f, 1e-6f);
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = wall_chunk, .amplify = amplify_hand_blocks,
+                                                                     .amplify_user = t });
+    terrain_world *plain = terrain_world_create(&(terrain_world_desc){ .generate = wall_chunk });
+    terrain_field fine, coarse, coarsest, base;
+    cr_assert(terrain_field_sample(world, &(terrain_field_desc){ .first = { -4, 0, 0 }, .size = { 9, 21, 11 } }, &fine));
+    cr_assert(terrain_field_sample(plain, &(terrain_field_desc){ .first = { -4, 0, 0 }, .size = { 9, 21, 11 } }, &base));
+    cr_assert(terrain_field_sample(world, &(terrain_field_desc){ .first = { -4, 0, 0 }, .size = { 5, 11, 6 }, .step = 2 },
+                                   &coarse));
+    cr_assert(terrain_field_sample(world, &(terrain_field_desc){ .first = { -4, 0, 0 }, .size = { 3, 6, 3 }, .step = 4 },
+                                   &coarsest));
+    int raised_fine[3] = { 0 }, raised_coarse[3] = { 0 };
+    for (int z = 0; z < 11; z++)
+        for (int y = 0; y < 21; y++)
+            for (int x = 0; x < 9; x++) {
+                const float p[3] = { (float)(x - 4), (float)y, (float)z };
+                const size_t i = ((size_t)z * 21 + y) * 9 + x;
+                int which = y < 6 ? 0 : y < 12 ? 1 : 2;   /* the box whose bounds (±1 m) hold it */
+                float expected = fmaxf(base.values[i], fminf(1.0f, hand_box_field(&boxes[which], p)));
+                cr_assert_float_eq(fine.values[i], expected, 1e-6f, "level 0 at %g %g %g", p[0], p[1], p[2]);
+                raised_fine[which] += fine.values[i] > base.values[i];
+                if (x % 2 || y % 2 || z % 2) continue;   /* the coarse field's samples */
+                const float erosion[3] = { INFINITY, 0.5f, 0.0f };
+                float coarse_expected = fmaxf(base.values[i], fminf(1.0f, hand_box_field(&boxes[which], p) - erosion[which]));
+                float v = coarse.values[((size_t)(z / 2) * 11 + y / 2) * 5 + x / 2];
+                cr_assert_float_eq(v, coarse_expected, 1e-6f, "2 m at %g %g %g", p[0], p[1], p[2]);
+                raised_coarse[which] += v > base.values[i];
+                if (which == 2) cr_assert_eq(v, fine.values[i], "the 5 m box as at 1 m");
+                if (x % 4 || y % 4 || z % 4) continue;   /* the coarsest field's */
+                const float erosion4[3] = { INFINITY, INFINITY, 1.5f };
+                float coarsest_expected = fmaxf(base.values[i], fminf(1.0f, hand_box_field(&boxes[which], p) - erosion4[which]));
+                cr_assert_float_eq(coarsest.values[((size_t)(z / 4) * 6 + y / 4) * 3 + x / 4], coarsest_expected, 1e-6f,
+                                   "4 m at %g %g %g", p[0], p[1], p[2]);
+            }
+    for (int b = 0; b < 3; b++) cr_assert_gt(raised_fine[b], 10, "box %d stands out at 1 m", b);
+    cr_assert_eq(raised_coarse[0], 0, "the 1.5 m box leaves the 2 m field as it was");
+    cr_assert_gt(raised_coarse[1], 3, "the 3 m box, thinned, still shows at 2 m");
+    cr_assert_gt(raised_coarse[2], 3);
+    /* by hand: (0, 8, 4) on the face (base 0) is 1 m inside the 3 m box, 0.5 after thinning;
+     * (0, 16, 4) is 2 m inside the 5 m box: 1 (clamped) at 2 m, 2 − 1.5 = 0.5 at 4 m */
+    cr_assert_float_eq(coarse.values[((size_t)2 * 11 + 4) * 5 + 2], 0.5f, 1e-6f);
+    cr_assert_float_eq(coarse.values[((size_t)2 * 11 + 8) * 5 + 2], 1.0f, 1e-6f);
+    cr_assert_float_eq(coarsest.values[((size_t)1 * 6 + 4) * 3 + 1], 0.5f, 1e-6f);
+    terrain_field_free(&fine);
+    terrain_field_free(&coarse);
+    terrain_field_free(&coarsest);
+    terrain_field_free(&base);
+    terrain_world_destroy(world);
+    terrain_world_destroy(plain);
+    rocks_block_tile_destroy(t);
+}
+
 /* ---- cliffs in a world (rocks_cliffs) -------------------------------------------------------- */
 
 /* The same wall in sand, on sand: bedrock only 5 m under the floor. */
@@ -537,9 +666,17 @@ Test(rocks_blocks, cliffs_on_bedrock_walls) {
     rocks_cliffs_stats_info second = rocks_cliffs_stats(cliffs);
     cr_assert_eq(second.cells_computed, first.cells_computed, "the second field computes no cell again");
     cr_assert_gt(second.cells_reused, first.cells_reused);
-    cr_assert_eq(raised_samples(wall_chunk, world, 4), 0, "none below the coarse grid");
+    cr_assert_eq(raised_samples(wall_chunk, world, 8), 0, "none past max_spacing (4 m)");
     terrain_world_destroy(world);
     rocks_cliffs_destroy(cliffs);
+    rocks_cliffs_desc fine_only = desc;
+    fine_only.max_spacing = 1;
+    rocks_cliffs *level0 = rocks_cliffs_create(&fine_only);
+    terrain_world *level0_world = cliff_world(wall_chunk, level0);
+    cr_assert_gt(raised_samples(wall_chunk, level0_world, 1), 20);
+    cr_assert_eq(raised_samples(wall_chunk, level0_world, 2), 0, "max_spacing 1: level 0 only");
+    terrain_world_destroy(level0_world);
+    rocks_cliffs_destroy(level0);
 
     rocks_cliffs *sand = rocks_cliffs_create(&desc);
     terrain_world *sand_world = cliff_world(sand_wall_chunk, sand);
@@ -550,6 +687,38 @@ Test(rocks_blocks, cliffs_on_bedrock_walls) {
     cr_assert_null(rocks_cliffs_create(&(rocks_cliffs_desc){ .strata_count = 9 }));
     cr_assert_null(rocks_cliffs_create(&(rocks_cliffs_desc){ .strata_count = 1, .strata = { (rocks_block_type)7 } }));
     cr_assert_null(rocks_cliffs_create(&(rocks_cliffs_desc){ .stratum_height = -1 }));
+}
+
+/* The world's cliffs at 2 m (level 1): some blocks show, and a coarse sample is never above the
+ * 1 m field's at the same point nor below the base field (a coarse field shows a subset of the
+ * blocks, each thinned or as it is: f̃ = max(f, t − e) with e ≥ 0). */
+Test(rocks_blocks, cliffs_in_coarse_fields) {
+    rocks_cliffs *cliffs = rocks_cliffs_create(&(rocks_cliffs_desc){ .strata_count = 1, .strata = { ROCKS_BLOCK_COLUMNAR },
+                                                                     .tile_size = 12 });
+    terrain_world *world = cliff_world(wall_chunk, cliffs);
+    terrain_world *plain = terrain_world_create(&(terrain_world_desc){ .generate = wall_chunk });
+    terrain_field fine, coarse, base;
+    cr_assert(terrain_field_sample(world, &(terrain_field_desc){ .first = { -8, 0, 0 }, .size = { 17, 21, 25 } }, &fine));
+    cr_assert(terrain_field_sample(plain, &(terrain_field_desc){ .first = { -8, 0, 0 }, .size = { 17, 21, 25 } }, &base));
+    cr_assert(terrain_field_sample(world, &(terrain_field_desc){ .first = { -8, 0, 0 }, .size = { 9, 11, 13 }, .step = 2 },
+                                   &coarse));
+    int raised = 0;
+    for (int z = 0; z < 13; z++)
+        for (int y = 0; y < 11; y++)
+            for (int x = 0; x < 9; x++) {
+                float v = coarse.values[((size_t)z * 11 + y) * 9 + x];
+                size_t i = ((size_t)(2 * z) * 21 + 2 * y) * 17 + 2 * x;
+                cr_assert_leq(v, fine.values[i]);
+                cr_assert_geq(v, base.values[i]);
+                raised += v > base.values[i];
+            }
+    cr_assert_gt(raised, 0, "blocks in the 2 m field");
+    terrain_field_free(&fine);
+    terrain_field_free(&coarse);
+    terrain_field_free(&base);
+    terrain_world_destroy(world);
+    terrain_world_destroy(plain);
+    rocks_cliffs_destroy(cliffs);
 }
 
 /* Strata: with tabular blocks in the bands [0, 10) and [20, 30) and columnar ones between, the
