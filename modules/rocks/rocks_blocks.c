@@ -1011,9 +1011,13 @@ float rocks__block_width(const rocks_block_tile *t, uint32_t index) {
     return count ? (float)width : 0.0f;
 }
 
+float rocks__coarse_min_width(float spacing) {
+    return spacing <= TERRAIN_COLUMN_SIZE ? -INFINITY : ROCKS__COARSE_MIN_WIDTH * spacing;
+}
+
 float rocks__coarse_erosion(float width, float spacing) {
     if (spacing <= TERRAIN_COLUMN_SIZE) return 0.0f;       /* level 0: every block as it is */
-    if (width <= spacing) return INFINITY;                 /* gone under a kernel of ±h */
+    if (!(width > rocks__coarse_min_width(spacing))) return INFINITY;
     return fmaxf(0.0f, spacing - 0.5f * width);            /* h − w/2: 2(w − h) of w left */
 }
 

@@ -163,7 +163,24 @@ float rocks_block_tile_field(const rocks_block_tile *tile, const double p[3], ro
 /* Raises a terrain field's samples to the tile's replication: f̃ = max(f, t) with t clamped to
  * [−1, 1] as the terrain's field is. Each block copy that reaches the field's box is asked for
  * presence once, then evaluated at the samples inside its bounds. Meant for a world's amplify
- * hook (terrain_world_desc.amplify): see tools/examples/rocks/rocks_blocks.c. */
+ * hook (terrain_world_desc.amplify): see tools/examples/rocks/rocks_blocks.c.
+ *
+ * Coarse fields (a level of detail: field->spacing = h > 1 m) get the blocks filtered to what
+ * their grid can hold. The terrain's own f is its stacks under a box kernel of ±σ, σ = 1 m,
+ * sampled every metre at level 0 (000 §3.3): the kernel spans two samples. Held to that ratio
+ * at spacing h, a kernel of ±h turns a slab of thickness w into one of 2(w − h) when h < w < 2h
+ * (its zero set is where more than half the kernel is solid), keeps it as it is when w ≥ 2h and
+ * erases it when w ≤ h. Without the filter a block under 2h aliases: at 2 m a 1.5 m tabular slab
+ * or a 2 m column is met by one row of samples or by none, and the mesh shows notches and
+ * shards that move with the grid's phase. So a block of smallest width w (widths above: the
+ * least extent along its planes' normals) is lowered by e = h − w/2 when w < 2h (0 above),
+ * which thins it to 2(w − h), and is left out when w ≤ 1.5 h: what the filter would leave of it
+ * is under h, which rows of samples would meet or miss by turns (bumps that move with the grid),
+ * and leaving it out spares its presence. Its other sides go in by e too (they are at least w
+ * long: a simplification of the separable kernel). Per block, not per sample: the
+ * result is still a function of the position and the presence alone (the amplify hook's
+ * contract), and every field at one spacing is treated alike, so chunks and their seams agree.
+ * Fields at 1 m (level 0, collision, picking) see every block as it is. */
 void rocks_block_tile_amplify(const rocks_block_tile *tile, terrain_field *field, rocks_block_presence_fn present,
                               void *user);
 
@@ -191,9 +208,11 @@ bool rocks_block_on_walls(void *wall_presence, uint32_t block, const double anch
  * must lie inside the wall or within half a metre of its face (003 §5's several anchors), the
  * highest among them (no block stands over the wall's rim as a spike). It is
  * worked out once per tile cell and kept, checked against the versions of the
- * column chunks it read, so an edit brings it up to date. Fields sampled coarser than
- * max_spacing get no blocks (a block is a few metres: below such a grid it is noise); every
- * field at one spacing is treated alike, so chunks and their LOD seams agree. */
+ * column chunks it read, so an edit brings it up to date. Fields sampled up to max_spacing get
+ * blocks; those coarser than 1 m show only the blocks wider than 1.5 spacings, thinned as
+ * rocks_block_tile_amplify says (a box filter of the spacing: no spikes from blocks thinner than
+ * the grid), and a cell's presence is worked out only for those blocks until a finer field
+ * asks. Every field at one spacing is treated alike, so chunks and their LOD seams agree. */
 typedef struct rocks_cliffs_desc {
     uint64_t seed;                    /* 0 = 1 */
     rocks_block_type strata[8];       /* bottom up, repeating; all zero with count 0 = tabular,
@@ -205,8 +224,12 @@ typedef struct rocks_cliffs_desc {
                                          lose thinner ones */
     float steepness, depth_min, depth_max;   /* rocks_wall_presence's; all 0 = ε 0.5 and the
                                          anchor in [−0.6, 1.0] (up to the field's clamp) */
-    float max_spacing;                /* 0 = 1 m (level of detail 0: at 2 m a block of a few
-                                         metres aliases into spikes) */
+    float max_spacing;                /* 0 = 4 m: fields sampled up to this get blocks (the
+                                         rings of levels 0, 1 and 2), coarser ones none. At
+                                         h > 1 m a block shows only when wider than 1.5 h,
+                                         thinned by h − w/2 under 2h (rocks_block_tile_amplify); 1 =
+                                         level 0 only (a block of a few metres at 2 m unfiltered
+                                         aliased into spikes) */
     float block_scale;                /* 0 = 1: the blocks' size. The tiles' side (tile_size),
                                          their points' spacing and the types' fracture spacings
                                          and disc radii all scale by it, so the blocks keep their

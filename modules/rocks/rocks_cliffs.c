@@ -331,7 +331,7 @@ static uint64_t cell_key(int type, const int64_t cell[3]) {
 /* The present blocks of `type`'s tile copy at `cell` among those wider than `above` metres, into
  * bits (c->words[type] words; the others' bits 0): from the cache when its versions still hold
  * and it knows those blocks, else worked out and kept. A coarse field shows only blocks wider
- * than its spacing (rocks__coarse_erosion), so the far rings ask about a few of a cell's blocks,
+ * than 1.5 spacings (rocks__coarse_min_width), so the far rings ask about a few of a cell's blocks,
  * and a finer field later adds the rest to the same entry. Presence is per block, so a block's
  * bit is the same whichever field asked first. */
 static void cell_presence(rocks_cliffs *c, const version_table *table, int type, const int64_t cell[3], float above,
@@ -401,8 +401,8 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
     rocks_cliffs *c = user;
     if (field->spacing > c->desc.max_spacing) return;   /* the same for every field at a spacing */
     const uint64_t start = core_time_ns();
-    /* a coarse field shows only the blocks wider than its spacing (rocks__coarse_erosion) */
-    const float above = field->spacing > TERRAIN_COLUMN_SIZE ? field->spacing : -INFINITY;
+    /* a coarse field shows only the blocks wider than this (rocks__coarse_erosion) */
+    const float above = rocks__coarse_min_width(field->spacing);
     const int n[3] = { field->nx, field->ny, field->nz };
     double lo[3], hi[3];
     for (int a = 0; a < 3; a++) lo[a] = field->origin[a], hi[a] = field->origin[a] + (n[a] - 1) * (double)field->spacing;

@@ -27,8 +27,13 @@ bool rocks__amplify_copy(const rocks_block_tile *tile, uint32_t block, const dou
 
 /* Coarse fields (003 §5 at a level of detail; rocks_blocks.h, rocks_block_tile_amplify, says
  * why): in a field sampled every `spacing` = h > 1 m a block of smallest width w
- * (rocks_block_tile.widths) is lowered by this many metres, h − w/2 when w < 2h (0 when w ≥ 2h),
- * and INFINITY (not shown at all) when w ≤ h. 0 for fields at 1 m: every block as it is. */
+ * (rocks_block_tile.widths) shows only when w > ROCKS__COARSE_MIN_WIDTH · h, lowered by
+ * h − w/2 when w < 2h (0 when w ≥ 2h); rocks__coarse_erosion gives INFINITY for one not shown.
+ * 1.5: what the box filter leaves of a block, 2(w − h), is then at least h thick, so every row
+ * of samples across it meets it (thinner, it would bead into bumps that move with the grid).
+ * Fields at 1 m show every block as it is (min width −INFINITY, erosion 0). */
+#define ROCKS__COARSE_MIN_WIDTH 1.5f
+float rocks__coarse_min_width(float spacing);
 float rocks__coarse_erosion(float width, float spacing);
 /* A block's smallest width, metres: the least extent along its planes' normals (rocks_blocks.c
  * says where that errs); a block placed by hand, its box's smallest side. */

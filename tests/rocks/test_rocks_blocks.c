@@ -509,12 +509,13 @@ Test(rocks_blocks, block_width_by_hand) {
                                   .planes = cases[i].planes, .plane_count = cases[i].count };
         cr_assert_float_eq(rocks__block_width(&tile, 0), cases[i].width, 1e-4f, "case %zu", i);
     }
-    /* the rule itself: level 0 keeps all; at h = 2 a block 2 m wide or less is gone, 3 m is
-     * thinned by 2 − 1.5 = 0.5, 4 m and more kept as it is */
+    /* the rule itself: level 0 keeps all; at h = 2 a block 3 m wide or less is gone, 3.5 m is
+     * thinned by 2 − 1.75 = 0.25 (to 2(3.5 − 2) = 3 m), 4 m and more kept as it is */
     cr_assert_eq(rocks__coarse_erosion(0.5f, 1.0f), 0.0f);
-    cr_assert_eq(rocks__coarse_erosion(2.0f, 2.0f), INFINITY);
-    cr_assert_float_eq(rocks__coarse_erosion(3.0f, 2.0f), 0.5f, 1e-6f);
+    cr_assert_eq(rocks__coarse_erosion(3.0f, 2.0f), INFINITY);
+    cr_assert_float_eq(rocks__coarse_erosion(3.5f, 2.0f), 0.25f, 1e-6f);
     cr_assert_eq(rocks__coarse_erosion(4.0f, 2.0f), 0.0f);
+    cr_assert_eq(rocks__coarse_erosion(5.9f, 4.0f), INFINITY);
     cr_assert_eq(rocks__coarse_erosion(9.0f, 4.0f), 0.0f);
 }
 
@@ -541,15 +542,17 @@ static void amplify_hand_blocks(void *user, terrain_world *world, terrain_field 
     rocks_block_tile_amplify(user, field, hand_blocks_at_origin, user);
 }
 
-/* The coarse fields' rule on the wall x = 0, with three boxes standing out of it, 1.5, 3 and 5 m
- * at their thinnest: at 1 m every box raises the field (level 0 unchanged); at 2 m the 1.5 m box
- * leaves the base field as it was, the 3 m one is thinned by 0.5 m (h − w/2), the 5 m one is as
- * at 1 m; at 4 m the 3 m box is gone too and the 5 m one thinned by 1.5 m. Values worked out from
- * the boxes' own fields, not read from the code. */
+/* The coarse fields' rule on the wall x = 0, with three boxes standing out of it, 2.5, 3.5 and
+ * 6.5 m at their thinnest: at 1 m every box raises the field (level 0 unchanged); at 2 m the
+ * 2.5 m box (under 1.5 h = 3 m) leaves the base field as it was, though the row of samples at
+ * y = 2 runs through it (the box filter alone would leave a 1 m sliver), the 3.5 m one is thinned by
+ * 0.25 m (h − w/2), the 6.5 m one is as at 1 m; at 4 m the 3.5 m box is gone too (under 6 m) and
+ * the 6.5 m one thinned by 0.75 m. Values worked out from the boxes' own fields, not read from
+ * the code. */
 Test(rocks_blocks, coarse_fields_drop_thin_blocks) {
-    hand_box boxes[3] = { { { -1, 3, 2 }, { 2, 4.5f, 8 } },        /* 1.5 m (y) */
-                          { { -1, 7, 2 }, { 2, 11, 8 } },          /* 3 m (x) */
-                          { { -2, 13, 2 }, { 3, 18.5f, 8 } } };    /* 5 m (x) */
+    hand_box boxes[3] = { { { -1, 1, 2 }, { 2, 3.5f, 8 } },             /* 2.5 m (y) */
+                          { { -1, 6, 2 }, { 2.5f, 10, 8 } },            /* 3.5 m (x) */
+                          { { -3, 12.5f, 1 }, { 3.5f, 19, 8 } } };      /* 6.5 m (x, y) */
     rocks_block_custom custom[3];
     for (int i = 0; i < 3; i++) {
         custom[i] = (rocks_block_custom){ .field = hand_box_field, .user = &boxes[i] };
@@ -561,9 +564,9 @@ Test(rocks_blocks, coarse_fields_drop_thin_blocks) {
         .custom = custom, .custom_count = 3 });
     cr_assert_not_null(t);
     for (uint32_t i = 0; i < 3; i++) cr_assert_eq(t->blocks[i].custom, i + 1);
-    cr_assert_float_eq(t->widths[0], 1.5f, 1e-6f);
-    cr_assert_float_eq(t->widths[1], 3.0f, 1e-6f);
-    cr_assert_float_eq(t->widths[2], 5.0f, 1e-6f);
+    cr_assert_float_eq(t->widths[0], 2.5f, 1e-6f);
+    cr_assert_float_eq(t->widths[1], 3.5f, 1e-6f);
+    cr_assert_float_eq(t->widths[2], 6.5f, 1e-6f);
     terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generate = wall_chunk, .amplify = amplify_hand_blocks,
                                                                      .amplify_user = t });
     terrain_world *plain = terrain_world_create(&(terrain_world_desc){ .generate = wall_chunk });
@@ -580,32 +583,37 @@ Test(rocks_blocks, coarse_fields_drop_thin_blocks) {
             for (int x = 0; x < 9; x++) {
                 const float p[3] = { (float)(x - 4), (float)y, (float)z };
                 const size_t i = ((size_t)z * 21 + y) * 9 + x;
-                int which = y < 6 ? 0 : y < 12 ? 1 : 2;   /* the box whose bounds (±1 m) hold it */
+                int which = y < 5 ? 0 : y < 12 ? 1 : 2;   /* the box whose bounds (±1 m) reach it */
                 float expected = fmaxf(base.values[i], fminf(1.0f, hand_box_field(&boxes[which], p)));
                 cr_assert_float_eq(fine.values[i], expected, 1e-6f, "level 0 at %g %g %g", p[0], p[1], p[2]);
                 raised_fine[which] += fine.values[i] > base.values[i];
                 if (x % 2 || y % 2 || z % 2) continue;   /* the coarse field's samples */
-                const float erosion[3] = { INFINITY, 0.5f, 0.0f };
+                const float erosion[3] = { INFINITY, 0.25f, 0.0f };
                 float coarse_expected = fmaxf(base.values[i], fminf(1.0f, hand_box_field(&boxes[which], p) - erosion[which]));
                 float v = coarse.values[((size_t)(z / 2) * 11 + y / 2) * 5 + x / 2];
                 cr_assert_float_eq(v, coarse_expected, 1e-6f, "2 m at %g %g %g", p[0], p[1], p[2]);
                 raised_coarse[which] += v > base.values[i];
-                if (which == 2) cr_assert_eq(v, fine.values[i], "the 5 m box as at 1 m");
+                if (which == 2) cr_assert_eq(v, fine.values[i], "the 6.5 m box as at 1 m");
                 if (x % 4 || y % 4 || z % 4) continue;   /* the coarsest field's */
-                const float erosion4[3] = { INFINITY, INFINITY, 1.5f };
+                const float erosion4[3] = { INFINITY, INFINITY, 0.75f };
                 float coarsest_expected = fmaxf(base.values[i], fminf(1.0f, hand_box_field(&boxes[which], p) - erosion4[which]));
                 cr_assert_float_eq(coarsest.values[((size_t)(z / 4) * 6 + y / 4) * 3 + x / 4], coarsest_expected, 1e-6f,
                                    "4 m at %g %g %g", p[0], p[1], p[2]);
             }
     for (int b = 0; b < 3; b++) cr_assert_gt(raised_fine[b], 10, "box %d stands out at 1 m", b);
-    cr_assert_eq(raised_coarse[0], 0, "the 1.5 m box leaves the 2 m field as it was");
-    cr_assert_gt(raised_coarse[1], 3, "the 3 m box, thinned, still shows at 2 m");
+    cr_assert_eq(raised_coarse[0], 0, "the 2.5 m box leaves the 2 m field as it was");
+    cr_assert_gt(raised_coarse[1], 3, "the 3.5 m box, thinned, still shows at 2 m");
     cr_assert_gt(raised_coarse[2], 3);
-    /* by hand: (0, 8, 4) on the face (base 0) is 1 m inside the 3 m box, 0.5 after thinning;
-     * (0, 16, 4) is 2 m inside the 5 m box: 1 (clamped) at 2 m, 2 − 1.5 = 0.5 at 4 m */
-    cr_assert_float_eq(coarse.values[((size_t)2 * 11 + 4) * 5 + 2], 0.5f, 1e-6f);
+    /* by hand: (0, 8, 4) on the face (base 0) is 1 m inside the 3.5 m box, 0.75 after thinning;
+     * (2, 8, 4) in the air (base −1) 0.5 inside it, 0.25 after; (0, 16, 4) is 3 m inside the
+     * 6.5 m box: 1 (clamped) at 2 m, and 3 − 0.75, clamped to 1, at 4 m; (0, 12, 4) at 4 m is
+     * 0.5 under the box: −0.5 − 0.75 < 0, the face's 0 stays */
+    cr_assert_float_eq(coarse.values[((size_t)2 * 11 + 1) * 5 + 2], 0.0f, 1e-6f);   /* (0, 2, 4): the face */
+    cr_assert_float_eq(coarse.values[((size_t)2 * 11 + 4) * 5 + 2], 0.75f, 1e-6f);
+    cr_assert_float_eq(coarse.values[((size_t)2 * 11 + 4) * 5 + 3], 0.25f, 1e-6f);
     cr_assert_float_eq(coarse.values[((size_t)2 * 11 + 8) * 5 + 2], 1.0f, 1e-6f);
-    cr_assert_float_eq(coarsest.values[((size_t)1 * 6 + 4) * 3 + 1], 0.5f, 1e-6f);
+    cr_assert_float_eq(coarsest.values[((size_t)1 * 6 + 4) * 3 + 1], 1.0f, 1e-6f);
+    cr_assert_float_eq(coarsest.values[((size_t)1 * 6 + 3) * 3 + 1], 0.0f, 1e-6f);
     terrain_field_free(&fine);
     terrain_field_free(&coarse);
     terrain_field_free(&coarsest);
