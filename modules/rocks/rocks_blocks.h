@@ -228,6 +228,10 @@ rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc);   /* NULL with
 void rocks_cliffs_destroy(rocks_cliffs *cliffs);
 /* terrain_world_desc.amplify, with amplify_user = the cliffs (thread-safe). */
 void rocks_cliffs_amplify(void *cliffs, terrain_world *world, terrain_field *field);
+/* terrain_world_desc.amplify_reach for these cliffs, metres along x, y and z: an edit changes
+ * which blocks stand as far as a block's extent and what their presence reads (about 2 m) from
+ * the columns it changed, so the chunks that far are meshed again. Zeros for NULL. */
+void rocks_cliffs_reach(const rocks_cliffs *cliffs, float reach[3]);
 typedef struct rocks_cliffs_stats_info {
     uint64_t fields, cells_computed, cells_reused;
     uint64_t copies_present;          /* block copies present whose bounds met a field's samples, summed over fields */

@@ -20,7 +20,9 @@
 #include <string.h>
 
 #define CACHE_CAPACITY 16384          /* entries (a power of two); emptied when 3/4 full */
-#define VERSION_MARGIN 2.0            /* metres past a cell that its presence reads */
+/* Metres past a point that its presence reads: the field's kernel (1 m), its gradient's quarter
+ * metre, and a column's width for the columns the kernel's cube meets in part. */
+#define PRESENCE_READS 2.25
 
 typedef struct cell_entry {
     uint64_t key;                     /* 0 = empty */
@@ -33,6 +35,9 @@ typedef struct cell_entry {
 struct rocks_cliffs {
     rocks_cliffs_desc desc;
     rocks_block_tile *tiles[ROCKS_BLOCK_TYPE_END];     /* by type; NULL for types no stratum uses */
+    double margin[ROCKS_BLOCK_TYPE_END];               /* metres past a tile cell its presence reads */
+    double margin_max;
+    float reach[3];                                    /* rocks_cliffs_reach */
     size_t words[ROCKS_BLOCK_TYPE_END];                /* 64-bit words of a cell's bits */
     pthread_mutex_t lock;
     cell_entry *cache;
@@ -105,6 +110,32 @@ static void make_tiles(void *user, size_t begin, size_t end) {
     }
 }
 
+/* What a copy's presence reads lies within its block's bounds (its anchor and extreme points)
+ * and PRESENCE_READS past them, and the values it adds lie within those bounds. So a cell's
+ * presence reads the blocks' overhang past the cell and PRESENCE_READS more (tiles of 16 m
+ * overhang by about 7 m: more than the 2 m once assumed), and a changed column changes values
+ * at most a block's extent and PRESENCE_READS away, along each axis (a column 17 m tall and
+ * 4 m wide reaches far up and down, not sideways). */
+static void cliffs_reach_of(rocks_cliffs *c, int type) {
+    const rocks_block_tile *tile = c->tiles[type];
+    double overhang = 0.0;
+    for (int a = 0; a < 3; a++) {
+        overhang = fmax(overhang, -(double)tile->reach_min[a]);
+        overhang = fmax(overhang, (double)tile->reach_max[a] - tile->desc.size);
+    }
+    for (uint32_t b = 0; b < tile->block_count; b++)
+        for (int a = 0; a < 3; a++) {
+            double extent = (double)tile->blocks[b].bounds_max[a] - tile->blocks[b].bounds_min[a];
+            c->reach[a] = fmaxf(c->reach[a], (float)(extent + PRESENCE_READS));
+        }
+    c->margin[type] = overhang + PRESENCE_READS;
+    c->margin_max = fmax(c->margin_max, c->margin[type]);
+}
+
+void rocks_cliffs_reach(const rocks_cliffs *cliffs, float reach[3]) {
+    for (int a = 0; a < 3; a++) reach[a] = cliffs ? cliffs->reach[a] : 0.0f;
+}
+
 rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc) {
     rocks_cliffs_desc d;
     if (!cliffs_desc_make(desc, &d)) return NULL;
@@ -133,6 +164,8 @@ rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc) {
         rocks_cliffs_destroy(c);
         return NULL;
     }
+    for (int type = 0; type < ROCKS_BLOCK_TYPE_END; type++)
+        if (c->tiles[type]) cliffs_reach_of(c, type);
     c->stats.build_seconds = (double)(core_time_ns() - start) * 1e-9;
     c->stats.tile_size = d.tile_size * d.block_scale;
     return c;
@@ -288,10 +321,11 @@ typedef struct version_table {
     uint32_t version[VERSION_TABLE_MAX];
 } version_table;
 
-static void version_table_make(version_table *t, terrain_world *world, const double lo[3], const double hi[3]) {
+static void version_table_make(version_table *t, terrain_world *world, const double lo[3], const double hi[3],
+                               double margin) {
     t->world = world;
-    t->x0 = chunk_of(lo[0] - VERSION_MARGIN), t->z0 = chunk_of(lo[2] - VERSION_MARGIN);
-    int64_t nx = chunk_of(hi[0] + VERSION_MARGIN) - t->x0 + 1, nz = chunk_of(hi[2] + VERSION_MARGIN) - t->z0 + 1;
+    t->x0 = chunk_of(lo[0] - margin), t->z0 = chunk_of(lo[2] - margin);
+    int64_t nx = chunk_of(hi[0] + margin) - t->x0 + 1, nz = chunk_of(hi[2] + margin) - t->z0 + 1;
     t->nx = t->nz = 0;
     if (nx * nz > VERSION_TABLE_MAX) return;
     t->nx = (int)nx, t->nz = (int)nz;
@@ -307,9 +341,9 @@ static uint32_t version_of(const version_table *t, int64_t x, int64_t z) {
 }
 
 /* The versions of the column chunks under the cell (and the margin its presence reads). */
-static uint64_t cell_versions(const version_table *t, const int64_t cell[3], double s) {
-    int64_t x0 = chunk_of((double)cell[0] * s - VERSION_MARGIN), x1 = chunk_of((double)cell[0] * s + s + VERSION_MARGIN);
-    int64_t z0 = chunk_of((double)cell[2] * s - VERSION_MARGIN), z1 = chunk_of((double)cell[2] * s + s + VERSION_MARGIN);
+static uint64_t cell_versions(const version_table *t, const int64_t cell[3], double s, double margin) {
+    int64_t x0 = chunk_of((double)cell[0] * s - margin), x1 = chunk_of((double)cell[0] * s + s + margin);
+    int64_t z0 = chunk_of((double)cell[2] * s - margin), z1 = chunk_of((double)cell[2] * s + s + margin);
     uint64_t h = 0x51ed27;
     for (int64_t z = z0; z <= z1; z++)
         for (int64_t x = x0; x <= x1; x++) h = core_hash_combine(h, version_of(t, x, z));
@@ -329,7 +363,7 @@ static void cell_presence(rocks_cliffs *c, const version_table *table, int type,
     terrain_world *world = table->world;
     const rocks_block_tile *tile = c->tiles[type];
     const size_t words = c->words[type];
-    const uint64_t key = cell_key(type, cell), versions = cell_versions(table, cell, tile->desc.size);
+    const uint64_t key = cell_key(type, cell), versions = cell_versions(table, cell, tile->desc.size, c->margin[type]);
     pthread_mutex_lock(&c->lock);
     for (size_t i = key & (CACHE_CAPACITY - 1);; i = (i + 1) & (CACHE_CAPACITY - 1)) {
         cell_entry *e = &c->cache[i];
@@ -400,7 +434,7 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
     }
     if (!(reach_lo[0] <= reach_hi[0])) return;   /* no tiles */
     version_table versions;
-    version_table_make(&versions, world, reach_lo, reach_hi);
+    version_table_make(&versions, world, reach_lo, reach_hi, c->margin_max);
     uint64_t present = 0, bits[64];
     for (int type = 0; type < ROCKS_BLOCK_TYPE_END; type++) {
         const rocks_block_tile *tile = c->tiles[type];

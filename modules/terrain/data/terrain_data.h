@@ -203,6 +203,12 @@ typedef struct terrain_world_desc {
      * it never calls itself), keep values in [−1, 1], and be safe from any thread. */
     void (*amplify)(void *user, terrain_world *world, terrain_field *field);
     void *amplify_user;               /* passed to amplify */
+    /* Metres along x, y and z: how far from a column the values amplify adds may change when
+     * that column's stacks change (what it adds near p may depend on columns that far from p).
+     * An edit then meshes again every chunk within this distance of the columns it changed,
+     * not only those whose own samples read them (rocks_cliffs_reach for cliff blocks). Zeros
+     * = amplify reads only the field's own kernel. */
+    float amplify_reach[3];
 } terrain_world_desc;
 
 terrain_world *terrain_world_create(const terrain_world_desc *desc);
