@@ -54,8 +54,9 @@ typedef enum terrain_material {
 } terrain_material;
 
 const char *terrain_material_name(terrain_material material);
-/* Whether the material belongs to the implicit surface's skeleton: sand and bedrock (rocks are
- * the rocks module's own skeleton, water has its own surface). */
+/* Whether the material belongs to the implicit surface's skeleton: sand, bedrock and a game's
+ * own materials (solid rock like bedrock: cliffs' strata, rocks_blocks.h); rocks are the rocks
+ * module's own skeleton, water has its own surface. */
 bool terrain_material_in_field(terrain_material material);
 
 /* ---- layout ------------------------------------------------------------------------------- */
