@@ -520,7 +520,7 @@ bool rocks__cliffs_present(rocks_cliffs *c, terrain_world *world, rocks_block_ty
     double lo[3], hi[3];
     for (int a = 0; a < 3; a++) lo[a] = (double)cell[a] * s, hi[a] = lo[a] + s;
     version_table versions;
-    version_table_make(&versions, world, lo, hi);
+    version_table_make(&versions, world, lo, hi, c->margin_max);
     cell_presence(c, &versions, (int)type, cell, bits);
     return true;
 }
