@@ -41,7 +41,7 @@ struct rocks_cliffs {
     float reach[3];                                    /* rocks_cliffs_reach */
     size_t words[ROCKS_BLOCK_TYPE_END];                /* 64-bit words of a cell's bits */
     uint32_t type_materials[ROCKS_BLOCK_TYPE_END];     /* the materials mapped to each type, a bit each */
-    bool mapped;                                       /* some material has an entry */
+    uint32_t mapped;                                   /* the materials with an entry, a bit each */
     bool bedrock_in_strata;                            /* bedrock has none: the strata decide */
     pthread_mutex_t lock;
     cell_entry *cache;
@@ -166,7 +166,7 @@ rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc) {
     size_t count = 0;
     bool used[ROCKS_BLOCK_TYPE_END] = { false };
     for (int m = 0; m < TERRAIN_MATERIAL_MAX; m++)
-        if (d.material_blocks[m] != ROCKS_BLOCK_DEFAULT) c->type_materials[d.material_blocks[m]] |= 1u << m, c->mapped = true;
+        if (d.material_blocks[m] != ROCKS_BLOCK_DEFAULT) c->type_materials[d.material_blocks[m]] |= 1u << m, c->mapped |= 1u << m;
     c->bedrock_in_strata = d.material_blocks[TERRAIN_BEDROCK] == ROCKS_BLOCK_DEFAULT;
     /* a tile per type some rock can break into: the strata's while bedrock follows them */
     for (int i = 0; c->bedrock_in_strata && i < d.strata_count; i++)
@@ -359,45 +359,91 @@ static bool far_from_surface(const surface_bounds *b, const double a[3]) {
     return above || below;
 }
 
-/* ---- a second, when materials are mapped: no rock of the type near the anchor ----------------- */
+/* ---- a second, when materials are mapped: no rock of the type near ---------------------------- */
 
 /* wall_type reads the material BEHIND_THE_FACE from the anchor, so inside the box a ±
- * BEHIND_THE_FACE: the layers that meet that box (a little wider, against rounding) hold it. An
- * anchor near no material of the type (nor bedrock in a stratum of it) has no block of the type,
- * and is passed over without the field's cost. (Without mapped materials the strata's height
- * test is exact and cheaper.) The box lies within ANCHOR_REACH of the cell, so within the
- * bounds' chunks. */
+ * BEHIND_THE_FACE: the layers that meet that box (a little wider, against rounding) hold it. A
+ * cell with no material of the type near (nor bedrock in a stratum of it) has no block of the
+ * type; where rocks of other types lie near too, an anchor with none of the type near is passed
+ * over; both without the field's cost. (Without mapped materials the strata's height test is
+ * exact and cheaper.) The boxes lie within ANCHOR_REACH of the cell, so within the bounds'
+ * chunks. On seed 1's cliffs (a 128 × 96 × 128 m box of level-0 fields, release, 2 cores) a
+ * table that maps only a material the world lacks finds the same 696 copies as the strata in
+ * the same time (0.32 s of presence either way), and bedrock mapped to tabular the same 838 as
+ * one tabular stratum (0.40 s either way; 0.45 s with per-anchor reads alone). */
 #define MATERIAL_REACH (BEHIND_THE_FACE + 1.0 / 16.0)
 #define COLUMN_LAYERS_MAX 64
 
 static int64_t column_of(double x) { return (int64_t)floor(x / TERRAIN_COLUMN_SIZE); }
 
-/* The materials (a bit each) of the layers within MATERIAL_REACH of a, in any direction. */
-static uint32_t materials_near(const surface_bounds *b, const double a[3]) {
-    const double y0 = a[1] - MATERIAL_REACH, y1 = a[1] + MATERIAL_REACH;
-    uint32_t mask = y0 < TERRAIN_FLOOR_Y ? 1u << TERRAIN_BEDROCK : 0;   /* below the floor */
-    for (int64_t gz = column_of(a[2] - MATERIAL_REACH); gz <= column_of(a[2] + MATERIAL_REACH); gz++)
-        for (int64_t gx = column_of(a[0] - MATERIAL_REACH); gx <= column_of(a[0] + MATERIAL_REACH); gx++) {
+/* The materials (a bit each) of the layers that meet the box [lo, hi], in the columns it
+ * covers (within the bounds' chunks); all of them when a column holds more layers than read. */
+static uint32_t materials_in(const surface_bounds *b, const double lo[3], const double hi[3]) {
+    uint32_t mask = lo[1] < TERRAIN_FLOOR_Y ? 1u << TERRAIN_BEDROCK : 0;   /* below the floor */
+    for (int64_t gz = column_of(lo[2]); gz <= column_of(hi[2]); gz++)
+        for (int64_t gx = column_of(lo[0]); gx <= column_of(hi[0]); gx++) {
             const int64_t cx = chunk_of((double)gx * TERRAIN_COLUMN_SIZE), cz = chunk_of((double)gz * TERRAIN_COLUMN_SIZE);
             const terrain_stacks *stacks = b->stacks[cz - b->chunk_z0][cx - b->chunk_x0];
             terrain_layer layers[COLUMN_LAYERS_MAX];
             int count = terrain_stacks_column(stacks, (int)(gx - cx * TERRAIN_CHUNK_COLUMNS),
                                               (int)(gz - cz * TERRAIN_CHUNK_COLUMNS), layers, COLUMN_LAYERS_MAX);
-            if (count > COLUMN_LAYERS_MAX) return UINT32_MAX;   /* not all read: anything may be there */
+            if (count > COLUMN_LAYERS_MAX) return UINT32_MAX;
             double bottom = TERRAIN_FLOOR_Y;
-            for (int l = 0; l < count && bottom < y1; l++) {
+            for (int l = 0; l < count && bottom < hi[1]; l++) {
                 double top = bottom + (double)layers[l].thickness;
-                if (top > y0) mask |= 1u << layers[l].material;
+                if (top > lo[1]) mask |= 1u << layers[l].material;
                 bottom = top;
             }
         }
     return mask;
 }
 
-static bool type_near(const rocks_cliffs *c, const surface_bounds *b, int type, const double a[3]) {
-    uint32_t near = materials_near(b, a);
-    if (near & c->type_materials[type]) return true;
-    return c->bedrock_in_strata && (near & 1u << TERRAIN_BEDROCK) && stratum_type(&c->desc, a[1]) == type;
+/* Those within MATERIAL_REACH of anchor a. */
+static uint32_t materials_near(const surface_bounds *b, const double a[3]) {
+    const double lo[3] = { a[0] - MATERIAL_REACH, a[1] - MATERIAL_REACH, a[2] - MATERIAL_REACH };
+    const double hi[3] = { a[0] + MATERIAL_REACH, a[1] + MATERIAL_REACH, a[2] + MATERIAL_REACH };
+    return materials_in(b, lo, hi);
+}
+
+/* Those within MATERIAL_REACH of the tile cell at `cell` (side s): of every anchor it holds. */
+static uint32_t cell_materials(const surface_bounds *b, const int64_t cell[3], double s) {
+    double lo[3], hi[3];
+    for (int a = 0; a < 3; a++) lo[a] = (double)cell[a] * s - MATERIAL_REACH, hi[a] = (double)cell[a] * s + s + MATERIAL_REACH;
+    return materials_in(b, lo, hi);
+}
+
+/* What a cell's anchors must pass before the wall test, worked out once a cell from the
+ * materials near it. Without materials mapped, only the strata: an anchor in another type's
+ * stratum is bedrock of that type (exact, as before materials could decide). */
+typedef struct anchor_filter {
+    bool none;                        /* no anchor of the cell can hold the type */
+    bool by_stratum;                  /* only bedrock in a stratum of the type gives it */
+    bool by_columns;                  /* rocks of other types lie near: each anchor reads its columns */
+    bool bedrock_in_strata;           /* bedrock with no entry lies near */
+} anchor_filter;
+
+static anchor_filter anchor_filter_make(const rocks_cliffs *c, const surface_bounds *b, bool have_bounds, int type,
+                                        const int64_t cell[3], double s) {
+    anchor_filter f = { .by_stratum = c->type_materials[type] == 0 };
+    if (!c->mapped || !have_bounds) return f;
+    const uint32_t near = cell_materials(b, cell, s), mine = near & c->type_materials[type];
+    f.bedrock_in_strata = c->bedrock_in_strata && (near & 1u << TERRAIN_BEDROCK);
+    if (!mine) {   /* a game's rock that lies in a few places skips every other cell at once */
+        f.none = !(f.bedrock_in_strata && stratum_meets(&c->desc, type, (double)cell[1] * s, (double)cell[1] * s + s));
+        f.by_stratum = true;
+        return f;
+    }
+    /* where every rock near is of the type (a wall of one mapped rock), the wall test alone decides */
+    f.by_columns = (near & c->mapped & ~c->type_materials[type]) || f.bedrock_in_strata;
+    return f;
+}
+
+/* An anchor of a cell with a material of the type near: bedrock in its stratum, or a material of
+ * the type within the wall test's reach. */
+static bool anchor_near_type(const rocks_cliffs *c, const anchor_filter *f, const surface_bounds *b, int type,
+                             const double a[3]) {
+    if (!f->by_columns || (f->bedrock_in_strata && stratum_type(&c->desc, a[1]) == type)) return true;
+    return (materials_near(b, a) & c->type_materials[type]) != 0;
 }
 
 /* The column chunks' versions one amplify call reads, each looked up once (a lookup takes the
@@ -471,14 +517,16 @@ static void cell_presence(rocks_cliffs *c, const version_table *table, int type,
     memset(bits, 0, words * sizeof *bits);
     const double s = tile->desc.size;
     surface_bounds bounds;
-    int shortcut = -1;                /* made at the first anchor that may hold `type` */
-    for (uint32_t b = 0; b < tile->block_count; b++) {
+    /* made at the first anchor that may hold `type`, or at once when materials are mapped */
+    int shortcut = c->mapped ? surface_bounds_make(world, cell, s, &bounds) : -1;
+    const anchor_filter filter = anchor_filter_make(c, &bounds, shortcut > 0, type, cell, s);
+    for (uint32_t b = 0; !filter.none && b < tile->block_count; b++) {
         double anchor[3];
         for (int a = 0; a < 3; a++) anchor[a] = (double)cell[a] * s + tile->blocks[b].anchor[a];
-        if (!c->mapped && stratum_type(&c->desc, anchor[1]) != type) continue;   /* bedrock of another stratum */
+        if (filter.by_stratum && stratum_type(&c->desc, anchor[1]) != type) continue;
         if (shortcut < 0) shortcut = surface_bounds_make(world, cell, s, &bounds);
         if (shortcut && far_from_surface(&bounds, anchor)) continue;
-        if (c->mapped && shortcut && !type_near(c, &bounds, type, anchor)) continue;
+        if (shortcut > 0 && !anchor_near_type(c, &filter, &bounds, type, anchor)) continue;
         if (wall_type(c, world, anchor) == type &&
             mostly_in_the_wall(world, &tile->blocks[b], tile->points, (double)cell[0] * s, (double)cell[1] * s,
                                (double)cell[2] * s))
