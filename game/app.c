@@ -266,11 +266,14 @@ static bool app_open_terrain(game_app *app) {
                                             .seed = app->desc.seed, .jobs = app->jobs,
                                             .cache_dir = app->desc.cliffs_cache_dir })))
         return false;
+    float reach[3];   /* an edit meshes again the chunks whose blocks it can change */
+    rocks_cliffs_reach(app->cliffs, reach);
     app->world = terrain_world_create(&(terrain_world_desc){ .generation = params, .generate = app->desc.generate,
                                                              .generate_user = app->desc.generate_user,
                                                              .edits = app->edits,
                                                              .amplify = app->cliffs ? rocks_cliffs_amplify : NULL,
-                                                             .amplify_user = app->cliffs });
+                                                             .amplify_user = app->cliffs,
+                                                             .amplify_reach = { reach[0], reach[1], reach[2] } });
     app->ecs = ecs_world_create(&(ecs_world_desc){ .jobs = app->jobs });
     app->terrain = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = app->ecs, .terrain = app->world });
     int iterations = app->desc.stabilize_iterations;

@@ -13,6 +13,7 @@
  * of a wall (issue 12). The search walks square rings of columns outwards, as the others do, and
  * the nearest cliff with a view wins. */
 #include "game/walk.h"
+#include "game/walk_view.h"
 
 #include "terrain/terrain.h"
 
@@ -82,27 +83,6 @@ static bool cliff_at(terrain_world *world, double x, double z, double dx, double
     return terrain_world_material_at(world, x + 6.0 * dx, *foot + 0.5 * *height, z + 6.0 * dz) == TERRAIN_BEDROCK;
 }
 
-/* The eye in the air: the feet under it clear of the 3 × 3 columns around. */
-static bool cliff_eye_clear(terrain_world *world, const double eye[3]) {
-    double feet = eye[1] - CLIFF_EYE_HEIGHT - CLIFF_FEET_CLEARANCE;
-    for (int k = -1; k <= 1; k++)
-        for (int i = -1; i <= 1; i++)
-            if ((double)terrain_world_top(world, eye[0] + i, eye[2] + k) > feet) return false;
-    return true;
-}
-
-/* The ground under the line from the eye to the face, up to the foot. */
-static bool cliff_clear_sight(terrain_world *world, const double eye[3], const double target[3], double to_foot) {
-    double dx = target[0] - eye[0], dy = target[1] - eye[1], dz = target[2] - eye[2];
-    double horizontal = hypot(dx, dz);
-    for (double d = CLIFF_SIGHT_STEP; d < to_foot; d += CLIFF_SIGHT_STEP) {
-        double t = d / horizontal;
-        if ((double)terrain_world_top(world, eye[0] + dx * t, eye[2] + dz * t) > eye[1] + dy * t - CLIFF_SIGHT_MARGIN)
-            return false;
-    }
-    return true;
-}
-
 /* The wall's top, in degrees over the horizon from the eye `back` metres before the foot. */
 static double cliff_top_angle(terrain_world *world, double x, double z, double dx, double dz, const double eye[3],
                               double back) {
@@ -126,41 +106,25 @@ static bool cliff_view_at(terrain_world *world, double x, double z, double dx, d
         double ex = x - dx * back, ez = z - dz * back;
         double ground = fmax((double)terrain_world_top(world, ex, ez), (double)foot);
         double eye[3] = { ex, ground + CLIFF_EYE_HEIGHT + CLIFF_FEET_CLEARANCE, ez };
-        if (!cliff_eye_clear(world, eye) || !cliff_clear_sight(world, eye, target, back)) continue;
+        if (!game__eye_clear(world, eye, CLIFF_EYE_HEIGHT + CLIFF_FEET_CLEARANCE) ||
+            !game__clear_sight(world, eye, target, back, CLIFF_SIGHT_STEP, CLIFF_SIGHT_MARGIN))
+            continue;
         double horizontal = back + 1.0;   /* the target is 1 m past the foot */
         double pitch = atan2(target[1] - eye[1], horizontal) * (180.0 / CLIFF_PI);
         if (cliff_top_angle(world, x, z, dx, dz, eye, back) - pitch > CLIFF_HALF_FOV - CLIFF_SKY_ROOM) continue;
         for (int a = 0; a < 3; a++) out->eye[a] = eye[a], out->face[a] = target[a];
         out->height = (float)height;
-        /* --look degrees: yaw 0 = +z, 90 = −x, so the view (dx, dz) = (−sin yaw, cos yaw) */
-        out->yaw = (float)(atan2(-dx, dz) * (180.0 / CLIFF_PI));
-        if (out->yaw < 0.0f) out->yaw += 360.0f;
+        out->yaw = game__look_yaw(dx, dz);
         out->pitch = (float)pitch;
         return true;
     }
     return false;
 }
 
-/* The lit directions, the most lit first; returns how many. */
-static int cliff_lit_directions(int order[CLIFF_DIRECTIONS]) {
-    const double light_x = 0.55, light_z = 0.35;
-    double dots[CLIFF_DIRECTIONS];
-    int lit = 0;
-    for (int d = 0; d < CLIFF_DIRECTIONS; d++) {
-        double angle = 2.0 * CLIFF_PI * d / CLIFF_DIRECTIONS;
-        dots[d] = cos(angle) * light_x + sin(angle) * light_z;
-        if (dots[d] <= 0.0) continue;
-        int at = lit++;
-        while (at > 0 && dots[order[at - 1]] < dots[d]) order[at] = order[at - 1], at--;
-        order[at] = d;
-    }
-    return lit;
-}
-
 bool game_find_cliff_view(terrain_world *world, double x, double z, double radius, game_cliff_view *out) {
     if (!(radius >= 0.0)) return false;
     int order[CLIFF_DIRECTIONS];
-    int lit = cliff_lit_directions(order);
+    int lit = game__sunlit_directions(CLIFF_DIRECTIONS, order);
     double centre_x = (floor(x / CLIFF_STEP) + 0.5) * CLIFF_STEP, centre_z = (floor(z / CLIFF_STEP) + 0.5) * CLIFF_STEP;
     int cells = (int)ceil(radius / CLIFF_STEP);
     double best = INFINITY;

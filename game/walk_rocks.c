@@ -14,6 +14,7 @@
  * any. The search walks square rings outwards from the centre, as the shore finder does, and
  * stops once a ring lies wholly farther than the nearest pile with an open view. */
 #include "game/walk.h"
+#include "game/walk_view.h"
 
 #include "terrain/terrain.h"
 
@@ -91,28 +92,6 @@ static bool rocks_pile_at(terrain_world *world, double x, double z, rocks_pile *
     return true;
 }
 
-/* The eye is in the air: the feet under it (an eye height down) clear of the 3 × 3 columns
- * around, so the player flies there without touching the ground. */
-static bool rocks_eye_clear(terrain_world *world, const double eye[3]) {
-    double feet = eye[1] - ROCKS_EYE_HEIGHT - ROCKS_FEET_CLEARANCE;
-    for (int k = -1; k <= 1; k++)
-        for (int i = -1; i <= 1; i++)
-            if ((double)terrain_world_top(world, eye[0] + i, eye[2] + k) > feet) return false;
-    return true;
-}
-
-/* The ground under the line of sight from the eye to the pile's centre, short of the pile. */
-static bool rocks_clear_sight(terrain_world *world, const double eye[3], const double target[3]) {
-    double dx = target[0] - eye[0], dy = target[1] - eye[1], dz = target[2] - eye[2];
-    double horizontal = hypot(dx, dz);
-    for (double d = ROCKS_SIGHT_STEP; d < horizontal - ROCKS_SIGHT_END; d += ROCKS_SIGHT_STEP) {
-        double t = d / horizontal;
-        if ((double)terrain_world_top(world, eye[0] + dx * t, eye[2] + dz * t) > eye[1] + dy * t - ROCKS_SIGHT_MARGIN)
-            return false;
-    }
-    return true;
-}
-
 /* Whether ground along (dx, dz), from `from` metres out to ROCKS_BEHIND_DISTANCE, stays under the
  * line `limit` (rise over distance) from the eye. */
 static bool rocks_ray_under(terrain_world *world, const double eye[3], double from, double dx, double dz, double limit) {
@@ -142,17 +121,8 @@ static bool rocks_open_behind(terrain_world *world, const double eye[3], double 
  * sunlight's horizontal (0.55, 0.35), the most lit first, the first eye position that is clear
  * and sees the pile: the first such view open behind the pile (out->open), else the first. */
 static bool rocks_view_of(terrain_world *world, const rocks_pile *pile, game_rocks_view *out) {
-    const double light_x = 0.55, light_z = 0.35;
-    int order[ROCKS_DIRECTIONS], lit = 0;
-    double dots[ROCKS_DIRECTIONS];
-    for (int d = 0; d < ROCKS_DIRECTIONS; d++) {
-        double angle = 2.0 * ROCKS_PI * d / ROCKS_DIRECTIONS;
-        dots[d] = cos(angle) * light_x + sin(angle) * light_z;
-        if (dots[d] <= 0.0) continue;
-        int at = lit++;
-        while (at > 0 && dots[order[at - 1]] < dots[d]) order[at] = order[at - 1], at--;
-        order[at] = d;
-    }
+    int order[ROCKS_DIRECTIONS];
+    const int lit = game__sunlit_directions(ROCKS_DIRECTIONS, order);
     const double target[3] = { pile->centre[0], pile->centre[1], pile->centre[2] };
     bool found = false;
     for (int n = 0; n < lit; n++) {
@@ -161,15 +131,17 @@ static bool rocks_view_of(terrain_world *world, const rocks_pile *pile, game_roc
             for (size_t h = 0; h < sizeof rocks_heights / sizeof rocks_heights[0]; h++) {
                 double back = rocks_backs[b];
                 double eye[3] = { target[0] - dx * back, (double)pile->top + rocks_heights[h], target[2] - dz * back };
-                if (!rocks_eye_clear(world, eye) || !rocks_clear_sight(world, eye, target)) continue;
+                /* the line's last metres lie over the pile itself */
+                double until = hypot(target[0] - eye[0], target[2] - eye[2]) - ROCKS_SIGHT_END;
+                if (!game__eye_clear(world, eye, ROCKS_EYE_HEIGHT + ROCKS_FEET_CLEARANCE) ||
+                    !game__clear_sight(world, eye, target, until, ROCKS_SIGHT_STEP, ROCKS_SIGHT_MARGIN))
+                    continue;
                 double down = atan2(eye[1] - target[1], back) * (180.0 / ROCKS_PI);
                 bool open = rocks_open_behind(world, eye, back, dx, dz, down);
                 if (found && !open) continue;
                 for (int a = 0; a < 3; a++) out->eye[a] = eye[a], out->pile[a] = target[a];
                 out->top = pile->top;
-                /* --look degrees: yaw 0 = +z, 90 = −x, so the view (dx, dz) = (−sin yaw, cos yaw) */
-                out->yaw = (float)(atan2(-dx, dz) * (180.0 / ROCKS_PI));
-                if (out->yaw < 0.0f) out->yaw += 360.0f;
+                out->yaw = game__look_yaw(dx, dz);
                 out->pitch = -(float)down;
                 out->open = open;
                 found = true;

@@ -9,6 +9,7 @@
  * outwards from the centre and stops once a ring lies wholly farther than the best shore found,
  * so only the shores nearer than the answer are tried. */
 #include "game/walk.h"
+#include "game/walk_view.h"
 
 #include "terrain/terrain.h"
 
@@ -57,9 +58,7 @@ static bool shore_view_from(terrain_world *world, double x, double z, float surf
     if (best_open < SHORE_MIN_OPEN) return false;
     out->eye[0] = eye[0], out->eye[1] = eye[1], out->eye[2] = eye[2];
     out->water[0] = x + wx * SHORE_GRID, out->water[1] = surface, out->water[2] = z + wz * SHORE_GRID;
-    /* --look degrees: yaw 0 = +z, 90 = −x, so the view (dx, dz) = (−sin yaw, cos yaw) */
-    out->yaw = (float)(atan2(-best_dx, best_dz) * (180.0 / SHORE_PI));
-    if (out->yaw < 0.0f) out->yaw += 360.0f;
+    out->yaw = game__look_yaw(best_dx, best_dz);
     double down = atan2(eye[1] - (double)surface, SHORE_PITCH_DISTANCE) * (180.0 / SHORE_PI);
     out->pitch = -(float)fmin(fmax(down, SHORE_MIN_PITCH), SHORE_MAX_PITCH);
     out->open = (float)best_open;

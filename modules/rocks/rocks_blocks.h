@@ -194,22 +194,30 @@ typedef struct rocks_wall_presence {
 } rocks_wall_presence;
 bool rocks_block_on_walls(void *wall_presence, uint32_t block, const double anchor[3]);
 
-/* ---- cliffs in a world (003 §5): a tile per stratum, presence cached ------------------------ */
+/* ---- cliffs in a world (003 §5): a tile per type, presence cached -------------------------- */
 
-/* Blocks on every steep bedrock wall of a world, through its amplify hook:
+/* Blocks on every steep rock wall of a world, through its amplify hook:
  *     rocks_cliffs *cliffs = rocks_cliffs_create(&(rocks_cliffs_desc){ 0 });
  *     terrain_world_create(&(terrain_world_desc){ ..., .amplify = rocks_cliffs_amplify,
  *                                                 .amplify_user = cliffs });
- * Strata: a block copy belongs to the stratum of its anchor's height, floor(y / stratum_height),
- * whose type is strata[stratum mod strata_count]: cliffs change block type with height (003
- * Fig. 11). Presence is rocks_block_on_walls at the anchor (down to a metre inside the face) and,
- * a metre above and below it, a steep face within a metre (a wall, not a step); the wall must be
- * bedrock (sand slopes get no blocks), and 4 of the block's 6 extreme points (along each axis)
- * must lie inside the wall or within half a metre of its face (003 §5's several anchors), the
- * highest among them (no block stands over the wall's rim as a spike). It is
- * worked out once per tile cell and kept, checked against the versions of the
- * column chunks it read, so an edit brings it up to date. Fields sampled up to max_spacing get
- * blocks; those coarser than 1 m show only the blocks wider than 1.5 spacings, thinned as
+ * Which type a wall breaks into (003 §5, "the material γ(a_k) corresponds to the material of the
+ * underlying block"): the material of the stacks behind the face (three quarters of a metre
+ * inside, along the field's gradient) decides. A rock material the game maps in material_blocks
+ * gives its block type, wherever it lies, so cliffs change block type where the stacks change
+ * material:
+ *     .material_blocks = { [TERRAIN_BEDROCK] = ROCKS_BLOCK_EQUIDIMENSIONAL,
+ *                          [MY_LIMESTONE] = ROCKS_BLOCK_TABULAR }   // MY_LIMESTONE ≥ BUILTIN_COUNT
+ * Bedrock with no entry falls into strata by height: a copy belongs to the stratum of its
+ * anchor's height, floor(y / stratum_height), whose type is strata[stratum mod strata_count]
+ * (003 Fig. 11). Any other material (sand, a game's material with no entry) gets no blocks.
+ * Presence is rocks_block_on_walls at the anchor (down to a metre inside the face) and, a metre
+ * above and below it, a steep face within a metre (a wall, not a step); the wall must be a rock
+ * material of the copy's type (sand slopes get no blocks), and 4 of the block's 6 extreme points
+ * (along each axis) must lie inside the wall or within half a metre of its face (003 §5's
+ * several anchors), the highest among them (no block stands over the wall's rim as a spike). It
+ * is worked out once per tile cell and kept, checked against the versions of the column chunks
+ * it read, so an edit brings it up to date. Fields sampled up to max_spacing get blocks; those
+ * coarser than 1 m show only the blocks wider than 1.5 spacings, thinned as
  * rocks_block_tile_amplify says (a box filter of the spacing: no spikes from blocks thinner than
  * the grid), and a cell's presence is worked out only for those blocks until a finer field
  * asks. Every field at one spacing is treated alike, so chunks and their LOD seams agree. */
@@ -219,6 +227,12 @@ typedef struct rocks_cliffs_desc {
                                          columnar, equidimensional; a DEFAULT one = equidimensional */
     int strata_count;                 /* 0 = 3 */
     float stratum_height;             /* metres; 0 = 20 */
+    /* The block type each rock material of the stacks breaks into, by terrain_material; zero
+     * (ROCKS_BLOCK_DEFAULT) = none: bedrock then follows the strata above, any other material
+     * gets no blocks. Only TERRAIN_BEDROCK and a game's own materials (from
+     * TERRAIN_MATERIAL_BUILTIN_COUNT, solid in the field like bedrock) may have an entry. All
+     * zero (the default) = bedrock in strata, the world's cliffs as they always were. */
+    rocks_block_type material_blocks[TERRAIN_MATERIAL_MAX];
     float tile_size;                  /* s; 0 = 16 */
     float joint;                      /* 0 = 0.6 m (at most s / 24): fields sampled every metre
                                          lose thinner ones */
@@ -242,7 +256,8 @@ typedef struct rocks_cliffs_desc {
      * blocks-<type>-<seed as 16 hex digits>.bin (the seed above, with its default), so worlds of
      * other seeds keep their own; made if missing. NULL = the tiles are built each run. */
     const char *cache_dir;
-    /* Builds (or reads) the tiles, one per type the strata use, at once on these workers; NULL
+    /* Builds (or reads) the tiles, one per type the strata (when bedrock has no entry) or
+     * material_blocks use, at once on these workers; NULL
      * = one after another on the calling thread. The tiles are the same either way. */
     job_system *jobs;
 } rocks_cliffs_desc;
@@ -253,6 +268,10 @@ rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc);   /* NULL with
 void rocks_cliffs_destroy(rocks_cliffs *cliffs);
 /* terrain_world_desc.amplify, with amplify_user = the cliffs (thread-safe). */
 void rocks_cliffs_amplify(void *cliffs, terrain_world *world, terrain_field *field);
+/* terrain_world_desc.amplify_reach for these cliffs, metres along x, y and z: an edit changes
+ * which blocks stand as far as a block's extent and what their presence reads (about 2 m) from
+ * the columns it changed, so the chunks that far are meshed again. Zeros for NULL. */
+void rocks_cliffs_reach(const rocks_cliffs *cliffs, float reach[3]);
 typedef struct rocks_cliffs_stats_info {
     uint64_t fields, cells_computed, cells_reused;
     uint64_t copies_present;          /* block copies present whose bounds met a field's samples, summed over fields */

@@ -208,6 +208,17 @@ int rocks__block_grid_cells(float size);
  * grid³ + 1) and sets them NULL; the struct itself stays. */
 void rocks__block_tile_free_arrays(rocks_block_tile *tile);
 
+/* ---- the cliffs' presence, read by the tests (rocks_cliffs.c) ------------------------------ */
+
+/* The cliffs' tile of `type`; NULL when neither their strata nor their materials use it. */
+const rocks_block_tile *rocks__cliffs_tile(const rocks_cliffs *cliffs, rocks_block_type type);
+/* Which blocks of `type`'s tile copy at tile coordinate `cell` are present in `world`, a bit each
+ * into bits ((block_count + 63) / 64 words), as rocks_cliffs_amplify finds them: its test of
+ * which cells to ask, its shortcuts and its cache included (so the world must be the one the
+ * cliffs serve). False, and no bit set, when the hook would not ask the cell. */
+bool rocks__cliffs_present(rocks_cliffs *cliffs, terrain_world *world, rocks_block_type type, const int64_t cell[3],
+                           uint64_t *bits);
+
 /* Levels of detail of a closed mesh by quadric edge collapse onto existing vertices
  * (rocks_simplify.c): begin with the mesh (positions in voxels), then run once a level, finest
  * first: each run collapses on until the next collapse would stray more than `error` voxels

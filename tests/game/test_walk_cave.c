@@ -15,6 +15,7 @@
  * Without a roof (flat ground) nothing is found, and a tunnel whose floor lies under the sea is
  * water, not a cave. */
 #include "../engine/test.h"
+#include "walk_test.h"
 #include "game/walk.h"
 
 #include <math.h>
@@ -92,27 +93,13 @@ Test(game_walk_cave, no_roof_no_cave_and_under_the_sea_is_water) {
     terrain_world_destroy(world);
 }
 
-static game_walk parsed(const char *text) {
-    game_walk walk;
-    core_error error = { 0 };
-    cr_assert(game_walk_parse_text(text, strlen(text), "t.walk", &walk, &error), "%s", error.message);
-    return walk;
-}
-
-static void place(game_player *pl, double x, double z) {
-    game_player_init(pl, NULL);
-    pl->position[0] = x, pl->position[1] = GROUND, pl->position[2] = z;
-    pl->yaw = 0.0f;
-    pl->on_ground = true;
-}
-
 Test(game_walk_cave, a_cave_line_becomes_a_flight_to_the_view_and_a_picture_facing_the_mouth) {
     cave_world cw = { .tunnel = true, .sea_level = 0.0f };
     terrain_world *world = cave_world_create(&cw);
-    game_walk walk = parsed("relative\n0 -4\ncave 60 shot\n0 -10\n");
+    game_walk walk = walk_test_parsed("relative\n0 -4\ncave 60 shot\n0 -10\n");
     cr_expect_eq(walk.points[1].cave_radius, 60.0f);
     game_player pl;
-    place(&pl, 0.5, -10.5);
+    walk_test_place(&pl, 0.5, GROUND, -10.5);
     cr_assert_eq(game_walk_resolve_caves(&walk, world, &pl), 1);
     cr_assert_eq(walk.count, 3);
     const game_walk_point *cave = &walk.points[1];
@@ -145,17 +132,17 @@ Test(game_walk_cave, a_cave_line_becomes_a_flight_to_the_view_and_a_picture_faci
 Test(game_walk_cave, a_cave_line_with_nothing_to_find_is_dropped_and_an_unresolved_one_is_skipped) {
     cave_world flat = { .tunnel = false, .sea_level = 0.0f };
     terrain_world *world = cave_world_create(&flat);
-    game_walk walk = parsed("relative\n0 -4\ncave 30 shot\n0 -8\n");
+    game_walk walk = walk_test_parsed("relative\n0 -4\ncave 30 shot\n0 -8\n");
     game_player pl;
-    place(&pl, 0.5, 0.5);
+    walk_test_place(&pl, 0.5, GROUND, 0.5);
     cr_expect_eq(game_walk_resolve_caves(&walk, world, &pl), 0);
     cr_expect_eq(walk.count, 2);
     cr_expect(walk.points[1].z == -8.0 && walk.points[0].z == -4.0);
     game_walk_free(&walk);
     /* Never resolved: the walker passes over it, and takes no picture. */
-    walk = parsed("relative\ncave 30 shot\n0 -8\n");
+    walk = walk_test_parsed("relative\ncave 30 shot\n0 -8\n");
     game_walker w;
-    place(&pl, 0.5, 0.5);
+    walk_test_place(&pl, 0.5, GROUND, 0.5);
     game_walker_start(&w, &walk, &pl);
     float dt = 1.0f / 60.0f;
     for (int frame = 0; frame < 2000 && !w.done; frame++) {
@@ -169,7 +156,7 @@ Test(game_walk_cave, a_cave_line_with_nothing_to_find_is_dropped_and_an_unresolv
 }
 
 Test(game_walk_cave, look_and_cave_words_parse_and_their_errors_name_the_problem) {
-    game_walk walk = parsed("1 2 shot look=-90,12.5\ncave 40\n");
+    game_walk walk = walk_test_parsed("1 2 shot look=-90,12.5\ncave 40\n");
     cr_expect(walk.points[0].has_look && walk.points[0].look_yaw == 270.0f && walk.points[0].look_pitch == 12.5f);
     cr_expect(walk.points[1].cave_radius == 40.0f && !walk.points[1].shot);
     game_walk_free(&walk);

@@ -18,6 +18,7 @@
  * With no wall, with the wall of sand, with a 50° ramp instead or with the floor under water,
  * nothing is found. */
 #include "../engine/test.h"
+#include "walk_test.h"
 #include "game/walk.h"
 
 #include <math.h>
@@ -79,22 +80,13 @@ Test(game_walk_cliff, no_wall_a_sand_wall_a_ramp_or_a_drowned_foot_is_no_cliff) 
     }
 }
 
-static game_walk parsed(const char *text) {
-    game_walk walk;
-    core_error error = { 0 };
-    cr_assert(game_walk_parse_text(text, strlen(text), "t.walk", &walk, &error), "%s", error.message);
-    return walk;
-}
-
 Test(game_walk_cliff, a_cliff_line_becomes_a_flight_facing_the_wall) {
     cliff_kind kind = WALL;
     terrain_world *world = cliff_world_create(&kind);
-    game_walk walk = parsed("relative\n0 -4\ncliff 60 shot\n0 -10\n");
+    game_walk walk = walk_test_parsed("relative\n0 -4\ncliff 60 shot\n0 -10\n");
     cr_expect_eq(walk.points[1].cliff_radius, 60.0f);
     game_player pl;
-    game_player_init(&pl, NULL);
-    pl.position[0] = 0.5, pl.position[1] = 10.0, pl.position[2] = 4.5;
-    pl.on_ground = true;
+    walk_test_place(&pl, 0.5, 10.0, 4.5);
     game_walk_found found = game_walk_resolve_stops(&walk, world, &pl);
     cr_expect(found.cliffs == 1 && found.rocks == 0 && found.shores == 0 && found.caves == 0);
     cr_assert_eq(walk.count, 3);
@@ -108,7 +100,7 @@ Test(game_walk_cliff, a_cliff_line_becomes_a_flight_facing_the_wall) {
     for (int a = 0; a < 3; a++) cr_expect_eq(cliff->look_at[a], v.face[a]);
     game_walk_free(&walk);
     /* nothing within reach: dropped with a notice */
-    walk = parsed("relative\n0 -4\ncliff 10 shot\n");
+    walk = walk_test_parsed("relative\n0 -4\ncliff 10 shot\n");
     cr_expect_eq(game_walk_resolve_stops(&walk, world, &pl).cliffs, 0);
     cr_expect_eq(walk.count, 1);
     game_walk_free(&walk);

@@ -22,6 +22,7 @@
  * With no rocks, with a rock sheet 0.5 m thick everywhere, with a single rocky column or with the
  * cone under water, nothing is found. */
 #include "../engine/test.h"
+#include "walk_test.h"
 #include "game/walk.h"
 
 #include <math.h>
@@ -133,27 +134,13 @@ Test(game_walk_rocks, no_rocks_a_thin_sheet_one_column_or_drowned_rocks_are_no_p
     }
 }
 
-static game_walk parsed(const char *text) {
-    game_walk walk;
-    core_error error = { 0 };
-    cr_assert(game_walk_parse_text(text, strlen(text), "t.walk", &walk, &error), "%s", error.message);
-    return walk;
-}
-
-static void place(game_player *pl, double x, double z) {
-    game_player_init(pl, NULL);
-    pl->position[0] = x, pl->position[1] = 10.0, pl->position[2] = z;
-    pl->yaw = 0.0f;
-    pl->on_ground = true;
-}
-
 Test(game_walk_rocks, a_rocks_line_becomes_a_flight_to_the_view_and_a_picture_of_the_pile) {
     rocks_kind kind = CONE;
     terrain_world *world = rocks_world_create(&kind);
-    game_walk walk = parsed("relative\n0 -4\nrocks 60 shot\n0 -10\n");
+    game_walk walk = walk_test_parsed("relative\n0 -4\nrocks 60 shot\n0 -10\n");
     cr_expect_eq(walk.points[1].rocks_radius, 60.0f);
     game_player pl;
-    place(&pl, 0.5, 4.5);
+    walk_test_place(&pl, 0.5, 10.0, 4.5);
     game_walk_found found = game_walk_resolve_stops(&walk, world, &pl);
     cr_expect(found.rocks == 1 && found.shores == 0 && found.caves == 0);
     cr_assert_eq(walk.count, 3);
@@ -183,8 +170,8 @@ Test(game_walk_rocks, a_rocks_line_becomes_a_flight_to_the_view_and_a_picture_of
                   "eye (%.1f, %.1f, %.1f), view (%.1f, %.1f, %.1f)", eye[0], eye[1], eye[2], v.eye[0], v.eye[1], v.eye[2]);
     game_walk_free(&walk);
     /* nothing to find: dropped with a notice */
-    walk = parsed("relative\n0 -4\nrocks 10 shot\n0 -8\n");
-    place(&pl, 0.5, 4.5);
+    walk = walk_test_parsed("relative\n0 -4\nrocks 10 shot\n0 -8\n");
+    walk_test_place(&pl, 0.5, 10.0, 4.5);
     cr_expect_eq(game_walk_resolve_stops(&walk, world, &pl).rocks, 0);
     cr_expect_eq(walk.count, 2);
     cr_expect_not(walk.points[0].has_look_at || walk.points[1].has_look_at);
@@ -193,7 +180,7 @@ Test(game_walk_rocks, a_rocks_line_becomes_a_flight_to_the_view_and_a_picture_of
 }
 
 Test(game_walk_rocks, rocks_lines_parse_and_their_errors_name_the_problem) {
-    game_walk walk = parsed("rocks 40\nrocks 12.5 shot\nshore 30\n");
+    game_walk walk = walk_test_parsed("rocks 40\nrocks 12.5 shot\nshore 30\n");
     cr_expect(walk.points[0].rocks_radius == 40.0f && !walk.points[0].shot && walk.points[0].shore_radius == 0.0f);
     cr_expect(walk.points[1].rocks_radius == 12.5f && walk.points[1].shot && walk.points[1].cave_radius == 0.0f);
     cr_expect(walk.points[2].shore_radius == 30.0f && walk.points[2].rocks_radius == 0.0f);
@@ -222,7 +209,7 @@ Test(game_walk_rocks, rocks_lines_parse_and_their_errors_name_the_problem) {
 /* The tour's stops in order: the spawn and 50 m on, a cave, a shore, a pile of rocks, the view
  * from 120 m up; six pictures, which fill the contact sheet's 3 × 2. */
 Test(game_walk_rocks, the_tour_parses_with_its_rocks_stop) {
-    game_walk walk = parsed(game_walk_tour);
+    game_walk walk = walk_test_parsed(game_walk_tour);
     cr_assert_eq(walk.count, 6);
     int shots = 0;
     for (int i = 0; i < walk.count; i++) shots += walk.points[i].shot;

@@ -15,6 +15,7 @@
  * With no water, with only a pond of 4 × 4 m (less than 40 m of water along any view) or with a
  * shore 20 m above the water (over the 12 m limit), nothing is found. */
 #include "../engine/test.h"
+#include "walk_test.h"
 #include "game/walk.h"
 
 #include <math.h>
@@ -77,27 +78,13 @@ Test(game_walk_shore, no_water_a_pond_or_a_cliff_is_no_shore_view) {
     }
 }
 
-static game_walk parsed(const char *text) {
-    game_walk walk;
-    core_error error = { 0 };
-    cr_assert(game_walk_parse_text(text, strlen(text), "t.walk", &walk, &error), "%s", error.message);
-    return walk;
-}
-
-static void place(game_player *pl, double x, double z) {
-    game_player_init(pl, NULL);
-    pl->position[0] = x, pl->position[1] = 11.0, pl->position[2] = z;
-    pl->yaw = 0.0f;
-    pl->on_ground = true;
-}
-
 Test(game_walk_shore, a_shore_line_becomes_a_flight_to_the_view_and_a_picture_over_the_water) {
     shore_kind kind = SEA;
     terrain_world *world = shore_world_create(&kind);
-    game_walk walk = parsed("relative\n0 -4\nshore 60 shot\n0 -10\n");
+    game_walk walk = walk_test_parsed("relative\n0 -4\nshore 60 shot\n0 -10\n");
     cr_expect_eq(walk.points[1].shore_radius, 60.0f);
     game_player pl;
-    place(&pl, -20.5, 4.5);
+    walk_test_place(&pl, -20.5, 11.0, 4.5);
     game_walk_found found = game_walk_resolve_stops(&walk, world, &pl);
     cr_expect(found.shores == 1 && found.caves == 0);
     cr_assert_eq(walk.count, 3);
@@ -125,8 +112,8 @@ Test(game_walk_shore, a_shore_line_becomes_a_flight_to_the_view_and_a_picture_ov
                   "eye (%.1f, %.1f, %.1f), view (%.1f, %.1f, %.1f)", eye[0], eye[1], eye[2], v.eye[0], v.eye[1], v.eye[2]);
     game_walk_free(&walk);
     /* nothing to find: dropped; never resolved: passed over without a picture */
-    walk = parsed("relative\n0 -4\nshore 10 shot\n0 -8\n");
-    place(&pl, -20.5, 4.5);
+    walk = walk_test_parsed("relative\n0 -4\nshore 10 shot\n0 -8\n");
+    walk_test_place(&pl, -20.5, 11.0, 4.5);
     cr_expect_eq(game_walk_resolve_stops(&walk, world, &pl).shores, 0);
     cr_expect_eq(walk.count, 2);
     game_walk_free(&walk);
@@ -134,7 +121,7 @@ Test(game_walk_shore, a_shore_line_becomes_a_flight_to_the_view_and_a_picture_ov
 }
 
 Test(game_walk_shore, shore_lines_parse_and_their_errors_name_the_problem) {
-    game_walk walk = parsed("shore 40\nshore 12.5 shot\ncave 30\n");
+    game_walk walk = walk_test_parsed("shore 40\nshore 12.5 shot\ncave 30\n");
     cr_expect(walk.points[0].shore_radius == 40.0f && !walk.points[0].shot && walk.points[0].cave_radius == 0.0f);
     cr_expect(walk.points[1].shore_radius == 12.5f && walk.points[1].shot);
     cr_expect(walk.points[2].cave_radius == 30.0f && walk.points[2].shore_radius == 0.0f);

@@ -192,3 +192,144 @@ Test(terrain_ecs_edit, a_profiled_sweep_is_copied_into_the_queue_and_reaches_as_
     running_close(&direct);
     running_close(&queued);
 }
+
+/* ---- what an amplify hook adds reaches past the columns it reads (amplify_reach) ------------- */
+
+/* Ground at y = 8 everywhere; the hook adds a ball of radius 3 at (40, 8, 16), in mesh chunk
+ * (1, 0, 0), while column (12, 16) of chunk (0, 0) is flat: its stacks decide the ball, 20 m
+ * from chunk (1, 0, 0)'s box, farther than the chunk's own samples, kernel and occlusion rays
+ * reach (11 m). So only amplify_reach can tell the ECS that an edit there changes that chunk. */
+#define BALL_X 40.0
+#define BALL_Y 8.0
+#define BALL_Z 16.0
+#define BALL_RADIUS 3.0
+
+static void ground8_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
+    (void)x, (void)z;
+    const float *top = user;
+    terrain_stacks_builder_push(builder, TERRAIN_BEDROCK, *top - TERRAIN_FLOOR_Y);
+}
+
+static terrain_stacks *ground8_chunk(void *user, terrain_chunk_coord coord) {
+    (void)user;
+    float top = 8.0f;
+    return terrain_stacks_from_columns(coord, ground8_column, &top);
+}
+
+static void ball_while_flat(void *user, terrain_world *world, terrain_field *field) {
+    (void)user;
+    const terrain_stacks *deciding = terrain_world_stacks(world, (terrain_chunk_coord){ 0, 0 });
+    if (terrain_stacks_top(deciding, 12, 16) > 8.5f) return;
+    for (int k = 0; k < field->nz; k++)
+        for (int j = 0; j < field->ny; j++)
+            for (int i = 0; i < field->nx; i++) {
+                double dx = field->origin[0] + i * (double)field->spacing - BALL_X;
+                double dy = field->origin[1] + j * (double)field->spacing - BALL_Y;
+                double dz = field->origin[2] + k * (double)field->spacing - BALL_Z;
+                float t = (float)(BALL_RADIUS - sqrt(dx * dx + dy * dy + dz * dz));
+                t = t > 1.0f ? 1.0f : t < -1.0f ? -1.0f : t;
+                float *v = &field->values[((size_t)k * field->ny + j) * field->nx + i];
+                *v = t > *v ? t : *v;
+            }
+}
+
+/* The top of mesh chunk (1, 0, 0) as last uploaded, after a few frames. */
+static float ball_chunk_top(running *r, ecs_query *query, uint64_t *serial) {
+    for (int f = 0; f < 4; f++) ecs_progress(r->ecs, DT);
+    ecs_iter it = ecs_query_iter(r->ecs, query);
+    float top = -1e9f;
+    while (ecs_query_next(&it)) {
+        TerrainMeshChunk *chunks = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++)
+            if (chunks[i].x == 1 && chunks[i].y == 0 && chunks[i].z == 0)
+                top = chunks[i].gpu.bounds_max[1], *serial = chunks[i].gpu.serial;
+    }
+    return top;
+}
+
+static void one_column_raised(void *user, int64_t x, int64_t z, terrain_stacks_builder *builder) {
+    (void)user;
+    float top = x == 12 && z == 16 ? 13.0f : 8.0f;
+    ground8_column(&top, x, z, builder);
+}
+
+/* Raises column (12, 16) of chunk (0, 0) to 13 m, a commit as any edit makes; returns the ball
+ * chunk's top after it (and before in *before). */
+static float ball_after_raising_its_column(float reach_x, float *before, bool *remeshed) {
+    running r = { .jobs = job_system_create(&(job_system_desc){ .threads = 2 }) };
+    r.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = r.jobs });
+    r.world = terrain_world_create(&(terrain_world_desc){ .generate = ground8_chunk, .amplify = ball_while_flat,
+                                                          .amplify_reach = { reach_x, 0, 0 } });
+    r.te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = r.ecs, .terrain = r.world });
+    cr_assert(r.te);
+    ecs_query *query = ecs_query_create(r.ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(r.ecs, "TerrainMeshChunk") } });
+    terrain_ecs_spawn_area(r.te, 0, 0, 1, 0, 0);   /* column chunks −1 … 1, mesh layer 0 (y 0 … 32) */
+    core_log_level level = core_log_get_level();
+    core_log_set_level(CORE_LOG_OFF);   /* no GL context: the uploads say so, and keep the bounds */
+    uint64_t serial_before = 0, serial_after = 0;
+    *before = ball_chunk_top(&r, query, &serial_before);
+
+    terrain_world_commit(r.world, (terrain_chunk_coord){ 0, 0 },
+                         terrain_stacks_from_columns((terrain_chunk_coord){ 0, 0 }, one_column_raised, NULL), TERRAIN_EDIT_SET);
+    float after = ball_chunk_top(&r, query, &serial_after);
+    *remeshed = serial_after != serial_before;
+    core_log_set_level(level);
+    ecs_query_destroy(r.ecs, query);
+    running_close(&r);
+    return after;
+}
+
+Test(terrain_ecs_edit, an_edit_meshes_again_the_chunks_within_the_amplify_hook_s_reach) {
+    /* the ball's farthest point is |12 − 43| = 31 m from the column along x */
+    float before, after;
+    bool remeshed;
+    after = ball_after_raising_its_column(32.0f, &before, &remeshed);
+    cr_expect_geq(before, (float)(BALL_Y + BALL_RADIUS - 1.0), "the ball is drawn at first: top %g", (double)before);
+    cr_expect(remeshed, "the chunk 20 m from the edit is meshed again");
+    /* flat ground's top is 8 m; the ball's is 11 m (bounds may carry a metre of margin) */
+    cr_expect_lt(after, (float)(BALL_Y + BALL_RADIUS - 1.0), "and the ball is gone from it: top %g", (double)after);
+    /* without the reach the chunk keeps drawing a ball that is no longer in the field */
+    after = ball_after_raising_its_column(0.0f, &before, &remeshed);
+    cr_expect_geq(before, (float)(BALL_Y + BALL_RADIUS - 1.0));
+    cr_expect_not(remeshed, "without amplify_reach nothing tells the chunk");
+    cr_expect_geq(after, (float)(BALL_Y + BALL_RADIUS - 1.0));
+}
+
+/* Frames until every wanted chunk is drawn again (a minute at most, for a loaded machine); the
+ * ball chunk's top then. */
+static float streamed_ball_top(running *r, ecs_query *query) {
+    const double eye[1][3] = { { 16, 10, 16 } };
+    uint64_t give_up = core_time_ns() + 60ull * 1000000000ull, serial = 0;
+    for (int f = 0; f < 2000 || core_time_ns() < give_up; f++) {
+        terrain_ecs_set_viewers(r->te, eye, 1);
+        ecs_progress(r->ecs, DT);
+        terrain_world_trim(r->world);
+        terrain_ecs_stream_stats_info st = terrain_ecs_stream_stats(r->te);
+        if (f > 2 && st.mesh_chunks_wanted > 0 && st.mesh_chunks_ready == st.mesh_chunks_wanted) break;
+    }
+    return ball_chunk_top(r, query, &serial);
+}
+
+/* Streamed, the chunks only the reach meets are meshed again in the background, and still come
+ * back without the ball. */
+Test(terrain_ecs_edit, streamed_chunks_within_the_amplify_hook_s_reach_are_meshed_again) {
+    running r = { .jobs = job_system_create(&(job_system_desc){ .threads = 2 }) };
+    r.ecs = ecs_world_create(&(ecs_world_desc){ .jobs = r.jobs });
+    r.world = terrain_world_create(&(terrain_world_desc){ .generate = ground8_chunk, .amplify = ball_while_flat,
+                                                          .amplify_reach = { 32, 0, 0 } });
+    r.te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = r.ecs, .terrain = r.world });
+    cr_assert(r.te);
+    ecs_query *query = ecs_query_create(r.ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(r.ecs, "TerrainMeshChunk") } });
+    terrain_ecs_stream(r.te, &(terrain_stream_desc){ .half_width = 2, .levels = 1, .y_min = 0, .y_max = 20 });
+    core_log_level level = core_log_get_level();
+    core_log_set_level(CORE_LOG_OFF);   /* no GL context: the uploads say so, and keep the bounds */
+    float before = streamed_ball_top(&r, query);
+    terrain_world_commit(r.world, (terrain_chunk_coord){ 0, 0 },
+                         terrain_stacks_from_columns((terrain_chunk_coord){ 0, 0 }, one_column_raised, NULL), TERRAIN_EDIT_SET);
+    float after = streamed_ball_top(&r, query);
+    core_log_set_level(level);
+    cr_expect_geq(before, (float)(BALL_Y + BALL_RADIUS - 1.0), "the ball is drawn at first: top %g", (double)before);
+    cr_expect_lt(after, (float)(BALL_Y + BALL_RADIUS - 1.0), "and is gone after the edit: top %g", (double)after);
+    ecs_query_destroy(r.ecs, query);
+    running_close(&r);
+}

@@ -41,6 +41,10 @@ Test(terrain_stacks, materials_named_and_in_field) {
     cr_expect_not(terrain_material_in_field(TERRAIN_AIR));
     cr_expect_not(terrain_material_in_field(TERRAIN_ROCKS));
     cr_expect_not(terrain_material_in_field(TERRAIN_WATER));
+    /* a game's own materials are rock, solid like bedrock; past the last there are none */
+    cr_expect(terrain_material_in_field(TERRAIN_MATERIAL_BUILTIN_COUNT));
+    cr_expect(terrain_material_in_field((terrain_material)(TERRAIN_MATERIAL_MAX - 1)));
+    cr_expect_not(terrain_material_in_field(TERRAIN_MATERIAL_MAX));
 }
 
 Test(terrain_stacks, adjacent_same_material_layers_merge) {

@@ -54,8 +54,9 @@ typedef enum terrain_material {
 } terrain_material;
 
 const char *terrain_material_name(terrain_material material);
-/* Whether the material belongs to the implicit surface's skeleton: sand and bedrock (rocks are
- * the rocks module's own skeleton, water has its own surface). */
+/* Whether the material belongs to the implicit surface's skeleton: sand, bedrock and a game's
+ * own materials (solid rock like bedrock: cliffs' strata, rocks_blocks.h); rocks are the rocks
+ * module's own skeleton, water has its own surface. */
 bool terrain_material_in_field(terrain_material material);
 
 /* ---- layout ------------------------------------------------------------------------------- */
@@ -203,6 +204,12 @@ typedef struct terrain_world_desc {
      * it never calls itself), keep values in [−1, 1], and be safe from any thread. */
     void (*amplify)(void *user, terrain_world *world, terrain_field *field);
     void *amplify_user;               /* passed to amplify */
+    /* Metres along x, y and z: how far from a column the values amplify adds may change when
+     * that column's stacks change (what it adds near p may depend on columns that far from p).
+     * An edit then meshes again every chunk within this distance of the columns it changed,
+     * not only those whose own samples read them (rocks_cliffs_reach for cliff blocks). Zeros
+     * = amplify reads only the field's own kernel. */
+    float amplify_reach[3];
 } terrain_world_desc;
 
 terrain_world *terrain_world_create(const terrain_world_desc *desc);

@@ -321,6 +321,8 @@ bool terrain__world_sea(const terrain_world *world, int32_t *sea_quanta);
 
 /* Passes a sampled field through terrain_world_desc.amplify, if the world has one. */
 void terrain__world_amplify(terrain_world *world, terrain_field *field);
+/* terrain_world_desc.amplify_reach, x y z (zeros without amplify). */
+const float *terrain__world_amplify_reach(const terrain_world *world);
 /* For tests of the chunk cache's races: `fn` runs on the generating thread after a chunk was
  * generated and replayed, before it is inserted (set before any thread uses the world). */
 void terrain__world_on_generated(terrain_world *world, void (*fn)(void *user, terrain_chunk_coord coord),

@@ -86,7 +86,9 @@ const char *terrain_material_name(terrain_material material) {
 }
 
 bool terrain_material_in_field(terrain_material material) {
-    return material == TERRAIN_BEDROCK || material == TERRAIN_SAND;
+    /* a game's own materials are rock like bedrock (the edits hold them stable too) */
+    return material == TERRAIN_BEDROCK || material == TERRAIN_SAND ||
+           (material >= TERRAIN_MATERIAL_BUILTIN_COUNT && material < TERRAIN_MATERIAL_MAX);
 }
 
 /* ---- building -------------------------------------------------------------------------- */

@@ -52,6 +52,7 @@ struct terrain_world {
     bool sea;                             /* edits let the sea in (terrain_world_desc.sea) */
     void (*amplify)(void *user, terrain_world *world, terrain_field *field);
     void *amplify_user;
+    float amplify_reach[3];               /* metres (terrain_world_desc.amplify_reach) */
     void (*generated)(void *user, terrain_chunk_coord coord);   /* tests' seam (internal header) */
     void *generated_user;
     terrain_world_change *changes;        /* committed since the last terrain_world_take_changes */
@@ -95,6 +96,8 @@ terrain_world *terrain_world_create(const terrain_world_desc *desc) {
     w->generate_user = desc->generate_user;
     w->amplify = desc->amplify;
     w->amplify_user = desc->amplify_user;
+    for (int a = 0; a < 3; a++)
+        w->amplify_reach[a] = desc->amplify && desc->amplify_reach[a] > 0.0f ? desc->amplify_reach[a] : 0.0f;
     w->edits = desc->edits;
     w->sea = desc->generate == NULL || desc->sea;
     w->max_chunks = desc->max_chunks ? desc->max_chunks : 4096;
@@ -519,6 +522,8 @@ void terrain__world_on_generated(terrain_world *world, void (*fn)(void *user, te
 void terrain__world_amplify(terrain_world *world, terrain_field *field) {
     if (world->amplify) world->amplify(world->amplify_user, world, field);
 }
+
+const float *terrain__world_amplify_reach(const terrain_world *world) { return world->amplify_reach; }
 
 /* ---- the far terrain's view of the cache ------------------------------------------------- */
 

@@ -229,13 +229,18 @@ static void edits_apply(terrain_ecs *te) {
 }
 
 /* Its samples reach one apron sample and the kernel (one column, one metre up and down) beyond
- * the chunk, and the material weights a column more; its occlusion's rays reach farther still. */
-bool terrain__mesh_reads_change(int level, int64_t x, int64_t y, int64_t z, const terrain_world_change *change) {
+ * the chunk, and the material weights a column more; its occlusion's rays reach farther still.
+ * What amplify adds at any of those samples may depend on columns `amplify_reach` further (a
+ * cliff block whose presence an edit beside the chunk changed reaches into it). */
+bool terrain__mesh_reads_change(int level, int64_t x, int64_t y, int64_t z, const terrain_world_change *change,
+                                const float amplify_reach[3]) {
     int64_t step = (int64_t)1 << level, size = TERRAIN_MESH_CELLS * step, pad = step + 2;
     if (pad < TERRAIN__MESH_OCCLUSION_REACH) pad = TERRAIN__MESH_OCCLUSION_REACH;   /* the occlusion's rays */
-    int64_t lo_x = x * size - pad, hi_x = (x + 1) * size + pad;
-    int64_t lo_z = z * size - pad, hi_z = (z + 1) * size + pad;
-    double lo_y = (double)(y * size - pad), hi_y = (double)((y + 1) * size + pad);
+    const int64_t pad_x = pad + (int64_t)ceilf(amplify_reach[0]), pad_z = pad + (int64_t)ceilf(amplify_reach[2]);
+    const double pad_y = (double)pad + ceil((double)amplify_reach[1]);
+    int64_t lo_x = x * size - pad_x, hi_x = (x + 1) * size + pad_x;
+    int64_t lo_z = z * size - pad_z, hi_z = (z + 1) * size + pad_z;
+    double lo_y = (double)(y * size) - pad_y, hi_y = (double)((y + 1) * size) + pad_y;
     int64_t x0 = change->coord.x * TERRAIN_CHUNK_COLUMNS + change->column_min[0];
     int64_t x1 = change->coord.x * TERRAIN_CHUNK_COLUMNS + change->column_max[0];
     int64_t z0 = change->coord.z * TERRAIN_CHUNK_COLUMNS + change->column_min[1];
@@ -247,6 +252,7 @@ bool terrain__mesh_reads_change(int level, int64_t x, int64_t y, int64_t z, cons
  * phase meshes them again; their old GPU mesh is drawn until the new one is up. */
 static void static_meshes_invalidate(terrain_ecs *te, ecs_commands *commands) {
     if (te->changed_count == 0) return;
+    const float *reach = terrain__world_amplify_reach(te->terrain);
     ecs_iter it = ecs_query_iter(te->ecs, te->mesh_chunks);
     while (ecs_query_next(&it)) {
         TerrainMeshChunk *chunks = ecs_field(&it, 0);
@@ -256,7 +262,7 @@ static void static_meshes_invalidate(terrain_ecs *te, ecs_commands *commands) {
             if (ecs_has(te->ecs, e, te->streamed) || m->state == TERRAIN_MESH_WAITING) continue;
             bool reads = false;
             for (size_t c = 0; c < te->changed_count && !reads; c++)
-                reads = terrain__mesh_reads_change(m->lod.level, m->x, m->y, m->z, &te->changed[c]);
+                reads = terrain__mesh_reads_change(m->lod.level, m->x, m->y, m->z, &te->changed[c], reach);
             if (!reads) continue;
             terrain_mesh_free(&m->mesh);
             m->state = TERRAIN_MESH_WAITING;

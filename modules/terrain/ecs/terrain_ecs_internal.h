@@ -65,8 +65,10 @@ void terrain__stream_destroy(terrain_ecs *te);
 void terrain__editor_register(terrain_ecs *te);
 void terrain__editor_destroy(terrain_ecs *te);
 /* Whether mesh chunk (level, x, y, z) reads a column of the changed chunk at a changed height
- * (samples, apron, kernel and material weights): it must be meshed again. */
-bool terrain__mesh_reads_change(int level, int64_t x, int64_t y, int64_t z, const terrain_world_change *change);
+ * (samples, apron, kernel and material weights, and `amplify_reach` metres further for what the
+ * world's amplify hook adds): it must be meshed again. */
+bool terrain__mesh_reads_change(int level, int64_t x, int64_t y, int64_t z, const terrain_world_change *change,
+                                const float amplify_reach[3]);
 
 /* ==== end of the ECS and streaming section ================================================ */
 

@@ -624,23 +624,31 @@ static void stream_submit(terrain_ecs *te) {
 
 /* Edits (terrain_ecs_edit.c collected the changed column chunks): every record that reads one
  * is meshed again — its task in flight has read the old stacks and is dropped — and those in
- * range are meshed now, as the frame's own jobs, so the stroke is drawn this frame. */
+ * range are meshed now, as the frame's own jobs, so the stroke is drawn this frame. Records
+ * that only the amplify hook's reach meets (cliff blocks the edit may have changed, up to some
+ * 17 m away) are meshed again in the background: an edit near a chunk's border would otherwise
+ * mesh a 3 × 3 block of chunks inside the frame. */
 static void stream_remesh_edits(terrain_ecs *te, ecs_commands *commands) {
     terrain__streamer *s = te->stream;
     if (te->changed_count == 0) return;
     TRACE_ZONE("terrain_stream_remesh_edits");
+    static const float own_samples[3] = { 0, 0, 0 };
+    const float *reach = terrain__world_amplify_reach(te->terrain);
+    const bool amplified = reach[0] > 0 || reach[1] > 0 || reach[2] > 0;
     for (size_t c = 0; c < te->changed_count; c++) stream_fit_layers(s, te->changed[c].y_min, te->changed[c].y_max);
     size_t urgent = 0;
     for (size_t i = 0; i < s->meshes.capacity; i++) {
         stream_record *r = s->meshes.slots[i];
         if (!r) continue;
-        bool reads = false;
+        bool reads = false, reached = false;
         for (size_t c = 0; c < te->changed_count && !reads; c++)
-            reads = terrain__mesh_reads_change(r->key.level, r->key.x, r->key.y, r->key.z, &te->changed[c]);
-        if (!reads) continue;
+            reads = terrain__mesh_reads_change(r->key.level, r->key.x, r->key.y, r->key.z, &te->changed[c], own_samples);
+        for (size_t c = 0; c < te->changed_count && amplified && !reads && !reached; c++)
+            reached = terrain__mesh_reads_change(r->key.level, r->key.x, r->key.y, r->key.z, &te->changed[c], reach);
+        if (!reads && !reached) continue;
         stream_task_cancel(s, r);
         r->ready = false;
-        if (!r->wanted || !r->entity) continue;
+        if (!reads || !r->wanted || !r->entity) continue;
         r->edited = true;
         s->scratch = core_grow(s->scratch, &s->scratch_capacity, urgent + 1, sizeof *s->scratch);
         s->scratch[urgent++] = r;
