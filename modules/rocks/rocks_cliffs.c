@@ -135,8 +135,9 @@ static void make_tiles(void *user, size_t begin, size_t end) {
  * presence reads the blocks' overhang past the cell and PRESENCE_READS more (tiles of 16 m
  * overhang by about 7 m: more than the 2 m once assumed), and a changed column changes values
  * at most a block's extent and PRESENCE_READS away, along each axis (a column 17 m tall and
- * 4 m wide reaches far up and down, not sideways). */
-static void cliffs_reach_of(rocks_cliffs *c, int type) {
+ * 4 m wide reaches far up and down, not sideways). And its widest block: a coarse field that
+ * shows none of the tile's blocks skips the type. */
+static void cliffs_measure_tile(rocks_cliffs *c, int type) {
     const rocks_block_tile *tile = c->tiles[type];
     double overhang = 0.0;
     for (int a = 0; a < 3; a++) {
@@ -148,6 +149,7 @@ static void cliffs_reach_of(rocks_cliffs *c, int type) {
             double extent = (double)tile->blocks[b].bounds_max[a] - tile->blocks[b].bounds_min[a];
             c->reach[a] = fmaxf(c->reach[a], (float)(extent + PRESENCE_READS));
         }
+    for (uint32_t b = 0; b < tile->block_count; b++) c->widest[type] = fmaxf(c->widest[type], tile->widths[b]);
     c->margin[type] = overhang + PRESENCE_READS;
     c->margin_max = fmax(c->margin_max, c->margin[type]);
 }
@@ -183,8 +185,6 @@ rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc) {
         c->tiles[jobs.types[i]] = jobs.tiles[i];
         if (!jobs.tiles[i]) ok = false;
         else c->words[jobs.types[i]] = (jobs.tiles[i]->block_count + 63) / 64;
-        for (uint32_t b = 0; jobs.tiles[i] && b < jobs.tiles[i]->block_count; b++)
-            c->widest[jobs.types[i]] = fmaxf(c->widest[jobs.types[i]], jobs.tiles[i]->widths[b]);
         if (jobs.tiles[i]) c->stats.blocks += jobs.tiles[i]->block_count;
         if (jobs.tiles[i] && jobs.tiles[i]->from_cache) c->stats.tiles_from_cache++;
     }
@@ -193,7 +193,7 @@ rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc) {
         return NULL;
     }
     for (int type = 0; type < ROCKS_BLOCK_TYPE_END; type++)
-        if (c->tiles[type]) cliffs_reach_of(c, type);
+        if (c->tiles[type]) cliffs_measure_tile(c, type);
     c->stats.build_seconds = (double)(core_time_ns() - start) * 1e-9;
     c->stats.tile_size = d.tile_size * d.block_scale;
     return c;
