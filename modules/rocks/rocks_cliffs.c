@@ -323,11 +323,26 @@ static bool mostly_in_the_wall(terrain_world *world, const rocks_block *b, const
  * anchors, most of a cell's, are passed over without the field's cost, with the same answer. */
 #define ANCHOR_REACH 1.25
 
+/* The chunks' bounds are coarse: a chunk that holds a canyon wall spans its whole height, and
+ * on seed 1's canyon three anchors in four that pass them lie in solid rock. So each column the
+ * anchors' cubes reach also keeps, read once a cell when first asked, the height below which it
+ * is solid (its first run of in-field material from the floor) and above which it is empty. */
+#define SPAN_COLUMNS_MAX 40           /* columns per axis: a cell of up to 37 m and the reach */
+#define COLUMN_LAYERS_MAX 64          /* layers read of a column (more: no shortcut there) */
+
+typedef struct column_span {
+    float solid_below, empty_above;
+} column_span;
+
 typedef struct surface_bounds {
     int64_t chunk_x0, chunk_z0;       /* the cell's first column chunk */
     int nx, nz;                       /* chunks it spans (1 or 2 each way at s ≤ 32 m) */
     float lowest[3][3], highest[3][3];
     const terrain_stacks *stacks[3][3];   /* [k][i]: for materials_near */
+    int64_t column_x0, column_z0;     /* the first column the cell's anchors' cubes reach */
+    int columns;                      /* per axis; 0 when the cell is too wide to hold them */
+    uint64_t span_known[SPAN_COLUMNS_MAX * SPAN_COLUMNS_MAX / 64];
+    column_span spans[SPAN_COLUMNS_MAX * SPAN_COLUMNS_MAX];
 } surface_bounds;
 
 /* The column chunk (terrain_chunk_coord) holding world coordinate x (or z). */
@@ -349,10 +364,56 @@ static bool surface_bounds_make(terrain_world *world, const int64_t cell[3], dou
             b->stacks[k][i] = stacks;
             terrain_stacks_interface_range(stacks, &b->lowest[k][i], &b->highest[k][i]);
         }
+    b->column_x0 = (int64_t)floor((double)cell[0] * s - ANCHOR_REACH);
+    b->column_z0 = (int64_t)floor((double)cell[2] * s - ANCHOR_REACH);
+    const int64_t columns = (int64_t)floor((double)cell[0] * s + s + ANCHOR_REACH) - b->column_x0 + 1;
+    b->columns = columns <= SPAN_COLUMNS_MAX ? (int)columns : 0;
+    memset(b->span_known, 0, sizeof b->span_known);
     return true;
 }
 
-static bool far_from_surface(const surface_bounds *b, const double a[3]) {
+/* Column (gx, gz)'s span, read from its stacks the first time a cell asks (within its reach). */
+static column_span column_span_of(surface_bounds *b, int64_t gx, int64_t gz) {
+    const int i = (int)(gx - b->column_x0), k = (int)(gz - b->column_z0), at = k * SPAN_COLUMNS_MAX + i;
+    if (b->span_known[at / 64] & 1ull << (at % 64)) return b->spans[at];
+    const int64_t cx = chunk_of((double)gx * TERRAIN_COLUMN_SIZE), cz = chunk_of((double)gz * TERRAIN_COLUMN_SIZE);
+    terrain_layer layers[COLUMN_LAYERS_MAX];
+    int count = terrain_stacks_column(b->stacks[cz - b->chunk_z0][cx - b->chunk_x0], (int)(gx - cx * TERRAIN_CHUNK_COLUMNS),
+                                      (int)(gz - cz * TERRAIN_CHUNK_COLUMNS), layers, COLUMN_LAYERS_MAX);
+    column_span span = { TERRAIN_FLOOR_Y, INFINITY };   /* too many layers to read: neither bound */
+    if (count <= COLUMN_LAYERS_MAX) {
+        double bottom = TERRAIN_FLOOR_Y, solid_below = NAN, empty_above = TERRAIN_FLOOR_Y;
+        for (int l = 0; l < count; l++) {
+            double top = bottom + (double)layers[l].thickness;
+            if (terrain_material_in_field(layers[l].material)) empty_above = top;
+            else if (isnan(solid_below)) solid_below = bottom;
+            bottom = top;
+        }
+        span = (column_span){ (float)(isnan(solid_below) ? bottom : solid_below), (float)empty_above };
+    }
+    b->spans[at] = span;
+    b->span_known[at / 64] |= 1ull << (at % 64);
+    return span;
+}
+
+/* The same test against the columns the anchor's cube meets: wholly above their empty heights
+ * or below their solid ones. Exact as the chunks' test is: the cube sees one material. */
+static bool far_from_columns(surface_bounds *b, const double a[3]) {
+    const int64_t x0 = (int64_t)floor(a[0] - ANCHOR_REACH), x1 = (int64_t)floor(a[0] + ANCHOR_REACH);
+    const int64_t z0 = (int64_t)floor(a[2] - ANCHOR_REACH), z1 = (int64_t)floor(a[2] + ANCHOR_REACH);
+    if (x0 < b->column_x0 || z0 < b->column_z0 || x1 >= b->column_x0 + b->columns || z1 >= b->column_z0 + b->columns)
+        return false;   /* an anchor outside its cell (none in the generated tiles) */
+    bool above = true, below = true;
+    for (int64_t gz = z0; gz <= z1 && (above || below); gz++)
+        for (int64_t gx = x0; gx <= x1 && (above || below); gx++) {
+            const column_span span = column_span_of(b, gx, gz);
+            above &= a[1] - ANCHOR_REACH > (double)span.empty_above;
+            below &= a[1] + ANCHOR_REACH < (double)span.solid_below;
+        }
+    return above || below;
+}
+
+static bool far_from_surface(surface_bounds *b, const double a[3]) {
     int i0 = (int)(chunk_of(a[0] - ANCHOR_REACH) - b->chunk_x0), i1 = (int)(chunk_of(a[0] + ANCHOR_REACH) - b->chunk_x0);
     int k0 = (int)(chunk_of(a[2] - ANCHOR_REACH) - b->chunk_z0), k1 = (int)(chunk_of(a[2] + ANCHOR_REACH) - b->chunk_z0);
     bool above = true, below = true;
@@ -361,7 +422,7 @@ static bool far_from_surface(const surface_bounds *b, const double a[3]) {
             above &= a[1] - ANCHOR_REACH > (double)b->highest[k][i];
             below &= a[1] + ANCHOR_REACH < (double)b->lowest[k][i];
         }
-    return above || below;
+    return above || below || far_from_columns(b, a);
 }
 
 /* ---- a second, when materials are mapped: no rock of the type near ---------------------------- */
@@ -377,7 +438,6 @@ static bool far_from_surface(const surface_bounds *b, const double a[3]) {
  * the same time (0.32 s of presence either way), and bedrock mapped to tabular the same 838 as
  * one tabular stratum (0.40 s either way; 0.45 s with per-anchor reads alone). */
 #define MATERIAL_REACH (BEHIND_THE_FACE + 1.0 / 16.0)
-#define COLUMN_LAYERS_MAX 64
 
 static int64_t column_of(double x) { return (int64_t)floor(x / TERRAIN_COLUMN_SIZE); }
 
@@ -498,6 +558,33 @@ static uint64_t cell_key(int type, const int64_t cell[3]) {
     return h ? h : 1;
 }
 
+/* Sets the bits of the present blocks of `type`'s copy at `cell` among those wider than `above`
+ * and not wider than `known`. The shortcuts (bounds, materials near) pass over anchors whose
+ * answer they know without the field's cost; without them every anchor is asked (the tests'
+ * check that they change nothing). */
+static void presence_work_out(rocks_cliffs *c, terrain_world *world, int type, const int64_t cell[3], float above,
+                              float known, bool shortcuts, uint64_t *bits) {
+    const rocks_block_tile *tile = c->tiles[type];
+    const double s = tile->desc.size;
+    surface_bounds bounds;
+    /* made at the first anchor that may hold `type`, or at once when materials are mapped */
+    int shortcut = !shortcuts ? 0 : c->mapped ? surface_bounds_make(world, cell, s, &bounds) : -1;
+    const anchor_filter filter = anchor_filter_make(c, &bounds, shortcut > 0, type, cell, s);
+    for (uint32_t b = 0; !filter.none && b < tile->block_count; b++) {
+        double anchor[3];
+        for (int a = 0; a < 3; a++) anchor[a] = (double)cell[a] * s + tile->blocks[b].anchor[a];
+        if (filter.by_stratum && stratum_type(&c->desc, anchor[1]) != type) continue;
+        if (!(tile->widths[b] > above && tile->widths[b] <= known)) continue;   /* not asked, or known */
+        if (shortcut < 0) shortcut = surface_bounds_make(world, cell, s, &bounds);
+        if (shortcut && far_from_surface(&bounds, anchor)) continue;
+        if (shortcut > 0 && !anchor_near_type(c, &filter, &bounds, type, anchor)) continue;
+        if (wall_type(c, world, anchor) == type &&
+            mostly_in_the_wall(world, &tile->blocks[b], tile->points, (double)cell[0] * s, (double)cell[1] * s,
+                               (double)cell[2] * s))
+            bits[b / 64] |= 1ull << (b % 64);
+    }
+}
+
 /* The present blocks of `type`'s tile copy at `cell` among those wider than `above` metres, into
  * bits (c->words[type] words; the others' bits 0): from the cache when its versions still hold
  * and it knows those blocks, else worked out and kept. A coarse field shows only blocks wider
@@ -530,24 +617,7 @@ static void cell_presence(rocks_cliffs *c, const version_table *table, int type,
     pthread_mutex_unlock(&c->lock);
 
     const uint64_t presence_start = core_time_ns();
-    const double s = tile->desc.size;
-    surface_bounds bounds;
-    /* made at the first anchor that may hold `type`, or at once when materials are mapped */
-    int shortcut = c->mapped ? surface_bounds_make(world, cell, s, &bounds) : -1;
-    const anchor_filter filter = anchor_filter_make(c, &bounds, shortcut > 0, type, cell, s);
-    for (uint32_t b = 0; !filter.none && b < tile->block_count; b++) {
-        double anchor[3];
-        for (int a = 0; a < 3; a++) anchor[a] = (double)cell[a] * s + tile->blocks[b].anchor[a];
-        if (filter.by_stratum && stratum_type(&c->desc, anchor[1]) != type) continue;
-        if (!(tile->widths[b] > above && tile->widths[b] <= known)) continue;   /* not asked, or known */
-        if (shortcut < 0) shortcut = surface_bounds_make(world, cell, s, &bounds);
-        if (shortcut && far_from_surface(&bounds, anchor)) continue;
-        if (shortcut > 0 && !anchor_near_type(c, &filter, &bounds, type, anchor)) continue;
-        if (wall_type(c, world, anchor) == type &&
-            mostly_in_the_wall(world, &tile->blocks[b], tile->points, (double)cell[0] * s, (double)cell[1] * s,
-                               (double)cell[2] * s))
-            bits[b / 64] |= 1ull << (b % 64);
-    }
+    presence_work_out(c, world, type, cell, above, known, true, bits);
 
     pthread_mutex_lock(&c->lock);
     c->stats.cells_computed++;
@@ -587,6 +657,17 @@ bool rocks__cliffs_present(rocks_cliffs *c, terrain_world *world, rocks_block_ty
     version_table versions;
     version_table_make(&versions, world, lo, hi, c->margin_max);
     cell_presence(c, &versions, (int)type, cell, -INFINITY, bits);   /* every block, as level 0 */
+    return true;
+}
+
+bool rocks__cliffs_present_unfiltered(rocks_cliffs *c, terrain_world *world, rocks_block_type type,
+                                      const int64_t cell[3], uint64_t *bits) {
+    const rocks_block_tile *tile = rocks__cliffs_tile(c, type);
+    if (!tile) return false;
+    const double s = tile->desc.size;
+    memset(bits, 0, c->words[type] * sizeof *bits);
+    if (!cell_may_hold(c, (int)type, (double)cell[1] * s, (double)cell[1] * s + s)) return false;
+    presence_work_out(c, world, (int)type, cell, -INFINITY, INFINITY, false, bits);
     return true;
 }
 

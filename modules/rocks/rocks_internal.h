@@ -218,6 +218,10 @@ const rocks_block_tile *rocks__cliffs_tile(const rocks_cliffs *cliffs, rocks_blo
  * cliffs serve). False, and no bit set, when the hook would not ask the cell. */
 bool rocks__cliffs_present(rocks_cliffs *cliffs, terrain_world *world, rocks_block_type type, const int64_t cell[3],
                            uint64_t *bits);
+/* The same worked out anchor by anchor, with none of the shortcuts that pass over anchors far
+ * from any surface or from rock of the type, and nothing cached: what they must not change. */
+bool rocks__cliffs_present_unfiltered(rocks_cliffs *cliffs, terrain_world *world, rocks_block_type type,
+                                      const int64_t cell[3], uint64_t *bits);
 
 /* Levels of detail of a closed mesh by quadric edge collapse onto existing vertices
  * (rocks_simplify.c): begin with the mesh (positions in voxels), then run once a level, finest
