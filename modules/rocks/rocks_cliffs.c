@@ -325,13 +325,15 @@ static bool mostly_in_the_wall(terrain_world *world, const rocks_block *b, const
 
 /* The chunks' bounds are coarse: a chunk that holds a canyon wall spans its whole height, and
  * on seed 1's canyon three anchors in four that pass them lie in solid rock. So each column the
- * anchors' cubes reach also keeps, read once a cell when first asked, the height below which it
- * is solid (its first run of in-field material from the floor) and above which it is empty. */
-#define SPAN_COLUMNS_MAX 40           /* columns per axis: a cell of up to 37 m and the reach */
+ * anchors' cubes reach also keeps, read once a cell when first asked, its runs of solid (in-field)
+ * material: a cube within one run of every column it meets, or between runs in all of them, sees
+ * one material. */
+#define SPAN_RUNS_MAX 3               /* solid runs kept of a column (more: no shortcut there) */
 #define COLUMN_LAYERS_MAX 64          /* layers read of a column (more: no shortcut there) */
 
 typedef struct column_span {
-    float solid_below, empty_above;
+    int count;                        /* solid runs; 0 not read yet, −1 too many to keep */
+    double bottom[SPAN_RUNS_MAX], top[SPAN_RUNS_MAX];  /* the first one's bottom −∞: the floor's solid */
 } column_span;
 
 typedef struct surface_bounds {
@@ -340,9 +342,8 @@ typedef struct surface_bounds {
     float lowest[3][3], highest[3][3];
     const terrain_stacks *stacks[3][3];   /* [k][i]: for materials_near */
     int64_t column_x0, column_z0;     /* the first column the cell's anchors' cubes reach */
-    int columns;                      /* per axis; 0 when the cell is too wide to hold them */
-    uint64_t span_known[SPAN_COLUMNS_MAX * SPAN_COLUMNS_MAX / 64];
-    column_span spans[SPAN_COLUMNS_MAX * SPAN_COLUMNS_MAX];
+    int columns;                      /* per axis */
+    column_span *spans;               /* columns², allocated when first asked (surface_bounds_free) */
 } surface_bounds;
 
 /* The column chunk (terrain_chunk_coord) holding world coordinate x (or z). */
@@ -367,50 +368,62 @@ static bool surface_bounds_make(terrain_world *world, const int64_t cell[3], dou
     b->column_x0 = (int64_t)floor((double)cell[0] * s - ANCHOR_REACH);
     b->column_z0 = (int64_t)floor((double)cell[2] * s - ANCHOR_REACH);
     const int64_t columns = (int64_t)floor((double)cell[0] * s + s + ANCHOR_REACH) - b->column_x0 + 1;
-    b->columns = columns <= SPAN_COLUMNS_MAX ? (int)columns : 0;
-    memset(b->span_known, 0, sizeof b->span_known);
+    b->columns = (int)columns;
+    b->spans = NULL;
     return true;
 }
 
-/* Column (gx, gz)'s span, read from its stacks the first time a cell asks (within its reach). */
-static column_span column_span_of(surface_bounds *b, int64_t gx, int64_t gz) {
-    const int i = (int)(gx - b->column_x0), k = (int)(gz - b->column_z0), at = k * SPAN_COLUMNS_MAX + i;
-    if (b->span_known[at / 64] & 1ull << (at % 64)) return b->spans[at];
+static void surface_bounds_free(surface_bounds *b) {
+    if (b->spans) core_free(b->spans, (size_t)b->columns * (size_t)b->columns * sizeof *b->spans);
+    b->spans = NULL;
+}
+
+/* Column (gx, gz)'s solid runs, read from its stacks the first time a cell asks. */
+static const column_span *column_span_of(surface_bounds *b, int64_t gx, int64_t gz) {
+    if (!b->spans) b->spans = core_calloc((size_t)b->columns * (size_t)b->columns, sizeof *b->spans);
+    column_span *span = &b->spans[(gz - b->column_z0) * b->columns + (gx - b->column_x0)];
+    if (span->count) return span;
     const int64_t cx = chunk_of((double)gx * TERRAIN_COLUMN_SIZE), cz = chunk_of((double)gz * TERRAIN_COLUMN_SIZE);
     terrain_layer layers[COLUMN_LAYERS_MAX];
     int count = terrain_stacks_column(b->stacks[cz - b->chunk_z0][cx - b->chunk_x0], (int)(gx - cx * TERRAIN_CHUNK_COLUMNS),
                                       (int)(gz - cz * TERRAIN_CHUNK_COLUMNS), layers, COLUMN_LAYERS_MAX);
-    column_span span = { TERRAIN_FLOOR_Y, INFINITY };   /* too many layers to read: neither bound */
-    if (count <= COLUMN_LAYERS_MAX) {
-        double bottom = TERRAIN_FLOOR_Y, solid_below = NAN, empty_above = TERRAIN_FLOOR_Y;
-        for (int l = 0; l < count; l++) {
-            double top = bottom + (double)layers[l].thickness;
-            if (terrain_material_in_field(layers[l].material)) empty_above = top;
-            else if (isnan(solid_below)) solid_below = bottom;
-            bottom = top;
+    span->count = 1;   /* below the floor: solid */
+    span->bottom[0] = -INFINITY, span->top[0] = TERRAIN_FLOOR_Y;
+    double bottom = TERRAIN_FLOOR_Y;
+    for (int l = 0; l < count && span->count >= 0; l++) {
+        double top = bottom + (double)layers[l].thickness;
+        if (terrain_material_in_field(layers[l].material) && layers[l].thickness > 0) {
+            if (span->top[span->count - 1] == bottom) span->top[span->count - 1] = top;   /* go on */
+            else if (span->count == SPAN_RUNS_MAX) span->count = -1;
+            else span->bottom[span->count] = bottom, span->top[span->count++] = top;
         }
-        span = (column_span){ (float)(isnan(solid_below) ? bottom : solid_below), (float)empty_above };
+        bottom = top;
     }
-    b->spans[at] = span;
-    b->span_known[at / 64] |= 1ull << (at % 64);
+    if (count > COLUMN_LAYERS_MAX) span->count = -1;
     return span;
 }
 
-/* The same test against the columns the anchor's cube meets: wholly above their empty heights
- * or below their solid ones. Exact as the chunks' test is: the cube sees one material. */
+/* The same test against the columns the anchor's cube meets: within one solid run of each, or
+ * clear of every run in all of them. Exact as the chunks' test is: the cube sees one material. */
 static bool far_from_columns(surface_bounds *b, const double a[3]) {
     const int64_t x0 = (int64_t)floor(a[0] - ANCHOR_REACH), x1 = (int64_t)floor(a[0] + ANCHOR_REACH);
     const int64_t z0 = (int64_t)floor(a[2] - ANCHOR_REACH), z1 = (int64_t)floor(a[2] + ANCHOR_REACH);
     if (x0 < b->column_x0 || z0 < b->column_z0 || x1 >= b->column_x0 + b->columns || z1 >= b->column_z0 + b->columns)
         return false;   /* an anchor outside its cell (none in the generated tiles) */
-    bool above = true, below = true;
-    for (int64_t gz = z0; gz <= z1 && (above || below); gz++)
-        for (int64_t gx = x0; gx <= x1 && (above || below); gx++) {
-            const column_span span = column_span_of(b, gx, gz);
-            above &= a[1] - ANCHOR_REACH > (double)span.empty_above;
-            below &= a[1] + ANCHOR_REACH < (double)span.solid_below;
+    const double lo = a[1] - ANCHOR_REACH, hi = a[1] + ANCHOR_REACH;
+    bool empty = true, solid = true;
+    for (int64_t gz = z0; gz <= z1 && (empty || solid); gz++)
+        for (int64_t gx = x0; gx <= x1 && (empty || solid); gx++) {
+            const column_span *span = column_span_of(b, gx, gz);
+            if (span->count < 0) return false;
+            bool within = false, clear = true;
+            for (int r = 0; r < span->count; r++) {
+                within |= span->bottom[r] < lo && hi < span->top[r];
+                clear &= span->top[r] < lo || hi < span->bottom[r];
+            }
+            solid &= within, empty &= clear;
         }
-    return above || below;
+    return empty || solid;
 }
 
 static bool far_from_surface(surface_bounds *b, const double a[3]) {
@@ -566,7 +579,7 @@ static void presence_work_out(rocks_cliffs *c, terrain_world *world, int type, c
                               float known, bool shortcuts, uint64_t *bits) {
     const rocks_block_tile *tile = c->tiles[type];
     const double s = tile->desc.size;
-    surface_bounds bounds;
+    surface_bounds bounds = { 0 };
     /* made at the first anchor that may hold `type`, or at once when materials are mapped */
     int shortcut = !shortcuts ? 0 : c->mapped ? surface_bounds_make(world, cell, s, &bounds) : -1;
     const anchor_filter filter = anchor_filter_make(c, &bounds, shortcut > 0, type, cell, s);
@@ -583,6 +596,7 @@ static void presence_work_out(rocks_cliffs *c, terrain_world *world, int type, c
                                (double)cell[2] * s))
             bits[b / 64] |= 1ull << (b % 64);
     }
+    surface_bounds_free(&bounds);
 }
 
 /* The present blocks of `type`'s tile copy at `cell` among those wider than `above` metres, into

@@ -4,9 +4,9 @@
  * when no rock of its type lies near. Each answer must be the one the wall test would give.
  *
  * The world is a wall made by hand with what makes the column test hard: rock behind the face
- * (x < 0) up to 20 m, a cave into it from 5 to 14 m, 10 m deep and 22 m wide (a column whose
- * first solid run ends below its top), a floor at 0 in front with water on part of it, and a
- * step of sand on top of the wall in places. Every tile cell along the face is asked both ways:
+ * (x < 0) up to 20 m, a cave into it from 5 to 14 m, 10 m deep and 22 m wide (columns whose
+ * first solid run ends below their top: the cave's side walls are walls between runs), a floor at
+ * 0 in front with water on part of it, and a step of sand on top of the wall in places. Every tile cell along the face is asked both ways:
  * rocks__cliffs_present (the hook's own path, shortcuts and cache) against
  * rocks__cliffs_present_unfiltered (every anchor through the wall test). */
 #include "../engine/test.h"
