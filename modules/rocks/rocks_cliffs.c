@@ -30,6 +30,7 @@ typedef struct cell_entry {
     int64_t cell[3];
     int type;
     uint64_t versions;                /* hash of the versions of the column chunks it read */
+    uint32_t commits;                 /* the world's commit count when they were last read */
     float known_above;                /* presence is worked out for the blocks wider than this */
     uint64_t *bits;                   /* present blocks, one bit each (0 for those not worked out) */
 } cell_entry;
@@ -525,37 +526,52 @@ static bool anchor_near_type(const rocks_cliffs *c, const anchor_filter *f, cons
 }
 
 /* The column chunks' versions one amplify call reads, each looked up once (a lookup takes the
- * world's lock, and a call asks about its chunks for every cell and type). */
+ * world's lock, and a call asks about its chunks for every cell and type). Versions change only
+ * with commits, so a call first reads the world's commit count: a cell kept at that count is
+ * still right, and the table is made only when some cell was kept at another. */
 #define VERSION_TABLE_MAX 64
 
 typedef struct version_table {
     terrain_world *world;
+    uint32_t commits;                 /* the world's commit count when the call began */
+    double lo[3], hi[3], margin;      /* the chunks to hold, once made */
+    bool made;
     int64_t x0, z0;
     int nx, nz;                       /* 0 when the call's chunks are too many to hold */
     uint32_t version[VERSION_TABLE_MAX];
 } version_table;
 
-static void version_table_make(version_table *t, terrain_world *world, const double lo[3], const double hi[3],
-                               double margin) {
+static void version_table_begin(version_table *t, terrain_world *world, const double lo[3], const double hi[3],
+                                double margin) {
     t->world = world;
-    t->x0 = chunk_of(lo[0] - margin), t->z0 = chunk_of(lo[2] - margin);
-    int64_t nx = chunk_of(hi[0] + margin) - t->x0 + 1, nz = chunk_of(hi[2] + margin) - t->z0 + 1;
+    t->commits = terrain_world_commit_count(world);
+    memcpy(t->lo, lo, sizeof t->lo);
+    memcpy(t->hi, hi, sizeof t->hi);
+    t->margin = margin;
+    t->made = false;
+}
+
+static void version_table_make(version_table *t) {
+    t->made = true;
+    t->x0 = chunk_of(t->lo[0] - t->margin), t->z0 = chunk_of(t->lo[2] - t->margin);
+    int64_t nx = chunk_of(t->hi[0] + t->margin) - t->x0 + 1, nz = chunk_of(t->hi[2] + t->margin) - t->z0 + 1;
     t->nx = t->nz = 0;
     if (nx * nz > VERSION_TABLE_MAX) return;
     t->nx = (int)nx, t->nz = (int)nz;
     for (int k = 0; k < t->nz; k++)
         for (int i = 0; i < t->nx; i++)
-            t->version[k * t->nx + i] = terrain_world_chunk_version(world, (terrain_chunk_coord){ t->x0 + i, t->z0 + k });
+            t->version[k * t->nx + i] = terrain_world_chunk_version(t->world, (terrain_chunk_coord){ t->x0 + i, t->z0 + k });
 }
 
-static uint32_t version_of(const version_table *t, int64_t x, int64_t z) {
+static uint32_t version_of(version_table *t, int64_t x, int64_t z) {
+    if (!t->made) version_table_make(t);
     int64_t i = x - t->x0, k = z - t->z0;
     if (i >= 0 && k >= 0 && i < t->nx && k < t->nz) return t->version[k * t->nx + i];
     return terrain_world_chunk_version(t->world, (terrain_chunk_coord){ x, z });
 }
 
 /* The versions of the column chunks under the cell (and the margin its presence reads). */
-static uint64_t cell_versions(const version_table *t, const int64_t cell[3], double s, double margin) {
+static uint64_t cell_versions(version_table *t, const int64_t cell[3], double s, double margin) {
     int64_t x0 = chunk_of((double)cell[0] * s - margin), x1 = chunk_of((double)cell[0] * s + s + margin);
     int64_t z0 = chunk_of((double)cell[2] * s - margin), z1 = chunk_of((double)cell[2] * s + s + margin);
     uint64_t h = 0x51ed27;
@@ -599,39 +615,59 @@ static void presence_work_out(rocks_cliffs *c, terrain_world *world, int type, c
     surface_bounds_free(&bounds);
 }
 
+/* The cache's entry for (type, cell), or NULL (lock held). */
+static cell_entry *cache_find(rocks_cliffs *c, uint64_t key, int type, const int64_t cell[3]) {
+    for (size_t i = key & (CACHE_CAPACITY - 1);; i = (i + 1) & (CACHE_CAPACITY - 1)) {
+        cell_entry *e = &c->cache[i];
+        if (!e->key) return NULL;
+        if (e->key == key && e->type == type && !memcmp(e->cell, cell, sizeof e->cell)) return e;
+    }
+}
+
 /* The present blocks of `type`'s tile copy at `cell` among those wider than `above` metres, into
  * bits (c->words[type] words; the others' bits 0): from the cache when its versions still hold
  * and it knows those blocks, else worked out and kept. A coarse field shows only blocks wider
  * than 1.5 spacings (rocks__coarse_min_width), so the far rings ask about a few of a cell's blocks,
  * and a finer field later adds the rest to the same entry. Presence is per block, so a block's
  * bit is the same whichever field asked first. */
-static void cell_presence(rocks_cliffs *c, const version_table *table, int type, const int64_t cell[3], float above,
+static void cell_presence(rocks_cliffs *c, version_table *table, int type, const int64_t cell[3], float above,
                           uint64_t *bits) {
-    terrain_world *world = table->world;
     const rocks_block_tile *tile = c->tiles[type];
     const size_t words = c->words[type];
-    const uint64_t key = cell_key(type, cell), versions = cell_versions(table, cell, tile->desc.size, c->margin[type]);
+    const uint64_t key = cell_key(type, cell);
+    uint64_t versions = 0;            /* read when the count does not tell (cache_find) */
     float known = INFINITY;           /* the blocks wider than this are in bits already */
     memset(bits, 0, words * sizeof *bits);
     pthread_mutex_lock(&c->lock);
-    for (size_t i = key & (CACHE_CAPACITY - 1);; i = (i + 1) & (CACHE_CAPACITY - 1)) {
-        cell_entry *e = &c->cache[i];
-        if (!e->key) break;
-        if (e->key == key && e->type == type && !memcmp(e->cell, cell, sizeof e->cell) && e->versions == versions) {
-            memcpy(bits, e->bits, words * sizeof *bits);
-            known = e->known_above;
-            if (known <= above) {
-                c->stats.cells_reused++;
-                pthread_mutex_unlock(&c->lock);
-                return;
-            }
-            break;   /* it knows the wider blocks only: add the others */
+    cell_entry *e = cache_find(c, key, type, cell);
+    if (e && e->commits != table->commits) {   /* kept before some commit: are its chunks' the same? */
+        const uint32_t kept = e->commits;
+        pthread_mutex_unlock(&c->lock);   /* the versions take the world's lock */
+        versions = cell_versions(table, cell, tile->desc.size, c->margin[type]);
+        pthread_mutex_lock(&c->lock);
+        e = cache_find(c, key, type, cell);
+        if (e && e->commits == kept) {
+            if (e->versions != versions) e = NULL;
+            else e->commits = table->commits;
         }
+        /* (else another thread brought it up to date meanwhile, or it went: asked again below) */
+        if (e && e->commits != table->commits) e = NULL;
+    }
+    if (e) {
+        memcpy(bits, e->bits, words * sizeof *bits);
+        known = e->known_above;
+        if (known <= above) {
+            c->stats.cells_reused++;
+            pthread_mutex_unlock(&c->lock);
+            return;
+        }
+        versions = e->versions;   /* it knows the wider blocks only: add the others */
     }
     pthread_mutex_unlock(&c->lock);
+    if (!e) versions = cell_versions(table, cell, tile->desc.size, c->margin[type]);
 
     const uint64_t presence_start = core_time_ns();
-    presence_work_out(c, world, type, cell, above, known, true, bits);
+    presence_work_out(c, table->world, type, cell, above, known, true, bits);
 
     pthread_mutex_lock(&c->lock);
     c->stats.cells_computed++;
@@ -641,13 +677,14 @@ static void cell_presence(rocks_cliffs *c, const version_table *table, int type,
     while (c->cache[i].key && !(c->cache[i].key == key && c->cache[i].type == type &&
                                 !memcmp(c->cache[i].cell, cell, sizeof c->cache[i].cell)))
         i = (i + 1) & (CACHE_CAPACITY - 1);
-    cell_entry *e = &c->cache[i];
+    e = &c->cache[i];
     if (!e->key) {
         *e = (cell_entry){ .key = key, .type = type, .bits = core_alloc(words * sizeof *bits) };
         memcpy(e->cell, cell, sizeof e->cell);
         c->used++;
     }
     e->versions = versions;   /* an older entry for the cell is brought up to date */
+    e->commits = table->commits;
     e->known_above = above;
     memcpy(e->bits, bits, words * sizeof *bits);
     pthread_mutex_unlock(&c->lock);
@@ -669,7 +706,7 @@ bool rocks__cliffs_present(rocks_cliffs *c, terrain_world *world, rocks_block_ty
     double lo[3], hi[3];
     for (int a = 0; a < 3; a++) lo[a] = (double)cell[a] * s, hi[a] = lo[a] + s;
     version_table versions;
-    version_table_make(&versions, world, lo, hi, c->margin_max);
+    version_table_begin(&versions, world, lo, hi, c->margin_max);
     cell_presence(c, &versions, (int)type, cell, -INFINITY, bits);   /* every block, as level 0 */
     return true;
 }
@@ -709,7 +746,7 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
     }
     if (!(reach_lo[0] <= reach_hi[0])) return;   /* no tiles */
     version_table versions;
-    version_table_make(&versions, world, reach_lo, reach_hi, c->margin_max);
+    version_table_begin(&versions, world, reach_lo, reach_hi, c->margin_max);
     uint64_t present = 0, bits[64];
     for (int type = 0; type < ROCKS_BLOCK_TYPE_END; type++) {
         const rocks_block_tile *tile = c->tiles[type];

@@ -73,6 +73,10 @@ Test(terrain_world_edit, deposit_across_chunk_corner_adds_exactly_its_volume_to_
     }
     cr_expect_eq(stamps, 0x1eu, "stamps 1, 2, 3 and 4");
     cr_expect_eq(terrain_world_chunk_version(w, (terrain_chunk_coord){ 1, 1 }), 0);
+    /* The commit count is the newest version: while it holds, no version has changed. */
+    cr_expect_eq(terrain_world_commit_count(w), 4);
+    terrain_world_stacks(w, (terrain_chunk_coord){ 3, 3 });
+    cr_expect_eq(terrain_world_commit_count(w), 4, "generating a chunk commits nothing");
     terrain_world_destroy(w);
 }
 

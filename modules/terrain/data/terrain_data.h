@@ -700,6 +700,9 @@ int terrain_world_take_changes(terrain_world *world, terrain_world_change *out, 
  * it was opened with). It survives the chunk's eviction and regeneration, so a cache keyed on it
  * stays right. */
 uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord coord);
+/* The world's commit count: every chunk's version is a count it had, so while this stays the
+ * same no chunk's version has changed, and a cache keyed on versions need not ask again. */
+uint32_t terrain_world_commit_count(terrain_world *world);
 
 /* ---- water planes (002 §3.4, 004 §4.3) ---------------------------------------------------
  * Water is a material layer of the stacks; where it lies on top of a column its flat top is a

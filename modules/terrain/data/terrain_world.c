@@ -513,6 +513,13 @@ uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord c
     return version;
 }
 
+uint32_t terrain_world_commit_count(terrain_world *world) {
+    pthread_mutex_lock(&world->lock);
+    uint32_t commits = world->commits;
+    pthread_mutex_unlock(&world->lock);
+    return commits;
+}
+
 void terrain__world_on_generated(terrain_world *world, void (*fn)(void *user, terrain_chunk_coord coord),
                                   void *user) {
     world->generated = fn;
