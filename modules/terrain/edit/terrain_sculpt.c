@@ -47,7 +47,7 @@
  * of their columns (§4.2 step 1).
  *
  * Picking marches terrain_field_at along the ray in steps of at most half a metre and bisects the
- * first crossing into the solid.
+ * first crossing into the solid (to 30 nm).
  */
 #include "terrain/edit/terrain_edit_internal.h"
 
@@ -69,6 +69,9 @@
 #define PROJECT_REACH 0.5               /* metres the target may move to reach the surface */
 #define REGION_MARGIN 2.0               /* columns beyond the edit's reach the region must hold */
 #define RAY_STEP 0.5                    /* metres, at most, between the ray's samples */
+#define RAY_BISECTIONS 24               /* halvings of a step: 0.5 m / 2^24 ≈ 30 nm, finer than a
+                                           float position a metre from the origin (each one is a
+                                           sample through the amplify hook) */
 #define RAY_MAX_DISTANCE 100000.0f
 /* Heights an edit may work at: from a little under the floor (nothing to edit below it) to far
  * under a column's limit (TERRAIN__COLUMN_MAX_QUANTA, 2 097 152 m). */
@@ -959,7 +962,7 @@ bool terrain_raycast(terrain_world *world, const double origin[3], const float d
         for (int a = 0; a < 3; a++) p[a] = origin[a] + t * dir[a];
         if (world_field(world, p) > 0.0) {
             double air = before, solid = t;   /* bisect the crossing */
-            for (int b = 0; b < 40; b++) {
+            for (int b = 0; b < RAY_BISECTIONS; b++) {
                 double mid = 0.5 * (air + solid), q[3];
                 for (int a = 0; a < 3; a++) q[a] = origin[a] + mid * dir[a];
                 if (world_field(world, q) > 0.0) solid = mid;
