@@ -119,7 +119,8 @@ program("test_threads", { files = { "tests/engine/test_shim.c", "tests/engine/te
                                     "tests/engine/test_ecs_hooks.c", "tests/engine/test_ecs_observers.c",
                                     "tests/engine/test_ecs_resources.c",
                                     "tests/engine/test_trace.c", "tests/engine/test_input_threads.c",
-                                    "tests/terrain/test_terrain_threads.c", "tests/terrain/test_terrain_ecs_edit.c" },
+                                    "tests/terrain/test_terrain_threads.c", "tests/terrain/test_terrain_ecs_edit.c",
+                                    "tests/rocks/test_rocks_threads.c" },
                           defines = { "TEST_WITHOUT_CRITERION" } })
 program("bench", { files = { "tools/src/bench/**.c", "tools/src/bench/**.h" },
                    buildoptions = { "-fopenmp" }, linkoptions = { "-fopenmp" } })

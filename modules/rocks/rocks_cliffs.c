@@ -47,6 +47,7 @@ struct rocks_cliffs {
     bool bedrock_in_strata;                            /* bedrock has none: the strata decide */
     float widest[ROCKS_BLOCK_TYPE_END];                /* its widest block (coarse fields skip a
                                                           type none of whose blocks they show) */
+    uint64_t id;                                       /* this one's, never reused: the memo's owner */
     pthread_mutex_t lock;
     cell_entry *cache;
     size_t used;
@@ -163,6 +164,8 @@ rocks_cliffs *rocks_cliffs_create(const rocks_cliffs_desc *desc) {
     rocks_cliffs_desc d;
     if (!cliffs_desc_make(desc, &d)) return NULL;
     rocks_cliffs *c = core_calloc(1, sizeof *c);
+    static uint64_t next_id;
+    c->id = __atomic_add_fetch(&next_id, 1, __ATOMIC_RELAXED);
     c->desc = d;
     c->desc.cache_dir = NULL, c->desc.jobs = NULL;   /* used here only: not kept */
     pthread_mutex_init(&c->lock, NULL);
@@ -624,6 +627,45 @@ static cell_entry *cache_find(rocks_cliffs *c, uint64_t key, int type, const int
     }
 }
 
+/* Each thread's last answers, kept beside the shared cache: the samples of a picking ray or a
+ * collision query ask the same few cells over and over, and the shared cache's lock, taken a
+ * cell at a time, cost more than the answer (about half of a sample through the hook). An entry
+ * is right for its owner while the world's commit count is the one it was kept at. */
+#define MEMO_SLOTS 32                 /* a power of two */
+#define MEMO_WORDS 8                  /* tiles of up to 512 blocks; bigger ones are not kept */
+
+typedef struct memo_entry {
+    uint64_t owner;                   /* rocks_cliffs.id; 0 = empty */
+    uint32_t commits;
+    int type;
+    int64_t cell[3];
+    float known_above;
+    uint64_t bits[MEMO_WORDS];
+} memo_entry;
+
+static _Thread_local memo_entry memo[MEMO_SLOTS];
+
+static memo_entry *memo_slot(uint64_t key) { return &memo[key & (MEMO_SLOTS - 1)]; }
+
+static bool memo_get(const rocks_cliffs *c, uint64_t key, uint32_t commits, int type, const int64_t cell[3],
+                     float above, uint64_t *bits) {
+    const memo_entry *m = memo_slot(key);
+    if (m->owner != c->id || m->commits != commits || m->type != type || memcmp(m->cell, cell, sizeof m->cell) ||
+        !(m->known_above <= above))
+        return false;
+    memcpy(bits, m->bits, c->words[type] * sizeof *bits);
+    return true;
+}
+
+static void memo_put(const rocks_cliffs *c, uint64_t key, uint32_t commits, int type, const int64_t cell[3],
+                     float known_above, const uint64_t *bits) {
+    if (c->words[type] > MEMO_WORDS) return;
+    memo_entry *m = memo_slot(key);
+    *m = (memo_entry){ .owner = c->id, .commits = commits, .type = type, .known_above = known_above };
+    memcpy(m->cell, cell, sizeof m->cell);
+    memcpy(m->bits, bits, c->words[type] * sizeof *bits);
+}
+
 /* The present blocks of `type`'s tile copy at `cell` among those wider than `above` metres, into
  * bits (c->words[type] words; the others' bits 0): from the cache when its versions still hold
  * and it knows those blocks, else worked out and kept. A coarse field shows only blocks wider
@@ -637,6 +679,7 @@ static void cell_presence(rocks_cliffs *c, version_table *table, int type, const
     const uint64_t key = cell_key(type, cell);
     uint64_t versions = 0;            /* read when the count does not tell (cache_find) */
     float known = INFINITY;           /* the blocks wider than this are in bits already */
+    if (memo_get(c, key, table->commits, type, cell, above, bits)) return;
     memset(bits, 0, words * sizeof *bits);
     pthread_mutex_lock(&c->lock);
     cell_entry *e = cache_find(c, key, type, cell);
@@ -659,6 +702,7 @@ static void cell_presence(rocks_cliffs *c, version_table *table, int type, const
         if (known <= above) {
             c->stats.cells_reused++;
             pthread_mutex_unlock(&c->lock);
+            memo_put(c, key, table->commits, type, cell, known, bits);
             return;
         }
         versions = e->versions;   /* it knows the wider blocks only: add the others */
@@ -688,6 +732,7 @@ static void cell_presence(rocks_cliffs *c, version_table *table, int type, const
     e->known_above = above;
     memcpy(e->bits, bits, words * sizeof *bits);
     pthread_mutex_unlock(&c->lock);
+    memo_put(c, key, table->commits, type, cell, above, bits);
 }
 
 /* ---- the tests' view -------------------------------------------------------------------------- */

@@ -105,3 +105,47 @@ Test(rocks_cliffs_edit, an_edit_changes_blocks_within_the_reach_and_the_kept_pre
     rocks_cliffs_destroy(seen);
     rocks_cliffs_destroy(fresh);
 }
+
+/* A point sampled just before an edit and again just after it (the tools' picking ray does this
+ * every frame): the second answer is the edited world's, though the thread kept the first one's
+ * tile cells (rocks_cliffs.c's memo of each thread's last answers). The points are those where
+ * the notch changes the blocks but not the ground under them. */
+Test(rocks_cliffs_edit, a_point_sampled_across_an_edit_follows_it) {
+    rocks_cliffs *seen = columnar_cliffs(), *fresh_plain = columnar_cliffs(), *fresh_notched = columnar_cliffs();
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){
+        .generate = wall_chunk, .generate_user = (void *)&plain, .amplify = rocks_cliffs_amplify, .amplify_user = seen });
+    terrain_world *want_plain = terrain_world_create(&(terrain_world_desc){
+        .generate = wall_chunk, .generate_user = (void *)&plain, .amplify = rocks_cliffs_amplify,
+        .amplify_user = fresh_plain });
+    terrain_world *want_notched = terrain_world_create(&(terrain_world_desc){
+        .generate = wall_chunk, .generate_user = (void *)&notched, .amplify = rocks_cliffs_amplify,
+        .amplify_user = fresh_notched });
+    int points = 0, wrong = 0;
+    for (int k = 0; k < around.size[2] && points < 24; k++)
+        for (int j = 0; j < around.size[1] && points < 24; j++)
+            for (int i = 0; i < around.size[0] && points < 24; i++) {
+                const double x = around.first[0] + i + 0.25, y = around.first[1] + j + 0.5, z = around.first[2] + k + 0.25;
+                const float a = terrain_field_at(want_plain, x, y, z, 0), b = terrain_field_at(want_notched, x, y, z, 0);
+                if (a == b || terrain_field_base_at(want_plain, x, y, z, 0) != terrain_field_base_at(want_notched, x, y, z, 0))
+                    continue;
+                points++;
+                for (int round = 0; round < 2; round++) {   /* to the notch, and back */
+                    (void)terrain_field_at(world, x, y, z, 0);
+                    for (int64_t cz = 0; cz <= 1; cz++) {
+                        terrain_chunk_coord coord = { -1, cz };
+                        terrain_world_commit(world, coord,
+                                             terrain_stacks_from_columns(coord, wall_column, (void *)(round ? &plain : &notched)),
+                                             TERRAIN_EDIT_SET);
+                    }
+                    wrong += terrain_field_at(world, x, y, z, 0) != (round ? a : b);
+                }
+            }
+    cr_expect_gt(points, 0, "the notch changes blocks over ground it leaves as it was");
+    cr_expect_eq(wrong, 0, "%d of %d answers after an edit are the old world's", wrong, 2 * points);
+    terrain_world_destroy(world);
+    terrain_world_destroy(want_plain);
+    terrain_world_destroy(want_notched);
+    rocks_cliffs_destroy(seen);
+    rocks_cliffs_destroy(fresh_plain);
+    rocks_cliffs_destroy(fresh_notched);
+}

@@ -58,7 +58,8 @@ struct terrain_world {
     terrain_world_change *changes;        /* committed since the last terrain_world_take_changes */
     size_t change_count, change_capacity;
     size_t max_chunks;
-    uint32_t commits;                     /* commits so far: the stamp of the newest */
+    uint32_t commits;                     /* commits so far: the stamp of the newest (written
+                                             atomically under the lock, read without it) */
     /* The stamps of evicted chunks that had commits (open addressing; a power of two). */
     world_stamp *stamps;
     size_t stamp_count, stamp_capacity;
@@ -478,7 +479,7 @@ void terrain_world_commit(terrain_world *world, terrain_chunk_coord coord, terra
     else if (differs) e->pinned = true;
     world->bytes += terrain_stacks_bytes(stacks) - terrain_stacks_bytes(before);
     e->stacks = stacks;
-    e->version = ++world->commits;
+    e->version = __atomic_add_fetch(&world->commits, 1, __ATOMIC_RELEASE);   /* read unlocked too */
     bury(world, before);       /* a job of this frame may still read it: freed at a later trim */
     if (differs) queue_change(world, &change);
     if (differs) note_surface(world, coord);
@@ -514,10 +515,7 @@ uint32_t terrain_world_chunk_version(terrain_world *world, terrain_chunk_coord c
 }
 
 uint32_t terrain_world_commit_count(terrain_world *world) {
-    pthread_mutex_lock(&world->lock);
-    uint32_t commits = world->commits;
-    pthread_mutex_unlock(&world->lock);
-    return commits;
+    return __atomic_load_n(&world->commits, __ATOMIC_ACQUIRE);   /* no lock: a reader asks often */
 }
 
 void terrain__world_on_generated(terrain_world *world, void (*fn)(void *user, terrain_chunk_coord coord),
