@@ -273,7 +273,8 @@ void rocks_cliffs_amplify(void *cliffs, terrain_world *world, terrain_field *fie
  * the columns it changed, so the chunks that far are meshed again. Zeros for NULL. */
 void rocks_cliffs_reach(const rocks_cliffs *cliffs, float reach[3]);
 typedef struct rocks_cliffs_stats_info {
-    uint64_t fields, cells_computed, cells_reused;
+    uint64_t fields, cells_computed;
+    uint64_t cells_reused;            /* answers from the shared cache (not those a thread kept itself) */
     uint64_t copies_present;          /* block copies present whose bounds met a field's samples, summed over fields */
     double amplify_seconds;           /* in rocks_cliffs_amplify, summed over threads */
     double presence_seconds;          /* of which working out presence (cells_computed) */

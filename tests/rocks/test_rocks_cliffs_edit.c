@@ -10,6 +10,9 @@
 #include "../engine/test.h"
 #include "rocks/rocks.h"
 
+#include <stdio.h>
+#include <stdlib.h>
+
 #include <math.h>
 
 #define NOTCH_X0 -3
@@ -30,9 +33,14 @@ static terrain_stacks *wall_chunk(void *user, terrain_chunk_coord coord) {
 
 static const bool plain = false, notched = true;
 
+/* Under tools/test (ROCKS_TEST_CACHE_DIR, a folder fresh each run) the tile is built once a run
+ * and read back by every cliffs made here (seconds saved under the sanitizers). */
 static rocks_cliffs *columnar_cliffs(void) {
+    static char dir[512];
+    const char *root = getenv("ROCKS_TEST_CACHE_DIR");
+    if (root && *root) snprintf(dir, sizeof dir, "%s/%s", root, "cliffs-edit");
     rocks_cliffs *c = rocks_cliffs_create(&(rocks_cliffs_desc){ .strata_count = 1, .strata = { ROCKS_BLOCK_COLUMNAR },
-                                                                .tile_size = 12 });
+                                                                .tile_size = 12, .cache_dir = root && *root ? dir : NULL });
     cr_assert_not_null(c);
     return c;
 }
