@@ -9,38 +9,12 @@
  * and z = 1 (z = 32), so cells on either side read it. */
 #include "../engine/test.h"
 #include "rocks/rocks.h"
-
-#include <stdio.h>
-#include <stdlib.h>
+#include "rocks_test_wall.h"
 
 #include <math.h>
 
-#define NOTCH_X0 -3
-#define NOTCH_Z0 29
-#define NOTCH_Z1 35          /* columns [NOTCH_X0, 0) × [NOTCH_Z0, NOTCH_Z1) */
-#define NOTCH_TOP 8.0f
-
-static void wall_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
-    const bool *notched = user;
-    float top = x < 0 ? 20.0f : 0.0f;
-    if (*notched && x >= NOTCH_X0 && x < 0 && z >= NOTCH_Z0 && z < NOTCH_Z1) top = NOTCH_TOP;
-    terrain_stacks_builder_push(b, TERRAIN_BEDROCK, top - TERRAIN_FLOOR_Y);
-}
-
-static terrain_stacks *wall_chunk(void *user, terrain_chunk_coord coord) {
-    return terrain_stacks_from_columns(coord, wall_column, user);
-}
-
-static const bool plain = false, notched = true;
-
-/* Under tools/test (ROCKS_TEST_CACHE_DIR, a folder fresh each run) the tile is built once a run
- * and read back by every cliffs made here (seconds saved under the sanitizers). */
 static rocks_cliffs *columnar_cliffs(void) {
-    static char dir[512];
-    const char *root = getenv("ROCKS_TEST_CACHE_DIR");
-    if (root && *root) snprintf(dir, sizeof dir, "%s/%s", root, "cliffs-edit");
-    rocks_cliffs *c = rocks_cliffs_create(&(rocks_cliffs_desc){ .strata_count = 1, .strata = { ROCKS_BLOCK_COLUMNAR },
-                                                                .tile_size = 12, .cache_dir = root && *root ? dir : NULL });
+    rocks_cliffs *c = columnar_cliffs_in("cliffs-edit");
     cr_assert_not_null(c);
     return c;
 }

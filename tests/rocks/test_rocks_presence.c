@@ -60,18 +60,22 @@ static int present_both_ways(rocks_cliffs *cliffs, terrain_world *world, rocks_b
     return present;
 }
 
-/* Bedrock, its block type by the strata (the bounds' shortcut alone). */
-Test(rocks_presence, the_shortcuts_over_bedrock_change_no_block) {
-    const terrain_material rock = TERRAIN_BEDROCK;
-    rocks_cliffs *cliffs = rocks_cliffs_create(&(rocks_cliffs_desc){
-        .strata_count = 1, .strata = { ROCKS_BLOCK_COLUMNAR }, .tile_size = TILE });
+/* The caved wall of `rock`, with cliffs of `desc` (a columnar stratum): every cell both ways. */
+static void check_caved_wall(terrain_material rock, const rocks_cliffs_desc *desc) {
+    rocks_cliffs *cliffs = rocks_cliffs_create(desc);
     cr_assert_not_null(cliffs);
     terrain_world *world = terrain_world_create(&(terrain_world_desc){
-        .generate = caved_chunk, .generate_user = (void *)&rock, .amplify = rocks_cliffs_amplify, .amplify_user = cliffs });
+        .generate = caved_chunk, .generate_user = &rock, .amplify = rocks_cliffs_amplify, .amplify_user = cliffs });
     int present = present_both_ways(cliffs, world, ROCKS_BLOCK_COLUMNAR);
     cr_expect_gt(present, 10, "the wall breaks into columns (%d blocks)", present);
     terrain_world_destroy(world);
     rocks_cliffs_destroy(cliffs);
+}
+
+/* Bedrock, its block type by the strata (the bounds' shortcut alone). */
+Test(rocks_presence, the_shortcuts_over_bedrock_change_no_block) {
+    check_caved_wall(TERRAIN_BEDROCK, &(rocks_cliffs_desc){ .strata_count = 1, .strata = { ROCKS_BLOCK_COLUMNAR },
+                                                            .tile_size = TILE });
 }
 
 /* A game's rock mapped to a type (the materials' shortcuts too). */
@@ -79,12 +83,5 @@ Test(rocks_presence, the_shortcuts_over_a_mapped_rock_change_no_block) {
     const terrain_material rock = (terrain_material)TERRAIN_MATERIAL_BUILTIN_COUNT;
     rocks_cliffs_desc desc = { .strata_count = 1, .strata = { ROCKS_BLOCK_COLUMNAR }, .tile_size = TILE };
     desc.material_blocks[rock] = ROCKS_BLOCK_COLUMNAR;
-    rocks_cliffs *cliffs = rocks_cliffs_create(&desc);
-    cr_assert_not_null(cliffs);
-    terrain_world *world = terrain_world_create(&(terrain_world_desc){
-        .generate = caved_chunk, .generate_user = (void *)&rock, .amplify = rocks_cliffs_amplify, .amplify_user = cliffs });
-    int present = present_both_ways(cliffs, world, ROCKS_BLOCK_COLUMNAR);
-    cr_expect_gt(present, 10, "the wall breaks into columns (%d blocks)", present);
-    terrain_world_destroy(world);
-    rocks_cliffs_destroy(cliffs);
+    check_caved_wall(rock, &desc);
 }

@@ -11,34 +11,13 @@
  * [−3, 0) × [29, 35) to 8 m (the column chunks z = 0 and z = 1 meet at z = 32). */
 #include "../engine/test.h"
 #include "rocks/rocks.h"
-
-#include <stdio.h>
-#include <stdlib.h>
+#include "rocks_test_wall.h"
 
 #include <pthread.h>
 #include <stdatomic.h>
 
-static void wall_column(void *user, int64_t x, int64_t z, terrain_stacks_builder *b) {
-    const bool *notched = user;
-    float top = x < 0 ? 20.0f : 0.0f;
-    if (*notched && x >= -3 && x < 0 && z >= 29 && z < 35) top = 8.0f;
-    terrain_stacks_builder_push(b, TERRAIN_BEDROCK, top - TERRAIN_FLOOR_Y);
-}
-
-static terrain_stacks *wall_chunk(void *user, terrain_chunk_coord coord) {
-    return terrain_stacks_from_columns(coord, wall_column, user);
-}
-
-static const bool plain = false, notched = true;
-
-/* Under tools/test (ROCKS_TEST_CACHE_DIR, a folder fresh each run) the tile is built once a run
- * and read back by every cliffs made here (seconds saved under the sanitizers). */
 static rocks_cliffs *columnar_cliffs(void) {
-    static char dir[512];
-    const char *root = getenv("ROCKS_TEST_CACHE_DIR");
-    if (root && *root) snprintf(dir, sizeof dir, "%s/%s", root, "cliffs-threads");
-    rocks_cliffs *c = rocks_cliffs_create(&(rocks_cliffs_desc){ .strata_count = 1, .strata = { ROCKS_BLOCK_COLUMNAR },
-                                                                .tile_size = 12, .cache_dir = root && *root ? dir : NULL });
+    rocks_cliffs *c = columnar_cliffs_in("cliffs-threads");
     cr_assert_not_null(c);
     return c;
 }
