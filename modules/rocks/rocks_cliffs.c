@@ -624,13 +624,18 @@ static void presence_work_out(rocks_cliffs *c, terrain_world *world, int type, c
     surface_bounds_free(&bounds);
 }
 
-/* The cache's entry for (type, cell), or NULL (lock held). */
-static cell_entry *cache_find(rocks_cliffs *c, uint64_t key, int type, const int64_t cell[3]) {
+/* The cache's slot for (type, cell): its entry, or the empty slot where it would go (lock held). */
+static cell_entry *cache_slot(rocks_cliffs *c, uint64_t key, int type, const int64_t cell[3]) {
     for (size_t i = key & (CACHE_CAPACITY - 1);; i = (i + 1) & (CACHE_CAPACITY - 1)) {
         cell_entry *e = &c->cache[i];
-        if (!e->key) return NULL;
-        if (e->key == key && e->type == type && !memcmp(e->cell, cell, sizeof e->cell)) return e;
+        if (!e->key || (e->key == key && e->type == type && !memcmp(e->cell, cell, sizeof e->cell))) return e;
     }
+}
+
+/* The cache's entry for (type, cell), or NULL (lock held). */
+static cell_entry *cache_find(rocks_cliffs *c, uint64_t key, int type, const int64_t cell[3]) {
+    cell_entry *e = cache_slot(c, key, type, cell);
+    return e->key ? e : NULL;
 }
 
 /* Each thread's last answers, kept beside the shared cache: the samples of a picking ray or a
@@ -723,11 +728,7 @@ static void cell_presence(rocks_cliffs *c, version_table *table, int type, const
     c->stats.cells_computed++;
     c->stats.presence_seconds += (double)(core_time_ns() - presence_start) * 1e-9;
     if (c->used >= CACHE_CAPACITY * 3 / 4) cache_clear(c);
-    size_t i = key & (CACHE_CAPACITY - 1);
-    while (c->cache[i].key && !(c->cache[i].key == key && c->cache[i].type == type &&
-                                !memcmp(c->cache[i].cell, cell, sizeof c->cache[i].cell)))
-        i = (i + 1) & (CACHE_CAPACITY - 1);
-    e = &c->cache[i];
+    e = cache_slot(c, key, type, cell);
     if (!e->key) {
         *e = (cell_entry){ .key = key, .type = type, .bits = core_alloc(words * sizeof *bits) };
         memcpy(e->cell, cell, sizeof e->cell);
@@ -747,30 +748,35 @@ const rocks_block_tile *rocks__cliffs_tile(const rocks_cliffs *c, rocks_block_ty
     return (unsigned)type < ROCKS_BLOCK_TYPE_END ? c->tiles[type] : NULL;
 }
 
-bool rocks__cliffs_present(rocks_cliffs *c, terrain_world *world, rocks_block_type type, const int64_t cell[3],
-                           uint64_t *bits) {
+/* Every block of the cell, as level 0: through the hook's path (its cache and shortcuts), or
+ * anchor by anchor with neither. */
+static bool cliffs_present(rocks_cliffs *c, terrain_world *world, rocks_block_type type, const int64_t cell[3],
+                           bool hook_path, uint64_t *bits) {
     const rocks_block_tile *tile = rocks__cliffs_tile(c, type);
     if (!tile) return false;
     const double s = tile->desc.size;
     memset(bits, 0, c->words[type] * sizeof *bits);
     if (!cell_may_hold(c, (int)type, (double)cell[1] * s, (double)cell[1] * s + s)) return false;
+    if (!hook_path) {
+        presence_work_out(c, world, (int)type, cell, -INFINITY, INFINITY, false, bits);
+        return true;
+    }
     double lo[3], hi[3];
     for (int a = 0; a < 3; a++) lo[a] = (double)cell[a] * s, hi[a] = lo[a] + s;
     version_table versions;
     version_table_begin(&versions, world, lo, hi, c->margin_max);
-    cell_presence(c, &versions, (int)type, cell, -INFINITY, bits);   /* every block, as level 0 */
+    cell_presence(c, &versions, (int)type, cell, -INFINITY, bits);
     return true;
+}
+
+bool rocks__cliffs_present(rocks_cliffs *c, terrain_world *world, rocks_block_type type, const int64_t cell[3],
+                           uint64_t *bits) {
+    return cliffs_present(c, world, type, cell, true, bits);
 }
 
 bool rocks__cliffs_present_unfiltered(rocks_cliffs *c, terrain_world *world, rocks_block_type type,
                                       const int64_t cell[3], uint64_t *bits) {
-    const rocks_block_tile *tile = rocks__cliffs_tile(c, type);
-    if (!tile) return false;
-    const double s = tile->desc.size;
-    memset(bits, 0, c->words[type] * sizeof *bits);
-    if (!cell_may_hold(c, (int)type, (double)cell[1] * s, (double)cell[1] * s + s)) return false;
-    presence_work_out(c, world, (int)type, cell, -INFINITY, INFINITY, false, bits);
-    return true;
+    return cliffs_present(c, world, type, cell, false, bits);
 }
 
 /* ---- the hook ---------------------------------------------------------------------------------- */
