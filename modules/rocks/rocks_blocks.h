@@ -276,7 +276,8 @@ typedef struct rocks_cliffs_stats_info {
     uint64_t fields, cells_computed;
     uint64_t cells_reused;            /* answers from the shared cache (not those a thread kept itself) */
     uint64_t copies_present;          /* block copies present whose bounds met a field's samples, summed over fields */
-    double amplify_seconds;           /* in rocks_cliffs_amplify, summed over threads */
+    double amplify_seconds;           /* in rocks_cliffs_amplify, summed over threads (less the
+                                         point samples a thread answers from its kept region) */
     double presence_seconds;          /* of which working out presence (cells_computed) */
     double build_seconds;             /* the tiles, built or read from cache_dir */
     uint32_t tiles_from_cache;        /* of the tiles, those read from cache_dir */

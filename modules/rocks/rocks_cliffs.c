@@ -781,15 +781,12 @@ bool rocks__cliffs_present_unfiltered(rocks_cliffs *c, terrain_world *world, roc
 
 /* ---- the hook ---------------------------------------------------------------------------------- */
 
-void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field) {
-    rocks_cliffs *c = user;
-    if (field->spacing > c->desc.max_spacing) return;   /* the same for every field at a spacing */
-    const uint64_t start = core_time_ns();
-    /* a coarse field shows only the blocks wider than this (rocks__coarse_erosion) */
-    const float above = rocks__coarse_min_width(field->spacing);
-    const int n[3] = { field->nx, field->ny, field->nz };
-    double lo[3], hi[3];
-    for (int a = 0; a < 3; a++) lo[a] = field->origin[a], hi[a] = field->origin[a] + (n[a] - 1) * (double)field->spacing;
+/* Each present block copy of the cells that the box [lo, hi] may meet, among the blocks wider
+ * than `above`, handed to visit. */
+typedef void copy_visit(void *user, const rocks_block_tile *tile, int type, uint32_t block, const double cell[3]);
+
+static void present_copies(rocks_cliffs *c, terrain_world *world, const double lo[3], const double hi[3],
+                           float above, copy_visit *visit, void *user) {
     int64_t c0[ROCKS_BLOCK_TYPE_END][3], c1[ROCKS_BLOCK_TYPE_END][3];
     double reach_lo[3] = { INFINITY, INFINITY, INFINITY }, reach_hi[3] = { -INFINITY, -INFINITY, -INFINITY };
     for (int type = 0; type < ROCKS_BLOCK_TYPE_END; type++) {
@@ -804,7 +801,7 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
     if (!(reach_lo[0] <= reach_hi[0])) return;   /* no tiles */
     version_table versions;
     version_table_begin(&versions, world, reach_lo, reach_hi, c->margin_max);
-    uint64_t present = 0, bits[64];
+    uint64_t bits[64];
     for (int type = 0; type < ROCKS_BLOCK_TYPE_END; type++) {
         const rocks_block_tile *tile = c->tiles[type];
         if (!tile || !(c->widest[type] > above) || c->words[type] > CORE_COUNTOF(bits)) continue;
@@ -816,16 +813,112 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
                     if (!cell_may_hold(c, type, (double)y * s, (double)y * s + s)) continue;
                     /* every cell the blocks' union reaches is asked once and kept (asking which
                      * block reaches the box cost more than the cached answer, for the small
-                     * fields of collision and picking) */
+                     * fields of collision) */
                     cell_presence(c, &versions, type, cell, above, bits);
                     const double at[3] = { (double)x, (double)y, (double)z };
                     for (size_t w = 0; w < c->words[type]; w++)
-                        for (uint64_t m = bits[w]; m; m &= m - 1) {
-                            present += rocks__amplify_copy(tile, (uint32_t)(w * 64 + (size_t)__builtin_ctzll(m)), at, field);
-                        }
+                        for (uint64_t m = bits[w]; m; m &= m - 1)
+                            visit(user, tile, type, (uint32_t)(w * 64 + (size_t)__builtin_ctzll(m)), at);
                 }
     }
+}
+
+typedef struct field_copies {
+    terrain_field *field;
+    uint64_t present;
+} field_copies;
+
+static void amplify_visit(void *user, const rocks_block_tile *tile, int type, uint32_t block, const double cell[3]) {
+    (void)type;
+    field_copies *f = user;
+    f->present += rocks__amplify_copy(tile, block, cell, f->field);
+}
+
+/* Point samples. A picking ray, a camera test or a walk's probe asks the field one point at a
+ * time, a few hundred a frame, and each went through the cells' presence (ranges, lookups, then
+ * every present block of each cell only to find it far from the point): three times the cost of
+ * the point's terrain field. A thread keeps, for the few 2 m regions it sampled last, the present
+ * copies whose bounds meet the region; a point in the region is then the fields of those few
+ * blocks. An entry holds while the world's commit count is the one it was made at, as the cells'
+ * memo does. */
+#define REGION_SIZE 2.0
+#define REGION_SLOTS 8                /* a power of two */
+#define REGION_COPIES 48              /* a region meeting more is not kept: asked the long way */
+
+typedef struct region_copy {
+    double cell[3];
+    uint32_t block;
+    int type;
+} region_copy;
+
+typedef struct region_memo {
+    uint64_t owner;                   /* rocks_cliffs.id; 0 = empty */
+    uint32_t commits;
+    float spacing;                    /* the sample's spacing: it sets the blocks shown */
+    int64_t region[3];
+    int count;                        /* copies; -1 while too many */
+    double lo[3], hi[3];              /* the region's box, while made */
+    region_copy copies[REGION_COPIES];
+} region_memo;
+
+static _Thread_local region_memo regions[REGION_SLOTS];
+
+static void region_visit(void *user, const rocks_block_tile *tile, int type, uint32_t block, const double cell[3]) {
+    region_memo *r = user;
+    const rocks_block *b = &tile->blocks[block];
+    const double s = tile->desc.size;
+    if (r->count < 0) return;
+    for (int a = 0; a < 3; a++)
+        if (cell[a] * s + b->bounds_max[a] < r->lo[a] || cell[a] * s + b->bounds_min[a] > r->hi[a]) return;
+    if (r->count == REGION_COPIES) {
+        r->count = -1;
+        return;
+    }
+    r->copies[r->count++] = (region_copy){ .cell = { cell[0], cell[1], cell[2] }, .block = block, .type = type };
+}
+
+/* The field at a one-sample field's point from its region's copies; false when the region
+ * meets too many to keep. A region made anew starts the clock (*start). */
+static bool amplify_point(rocks_cliffs *c, terrain_world *world, terrain_field *field, float above,
+                          uint64_t *present, uint64_t *start) {
+    int64_t region[3];
+    for (int a = 0; a < 3; a++) region[a] = (int64_t)floor(field->origin[a] / REGION_SIZE);
+    const uint32_t commits = terrain_world_commit_count(world);
+    const uint64_t key = core_hash_combine(core_hash_combine((uint64_t)region[0], (uint64_t)region[1]),
+                                           (uint64_t)region[2]);
+    region_memo *r = &regions[key & (REGION_SLOTS - 1)];
+    if (r->owner != c->id || r->commits != commits || r->spacing != field->spacing ||
+        memcmp(r->region, region, sizeof region)) {
+        *start = core_time_ns();
+        *r = (region_memo){ .owner = c->id, .commits = commits, .spacing = field->spacing };
+        memcpy(r->region, region, sizeof region);
+        for (int a = 0; a < 3; a++) r->lo[a] = (double)region[a] * REGION_SIZE, r->hi[a] = r->lo[a] + REGION_SIZE;
+        present_copies(c, world, r->lo, r->hi, above, region_visit, r);
+    }
+    if (r->count < 0) return false;
+    for (int i = 0; i < r->count; i++)
+        *present += rocks__amplify_copy(c->tiles[r->copies[i].type], r->copies[i].block, r->copies[i].cell, field);
+    return true;
+}
+
+void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field) {
+    rocks_cliffs *c = user;
+    if (field->spacing > c->desc.max_spacing) return;   /* the same for every field at a spacing */
+    /* a coarse field shows only the blocks wider than this (rocks__coarse_erosion) */
+    const float above = rocks__coarse_min_width(field->spacing);
+    field_copies copies = { .field = field };
+    uint64_t start = 0;   /* a point its thread's region answers goes untimed: the clock cost a
+                             quarter of the answer */
+    const bool point = field->nx == 1 && field->ny == 1 && field->nz == 1;
+    if (!point || !amplify_point(c, world, field, above, &copies.present, &start)) {
+        if (!start) start = core_time_ns();
+        double lo[3], hi[3];
+        const int n[3] = { field->nx, field->ny, field->nz };
+        for (int a = 0; a < 3; a++)
+            lo[a] = field->origin[a], hi[a] = field->origin[a] + (n[a] - 1) * (double)field->spacing;
+        present_copies(c, world, lo, hi, above, amplify_visit, &copies);
+    }
     __atomic_add_fetch(&c->fields, 1, __ATOMIC_RELAXED);
-    __atomic_add_fetch(&c->copies_present, present, __ATOMIC_RELAXED);
-    __atomic_add_fetch(&c->amplify_ns, core_time_ns() - start, __ATOMIC_RELAXED);
+    __atomic_add_fetch(&c->copies_present, copies.present, __ATOMIC_RELAXED);
+    if (start) __atomic_add_fetch(&c->amplify_ns, core_time_ns() - start, __ATOMIC_RELAXED);
 }

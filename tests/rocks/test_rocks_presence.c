@@ -8,7 +8,11 @@
  * first solid run ends below their top: the cave's side walls are walls between runs), a floor at
  * 0 in front with water on part of it, and a step of sand on top of the wall in places. Every tile cell along the face is asked both ways:
  * rocks__cliffs_present (the hook's own path, shortcuts and cache) against
- * rocks__cliffs_present_unfiltered (every anchor through the wall test). */
+ * rocks__cliffs_present_unfiltered (every anchor through the wall test).
+ *
+ * The hook's point path is checked on the same wall: a one-sample field (a picking ray's sample,
+ * answered from the blocks its thread kept for the sample's 2 m region) must equal the same point
+ * taken as the centre of a 3³ field (the cells' path). */
 #include "../engine/test.h"
 #include "rocks/rocks.h"
 #include "rocks/rocks_internal.h"
@@ -84,4 +88,41 @@ Test(rocks_presence, the_shortcuts_over_a_mapped_rock_change_no_block) {
     rocks_cliffs_desc desc = { .strata_count = 1, .strata = { ROCKS_BLOCK_COLUMNAR }, .tile_size = TILE };
     desc.material_blocks[rock] = ROCKS_BLOCK_COLUMNAR;
     check_caved_wall(rock, &desc);
+}
+
+/* Every point of a 1 m lattice (offset a quarter metre, so points fall on every side of the 2 m
+ * regions' borders) over the face, the cave and the floor: the point path and the field path give
+ * the same value, to the bit. */
+Test(rocks_presence, a_point_sample_equals_the_same_point_of_a_field) {
+    const terrain_material rock = TERRAIN_BEDROCK;
+    rocks_cliffs *cliffs = rocks_cliffs_create(&(rocks_cliffs_desc){ .strata_count = 1,
+                                                                     .strata = { ROCKS_BLOCK_COLUMNAR }, .tile_size = TILE });
+    cr_assert_not_null(cliffs);
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){
+        .generate = caved_chunk, .generate_user = (void *)&rock, .amplify = rocks_cliffs_amplify, .amplify_user = cliffs });
+    int points = 0, raised = 0, differ = 0;
+    for (int k = 0; k <= 40; k++)
+        for (int j = -1; j <= 24; j++)
+            for (int i = -6; i <= 4; i++) {
+                const double p[3] = { i + 0.25, j + 0.75, k + 0.25 };
+                const float base = terrain_field_base_at(world, p[0], p[1], p[2], 0);
+                float one = base, cube[27];
+                for (int n = 0; n < 27; n++) cube[n] = base;
+                terrain_field point = { .nx = 1, .ny = 1, .nz = 1, .origin = { p[0], p[1], p[2] },
+                                        .spacing = TERRAIN_COLUMN_SIZE, .values = &one };
+                terrain_field around = { .nx = 3, .ny = 3, .nz = 3, .spacing = TERRAIN_COLUMN_SIZE, .values = cube,
+                                         .origin = { p[0] - TERRAIN_COLUMN_SIZE, p[1] - TERRAIN_COLUMN_SIZE,
+                                                     p[2] - TERRAIN_COLUMN_SIZE } };
+                rocks_cliffs_amplify(cliffs, world, &point);
+                rocks_cliffs_amplify(cliffs, world, &around);
+                points++;
+                raised += one > base;
+                if (one != cube[13] && differ++ < 5)
+                    cr_expect_eq(one, cube[13], "at (%g, %g, %g): %.9g as a point, %.9g in a field", p[0], p[1], p[2],
+                                 (double)one, (double)cube[13]);
+            }
+    cr_expect_eq(differ, 0, "%d of %d points differ", differ, points);
+    cr_expect_gt(raised, 100, "blocks stand out of the wall at some points (%d)", raised);
+    terrain_world_destroy(world);
+    rocks_cliffs_destroy(cliffs);
 }
