@@ -834,16 +834,19 @@ static void amplify_visit(void *user, const rocks_block_tile *tile, int type, ui
     f->present += rocks__amplify_copy(tile, block, cell, f->field);
 }
 
-/* Point samples. A picking ray, a camera test or a walk's probe asks the field one point at a
- * time, a few hundred a frame, and each went through the cells' presence (ranges, lookups, then
- * every present block of each cell only to find it far from the point): three times the cost of
- * the point's terrain field. A thread keeps, for the few 2 m regions it sampled last, the present
- * copies whose bounds meet the region; a point in the region is then the fields of those few
- * blocks. An entry holds while the world's commit count is the one it was made at, as the cells'
- * memo does. */
+/* Points and small fields. A picking ray, a camera test or a walk's probe asks the field one
+ * point at a time, a few hundred a frame, and the player's collision asks a small box each frame,
+ * mostly the same box as the frame before. Through the cells' presence, each went through ranges,
+ * lookups, then every present block of each cell only to find most of them far away: a point cost
+ * three times its terrain field. A thread keeps, for the last few boxes it asked, the present
+ * copies whose bounds meet the box; asking again is then the fields of those few blocks. A point's
+ * box is the 2 m region it lies in, so a ray's samples share one; a small field's box is its own.
+ * An entry holds while the world's commit count is the one it was made at, as the cells' memo
+ * does. */
 #define REGION_SIZE 2.0
+#define SMALL_FIELD 512               /* samples at most in a field whose box is kept */
 #define REGION_SLOTS 8                /* a power of two */
-#define REGION_COPIES 48              /* a region meeting more is not kept: asked the long way */
+#define REGION_COPIES 64              /* a box meeting more is not kept: asked the long way */
 
 typedef struct region_copy {
     double cell[3];
@@ -854,10 +857,9 @@ typedef struct region_copy {
 typedef struct region_memo {
     uint64_t owner;                   /* rocks_cliffs.id; 0 = empty */
     uint32_t commits;
-    float spacing;                    /* the sample's spacing: it sets the blocks shown */
-    int64_t region[3];
-    int count;                        /* copies; -1 while too many */
-    double lo[3], hi[3];              /* the region's box, while made */
+    float spacing;                    /* the field's spacing: it sets the blocks shown */
+    double lo[3], hi[3];              /* the box */
+    int count;                        /* copies; -1 when too many */
     region_copy copies[REGION_COPIES];
 } region_memo;
 
@@ -877,22 +879,23 @@ static void region_visit(void *user, const rocks_block_tile *tile, int type, uin
     r->copies[r->count++] = (region_copy){ .cell = { cell[0], cell[1], cell[2] }, .block = block, .type = type };
 }
 
-/* The field at a one-sample field's point from its region's copies; false when the region
- * meets too many to keep. A region made anew starts the clock (*start). */
-static bool amplify_point(rocks_cliffs *c, terrain_world *world, terrain_field *field, float above,
-                          uint64_t *present, uint64_t *start) {
-    int64_t region[3];
-    for (int a = 0; a < 3; a++) region[a] = (int64_t)floor(field->origin[a] / REGION_SIZE);
+/* The field within [lo, hi] (a box holding its samples) from the copies its thread kept for that
+ * box; false when the box meets too many to keep. A box made anew starts the clock (*start). */
+static bool amplify_kept(rocks_cliffs *c, terrain_world *world, terrain_field *field, const double lo[3],
+                         const double hi[3], float above, uint64_t *present, uint64_t *start) {
     const uint32_t commits = terrain_world_commit_count(world);
-    const uint64_t key = core_hash_combine(core_hash_combine((uint64_t)region[0], (uint64_t)region[1]),
-                                           (uint64_t)region[2]);
+    uint64_t key = 0x9e3779b9;
+    for (int a = 0; a < 3; a++) {
+        uint64_t l, h;
+        memcpy(&l, &lo[a], sizeof l), memcpy(&h, &hi[a], sizeof h);
+        key = core_hash_combine(core_hash_combine(key, l), h);
+    }
     region_memo *r = &regions[key & (REGION_SLOTS - 1)];
     if (r->owner != c->id || r->commits != commits || r->spacing != field->spacing ||
-        memcmp(r->region, region, sizeof region)) {
+        memcmp(r->lo, lo, sizeof r->lo) || memcmp(r->hi, hi, sizeof r->hi)) {
         *start = core_time_ns();
         *r = (region_memo){ .owner = c->id, .commits = commits, .spacing = field->spacing };
-        memcpy(r->region, region, sizeof region);
-        for (int a = 0; a < 3; a++) r->lo[a] = (double)region[a] * REGION_SIZE, r->hi[a] = r->lo[a] + REGION_SIZE;
+        memcpy(r->lo, lo, sizeof r->lo), memcpy(r->hi, hi, sizeof r->hi);
         present_copies(c, world, r->lo, r->hi, above, region_visit, r);
     }
     if (r->count < 0) return false;
@@ -907,15 +910,19 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
     /* a coarse field shows only the blocks wider than this (rocks__coarse_erosion) */
     const float above = rocks__coarse_min_width(field->spacing);
     field_copies copies = { .field = field };
-    uint64_t start = 0;   /* a point its thread's region answers goes untimed: the clock cost a
-                             quarter of the answer */
-    const bool point = field->nx == 1 && field->ny == 1 && field->nz == 1;
-    if (!point || !amplify_point(c, world, field, above, &copies.present, &start)) {
+    /* the box the samples lie in, and the box a thread keeps its copies for */
+    const int n[3] = { field->nx, field->ny, field->nz };
+    double lo[3], hi[3], kept_lo[3], kept_hi[3];
+    for (int a = 0; a < 3; a++) lo[a] = field->origin[a], hi[a] = field->origin[a] + (n[a] - 1) * (double)field->spacing;
+    const bool point = n[0] == 1 && n[1] == 1 && n[2] == 1;
+    for (int a = 0; a < 3; a++) {
+        kept_lo[a] = point ? floor(lo[a] / REGION_SIZE) * REGION_SIZE : lo[a];
+        kept_hi[a] = point ? kept_lo[a] + REGION_SIZE : hi[a];
+    }
+    uint64_t start = 0;   /* a box its thread kept goes untimed: the clock cost a quarter of a point */
+    if ((size_t)n[0] * n[1] * n[2] > SMALL_FIELD ||
+        !amplify_kept(c, world, field, kept_lo, kept_hi, above, &copies.present, &start)) {
         if (!start) start = core_time_ns();
-        double lo[3], hi[3];
-        const int n[3] = { field->nx, field->ny, field->nz };
-        for (int a = 0; a < 3; a++)
-            lo[a] = field->origin[a], hi[a] = field->origin[a] + (n[a] - 1) * (double)field->spacing;
         present_copies(c, world, lo, hi, above, amplify_visit, &copies);
     }
     __atomic_add_fetch(&c->fields, 1, __ATOMIC_RELAXED);

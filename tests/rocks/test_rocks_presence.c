@@ -10,12 +10,16 @@
  * rocks__cliffs_present (the hook's own path, shortcuts and cache) against
  * rocks__cliffs_present_unfiltered (every anchor through the wall test).
  *
- * The hook's point path is checked on the same wall: a one-sample field (a picking ray's sample,
- * answered from the blocks its thread kept for the sample's 2 m region) must equal the same point
- * taken as the centre of a 3³ field (the cells' path). */
+ * The hook's path for points and small fields is checked on the same wall: a one-sample field (a
+ * picking ray's sample, answered from the blocks its thread kept for the sample's 2 m region) and
+ * a small box (the player's collision) must equal the same samples of a big field (the cells'
+ * path). */
 #include "../engine/test.h"
 #include "rocks/rocks.h"
 #include "rocks/rocks_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
 
 #define TILE 12.0f
 
@@ -90,39 +94,84 @@ Test(rocks_presence, the_shortcuts_over_a_mapped_rock_change_no_block) {
     check_caved_wall(rock, &desc);
 }
 
-/* Every point of a 1 m lattice (offset a quarter metre, so points fall on every side of the 2 m
- * regions' borders) over the face, the cave and the floor: the point path and the field path give
- * the same value, to the bit. */
-Test(rocks_presence, a_point_sample_equals_the_same_point_of_a_field) {
+/* A lattice 1 m apart (offset a quarter metre, so points fall on every side of the 2 m regions'
+ * borders) over the face, the cave and the floor, amplified as one big field (the cells' path);
+ * then each of its points alone, and boxes of 4 × 5 × 4 of its samples (the player's collision
+ * asks such boxes), each asked twice (the second answer from what the thread kept): the same
+ * values, to the bit. */
+#define LATTICE_X 11
+#define LATTICE_Y 26
+#define LATTICE_Z 41
+
+static float *base_values(terrain_world *world, const double origin[3], const int n[3]) {
+    float *v = malloc(sizeof *v * (size_t)n[0] * n[1] * n[2]);
+    cr_assert_not_null(v);
+    for (int k = 0; k < n[2]; k++)
+        for (int j = 0; j < n[1]; j++)
+            for (int i = 0; i < n[0]; i++)
+                v[((size_t)k * n[1] + j) * n[0] + i] =
+                    terrain_field_base_at(world, origin[0] + i, origin[1] + j, origin[2] + k, 0);
+    return v;
+}
+
+Test(rocks_presence, points_and_small_boxes_equal_the_same_samples_of_a_big_field) {
     const terrain_material rock = TERRAIN_BEDROCK;
     rocks_cliffs *cliffs = rocks_cliffs_create(&(rocks_cliffs_desc){ .strata_count = 1,
                                                                      .strata = { ROCKS_BLOCK_COLUMNAR }, .tile_size = TILE });
     cr_assert_not_null(cliffs);
     terrain_world *world = terrain_world_create(&(terrain_world_desc){
         .generate = caved_chunk, .generate_user = (void *)&rock, .amplify = rocks_cliffs_amplify, .amplify_user = cliffs });
-    int points = 0, raised = 0, differ = 0;
-    for (int k = 0; k <= 40; k++)
-        for (int j = -1; j <= 24; j++)
-            for (int i = -6; i <= 4; i++) {
-                const double p[3] = { i + 0.25, j + 0.75, k + 0.25 };
-                const float base = terrain_field_base_at(world, p[0], p[1], p[2], 0);
-                float one = base, cube[27];
-                for (int n = 0; n < 27; n++) cube[n] = base;
-                terrain_field point = { .nx = 1, .ny = 1, .nz = 1, .origin = { p[0], p[1], p[2] },
+    const int n[3] = { LATTICE_X, LATTICE_Y, LATTICE_Z };
+    const double origin[3] = { -5.75, -0.25, 0.25 };
+    float *base = base_values(world, origin, n);
+    float *big = malloc(sizeof *big * (size_t)n[0] * n[1] * n[2]);
+    cr_assert_not_null(big);
+    memcpy(big, base, sizeof *big * (size_t)n[0] * n[1] * n[2]);
+    terrain_field whole = { .nx = n[0], .ny = n[1], .nz = n[2], .origin = { origin[0], origin[1], origin[2] },
+                            .spacing = TERRAIN_COLUMN_SIZE, .values = big };
+    rocks_cliffs_amplify(cliffs, world, &whole);
+
+    int raised = 0, points_differ = 0, boxes = 0, boxes_differ = 0;
+    for (int k = 0; k < n[2]; k++)
+        for (int j = 0; j < n[1]; j++)
+            for (int i = 0; i < n[0]; i++) {
+                const size_t at = ((size_t)k * n[1] + j) * n[0] + i;
+                float one = base[at];
+                terrain_field point = { .nx = 1, .ny = 1, .nz = 1, .origin = { origin[0] + i, origin[1] + j, origin[2] + k },
                                         .spacing = TERRAIN_COLUMN_SIZE, .values = &one };
-                terrain_field around = { .nx = 3, .ny = 3, .nz = 3, .spacing = TERRAIN_COLUMN_SIZE, .values = cube,
-                                         .origin = { p[0] - TERRAIN_COLUMN_SIZE, p[1] - TERRAIN_COLUMN_SIZE,
-                                                     p[2] - TERRAIN_COLUMN_SIZE } };
                 rocks_cliffs_amplify(cliffs, world, &point);
-                rocks_cliffs_amplify(cliffs, world, &around);
-                points++;
-                raised += one > base;
-                if (one != cube[13] && differ++ < 5)
-                    cr_expect_eq(one, cube[13], "at (%g, %g, %g): %.9g as a point, %.9g in a field", p[0], p[1], p[2],
-                                 (double)one, (double)cube[13]);
+                raised += big[at] > base[at];
+                if (one != big[at] && points_differ++ < 5)
+                    cr_expect_eq(one, big[at], "at (%g, %g, %g): %.9g as a point, %.9g in the big field",
+                                 point.origin[0], point.origin[1], point.origin[2], (double)one, (double)big[at]);
             }
-    cr_expect_eq(differ, 0, "%d of %d points differ", differ, points);
+    for (int k = 0; k + 4 <= n[2]; k += 3)
+        for (int j = 0; j + 5 <= n[1]; j += 3)
+            for (int i = 0; i + 4 <= n[0]; i += 3)
+                for (int ask = 0; ask < 2; ask++) {
+                    float v[4 * 5 * 4];
+                    for (int z = 0; z < 4; z++)
+                        for (int y = 0; y < 5; y++)
+                            for (int x = 0; x < 4; x++)
+                                v[(z * 5 + y) * 4 + x] = base[((size_t)(k + z) * n[1] + (j + y)) * n[0] + (i + x)];
+                    terrain_field box = { .nx = 4, .ny = 5, .nz = 4, .spacing = TERRAIN_COLUMN_SIZE, .values = v,
+                                          .origin = { origin[0] + i, origin[1] + j, origin[2] + k } };
+                    rocks_cliffs_amplify(cliffs, world, &box);
+                    bool same = true;
+                    for (int z = 0; z < 4; z++)
+                        for (int y = 0; y < 5; y++)
+                            for (int x = 0; x < 4; x++)
+                                same &= v[(z * 5 + y) * 4 + x] == big[((size_t)(k + z) * n[1] + (j + y)) * n[0] + (i + x)];
+                    boxes++;
+                    if (!same && boxes_differ++ < 5)
+                        cr_expect(same, "the box at (%g, %g, %g), asked %s, differs from the big field", box.origin[0],
+                                  box.origin[1], box.origin[2], ask ? "again" : "first");
+                }
+    cr_expect_eq(points_differ, 0, "%d of %d points differ", points_differ, n[0] * n[1] * n[2]);
+    cr_expect_eq(boxes_differ, 0, "%d of %d boxes differ", boxes_differ, boxes);
     cr_expect_gt(raised, 100, "blocks stand out of the wall at some points (%d)", raised);
+    free(base);
+    free(big);
     terrain_world_destroy(world);
     rocks_cliffs_destroy(cliffs);
 }
