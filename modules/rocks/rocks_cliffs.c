@@ -865,18 +865,66 @@ typedef struct region_memo {
 
 static _Thread_local region_memo regions[REGION_SLOTS];
 
-static void region_visit(void *user, const rocks_block_tile *tile, int type, uint32_t block, const double cell[3]) {
-    region_memo *r = user;
+/* Whether the copy of block `block` at `cell` may meet the box [lo, hi] (its bounds do). */
+static bool copy_meets(const rocks_block_tile *tile, uint32_t block, const double cell[3], const double lo[3],
+                       const double hi[3]) {
     const rocks_block *b = &tile->blocks[block];
     const double s = tile->desc.size;
-    if (r->count < 0) return;
     for (int a = 0; a < 3; a++)
-        if (cell[a] * s + b->bounds_max[a] < r->lo[a] || cell[a] * s + b->bounds_min[a] > r->hi[a]) return;
+        if (cell[a] * s + b->bounds_max[a] < lo[a] || cell[a] * s + b->bounds_min[a] > hi[a]) return false;
+    return true;
+}
+
+static void region_visit(void *user, const rocks_block_tile *tile, int type, uint32_t block, const double cell[3]) {
+    region_memo *r = user;
+    if (r->count < 0 || !copy_meets(tile, block, cell, r->lo, r->hi)) return;
     if (r->count == REGION_COPIES) {
         r->count = -1;
         return;
     }
     r->copies[r->count++] = (region_copy){ .cell = { cell[0], cell[1], cell[2] }, .block = block, .type = type };
+}
+
+/* Most of a picking ray's samples lie in open air or deep in rock, far from any block, and a 2 m
+ * region made for each four of them cost more than the samples' terrain field. A thread also
+ * keeps, for the last few 8 m regions its points fell in, whether any copy meets them: a point in
+ * an empty one needs nothing more. */
+#define EMPTY_SIZE 8.0
+#define EMPTY_SLOTS 4                 /* a power of two */
+
+typedef struct empty_memo {
+    uint64_t owner;                   /* rocks_cliffs.id; 0 = empty slot */
+    uint32_t commits;
+    float spacing;
+    double lo[3], hi[3];
+    bool empty;                       /* no copy meets the region */
+} empty_memo;
+
+static _Thread_local empty_memo empties[EMPTY_SLOTS];
+
+static void empty_visit(void *user, const rocks_block_tile *tile, int type, uint32_t block, const double cell[3]) {
+    (void)type;
+    empty_memo *e = user;
+    if (e->empty && copy_meets(tile, block, cell, e->lo, e->hi)) e->empty = false;
+}
+
+/* Whether no copy meets the 8 m region of a one-sample field's point. A region asked anew starts
+ * the clock (*start). */
+static bool point_far_from_blocks(rocks_cliffs *c, terrain_world *world, const terrain_field *field, float above,
+                                  uint64_t *start) {
+    double lo[3];
+    for (int a = 0; a < 3; a++) lo[a] = floor(field->origin[a] / EMPTY_SIZE) * EMPTY_SIZE;
+    const uint32_t commits = terrain_world_commit_count(world);
+    uint64_t key = 0x7f4a7c15;
+    for (int a = 0; a < 3; a++) key = core_hash_combine(key, (uint64_t)(int64_t)(lo[a] / EMPTY_SIZE));
+    empty_memo *e = &empties[key & (EMPTY_SLOTS - 1)];
+    if (e->owner != c->id || e->commits != commits || e->spacing != field->spacing || memcmp(e->lo, lo, sizeof lo)) {
+        *start = core_time_ns();
+        *e = (empty_memo){ .owner = c->id, .commits = commits, .spacing = field->spacing, .empty = true };
+        for (int a = 0; a < 3; a++) e->lo[a] = lo[a], e->hi[a] = lo[a] + EMPTY_SIZE;
+        present_copies(c, world, e->lo, e->hi, above, empty_visit, e);
+    }
+    return e->empty;
 }
 
 /* The field within [lo, hi] (a box holding its samples) from the copies its thread kept for that
@@ -920,8 +968,10 @@ void rocks_cliffs_amplify(void *user, terrain_world *world, terrain_field *field
         kept_hi[a] = point ? kept_lo[a] + REGION_SIZE : hi[a];
     }
     uint64_t start = 0;   /* a box its thread kept goes untimed: the clock cost a quarter of a point */
-    if ((size_t)n[0] * n[1] * n[2] > SMALL_FIELD ||
-        !amplify_kept(c, world, field, kept_lo, kept_hi, above, &copies.present, &start)) {
+    if (point && point_far_from_blocks(c, world, field, above, &start)) {
+        /* nothing to raise */
+    } else if ((size_t)n[0] * n[1] * n[2] > SMALL_FIELD ||
+               !amplify_kept(c, world, field, kept_lo, kept_hi, above, &copies.present, &start)) {
         if (!start) start = core_time_ns();
         present_copies(c, world, lo, hi, above, amplify_visit, &copies);
     }
