@@ -841,17 +841,19 @@ static void amplify_visit(void *user, const rocks_block_tile *tile, int type, ui
  * three times its terrain field. A thread keeps, for the last few boxes it asked, the present
  * copies whose bounds meet the box; asking again is then the fields of those few blocks. A point's
  * box is the 2 m region it lies in, so a ray's samples share one; a small field's box is its own.
- * An entry holds while the world's commit count is the one it was made at, as the cells' memo
- * does. */
+ * There are slots enough for a whole picking ray's regions, so the next frame's ray, a few
+ * centimetres on, finds them again. An entry holds while the world's commit count is the one it
+ * was made at, as the cells' memo does. */
 #define REGION_SIZE 2.0
 #define SMALL_FIELD 512               /* samples at most in a field whose box is kept */
-#define REGION_SLOTS 8                /* a power of two */
-#define REGION_COPIES 64              /* a box meeting more is not kept: asked the long way */
+#define REGION_SLOTS 64               /* a power of two */
+#define REGION_COPIES 48              /* a box meeting more is not kept: asked the long way */
 
-typedef struct region_copy {
-    double cell[3];
-    uint32_t block;
-    int type;
+_Static_assert(ROCKS_BLOCK_TYPE_END <= 8, "a block type fits in a region copy's 3 bits");
+
+typedef struct region_copy {          /* 16 bytes: the slots stay small */
+    int32_t cell[3];
+    uint32_t block_type;              /* block << 3 | type */
 } region_copy;
 
 typedef struct region_memo {
@@ -878,19 +880,22 @@ static bool copy_meets(const rocks_block_tile *tile, uint32_t block, const doubl
 static void region_visit(void *user, const rocks_block_tile *tile, int type, uint32_t block, const double cell[3]) {
     region_memo *r = user;
     if (r->count < 0 || !copy_meets(tile, block, cell, r->lo, r->hi)) return;
-    if (r->count == REGION_COPIES) {
+    bool fits = r->count < REGION_COPIES && block < (UINT32_MAX >> 3);
+    for (int a = 0; a < 3; a++) fits &= fabs(cell[a]) < (double)INT32_MAX;   /* else not kept */
+    if (!fits) {
         r->count = -1;
         return;
     }
-    r->copies[r->count++] = (region_copy){ .cell = { cell[0], cell[1], cell[2] }, .block = block, .type = type };
+    r->copies[r->count++] = (region_copy){ .cell = { (int32_t)cell[0], (int32_t)cell[1], (int32_t)cell[2] },
+                                           .block_type = block << 3 | (uint32_t)type };
 }
 
 /* Most of a picking ray's samples lie in open air or deep in rock, far from any block, and a 2 m
  * region made for each four of them cost more than the samples' terrain field. A thread also
- * keeps, for the last few 8 m regions its points fell in, whether any copy meets them: a point in
+ * keeps, for the 8 m regions its points fell in lately, whether any copy meets them: a point in
  * an empty one needs nothing more. */
 #define EMPTY_SIZE 8.0
-#define EMPTY_SLOTS 4                 /* a power of two */
+#define EMPTY_SLOTS 32                /* a power of two */
 
 typedef struct empty_memo {
     uint64_t owner;                   /* rocks_cliffs.id; 0 = empty slot */
@@ -947,8 +952,11 @@ static bool amplify_kept(rocks_cliffs *c, terrain_world *world, terrain_field *f
         present_copies(c, world, r->lo, r->hi, above, region_visit, r);
     }
     if (r->count < 0) return false;
-    for (int i = 0; i < r->count; i++)
-        *present += rocks__amplify_copy(c->tiles[r->copies[i].type], r->copies[i].block, r->copies[i].cell, field);
+    for (int i = 0; i < r->count; i++) {
+        const region_copy *k = &r->copies[i];
+        const double cell[3] = { k->cell[0], k->cell[1], k->cell[2] };
+        *present += rocks__amplify_copy(c->tiles[k->block_type & 7], k->block_type >> 3, cell, field);
+    }
     return true;
 }
 
