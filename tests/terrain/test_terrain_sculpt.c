@@ -777,6 +777,54 @@ Test(terrain_sculpt, raycast_hits_the_wall_of_a_step) {
     terrain_world_destroy(world);
 }
 
+/* The first crossing by plain bisection, 40 halvings of each half-metre step: the answer the
+ * secant must reach (its own steps are not the test's). */
+static double crossing_by_halving(terrain_world *world, const double o[3], const double d[3], double reach) {
+    const int steps = (int)ceil(reach / 0.5);
+    double before = 0.0;
+    for (int s = 1; s <= steps; s++) {
+        const double t = s == steps ? reach : s * (reach / steps);
+        if (terrain_field_at(world, o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2], 0) > 0.0f) {
+            double air = before, solid = t;
+            for (int h = 0; h < 40; h++) {
+                const double m = 0.5 * (air + solid);
+                if (terrain_field_at(world, o[0] + m * d[0], o[1] + m * d[1], o[2] + m * d[2], 0) > 0.0f) solid = m;
+                else air = m;
+            }
+            return 0.5 * (air + solid);
+        }
+        before = t;
+    }
+    return -1.0;
+}
+
+/* Rays fanned over generated ground (hills, cliffs, overhangs of seed 3): every hit is where
+ * halving finds the first crossing, to a float's step at the distance. */
+Test(terrain_sculpt, raycast_finds_the_crossing_that_halving_finds) {
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(3) });
+    const double o[3] = { 5.0, 0.0, 5.0 };
+    double eye[3] = { o[0], terrain_world_top(world, o[0], o[2]) + 6.0, o[2] };
+    int hits = 0;
+    for (int i = 0; i < 48; i++) {
+        const float yaw = 0.1309f * (float)i, pitch = -0.05f - 0.02f * (float)(i % 12);
+        const float dir[3] = { cosf(yaw) * cosf(pitch), sinf(pitch), sinf(yaw) * cosf(pitch) };
+        const double d[3] = { dir[0], dir[1], dir[2] };
+        const double length = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        const double unit[3] = { d[0] / length, d[1] / length, d[2] / length };
+        terrain_ray_hit hit;
+        const bool hitting = terrain_raycast(world, eye, dir, 64.0f, &hit);
+        const double expected = crossing_by_halving(world, eye, unit, 64.0);
+        cr_expect_eq(hitting, expected >= 0.0, "ray %d: %s, halving %s", i, hitting ? "hits" : "misses",
+                     expected >= 0.0 ? "hits" : "misses");
+        if (!hitting || expected < 0.0) continue;
+        hits++;
+        cr_expect_float_eq((double)hit.distance, expected, 1e-5 + 4e-7 * expected, "ray %d: %.7f m, halving %.7f m", i,
+                           (double)hit.distance, expected);
+    }
+    cr_expect_gt(hits, 24, "most rays meet the ground (%d of 48)", hits);
+    terrain_world_destroy(world);
+}
+
 /* ---- bad input ------------------------------------------------------------------------------ */
 
 Test(terrain_sculpt, bad_parameters_are_refused_and_change_nothing) {

