@@ -851,16 +851,45 @@ static void amplify_visit(void *user, const rocks_block_tile *tile, int type, ui
 
 _Static_assert(ROCKS_BLOCK_TYPE_END <= 8, "a block type fits in a region copy's 3 bits");
 
+/* What a thread's kept answer for a box is about: the cliffs, the world's commit count, the
+ * field's spacing (it sets the blocks shown) and the box. */
+typedef struct kept_box {
+    uint64_t owner;                   /* rocks_cliffs.id; 0 = an empty slot */
+    uint32_t commits;
+    float spacing;
+    double lo[3], hi[3];
+} kept_box;
+
+static kept_box kept_box_make(const rocks_cliffs *c, uint32_t commits, float spacing, const double lo[3],
+                              const double hi[3]) {
+    kept_box k = { .owner = c->id, .commits = commits, .spacing = spacing };
+    memcpy(k.lo, lo, sizeof k.lo), memcpy(k.hi, hi, sizeof k.hi);
+    return k;
+}
+
+static bool kept_box_same(const kept_box *a, const kept_box *b) {
+    return a->owner == b->owner && a->commits == b->commits && a->spacing == b->spacing &&
+           !memcmp(a->lo, b->lo, sizeof a->lo) && !memcmp(a->hi, b->hi, sizeof a->hi);
+}
+
+/* The slot of `slots` (a power of two) a box's answer is kept in. */
+static size_t kept_box_slot(const kept_box *k, size_t slots) {
+    uint64_t key = 0x9e3779b9;
+    for (int a = 0; a < 3; a++) {
+        uint64_t l, h;
+        memcpy(&l, &k->lo[a], sizeof l), memcpy(&h, &k->hi[a], sizeof h);
+        key = core_hash_combine(core_hash_combine(key, l), h);
+    }
+    return (size_t)(key & (slots - 1));
+}
+
 typedef struct region_copy {          /* 16 bytes: the slots stay small */
     int32_t cell[3];
     uint32_t block_type;              /* block << 3 | type */
 } region_copy;
 
 typedef struct region_memo {
-    uint64_t owner;                   /* rocks_cliffs.id; 0 = empty */
-    uint32_t commits;
-    float spacing;                    /* the field's spacing: it sets the blocks shown */
-    double lo[3], hi[3];              /* the box */
+    kept_box box;
     int count;                        /* copies; -1 when too many */
     region_copy copies[REGION_COPIES];
 } region_memo;
@@ -879,7 +908,7 @@ static bool copy_meets(const rocks_block_tile *tile, uint32_t block, const doubl
 
 static void region_visit(void *user, const rocks_block_tile *tile, int type, uint32_t block, const double cell[3]) {
     region_memo *r = user;
-    if (r->count < 0 || !copy_meets(tile, block, cell, r->lo, r->hi)) return;
+    if (r->count < 0 || !copy_meets(tile, block, cell, r->box.lo, r->box.hi)) return;
     bool fits = r->count < REGION_COPIES && block < (UINT32_MAX >> 3);
     for (int a = 0; a < 3; a++) fits &= fabs(cell[a]) < (double)INT32_MAX;   /* else not kept */
     if (!fits) {
@@ -898,10 +927,7 @@ static void region_visit(void *user, const rocks_block_tile *tile, int type, uin
 #define EMPTY_SLOTS 32                /* a power of two */
 
 typedef struct empty_memo {
-    uint64_t owner;                   /* rocks_cliffs.id; 0 = empty slot */
-    uint32_t commits;
-    float spacing;
-    double lo[3], hi[3];
+    kept_box box;
     bool empty;                       /* no copy meets the region */
 } empty_memo;
 
@@ -910,24 +936,21 @@ static _Thread_local empty_memo empties[EMPTY_SLOTS];
 static void empty_visit(void *user, const rocks_block_tile *tile, int type, uint32_t block, const double cell[3]) {
     (void)type;
     empty_memo *e = user;
-    if (e->empty && copy_meets(tile, block, cell, e->lo, e->hi)) e->empty = false;
+    if (e->empty && copy_meets(tile, block, cell, e->box.lo, e->box.hi)) e->empty = false;
 }
 
 /* Whether no copy meets the 8 m region of a one-sample field's point. A region asked anew starts
  * the clock (*start). */
 static bool point_far_from_blocks(rocks_cliffs *c, terrain_world *world, const terrain_field *field, float above,
                                   uint64_t *start) {
-    double lo[3];
-    for (int a = 0; a < 3; a++) lo[a] = floor(field->origin[a] / EMPTY_SIZE) * EMPTY_SIZE;
-    const uint32_t commits = terrain_world_commit_count(world);
-    uint64_t key = 0x7f4a7c15;
-    for (int a = 0; a < 3; a++) key = core_hash_combine(key, (uint64_t)(int64_t)(lo[a] / EMPTY_SIZE));
-    empty_memo *e = &empties[key & (EMPTY_SLOTS - 1)];
-    if (e->owner != c->id || e->commits != commits || e->spacing != field->spacing || memcmp(e->lo, lo, sizeof lo)) {
+    double lo[3], hi[3];
+    for (int a = 0; a < 3; a++) lo[a] = floor(field->origin[a] / EMPTY_SIZE) * EMPTY_SIZE, hi[a] = lo[a] + EMPTY_SIZE;
+    const kept_box box = kept_box_make(c, terrain_world_commit_count(world), field->spacing, lo, hi);
+    empty_memo *e = &empties[kept_box_slot(&box, EMPTY_SLOTS)];
+    if (!kept_box_same(&e->box, &box)) {
         *start = core_time_ns();
-        *e = (empty_memo){ .owner = c->id, .commits = commits, .spacing = field->spacing, .empty = true };
-        for (int a = 0; a < 3; a++) e->lo[a] = lo[a], e->hi[a] = lo[a] + EMPTY_SIZE;
-        present_copies(c, world, e->lo, e->hi, above, empty_visit, e);
+        *e = (empty_memo){ .box = box, .empty = true };
+        present_copies(c, world, lo, hi, above, empty_visit, e);
     }
     return e->empty;
 }
@@ -936,20 +959,12 @@ static bool point_far_from_blocks(rocks_cliffs *c, terrain_world *world, const t
  * box; false when the box meets too many to keep. A box made anew starts the clock (*start). */
 static bool amplify_kept(rocks_cliffs *c, terrain_world *world, terrain_field *field, const double lo[3],
                          const double hi[3], float above, uint64_t *present, uint64_t *start) {
-    const uint32_t commits = terrain_world_commit_count(world);
-    uint64_t key = 0x9e3779b9;
-    for (int a = 0; a < 3; a++) {
-        uint64_t l, h;
-        memcpy(&l, &lo[a], sizeof l), memcpy(&h, &hi[a], sizeof h);
-        key = core_hash_combine(core_hash_combine(key, l), h);
-    }
-    region_memo *r = &regions[key & (REGION_SLOTS - 1)];
-    if (r->owner != c->id || r->commits != commits || r->spacing != field->spacing ||
-        memcmp(r->lo, lo, sizeof r->lo) || memcmp(r->hi, hi, sizeof r->hi)) {
+    const kept_box box = kept_box_make(c, terrain_world_commit_count(world), field->spacing, lo, hi);
+    region_memo *r = &regions[kept_box_slot(&box, REGION_SLOTS)];
+    if (!kept_box_same(&r->box, &box)) {
         *start = core_time_ns();
-        *r = (region_memo){ .owner = c->id, .commits = commits, .spacing = field->spacing };
-        memcpy(r->lo, lo, sizeof r->lo), memcpy(r->hi, hi, sizeof r->hi);
-        present_copies(c, world, r->lo, r->hi, above, region_visit, r);
+        *r = (region_memo){ .box = box };
+        present_copies(c, world, lo, hi, above, region_visit, r);
     }
     if (r->count < 0) return false;
     for (int i = 0; i < r->count; i++) {
