@@ -40,8 +40,11 @@ if premake5 then workspace "engine" else solution "engine" end
   includedirs { "engine", "modules", ".", glad_dir .. "/include" }   -- "." for game/*.h
   defines { "_GNU_SOURCE" }
   buildoptions { "-std=c11", "-Wall", "-Wextra", "-Wshadow", "-Wno-missing-field-initializers",
-                 "-pthread", "-g" }
+                 "-pthread" }
   linkoptions { "-pthread" }
+  -- Keep the symbols in the programs: premake4 links with -s unless told, and a stripped
+  -- program leaves sanitizer reports, perf and gdb with bare addresses.
+  if premake5 then symbols "On" else flags { "Symbols" } end
 
   only "debug"
     targetdir "bin/debug"
