@@ -37,7 +37,10 @@ out float v_lake_depth;            // metres of lake water over the ground (≤ 
 // beyond the vertices kept for them) and the lake level in one read: the CPU packs them
 // (packed_texel in terrain_clipmap.c), which spares four reads per vertex.
 vec4 texel_at(int layer, ivec2 texel) {
-    return texelFetch(u_heights, ivec3((texel + u_size) % u_size, layer), 0);
+    // texel is within [0, 2·u_size) (a start texel in [0, u_size) plus at most u_cells + 1):
+    // one subtraction wraps it. No integer % or /: llvmpipe does those a lane at a time.
+    ivec2 wrapped = texel - u_size * ivec2(greaterThanEqual(texel, ivec2(u_size)));
+    return texelFetch(u_heights, ivec3(wrapped, layer), 0);
 }
 
 // The normal's y from its x and z: a height field's normals all point up.
@@ -51,7 +54,13 @@ float hole_depth_inside(vec4 hole, vec2 p) {
 }
 
 void main() {
-    ivec2 grid = ivec2(gl_VertexID % (u_cells + 1), gl_VertexID / (u_cells + 1));
+    // The row from a float quotient (llvmpipe divides integers a lane at a time), put right
+    // if rounding left it one off: the column must come out in [0, row_length).
+    int row_length = u_cells + 1;
+    int row = int((float(gl_VertexID) + 0.5) / float(row_length));
+    int column = gl_VertexID - row * row_length;
+    row += int(column >= row_length) - int(column < 0);
+    ivec2 grid = ivec2(gl_VertexID - row * row_length, row);
     // The anchor is shared by all levels and (u_offset + grid)·u_spacing is exact, so a vertex
     // that two levels share gets the same bits in both.
     precise vec2 position = u_anchor + vec2(u_offset + grid) * u_spacing;
@@ -70,8 +79,14 @@ void main() {
     // this opens against a coarser level lies in the border's plane, over the pit: ground shows
     // through it, never sky (terrain_clipmap.c, "The seam").
     bool seam = false;
-    for (int h = 0; h < min(u_hole_count, MAX_HOLES); h++)
-        seam = seam || (u_seam_exact != 0 && abs(hole_depth_inside(u_holes[h], position)) <= 1e-3 * u_spacing);
+    float sink = 0.0;
+    for (int h = 0; h < MAX_HOLES; h++) {
+        if (h < u_hole_count) {
+            float inside = hole_depth_inside(u_holes[h], position);
+            seam = seam || (u_seam_exact != 0 && abs(inside) <= 1e-3 * u_spacing);
+            sink = max(sink, inside > 0.0 ? u_hole_depth * clamp(inside / u_hole_band, 0.0, 1.0) : 0.0);
+        }
+    }
     if (u_coarse_layer >= 0) {
         bool border = grid.x == 0 || grid.y == 0 || grid.x == u_cells || grid.y == u_cells;
         // Measured from the camera the levels were placed for, so that the transition always
@@ -100,11 +115,7 @@ void main() {
     // the ground: a pit under the volumetric chunks, whose walls are the skirt of their open
     // border (terrain_clipmap.c says why it is a pit rather than a cut-out). Where holes
     // overlap the deepest pit wins, so their union is one pit (terrain__clipmap_sink mirrors it).
-    float sink = 0.0;
-    for (int h = 0; h < min(u_hole_count, MAX_HOLES); h++) {
-        float inside = hole_depth_inside(u_holes[h], position);
-        sink = max(sink, inside > 0.0 ? u_hole_depth * clamp(inside / u_hole_band, 0.0, 1.0) : 0.0);
-    }
+
     // Inside a hole the meshes draw the lake's bed and terrain_water its surface: the pit stays
     // the ground's.
     if (sink > 0.0) surface = height;

@@ -1045,11 +1045,6 @@ static void draw_shared_uniforms(terrain_clipmap *c, gfx_context *gfx, gfx_progr
     gfx_uniform_int(gfx, program, "u_size", c->size);
     gfx_uniform_int(gfx, program, "u_cells", c->cells);
     gfx_uniform_float(gfx, program, "u_camera_y", (float)camera[1]);
-    float holes[TERRAIN_CLIPMAP_MAX_HOLES][4];
-    int hole_count = terrain__clipmap_holes(c, camera, holes);
-    gfx_uniform_int(gfx, program, "u_hole_count", hole_count);
-    GLint holes_location = glGetUniformLocation(gfx_program_gl(gfx, program), "u_holes");
-    if (holes_location >= 0 && hole_count > 0) glUniform4fv(holes_location, hole_count, &holes[0][0]);
     gfx_uniform_float(gfx, program, "u_hole_band", c->desc.hole_band);
     gfx_uniform_float(gfx, program, "u_hole_depth", c->desc.hole_depth);
     gfx_uniform_int(gfx, program, "u_seam_exact", c->desc.world != NULL);
@@ -1100,6 +1095,31 @@ int terrain__clipmap_bind_ground(terrain_clipmap *c, gfx_context *gfx, uint32_t 
     return levels;
 }
 
+/* The holes that reach block `info` (its box holds one cell more around than its vertices), as
+ * a bit per hole: a hole that does not meet the box neither sinks nor seams any of its vertices. */
+static unsigned block_holes(const terrain_clipmap *c, const terrain__clipmap_block_info *info) {
+    unsigned near = 0;
+    for (int h = 0; h < c->hole_count; h++)
+        if (info->box_max[0] >= c->hole_min[h][0] && info->box_min[0] <= c->hole_max[h][0] &&
+            info->box_max[2] >= c->hole_min[h][1] && info->box_min[2] <= c->hole_max[h][1])
+            near |= 1u << h;
+    return near;
+}
+
+/* clipmap.vert loops over u_holes for every vertex, and on llvmpipe that loop (an array read at
+ * a varying index, once per hole and lane) was half the far terrain's vertex cost: each block
+ * gets only the holes that reach it, which for all but the few blocks around the chunks is none. */
+static void bind_block_holes(const terrain_clipmap *c, GLuint program, const float holes[][4], unsigned near) {
+    float chosen[TERRAIN_CLIPMAP_MAX_HOLES][4];
+    int count = 0;
+    for (int h = 0; h < c->hole_count; h++)
+        if (near & (1u << h)) memcpy(chosen[count++], holes[h], sizeof chosen[0]);
+    GLint at = glGetUniformLocation(program, "u_hole_count");
+    if (at >= 0) glUniform1i(at, count);
+    at = glGetUniformLocation(program, "u_holes");
+    if (at >= 0 && count > 0) glUniform4fv(at, count, &chosen[0][0]);
+}
+
 void terrain__clipmap_draw(terrain_clipmap *c, gfx_context *gfx, uint32_t program_handle, const terrain_view *view) {
     TRACE_ZONE("terrain_clipmap_draw");
     c->stats.blocks_drawn = 0;
@@ -1111,6 +1131,9 @@ void terrain__clipmap_draw(terrain_clipmap *c, gfx_context *gfx, uint32_t progra
     GLuint gl_program = gfx_program_gl(gfx, program);
     draw_shared_uniforms(c, gfx, program, view);
     gfx_texture_bind(c->texture, 1);
+    float holes[TERRAIN_CLIPMAP_MAX_HOLES][4];
+    terrain__clipmap_holes(c, view->camera, holes);
+    unsigned bound = ~0u;                      /* the holes bound for the draws so far: none yet */
     for (int l = 0; l < c->level_count; l++) {
         level_uniforms u = uniforms_for(c, l, view->camera);
         gfx_uniform_int(gfx, program, "u_layer", l);
@@ -1123,7 +1146,10 @@ void terrain__clipmap_draw(terrain_clipmap *c, gfx_context *gfx, uint32_t progra
         uniform_ivec2(gl_program, "u_start", u.start);
         uniform_ivec2(gl_program, "u_coarse_start", u.coarse_start);
         for (int b = 0; b < BLOCKS; b++) {
-            if (!terrain__clipmap_block(c, l, b).visible) continue;
+            terrain__clipmap_block_info info = terrain__clipmap_block(c, l, b);
+            if (!info.visible) continue;
+            unsigned near = block_holes(c, &info);
+            if (near != bound) bind_block_holes(c, gl_program, holes, bound = near);
             gfx_draw(&(gfx_draw_desc){ .vertex_array = c->vertex_array, .first = c->block_first[b],
                                        .count = c->block_count[b], .index_type = GFX_INDEX_U32 });
             c->stats.blocks_drawn++;
