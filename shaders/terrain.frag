@@ -8,10 +8,11 @@
 // at 25 m multiplies the albedo (over its mean, from 24–48 m out, share from the macro layer),
 // and within u_detail_distance a 1 m detail layer does too (mean 1, so a region's colour does
 // not change) and adds its slopes (UDN). The summed tangent slopes of each projection meet the
-// geometric normal in a whiteout blend, and the three are mixed with the triplanar weights. The
-// macro layer (200 m, read per vertex in terrain.vert) scales brightness and hue. Fetches: 12
-// base (4 materials × 3 projections: llvmpipe runs every branch), +3 at 25 m, +3 detail; the
-// low quality (u_scale_blend = 0, u_detail_distance = 0) skips the last six.
+// geometric normal in a whiteout blend, and the projections are mixed by their weights. The
+// macro layer (200 m, read per vertex in terrain.vert) scales brightness and hue. Each pixel
+// reads its two largest projections and its two largest materials (pick_two_of_*, below):
+// fetches 4 base, +2 at 25 m, +2 detail; the low quality (u_scale_blend = 0,
+// u_detail_distance = 0) skips the last four.
 
 #include "common.glsl"
 #include "materials.glsl"
@@ -40,61 +41,73 @@ vec3 triplanar_weights(vec3 n) {
     return w / max(w.x + w.y + w.z, 1e-6);
 }
 
-// One projection of one material: its shade, and its tangent slopes added to `slope`.
-float projection_shade(float layer, vec2 uv, inout vec2 slope) {
-    vec3 base = texture(u_materials, vec3(uv * u_texture_scale, layer)).rgb;
-    slope += base.gb * 2.0 - 1.0;
-    return base.r;
+// Two of three, and two of four. llvmpipe runs both sides of a branch that differs between
+// pixels, fetches included, so the projections and materials a pixel hardly uses cost as much
+// as those it uses. Each pixel reads the two largest of each, chosen per pixel (the texture
+// array's layer and the projection's axes are just values), less the largest one left out:
+// where the second and third swap, the second's weight has reached zero, so the blend stays
+// continuous. 4 base fetches in place of 12, and 2 in place of 3 for each extra layer.
+struct pick {
+    ivec2 index;                              // the largest, the second
+    vec2 weight;                              // theirs less the third's, summing to 1
+};
+
+pick pick_two_of_three(vec3 w) {
+    int first = w.x >= w.y ? (w.x >= w.z ? 0 : 2) : (w.y >= w.z ? 1 : 2);
+    int last = w.x < w.y ? (w.x < w.z ? 0 : 2) : (w.y < w.z ? 1 : 2);
+    int second = 3 - first - last;
+    vec2 kept = vec2(w[first], w[second]) - w[last];
+    return pick(ivec2(first, second), kept / max(kept.x + kept.y, 1e-6));
 }
 
-// One material's shade over the projections; its tangent slopes, times its weight, are added to
-// the projections' (each in its texture axes: x reads (z, y), y reads (x, z), z reads (x, y)).
-float material_shade(float layer, float weight, vec3 blend, inout vec2 slope_x, inout vec2 slope_y, inout vec2 slope_z) {
-    vec3 p = v_texture_position;
-    float shade = 0.0;
-    vec2 slope;
-    if (blend.x > 0.01) { slope = vec2(0.0); shade += blend.x * projection_shade(layer, p.zy, slope); slope_x += weight * slope; }
-    if (blend.y > 0.01) { slope = vec2(0.0); shade += blend.y * projection_shade(layer, p.xz, slope); slope_y += weight * slope; }
-    if (blend.z > 0.01) { slope = vec2(0.0); shade += blend.z * projection_shade(layer, p.xy, slope); slope_z += weight * slope; }
-    return shade;
+pick pick_two_of_four(vec4 w) {
+    // Sorted by a network of five compare-exchanges on (weight, index) pairs, largest first.
+    vec2 a = vec2(w.x, 0.0), b = vec2(w.y, 1.0), c = vec2(w.z, 2.0), d = vec2(w.w, 3.0), t;
+    if (b.x > a.x) { t = a; a = b; b = t; }
+    if (d.x > c.x) { t = c; c = d; d = t; }
+    if (c.x > a.x) { t = a; a = c; c = t; }
+    if (d.x > b.x) { t = b; b = d; d = t; }
+    if (c.x > b.x) { t = b; b = c; c = t; }
+    vec2 kept = vec2(a.x, b.x) - c.x;
+    return pick(ivec2(a.y, b.y), kept / max(kept.x + kept.y, 1e-6));
 }
 
-// llvmpipe runs both sides of a branch that differs between pixels, fetches included; only a
-// branch on a uniform is really skipped. So what the quality setting leaves out sits under
-// uniform conditions, and the extra layers are read once per projection for the dominant
-// material (`layer`), not once per material: three fetches each.
+// Projection `axis` of a point: x reads (z, y), y reads (x, z), z reads (x, y).
+vec2 projected(vec3 p, int axis) { return axis == 0 ? p.zy : axis == 1 ? p.xz : p.xy; }
+
+// A projection's tangent slopes added to the geometric normal's components in its texture axes
+// (whiteout); the axis' own component is the normal's, sign included, so faces looking down an
+// axis are lit as those looking up. The coordinates are world positions, never mirrored, so a
+// height map's slope points the same world way on both faces of an axis: no flip is needed.
+vec3 whiteout(vec3 n, int axis, vec2 slope) {
+    return n + (axis == 0 ? vec3(0.0, slope.y, slope.x) : axis == 1 ? vec3(slope.x, 0.0, slope.y) : vec3(slope, 0.0));
+}
+
+// One material's shade over the two projections, and its tangent slopes, times its weight,
+// added to each projection's.
+float material_shade(float layer, float weight, pick axes, vec2 uv0, vec2 uv1, inout vec2 slope0, inout vec2 slope1) {
+    vec3 a = texture(u_materials, vec3(uv0 * u_texture_scale, layer)).rgb;
+    vec3 b = texture(u_materials, vec3(uv1 * u_texture_scale, layer)).rgb;
+    slope0 += weight * (a.gb * 2.0 - 1.0);
+    slope1 += weight * (b.gb * 2.0 - 1.0);
+    return axes.weight.x * a.r + axes.weight.y * b.r;
+}
 
 // The 25 m sample of the dominant material as a factor with a mean of 1 (its shade over its
 // mean shade), mixed in by `coarse`: a pattern that never lines up with the 8 m repeats.
-float coarse_factor(float layer, vec3 blend, float coarse) {
-    vec3 p = v_texture_position * u_texture_scale2;
-    float shade = blend.x * texture(u_materials, vec3(p.zy, layer)).r + blend.y * texture(u_materials, vec3(p.xz, layer)).r
-                + blend.z * texture(u_materials, vec3(p.xy, layer)).r;
+float coarse_factor(float layer, pick axes, vec2 uv0, vec2 uv1, float coarse) {
+    float shade = axes.weight.x * texture(u_materials, vec3(uv0 * u_texture_scale2, layer)).r
+                + axes.weight.y * texture(u_materials, vec3(uv1 * u_texture_scale2, layer)).r;
     return mix(1.0, shade / u_mean_shades[int(layer)], coarse);
 }
 
 // The 1 m detail of the dominant material: its multiplier (mean 1), faded by `detail`, and its
 // slopes added to the projections' (UDN: the slopes of two height maps add).
-float detail_factor(float layer, vec3 blend, float detail, inout vec2 slope_x, inout vec2 slope_y, inout vec2 slope_z) {
-    vec3 p = v_texture_position * u_detail_scale;
-    vec3 dx = texture(u_detail, vec3(p.zy, layer)).rgb, dy = texture(u_detail, vec3(p.xz, layer)).rgb;
-    vec3 dz = texture(u_detail, vec3(p.xy, layer)).rgb;
-    slope_x += (dx.gb * 2.0 - 1.0) * detail;
-    slope_y += (dy.gb * 2.0 - 1.0) * detail;
-    slope_z += (dz.gb * 2.0 - 1.0) * detail;
-    return mix(1.0, 2.0 * (blend.x * dx.r + blend.y * dy.r + blend.z * dz.r), detail);
-}
-
-// Triplanar normal mapping, whiteout blend per axis: projection x reads (z, y), y reads (x, z),
-// z reads (x, y). Each projection's slopes are added to the geometric normal's components in its
-// texture axes and the axis' own component is the normal's, sign included, so faces looking down
-// an axis are lit as those looking up. The coordinates are world positions, never mirrored, so a
-// height map's slope points the same world way on both faces of an axis: no flip is needed.
-vec3 triplanar_normal(vec3 n, vec3 blend, vec2 slope_x, vec2 slope_y, vec2 slope_z) {
-    vec3 along_x = vec3(n.x, n.y + slope_x.y, n.z + slope_x.x);
-    vec3 along_y = vec3(n.x + slope_y.x, n.y, n.z + slope_y.y);
-    vec3 along_z = vec3(n.x + slope_z.x, n.y + slope_z.y, n.z);
-    return normalize(along_x * blend.x + along_y * blend.y + along_z * blend.z);
+float detail_factor(float layer, pick axes, vec2 uv0, vec2 uv1, float detail, inout vec2 slope0, inout vec2 slope1) {
+    vec3 a = texture(u_detail, vec3(uv0 * u_detail_scale, layer)).rgb, b = texture(u_detail, vec3(uv1 * u_detail_scale, layer)).rgb;
+    slope0 += (a.gb * 2.0 - 1.0) * detail;
+    slope1 += (b.gb * 2.0 - 1.0) * detail;
+    return mix(1.0, 2.0 * (axes.weight.x * a.r + axes.weight.y * b.r), detail);
 }
 
 // 002 §4.1: bands by height (wet shore, grass, bare rock, snow), with steep slopes bare.
@@ -122,29 +135,31 @@ vec3 light_surface_open(vec3 albedo, vec3 normal, float openness, float sun_visi
 
 void main() {
     vec3 n = normalize(v_normal);
-    vec3 blend = triplanar_weights(n);
-    vec4 w = v_weights / max(dot(v_weights, vec4(1.0)), 1e-4);
+    pick axes = pick_two_of_three(triplanar_weights(n));
+    pick materials = pick_two_of_four(v_weights);
+    vec2 uv0 = projected(v_texture_position, axes.index.x), uv1 = projected(v_texture_position, axes.index.y);
     float slope = (1.0 - clamp(n.y, 0.0, 1.0)) * 90.0;
     float distance = length(v_relative_position);
-    vec2 slope_x = vec2(0.0), slope_y = vec2(0.0), slope_z = vec2(0.0);
+    vec2 slope0 = vec2(0.0), slope1 = vec2(0.0);
     vec3 albedo = vec3(0.0);
-    if (w.x > 0.01) albedo += w.x * bedrock_tint(u_material_tints[0] * material_shade(0.0, w.x, blend, slope_x, slope_y, slope_z), v_height, slope);
-    if (w.y > 0.01) albedo += w.y * u_material_tints[1] * material_shade(1.0, w.y, blend, slope_x, slope_y, slope_z);
-    if (w.z > 0.01) albedo += w.z * u_material_tints[2] * material_shade(2.0, w.z, blend, slope_x, slope_y, slope_z);
-    if (w.w > 0.01) albedo += w.w * u_material_tints[3] * material_shade(3.0, w.w, blend, slope_x, slope_y, slope_z);
-    float dominant = w.x >= max(w.y, max(w.z, w.w)) ? 0.0 : w.y >= max(w.z, w.w) ? 1.0 : w.z >= w.w ? 2.0 : 3.0;
+    for (int m = 0; m < 2; m++) {
+        int layer = materials.index[m];
+        vec3 tinted = u_material_tints[layer] * material_shade(float(layer), materials.weight[m], axes, uv0, uv1, slope0, slope1);
+        albedo += materials.weight[m] * (layer == 0 ? bedrock_tint(tinted, v_height, slope) : tinted);
+    }
+    float dominant = float(materials.index.x);
     // The 25 m factor fades in from 24 to 48 m: nearer, a screen holds too little ground for
     // the 8 m repeat to show.
     if (u_scale_blend > 0.0)
-        albedo *= coarse_factor(dominant, blend, macro_coarse_share(v_macro) * smoothstep(24.0, 48.0, distance));
+        albedo *= coarse_factor(dominant, axes, uv0, uv1, macro_coarse_share(v_macro) * smoothstep(24.0, 48.0, distance));
     // The detail fades out over the second half of its reach: further away its 1 m repeat is a
     // few pixels, averaged by the mipmaps to 1 anyway.
     if (u_detail_distance > 0.0)
-        albedo *= detail_factor(dominant, blend, 1.0 - smoothstep(0.5 * u_detail_distance, u_detail_distance, distance),
-                                slope_x, slope_y, slope_z);
+        albedo *= detail_factor(dominant, axes, uv0, uv1, 1.0 - smoothstep(0.5 * u_detail_distance, u_detail_distance, distance),
+                                slope0, slope1);
     albedo *= macro_tint(v_macro);
-    vec3 color = light_surface_open(albedo, triplanar_normal(n, blend, slope_x, slope_y, slope_z),
-                                    mix(1.0, v_openness, u_occlusion), shadow_visibility(v_relative_position, n));
+    vec3 normal = normalize(whiteout(n, axes.index.x, slope0) * axes.weight.x + whiteout(n, axes.index.y, slope1) * axes.weight.y);
+    vec3 color = light_surface_open(albedo, normal, mix(1.0, v_openness, u_occlusion), shadow_visibility(v_relative_position, n));
     // common.glsl's fog works in world space around u_camera_position; here the camera is the
     // origin, so pass relative positions with u_camera_position = 0.
     frag_color = vec4(apply_fog(color, v_relative_position), 1.0);
