@@ -82,15 +82,16 @@ Test(render_detail, the_far_colours_are_the_tints_times_the_mean_shades) {
 
 /* ---- the pictures ---- */
 
-/* Flat bedrock of 2·size metres around the origin, at height 0, facing up. */
-static terrain_mesh flat_bedrock(float size) {
+/* Flat ground of 2·size metres around the origin, at height 0, facing up, with the material
+ * weights `weights` (bedrock, sand, rocks, water; unorm8) at every vertex. */
+static terrain_mesh flat_ground(float size, const uint8_t weights[4]) {
     terrain_mesh mesh = { .vertex_count = 4, .index_count = 6 };
     mesh.vertices = calloc(4, sizeof *mesh.vertices);
     mesh.indices = malloc(6 * sizeof *mesh.indices);
     const float corners[4][2] = { { -size, -size }, { -size, size }, { size, size }, { size, -size } };
     for (int i = 0; i < 4; i++)
         mesh.vertices[i] = (terrain_vertex){ .position = { corners[i][0], 0, corners[i][1] }, .normal = { 0, 1, 0 },
-                                             .weights = { 255, 0, 0, 0 } };
+                                             .weights = { weights[0], weights[1], weights[2], weights[3] } };
     const uint32_t indices[6] = { 0, 1, 2, 0, 2, 3 };
     memcpy(mesh.indices, indices, sizeof indices);
     mesh.bounds_min[0] = mesh.bounds_min[2] = -size;
@@ -102,12 +103,12 @@ static terrain_mesh flat_bedrock(float size) {
  * (so that relief shows), with the detail layer reaching `detail_distance` (< 0: the low
  * quality, also without the 25 m scale blend; NO_DETAIL: no detail, all else as by default). */
 #define NO_DETAIL 0.001f
-static render_image render_ground(float detail_distance, double height) {
+static render_image render_ground_of(const uint8_t weights[4], float detail_distance, double height) {
     gfx_context *gfx = render_offscreen(W, H);
     terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){
         .sea_level = -50, .fog_density = 1e-9f, .cloud_cover = -1, .detail_distance = detail_distance });
     cr_assert(renderer);
-    terrain_mesh mesh = flat_bedrock(400);
+    terrain_mesh mesh = flat_ground(400, weights);
     terrain_gpu_mesh gpu = terrain_gpu_mesh_upload(&mesh);
     terrain_view view = { .camera = { 3.3, height, 5.6 }, .pitch = -1.5707f, .aspect = (float)W / H,
                           .sun_direction = { -0.6f, 0.5f, -0.3f } };
@@ -122,6 +123,40 @@ static render_image render_ground(float detail_distance, double height) {
     terrain_renderer_destroy(renderer);
     gfx_context_destroy(gfx);
     return image;
+}
+
+static render_image render_ground(float detail_distance, double height) {
+    return render_ground_of((const uint8_t[4]){ 255, 0, 0, 0 }, detail_distance, height);
+}
+
+/* Mean absolute difference of two pictures' channels, 0 … 255. */
+static double mean_difference(const render_image *a, const render_image *b) {
+    double sum = 0;
+    for (int i = 0; i < a->width * a->height * 4; i++)
+        if (i % 4 != 3) sum += abs((int)a->rgba[i] - (int)b->rgba[i]);
+    return sum / (3.0 * a->width * a->height);
+}
+
+/* terrain.frag reads each pixel's two largest materials, less the weight of the largest one it
+ * leaves out. Where the second and the third are nearly equal, which of them is second must not
+ * matter: bedrock ½ with sand and rocks a quarter each, the two quarters a step of 1/256 apart
+ * one way and then the other, gives nearly the same picture (each then has a weight of 2/65 of
+ * the blend). Dropping the third's weight without subtracting it would give a third of the
+ * ground to sand in one picture and to rocks in the other: two thirds of the difference between
+ * half sand and half rocks. */
+Test(render_detail, materials_blend_without_a_step_where_the_second_and_third_swap) {
+    render_image more_sand = render_ground_of((const uint8_t[4]){ 128, 65, 63, 0 }, NO_DETAIL, 3.0);
+    render_image more_rocks = render_ground_of((const uint8_t[4]){ 128, 63, 65, 0 }, NO_DETAIL, 3.0);
+    render_image sand = render_ground_of((const uint8_t[4]){ 128, 128, 0, 0 }, NO_DETAIL, 3.0);
+    render_image rocks = render_ground_of((const uint8_t[4]){ 128, 0, 128, 0 }, NO_DETAIL, 3.0);
+    double step = mean_difference(&more_sand, &more_rocks), materials = mean_difference(&sand, &rocks);
+    cr_assert_gt(materials, 8.0, "half sand and half rocks look alike (%.2f of 255): the test sees nothing", materials);
+    cr_assert_lt(step, 0.15 * materials, "a step of %.2f where sand and rocks swap places, against %.2f between them", step,
+                 materials);
+    render_image_free(&more_sand);
+    render_image_free(&more_rocks);
+    render_image_free(&sand);
+    render_image_free(&rocks);
 }
 
 /* Mean absolute luminance difference between horizontal and vertical neighbours. */
