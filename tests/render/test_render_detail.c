@@ -228,20 +228,69 @@ Test(render_detail, from_afar_the_detail_averages_out) {
     render_image_free(&near_default);
 }
 
-/* A wall in the plane x = 0 facing `facing` (+1 or −1), both windings (culling keeps one). */
-static terrain_mesh wall(float facing) {
+/* A wall in the plane x = 0, both windings (culling keeps one), its vertices' normal `normal`. */
+static terrain_mesh wall_with_normal(const float normal[3]) {
     terrain_mesh mesh = { .vertex_count = 4, .index_count = 12 };
     mesh.vertices = calloc(4, sizeof *mesh.vertices);
     mesh.indices = malloc(12 * sizeof *mesh.indices);
     const float corners[4][2] = { { -50, -50 }, { -50, 50 }, { 50, 50 }, { 50, -50 } };   /* y, z */
     for (int i = 0; i < 4; i++)
-        mesh.vertices[i] = (terrain_vertex){ .position = { 0, corners[i][0], corners[i][1] }, .normal = { facing, 0, 0 },
-                                             .weights = { 255, 0, 0, 0 } };
+        mesh.vertices[i] = (terrain_vertex){ .position = { 0, corners[i][0], corners[i][1] },
+                                             .normal = { normal[0], normal[1], normal[2] }, .weights = { 255, 0, 0, 0 } };
     const uint32_t indices[12] = { 0, 1, 2, 0, 2, 3, 0, 2, 1, 0, 3, 2 };
     memcpy(mesh.indices, indices, sizeof indices);
     mesh.bounds_min[1] = mesh.bounds_min[2] = -50;
     mesh.bounds_max[1] = mesh.bounds_max[2] = 50;
     return mesh;
+}
+
+/* The wall facing `facing` (+1 or −1). */
+static terrain_mesh wall(float facing) { return wall_with_normal((const float[3]){ facing, 0, 0 }); }
+
+/* The wall seen from 4 m in front of its +x face, its normal `normal`, the sun along `sun`. */
+static render_image wall_picture(const float normal[3], const float sun[3]) {
+    gfx_context *gfx = render_offscreen(W, H);
+    terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){
+        .sea_level = -100, .fog_density = 1e-9f, .cloud_cover = -1, .detail_distance = NO_DETAIL });
+    cr_assert(renderer);
+    terrain_mesh mesh = wall_with_normal(normal);
+    terrain_gpu_mesh gpu = terrain_gpu_mesh_upload(&mesh);
+    terrain_view view = { .camera = { 4.0, 1.3, 2.1 }, .yaw = -1.5707963f, .aspect = (float)W / H,
+                          .sun_direction = { sun[0], sun[1], sun[2] } };
+    gfx_frame_begin(gfx);
+    terrain_renderer_draw(renderer, &view, &gpu, 1);
+    render_image image = { W, H, malloc(W * H * 4) };
+    gfx_read_pixels(gfx, image.rgba);
+    gfx_frame_end(gfx);
+    terrain_gpu_mesh_destroy(&gpu);
+    free(mesh.vertices);
+    free(mesh.indices);
+    terrain_renderer_destroy(renderer);
+    gfx_context_destroy(gfx);
+    return image;
+}
+
+/* The same for the projections: each pixel reads its two largest triplanar weights, less the
+ * third's. A normal leaning equally towards +y and +z (x's weight 0.75 and 0.125 each for y and
+ * z, with p = 8), tipped by 0.004 one way and then the other, must give nearly the same
+ * picture; the sun, symmetric in y and z, lights both alike, and both faces are steep enough
+ * (over 40°) to be bare rock. The scale: the same wall leaning clearly towards y, then towards
+ * z (the second projection about a seventh of the blend, as it would be at the tie without the
+ * subtraction). Measured: a step of 0.08 against 2.0; without the subtraction, 1.0. */
+Test(render_detail, projections_blend_without_a_step_where_the_second_and_third_swap) {
+    const float sun[3] = { 0.9f, 0.3f, 0.3f };
+    render_image towards_y = wall_picture((const float[3]){ 0.70f, 0.562f, 0.558f }, sun);
+    render_image towards_z = wall_picture((const float[3]){ 0.70f, 0.558f, 0.562f }, sun);
+    render_image leaning_y = wall_picture((const float[3]){ 0.70f, 0.562f, 0.40f }, sun);
+    render_image leaning_z = wall_picture((const float[3]){ 0.70f, 0.40f, 0.562f }, sun);
+    double step = mean_difference(&towards_y, &towards_z), projections = mean_difference(&leaning_y, &leaning_z);
+    cr_assert_gt(projections, 1.0, "the y and z projections look alike (%.2f of 255): the test sees nothing", projections);
+    cr_assert_lt(step, 0.25 * projections, "a step of %.2f where the y and z projections swap, against %.2f between them",
+                 step, projections);
+    render_image_free(&towards_y);
+    render_image_free(&towards_z);
+    render_image_free(&leaning_y);
+    render_image_free(&leaning_z);
 }
 
 /* Mean luminance of the wall facing `facing`, seen from 4 m in front of it, the sun along
