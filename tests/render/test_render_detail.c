@@ -99,21 +99,14 @@ static terrain_mesh flat_ground(float size, const uint8_t weights[4]) {
     return mesh;
 }
 
-/* The ground from `height` metres above (3.3, ·, 5.6), looking straight down, under a low sun
- * (so that relief shows), with the detail layer reaching `detail_distance` (< 0: the low
- * quality, also without the 25 m scale blend; NO_DETAIL: no detail, all else as by default). */
-#define NO_DETAIL 0.001f
-static render_image render_ground_of(const uint8_t weights[4], float detail_distance, double height) {
+/* One picture of `mesh` (freed here) from `view`, by a renderer made from `desc`. */
+static render_image render_mesh(terrain_mesh mesh, const terrain_view *view, const terrain_renderer_desc *desc) {
     gfx_context *gfx = render_offscreen(W, H);
-    terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){
-        .sea_level = -50, .fog_density = 1e-9f, .cloud_cover = -1, .detail_distance = detail_distance });
+    terrain_renderer *renderer = terrain_renderer_create(gfx, desc);
     cr_assert(renderer);
-    terrain_mesh mesh = flat_ground(400, weights);
     terrain_gpu_mesh gpu = terrain_gpu_mesh_upload(&mesh);
-    terrain_view view = { .camera = { 3.3, height, 5.6 }, .pitch = -1.5707f, .aspect = (float)W / H,
-                          .sun_direction = { -0.6f, 0.5f, -0.3f } };
     gfx_frame_begin(gfx);
-    terrain_renderer_draw(renderer, &view, &gpu, 1);
+    terrain_renderer_draw(renderer, view, &gpu, 1);
     render_image image = { W, H, malloc(W * H * 4) };
     gfx_read_pixels(gfx, image.rgba);
     gfx_frame_end(gfx);
@@ -123,6 +116,17 @@ static render_image render_ground_of(const uint8_t weights[4], float detail_dist
     terrain_renderer_destroy(renderer);
     gfx_context_destroy(gfx);
     return image;
+}
+
+/* The ground from `height` metres above (3.3, ·, 5.6), looking straight down, under a low sun
+ * (so that relief shows), with the detail layer reaching `detail_distance` (< 0: the low
+ * quality, also without the 25 m scale blend; NO_DETAIL: no detail, all else as by default). */
+#define NO_DETAIL 0.001f
+static render_image render_ground_of(const uint8_t weights[4], float detail_distance, double height) {
+    terrain_view view = { .camera = { 3.3, height, 5.6 }, .pitch = -1.5707f, .aspect = (float)W / H,
+                          .sun_direction = { -0.6f, 0.5f, -0.3f } };
+    return render_mesh(flat_ground(400, weights), &view, &(terrain_renderer_desc){
+        .sea_level = -50, .fog_density = 1e-9f, .cloud_cover = -1, .detail_distance = detail_distance });
 }
 
 static render_image render_ground(float detail_distance, double height) {
@@ -249,25 +253,10 @@ static terrain_mesh wall(float facing) { return wall_with_normal((const float[3]
 
 /* The wall seen from 4 m in front of its +x face, its normal `normal`, the sun along `sun`. */
 static render_image wall_picture(const float normal[3], const float sun[3]) {
-    gfx_context *gfx = render_offscreen(W, H);
-    terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){
-        .sea_level = -100, .fog_density = 1e-9f, .cloud_cover = -1, .detail_distance = NO_DETAIL });
-    cr_assert(renderer);
-    terrain_mesh mesh = wall_with_normal(normal);
-    terrain_gpu_mesh gpu = terrain_gpu_mesh_upload(&mesh);
     terrain_view view = { .camera = { 4.0, 1.3, 2.1 }, .yaw = -1.5707963f, .aspect = (float)W / H,
                           .sun_direction = { sun[0], sun[1], sun[2] } };
-    gfx_frame_begin(gfx);
-    terrain_renderer_draw(renderer, &view, &gpu, 1);
-    render_image image = { W, H, malloc(W * H * 4) };
-    gfx_read_pixels(gfx, image.rgba);
-    gfx_frame_end(gfx);
-    terrain_gpu_mesh_destroy(&gpu);
-    free(mesh.vertices);
-    free(mesh.indices);
-    terrain_renderer_destroy(renderer);
-    gfx_context_destroy(gfx);
-    return image;
+    return render_mesh(wall_with_normal(normal), &view, &(terrain_renderer_desc){
+        .sea_level = -100, .fog_density = 1e-9f, .cloud_cover = -1, .detail_distance = NO_DETAIL });
 }
 
 /* The same for the projections: each pixel reads its two largest triplanar weights, less the
@@ -296,29 +285,15 @@ Test(render_detail, projections_blend_without_a_step_where_the_second_and_third_
 /* Mean luminance of the wall facing `facing`, seen from 4 m in front of it, the sun along
  * `sun_x` (±1) and a little above. */
 static double wall_luminance(float facing, float sun_x) {
-    gfx_context *gfx = render_offscreen(W, H);
-    terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){
-        .sea_level = -100, .fog_density = 1e-9f, .cloud_cover = -1 });
-    cr_assert(renderer);
-    terrain_mesh mesh = wall(facing);
-    terrain_gpu_mesh gpu = terrain_gpu_mesh_upload(&mesh);
     /* yaw 0 looks along −z and +90° along +x: −90° looks at the +x face from +x. */
     terrain_view view = { .camera = { 4.0 * facing, 1.3, 2.1 }, .yaw = -1.5707963f * facing, .aspect = (float)W / H,
                           .sun_direction = { sun_x, 0.3f, 0 } };
-    gfx_frame_begin(gfx);
-    terrain_renderer_draw(renderer, &view, &gpu, 1);
-    render_image image = { W, H, malloc(W * H * 4) };
-    gfx_read_pixels(gfx, image.rgba);
-    gfx_frame_end(gfx);
+    render_image image = render_mesh(wall(facing), &view, &(terrain_renderer_desc){
+        .sea_level = -100, .fog_density = 1e-9f, .cloud_cover = -1 });
     double sum = 0;
     for (int y = 0; y < H; y++)
         for (int x = 0; x < W; x++) sum += render_luminance(render_pixel(&image, x, y));
     render_image_free(&image);
-    terrain_gpu_mesh_destroy(&gpu);
-    free(mesh.vertices);
-    free(mesh.indices);
-    terrain_renderer_destroy(renderer);
-    gfx_context_destroy(gfx);
     return sum / (W * H);
 }
 
