@@ -49,10 +49,11 @@ vec3 far_lake(vec3 bed, float depth, vec3 view_dir) {
     return mix(bed, water, smoothstep(0.0, LAKE_SHORE_METRES, depth));
 }
 
-// 000 §6's triplanar blend with weights w = |n_i|^8 / Σ|n_j|^8 (projections under 5 % left
-// out), the base mixed with itself at 25 m as terrain.frag does; far away the material's mean
-// colour, what its mipmaps tend to anyway, for no fetch. No normal map or detail layer: at the
-// clipmap's distances they average out (the detail to 1, the slopes to 0).
+// 000 §6's triplanar blend with weights w = |n_i|^8 / Σ|n_j|^8, read along the pixel's two
+// largest projections as terrain.frag does (materials.glsl's pick_two_of_three), the base mixed
+// with itself at 25 m as terrain.frag does; far away the material's mean colour, what its
+// mipmaps tend to anyway, for no fetch. No normal map or detail layer: at the clipmap's
+// distances they average out (the detail to 1, the slopes to 0).
 float base_shade(float layer, vec2 uv, float coarse) {
     float s = texture(u_materials, vec3(uv * u_texture_scale, layer)).r;
     // On a uniform: llvmpipe skips only such branches (the low quality saves the fetch).
@@ -60,14 +61,11 @@ float base_shade(float layer, vec2 uv, float coarse) {
     return s;
 }
 
-vec3 material(float layer, vec3 tint, vec3 mean, vec3 position, vec3 w, float far, float coarse) {
+vec3 material(float layer, vec3 tint, vec3 mean, vec3 position, pick axes, float far, float coarse) {
     if (far >= 1.0) return mean;
-    float c = 0.0;
-    float total = 0.0;
-    if (w.x > 0.05) { c += w.x * base_shade(layer, position.zy, coarse); total += w.x; }
-    if (w.y > 0.05) { c += w.y * base_shade(layer, position.xz, coarse); total += w.y; }
-    if (w.z > 0.05) { c += w.z * base_shade(layer, position.xy, coarse); total += w.z; }
-    return mix(tint * (c / total), mean, far);
+    float c = axes.weight.x * base_shade(layer, projected(position, axes.index.x), coarse)
+            + axes.weight.y * base_shade(layer, projected(position, axes.index.y), coarse);
+    return mix(tint * c, mean, far);
 }
 
 // The bands of terrain.frag's bedrock tint: wet near the sea, grass on flat ground, bare rock
@@ -91,14 +89,14 @@ void main() {
     float far = smoothstep(0.7 * TEXTURE_FAR, TEXTURE_FAR, distance);
     vec3 w = abs(n);
     w *= w; w *= w; w *= w;
-    w /= max(w.x + w.y + w.z, 1e-6);
+    pick axes = pick_two_of_three(w / max(w.x + w.y + w.z, 1e-6));
     float slope = (1.0 - clamp(n.y, 0.0, 1.0)) * 90.0;
     // The macro layer where textures are (beyond, the means show no repeats to break up), for
     // a fetch saved per pixel on most of the far terrain.
     vec4 macro = far < 1.0 ? macro_sample(texture_position) : vec4(0.5, 0.5, 0.0, 1.0);
     macro.rg = mix(macro.rg, vec2(0.5), far);
     float coarse = macro_coarse_share(macro);
-    vec3 albedo = rock_bands(material(0.0, u_material_tints[0], u_bedrock_mean, texture_position, w, far, coarse), v_height, slope);
+    vec3 albedo = rock_bands(material(0.0, u_material_tints[0], u_bedrock_mean, texture_position, axes, far, coarse), v_height, slope);
     // Sand: the generator lays sand_depth·(1 − tan/sand_max_slope) metres of it per column, by
     // the slope of the rough 1 m ground, so seen from afar it covers a share of the ground that
     // falls with the smooth slope drawn here. Measured on generated chunks (seed 42, defaults:
@@ -107,7 +105,7 @@ void main() {
     float tangent = sqrt(max(1.0 - n.y * n.y, 0.0)) / max(n.y, 0.05);
     float sand = u_sand_max_slope > 0.0 && u_sand_depth > 0.0
                ? 0.1 + 0.55 * (1.0 - smoothstep(0.0, 1.33 * u_sand_max_slope, tangent)) : 0.0;
-    if (sand > 0.0) albedo = mix(albedo, material(1.0, u_material_tints[1], u_sand_mean, texture_position, w, far, coarse), sand);
+    if (sand > 0.0) albedo = mix(albedo, material(1.0, u_material_tints[1], u_sand_mean, texture_position, axes, far, coarse), sand);
     // The macro variation, as on the meshes, so the near-far seam keeps matching.
     albedo *= macro_tint(macro);
     // The sea: the surface stays on the ground (the meshes' sea bed meets it at the hole), and

@@ -31,3 +31,38 @@ vec3 macro_tint(vec4 macro) {
 // The share of the 25 m sample in the base: varies over the plan so neither scale's repeats
 // line up into a grid. Zero skips the sample's fetch (llvmpipe skips what no pixel needs).
 float macro_coarse_share(vec4 macro) { return (0.2 + 0.5 * macro.b) * u_scale_blend; }
+
+// Two of three, and two of four. llvmpipe runs both sides of a branch that differs between
+// pixels, fetches included, so the projections and materials a pixel hardly uses cost as much
+// as those it uses. Each pixel reads the two largest of each, chosen per pixel (the texture
+// array's layer and the projection's axes are just values), less the largest one left out:
+// where the second and third swap, the second's weight has reached zero, so the blend stays
+// continuous. terrain.frag reads 4 base fetches in place of 12 with it, clipmap.frag 2 in
+// place of 3 per material and scale.
+struct pick {
+    ivec2 index;                              // the largest, the second
+    vec2 weight;                              // theirs less the third's, summing to 1
+};
+
+pick pick_two_of_three(vec3 w) {
+    int first = w.x >= w.y ? (w.x >= w.z ? 0 : 2) : (w.y >= w.z ? 1 : 2);
+    int last = w.x < w.y ? (w.x < w.z ? 0 : 2) : (w.y < w.z ? 1 : 2);
+    int second = 3 - first - last;
+    vec2 kept = vec2(w[first], w[second]) - w[last];
+    return pick(ivec2(first, second), kept / max(kept.x + kept.y, 1e-6));
+}
+
+pick pick_two_of_four(vec4 w) {
+    // Sorted by a network of five compare-exchanges on (weight, index) pairs, largest first.
+    vec2 a = vec2(w.x, 0.0), b = vec2(w.y, 1.0), c = vec2(w.z, 2.0), d = vec2(w.w, 3.0), t;
+    if (b.x > a.x) { t = a; a = b; b = t; }
+    if (d.x > c.x) { t = c; c = d; d = t; }
+    if (c.x > a.x) { t = a; a = c; c = t; }
+    if (d.x > b.x) { t = b; b = d; d = t; }
+    if (c.x > b.x) { t = b; b = c; c = t; }
+    vec2 kept = vec2(a.x, b.x) - c.x;
+    return pick(ivec2(a.y, b.y), kept / max(kept.x + kept.y, 1e-6));
+}
+
+// Projection `axis` of a point: x reads (z, y), y reads (x, z), z reads (x, y).
+vec2 projected(vec3 p, int axis) { return axis == 0 ? p.zy : axis == 1 ? p.xz : p.xy; }
