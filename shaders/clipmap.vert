@@ -59,8 +59,8 @@ void main() {
     int row_length = u_cells + 1;
     int row = int((float(gl_VertexID) + 0.5) / float(row_length));
     int column = gl_VertexID - row * row_length;
-    row += int(column >= row_length) - int(column < 0);
-    ivec2 grid = ivec2(gl_VertexID - row * row_length, row);
+    int off = int(column >= row_length) - int(column < 0);
+    ivec2 grid = ivec2(column - off * row_length, row + off);
     // The anchor is shared by all levels and (u_offset + grid)·u_spacing is exact, so a vertex
     // that two levels share gets the same bits in both.
     precise vec2 position = u_anchor + vec2(u_offset + grid) * u_spacing;
@@ -78,6 +78,12 @@ void main() {
     // height whatever the morph: there the clipmap meets the chunks' meshes (002 §3.5). A crack
     // this opens against a coarser level lies in the border's plane, over the pit: ground shows
     // through it, never sky (terrain_clipmap.c, "The seam").
+    // Inside a hole the surface sinks within u_hole_band of the border to u_hole_depth below
+    // the ground: a pit under the volumetric chunks, whose walls are the skirt of their open
+    // border (terrain_clipmap.c says why it is a pit rather than a cut-out). Where holes
+    // overlap the deepest pit wins, so their union is one pit (terrain__clipmap_sink mirrors it).
+    // The loop runs to the constant MAX_HOLES under a uniform test, so llvmpipe unrolls it and
+    // reads u_holes at constant indices (terrain_clipmap.c binds each block only its holes).
     bool seam = false;
     float sink = 0.0;
     for (int h = 0; h < MAX_HOLES; h++) {
@@ -111,11 +117,6 @@ void main() {
             lake = (1.0 - alpha) * lake + alpha * 0.5 * (t0.a + t1.a);
         }
     }
-    // Inside a hole the surface sinks within u_hole_band of the border to u_hole_depth below
-    // the ground: a pit under the volumetric chunks, whose walls are the skirt of their open
-    // border (terrain_clipmap.c says why it is a pit rather than a cut-out). Where holes
-    // overlap the deepest pit wins, so their union is one pit (terrain__clipmap_sink mirrors it).
-
     // Inside a hole the meshes draw the lake's bed and terrain_water its surface: the pit stays
     // the ground's.
     if (sink > 0.0) surface = height;
