@@ -87,9 +87,7 @@ void main() {
     vec3 texture_position = v_relative_position + u_texture_offset;
     float distance = length(v_relative_position);
     float far = smoothstep(0.7 * TEXTURE_FAR, TEXTURE_FAR, distance);
-    vec3 w = abs(n);
-    w *= w; w *= w; w *= w;
-    pick axes = pick_two_of_three(w / max(w.x + w.y + w.z, 1e-6));
+    pick axes = pick_two_of_three(triplanar_weights(n));
     float slope = (1.0 - clamp(n.y, 0.0, 1.0)) * 90.0;
     // The macro layer where textures are (beyond, the means show no repeats to break up), for
     // a fetch saved per pixel on most of the far terrain.

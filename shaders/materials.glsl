@@ -32,6 +32,13 @@ vec3 macro_tint(vec4 macro) {
 // line up into a grid. Zero skips the sample's fetch (llvmpipe skips what no pixel needs).
 float macro_coarse_share(vec4 macro) { return (0.2 + 0.5 * macro.b) * u_scale_blend; }
 
+// 000 §6: weights |n_i|^p / Σ|n_j|^p, i.e. each axis' share of ‖n‖_p^p, with p = 8.
+vec3 triplanar_weights(vec3 n) {
+    vec3 a = abs(n);
+    vec3 w = a * a; w *= w; w *= w;           // |n|^8
+    return w / max(w.x + w.y + w.z, 1e-6);
+}
+
 // Two of three, and two of four. llvmpipe runs both sides of a branch that differs between
 // pixels, fetches included, so the projections and materials a pixel hardly uses cost as much
 // as those it uses. Each pixel reads the two largest of each, chosen per pixel (the texture

@@ -34,13 +34,6 @@ uniform float u_detail_distance;             // metres; 0 = no detail layer
 
 out vec4 frag_color;
 
-// 000 §6: weights |n_i|^p / Σ|n_j|^p, i.e. each axis' share of ‖n‖_p^p, with p = 8.
-vec3 triplanar_weights(vec3 n) {
-    vec3 a = abs(n);
-    vec3 w = a * a; w *= w; w *= w;           // |n|^8
-    return w / max(w.x + w.y + w.z, 1e-6);
-}
-
 // A projection's tangent slopes added to the geometric normal's components in its texture axes
 // (whiteout); the axis' own component is the normal's, sign included, so faces looking down an
 // axis are lit as those looking up. The coordinates are world positions, never mirrored, so a
