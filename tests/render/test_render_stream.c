@@ -361,6 +361,38 @@ Test(render_stream, a_single_thread_streams_too) {
     streamed_close(&s);
 }
 
+/* Frames of `sleep_ms` each (a slow renderer: llvmpipe draws a 640×360 frame in about 100 ms
+ * on two cores) until the rings are ready; returns the frames. */
+static int frames_to_load_at(int max_jobs, long sleep_ms) {
+    terrain_stream_desc desc = small_rings;   /* 4² · 4 + (4² − 2²) · 2 = 88 chunks */
+    desc.max_jobs = max_jobs;
+    streamed s = streamed_open(2, &desc);
+    const double eye[1][3] = { { 10, 5, 10 } };
+    int frames = -1;
+    for (int frame = 0; frame < 200 && frames < 0; frame++) {
+        terrain_ecs_set_viewers(s.te, eye, 1);
+        ecs_progress(s.ecs, DT);
+        terrain_world_trim(s.world);
+        terrain_ecs_stream_stats_info st = terrain_ecs_stream_stats(s.te);
+        if (st.mesh_chunks_wanted > 0 && st.mesh_chunks_ready == st.mesh_chunks_wanted) frames = frame + 1;
+        nanosleep(&(struct timespec){ 0, sleep_ms * 1000000L }, NULL);
+    }
+    streamed_close(&s);
+    return frames;
+}
+
+/* The default keeps the worker busy from one frame to the next. 8 jobs a frame (the old fixed
+ * limit, still there when asked for) need at least 88 / 8 = 11 frames. A 150 ms frame holds
+ * many more of these meshes than 8 on one worker, in the release build and under the
+ * sanitizers, so the default needs at most three quarters of the frames (measured: 4 of 13 in
+ * release, 7 of 14 under the sanitizers; the bound is the claim, not those counts). */
+Test(render_stream, slow_frames_do_not_slow_the_loading) {
+    int fixed = frames_to_load_at(8, 150), adaptive = frames_to_load_at(0, 150);
+    cr_expect_geq(fixed, 11, "%d frames with 8 jobs in flight", fixed);
+    cr_expect(adaptive > 0 && 4 * adaptive <= 3 * fixed, "%d frames by default, %d with 8 jobs in flight", adaptive,
+              fixed);
+}
+
 /* ---- editing a streamed world (terrain.h, "editing in the ECS") ---- */
 
 /* The level-0 mesh chunk (x, y, z), or NULL. */

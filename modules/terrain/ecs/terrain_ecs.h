@@ -134,7 +134,8 @@ typedef struct terrain_stream_desc {
     int collision_radius;             /* column chunks each way kept generated; 0 = 2 */
     float upload_budget_ms;           /* main-thread GPU uploads and frees a frame; 0 = 2 ms */
     size_t memory_budget;             /* bytes of stacks and meshes kept (CPU + GPU); 0 = 384 MB */
-    int max_jobs;                     /* background jobs in flight; 0 = 2 per worker, at least 2 */
+    int max_jobs;                     /* background jobs in flight; 0 = what keeps the workers
+                                         busy from one frame to the next (8 to 64 a worker) */
 } terrain_stream_desc;
 
 #define TERRAIN_MAX_VIEWERS 8

@@ -63,6 +63,7 @@ struct stream_task {
     terrain_mesh mesh;
     WaterPlane *water;                     /* its water surfaces, or NULL (terrain_water_planes.c) */
     job_handle job;
+    uint64_t work_ns;                      /* the job's wall time, 0 when cancelled */
     stream_record *record;                 /* main thread only; NULL when orphaned */
 };
 
@@ -96,6 +97,9 @@ struct terrain__streamer {
     terrain_clipmap *clipmap;              /* far terrain around viewer 0, or NULL */
     int hole_count;                        /* the rings' squares of the last layout that was ready, */
     double hole_min[TERRAIN_MAX_VIEWERS][2], hole_max[TERRAIN_MAX_VIEWERS][2];   /* one per place */
+    double job_ms;                         /* a task's wall time, a running mean */
+    double frame_ms;                       /* time between two submits (frames) */
+    uint64_t last_submit_ns;
     terrain_ecs_stream_stats_info stats;
 };
 
@@ -190,7 +194,7 @@ static void stream_task_run(void *user) {
         trace_zone_arg_str("cancelled", "yes");
         return;
     }
-    uint64_t token = terrain_world_read_begin(t->world);
+    uint64_t start = core_time_ns(), token = terrain_world_read_begin(t->world);
     if (t->key.level == STREAM_COLUMN_LEVEL) {
         terrain_world_stacks(t->world, (terrain_chunk_coord){ t->key.x, t->key.z });
     } else {
@@ -201,6 +205,7 @@ static void stream_task_run(void *user) {
         t->water = terrain__water_find(t->world, t->key.x, t->key.y, t->key.z, t->lod.level);
     }
     terrain_world_read_end(t->world, token);
+    t->work_ns = core_time_ns() - start;
 }
 
 static job_handle stream_task_start(terrain_ecs *te, stream_record *record, bool background) {
@@ -563,6 +568,10 @@ static void stream_collect(terrain_ecs *te, ecs_commands *commands) {
             continue;
         }
         if (t->record) stream_deliver(te, commands, t);
+        if (t->work_ns) {
+            double ms = (double)t->work_ns * 1e-6;
+            s->job_ms = s->job_ms > 0 ? 0.9 * s->job_ms + 0.1 * ms : ms;
+        }
         stream_task_free(t);
     }
     s->task_count = kept;
@@ -599,9 +608,28 @@ static int stream_jobs_in_flight(const terrain__streamer *s) {
     return count;
 }
 
+/* Jobs kept in flight. Given in the desc: that many. By default: enough to keep every worker
+ * busy until the next frame submits more (the frame's interval times the workers, over a
+ * task's mean time, and a half more), between 8 and 64 a worker. A fixed 8 left the worker of a
+ * 2-core machine idle for half of each 100 ms frame that llvmpipe spent drawing while the world
+ * loaded; only as many as a frame needs, so that priorities stay those of the last frame. */
+static int stream_jobs_limit(const terrain_ecs *te) {
+    const terrain__streamer *s = te->stream;
+    if (s->asked.max_jobs > 0 || !(s->job_ms > 0)) return s->desc.max_jobs;
+    int workers = job_thread_count(ecs_world_jobs(te->ecs)) - 1;
+    if (workers < 1) workers = 1;
+    double frame_ms = s->frame_ms < 250.0 ? s->frame_ms : 250.0;
+    double wanted = ceil(1.5 * workers * frame_ms / s->job_ms);
+    double lo = s->desc.max_jobs, hi = 64.0 * workers;
+    return (int)(wanted < lo ? lo : wanted > hi ? hi : wanted);
+}
+
 static void stream_submit(terrain_ecs *te) {
     terrain__streamer *s = te->stream;
-    int free_slots = s->desc.max_jobs - stream_jobs_in_flight(s);
+    uint64_t now = core_time_ns();
+    if (s->last_submit_ns) s->frame_ms = (double)(now - s->last_submit_ns) * 1e-6;
+    s->last_submit_ns = now;
+    int free_slots = stream_jobs_limit(te) - stream_jobs_in_flight(s);
     size_t waiting = 0;
     int wanted = 0, ready = 0;
     for (size_t i = 0; i < s->meshes.capacity; i++) {
