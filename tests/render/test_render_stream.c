@@ -363,18 +363,20 @@ Test(render_stream, a_single_thread_streams_too) {
 
 /* Frames of `sleep_ms` each (a slow renderer: llvmpipe draws a 640×360 frame in about 100 ms
  * on two cores) until the rings are ready; returns the frames. */
-static int frames_to_load_at(int max_jobs, long sleep_ms) {
+static int frames_to_load_at(int max_jobs, long sleep_ms, int *highest_limit) {
     terrain_stream_desc desc = small_rings;   /* 4² · 4 + (4² − 2²) · 2 = 88 chunks */
     desc.max_jobs = max_jobs;
     streamed s = streamed_open(2, &desc);
     const double eye[1][3] = { { 10, 5, 10 } };
     int frames = -1;
+    *highest_limit = 0;
     for (int frame = 0; frame < 200 && frames < 0; frame++) {
         terrain_ecs_set_viewers(s.te, eye, 1);
         ecs_progress(s.ecs, DT);
         terrain_world_trim(s.world);
         terrain_ecs_stream_stats_info st = terrain_ecs_stream_stats(s.te);
         if (st.mesh_chunks_wanted > 0 && st.mesh_chunks_ready == st.mesh_chunks_wanted) frames = frame + 1;
+        if (st.jobs_limit > *highest_limit) *highest_limit = st.jobs_limit;
         nanosleep(&(struct timespec){ 0, sleep_ms * 1000000L }, NULL);
     }
     streamed_close(&s);
@@ -387,10 +389,73 @@ static int frames_to_load_at(int max_jobs, long sleep_ms) {
  * sanitizers, so the default needs at most three quarters of the frames (measured: 4 of 13 in
  * release, 7 of 14 under the sanitizers; the bound is the claim, not those counts). */
 Test(render_stream, slow_frames_do_not_slow_the_loading) {
-    int fixed = frames_to_load_at(8, 150), adaptive = frames_to_load_at(0, 150);
+    int fixed_limit, adaptive_limit;
+    int fixed = frames_to_load_at(8, 150, &fixed_limit), adaptive = frames_to_load_at(0, 150, &adaptive_limit);
+    cr_expect_eq(fixed_limit, 8, "a max_jobs asked for is kept");
+    cr_expect(adaptive_limit > 8 && adaptive_limit <= 64, "the default rose to %d (8 … 64 for one worker)", adaptive_limit);
     cr_expect_geq(fixed, 11, "%d frames with 8 jobs in flight", fixed);
     cr_expect(adaptive > 0 && 4 * adaptive <= 3 * fixed, "%d frames by default, %d with 8 jobs in flight", adaptive,
               fixed);
+}
+
+/* One slow frame (150 ms, as llvmpipe's) with the viewer at eye; returns the stats after it and
+ * the time since the previous call, which the streamer also measures (between its submits). */
+static terrain_ecs_stream_stats_info slow_frame(streamed *s, const double eye[3], double *interval_ms) {
+    static uint64_t last;
+    terrain_ecs_set_viewers(s->te, (const double (*)[3])eye, 1);
+    ecs_progress(s->ecs, DT);
+    uint64_t now = core_time_ns();
+    *interval_ms = last ? (double)(now - last) * 1e-6 : 0.0;
+    last = now;
+    terrain_world_trim(s->world);
+    nanosleep(&(struct timespec){ 0, 150 * 1000000L }, NULL);
+    return terrain_ecs_stream_stats(s->te);
+}
+
+/* Once loaded, the jobs follow the backlog (terrain.h: max_jobs): the chunks wanted and not
+ * ready, finished by the time the viewer at its speed crosses a coarsest chunk (64 m here),
+ * within 1 … 8 s; at least 8, and no more than keep the worker busy.
+ *   - A walk at 4 m/s across a ring boundary (the rings move at x = 32) wants over a hundred
+ *     chunks (128 when written): 8 at a time finish them within 8 s of 150 ms frames, so the
+ *     limit stays 8 and the work is spread (to finish within a second it would be about 20).
+ *   - A jump 10 km away reads as very fast and wants all 352: within a second, about
+ *     352 × 0.15, 53, at a time; fewer if the worker cannot take that many (under the
+ *     sanitizers, 1.5 × 150 ms over a job's time).
+ * The bounds are worked from the frame interval measured here (a loaded machine's frames are
+ * longer), with a job and a tenth to spare. */
+static void expect_limit_at_most(const terrain_ecs_stream_stats_info *st, double interval_ms, double catch_up_ms,
+                                 const char *what) {
+    int backlog = st->mesh_chunks_wanted - st->mesh_chunks_ready;
+    double bound = fmax(8.0, ceil(backlog * interval_ms / catch_up_ms));
+    cr_expect(st->jobs_limit <= bound + 1.0 + 0.1 * bound, "%s: %d jobs for %d chunks at %.0f ms frames, at most %g",
+              what, st->jobs_limit, backlog, interval_ms, bound);
+}
+
+Test(render_stream, after_loading_the_jobs_follow_the_backlog) {
+    terrain_stream_desc desc = small_rings;
+    desc.half_width = 4;   /* 8² · 4 + (8² − 4²) · 2 = 352 chunks */
+    streamed s = streamed_open(2, &desc);
+    double eye[3] = { 28, 5, 10 }, interval = 0.0;
+    terrain_ecs_stream_stats_info st = { 0 };
+    for (int frame = 0; frame < 100 && !(st.mesh_chunks_wanted > 0 && st.mesh_chunks_ready == st.mesh_chunks_wanted);
+         frame++)
+        st = slow_frame(&s, eye, &interval);
+    cr_assert_eq(st.mesh_chunks_ready, st.mesh_chunks_wanted, "loaded");
+    for (int frame = 0; frame < 20 && st.mesh_chunks_wanted - st.mesh_chunks_ready <= 8; frame++) {
+        eye[0] += 0.6;   /* 4 m/s at 150 ms a frame */
+        st = slow_frame(&s, eye, &interval);
+    }
+    cr_assert_gt(st.mesh_chunks_wanted - st.mesh_chunks_ready, 8, "the walk crossed the boundary");
+    expect_limit_at_most(&st, interval, 8000.0, "a walk");
+    cr_expect_eq(st.jobs_limit, 8, "a walk's %d chunks are spread", st.mesh_chunks_wanted - st.mesh_chunks_ready);
+    for (int frame = 0; frame < 100 && st.mesh_chunks_ready < st.mesh_chunks_wanted; frame++)
+        st = slow_frame(&s, eye, &interval);
+    eye[0] += 10000.0;
+    st = slow_frame(&s, eye, &interval);
+    cr_expect_eq(st.mesh_chunks_wanted - st.mesh_chunks_ready, 352);
+    cr_expect_gt(st.jobs_limit, 8, "a jump raises the jobs");
+    expect_limit_at_most(&st, interval, 1000.0, "a jump");
+    streamed_close(&s);
 }
 
 /* ---- editing a streamed world (terrain.h, "editing in the ECS") ---- */
@@ -412,8 +477,15 @@ static TerrainMeshChunk *mesh_at(streamed *s, int64_t x, int64_t y, int64_t z) {
 /* 000's tools are interactive: the frame that applies a stroke meshes and uploads what it
  * changed (the issue asks for "within two frames"). The ground under (16, 16) lies between −6 and
  * 6 m, in mesh layer y = 0 (0 … 32 m) and y = −1. */
+/* One stabilization pass a frame, not the default 2 ms of them: a faster build slides a fresh
+ * pile further within the frame, and what these tests look for is the pile itself. */
+static void one_stabilize_pass_a_frame(streamed *s) {
+    terrain_ecs_set_editing(s->te, &(terrain_editing_desc){ .stabilize = { .max_iterations = 1 } });
+}
+
 Test(render_stream, an_edit_is_drawn_the_frame_it_is_applied) {
     streamed s = streamed_open(2, &small_rings);
+    one_stabilize_pass_a_frame(&s);
     const double eye[1][3] = { { 16, 8, 16 } };
     cr_assert(streamed_settle(&s, eye, 1, 2000) > 0);
     TerrainMeshChunk *before = mesh_at(&s, 0, 0, 0);
@@ -474,6 +546,7 @@ Test(render_stream, stabilization_spreads_a_pile_across_chunks_and_keeps_its_mas
  * stacks. */
 Test(render_stream, spawned_chunks_follow_edits_too) {
     streamed s = streamed_open(2, NULL);
+    one_stabilize_pass_a_frame(&s);
     terrain_ecs_spawn_area(s.te, 0, 0, 1, -1, 0);
     for (int frame = 0; frame < 3; frame++) ecs_progress(s.ecs, DT);
     TerrainMeshChunk *before = mesh_at(&s, 0, 0, 0);

@@ -134,8 +134,10 @@ typedef struct terrain_stream_desc {
     int collision_radius;             /* column chunks each way kept generated; 0 = 2 */
     float upload_budget_ms;           /* main-thread GPU uploads and frees a frame; 0 = 2 ms */
     size_t memory_budget;             /* bytes of stacks and meshes kept (CPU + GPU); 0 = 384 MB */
-    int max_jobs;                     /* background jobs in flight; 0 = what keeps the workers
-                                         busy from one frame to the next (8 to 64 a worker) */
+    int max_jobs;                     /* background jobs in flight; 0 = as the work left needs:
+                                         every worker busy while the world loads, then what
+                                         finishes the backlog before the rings move again at
+                                         the viewer's speed, at least 8 (README) */
 } terrain_stream_desc;
 
 #define TERRAIN_MAX_VIEWERS 8
@@ -164,6 +166,7 @@ typedef struct terrain_ecs_stream_stats_info {
     int mesh_chunks_ready;            /* of those, drawn or empty */
     int mesh_chunks_kept;             /* out of range, kept while memory allows */
     int jobs_in_flight;
+    int jobs_limit;                   /* how many may be in flight now (terrain_stream_desc.max_jobs) */
     uint64_t chunks_meshed, chunks_skipped_empty, chunks_cancelled, chunks_evicted;
     size_t resident_bytes, peak_resident_bytes;   /* stacks cached + CPU and GPU meshes */
     size_t stacks_bytes;              /* of resident_bytes: the column chunks' stacks cached */

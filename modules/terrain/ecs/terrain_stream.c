@@ -94,11 +94,15 @@ struct terrain__streamer {
     int64_t y_first[16], y_last[16];       /* mesh layers per level */
     bool grow_layers;                      /* no range was asked for: fit the ground found */
     bool layout_ready;                     /* every wanted chunk of the current layout is ready */
+    bool loaded;                           /* some layout has been ready: the world has loaded */
     terrain_clipmap *clipmap;              /* far terrain around viewer 0, or NULL */
     int hole_count;                        /* the rings' squares of the last layout that was ready, */
     double hole_min[TERRAIN_MAX_VIEWERS][2], hole_max[TERRAIN_MAX_VIEWERS][2];   /* one per place */
     double job_ms;                         /* a task's wall time, a running mean */
     double frame_ms;                       /* time between two submits (frames) */
+    double speed;                          /* viewer 0's, m/s, a running mean */
+    double last_viewer[3];
+    bool speed_known;
     uint64_t last_submit_ns;
     terrain_ecs_stream_stats_info stats;
 };
@@ -608,20 +612,50 @@ static int stream_jobs_in_flight(const terrain__streamer *s) {
     return count;
 }
 
-/* Jobs kept in flight. Given in the desc: that many. By default: enough to keep every worker
- * busy until the next frame submits more (the frame's interval times the workers, over a
- * task's mean time, and a half more), between 8 and 64 a worker. A fixed 8 left the worker of a
- * 2-core machine idle for half of each 100 ms frame that llvmpipe spent drawing while the world
- * loaded; only as many as a frame needs, so that priorities stay those of the last frame. */
-static int stream_jobs_limit(const terrain_ecs *te) {
+/* Jobs kept in flight. Given in the desc: that many. By default it follows the work left:
+ *   - the most that is useful: enough to keep every worker busy until the next frame submits
+ *     more (the frame's interval times the workers over a task's mean time, and half again),
+ *     at most 64 a worker. Never more, so that priorities stay those of the last frame;
+ *   - while the world first loads (no layout has been ready yet: the player waits), that;
+ *   - afterwards, what finishes the chunks wanted and not ready before the rings move again:
+ *     by the time the viewer, at its speed, crosses a coarsest chunk (they move a coarsest
+ *     chunk at a time), within 1 … 8 s; at least 8 (8 a worker beyond one).
+ * A fixed 8 left the worker of a 2-core machine idle for half of each 100 ms frame that llvmpipe
+ * spent drawing while the world loaded (world.stream.chunks_per_s 51; 90 this way). But there a
+ * busy worker also takes the CPU that llvmpipe draws with: a walk's ring shift (400 chunks every
+ * 128 m) done at once slows the frames of the seconds it takes. So a walk spreads it over the
+ * time until the next (at 12 m/s, 8 jobs a frame, as the fixed 8 did), and a fast flight, which
+ * would outrun a spread one, gets it sooner. */
+#define STREAM_CATCH_UP_MIN_MS 1000.0
+#define STREAM_CATCH_UP_MAX_MS 8000.0
+
+static int stream_jobs_limit(const terrain_ecs *te, int backlog) {
     const terrain__streamer *s = te->stream;
-    if (s->asked.max_jobs > 0 || !(s->job_ms > 0)) return s->desc.max_jobs;
+    const int least = s->desc.max_jobs;
+    if (s->asked.max_jobs > 0 || !(s->job_ms > 0)) return least;
     int workers = job_thread_count(ecs_world_jobs(te->ecs)) - 1;
     if (workers < 1) workers = 1;
     double frame_ms = s->frame_ms < 250.0 ? s->frame_ms : 250.0;
-    double wanted = ceil(1.5 * workers * frame_ms / s->job_ms);
-    double lo = s->desc.max_jobs, hi = 64.0 * workers;
-    return (int)(wanted < lo ? lo : wanted > hi ? hi : wanted);
+    double most = fmin(ceil(1.5 * workers * frame_ms / s->job_ms), 64.0 * workers);
+    double coarsest = (double)TERRAIN_MESH_CELLS * (double)(1 << (s->desc.levels - 1));
+    double catch_up_ms = s->speed > 0 ? 1000.0 * coarsest / s->speed : INFINITY;
+    catch_up_ms = fmin(fmax(catch_up_ms, STREAM_CATCH_UP_MIN_MS), STREAM_CATCH_UP_MAX_MS);
+    double wanted = s->loaded ? fmin(ceil(backlog * frame_ms / catch_up_ms), most) : most;
+    return wanted > least ? (int)wanted : least;
+}
+
+/* Viewer 0's speed, metres a second, a running mean over about a second of frames: a jump (a
+ * teleport) reads as very fast for a while, which is what it needs. */
+static void stream_track_speed(terrain__streamer *s) {
+    if (s->viewer_count == 0) return;
+    if (s->speed_known && s->frame_ms > 0) {
+        double d2 = 0;
+        for (int a = 0; a < 3; a++) d2 += (s->viewers[0][a] - s->last_viewer[a]) * (s->viewers[0][a] - s->last_viewer[a]);
+        double now = sqrt(d2) / (s->frame_ms * 1e-3), k = fmin(s->frame_ms / 1000.0, 1.0);
+        s->speed += k * (now - s->speed);
+    }
+    memcpy(s->last_viewer, s->viewers[0], sizeof s->last_viewer);
+    s->speed_known = true;
 }
 
 static void stream_submit(terrain_ecs *te) {
@@ -629,7 +663,7 @@ static void stream_submit(terrain_ecs *te) {
     uint64_t now = core_time_ns();
     if (s->last_submit_ns) s->frame_ms = (double)(now - s->last_submit_ns) * 1e-6;
     s->last_submit_ns = now;
-    int free_slots = stream_jobs_limit(te) - stream_jobs_in_flight(s);
+    stream_track_speed(s);
     size_t waiting = 0;
     int wanted = 0, ready = 0;
     for (size_t i = 0; i < s->meshes.capacity; i++) {
@@ -645,6 +679,9 @@ static void stream_submit(terrain_ecs *te) {
     s->stats.mesh_chunks_wanted = wanted;
     s->stats.mesh_chunks_ready = ready;
     s->layout_ready = wanted > 0 && ready == wanted;
+    s->loaded |= s->layout_ready;
+    s->stats.jobs_limit = stream_jobs_limit(te, wanted - ready);
+    int free_slots = s->stats.jobs_limit - stream_jobs_in_flight(s);
     if (free_slots <= 0 || waiting == 0) return;
     qsort(s->scratch, waiting, sizeof *s->scratch, compare_priority);
     for (size_t i = 0; i < waiting && (int)i < free_slots; i++) stream_task_submit(te, s->scratch[i]);
@@ -716,6 +753,7 @@ static void terrain_stream_mesh_system(ecs_iter *it) {
     trace_counter("terrain.stream.chunks_wanted", s->stats.mesh_chunks_wanted);
     trace_counter("terrain.stream.chunks_pending", s->stats.mesh_chunks_wanted - s->stats.mesh_chunks_ready);
     trace_counter("terrain.stream.jobs_in_flight", s->stats.jobs_in_flight);
+    trace_counter("terrain.stream.jobs_limit", s->stats.jobs_limit);
     trace_counter("terrain.stream.resident_mb", (double)resident / (1024.0 * 1024.0));
 }
 
