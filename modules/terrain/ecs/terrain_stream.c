@@ -561,6 +561,15 @@ static void stream_deliver(terrain_ecs *te, ecs_commands *commands, stream_task 
     else s->stats.chunks_meshed++;
 }
 
+/* mean moved a share k of the way to sample: a running mean over about 1/k samples */
+static double running_mean(double mean, double sample, double k) { return mean + k * (sample - mean); }
+
+/* Threads that run background jobs: all but the main thread (which runs them only when alone). */
+static int stream_workers(const terrain_ecs *te) {
+    int workers = job_thread_count(ecs_world_jobs(te->ecs)) - 1;
+    return workers > 1 ? workers : 1;
+}
+
 static void stream_collect(terrain_ecs *te, ecs_commands *commands) {
     terrain__streamer *s = te->stream;
     job_system *jobs = ecs_world_jobs(te->ecs);
@@ -574,7 +583,7 @@ static void stream_collect(terrain_ecs *te, ecs_commands *commands) {
         if (t->record) stream_deliver(te, commands, t);
         if (t->work_ns) {
             double ms = (double)t->work_ns * 1e-6;
-            s->job_ms = s->job_ms > 0 ? 0.9 * s->job_ms + 0.1 * ms : ms;
+            s->job_ms = s->job_ms > 0 ? running_mean(s->job_ms, ms, 0.1) : ms;
         }
         stream_task_free(t);
     }
@@ -629,13 +638,13 @@ static int stream_jobs_in_flight(const terrain__streamer *s) {
 #define STREAM_CATCH_UP_MIN_MS 1000.0
 #define STREAM_CATCH_UP_MAX_MS 8000.0
 
+#define STREAM_FRAME_MAX_MS 250.0   /* a frame held up (a tile set built) counts as this long */
+
 static int stream_jobs_limit(const terrain_ecs *te, int backlog) {
     const terrain__streamer *s = te->stream;
-    const int least = s->desc.max_jobs;
+    const int least = s->desc.max_jobs, workers = stream_workers(te);
     if (s->asked.max_jobs > 0 || !(s->job_ms > 0)) return least;
-    int workers = job_thread_count(ecs_world_jobs(te->ecs)) - 1;
-    if (workers < 1) workers = 1;
-    double frame_ms = s->frame_ms < 250.0 ? s->frame_ms : 250.0;
+    double frame_ms = fmin(s->frame_ms, STREAM_FRAME_MAX_MS);
     double most = fmin(ceil(1.5 * workers * frame_ms / s->job_ms), 64.0 * workers);
     double coarsest = (double)TERRAIN_MESH_CELLS * (double)(1 << (s->desc.levels - 1));
     double catch_up_ms = s->speed > 0 ? 1000.0 * coarsest / s->speed : INFINITY;
@@ -651,8 +660,7 @@ static void stream_track_speed(terrain__streamer *s) {
     if (s->speed_known && s->frame_ms > 0) {
         double d2 = 0;
         for (int a = 0; a < 3; a++) d2 += (s->viewers[0][a] - s->last_viewer[a]) * (s->viewers[0][a] - s->last_viewer[a]);
-        double now = sqrt(d2) / (s->frame_ms * 1e-3), k = fmin(s->frame_ms / 1000.0, 1.0);
-        s->speed += k * (now - s->speed);
+        s->speed = running_mean(s->speed, sqrt(d2) / (s->frame_ms * 1e-3), fmin(s->frame_ms / 1000.0, 1.0));
     }
     memcpy(s->last_viewer, s->viewers[0], sizeof s->last_viewer);
     s->speed_known = true;
@@ -823,10 +831,7 @@ static terrain_stream_desc stream_defaults(const terrain_ecs *te, const terrain_
     if (d.collision_radius <= 0) d.collision_radius = 2;
     if (d.upload_budget_ms <= 0) d.upload_budget_ms = 2.0f;
     if (d.memory_budget == 0) d.memory_budget = (size_t)384 << 20;
-    if (d.max_jobs <= 0) {
-        int workers = job_thread_count(ecs_world_jobs(te->ecs)) - 1;
-        d.max_jobs = workers > 1 ? 8 * workers : 8;
-    }
+    if (d.max_jobs <= 0) d.max_jobs = 8 * stream_workers(te);
     return d;
 }
 
