@@ -21,12 +21,14 @@
 
 #define ROCKS__MAX_SEEDS_PER_CELL 8
 #define ROCKS__REGION_COUNT (2 + 12 + 48 + 256)   /* 318 region instances (001 §3) */
-#define ROCKS__LOD0_ERROR 0.6f                    /* voxels LOD 0 may stray from the marching cubes */
+#define ROCKS__LOD0_ERROR 0.6f                    /* voxels LOD 0 may stray from the marching cubes
+                                                     (0.5 from the dual surface: rocks_mesh.c) */
 #define ROCKS__ANCHORS 16                         /* the seed and up to 15 voxel centres */
 /* Bump it with ANY change to what a build makes (seeds, ownership, contacts, erosion, meshes,
  * anchors): a cache holds a build's output under its desc, so an old one would read as valid. */
-#define ROCKS__CACHE_VERSION 3u   /* 2: LOD 0 at 0.6 voxel; contacts across the nearest face;
-                                     3: LODs by rocks_simplify.c, closed without falling back */
+#define ROCKS__CACHE_VERSION 4u   /* 2: LOD 0 at 0.6 voxel; contacts across the nearest face;
+                                     3: LODs by rocks_simplify.c, closed without falling back;
+                                     4: LODs from the dual surface at two voxels (rocks_surface.c) */
 
 enum { ROCKS__VERTEX = 0, ROCKS__EDGE = 1, ROCKS__FACE = 2, ROCKS__CENTRE = 3 };
 
@@ -222,6 +224,23 @@ bool rocks__cliffs_present(rocks_cliffs *cliffs, terrain_world *world, rocks_blo
  * from any surface or from rock of the type, and nothing cached: what they must not change. */
 bool rocks__cliffs_present_unfiltered(rocks_cliffs *cliffs, terrain_world *world, rocks_block_type type,
                                       const int64_t cell[3], uint64_t *bits);
+
+/* A closed surface for a rock's levels of detail (rocks_surface.c, rocks_mesh.c): positions in
+ * voxels, sample (x, y, z) of ρ's box at (x, y, z); unit normals out of the rock; triangles
+ * counter-clockwise seen from outside. */
+typedef struct rocks__surface {
+    float *positions, *normals;       /* 3 a vertex (room for vertex_count + 1) */
+    uint32_t *indices;
+    uint32_t vertex_count, index_count;
+    size_t index_cap;
+} rocks__surface;
+
+/* Dual contouring of r = 2ρ − 1 at two voxels (ρ over a box of `size` whose border voxels are
+ * empty), with a vertex per surface piece of a coarse cell fitted to the voxel grid's crossings.
+ * False, with *out empty, where the coarse grid misses detail the voxels have (a thin slab, a
+ * fin): the caller then meshes the voxels themselves. */
+bool rocks__dual_surface(const float *rho, const int size[3], rocks__surface *out);
+void rocks__surface_free(rocks__surface *surface);
 
 /* Levels of detail of a closed mesh by quadric edge collapse onto existing vertices
  * (rocks_simplify.c): begin with the mesh (positions in voxels), then run once a level, finest

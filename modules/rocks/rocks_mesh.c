@@ -1,8 +1,11 @@
 /* rocks_mesh.c — an eroded rock's meshes, levels of detail, anchors and hull (001 §5–§6).
  *
  * The field r = 2ρ − 1 at voxel centres (001 §5), −1 outside the rock; the box carries a border
- * of empty voxels, so marching cubes (terrain_mesh_build, f > 0 solid) closes every mesh. LOD 0
- * is simplified (rocks_simplify.c, error ≤ 0.6 voxel: a voxel-grid surface has far more
+ * of empty voxels, so every surface closes. The surface is the dual contouring of r at two voxels
+ * (rocks_surface.c: about a quarter of marching cubes' triangles, its vertices fitted to marching
+ * cubes' points), or, where that cannot follow the rock, marching cubes of r itself
+ * (terrain_mesh_build, f > 0 solid). LOD 0 is simplified from it (rocks_simplify.c, error ≤ 0.5
+ * voxel from the dual surface, 0.6 from marching cubes: a voxel-grid surface has far more
  * triangles than its shape needs, and the set must stay small), LOD 1 and 2 aim at 1/4 and 1/12
  * of LOD 0's triangles, all in one run of the simplifier, which keeps closed meshes closed (each
  * edge in exactly two triangles). A level that still comes out not closed falls back to the
@@ -56,6 +59,9 @@ bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t v
  * meshoptimizer kept 294, and the default set held 89 MB): a rock's facets stay under 4 cm at
  * the game's 3 m tiles. LOD 2 is what most rocks in view draw (past 35 m), so it goes as far as
  * 8 voxels. */
+#define DUAL_LOD0_ERROR 0.5f    /* from the dual surface, which already strays a little from the
+                                   voxels' crossings: at 0.5 LOD 0 keeps as many triangles as from
+                                   marching cubes at 0.6, and lies nearer to them (rocks_surface.c) */
 #define LOD1_ERROR 2.0f
 #define LOD1_SHARE 4
 #define LOD2_ERROR 8.0f
@@ -126,8 +132,8 @@ static uint32_t spread_anchors(const float *rho, const int box_lo[3], const int 
  * simplifier keeps closed meshes closed, so only a marching-cubes mesh that is not would) is the
  * level above it, or the input for LOD 0. */
 static void make_lods(const uint32_t *indices, size_t index_count, const float *positions, size_t vertex_count,
-                      uint32_t *lod[ROCKS_LODS], size_t lod_count[ROCKS_LODS]) {
-    static const float error[ROCKS_LODS] = { ROCKS__LOD0_ERROR, LOD1_ERROR, LOD2_ERROR };
+                      float lod0_error, uint32_t *lod[ROCKS_LODS], size_t lod_count[ROCKS_LODS]) {
+    const float error[ROCKS_LODS] = { lod0_error, LOD1_ERROR, LOD2_ERROR };
     static const size_t share[ROCKS_LODS] = { 0, LOD1_SHARE, LOD2_SHARE };
     rocks__simplifier *simplifier = rocks__simplify_begin(indices, index_count, positions, vertex_count);
     for (int l = 0; l < ROCKS_LODS; l++) {
@@ -142,6 +148,42 @@ static void make_lods(const uint32_t *indices, size_t index_count, const float *
     rocks__simplify_end(simplifier);
 }
 
+/* The rock's surface in voxels: the dual contouring at two voxels (rocks_surface.c) where it
+ * follows the voxels, else marching cubes of r on the voxel grid (001 §5). False when nothing
+ * of the rock is left. */
+static bool rock_surface(const float *rho, const int size[3], rocks__surface *out, bool *dual) {
+    *dual = rocks__dual_surface(rho, size, out);
+    if (*dual) return true;
+    const size_t total = (size_t)size[0] * size[1] * size[2];
+    terrain_field field = { .nx = size[0], .ny = size[1], .nz = size[2], .spacing = 1.0f };
+    field.values = core_alloc(total * sizeof *field.values);
+    for (size_t i = 0; i < total; i++) {
+        float r = 2.0f * rho[i] - 1.0f;
+        field.values[i] = r == 0.0f ? 1e-6f : r;   /* ρ = ½ counts as solid, like the anchors */
+    }
+    terrain_mesh mesh;
+    bool built = terrain_mesh_build(&field, &(terrain_mesh_desc){ .no_occlusion = true, .no_optimize = true }, &mesh);
+    core_free(field.values, total * sizeof *field.values);
+    if (!built) return false;
+    if (mesh.index_count == 0) {
+        terrain_mesh_free(&mesh);
+        return false;
+    }
+    memset(out, 0, sizeof *out);
+    out->vertex_count = mesh.vertex_count, out->index_count = mesh.index_count, out->index_cap = mesh.index_count;
+    out->positions = core_alloc(3 * ((size_t)mesh.vertex_count + 1) * sizeof *out->positions);
+    out->normals = core_alloc(3 * ((size_t)mesh.vertex_count + 1) * sizeof *out->normals);
+    for (uint32_t v = 0; v < mesh.vertex_count; v++)
+        for (int a = 0; a < 3; a++) {
+            out->positions[3 * v + a] = mesh.vertices[v].position[a];
+            out->normals[3 * v + a] = mesh.vertices[v].normal[a];
+        }
+    out->indices = core_alloc(mesh.index_count * sizeof *out->indices);
+    memcpy(out->indices, mesh.indices, mesh.index_count * sizeof *out->indices);
+    terrain_mesh_free(&mesh);
+    return true;
+}
+
 #define GROW(res, field, cap, needed) ((res)->field = core_grow((res)->field, &(res)->cap, (needed), sizeof *(res)->field))
 
 bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int box_lo[3], const int size[3],
@@ -154,29 +196,14 @@ bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int b
     for (size_t i = 0; i < total && !any; i++) any = rho[i] >= 0.5f;
     if (!any) return false;   /* eroded away: 001 §7's counts are below the seed counts */
 
-    terrain_field field = { .nx = size[0], .ny = size[1], .nz = size[2], .spacing = 1.0f };
-    field.values = core_alloc(total * sizeof *field.values);
-    for (size_t i = 0; i < total; i++) {
-        float r = 2.0f * rho[i] - 1.0f;
-        field.values[i] = r == 0.0f ? 1e-6f : r;   /* ρ = ½ counts as solid, like the anchors */
-    }
-    terrain_mesh mesh;
-    bool built = terrain_mesh_build(&field, &(terrain_mesh_desc){ .no_occlusion = true, .no_optimize = true }, &mesh);
-    core_free(field.values, total * sizeof *field.values);
-    if (!built || mesh.index_count == 0) {
-        if (built) terrain_mesh_free(&mesh);
-        return false;
-    }
-
-    /* Positions in voxels for the simplifier (its errors are then in voxels). */
-    size_t vc = mesh.vertex_count, ic = mesh.index_count;
-    float *positions = core_alloc(vc * 3 * sizeof *positions);
-    for (size_t v = 0; v < vc; v++)
-        for (int a = 0; a < 3; a++) positions[3 * v + a] = mesh.vertices[v].position[a];
+    rocks__surface surface;
+    bool dual;
+    if (!rock_surface(rho, size, &surface, &dual)) return false;
+    size_t vc = surface.vertex_count, ic = surface.index_count;
     uint32_t *lod[ROCKS_LODS];
     size_t lod_count[ROCKS_LODS];
     for (int l = 0; l < ROCKS_LODS; l++) lod[l] = core_alloc(ic * sizeof *lod[l]);
-    make_lods(mesh.indices, ic, positions, vc, lod, lod_count);
+    make_lods(surface.indices, ic, surface.positions, vc, dual ? DUAL_LOD0_ERROR : ROCKS__LOD0_ERROR, lod, lod_count);
 
     /* Keep LOD 0's vertices only, in order of first use (the others use a subset of them). */
     uint32_t *remap = core_alloc(vc * sizeof *remap);
@@ -201,9 +228,9 @@ bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int b
         memset(o, 0, sizeof *o);
         float d2 = 0.0f;
         for (int a = 0; a < 3; a++) {
-            float p = ((float)box_lo[a] + 0.5f + mesh.vertices[v].position[a]) * tile_scale;
+            float p = ((float)box_lo[a] + 0.5f + surface.positions[3 * v + a]) * tile_scale;
             o->position[a] = p;
-            o->normal[a] = (int8_t)lrintf(fmaxf(-1.0f, fminf(1.0f, mesh.vertices[v].normal[a])) * 127.0f);
+            o->normal[a] = (int8_t)lrintf(fmaxf(-1.0f, fminf(1.0f, surface.normals[3 * v + a])) * 127.0f);
             if (p < rock->bounds_min[a]) rock->bounds_min[a] = p;
             if (p > rock->bounds_max[a]) rock->bounds_max[a] = p;
             d2 += (p - seed_pos[a]) * (p - seed_pos[a]);
@@ -228,8 +255,7 @@ bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int b
         core_free(lod[l], ic * sizeof *lod[l]);
     }
     core_free(remap, vc * sizeof *remap);
-    core_free(positions, vc * 3 * sizeof *positions);
-    terrain_mesh_free(&mesh);
+    rocks__surface_free(&surface);
 
     rock->anchor_first = res->anchor_count;
     GROW(res, anchors, anchor_cap, res->anchor_count + ROCKS__ANCHORS);
