@@ -83,6 +83,8 @@ static int union_find(int *parent, int x) {
 
 static int8_t piece_of_edge[256][12];   /* per case (corner signs), each edge's piece or −1 */
 static uint8_t piece_count[256];
+static uint8_t faces_met_twice[256];    /* bit 2·axis + side: the face's corners alternate and one
+                                           piece holds both its curves */
 static pthread_once_t pieces_once = PTHREAD_ONCE_INIT;
 
 /* The crossed edges of one face joined as the surface joins them (see the top). */
@@ -117,6 +119,16 @@ static void make_pieces(void) {
             piece_of_edge[signs][e] = (int8_t)label[root];
         }
         piece_count[signs] = (uint8_t)count;
+        for (int axis = 0; axis < 3; axis++)
+            for (int side = 0; side < 2; side++) {
+                int u = (axis + 1) % 3, w = (axis + 2) % 3, s = side << axis;
+                int a = (signs >> s) & 1, b = (signs >> (s | 1 << u)) & 1, c = (signs >> (s | 1 << u | 1 << w)) & 1,
+                    d = (signs >> (s | 1 << w)) & 1;
+                if (a == b || b == c || c == d || d == a) continue;   /* not alternating */
+                /* its curves: one round corner s, the other round the opposite corner */
+                int first = piece_of_edge[signs][edge_along(u, s)], second = piece_of_edge[signs][edge_along(u, s | 1 << w)];
+                if (first == second) faces_met_twice[signs] |= (uint8_t)(1 << (2 * axis + side));
+            }
     }
 }
 
@@ -338,6 +350,25 @@ static void qef_point(const qef *q, const int lo[3], float out[3]) {
     for (int k = 0; k < 3; k++) out[k] = (float)(x[k] < lo[k] ? lo[k] : x[k] > lo[k] + 2 ? lo[k] + 2 : x[k]);
 }
 
+/* False when two cells across a face whose corners alternate each hold both of its curves in
+ * one piece: the edge between their vertices would lie in four triangles (rare in rocks). Where
+ * one of them holds the curves apart, its two vertices each meet the other's one along an edge
+ * of two triangles. */
+static bool two_sheets_everywhere(const dual_grid *g) {
+    for (int z = 0; z < g->cells[2]; z++)
+        for (int y = 0; y < g->cells[1]; y++)
+            for (int x = 0; x < g->cells[0]; x++) {
+                size_t cell = (size_t)(z * g->cell_stride[2] + y * g->cell_stride[1] + x);
+                uint8_t faces = faces_met_twice[g->cell_case[cell]];
+                const int at[3] = { x, y, z };
+                for (int axis = 0; faces && axis < 3; axis++)   /* the upper face: the lower is the neighbour's */
+                    if (faces >> (2 * axis + 1) & 1 && at[axis] + 1 < g->cells[axis] &&
+                        faces_met_twice[g->cell_case[cell + (size_t)g->cell_stride[axis]]] >> (2 * axis) & 1)
+                        return false;
+            }
+    return true;
+}
+
 /* Each vertex placed; false when its crossings' normals disagree (see the top). */
 static bool place_vertices(const dual_grid *g, rocks__surface *out) {
     out->vertex_count = g->vertex_count;
@@ -444,11 +475,9 @@ bool rocks__dual_surface(const float *rho, const int size[3], rocks__surface *ou
     make_fine(&g, rho);
     make_cells(&g);
     gather_crossings(&g);
-    bool ok = g.vertex_count > 0 && place_vertices(&g, out) && missed_nothing(&g, out);
+    bool ok = g.vertex_count > 0 && two_sheets_everywhere(&g) && place_vertices(&g, out) && missed_nothing(&g, out);
     if (ok) make_quads(&g, out);
-    /* a piece that meets a face whose corners alternate on both of its curves, beside a cell
-     * where the same holds, gives an edge of four triangles: not a 2-manifold (rare in rocks) */
-    ok = ok && rocks__watertight(out->indices, out->index_count, out->vertex_count);
+
     dual_grid_free(&g);
     if (!ok) rocks__surface_free(out);
     return ok;
