@@ -67,12 +67,20 @@ bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t v
 #define LOD2_ERROR 8.0f
 #define LOD2_SHARE 12
 
+typedef float lanes __attribute__((vector_size(16)));
+typedef int32_t lane_mask __attribute__((vector_size(16)));
+
+/* a where `take` (all bits of a lane set), else b */
+static inline lanes lanes_select(lane_mask take, lanes a, lanes b) {
+    return (lanes)((take & (lane_mask)a) | (~take & (lane_mask)b));
+}
+
 /* Anchors (001 §6): the seed, then voxel centres with ρ ≥ ½ spread by farthest-point sampling.
  * 001 uses every voxel centre; 15 spread ones bound the cost of testing a rock against the
  * support (placement stays under 0.5 ms a chunk) and still see where it lies. The centres are
  * kept as three arrays padded to groups of four (a pad's distance is −1, never the farthest);
- * each round updates the distances, takes their maximum in four lanes and then the first centre
- * at it, as one scan would. Returns the count written. */
+ * each round updates the distances and takes their maximum four lanes at a time, then the first
+ * centre at it, as one scan would. Returns the count written. */
 static uint32_t spread_anchors(const float *rho, const int box_lo[3], const int size[3], const float seed_pos[3],
                                float tile_scale, float (*anchors)[3]) {
     const size_t total = (size_t)size[0] * size[1] * size[2];
@@ -100,23 +108,26 @@ static uint32_t spread_anchors(const float *rho, const int box_lo[3], const int 
     uint32_t count = 1;
     float bx = 0.0f, by = 0.0f, bz = 0.0f;
     while (count < ROCKS__ANCHORS) {
-        if (count > 1)
-            for (size_t i = 0; i < padded; i++) {
-                float d2 = 0.0f;
-                d2 += (cx[i] - bx) * (cx[i] - bx);
-                d2 += (cy[i] - by) * (cy[i] - by);
-                d2 += (cz[i] - bz) * (cz[i] - bz);
-                nearest[i] = d2 < nearest[i] ? d2 : nearest[i];
+        /* four centres at a time (GCC's vector types: SSE2 on any x86-64), the same operations in
+         * the same order as one at a time, so the same bits; the update and the maximum in one pass */
+        lanes farthest4 = { -1.0f, -1.0f, -1.0f, -1.0f };
+        const lanes x0 = { bx, bx, bx, bx }, y0 = { by, by, by, by }, z0 = { bz, bz, bz, bz };
+        for (size_t i = 0; i < padded; i += 4) {
+            lanes x, y, z, near;
+            memcpy(&near, nearest + i, sizeof near);
+            if (count > 1) {
+                memcpy(&x, cx + i, sizeof x), memcpy(&y, cy + i, sizeof y), memcpy(&z, cz + i, sizeof z);
+                lanes d2 = (lanes){ 0.0f, 0.0f, 0.0f, 0.0f };
+                d2 += (x - x0) * (x - x0);
+                d2 += (y - y0) * (y - y0);
+                d2 += (z - z0) * (z - z0);
+                near = lanes_select(d2 < near, d2, near);
+                memcpy(nearest + i, &near, sizeof near);
             }
-        float lane[4] = { -1.0f, -1.0f, -1.0f, -1.0f };   /* four chains of comparisons, not one */
-        for (size_t g = 0; g < padded; g += 4) {
-            lane[0] = nearest[g] > lane[0] ? nearest[g] : lane[0];
-            lane[1] = nearest[g + 1] > lane[1] ? nearest[g + 1] : lane[1];
-            lane[2] = nearest[g + 2] > lane[2] ? nearest[g + 2] : lane[2];
-            lane[3] = nearest[g + 3] > lane[3] ? nearest[g + 3] : lane[3];
+            farthest4 = lanes_select(near > farthest4, near, farthest4);
         }
-        float farthest = lane[0];
-        for (int l = 1; l < 4; l++) farthest = lane[l] > farthest ? lane[l] : farthest;
+        float farthest = farthest4[0];
+        for (int l = 1; l < 4; l++) farthest = farthest4[l] > farthest ? farthest4[l] : farthest;
         if (!(farthest > 0.0f)) break;
         size_t best = 0;
         while (nearest[best] != farthest) best++;
