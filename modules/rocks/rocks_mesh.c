@@ -83,12 +83,9 @@ static inline lanes lanes_select(lane_mask take, lanes a, lanes b) {
  * centre at it, as one scan would. Returns the count written. */
 static uint32_t spread_anchors(const float *rho, const int box_lo[3], const int size[3], const float seed_pos[3],
                                float tile_scale, float (*anchors)[3]) {
-    const size_t total = (size_t)size[0] * size[1] * size[2];
-    size_t solid = 0;
-    for (size_t i = 0; i < total; i++) solid += rho[i] >= 0.5f;
-    const size_t padded = (solid + 3) & ~(size_t)3;
-    float *centres = core_calloc(4 * padded + 4, sizeof *centres);
-    float *restrict cx = centres, *restrict cy = cx + padded, *restrict cz = cy + padded, *restrict nearest = cz + padded;
+    const size_t total = (size_t)size[0] * size[1] * size[2], room = (total + 3) & ~(size_t)3;
+    float *centres = core_alloc(4 * room * sizeof *centres);
+    float *restrict cx = centres, *restrict cy = cx + room, *restrict cz = cy + room, *restrict nearest = cz + room;
     size_t c = 0;
     for (int z = 0; z < size[2]; z++)
         for (int y = 0; y < size[1]; y++)
@@ -103,16 +100,21 @@ static uint32_t spread_anchors(const float *rho, const int box_lo[3], const int 
                 d2 += (cz[c] - seed_pos[2]) * (cz[c] - seed_pos[2]);
                 nearest[c++] = d2;
             }
-    for (; c < padded; c++) nearest[c] = -1.0f;
+    const size_t padded = (c + 3) & ~(size_t)3;
+    for (; c < padded; c++) cx[c] = cy[c] = cz[c] = 0.0f, nearest[c] = -1.0f;
     memcpy(anchors[0], seed_pos, 3 * sizeof *seed_pos);
     uint32_t count = 1;
     float bx = 0.0f, by = 0.0f, bz = 0.0f;
     while (count < ROCKS__ANCHORS) {
         /* four centres at a time (GCC's vector types: SSE2 on any x86-64), the same operations in
-         * the same order as one at a time, so the same bits; the update and the maximum in one pass */
+         * the same order as one at a time, so the same bits; the update, the maximum and the
+         * first centre at it (each lane's first, then the least of the lanes at the maximum) in
+         * one pass */
         lanes farthest4 = { -1.0f, -1.0f, -1.0f, -1.0f };
+        lane_mask at4 = { 0, 1, 2, 3 }, index4 = { 0, 1, 2, 3 };
+        const lane_mask step = { 4, 4, 4, 4 };
         const lanes x0 = { bx, bx, bx, bx }, y0 = { by, by, by, by }, z0 = { bz, bz, bz, bz };
-        for (size_t i = 0; i < padded; i += 4) {
+        for (size_t i = 0; i < padded; i += 4, index4 += step) {
             lanes x, y, z, near;
             memcpy(&near, nearest + i, sizeof near);
             if (count > 1) {
@@ -124,18 +126,20 @@ static uint32_t spread_anchors(const float *rho, const int box_lo[3], const int 
                 near = lanes_select(d2 < near, d2, near);
                 memcpy(nearest + i, &near, sizeof near);
             }
-            farthest4 = lanes_select(near > farthest4, near, farthest4);
+            lane_mask further = near > farthest4;
+            farthest4 = lanes_select(further, near, farthest4);
+            at4 = (further & index4) | (~further & at4);
         }
-        float farthest = farthest4[0];
-        for (int l = 1; l < 4; l++) farthest = farthest4[l] > farthest ? farthest4[l] : farthest;
-        if (!(farthest > 0.0f)) break;
-        size_t best = 0;
-        while (nearest[best] != farthest) best++;
+        int lane = 0;
+        for (int l = 1; l < 4; l++)
+            if (farthest4[l] > farthest4[lane] || (farthest4[l] == farthest4[lane] && at4[l] < at4[lane])) lane = l;
+        if (!(farthest4[lane] > 0.0f)) break;
+        size_t best = (size_t)at4[lane];
         bx = cx[best], by = cy[best], bz = cz[best];
         anchors[count][0] = bx, anchors[count][1] = by, anchors[count][2] = bz;
         count++;
     }
-    core_free(centres, (4 * padded + 4) * sizeof *centres);
+    core_free(centres, 4 * room * sizeof *centres);
     return count;
 }
 
