@@ -267,13 +267,13 @@ static void qef_add(qef *q, const float p[3], const float n[3], bool has_normal)
 /* The crossing on the fine edge from sample (x, y, z) along `axis` given to every coarse cell
  * that holds the edge (one, or two or four when it lies on the cells' faces or edges). */
 static void scatter_crossing(dual_grid *g, const int at[3], int axis, float t, const float n[3], bool has_normal) {
-    float p[3] = { (float)at[0], (float)at[1], (float)at[2] };
-    p[axis] += t;
+    const float p[3] = { (float)at[0] + (axis == 0 ? t : 0.0f), (float)at[1] + (axis == 1 ? t : 0.0f),
+                         (float)at[2] + (axis == 2 ? t : 0.0f) };
     int lo[3], hi[3];
     for (int a = 0; a < 3; a++) {
         int k = at[a] + 2;            /* cell c spans fine 2c − 2 … 2c */
-        if (a == axis || k & 1) lo[a] = hi[a] = k >> 1;
-        else lo[a] = k / 2 - 1, hi[a] = k / 2;
+        hi[a] = k >> 1;
+        lo[a] = hi[a] - (a != axis && !(k & 1));
     }
     int c[3];
     bool held = false;
