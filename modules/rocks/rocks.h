@@ -98,8 +98,9 @@ typedef struct rocks_rock {
                                       /* triangles in rocks_tileset.indices, local to the rock's
                                          vertices (add vertex_first; 16 bits: a rock has fewer
                                          than 65 536 vertices); LOD 0 is the full mesh,
-                                         simplified (≤ 0.6 voxel), LOD 1 and 2 about 1/4 and
-                                         1/12 of its triangles; every level closed */
+                                         simplified (≤ 0.5 voxel from its dual surface at two
+                                         voxels, or 0.6 from marching cubes), LOD 1 and 2 about
+                                         1/4 and 1/12 of its triangles; every level closed */
     uint32_t anchor_first, anchor_count;  /* in rocks_tileset.anchors: the seed first, then
                                          voxel centres spread over the rock (001 §6) */
     uint32_t contact_first, contact_count;  /* in rocks_tileset.contacts */
