@@ -799,6 +799,8 @@ static void coarse_lattice(chunk_gen *g, float y_lo, float y_hi, float ring_lo, 
 
 /* ---- one column ------------------------------------------------------------------------ */
 
+typedef float lanes __attribute__((vector_size(16)));
+
 /* Bilinear interpolation of the first `fields` fields' coarse columns to the centre of column
  * (i, k) (a ring column too), over levels [l0, l1]. */
 static void column_fields(const chunk_gen *g, int i, int k, int fields, int l0, int l1, float *out) {
@@ -807,11 +809,23 @@ static void column_fields(const chunk_gen *g, int i, int k, int fields, int l0, 
     float tx = ax - (float)a, tz = cz - (float)c;
     float w00 = (1 - tx) * (1 - tz), w10 = tx * (1 - tz), w01 = (1 - tx) * tz, w11 = tx * tz;
     int levels = g->levels;
+    const lanes v00 = { w00, w00, w00, w00 }, v10 = { w10, w10, w10, w10 }, v01 = { w01, w01, w01, w01 },
+                v11 = { w11, w11, w11, w11 };
     for (int f = 0; f < fields; f++) {
         const float *p00 = lattice_node(g, f, a, c), *p10 = p00 + levels;
         const float *p01 = p00 + (size_t)LATTICE_NODES * levels, *p11 = p01 + levels;
         float *o = out + (size_t)f * levels;
-        for (int l = l0; l <= l1; l++) o[l] = w00 * p00[l] + w10 * p10[l] + w01 * p01[l] + w11 * p11[l];
+        int l = l0;
+        /* four levels at a time (GCC's vector types: SSE2 on any x86-64), the same sum in the
+         * same order as one at a time: the same bits */
+        for (; l + 3 <= l1; l += 4) {
+            lanes q00, q10, q01, q11;
+            memcpy(&q00, p00 + l, sizeof q00), memcpy(&q10, p10 + l, sizeof q10);
+            memcpy(&q01, p01 + l, sizeof q01), memcpy(&q11, p11 + l, sizeof q11);
+            lanes sum = v00 * q00 + v10 * q10 + v01 * q01 + v11 * q11;
+            memcpy(o + l, &sum, sizeof sum);
+        }
+        for (; l <= l1; l++) o[l] = w00 * p00[l] + w10 * p10[l] + w01 * p01[l] + w11 * p11[l];
     }
 }
 
