@@ -893,6 +893,27 @@ static inline float cave_density(const column_context *c, int l, float t, float 
     return (1.0f - c->threshold * attenuation - ridges) * c->cave_scale;
 }
 
+/* Whether cave_density(c, l, t, y) > 0, i.e. R₁R₂ < 1 − threshold·attenuation (cave_scale > 0),
+ * found from R₁ alone where it is already below: R₂ ≤ 1, so R₁R₂ ≤ R₁ (in floats too: the
+ * product rounds monotonically). The same answer as the sign of cave_density, bit for bit. */
+static inline bool cave_solid(const column_context *c, int l, float t, float y) {
+    if (!(c->cave_scale > 0.0f)) return cave_density(c, l, t, y) > 0.0f;
+    float n1[CAVE_OCTAVES], n2[CAVE_OCTAVES];
+    for (int o = 0; o < CAVE_OCTAVES; o++) {
+        const float *a = c->cave1 + (size_t)o * c->levels;
+        n1[o] = a[l] + t * (a[l + 1] - a[l]);
+    }
+    float attenuation = clampf((c->cave_top - y) / c->fade, 0.0f, 1.0f) *
+                        clampf((y - c->cave_bottom) / c->fade, 0.0f, 1.0f);
+    float room = 1.0f - c->threshold * attenuation, first = terrain__ridged_from_octaves(n1, CAVE_OCTAVES, CAVE_GAIN);
+    if (first < room) return true;
+    for (int o = 0; o < CAVE_OCTAVES; o++) {
+        const float *b = c->cave2 + (size_t)o * c->levels;
+        n2[o] = b[l] + t * (b[l + 1] - b[l]);
+    }
+    return room - first * terrain__ridged_from_octaves(n2, CAVE_OCTAVES, CAVE_GAIN) > 0.0f;
+}
+
 /* The density at y, every part evaluated (for placing a crossing). */
 static float density_exact(const column_context *c, float y) {
     float level = (y - c->g->y_base) * (1.0f / COARSE_Y);
@@ -913,6 +934,69 @@ static float ridged_bound(const float *n, int levels, int l) {
         smallest[o] = (a > 0.0f) != (b > 0.0f) ? 0.0f : CORE_MIN(fabsf(a), fabsf(b));
     }
     return terrain__ridged_from_octaves(smallest, CAVE_OCTAVES, CAVE_GAIN);
+}
+
+/* ---- the caves' bounds, four segments at a time ----------------------------------------------
+ * ridged_bound and the test of caves_possible in GCC's vector types (SSE2 on any x86-64): the
+ * same operations in the same order as one segment at a time, so the same bits. */
+
+typedef int32_t lane_mask __attribute__((vector_size(16)));
+
+static inline lanes lanes_select(lane_mask take, lanes a, lanes b) {
+    return (lanes)((take & (lane_mask)a) | (~take & (lane_mask)b));
+}
+
+static inline lanes lanes_abs(lanes v) {
+    const lane_mask magnitude = { INT32_MAX, INT32_MAX, INT32_MAX, INT32_MAX };
+    return (lanes)((lane_mask)v & magnitude);
+}
+
+static inline lanes lanes_splat(float v) { return (lanes){ v, v, v, v }; }
+
+/* terrain__ridged_from_octaves of CAVE_OCTAVES octaves, per lane. */
+static inline lanes ridged_lanes(const lanes *n) {
+    const lanes zero = lanes_splat(0.0f), one = lanes_splat(1.0f), two = lanes_splat(2.0f);
+    lanes result = zero, total = zero, weight = one, amplitude = one;
+    for (int k = 0; k < CAVE_OCTAVES; k++) {
+        lanes signal = one - lanes_abs(n[k]);
+        signal *= signal * weight;
+        weight = signal * two;
+        weight = lanes_select(weight > one, one, weight);
+        result += signal * amplitude;
+        total += amplitude;
+        amplitude *= lanes_splat(CAVE_GAIN);
+    }
+    return lanes_select(total > zero, result / total, zero);
+}
+
+/* ridged_bound of the segments l … l + 3 of one field's octaves. */
+static inline lanes ridged_bound_lanes(const float *n, int levels, int l) {
+    lanes smallest[CAVE_OCTAVES];
+    for (int o = 0; o < CAVE_OCTAVES; o++) {
+        lanes a, b;
+        memcpy(&a, n + (size_t)o * levels + l, sizeof a);
+        memcpy(&b, n + (size_t)o * levels + l + 1, sizeof b);
+        lanes fa = lanes_abs(a), fb = lanes_abs(b);
+        lane_mask crosses = (a > lanes_splat(0.0f)) ^ (b > lanes_splat(0.0f));
+        smallest[o] = lanes_select(crosses, lanes_splat(0.0f), lanes_select(fa < fb, fa, fb));
+    }
+    return ridged_lanes(smallest);
+}
+
+/* cave_possible[l] for the segments first … last of the column (l + 1 < levels): whether the
+ * caves' two ridged fields can together pass the threshold anywhere in the segment. */
+static void caves_possible(const column_context *c, int first, int last, bool *possible) {
+    const float room = 1.0f - c->threshold;
+    int l = first;
+    for (; l + 3 <= last && l + 4 < c->levels; l += 4) {
+        lanes r1 = ridged_bound_lanes(c->cave1, c->levels, l), r2 = ridged_bound_lanes(c->cave2, c->levels, l);
+        lane_mask yes = (r1 * r2) > lanes_splat(room);
+        for (int k = 0; k < 4; k++) possible[l + k] = yes[k] != 0;
+    }
+    for (; l <= last && l + 1 < c->levels; l++) {   /* the second bound only where the first leaves room: both are at most 1 */
+        float r1 = ridged_bound(c->cave1, c->levels, l);
+        possible[l] = r1 > room && r1 * ridged_bound(c->cave2, c->levels, l) > room;
+    }
 }
 
 static void column_generate(const chunk_gen *g, int i, int k, const float *fields, bool *cave_possible,
@@ -943,11 +1027,7 @@ static void column_generate(const chunk_gen *g, int i, int k, const float *field
     /* Segments of the coarse lattice where this column can have a cave at all. */
     int first_level = (int)((y_lo - g->y_base) * (1.0f / COARSE_Y));
     int last_level = (int)((y_hi + 2.0f * SAMPLE_STEP - g->y_base) * (1.0f / COARSE_Y));
-    if (c.caves) {
-        for (int l = first_level; l <= last_level && l + 1 < c.levels; l++)
-            cave_possible[l] = ridged_bound(c.cave1, c.levels, l) * ridged_bound(c.cave2, c.levels, l) >
-                               1.0f - c.threshold;
-    }
+    if (c.caves) caves_possible(&c, first_level, last_level, cave_possible);
 
     out->count = 0;
     bool solid = true;                    /* y_lo is below every surface */
@@ -959,15 +1039,11 @@ static void column_generate(const chunk_gen *g, int i, int k, const float *field
         int l = (int)level;
         float t = level - (float)l;
         bool cave_here = in_cave_band(&c, y) && cave_possible[l];
-        float d;
-        if (y < c.reach_min) {
-            /* The ground part is surely positive: only a cave can make this air. */
-            d = cave_here ? cave_density(&c, l, t, y) : 1.0f;
-        } else {
-            d = ground_density(&c, l, t, y);
-            if (d > 0.0f && cave_here) d = CORE_MIN(d, cave_density(&c, l, t, y));
-        }
-        bool now_solid = d > 0.0f;
+        /* Only the sign matters here: solid where the ground's part and the cave's are both
+         * positive (density = min of the two), the crossing placed below from both in full. */
+        bool now_solid;
+        if (y < c.reach_min) now_solid = !cave_here || cave_solid(&c, l, t, y);   /* the ground's part is surely positive */
+        else now_solid = ground_density(&c, l, t, y) > 0.0f && (!cave_here || cave_solid(&c, l, t, y));
         if (now_solid != solid) {
             /* Place the crossing from the full density at both samples. */
             float d0 = density_exact(&c, previous_y), d1 = density_exact(&c, y);

@@ -317,25 +317,6 @@ float terrain_fbm3(uint64_t seed, float x, float y, float z, int octaves) {
 
 /* ---- ridged multifractal ---------------------------------------------------------------- */
 
-float terrain__ridged_from_octaves(const float *n, int octaves, float gain) {
-    /* Musgrave's ridged multifractal (offset 1, weight gain 2): each octave's ridge (1 − |n|)²
-     * is weighted by the previous octave's, so detail gathers along the main ridges. Octave k's
-     * amplitude is gain^k; the sum is normalised by Σ gain^k, so the result is in [0, 1] with 1
-     * where every octave's noise is 0. On the first octave's ridge alone the value is at least
-     * 1 / Σ gain^k (0.8 for two octaves at gain 0.25, 0.67 at 0.5). */
-    float result = 0.0f, total = 0.0f, weight = 1.0f, amplitude = 1.0f;
-    for (int k = 0; k < octaves; k++) {
-        float signal = 1.0f - fabsf(n[k]);
-        signal *= signal * weight;
-        weight = signal * 2.0f;
-        weight = weight > 1.0f ? 1.0f : weight;
-        result += signal * amplitude;
-        total += amplitude;
-        amplitude *= gain;
-    }
-    return total > 0.0f ? result / total : 0.0f;
-}
-
 float terrain__ridged3(uint32_t seed, float x, float y, float z, int octaves, float gain) {
     float n[16];
     if (octaves > 16) octaves = 16;
