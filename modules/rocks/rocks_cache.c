@@ -25,7 +25,6 @@
 
 #define MAGIC "ROCKTILE"
 #define ENDIAN_MARK 0x01020304u
-#define CHECKSUM_SEED 0x726f636b63616368ull
 #define FILE_MAX ((size_t)1 << 31)
 
 typedef struct cache_header {
@@ -163,7 +162,7 @@ bool rocks__cache_write(const char *path, const rocks__set *full_in) {
         if (bytes) memcpy(data + at, *list[i].data, bytes);
         at += bytes;
     }
-    uint64_t sum = core_hash_bytes(data, at, CHECKSUM_SEED);
+    uint64_t sum = core_hash_bytes(data, at, ROCKS__CACHE_CHECKSUM_SEED);
     memcpy(data + at, &sum, sizeof sum);
     bool ok = rocks__file_store(path, data, size, "tile cache");
     core_free(data, size);
@@ -229,7 +228,7 @@ bool rocks__cache_parse(const unsigned char *data, size_t size, const rocks__par
     }
     if (!*why) {
         uint64_t sum, stored;
-        sum = core_hash_bytes(data, size - sizeof stored, CHECKSUM_SEED);
+        sum = core_hash_bytes(data, size - sizeof stored, ROCKS__CACHE_CHECKSUM_SEED);
         memcpy(&stored, data + size - sizeof stored, sizeof stored);
         if (sum != stored) *why = "damaged (checksum)";
     }

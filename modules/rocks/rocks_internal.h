@@ -26,6 +26,7 @@
 #define ROCKS__ANCHORS 16                         /* the seed and up to 15 voxel centres */
 /* Bump it with ANY change to what a build makes (seeds, ownership, contacts, erosion, meshes,
  * anchors): a cache holds a build's output under its desc, so an old one would read as valid. */
+#define ROCKS__CACHE_CHECKSUM_SEED 0x726f636b63616368ull   /* core_hash_bytes' seed for the file's checksum */
 #define ROCKS__CACHE_VERSION 4u   /* 2: LOD 0 at 0.6 voxel; contacts across the nearest face;
                                      3: LODs by rocks_simplify.c, closed without falling back;
                                      4: LODs from the dual surface at two voxels (rocks_surface.c) */
