@@ -27,9 +27,10 @@
 /* Bump it with ANY change to what a build makes (seeds, ownership, contacts, erosion, meshes,
  * anchors): a cache holds a build's output under its desc, so an old one would read as valid. */
 #define ROCKS__CACHE_CHECKSUM_SEED 0x726f636b63616368ull   /* core_hash_bytes' seed for the file's checksum */
-#define ROCKS__CACHE_VERSION 4u   /* 2: LOD 0 at 0.6 voxel; contacts across the nearest face;
+#define ROCKS__CACHE_VERSION 5u   /* 2: LOD 0 at 0.6 voxel; contacts across the nearest face;
                                      3: LODs by rocks_simplify.c, closed without falling back;
-                                     4: LODs from the dual surface at two voxels (rocks_surface.c) */
+                                     4: LODs from the dual surface at two voxels (rocks_surface.c);
+                                     5: its normals' agreement at 0.35 */
 
 enum { ROCKS__VERTEX = 0, ROCKS__EDGE = 1, ROCKS__FACE = 2, ROCKS__CENTRE = 3 };
 
