@@ -44,7 +44,7 @@
  *     face twice, beside another that does; rare).
  * Measured on the n = 5 sets (release, the first 2 000 rocks of each): the accepted surfaces lie
  * within 1.46 voxels of every marching-cubes point of the same ρ, 0.09–0.10 voxel on average;
- * 97 % of the round and mixed sets' rocks are accepted, 90 % of the slabs'. LOD 0 simplified from
+ * 97 % of the round and mixed sets' rocks are accepted, 92 % of the slabs'. LOD 0 simplified from
  * them lies nearer the marching-cubes points than LOD 0 simplified from marching cubes itself
  * (over the first 300 round rocks 0.160 against 0.174 voxel on average, 15 against 19 rocks with
  * a point more than a voxel off, the worst 1.73 against 1.35), with as many triangles.
