@@ -172,11 +172,18 @@ static void make_fine(dual_grid *g, const float *rho) {
     g->fine_total = (size_t)g->fine_stride[2] * (sz + 2 * PAD);
     g->fine = core_alloc(g->fine_total * sizeof *g->fine);
     g->solid_rows = core_alloc((size_t)sy * sz * sizeof *g->solid_rows);
-    for (size_t i = 0; i < g->fine_total; i++) g->fine[i] = -1.0f;
+    /* −1 around the box: the first and last planes and rows whole, each row's ends */
+    const size_t plane = (size_t)g->fine_stride[2], row_length = (size_t)g->fine_stride[1];
+    for (size_t i = 0; i < plane * PAD; i++) g->fine[i] = g->fine[g->fine_total - 1 - i] = -1.0f;
+    for (int z = 0; z < sz; z++) {
+        float *first_rows = fine_sample(g, -PAD, -PAD, z), *last_rows = fine_sample(g, -PAD, sy, z);
+        for (size_t i = 0; i < row_length * PAD; i++) first_rows[i] = last_rows[i] = -1.0f;
+    }
     for (int z = 0; z < sz; z++)
         for (int y = 0; y < sy; y++) {
             const float *in = rho + ((size_t)z * sy + y) * sx;
             float *out = fine_sample(g, 0, y, z);
+            for (int p = 1; p <= PAD; p++) out[-p] = out[sx - 1 + p] = -1.0f;
             uint64_t solid = 0;
             for (int x = 0; x < sx; x++) {
                 float r = 2.0f * in[x] - 1.0f;
@@ -248,6 +255,7 @@ static int nearest_piece(const dual_grid *g, size_t cell, const int cell_xyz[3],
 /* The piece of `cell` (coarse coordinates c) that the crossing on the fine edge from `at` along
  * `axis`, at p, belongs to: the piece of the crossed coarse edge it lies on, else the nearest. */
 static int crossing_piece(const dual_grid *g, size_t cell, const int c[3], const int at[3], int axis, const float p[3]) {
+    if (piece_count[g->cell_case[cell]] == 1) return 0;   /* most cells */
     const int u = (axis + 1) % 3, w = (axis + 2) % 3, ou = at[u] - (2 * c[u] - 2), ow = at[w] - (2 * c[w] - 2);
     if ((ou == 0 || ou == 2) && (ow == 0 || ow == 2)) {
         int piece = piece_of_edge[g->cell_case[cell]][edge_along(axis, (ou / 2) << u | (ow / 2) << w)];

@@ -358,16 +358,17 @@ static void erode(const region_build *b, int32_t self, const int lo[3], const in
     const int sx = size[0], sy = size[1], sz = size[2];
     const float a = params->contact_voxels, bb = params->blend_voxels;
     const size_t total = (size_t)sx * sy * sz;
-    for (size_t i = 0; i < total; i++) e->empty[i] = 1, e->omega[i] = 1.0f;
+    for (size_t i = 0; i < total; i++) e->empty[i] = 1, e->omega[i] = 1.0f, e->rho[i] = 0.0f;
     for (int z = 1; z < sz - 1; z++)
         for (int y = 1; y < sy - 1; y++) {
             /* the box less its border lies inside the owner array (it bounds the rock's voxels) */
             const int32_t *owner = b->owner + ((size_t)(lo[2] + z - b->vlo[2]) * b->vdim[1] + (lo[1] + y - b->vlo[1])) * b->vdim[0] +
                                    (lo[0] - b->vlo[0]);
-            uint8_t *empty = e->empty + ((size_t)z * sy + y) * sx;
-            for (int x = 1; x < sx - 1; x++) empty[x] = owner[x] != self;
+            size_t row = ((size_t)z * sy + y) * sx;
+            uint8_t *empty = e->empty + row;
+            float *rho = e->rho + row;
+            for (int x = 1; x < sx - 1; x++) empty[x] = owner[x] != self, rho[x] = owner[x] == self ? 1.0f : 0.0f;
         }
-    for (size_t i = 0; i < total; i++) e->rho[i] = e->empty[i] ? 0.0f : 1.0f;
     damping(e->omega, e->empty, lo, size, contacts, contact_count, a, bb);
     count_empty_neighbours(e, size);
     size_t active = 0;   /* the surface voxels that can erode (kept by advancing the count) */
