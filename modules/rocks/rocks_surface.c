@@ -104,6 +104,22 @@ static void join_on_face(int signs, int axis, int side, int *parent) {
             if ((signs >> corner[k]) & 1) parent[union_find(parent, edge[k])] = union_find(parent, edge[(k + 3) & 3]);
 }
 
+/* faces_met_twice for one case, once its pieces are known. */
+static uint8_t met_twice(int signs) {
+    uint8_t faces = 0;
+    for (int axis = 0; axis < 3; axis++)
+        for (int side = 0; side < 2; side++) {
+            int u = (axis + 1) % 3, w = (axis + 2) % 3, s = side << axis;
+            int a = (signs >> s) & 1, b = (signs >> (s | 1 << u)) & 1, c = (signs >> (s | 1 << u | 1 << w)) & 1,
+                d = (signs >> (s | 1 << w)) & 1;
+            if (a == b || b == c || c == d || d == a) continue;   /* not alternating */
+            /* its two curves: the edges along u through corner s and through s + w lie on different ones */
+            if (piece_of_edge[signs][edge_along(u, s)] == piece_of_edge[signs][edge_along(u, s | 1 << w)])
+                faces |= (uint8_t)(1 << (2 * axis + side));
+        }
+    return faces;
+}
+
 static void make_pieces(void) {
     for (int signs = 0; signs < 256; signs++) {
         int parent[12], label[12], count = 0;
@@ -121,16 +137,7 @@ static void make_pieces(void) {
             piece_of_edge[signs][e] = (int8_t)label[root];
         }
         piece_count[signs] = (uint8_t)count;
-        for (int axis = 0; axis < 3; axis++)
-            for (int side = 0; side < 2; side++) {
-                int u = (axis + 1) % 3, w = (axis + 2) % 3, s = side << axis;
-                int a = (signs >> s) & 1, b = (signs >> (s | 1 << u)) & 1, c = (signs >> (s | 1 << u | 1 << w)) & 1,
-                    d = (signs >> (s | 1 << w)) & 1;
-                if (a == b || b == c || c == d || d == a) continue;   /* not alternating */
-                /* its curves: one round corner s, the other round the opposite corner */
-                int first = piece_of_edge[signs][edge_along(u, s)], second = piece_of_edge[signs][edge_along(u, s | 1 << w)];
-                if (first == second) faces_met_twice[signs] |= (uint8_t)(1 << (2 * axis + side));
-            }
+        faces_met_twice[signs] = met_twice(signs);
     }
 }
 
