@@ -5,16 +5,16 @@
  * Seeds: tests/fuzz/corpus/fuzz_block_cache/tiny.bin, the cache file of the tile of TILE_DESC
  * below (a 4 m tabular tile of 5 blocks, 2.8 KB), as rocks_block_tile_create writes it.
  *
- * A mutated file almost never keeps its checksum, so each input is parsed twice: as it is
- * (which must fail unless unchanged) and with the checksum recomputed over the mutated bytes,
- * which lets the fuzzer reach the consistency checks behind it. Traps when a result breaks the
- * contract: a failure says why and keeps nothing; a success gives a tile whose every index is
+ * Each input is parsed as it is and with its checksum fixed (fuzz_checksum.h). Traps when a
+ * result breaks the contract: a failure says why and keeps nothing; a success gives a tile whose every index is
  * inside its arrays (checked here again, independently), and evaluating its field at the input's
  * points and each block at its anchor reads only what the tile holds (ASan watches).
  */
 #include "core/core.h"
 #include "rocks/rocks.h"
 #include "rocks/rocks_internal.h"
+
+#include "fuzz_checksum.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -83,16 +83,6 @@ static bool parse_and_check(const unsigned char *bytes, size_t size) {
 }
 
 int LLVMFuzzerTestOneInput(const unsigned char *bytes, size_t size) {
-    bool as_is = parse_and_check(bytes, size);
-    if (size < 8) return 0;
-    unsigned char *fixed = malloc(size);
-    memcpy(fixed, bytes, size);
-    uint64_t sum = core_hash_bytes(fixed, size - 8, ROCKS__BLOCK_CACHE_CHECKSUM_SEED);
-    memcpy(fixed + size - 8, &sum, 8);
-    bool unchanged = memcmp(fixed, bytes, size) == 0;
-    bool with_sum = parse_and_check(fixed, size);
-    if (unchanged && as_is != with_sum) __builtin_trap();
-    if (!unchanged && as_is) __builtin_trap();   /* a wrong checksum got through */
-    free(fixed);
+    fuzz_with_checksum(bytes, size, ROCKS__BLOCK_CACHE_CHECKSUM_SEED, parse_and_check);
     return 0;
 }
