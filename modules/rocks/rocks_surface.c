@@ -156,7 +156,7 @@ typedef struct dual_grid {
     ptrdiff_t fine_stride[3];
     float *fine;                      /* r at the padded fine samples, −1 outside the box */
     size_t fine_total;
-    uint64_t *solid_rows;             /* per box row (y, z): bit x set where r > 0 */
+    uint64_t *solid_rows;             /* per box row (y, z): bit x set where solid (r ≥ 0) */
     int samples[3], cells[3];         /* coarse */
     ptrdiff_t sample_stride[3], cell_stride[3];
     uint8_t *sample_solid;
@@ -239,11 +239,10 @@ static void make_cells(dual_grid *g) {
 
 /* ---- the crossings ----------------------------------------------------------------------------- */
 
-/* The piece of `cell` a crossing at p (fine units) belongs to: the one whose crossed coarse
- * edges' midpoints lie nearest. */
+/* The piece of a cell of several that a crossing at p (fine units) belongs to: the one whose
+ * crossed coarse edges' midpoints lie nearest. */
 static int nearest_piece(const dual_grid *g, size_t cell, const int cell_xyz[3], const float p[3]) {
     const int8_t *piece = piece_of_edge[g->cell_case[cell]];
-    if (piece_count[g->cell_case[cell]] == 1) return 0;
     float best = INFINITY;
     int which = 0;
     for (int e = 0; e < 12; e++) {

@@ -877,41 +877,37 @@ static inline bool in_cave_band(const column_context *c, float y) {
     return c->caves && y > c->cave_bottom && y < c->cave_top;
 }
 
-static inline float cave_density(const column_context *c, int l, float t, float y) {
-    float n1[CAVE_OCTAVES], n2[CAVE_OCTAVES];
+/* One of the caves' ridged fields (cave1 or cave2) at level l + t: its octaves interpolated. */
+static inline float cave_ridged(const column_context *c, const float *field, int l, float t) {
+    float n[CAVE_OCTAVES];
     for (int o = 0; o < CAVE_OCTAVES; o++) {
-        const float *a = c->cave1 + (size_t)o * c->levels, *b = c->cave2 + (size_t)o * c->levels;
-        n1[o] = a[l] + t * (a[l + 1] - a[l]);
-        n2[o] = b[l] + t * (b[l + 1] - b[l]);
+        const float *a = field + (size_t)o * c->levels;
+        n[o] = a[l] + t * (a[l + 1] - a[l]);
     }
-    float ridges = terrain__ridged_from_octaves(n1, CAVE_OCTAVES, CAVE_GAIN) *
-                   terrain__ridged_from_octaves(n2, CAVE_OCTAVES, CAVE_GAIN);
-    /* Height attenuation (002 §3.1.3.2): 0 above cave_top, full from fade below it, fading
-     * out again over the fade above cave_bottom. */
-    float attenuation = clampf((c->cave_top - y) / c->fade, 0.0f, 1.0f) *
-                        clampf((y - c->cave_bottom) / c->fade, 0.0f, 1.0f);
-    return (1.0f - c->threshold * attenuation - ridges) * c->cave_scale;
+    return terrain__ridged_from_octaves(n, CAVE_OCTAVES, CAVE_GAIN);
 }
 
-/* Whether cave_density(c, l, t, y) > 0, i.e. R₁R₂ < 1 − threshold·attenuation (cave_scale > 0),
- * found from R₁ alone where it is already below: R₂ ≤ 1, so R₁R₂ ≤ R₁ (in floats too: the
- * product rounds monotonically). The same answer as the sign of cave_density, bit for bit. */
-static inline bool cave_solid(const column_context *c, int l, float t, float y) {
-    if (!(c->cave_scale > 0.0f)) return cave_density(c, l, t, y) > 0.0f;
-    float n1[CAVE_OCTAVES], n2[CAVE_OCTAVES];
-    for (int o = 0; o < CAVE_OCTAVES; o++) {
-        const float *a = c->cave1 + (size_t)o * c->levels;
-        n1[o] = a[l] + t * (a[l + 1] - a[l]);
-    }
+/* 1 − threshold·attenuation at y: what R₁R₂ must exceed for a cave. Height attenuation
+ * (002 §3.1.3.2): 0 above cave_top, full from fade below it, fading out again over the fade
+ * above cave_bottom. */
+static inline float cave_room(const column_context *c, float y) {
     float attenuation = clampf((c->cave_top - y) / c->fade, 0.0f, 1.0f) *
                         clampf((y - c->cave_bottom) / c->fade, 0.0f, 1.0f);
-    float room = 1.0f - c->threshold * attenuation, first = terrain__ridged_from_octaves(n1, CAVE_OCTAVES, CAVE_GAIN);
-    if (first < room) return true;
-    for (int o = 0; o < CAVE_OCTAVES; o++) {
-        const float *b = c->cave2 + (size_t)o * c->levels;
-        n2[o] = b[l] + t * (b[l + 1] - b[l]);
-    }
-    return room - first * terrain__ridged_from_octaves(n2, CAVE_OCTAVES, CAVE_GAIN) > 0.0f;
+    return 1.0f - c->threshold * attenuation;
+}
+
+static inline float cave_density(const column_context *c, int l, float t, float y) {
+    float ridges = cave_ridged(c, c->cave1, l, t) * cave_ridged(c, c->cave2, l, t);
+    return (cave_room(c, y) - ridges) * c->cave_scale;
+}
+
+/* Whether cave_density(c, l, t, y) > 0, i.e. R₁R₂ < cave_room (cave_scale > 0), found from R₁
+ * alone where it is already below: R₂ ≤ 1, so R₁R₂ ≤ R₁ (in floats too: the product rounds
+ * monotonically). The same answer as the sign of cave_density, bit for bit. */
+static inline bool cave_solid(const column_context *c, int l, float t, float y) {
+    if (!(c->cave_scale > 0.0f)) return cave_density(c, l, t, y) > 0.0f;
+    float room = cave_room(c, y), first = cave_ridged(c, c->cave1, l, t);
+    return first < room || room - first * cave_ridged(c, c->cave2, l, t) > 0.0f;
 }
 
 /* The density at y, every part evaluated (for placing a crossing). */
