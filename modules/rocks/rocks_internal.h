@@ -41,6 +41,7 @@ typedef struct rocks__seed {
     float u[3];         /* position inside the cell, in voxels (0 … m) */
     float q[6];         /* d(δ) = δᵀ·Q·δ with Q = (α x xᵀ + β y yᵀ + γ z zᵀ)/g:
                            q00, q11, q22, 2q01, 2q02, 2q12 */
+    float q_min;        /* Q's smallest eigenvalue, min(α, β, γ)/g: d ≥ q_min·|δ|² */
     int k;              /* index within its cell */
 } rocks__seed;
 

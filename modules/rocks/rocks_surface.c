@@ -143,13 +143,19 @@ static void make_pieces(void) {
 
 /* ---- the grids --------------------------------------------------------------------------------- */
 
-/* The tangent planes and points of a vertex's crossings, in fine units. */
-typedef struct qef {
-    float a[6];                       /* Σ n nᵀ: xx yy zz xy xz yz */
-    float b[3];                       /* Σ n (n·p) */
-    float mass[3], normal[3];         /* Σ p, Σ n */
-    int count;
+/* The tangent planes and points of a vertex's crossings, in fine units: sixteen floats, added
+ * four at a time. */
+typedef float floats4 __attribute__((vector_size(16)));
+typedef union qef {
+    floats4 v[4];
+    struct {
+        float a[6];                   /* Σ n nᵀ: xx yy zz xy xz yz */
+        float b[3];                   /* Σ n (n·p) */
+        float mass[3], normal[3];     /* Σ p, Σ n */
+        float count;                  /* exact: far fewer than 2²⁴ crossings */
+    };
 } qef;
+_Static_assert(sizeof(qef) == 4 * sizeof(floats4), "a qef is four vectors of four floats");
 
 typedef struct dual_grid {
     int size[3];
@@ -173,6 +179,32 @@ static float *fine_sample(const dual_grid *g, int x, int y, int z) {
     return g->fine + (z + PAD) * g->fine_stride[2] + (y + PAD) * g->fine_stride[1] + (x + PAD);
 }
 
+/* One row of r = 2ρ − 1 (ρ = ½ counts as solid, as in marching cubes' field: r = 0 becomes 10⁻⁶),
+ * four samples at a time; returns its signs, bit x set where solid. */
+static uint64_t fine_row(const float *in, float *out, int length) {
+    typedef int32_t ints4 __attribute__((vector_size(16)));
+    const floats4 two = { 2.0f, 2.0f, 2.0f, 2.0f }, one = { 1.0f, 1.0f, 1.0f, 1.0f }, zero = { 0 };
+    const floats4 tiny = { 1e-6f, 1e-6f, 1e-6f, 1e-6f };
+    const ints4 bit = { 1, 2, 4, 8 };
+    uint64_t solid = 0;
+    int x = 0;
+    for (; x + 4 <= length; x += 4) {
+        floats4 rho, r;
+        memcpy(&rho, in + x, sizeof rho);
+        r = two * rho - one;
+        ints4 is_zero = r == zero, bits = (r >= zero) & bit;
+        r = (floats4)((is_zero & (ints4)tiny) | (~is_zero & (ints4)r));
+        memcpy(out + x, &r, sizeof r);
+        solid |= (uint64_t)(bits[0] | bits[1] | bits[2] | bits[3]) << x;
+    }
+    for (; x < length; x++) {
+        float r = 2.0f * in[x] - 1.0f;
+        out[x] = r == 0.0f ? 1e-6f : r;
+        solid |= (uint64_t)(r >= 0.0f) << x;
+    }
+    return solid;
+}
+
 static void make_fine(dual_grid *g, const float *rho) {
     const int sx = g->size[0], sy = g->size[1], sz = g->size[2];
     g->fine_stride[0] = 1, g->fine_stride[1] = sx + 2 * PAD, g->fine_stride[2] = (ptrdiff_t)(sx + 2 * PAD) * (sy + 2 * PAD);
@@ -191,13 +223,7 @@ static void make_fine(dual_grid *g, const float *rho) {
             const float *in = rho + ((size_t)z * sy + y) * sx;
             float *out = fine_sample(g, 0, y, z);
             for (int p = 1; p <= PAD; p++) out[-p] = out[sx - 1 + p] = -1.0f;
-            uint64_t solid = 0;
-            for (int x = 0; x < sx; x++) {
-                float r = 2.0f * in[x] - 1.0f;
-                out[x] = r == 0.0f ? 1e-6f : r;   /* ρ = ½ counts as solid, as in marching cubes' field */
-                solid |= (uint64_t)(r >= 0.0f) << x;
-            }
-            g->solid_rows[(size_t)z * sy + y] = solid;
+            g->solid_rows[(size_t)z * sy + y] = fine_row(in, out, sx);
         }
 }
 
@@ -270,37 +296,39 @@ static int crossing_piece(const dual_grid *g, size_t cell, const int c[3], const
     return nearest_piece(g, cell, c, p);
 }
 
-static void qef_add(qef *q, const float p[3], const float n[3], bool has_normal) {
-    for (int a = 0; a < 3; a++) q->mass[a] += p[a];
-    q->count++;
-    if (!has_normal) return;
+/* One crossing's terms: its point, and its tangent plane when it has a normal. */
+static qef qef_of_crossing(const float p[3], const float n[3], bool has_normal) {
+    qef q = { .v = { { 0 }, { 0 }, { 0, p[0], p[1], p[2] }, { 0, 0, 0, 1.0f } } };
+    if (!has_normal) return q;
     float d = n[0] * p[0] + n[1] * p[1] + n[2] * p[2];
-    q->a[0] += n[0] * n[0], q->a[1] += n[1] * n[1], q->a[2] += n[2] * n[2];
-    q->a[3] += n[0] * n[1], q->a[4] += n[0] * n[2], q->a[5] += n[1] * n[2];
-    for (int a = 0; a < 3; a++) q->b[a] += n[a] * d, q->normal[a] += n[a];
+    q.v[0] = (floats4){ n[0] * n[0], n[1] * n[1], n[2] * n[2], n[0] * n[1] };
+    q.v[1] = (floats4){ n[0] * n[2], n[1] * n[2], n[0] * d, n[1] * d };
+    q.v[2] = (floats4){ n[2] * d, p[0], p[1], p[2] };
+    q.v[3] = (floats4){ n[0], n[1], n[2], 1.0f };
+    return q;
 }
 
 /* The crossing on the fine edge from sample (x, y, z) along `axis` given to every coarse cell
- * that holds the edge (one, or two or four when it lies on the cells' faces or edges). */
+ * that holds the edge: one, or two or four when it lies on the cells' faces or edges (cell c
+ * spans fine samples 2c − 2 … 2c, so an even coordinate off the axis lies on two cells). */
 static void scatter_crossing(dual_grid *g, const int at[3], int axis, float t, const float n[3], bool has_normal) {
     const float p[3] = { (float)at[0] + (axis == 0 ? t : 0.0f), (float)at[1] + (axis == 1 ? t : 0.0f),
                          (float)at[2] + (axis == 2 ? t : 0.0f) };
-    int lo[3], hi[3];
-    for (int a = 0; a < 3; a++) {
-        int k = at[a] + 2;            /* cell c spans fine 2c − 2 … 2c */
-        hi[a] = k >> 1;
-        lo[a] = hi[a] - (a != axis && !(k & 1));
-    }
-    int c[3];
+    const qef terms = qef_of_crossing(p, n, has_normal);
+    const int u = (axis + 1) % 3, w = (axis + 2) % 3;
+    int c[3] = { (at[0] + 2) >> 1, (at[1] + 2) >> 1, (at[2] + 2) >> 1 };   /* the highest cell */
+    const int two_u = !(at[u] & 1), two_w = !(at[w] & 1);
+    const int cu = c[u], cw = c[w];
     bool held = false;
-    for (c[2] = lo[2]; c[2] <= hi[2]; c[2]++)
-        for (c[1] = lo[1]; c[1] <= hi[1]; c[1]++)
-            for (c[0] = lo[0]; c[0] <= hi[0]; c[0]++) {
-                size_t cell = (size_t)(c[2] * g->cell_stride[2] + c[1] * g->cell_stride[1] + c[0]);
-                if (g->cell_first[cell] < 0) continue;
-                qef_add(&g->qefs[g->cell_first[cell] + crossing_piece(g, cell, c, at, axis, p)], p, n, has_normal);
-                held = true;
-            }
+    for (int i = 0; i <= two_w; i++)
+        for (int j = 0; j <= two_u; j++) {
+            c[u] = cu - j, c[w] = cw - i;
+            size_t cell = (size_t)(c[2] * g->cell_stride[2] + c[1] * g->cell_stride[1] + c[0]);
+            if (g->cell_first[cell] < 0) continue;
+            qef *sum = &g->qefs[g->cell_first[cell] + crossing_piece(g, cell, c, at, axis, p)];
+            for (int k = 0; k < 4; k++) sum->v[k] += terms.v[k];
+            held = true;
+        }
     if (!held) {   /* no vertex's cell holds it: checked against the vertices around, once placed */
         g->missed = core_grow(g->missed, &g->missed_cap, g->missed_count + 1, sizeof *g->missed);
         memcpy(g->missed[g->missed_count++], p, sizeof p);
@@ -351,7 +379,7 @@ static void gather_crossings(dual_grid *g) {
  * kept inside the cell (fine coordinates lo … lo + 2). */
 static void qef_point(const qef *q, const int lo[3], float out[3]) {
     double m[3], r[3];
-    for (int a = 0; a < 3; a++) m[a] = q->count ? (double)q->mass[a] / q->count : lo[a] + 1.0;
+    for (int a = 0; a < 3; a++) m[a] = q->count > 0.0f ? (double)q->mass[a] / q->count : lo[a] + 1.0;
     const double xx = q->a[0], yy = q->a[1], zz = q->a[2], xy = q->a[3], xz = q->a[4], yz = q->a[5];
     r[0] = q->b[0] - (xx * m[0] + xy * m[1] + xz * m[2]);
     r[1] = q->b[1] - (xy * m[0] + yy * m[1] + yz * m[2]);
@@ -400,7 +428,7 @@ static bool place_vertices(const dual_grid *g, rocks__surface *out) {
                     uint32_t v = (uint32_t)(g->cell_first[cell] + k);
                     const qef *q = &g->qefs[v];
                     float length = sqrtf(q->normal[0] * q->normal[0] + q->normal[1] * q->normal[1] + q->normal[2] * q->normal[2]);
-                    if (q->count == 0 || !(length >= AGREEMENT * (float)q->count)) return false;   /* none, or they disagree */
+                    if (q->count == 0.0f || !(length >= AGREEMENT * q->count)) return false;   /* none, or they disagree */
                     qef_point(q, lo, out->positions + 3 * (size_t)v);
                     for (int a = 0; a < 3; a++) out->normals[3 * (size_t)v + a] = q->normal[a] / length;
                 }

@@ -165,6 +165,7 @@ int rocks__cell_seeds(const rocks__params *params, const int cell[3], rocks__col
                 for (int a = 0; a < 3; a++) q[r][c] += scale[a] * rot[r][a] * rot[c][a] / g;
         s->q[0] = (float)q[0][0], s->q[1] = (float)q[1][1], s->q[2] = (float)q[2][2];
         s->q[3] = (float)(2 * q[0][1]), s->q[4] = (float)(2 * q[0][2]), s->q[5] = (float)(2 * q[1][2]);
+        s->q_min = (float)(fmin(scale[0], fmin(scale[1], scale[2])) / g);
     }
     return count;
 }

@@ -37,6 +37,9 @@ typedef struct region_build {
     /* the voxels whose dual block holds a region cell */
     int vlo[3], vdim[3];
     int32_t *owner;
+    /* per seed: the voxels it owns and their box (lo xyz, hi xyz), kept as ownership is decided */
+    uint32_t *owned;
+    int (*owned_box)[6];
 } region_build;
 
 static int region_colour(const void *user, int x, int y, int z) {
@@ -69,6 +72,54 @@ static void make_seeds(region_build *b) {
 
 /* ---- ownership (001 §4, the dual-block rule above) --------------------------------------------- */
 
+/* Voxels first … last of row (y, z) belong to seed `who`: its count and box. */
+static void note_owned(region_build *b, int32_t who, int first, int last, int y, int z) {
+    if (who < 0) return;
+    int *box = b->owned_box[who];
+    b->owned[who] += (uint32_t)(last - first + 1);
+    if (first < box[0]) box[0] = first;
+    if (y < box[1]) box[1] = y;
+    if (z < box[2]) box[2] = z;
+    if (last > box[3]) box[3] = last;
+    if (y > box[4]) box[4] = y;
+    if (z > box[5]) box[5] = z;
+}
+
+/* Drops the candidates that cannot own a voxel of the block, keeping the others' order. Over the
+ * box of its voxel centres, a seed's d is at most its largest value at the box's 8 corners (d is
+ * convex) and at least q_min times the squared distance from the seed to the box. A seed whose
+ * least value exceeds some seed's largest is beaten at every voxel, so leaving it out changes no
+ * owner. The margins cover float rounding of d (relative 1e-6) many times over. */
+static int prune_candidates(const region_build *b, const int v0[3], const int size[3], uint32_t *cand, int count) {
+    float lo[8 * ROCKS__MAX_SEEDS_PER_CELL][3], hi[8 * ROCKS__MAX_SEEDS_PER_CELL][3];
+    float bound = INFINITY;   /* the smallest of the seeds' largest d */
+    for (int k = 0; k < count; k++) {
+        const rocks__seed *s = &b->seeds[cand[k]];
+        float most = 0.0f;
+        for (int a = 0; a < 3; a++) {
+            lo[k][a] = (float)(v0[a] - s->cell[a] * b->m) + 0.5f - s->u[a];
+            hi[k][a] = lo[k][a] + (float)(size[a] - 1);
+        }
+        for (int corner = 0; corner < 8; corner++) {
+            float d = rocks__distance(s->q, corner & 1 ? hi[k][0] : lo[k][0], corner & 2 ? hi[k][1] : lo[k][1],
+                                      corner & 4 ? hi[k][2] : lo[k][2]);
+            most = d > most ? d : most;
+        }
+        bound = most < bound ? most : bound;
+    }
+    bound = bound * 1.01f + 1e-3f;
+    int kept = 0;
+    for (int k = 0; k < count; k++) {
+        float gap2 = 0.0f;   /* squared distance from the seed to the box */
+        for (int a = 0; a < 3; a++) {
+            float g = lo[k][a] > 0.0f ? lo[k][a] : hi[k][a] < 0.0f ? -hi[k][a] : 0.0f;
+            gap2 += g * g;
+        }
+        if (0.99f * b->seeds[cand[k]].q_min * gap2 <= bound) cand[kept++] = cand[k];
+    }
+    return kept;
+}
+
 /* One octant of one cell: all its voxels share a dual block, so the candidates are fixed and the
  * loop runs candidate by candidate over rows of voxels (structure of arrays: the x offsets of a
  * row precomputed, then two multiplies and two adds a voxel, vectorisable). */
@@ -88,15 +139,18 @@ static void own_block(region_build *b, const int v0[3], const int size[3], const
         while (j >= 0 && b->seeds[cand[j]].id > b->seeds[x].id) cand[j + 1] = cand[j], j--;
         cand[j + 1] = x;
     }
+    count = prune_candidates(b, v0, size, cand, count);
     /* rows padded to BLOCK_SIDE: a loop of fixed length, which the compiler vectorises; the
-     * padding lanes compute with dx = 0 and are never read */
+     * padding lanes compute with dx = 0 and are never read. The first candidate finds the
+     * distances unset (as if infinite) and takes every voxel. */
     float best[BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE];
     int32_t who[BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE];
     const int nx = size[0], ny = size[1], nz = size[2], m = b->m;
-    for (int i = 0; i < BLOCK_SIDE * ny * nz; i++) best[i] = INFINITY, who[i] = -1;
+    if (count == 0)
+        for (int i = 0; i < BLOCK_SIDE * ny * nz; i++) who[i] = -1;
     for (int k = 0; k < count; k++) {
         const rocks__seed *s = &b->seeds[cand[k]];
-        const float *q = s->q;
+        const float *q = s->q, q0 = q[0];   /* q0 a local: the x loop below loads nothing else */
         float dxs[BLOCK_SIDE] = { 0 };
         for (int x = 0; x < nx; x++) dxs[x] = (float)(v0[0] + x - s->cell[0] * m) + 0.5f - s->u[0];
         int32_t id = (int32_t)cand[k];
@@ -109,7 +163,8 @@ static void own_block(region_build *b, const int v0[3], const int size[3], const
                 float *row = best + (z * ny + y) * BLOCK_SIDE;
                 int32_t *row_who = who + (z * ny + y) * BLOCK_SIDE;
                 for (int x = 0; x < BLOCK_SIDE; x++) {   /* branch-free, so it vectorises */
-                    float d = (q[0] * dxs[x] + bq) * dxs[x] + aq, r = row[x];
+                    float d = (q0 * dxs[x] + bq) * dxs[x] + aq, r = row[x];
+                    r = k ? r : INFINITY;   /* loaded either way: a select, not a branch */
                     int32_t better = -(int32_t)(d < r);
                     row[x] = d < r ? d : r;
                     row_who[x] = (row_who[x] & ~better) | (id & better);
@@ -119,9 +174,14 @@ static void own_block(region_build *b, const int v0[3], const int size[3], const
     }
     for (int z = 0; z < nz; z++)
         for (int y = 0; y < ny; y++) {
+            const int32_t *row = who + (z * ny + y) * BLOCK_SIDE;
             int32_t *dst = b->owner + ((size_t)(v0[2] + z - b->vlo[2]) * b->vdim[1] + (v0[1] + y - b->vlo[1])) * b->vdim[0] +
                            (v0[0] - b->vlo[0]);
-            memcpy(dst, who + (z * ny + y) * BLOCK_SIDE, (size_t)nx * sizeof *dst);
+            memcpy(dst, row, (size_t)nx * sizeof *dst);
+            for (int x = 0, end; x < nx; x = end) {   /* the row's runs of one owner */
+                for (end = x + 1; end < nx && row[end] == row[x];) end++;
+                note_owned(b, row[x], v0[0] + x, v0[0] + end - 1, v0[1] + y, v0[2] + z);
+            }
         }
 }
 
@@ -129,6 +189,10 @@ static void own_voxels(region_build *b) {
     const int m = b->m, half = m / 2;   /* voxels s < half are on the lower side (2s + 1 < m) */
     size_t total = (size_t)b->vdim[0] * b->vdim[1] * b->vdim[2];
     b->owner = core_alloc(total * sizeof *b->owner);
+    b->owned = core_calloc(b->seed_count ? b->seed_count : 1, sizeof *b->owned);
+    b->owned_box = core_alloc((b->seed_count ? b->seed_count : 1) * sizeof *b->owned_box);
+    for (uint32_t i = 0; i < b->seed_count; i++)
+        for (int a = 0; a < 3; a++) b->owned_box[i][a] = 1 << 30, b->owned_box[i][3 + a] = -(1 << 30);
     int c[3];
     for (c[2] = b->clo[2]; c[2] < b->clo[2] + b->cdim[2]; c[2]++)
         for (c[1] = b->clo[1]; c[1] < b->clo[1] + b->cdim[1]; c[1]++)
@@ -257,13 +321,18 @@ typedef struct erosion_buffers {
     size_t capacity;
 } erosion_buffers;
 
+/* Bytes after each byte array's box: its 16-byte loops may read and write up to SLACK − 1
+ * past the last voxel they need (into this array's own tail, never the next array's). */
+#define SLACK 32
+
 static void erosion_buffers_make(erosion_buffers *e, size_t capacity) {
     e->capacity = capacity;
     e->rho = core_alloc(capacity * sizeof *e->rho);
     e->omega = core_alloc(capacity * sizeof *e->omega);
-    e->empty = core_alloc(5 * capacity);
-    e->sum_x = e->empty + capacity, e->sum_xy = e->sum_x + capacity;
-    e->outside = e->sum_xy + capacity, e->faces = e->outside + capacity;
+    const size_t stride = capacity + SLACK;
+    e->empty = core_calloc(5, stride);
+    e->sum_x = e->empty + stride, e->sum_xy = e->sum_x + stride;
+    e->outside = e->sum_xy + stride, e->faces = e->outside + stride;
     e->active = core_alloc(2 * capacity * sizeof *e->active);
     e->emptied = e->active + capacity;
 }
@@ -271,7 +340,7 @@ static void erosion_buffers_make(erosion_buffers *e, size_t capacity) {
 static void erosion_buffers_free(erosion_buffers *e) {
     core_free(e->rho, e->capacity * sizeof *e->rho);
     core_free(e->omega, e->capacity * sizeof *e->omega);
-    core_free(e->empty, 5 * e->capacity);
+    core_free(e->empty, 5 * (e->capacity + SLACK));
     core_free(e->active, 2 * e->capacity * sizeof *e->active);
 }
 
@@ -314,35 +383,80 @@ static void damping(float *omega, const uint8_t *empty, const int lo[3], const i
     }
 }
 
+/* Sixteen voxels' bytes at a time, in GCC's vector types (SSE2 on any x86-64): at -O2 GCC does
+ * not vectorise a loop whose length it does not know, and these run over a whole box. */
+typedef uint8_t bytes16 __attribute__((vector_size(16)));
+
+static inline bytes16 load16(const uint8_t *p) {
+    bytes16 v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+
+static inline void store16(uint8_t *p, bytes16 v) { memcpy(p, &v, sizeof v); }
+
 /* How many of each voxel's 26 neighbours are empty, by three separable 3-sums of the emptiness
- * indicator (interior voxels only: rock voxels never lie on the box's border), and of its 6 face
- * neighbours. */
+ * indicator, and of its 6 face neighbours. Each sum runs over the box as one flat array: a voxel
+ * on the box's border gets a sum that wraps round a row or plane, but no rock voxel lies on the
+ * border, and erosion reads the counts of rock voxels only. */
 static void count_empty_neighbours(erosion_buffers *e, const int size[3]) {
-    const int sx = size[0], sy = size[1], sz = size[2];
-    const size_t plane = (size_t)sx * sy, total = plane * sz;
-    memset(e->outside, 0, total);
-    memset(e->faces, 0, total);
-    for (size_t row = 0; row < (size_t)sy * sz; row++) {
-        const uint8_t *in = e->empty + row * sx;
-        uint8_t *out = e->sum_x + row * sx;
-        for (int x = 1; x < sx - 1; x++) out[x] = (uint8_t)(in[x - 1] + in[x] + in[x + 1]);
+    const ptrdiff_t sx = size[0], plane = sx * size[1], total = plane * size[2];
+    const uint8_t *empty = e->empty;
+    uint8_t *sum_x = e->sum_x, *sum_xy = e->sum_xy, *outside = e->outside, *faces = e->faces;
+    for (ptrdiff_t i = 1; i < total - 1; i += 16)
+        store16(sum_x + i, load16(empty + i - 1) + load16(empty + i) + load16(empty + i + 1));
+    for (ptrdiff_t i = sx; i < total - sx; i += 16)
+        store16(sum_xy + i, load16(sum_x + i - sx) + load16(sum_x + i) + load16(sum_x + i + sx));
+    memset(outside, 0, (size_t)plane);
+    memset(faces, 0, (size_t)plane);
+    for (ptrdiff_t i = plane; i < total - plane; i += 16) {
+        store16(outside + i, load16(sum_xy + i - plane) + load16(sum_xy + i) + load16(sum_xy + i + plane));
+        store16(faces + i, load16(empty + i - 1) + load16(empty + i + 1) + load16(empty + i - sx) + load16(empty + i + sx) +
+                               load16(empty + i - plane) + load16(empty + i + plane));
     }
-    for (int z = 0; z < sz; z++)
-        for (int y = 1; y < sy - 1; y++) {
-            size_t i = (size_t)z * plane + (size_t)y * sx;
-            for (int x = 1; x < sx - 1; x++)
-                e->sum_xy[i + x] = (uint8_t)(e->sum_x[i + x - sx] + e->sum_x[i + x] + e->sum_x[i + x + sx]);
-        }
+    memset(outside + total - plane, 0, (size_t)plane);
+    memset(faces + total - plane, 0, (size_t)plane);
+}
+
+/* The rock's voxels in its box: emptiness 0, ρ = 1 and ω = 1 on them; emptiness 1 and ρ = 0
+ * elsewhere (ω is read on the rock's voxels only). */
+static void erosion_start(const region_build *b, int32_t self, const int lo[3], const int size[3], erosion_buffers *e) {
+    const int sx = size[0], sy = size[1], sz = size[2];
+    const size_t total = (size_t)sx * sy * sz;
+    memset(e->empty, 1, total);
+    memset(e->rho, 0, total * sizeof *e->rho);
     for (int z = 1; z < sz - 1; z++)
         for (int y = 1; y < sy - 1; y++) {
-            size_t i = (size_t)z * plane + (size_t)y * sx;
+            /* the box less its border lies inside the owner array (it bounds the rock's voxels) */
+            const int32_t *owner = b->owner + ((size_t)(lo[2] + z - b->vlo[2]) * b->vdim[1] + (lo[1] + y - b->vlo[1])) * b->vdim[0] +
+                                   (lo[0] - b->vlo[0]);
+            size_t row = ((size_t)z * sy + y) * sx;
+            uint8_t *empty = e->empty + row;
+            float *rho = e->rho + row, *omega = e->omega + row;
             for (int x = 1; x < sx - 1; x++) {
-                size_t j = i + x;
-                e->outside[j] = (uint8_t)(e->sum_xy[j - plane] + e->sum_xy[j] + e->sum_xy[j + plane]);
-                e->faces[j] = (uint8_t)(e->empty[j - 1] + e->empty[j + 1] + e->empty[j - sx] + e->empty[j + sx] +
-                                        e->empty[j - plane] + e->empty[j + plane]);
+                int mine = owner[x] == self;
+                empty[x] = (uint8_t)!mine, rho[x] = (float)mine, omega[x] = 1.0f;
             }
         }
+}
+
+/* The surface voxels that can erode, in order: in the rock, undamped, with a face neighbour
+ * outside. Eight voxels at a time: one byte each of 1 − empty and of (faces > 0) (faces ≤ 6, so
+ * its low three bits), and most groups of eight hold none. */
+static size_t erosion_surface(size_t total, const uint8_t *empty, const float *omega, const uint8_t *faces, uint32_t *list) {
+    const uint64_t ones = 0x0101010101010101ull;
+    size_t count = 0;
+    for (size_t i = 0; i < total; i += 8) {
+        uint64_t e, f;
+        memcpy(&e, empty + i, 8), memcpy(&f, faces + i, 8);
+        uint64_t surface = ~e & (f | f >> 1 | f >> 2) & ones;
+        if (total - i < 8) surface &= ~(~0ull << 8 * (total - i));   /* the bytes past the box */
+        for (; surface; surface &= surface - 1) {
+            size_t v = i + (size_t)__builtin_ctzll(surface) / 8;
+            if (omega[v] > 0.0f) list[count++] = (uint32_t)v;
+        }
+    }
+    return count;
 }
 
 /* ρ over the rock's box grown by one voxel (the border stays 0), after the erosion steps:
@@ -356,26 +470,10 @@ static void erode(const region_build *b, int32_t self, const int lo[3], const in
                   int contact_count, erosion_buffers *e) {
     const rocks__params *params = b->params;
     const int sx = size[0], sy = size[1], sz = size[2];
-    const float a = params->contact_voxels, bb = params->blend_voxels;
-    const size_t total = (size_t)sx * sy * sz;
-    for (size_t i = 0; i < total; i++) e->empty[i] = 1, e->omega[i] = 1.0f, e->rho[i] = 0.0f;
-    for (int z = 1; z < sz - 1; z++)
-        for (int y = 1; y < sy - 1; y++) {
-            /* the box less its border lies inside the owner array (it bounds the rock's voxels) */
-            const int32_t *owner = b->owner + ((size_t)(lo[2] + z - b->vlo[2]) * b->vdim[1] + (lo[1] + y - b->vlo[1])) * b->vdim[0] +
-                                   (lo[0] - b->vlo[0]);
-            size_t row = ((size_t)z * sy + y) * sx;
-            uint8_t *empty = e->empty + row;
-            float *rho = e->rho + row;
-            for (int x = 1; x < sx - 1; x++) empty[x] = owner[x] != self, rho[x] = owner[x] == self ? 1.0f : 0.0f;
-        }
-    damping(e->omega, e->empty, lo, size, contacts, contact_count, a, bb);
+    erosion_start(b, self, lo, size, e);
+    damping(e->omega, e->empty, lo, size, contacts, contact_count, params->contact_voxels, params->blend_voxels);
     count_empty_neighbours(e, size);
-    size_t active = 0;   /* the surface voxels that can erode (kept by advancing the count) */
-    for (size_t i = 0; i < total; i++) {
-        e->active[active] = (uint32_t)i;
-        active += !e->empty[i] & (e->omega[i] > 0.0f) & (e->faces[i] > 0);
-    }
+    size_t active = erosion_surface((size_t)sx * sy * sz, e->empty, e->omega, e->faces, e->active);
     const float rate = params->desc.erosion_rate;
     const ptrdiff_t plane = (ptrdiff_t)sx * sy, face[6] = { -1, 1, -sx, sx, -plane, plane };
     for (int step = 0; step < params->desc.erosion_steps; step++) {
@@ -420,7 +518,7 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
     make_seeds(&b);
     own_voxels(&b);
 
-    /* The region's own seeds, each a rock: its voxel count and box. */
+    /* The region's own seeds, each a rock (its voxel count and box are kept by own_voxels). */
     int32_t *slot = core_alloc(b.seed_count * sizeof *slot);
     uint32_t rocks = 0;
     for (uint32_t s = 0; s < b.seed_count; s++) {
@@ -429,21 +527,6 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
         for (int a = 0; a < 3; a++) inside &= c[a] >= b.region.lo[a] && c[a] <= b.region.hi[a];
         slot[s] = inside ? (int32_t)rocks++ : -1;
     }
-    int (*box)[6] = core_alloc((rocks ? rocks : 1) * sizeof *box);
-    uint32_t *count = core_calloc(rocks ? rocks : 1, sizeof *count);
-    for (uint32_t r = 0; r < rocks; r++) box[r][0] = box[r][1] = box[r][2] = 1 << 30, box[r][3] = box[r][4] = box[r][5] = -(1 << 30);
-    for (int z = 0; z < b.vdim[2]; z++)
-        for (int y = 0; y < b.vdim[1]; y++)
-            for (int x = 0; x < b.vdim[0]; x++) {
-                int32_t o = b.owner[((size_t)z * b.vdim[1] + y) * b.vdim[0] + x];
-                if (o < 0 || slot[o] < 0) continue;
-                int r = slot[o], v[3] = { b.vlo[0] + x, b.vlo[1] + y, b.vlo[2] + z };
-                count[r]++;
-                for (int a = 0; a < 3; a++) {
-                    if (v[a] < box[r][a]) box[r][a] = v[a];
-                    if (v[a] > box[r][3 + a]) box[r][3 + a] = v[a];
-                }
-            }
 
     const size_t box_max = (size_t)(2 * m + 3) * (2 * m + 3) * (2 * m + 3);
     erosion_buffers erosion;
@@ -455,9 +538,8 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
     const float tile_scale = 1.0f / (float)(b.n * m);
     for (uint32_t s = 0; s < b.seed_count; s++) {
         if (slot[s] < 0) continue;
-        int r = slot[s];
         const rocks__seed *p = &b.seeds[s];
-        if (count[r] == 0 && !options->keep_empty) continue;   /* owns no voxel centre */
+        if (b.owned[s] == 0 && !options->keep_empty) continue;   /* owns no voxel centre */
 
         /* contacts with the seeds of the 26 cells around and its own cell */
         uint32_t contact_first = out->contact_count;
@@ -497,9 +579,10 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
         rocks_rock rock = { 0 };
         int lo[3], size[3];
         for (int a = 0; a < 3; a++) {
-            if (count[r] == 0) box[r][a] = box[r][3 + a] = p->cell[a] * m + m / 2;
-            lo[a] = box[r][a] - 1;
-            size[a] = box[r][3 + a] - box[r][a] + 3;
+            int *box = b.owned_box[s];
+            if (b.owned[s] == 0) box[a] = box[3 + a] = p->cell[a] * m + m / 2;
+            lo[a] = box[a] - 1;
+            size[a] = box[3 + a] - box[a] + 3;
         }
         erode(&b, (int32_t)s, lo, size, (const double (*)[3])points, points_count, &erosion);
         bool kept = rocks__rock_mesh(params, rho, lo, size, p, out, &rock);
@@ -545,8 +628,8 @@ void rocks__region_build(const rocks__params *params, const rocks__build_options
     core_free(points, 27 * ROCKS__MAX_SEEDS_PER_CELL * sizeof *points);
     core_free(memo, memo_count * sizeof *memo);
     erosion_buffers_free(&erosion);
-    core_free(box, (rocks ? rocks : 1) * sizeof *box);
-    core_free(count, (rocks ? rocks : 1) * sizeof *count);
+    core_free(b.owned, (b.seed_count ? b.seed_count : 1) * sizeof *b.owned);
+    core_free(b.owned_box, (b.seed_count ? b.seed_count : 1) * sizeof *b.owned_box);
     core_free(slot, b.seed_count * sizeof *slot);
     size_t cells = (size_t)b.cdim[0] * b.cdim[1] * b.cdim[2];
     core_free(b.cell_first, cells * sizeof *b.cell_first);
