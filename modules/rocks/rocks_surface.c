@@ -164,11 +164,12 @@ typedef struct dual_grid {
     size_t fine_total;
     uint64_t *solid_rows;             /* per box row (y, z): bit x set where solid (r ≥ 0) */
     int samples[3], cells[3];         /* coarse */
-    ptrdiff_t sample_stride[3], cell_stride[3];
-    uint8_t *sample_solid;
-    uint8_t *cell_case;               /* corner signs */
+    ptrdiff_t cell_stride[3];
+    uint64_t *sample_rows;            /* per coarse row (y, z): bit x set where sample x is solid */
+    uint8_t *cell_case;               /* corner signs; 0 for a cell all inside or all outside */
     int32_t *cell_first;              /* its first vertex, −1 when it has none */
-    size_t cell_total, sample_total;
+    uint32_t *crossed_cells;          /* the cells with vertices, in order */
+    size_t cell_total, crossed_count;
     qef *qefs;                        /* one a vertex */
     uint32_t vertex_count;
     float (*missed)[3];               /* crossings in cells without vertices */
@@ -227,40 +228,64 @@ static void make_fine(dual_grid *g, const float *rho) {
         }
 }
 
-/* Whether fine sample (x, y, z) is solid; outside the box, not. */
-static bool fine_solid(const dual_grid *g, int x, int y, int z) {
-    if (x < 0 || y < 0 || z < 0 || x >= g->size[0] || y >= g->size[1] || z >= g->size[2]) return false;
-    return (g->solid_rows[(size_t)z * g->size[1] + y] >> x) & 1;
+/* Bits 0, 2, 4, … of v packed into bits 0, 1, 2, … */
+static uint64_t even_bits(uint64_t v) {
+    v &= 0x5555555555555555ull;
+    v = (v | v >> 1) & 0x3333333333333333ull;
+    v = (v | v >> 2) & 0x0f0f0f0f0f0f0f0full;
+    v = (v | v >> 4) & 0x00ff00ff00ff00ffull;
+    v = (v | v >> 8) & 0x0000ffff0000ffffull;
+    return (v | v >> 16) & 0x00000000ffffffffull;
 }
 
-/* Coarse signs, each cell's case, and a vertex (qef) for each piece of each cell that has one. */
+static uint64_t sample_row(const dual_grid *g, int y, int z) { return g->sample_rows[(size_t)z * g->samples[1] + y]; }
+
+/* Coarse signs, each cell's case, and a vertex (qef) for each piece of each cell that has one.
+ * Coarse sample (x, y, z) is fine sample (2x − 2, 2y − 2, 2z − 2), so a coarse row of signs is
+ * the even bits of a fine row moved up one (x = 0 lies outside the box). A cell is crossed where
+ * its four rows' bits x and x + 1 are neither all clear nor all set; only those are visited. */
 static void make_cells(dual_grid *g) {
     for (int a = 0; a < 3; a++) g->samples[a] = g->size[a] / 2 + 3, g->cells[a] = g->samples[a] - 1;
-    g->sample_stride[0] = 1, g->sample_stride[1] = g->samples[0], g->sample_stride[2] = (ptrdiff_t)g->samples[0] * g->samples[1];
     g->cell_stride[0] = 1, g->cell_stride[1] = g->cells[0], g->cell_stride[2] = (ptrdiff_t)g->cells[0] * g->cells[1];
-    g->sample_total = (size_t)g->sample_stride[2] * g->samples[2];
     g->cell_total = (size_t)g->cell_stride[2] * g->cells[2];
-    g->sample_solid = core_alloc(g->sample_total);
+    g->sample_rows = core_alloc((size_t)g->samples[1] * g->samples[2] * sizeof *g->sample_rows);
     for (int z = 0; z < g->samples[2]; z++)
-        for (int y = 0; y < g->samples[1]; y++)
-            for (int x = 0; x < g->samples[0]; x++)
-                g->sample_solid[z * g->sample_stride[2] + y * g->sample_stride[1] + x] = fine_solid(g, 2 * x - 2, 2 * y - 2, 2 * z - 2);
+        for (int y = 0; y < g->samples[1]; y++) {
+            const int fy = 2 * y - 2, fz = 2 * z - 2;
+            const bool inside = fy >= 0 && fz >= 0 && fy < g->size[1] && fz < g->size[2];
+            g->sample_rows[(size_t)z * g->samples[1] + y] = inside ? even_bits(g->solid_rows[(size_t)fz * g->size[1] + fy]) << 1 : 0;
+        }
     g->cell_case = core_alloc(g->cell_total);
     g->cell_first = core_alloc(g->cell_total * sizeof *g->cell_first);
+    g->crossed_cells = core_alloc(g->cell_total * sizeof *g->crossed_cells);
+    memset(g->cell_case, 0, g->cell_total);
+    memset(g->cell_first, 0xff, g->cell_total * sizeof *g->cell_first);   /* −1 */
     g->vertex_count = 0;
-    const ptrdiff_t sy = g->sample_stride[1], sz = g->sample_stride[2];
+    g->crossed_count = 0;
+    const uint64_t in_row = (1ull << g->cells[0]) - 1;
     for (int z = 0; z < g->cells[2]; z++)
-        for (int y = 0; y < g->cells[1]; y++)
-            for (int x = 0; x < g->cells[0]; x++) {
-                const uint8_t *s = g->sample_solid + z * sz + y * sy + x;
-                int signs = s[0] | s[1] << 1 | s[sy] << 2 | s[sy + 1] << 3 | s[sz] << 4 | s[sz + 1] << 5 | s[sz + sy] << 6 |
-                            s[sz + sy + 1] << 7;
-                size_t cell = (size_t)(z * g->cell_stride[2] + y * g->cell_stride[1] + x);
+        for (int y = 0; y < g->cells[1]; y++) {
+            const uint64_t a = sample_row(g, y, z), b = sample_row(g, y + 1, z), c = sample_row(g, y, z + 1),
+                           d = sample_row(g, y + 1, z + 1);
+            const uint64_t some = a | b | c | d, all = a & b & c & d;
+            for (uint64_t crossed = (some | some >> 1) & ~(all & all >> 1) & in_row; crossed; crossed &= crossed - 1) {
+                const int x = __builtin_ctzll(crossed);
+                const int signs = (int)((a >> x & 3) | (b >> x & 3) << 2 | (c >> x & 3) << 4 | (d >> x & 3) << 6);
+                const size_t cell = (size_t)(z * g->cell_stride[2] + y * g->cell_stride[1] + x);
                 g->cell_case[cell] = (uint8_t)signs;
-                g->cell_first[cell] = piece_count[signs] ? (int32_t)g->vertex_count : -1;
+                g->cell_first[cell] = (int32_t)g->vertex_count;
                 g->vertex_count += piece_count[signs];
+                g->crossed_cells[g->crossed_count++] = (uint32_t)cell;
             }
+        }
     g->qefs = core_calloc(g->vertex_count ? g->vertex_count : 1, sizeof *g->qefs);
+}
+
+/* The coarse coordinates of a cell. */
+static void cell_coordinates(const dual_grid *g, size_t cell, int out[3]) {
+    out[0] = (int)(cell % (size_t)g->cells[0]);
+    out[1] = (int)(cell / (size_t)g->cells[0] % (size_t)g->cells[1]);
+    out[2] = (int)(cell / (size_t)g->cell_stride[2]);
 }
 
 /* ---- the crossings ----------------------------------------------------------------------------- */
@@ -399,17 +424,17 @@ static void qef_point(const qef *q, const int lo[3], float out[3]) {
  * one of them holds the curves apart, its two vertices each meet the other's one along an edge
  * of two triangles. */
 static bool two_sheets_everywhere(const dual_grid *g) {
-    for (int z = 0; z < g->cells[2]; z++)
-        for (int y = 0; y < g->cells[1]; y++)
-            for (int x = 0; x < g->cells[0]; x++) {
-                size_t cell = (size_t)(z * g->cell_stride[2] + y * g->cell_stride[1] + x);
-                uint8_t faces = faces_met_twice[g->cell_case[cell]];
-                const int at[3] = { x, y, z };
-                for (int axis = 0; faces && axis < 3; axis++)   /* the upper face: the lower is the neighbour's */
-                    if (faces >> (2 * axis + 1) & 1 && at[axis] + 1 < g->cells[axis] &&
-                        faces_met_twice[g->cell_case[cell + (size_t)g->cell_stride[axis]]] >> (2 * axis) & 1)
-                        return false;
-            }
+    for (size_t i = 0; i < g->crossed_count; i++) {   /* a face met twice is a crossed cell's */
+        const size_t cell = g->crossed_cells[i];
+        uint8_t faces = faces_met_twice[g->cell_case[cell]];
+        if (!faces) continue;
+        int at[3];
+        cell_coordinates(g, cell, at);
+        for (int axis = 0; axis < 3; axis++)   /* the upper face: the lower is the neighbour's */
+            if (faces >> (2 * axis + 1) & 1 && at[axis] + 1 < g->cells[axis] &&
+                faces_met_twice[g->cell_case[cell + (size_t)g->cell_stride[axis]]] >> (2 * axis) & 1)
+                return false;
+    }
     return true;
 }
 
@@ -418,21 +443,20 @@ static bool place_vertices(const dual_grid *g, rocks__surface *out) {
     out->vertex_count = g->vertex_count;
     out->positions = core_alloc(3 * (size_t)(g->vertex_count + 1) * sizeof *out->positions);
     out->normals = core_alloc(3 * (size_t)(g->vertex_count + 1) * sizeof *out->normals);
-    for (int z = 0; z < g->cells[2]; z++)
-        for (int y = 0; y < g->cells[1]; y++)
-            for (int x = 0; x < g->cells[0]; x++) {
-                size_t cell = (size_t)(z * g->cell_stride[2] + y * g->cell_stride[1] + x);
-                if (g->cell_first[cell] < 0) continue;
-                const int lo[3] = { 2 * x - 2, 2 * y - 2, 2 * z - 2 };
-                for (int k = 0; k < piece_count[g->cell_case[cell]]; k++) {
-                    uint32_t v = (uint32_t)(g->cell_first[cell] + k);
-                    const qef *q = &g->qefs[v];
-                    float length = sqrtf(q->normal[0] * q->normal[0] + q->normal[1] * q->normal[1] + q->normal[2] * q->normal[2]);
-                    if (q->count == 0.0f || !(length >= AGREEMENT * q->count)) return false;   /* none, or they disagree */
-                    qef_point(q, lo, out->positions + 3 * (size_t)v);
-                    for (int a = 0; a < 3; a++) out->normals[3 * (size_t)v + a] = q->normal[a] / length;
-                }
-            }
+    for (size_t i = 0; i < g->crossed_count; i++) {
+        const size_t cell = g->crossed_cells[i];
+        int at[3];
+        cell_coordinates(g, cell, at);
+        const int lo[3] = { 2 * at[0] - 2, 2 * at[1] - 2, 2 * at[2] - 2 };
+        for (int k = 0; k < piece_count[g->cell_case[cell]]; k++) {
+            uint32_t v = (uint32_t)(g->cell_first[cell] + k);
+            const qef *q = &g->qefs[v];
+            float length = sqrtf(q->normal[0] * q->normal[0] + q->normal[1] * q->normal[1] + q->normal[2] * q->normal[2]);
+            if (q->count == 0.0f || !(length >= AGREEMENT * q->count)) return false;   /* none, or they disagree */
+            qef_point(q, lo, out->positions + 3 * (size_t)v);
+            for (int a = 0; a < 3; a++) out->normals[3 * (size_t)v + a] = q->normal[a] / length;
+        }
+    }
     return true;
 }
 
@@ -465,13 +489,17 @@ static void make_quads(const dual_grid *g, rocks__surface *out) {
     out->index_count = 0;
     out->index_cap = 0;
     out->indices = NULL;
-    const ptrdiff_t *ss = g->sample_stride, *cs = g->cell_stride;
+    const ptrdiff_t *cs = g->cell_stride;
+    const uint64_t inner = ((1ull << (g->samples[0] - 1)) - 1) & ~1ull;   /* samples 1 … samples − 2 */
     for (int z = 1; z < g->samples[2] - 1; z++)
-        for (int y = 1; y < g->samples[1] - 1; y++)
-            for (int x = 1; x < g->samples[0] - 1; x++) {
-                const uint8_t *s = g->sample_solid + z * ss[2] + y * ss[1] + x;
+        for (int y = 1; y < g->samples[1] - 1; y++) {
+            const uint64_t row = sample_row(g, y, z);
+            const uint64_t across[3] = { row ^ row >> 1, row ^ sample_row(g, y + 1, z), row ^ sample_row(g, y, z + 1) };
+            for (uint64_t edges = (across[0] | across[1] | across[2]) & inner; edges; edges &= edges - 1) {
+                const int x = __builtin_ctzll(edges);
+                const bool solid = row >> x & 1;
                 for (int axis = 0; axis < 3; axis++) {
-                    if (s[0] == s[ss[axis]]) continue;
+                    if (!(across[axis] >> x & 1)) continue;
                     const int u = (axis + 1) % 3, w = (axis + 2) % 3;
                     const ptrdiff_t here = z * cs[2] + y * cs[1] + x;
                     uint32_t v[4];
@@ -481,7 +509,7 @@ static void make_quads(const dual_grid *g, rocks__surface *out) {
                         int corner = du << u | dw << w;   /* the edge's low end, seen from that cell */
                         v[k] = (uint32_t)(g->cell_first[cell] + piece_of_edge[g->cell_case[cell]][edge_along(axis, corner)]);
                     }
-                    if (!s[0]) {   /* solid towards +axis: the other way round */
+                    if (!solid) {   /* solid towards +axis: the other way round */
                         uint32_t t = v[1];
                         v[1] = v[3], v[3] = t;
                     }
@@ -498,12 +526,14 @@ static void make_quads(const dual_grid *g, rocks__surface *out) {
                     out->index_count += 6;
                 }
             }
+        }
 }
 
 static void dual_grid_free(dual_grid *g) {
     core_free(g->fine, g->fine_total * sizeof *g->fine);
     core_free(g->solid_rows, (size_t)g->size[1] * g->size[2] * sizeof *g->solid_rows);
-    core_free(g->sample_solid, g->sample_total);
+    core_free(g->sample_rows, (size_t)g->samples[1] * g->samples[2] * sizeof *g->sample_rows);
+    core_free(g->crossed_cells, g->cell_total * sizeof *g->crossed_cells);
     core_free(g->cell_case, g->cell_total);
     core_free(g->cell_first, g->cell_total * sizeof *g->cell_first);
     core_free(g->qefs, (g->vertex_count ? g->vertex_count : 1) * sizeof *g->qefs);
