@@ -71,8 +71,7 @@ struct rocks__simplifier {
     uint32_t *taken_first, *taken_next;   /* the vertices it took then, as a list */
     uint8_t *gone;                    /* moved onto another */
     uint32_t *stamp, stamp_value;
-    collapse *collapses;
-    uint32_t *order;
+    collapse *collapses, *sorted;     /* ranked; then in order of error (counting sort) */
     float worst;                      /* the largest error taken so far */
 };
 
@@ -126,8 +125,9 @@ static void build_adjacency(rocks__simplifier *s) {
 }
 
 /* Every half-edge a → b as the collapse of a onto b (so both directions of each edge), when it
- * costs at most `limit`; sorted into s->order by error. Returns the count. Branch-free: the
- * candidate is written and kept by advancing the count. */
+ * costs at most `limit`; copied into s->sorted in order of error (the pass then reads them one
+ * after the other). Returns the count. Branch-free: the candidate is written and kept by
+ * advancing the count. */
 static size_t rank_collapses(rocks__simplifier *s, float limit) {
     const uint32_t top = float_bits(limit) >> 19;
     size_t count = 0;
@@ -147,7 +147,7 @@ static size_t rank_collapses(rocks__simplifier *s, float limit) {
         histogram[k] = sum;
         sum += here;
     }
-    for (size_t i = 0; i < count; i++) s->order[histogram[s->collapses[i].key]++] = (uint32_t)i;
+    for (size_t i = 0; i < count; i++) s->sorted[histogram[s->collapses[i].key]++] = s->collapses[i];
     return count;
 }
 
@@ -241,13 +241,14 @@ static size_t pass(rocks__simplifier *s, float limit, size_t target_index_count)
      * cheapest, once a sixth of the goal is done, so cheap collapses go first across passes */
     size_t triangle_goal = (s->index_count - target_index_count) / 3, edge_goal = triangle_goal / 2;
     size_t removed = 0, made = 0;
+    float error_goal = edge_goal < count ? 1.5f * s->sorted[edge_goal].error : INFINITY;
     for (size_t i = 0; i < count && removed < triangle_goal && s->live_vertices > 4; i++) {
-        const collapse *c = &s->collapses[s->order[i]];
-        float error_goal = edge_goal < count ? 1.5f * s->collapses[s->order[edge_goal]].error : INFINITY;
+        const collapse *c = &s->sorted[i];
         if (c->error > error_goal && c->error > s->worst && removed > triangle_goal / 6) break;
         if (s->gone[c->from] || s->gone[c->to] || s->took[c->from] == s->pass_id) continue;
         if (!can_collapse(s, c->from, c->to)) {
             edge_goal++;   /* a refused collapse does not count towards the goal's error */
+            error_goal = edge_goal < count ? 1.5f * s->sorted[edge_goal].error : INFINITY;
             continue;
         }
         collapse_onto(s, c->from, c->to);
@@ -318,7 +319,7 @@ rocks__simplifier *rocks__simplify_begin(const uint32_t *indices, size_t index_c
     s->taken_next = core_alloc(n * sizeof *s->taken_next);
     s->gone = core_calloc(n, 1);
     s->collapses = core_alloc(capacity * sizeof *s->collapses);
-    s->order = core_alloc(capacity * sizeof *s->order);
+    s->sorted = core_alloc(capacity * sizeof *s->sorted);
     return s;
 }
 
@@ -345,6 +346,6 @@ void rocks__simplify_end(rocks__simplifier *s) {
     core_free(s->gone, n);
     core_free(s->inverse, n * sizeof *s->inverse);
     core_free(s->collapses, s->capacity * sizeof *s->collapses);
-    core_free(s->order, s->capacity * sizeof *s->order);
+    core_free(s->sorted, s->capacity * sizeof *s->sorted);
     core_free(s, sizeof *s);
 }
