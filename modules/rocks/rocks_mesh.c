@@ -22,23 +22,21 @@
  * directed edge once and its reverse once. */
 bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t vertex_count) {
     if (index_count == 0 || index_count % 3) return false;
-    uint32_t *first = core_calloc((size_t)vertex_count + 1, sizeof *first);
-    uint32_t *to = core_alloc(index_count * sizeof *to);
+    const size_t words = 2 * ((size_t)vertex_count + 1) + index_count;   /* first, fill, to: one block */
+    uint32_t *first = core_alloc(words * sizeof *first), *fill = first + vertex_count + 1, *to = fill + vertex_count + 1;
+    memset(first, 0, ((size_t)vertex_count + 1) * sizeof *first);
     bool ok = true;
-    for (uint32_t i = 0; i < index_count && ok; i++) {
-        uint32_t a = indices[i], b = indices[i - i % 3 + (i % 3 + 1) % 3];
-        if (a == b || a >= vertex_count || b >= vertex_count) ok = false;
-        else first[a + 1]++;
-    }
+    for (uint32_t t = 0; t < index_count && ok; t += 3)
+        for (int k = 0; k < 3; k++) {
+            uint32_t a = indices[t + k], b = indices[t + (k == 2 ? 0 : k + 1)];
+            if (a == b || a >= vertex_count || b >= vertex_count) ok = false;
+            else first[a + 1]++;
+        }
     if (ok) {
         for (uint32_t v = 0; v < vertex_count; v++) first[v + 1] += first[v];
-        uint32_t *fill = core_alloc(((size_t)vertex_count + 1) * sizeof *fill);
         memcpy(fill, first, ((size_t)vertex_count + 1) * sizeof *fill);
-        for (uint32_t i = 0; i < index_count; i++) {
-            uint32_t a = indices[i], b = indices[i - i % 3 + (i % 3 + 1) % 3];
-            to[fill[a]++] = b;
-        }
-        core_free(fill, ((size_t)vertex_count + 1) * sizeof *fill);
+        for (uint32_t t = 0; t < index_count; t += 3)
+            for (int k = 0; k < 3; k++) to[fill[indices[t + k]]++] = indices[t + (k == 2 ? 0 : k + 1)];
         for (uint32_t a = 0; a < vertex_count && ok; a++)
             for (uint32_t e = first[a]; e < first[a + 1] && ok; e++) {
                 uint32_t b = to[e];
@@ -49,8 +47,7 @@ bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t v
                 ok &= back;
             }
     }
-    core_free(first, ((size_t)vertex_count + 1) * sizeof *first);
-    core_free(to, index_count * sizeof *to);
+    core_free(first, words * sizeof *first);
     return ok;
 }
 
@@ -215,13 +212,13 @@ bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int b
     bool dual;
     if (!rock_surface(rho, size, &surface, &dual)) return false;
     size_t vc = surface.vertex_count, ic = surface.index_count;
-    uint32_t *lod[ROCKS_LODS];
+    const size_t words = ROCKS_LODS * ic + vc;   /* the levels' indices and the remap: one block */
+    uint32_t *block = core_alloc(words * sizeof *block), *lod[ROCKS_LODS], *remap = block + ROCKS_LODS * ic;
     size_t lod_count[ROCKS_LODS];
-    for (int l = 0; l < ROCKS_LODS; l++) lod[l] = core_alloc(ic * sizeof *lod[l]);
+    for (int l = 0; l < ROCKS_LODS; l++) lod[l] = block + l * ic;
     make_lods(surface.indices, ic, surface.positions, vc, dual ? DUAL_LOD0_ERROR : ROCKS__LOD0_ERROR, lod, lod_count);
 
     /* Keep LOD 0's vertices only, in order of first use (the others use a subset of them). */
-    uint32_t *remap = core_alloc(vc * sizeof *remap);
     for (size_t v = 0; v < vc; v++) remap[v] = UINT32_MAX;
     uint32_t used = 0;
     for (size_t i = 0; i < lod_count[0]; i++)
@@ -267,9 +264,8 @@ bool rocks__rock_mesh(const rocks__params *params, const float *rho, const int b
         rock->index_first[l] = res->index_count;
         rock->index_count[l] = (uint32_t)lod_count[l];
         for (size_t i = 0; i < lod_count[l]; i++) res->indices[res->index_count++] = (uint16_t)remap[lod[l][i]];
-        core_free(lod[l], ic * sizeof *lod[l]);
     }
-    core_free(remap, vc * sizeof *remap);
+    core_free(block, words * sizeof *block);
     rocks__surface_free(&surface);
 
     rock->anchor_first = res->anchor_count;

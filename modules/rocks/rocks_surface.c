@@ -206,12 +206,16 @@ static uint64_t fine_row(const float *in, float *out, int length) {
     return solid;
 }
 
+static size_t fine_bytes(const dual_grid *g) {
+    return (size_t)g->size[1] * g->size[2] * sizeof *g->solid_rows + g->fine_total * sizeof *g->fine;
+}
+
 static void make_fine(dual_grid *g, const float *rho) {
     const int sx = g->size[0], sy = g->size[1], sz = g->size[2];
     g->fine_stride[0] = 1, g->fine_stride[1] = sx + 2 * PAD, g->fine_stride[2] = (ptrdiff_t)(sx + 2 * PAD) * (sy + 2 * PAD);
     g->fine_total = (size_t)g->fine_stride[2] * (sz + 2 * PAD);
-    g->fine = core_alloc(g->fine_total * sizeof *g->fine);
-    g->solid_rows = core_alloc((size_t)sy * sz * sizeof *g->solid_rows);
+    g->solid_rows = core_alloc(fine_bytes(g));   /* the rows' signs, then the samples: one block */
+    g->fine = (float *)(g->solid_rows + (size_t)sy * sz);
     /* −1 around the box: the first and last planes and rows whole, each row's ends */
     const size_t plane = (size_t)g->fine_stride[2], row_length = (size_t)g->fine_stride[1];
     for (size_t i = 0; i < plane * PAD; i++) g->fine[i] = g->fine[g->fine_total - 1 - i] = -1.0f;
@@ -244,20 +248,26 @@ static uint64_t sample_row(const dual_grid *g, int y, int z) { return g->sample_
  * Coarse sample (x, y, z) is fine sample (2x − 2, 2y − 2, 2z − 2), so a coarse row of signs is
  * the even bits of a fine row moved up one (x = 0 lies outside the box). A cell is crossed where
  * its four rows' bits x and x + 1 are neither all clear nor all set; only those are visited. */
+static size_t cells_bytes(const dual_grid *g) {
+    return (size_t)g->samples[1] * g->samples[2] * sizeof *g->sample_rows +
+           g->cell_total * (sizeof *g->cell_first + sizeof *g->crossed_cells + sizeof *g->cell_case);
+}
+
 static void make_cells(dual_grid *g) {
     for (int a = 0; a < 3; a++) g->samples[a] = g->size[a] / 2 + 3, g->cells[a] = g->samples[a] - 1;
     g->cell_stride[0] = 1, g->cell_stride[1] = g->cells[0], g->cell_stride[2] = (ptrdiff_t)g->cells[0] * g->cells[1];
     g->cell_total = (size_t)g->cell_stride[2] * g->cells[2];
-    g->sample_rows = core_alloc((size_t)g->samples[1] * g->samples[2] * sizeof *g->sample_rows);
+    /* one block: the coarse rows, each cell's first vertex, the crossed cells, each cell's case */
+    g->sample_rows = core_alloc(cells_bytes(g));
+    g->cell_first = (int32_t *)(g->sample_rows + (size_t)g->samples[1] * g->samples[2]);
+    g->crossed_cells = (uint32_t *)(g->cell_first + g->cell_total);
+    g->cell_case = (uint8_t *)(g->crossed_cells + g->cell_total);
     for (int z = 0; z < g->samples[2]; z++)
         for (int y = 0; y < g->samples[1]; y++) {
             const int fy = 2 * y - 2, fz = 2 * z - 2;
             const bool inside = fy >= 0 && fz >= 0 && fy < g->size[1] && fz < g->size[2];
             g->sample_rows[(size_t)z * g->samples[1] + y] = inside ? even_bits(g->solid_rows[(size_t)fz * g->size[1] + fy]) << 1 : 0;
         }
-    g->cell_case = core_alloc(g->cell_total);
-    g->cell_first = core_alloc(g->cell_total * sizeof *g->cell_first);
-    g->crossed_cells = core_alloc(g->cell_total * sizeof *g->crossed_cells);
     memset(g->cell_case, 0, g->cell_total);
     memset(g->cell_first, 0xff, g->cell_total * sizeof *g->cell_first);   /* −1 */
     g->vertex_count = 0;
@@ -487,10 +497,17 @@ static bool missed_nothing(const dual_grid *g, const rocks__surface *s) {
  * seen from outside, split along the shorter diagonal. */
 static void make_quads(const dual_grid *g, rocks__surface *out) {
     out->index_count = 0;
-    out->index_cap = 0;
-    out->indices = NULL;
     const ptrdiff_t *cs = g->cell_stride;
     const uint64_t inner = ((1ull << (g->samples[0] - 1)) - 1) & ~1ull;   /* samples 1 … samples − 2 */
+    size_t quads = 0;   /* counted first: the indices in one allocation */
+    for (int z = 1; z < g->samples[2] - 1; z++)
+        for (int y = 1; y < g->samples[1] - 1; y++) {
+            const uint64_t row = sample_row(g, y, z);
+            quads += (size_t)(__builtin_popcountll((row ^ row >> 1) & inner) + __builtin_popcountll((row ^ sample_row(g, y + 1, z)) & inner) +
+                              __builtin_popcountll((row ^ sample_row(g, y, z + 1)) & inner));
+        }
+    out->index_cap = quads ? 6 * quads : 1;
+    out->indices = core_alloc(out->index_cap * sizeof *out->indices);
     for (int z = 1; z < g->samples[2] - 1; z++)
         for (int y = 1; y < g->samples[1] - 1; y++) {
             const uint64_t row = sample_row(g, y, z);
@@ -519,7 +536,6 @@ static void make_quads(const dual_grid *g, rocks__surface *out) {
                         float e0 = p[3 * v[0] + a] - p[3 * v[2] + a], e1 = p[3 * v[1] + a] - p[3 * v[3] + a];
                         ac += e0 * e0, bd += e1 * e1;
                     }
-                    out->indices = core_grow(out->indices, &out->index_cap, out->index_count + 6, sizeof *out->indices);
                     uint32_t *t = out->indices + out->index_count;
                     if (ac <= bd) t[0] = v[0], t[1] = v[1], t[2] = v[2], t[3] = v[0], t[4] = v[2], t[5] = v[3];
                     else t[0] = v[0], t[1] = v[1], t[2] = v[3], t[3] = v[1], t[4] = v[2], t[5] = v[3];
@@ -530,12 +546,8 @@ static void make_quads(const dual_grid *g, rocks__surface *out) {
 }
 
 static void dual_grid_free(dual_grid *g) {
-    core_free(g->fine, g->fine_total * sizeof *g->fine);
-    core_free(g->solid_rows, (size_t)g->size[1] * g->size[2] * sizeof *g->solid_rows);
-    core_free(g->sample_rows, (size_t)g->samples[1] * g->samples[2] * sizeof *g->sample_rows);
-    core_free(g->crossed_cells, g->cell_total * sizeof *g->crossed_cells);
-    core_free(g->cell_case, g->cell_total);
-    core_free(g->cell_first, g->cell_total * sizeof *g->cell_first);
+    core_free(g->solid_rows, fine_bytes(g));
+    core_free(g->sample_rows, cells_bytes(g));
     core_free(g->qefs, (g->vertex_count ? g->vertex_count : 1) * sizeof *g->qefs);
     core_free(g->missed, g->missed_cap * sizeof *g->missed);
 }
