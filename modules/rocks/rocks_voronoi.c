@@ -245,13 +245,24 @@ static bool contact_point(const region_build *b, const rocks__seed *p, const roc
     float dvec[3];
     for (int a = 0; a < 3; a++) dvec[a] = (float)((sb->cell[a] - sa->cell[a]) * m) + (sb->u[a] - sa->u[a]);
     double lo = 0.0, hi = 1.0;
+    bool nearer_a = false, settled = false;
     for (int i = 0; i < 40; i++) {
         double t = 0.5 * (lo + hi);
-        float x = (float)(t * dvec[0]), y = (float)(t * dvec[1]), z = (float)(t * dvec[2]);
-        float da = rocks__distance(sa->q, x, y, z);
-        float db = rocks__distance(sb->q, x - dvec[0], y - dvec[1], z - dvec[2]);
-        if (da < db) lo = t;
+        if (!settled) {
+            float x = (float)(t * dvec[0]), y = (float)(t * dvec[1]), z = (float)(t * dvec[2]);
+            float da = rocks__distance(sa->q, x, y, z);
+            float db = rocks__distance(sb->q, x - dvec[0], y - dvec[1], z - dvec[2]);
+            nearer_a = da < db;
+        }
+        if (nearer_a) lo = t;
         else hi = t;
+        /* Once both ends round to the same float point, every t between them does too (t·d and
+         * its rounding are monotone in t), so every later step compares the same distances: the
+         * halvings go on (the same bits) without evaluating them. Checked from step 20 on, when
+         * the interval nears a float's precision. */
+        if (!settled && i >= 20)
+            settled = (float)(lo * dvec[0]) == (float)(hi * dvec[0]) && (float)(lo * dvec[1]) == (float)(hi * dvec[1]) &&
+                      (float)(lo * dvec[2]) == (float)(hi * dvec[2]);
     }
     double t = 0.5 * (lo + hi);
     int v[3];
@@ -433,7 +444,19 @@ static void erosion_start(const region_build *b, int32_t self, const int lo[3], 
             size_t row = ((size_t)z * sy + y) * sx;
             uint8_t *empty = e->empty + row;
             float *rho = e->rho + row, *omega = e->omega + row;
-            for (int x = 1; x < sx - 1; x++) {
+            int x = 1;
+            for (; x + 4 <= sx - 1; x += 4) {   /* four at a time: GCC does not vectorise this at -O2 */
+                typedef int32_t ints4 __attribute__((vector_size(16)));
+                typedef float floats4 __attribute__((vector_size(16)));
+                const floats4 one = { 1.0f, 1.0f, 1.0f, 1.0f };
+                ints4 o;
+                memcpy(&o, owner + x, sizeof o);
+                const ints4 mine = o == (ints4){ self, self, self, self };   /* −1 or 0 */
+                const floats4 r = (floats4)(mine & (ints4)one);               /* 1.0f or 0.0f */
+                const uint8_t out[4] = { (uint8_t)(1 + mine[0]), (uint8_t)(1 + mine[1]), (uint8_t)(1 + mine[2]), (uint8_t)(1 + mine[3]) };
+                memcpy(rho + x, &r, sizeof r), memcpy(omega + x, &one, sizeof one), memcpy(empty + x, out, sizeof out);
+            }
+            for (; x < sx - 1; x++) {
                 int mine = owner[x] == self;
                 empty[x] = (uint8_t)!mine, rho[x] = (float)mine, omega[x] = 1.0f;
             }
