@@ -14,6 +14,7 @@
 #include "rocks_internal.h"
 
 #include "core/core.h"
+#include "core/core_lanes.h"
 
 #include <math.h>
 #include <string.h>
@@ -64,14 +65,6 @@ bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t v
 #define LOD2_ERROR 8.0f
 #define LOD2_SHARE 12
 
-typedef float lanes __attribute__((vector_size(16)));
-typedef int32_t lane_mask __attribute__((vector_size(16)));
-
-/* a where `take` (all bits of a lane set), else b */
-static inline lanes lanes_select(lane_mask take, lanes a, lanes b) {
-    return (lanes)((take & (lane_mask)a) | (~take & (lane_mask)b));
-}
-
 /* Anchors (001 §6): the seed, then voxel centres with ρ ≥ ½ spread by farthest-point sampling.
  * 001 uses every voxel centre; 15 spread ones bound the cost of testing a rock against the
  * support (placement stays under 0.5 ms a chunk) and still see where it lies. The centres are
@@ -107,24 +100,23 @@ static uint32_t spread_anchors(const float *rho, const int box_lo[3], const int 
          * the same order as one at a time, so the same bits; the update, the maximum and the
          * first centre at it (each lane's first, then the least of the lanes at the maximum) in
          * one pass */
-        lanes farthest4 = { -1.0f, -1.0f, -1.0f, -1.0f };
-        lane_mask at4 = { 0, 1, 2, 3 }, index4 = { 0, 1, 2, 3 };
-        const lane_mask step = { 4, 4, 4, 4 };
-        const lanes x0 = { bx, bx, bx, bx }, y0 = { by, by, by, by }, z0 = { bz, bz, bz, bz };
+        core_floats4 farthest4 = core_floats4_splat(-1.0f);
+        core_ints4 at4 = { 0, 1, 2, 3 }, index4 = { 0, 1, 2, 3 };
+        const core_ints4 step = { 4, 4, 4, 4 };
+        const core_floats4 x0 = core_floats4_splat(bx), y0 = core_floats4_splat(by), z0 = core_floats4_splat(bz);
         for (size_t i = 0; i < padded; i += 4, index4 += step) {
-            lanes x, y, z, near;
-            memcpy(&near, nearest + i, sizeof near);
+            core_floats4 near = core_floats4_load(nearest + i);
             if (count > 1) {
-                memcpy(&x, cx + i, sizeof x), memcpy(&y, cy + i, sizeof y), memcpy(&z, cz + i, sizeof z);
-                lanes d2 = (lanes){ 0.0f, 0.0f, 0.0f, 0.0f };
+                core_floats4 x = core_floats4_load(cx + i), y = core_floats4_load(cy + i), z = core_floats4_load(cz + i);
+                core_floats4 d2 = core_floats4_splat(0.0f);
                 d2 += (x - x0) * (x - x0);
                 d2 += (y - y0) * (y - y0);
                 d2 += (z - z0) * (z - z0);
-                near = lanes_select(d2 < near, d2, near);
-                memcpy(nearest + i, &near, sizeof near);
+                near = core_floats4_select(d2 < near, d2, near);
+                core_floats4_store(nearest + i, near);
             }
-            lane_mask further = near > farthest4;
-            farthest4 = lanes_select(further, near, farthest4);
+            core_ints4 further = near > farthest4;
+            farthest4 = core_floats4_select(further, near, farthest4);
             at4 = (further & index4) | (~further & at4);
         }
         int lane = 0;

@@ -52,6 +52,7 @@
 #include "rocks_internal.h"
 
 #include "core/core.h"
+#include "core/core_lanes.h"
 
 #include <math.h>
 #include <pthread.h>
@@ -145,9 +146,8 @@ static void make_pieces(void) {
 
 /* The tangent planes and points of a vertex's crossings, in fine units: sixteen floats, added
  * four at a time. */
-typedef float floats4 __attribute__((vector_size(16)));
 typedef union qef {
-    floats4 v[4];
+    core_floats4 v[4];
     struct {
         float a[6];                   /* Σ n nᵀ: xx yy zz xy xz yz */
         float b[3];                   /* Σ n (n·p) */
@@ -155,7 +155,7 @@ typedef union qef {
         float count;                  /* exact: far fewer than 2²⁴ crossings */
     };
 } qef;
-_Static_assert(sizeof(qef) == 4 * sizeof(floats4), "a qef is four vectors of four floats");
+_Static_assert(sizeof(qef) == 4 * sizeof(core_floats4), "a qef is four vectors of four floats");
 
 typedef struct dual_grid {
     int size[3];
@@ -183,19 +183,14 @@ static float *fine_sample(const dual_grid *g, int x, int y, int z) {
 /* One row of r = 2ρ − 1 (ρ = ½ counts as solid, as in marching cubes' field: r = 0 becomes 10⁻⁶),
  * four samples at a time; returns its signs, bit x set where solid. */
 static uint64_t fine_row(const float *in, float *out, int length) {
-    typedef int32_t ints4 __attribute__((vector_size(16)));
-    const floats4 two = { 2.0f, 2.0f, 2.0f, 2.0f }, one = { 1.0f, 1.0f, 1.0f, 1.0f }, zero = { 0 };
-    const floats4 tiny = { 1e-6f, 1e-6f, 1e-6f, 1e-6f };
-    const ints4 bit = { 1, 2, 4, 8 };
+    const core_floats4 two = core_floats4_splat(2.0f), one = core_floats4_splat(1.0f), zero = core_floats4_splat(0.0f);
+    const core_ints4 bit = { 1, 2, 4, 8 };
     uint64_t solid = 0;
     int x = 0;
     for (; x + 4 <= length; x += 4) {
-        floats4 rho, r;
-        memcpy(&rho, in + x, sizeof rho);
-        r = two * rho - one;
-        ints4 is_zero = r == zero, bits = (r >= zero) & bit;
-        r = (floats4)((is_zero & (ints4)tiny) | (~is_zero & (ints4)r));
-        memcpy(out + x, &r, sizeof r);
+        core_floats4 r = two * core_floats4_load(in + x) - one;
+        core_ints4 bits = (r >= zero) & bit;
+        core_floats4_store(out + x, core_floats4_select(r == zero, core_floats4_splat(1e-6f), r));
         solid |= (uint64_t)(bits[0] | bits[1] | bits[2] | bits[3]) << x;
     }
     for (; x < length; x++) {
@@ -336,10 +331,10 @@ static qef qef_of_crossing(const float p[3], const float n[3], bool has_normal) 
     qef q = { .v = { { 0 }, { 0 }, { 0, p[0], p[1], p[2] }, { 0, 0, 0, 1.0f } } };
     if (!has_normal) return q;
     float d = n[0] * p[0] + n[1] * p[1] + n[2] * p[2];
-    q.v[0] = (floats4){ n[0] * n[0], n[1] * n[1], n[2] * n[2], n[0] * n[1] };
-    q.v[1] = (floats4){ n[0] * n[2], n[1] * n[2], n[0] * d, n[1] * d };
-    q.v[2] = (floats4){ n[2] * d, p[0], p[1], p[2] };
-    q.v[3] = (floats4){ n[0], n[1], n[2], 1.0f };
+    q.v[0] = (core_floats4){ n[0] * n[0], n[1] * n[1], n[2] * n[2], n[0] * n[1] };
+    q.v[1] = (core_floats4){ n[0] * n[2], n[1] * n[2], n[0] * d, n[1] * d };
+    q.v[2] = (core_floats4){ n[2] * d, p[0], p[1], p[2] };
+    q.v[3] = (core_floats4){ n[0], n[1], n[2], 1.0f };
     return q;
 }
 

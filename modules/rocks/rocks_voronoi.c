@@ -19,6 +19,7 @@
 #include "rocks_internal.h"
 
 #include "core/core.h"
+#include "core/core_lanes.h"
 
 #include <math.h>
 #include <string.h>
@@ -394,18 +395,6 @@ static void damping(float *omega, const uint8_t *empty, const int lo[3], const i
     }
 }
 
-/* Sixteen voxels' bytes at a time, in GCC's vector types (SSE2 on any x86-64): at -O2 GCC does
- * not vectorise a loop whose length it does not know, and these run over a whole box. */
-typedef uint8_t bytes16 __attribute__((vector_size(16)));
-
-static inline bytes16 load16(const uint8_t *p) {
-    bytes16 v;
-    memcpy(&v, p, sizeof v);
-    return v;
-}
-
-static inline void store16(uint8_t *p, bytes16 v) { memcpy(p, &v, sizeof v); }
-
 /* How many of each voxel's 26 neighbours are empty, by three separable 3-sums of the emptiness
  * indicator, and of its 6 face neighbours. Each sum runs over the box as one flat array: a voxel
  * on the box's border gets a sum that wraps round a row or plane, but no rock voxel lies on the
@@ -414,16 +403,18 @@ static void count_empty_neighbours(erosion_buffers *e, const int size[3]) {
     const ptrdiff_t sx = size[0], plane = sx * size[1], total = plane * size[2];
     const uint8_t *empty = e->empty;
     uint8_t *sum_x = e->sum_x, *sum_xy = e->sum_xy, *outside = e->outside, *faces = e->faces;
-    for (ptrdiff_t i = 1; i < total - 1; i += 16)
-        store16(sum_x + i, load16(empty + i - 1) + load16(empty + i) + load16(empty + i + 1));
+    for (ptrdiff_t i = 1; i < total - 1; i += 16)   /* sixteen voxels at a time (core_lanes.h) */
+        core_bytes16_store(sum_x + i, core_bytes16_load(empty + i - 1) + core_bytes16_load(empty + i) + core_bytes16_load(empty + i + 1));
     for (ptrdiff_t i = sx; i < total - sx; i += 16)
-        store16(sum_xy + i, load16(sum_x + i - sx) + load16(sum_x + i) + load16(sum_x + i + sx));
+        core_bytes16_store(sum_xy + i, core_bytes16_load(sum_x + i - sx) + core_bytes16_load(sum_x + i) + core_bytes16_load(sum_x + i + sx));
     memset(outside, 0, (size_t)plane);
     memset(faces, 0, (size_t)plane);
     for (ptrdiff_t i = plane; i < total - plane; i += 16) {
-        store16(outside + i, load16(sum_xy + i - plane) + load16(sum_xy + i) + load16(sum_xy + i + plane));
-        store16(faces + i, load16(empty + i - 1) + load16(empty + i + 1) + load16(empty + i - sx) + load16(empty + i + sx) +
-                               load16(empty + i - plane) + load16(empty + i + plane));
+        core_bytes16_store(outside + i, core_bytes16_load(sum_xy + i - plane) + core_bytes16_load(sum_xy + i) +
+                                            core_bytes16_load(sum_xy + i + plane));
+        core_bytes16_store(faces + i, core_bytes16_load(empty + i - 1) + core_bytes16_load(empty + i + 1) +
+                                          core_bytes16_load(empty + i - sx) + core_bytes16_load(empty + i + sx) +
+                                          core_bytes16_load(empty + i - plane) + core_bytes16_load(empty + i + plane));
     }
     memset(outside + total - plane, 0, (size_t)plane);
     memset(faces + total - plane, 0, (size_t)plane);
@@ -445,16 +436,13 @@ static void erosion_start(const region_build *b, int32_t self, const int lo[3], 
             uint8_t *empty = e->empty + row;
             float *rho = e->rho + row, *omega = e->omega + row;
             int x = 1;
-            for (; x + 4 <= sx - 1; x += 4) {   /* four at a time: GCC does not vectorise this at -O2 */
-                typedef int32_t ints4 __attribute__((vector_size(16)));
-                typedef float floats4 __attribute__((vector_size(16)));
-                const floats4 one = { 1.0f, 1.0f, 1.0f, 1.0f };
-                ints4 o;
-                memcpy(&o, owner + x, sizeof o);
-                const ints4 mine = o == (ints4){ self, self, self, self };   /* −1 or 0 */
-                const floats4 r = (floats4)(mine & (ints4)one);               /* 1.0f or 0.0f */
+            for (; x + 4 <= sx - 1; x += 4) {   /* four at a time (core_lanes.h) */
+                const core_floats4 one = core_floats4_splat(1.0f);
+                const core_ints4 mine = core_ints4_load(owner + x) == (core_ints4){ self, self, self, self };   /* −1 or 0 */
                 const uint8_t out[4] = { (uint8_t)(1 + mine[0]), (uint8_t)(1 + mine[1]), (uint8_t)(1 + mine[2]), (uint8_t)(1 + mine[3]) };
-                memcpy(rho + x, &r, sizeof r), memcpy(omega + x, &one, sizeof one), memcpy(empty + x, out, sizeof out);
+                core_floats4_store(rho + x, core_floats4_select(mine, one, core_floats4_splat(0.0f)));
+                core_floats4_store(omega + x, one);
+                memcpy(empty + x, out, sizeof out);
             }
             for (; x < sx - 1; x++) {
                 int mine = owner[x] == self;

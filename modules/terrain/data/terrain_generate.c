@@ -133,6 +133,7 @@
 #include "terrain/data/terrain_data_internal.h"
 
 #include "core/core.h"
+#include "core/core_lanes.h"
 
 #include <float.h>
 #include <math.h>
@@ -799,8 +800,6 @@ static void coarse_lattice(chunk_gen *g, float y_lo, float y_hi, float ring_lo, 
 
 /* ---- one column ------------------------------------------------------------------------ */
 
-typedef float lanes __attribute__((vector_size(16)));
-
 /* Bilinear interpolation of the first `fields` fields' coarse columns to the centre of column
  * (i, k) (a ring column too), over levels [l0, l1]. */
 static void column_fields(const chunk_gen *g, int i, int k, int fields, int l0, int l1, float *out) {
@@ -809,8 +808,8 @@ static void column_fields(const chunk_gen *g, int i, int k, int fields, int l0, 
     float tx = ax - (float)a, tz = cz - (float)c;
     float w00 = (1 - tx) * (1 - tz), w10 = tx * (1 - tz), w01 = (1 - tx) * tz, w11 = tx * tz;
     int levels = g->levels;
-    const lanes v00 = { w00, w00, w00, w00 }, v10 = { w10, w10, w10, w10 }, v01 = { w01, w01, w01, w01 },
-                v11 = { w11, w11, w11, w11 };
+    const core_floats4 v00 = core_floats4_splat(w00), v10 = core_floats4_splat(w10), v01 = core_floats4_splat(w01),
+                       v11 = core_floats4_splat(w11);
     for (int f = 0; f < fields; f++) {
         const float *p00 = lattice_node(g, f, a, c), *p10 = p00 + levels;
         const float *p01 = p00 + (size_t)LATTICE_NODES * levels, *p11 = p01 + levels;
@@ -819,11 +818,9 @@ static void column_fields(const chunk_gen *g, int i, int k, int fields, int l0, 
         /* four levels at a time (GCC's vector types: SSE2 on any x86-64), the same sum in the
          * same order as one at a time: the same bits */
         for (; l + 3 <= l1; l += 4) {
-            lanes q00, q10, q01, q11;
-            memcpy(&q00, p00 + l, sizeof q00), memcpy(&q10, p10 + l, sizeof q10);
-            memcpy(&q01, p01 + l, sizeof q01), memcpy(&q11, p11 + l, sizeof q11);
-            lanes sum = v00 * q00 + v10 * q10 + v01 * q01 + v11 * q11;
-            memcpy(o + l, &sum, sizeof sum);
+            core_floats4 sum = v00 * core_floats4_load(p00 + l) + v10 * core_floats4_load(p10 + l) +
+                               v01 * core_floats4_load(p01 + l) + v11 * core_floats4_load(p11 + l);
+            core_floats4_store(o + l, sum);
         }
         for (; l <= l1; l++) o[l] = w00 * p00[l] + w10 * p10[l] + w01 * p01[l] + w11 * p11[l];
     }
@@ -936,45 +933,30 @@ static float ridged_bound(const float *n, int levels, int l) {
  * ridged_bound and the test of caves_possible in GCC's vector types (SSE2 on any x86-64): the
  * same operations in the same order as one segment at a time, so the same bits. */
 
-typedef int32_t lane_mask __attribute__((vector_size(16)));
-
-static inline lanes lanes_select(lane_mask take, lanes a, lanes b) {
-    return (lanes)((take & (lane_mask)a) | (~take & (lane_mask)b));
-}
-
-static inline lanes lanes_abs(lanes v) {
-    const lane_mask magnitude = { INT32_MAX, INT32_MAX, INT32_MAX, INT32_MAX };
-    return (lanes)((lane_mask)v & magnitude);
-}
-
-static inline lanes lanes_splat(float v) { return (lanes){ v, v, v, v }; }
-
 /* terrain__ridged_from_octaves of CAVE_OCTAVES octaves, per lane. */
-static inline lanes ridged_lanes(const lanes *n) {
-    const lanes zero = lanes_splat(0.0f), one = lanes_splat(1.0f), two = lanes_splat(2.0f);
-    lanes result = zero, total = zero, weight = one, amplitude = one;
+static inline core_floats4 ridged_lanes(const core_floats4 *n) {
+    const core_floats4 zero = core_floats4_splat(0.0f), one = core_floats4_splat(1.0f), two = core_floats4_splat(2.0f);
+    core_floats4 result = zero, total = zero, weight = one, amplitude = one;
     for (int k = 0; k < CAVE_OCTAVES; k++) {
-        lanes signal = one - lanes_abs(n[k]);
+        core_floats4 signal = one - core_floats4_abs(n[k]);
         signal *= signal * weight;
         weight = signal * two;
-        weight = lanes_select(weight > one, one, weight);
+        weight = core_floats4_select(weight > one, one, weight);
         result += signal * amplitude;
         total += amplitude;
-        amplitude *= lanes_splat(CAVE_GAIN);
+        amplitude *= core_floats4_splat(CAVE_GAIN);
     }
-    return lanes_select(total > zero, result / total, zero);
+    return core_floats4_select(total > zero, result / total, zero);
 }
 
 /* ridged_bound of the segments l … l + 3 of one field's octaves. */
-static inline lanes ridged_bound_lanes(const float *n, int levels, int l) {
-    lanes smallest[CAVE_OCTAVES];
+static inline core_floats4 ridged_bound_lanes(const float *n, int levels, int l) {
+    core_floats4 smallest[CAVE_OCTAVES];
     for (int o = 0; o < CAVE_OCTAVES; o++) {
-        lanes a, b;
-        memcpy(&a, n + (size_t)o * levels + l, sizeof a);
-        memcpy(&b, n + (size_t)o * levels + l + 1, sizeof b);
-        lanes fa = lanes_abs(a), fb = lanes_abs(b);
-        lane_mask crosses = (a > lanes_splat(0.0f)) ^ (b > lanes_splat(0.0f));
-        smallest[o] = lanes_select(crosses, lanes_splat(0.0f), lanes_select(fa < fb, fa, fb));
+        core_floats4 a = core_floats4_load(n + (size_t)o * levels + l), b = core_floats4_load(n + (size_t)o * levels + l + 1);
+        core_floats4 fa = core_floats4_abs(a), fb = core_floats4_abs(b);
+        core_ints4 crosses = (a > core_floats4_splat(0.0f)) ^ (b > core_floats4_splat(0.0f));
+        smallest[o] = core_floats4_select(crosses, core_floats4_splat(0.0f), core_floats4_select(fa < fb, fa, fb));
     }
     return ridged_lanes(smallest);
 }
@@ -985,8 +967,8 @@ static void caves_possible(const column_context *c, int first, int last, bool *p
     const float room = 1.0f - c->threshold;
     int l = first;
     for (; l + 3 <= last && l + 4 < c->levels; l += 4) {
-        lanes r1 = ridged_bound_lanes(c->cave1, c->levels, l), r2 = ridged_bound_lanes(c->cave2, c->levels, l);
-        lane_mask yes = (r1 * r2) > lanes_splat(room);
+        core_floats4 r1 = ridged_bound_lanes(c->cave1, c->levels, l), r2 = ridged_bound_lanes(c->cave2, c->levels, l);
+        core_ints4 yes = (r1 * r2) > core_floats4_splat(room);
         for (int k = 0; k < 4; k++) possible[l + k] = yes[k] != 0;
     }
     for (; l <= last && l + 1 < c->levels; l++) {   /* the second bound only where the first leaves room: both are at most 1 */
