@@ -73,6 +73,7 @@ struct rocks__simplifier {
     uint32_t *stamp, stamp_value;
     collapse *collapses, *sorted;     /* ranked; then in order of error (counting sort) */
     float worst;                      /* the largest error taken so far */
+    core_arena arena;                 /* holds this struct and every array above */
 };
 
 /* An error's rank bin: its float bits >> 19 (errors ≥ 0 order like their bits), 16 bins an
@@ -297,45 +298,33 @@ static void make_quadrics(rocks__simplifier *s, const uint32_t *indices, size_t 
     s->stamp_value = 1;
 }
 
-/* The simplifier and all its arrays in one block (a rock's simplification makes one allocation,
- * not fourteen), each array at a 16-byte boundary. */
-static size_t rounded(size_t bytes) { return (bytes + 15) & ~(size_t)15; }
-
-static size_t simplifier_bytes(size_t n, size_t capacity) {
-    return rounded(sizeof(rocks__simplifier)) + rounded(capacity * sizeof(uint32_t)) * 2 +   /* indices, triangles */
-           rounded(capacity * sizeof(collapse)) * 2 +                                          /* collapses, sorted */
-           rounded(3 * n * sizeof(float)) + rounded(n * sizeof(quadric)) + rounded(n * sizeof(float)) +
-           rounded((n + 1) * sizeof(uint32_t)) + rounded(n * sizeof(uint32_t)) * 4 + rounded(n);
-}
-
-static void *take(unsigned char **at, size_t bytes) {
-    void *p = *at;
-    *at += rounded(bytes);
-    return p;
-}
+/* An array of count items from the simplifier's arena. */
+#define TAKE(arena, pointer, count) ((pointer) = core_arena_alloc((arena), (count) * sizeof *(pointer), 16))
 
 rocks__simplifier *rocks__simplify_begin(const uint32_t *indices, size_t index_count, const float *positions,
                                          size_t vertex_count) {
     size_t n = vertex_count ? vertex_count : 1, capacity = index_count ? index_count : 3;
-    unsigned char *at = core_alloc(simplifier_bytes(n, capacity));
-    rocks__simplifier *s = take(&at, sizeof *s);
+    /* the simplifier and all its arrays from one arena: a block or two a rock, not fourteen */
+    core_arena arena = { 0 };
+    rocks__simplifier *s = core_arena_alloc(&arena, sizeof *s, 16);
     memset(s, 0, sizeof *s);
     s->vertex_count = (uint32_t)vertex_count;
     s->capacity = capacity;
     s->index_count = index_count;
-    s->indices = take(&at, capacity * sizeof *s->indices);
-    s->triangles = take(&at, capacity * sizeof *s->triangles);
-    s->collapses = take(&at, capacity * sizeof *s->collapses);
-    s->sorted = take(&at, capacity * sizeof *s->sorted);
-    s->positions = take(&at, 3 * n * sizeof *s->positions);
-    s->quadrics = take(&at, n * sizeof *s->quadrics);
-    s->inverse = take(&at, n * sizeof *s->inverse);
-    s->first = take(&at, (n + 1) * sizeof *s->first);
-    s->stamp = take(&at, n * sizeof *s->stamp);
-    s->took = take(&at, n * sizeof *s->took);
-    s->taken_first = take(&at, n * sizeof *s->taken_first);
-    s->taken_next = take(&at, n * sizeof *s->taken_next);
-    s->gone = take(&at, n);
+    TAKE(&arena, s->indices, capacity);
+    TAKE(&arena, s->triangles, capacity);
+    TAKE(&arena, s->collapses, capacity);
+    TAKE(&arena, s->sorted, capacity);
+    TAKE(&arena, s->positions, 3 * n);
+    TAKE(&arena, s->quadrics, n);
+    TAKE(&arena, s->inverse, n);
+    TAKE(&arena, s->first, n + 1);
+    TAKE(&arena, s->stamp, n);
+    TAKE(&arena, s->took, n);
+    TAKE(&arena, s->taken_first, n);
+    TAKE(&arena, s->taken_next, n);
+    TAKE(&arena, s->gone, n);
+    s->arena = arena;   /* the arena's blocks, kept with what they hold */
     memset(s->quadrics, 0, n * sizeof *s->quadrics);   /* the sums, stamps and marks start at 0 */
     memset(s->stamp, 0, n * sizeof *s->stamp);
     memset(s->took, 0, n * sizeof *s->took);
@@ -356,5 +345,6 @@ size_t rocks__simplify_run(rocks__simplifier *s, float error, size_t target_inde
 
 void rocks__simplify_end(rocks__simplifier *s) {
     if (!s) return;
-    core_free(s, simplifier_bytes(s->vertex_count ? s->vertex_count : 1, s->capacity));
+    core_arena arena = s->arena;   /* s lies in it */
+    core_arena_release(&arena);
 }

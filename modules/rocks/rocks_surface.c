@@ -174,6 +174,7 @@ typedef struct dual_grid {
     uint32_t vertex_count;
     float (*missed)[3];               /* crossings in cells without vertices */
     size_t missed_count, missed_cap;
+    core_arena arena;                 /* every array above but missed */
 } dual_grid;
 
 static float *fine_sample(const dual_grid *g, int x, int y, int z) {
@@ -201,16 +202,12 @@ static uint64_t fine_row(const float *in, float *out, int length) {
     return solid;
 }
 
-static size_t fine_bytes(const dual_grid *g) {
-    return (size_t)g->size[1] * g->size[2] * sizeof *g->solid_rows + g->fine_total * sizeof *g->fine;
-}
-
 static void make_fine(dual_grid *g, const float *rho) {
     const int sx = g->size[0], sy = g->size[1], sz = g->size[2];
     g->fine_stride[0] = 1, g->fine_stride[1] = sx + 2 * PAD, g->fine_stride[2] = (ptrdiff_t)(sx + 2 * PAD) * (sy + 2 * PAD);
     g->fine_total = (size_t)g->fine_stride[2] * (sz + 2 * PAD);
-    g->solid_rows = core_alloc(fine_bytes(g));   /* the rows' signs, then the samples: one block */
-    g->fine = (float *)(g->solid_rows + (size_t)sy * sz);
+    g->solid_rows = core_arena_alloc(&g->arena, (size_t)sy * sz * sizeof *g->solid_rows, 16);
+    g->fine = core_arena_alloc(&g->arena, g->fine_total * sizeof *g->fine, 16);
     /* −1 around the box: the first and last planes and rows whole, each row's ends */
     const size_t plane = (size_t)g->fine_stride[2], row_length = (size_t)g->fine_stride[1];
     for (size_t i = 0; i < plane * PAD; i++) g->fine[i] = g->fine[g->fine_total - 1 - i] = -1.0f;
@@ -243,20 +240,14 @@ static uint64_t sample_row(const dual_grid *g, int y, int z) { return g->sample_
  * Coarse sample (x, y, z) is fine sample (2x − 2, 2y − 2, 2z − 2), so a coarse row of signs is
  * the even bits of a fine row moved up one (x = 0 lies outside the box). A cell is crossed where
  * its four rows' bits x and x + 1 are neither all clear nor all set; only those are visited. */
-static size_t cells_bytes(const dual_grid *g) {
-    return (size_t)g->samples[1] * g->samples[2] * sizeof *g->sample_rows +
-           g->cell_total * (sizeof *g->cell_first + sizeof *g->crossed_cells + sizeof *g->cell_case);
-}
-
 static void make_cells(dual_grid *g) {
     for (int a = 0; a < 3; a++) g->samples[a] = g->size[a] / 2 + 3, g->cells[a] = g->samples[a] - 1;
     g->cell_stride[0] = 1, g->cell_stride[1] = g->cells[0], g->cell_stride[2] = (ptrdiff_t)g->cells[0] * g->cells[1];
     g->cell_total = (size_t)g->cell_stride[2] * g->cells[2];
-    /* one block: the coarse rows, each cell's first vertex, the crossed cells, each cell's case */
-    g->sample_rows = core_alloc(cells_bytes(g));
-    g->cell_first = (int32_t *)(g->sample_rows + (size_t)g->samples[1] * g->samples[2]);
-    g->crossed_cells = (uint32_t *)(g->cell_first + g->cell_total);
-    g->cell_case = (uint8_t *)(g->crossed_cells + g->cell_total);
+    g->sample_rows = core_arena_alloc(&g->arena, (size_t)g->samples[1] * g->samples[2] * sizeof *g->sample_rows, 16);
+    g->cell_first = core_arena_alloc(&g->arena, g->cell_total * sizeof *g->cell_first, 16);
+    g->crossed_cells = core_arena_alloc(&g->arena, g->cell_total * sizeof *g->crossed_cells, 16);
+    g->cell_case = core_arena_alloc(&g->arena, g->cell_total, 16);
     for (int z = 0; z < g->samples[2]; z++)
         for (int y = 0; y < g->samples[1]; y++) {
             const int fy = 2 * y - 2, fz = 2 * z - 2;
@@ -283,7 +274,8 @@ static void make_cells(dual_grid *g) {
                 g->crossed_cells[g->crossed_count++] = (uint32_t)cell;
             }
         }
-    g->qefs = core_calloc(g->vertex_count ? g->vertex_count : 1, sizeof *g->qefs);
+    g->qefs = core_arena_alloc(&g->arena, (g->vertex_count ? g->vertex_count : 1) * sizeof *g->qefs, 16);
+    memset(g->qefs, 0, g->vertex_count * sizeof *g->qefs);
 }
 
 /* The coarse coordinates of a cell. */
@@ -488,26 +480,35 @@ static bool missed_nothing(const dual_grid *g, const rocks__surface *s) {
     return true;
 }
 
+/* The coarse edges from samples 1 … samples − 2 of row (y, z) that the surface crosses, along
+ * x, y and z: bit x set where sample x and its neighbour along the axis differ in sign. */
+static void crossed_edges(const dual_grid *g, int y, int z, uint64_t across[3]) {
+    const uint64_t row = sample_row(g, y, z), inner = ((1ull << (g->samples[0] - 1)) - 1) & ~1ull;
+    across[0] = (row ^ row >> 1) & inner;
+    across[1] = (row ^ sample_row(g, y + 1, z)) & inner;
+    across[2] = (row ^ sample_row(g, y, z + 1)) & inner;
+}
+
 /* Two triangles for each crossed coarse edge: the pieces of its four cells, counter-clockwise
  * seen from outside, split along the shorter diagonal. */
 static void make_quads(const dual_grid *g, rocks__surface *out) {
     out->index_count = 0;
     const ptrdiff_t *cs = g->cell_stride;
-    const uint64_t inner = ((1ull << (g->samples[0] - 1)) - 1) & ~1ull;   /* samples 1 … samples − 2 */
     size_t quads = 0;   /* counted first: the indices in one allocation */
     for (int z = 1; z < g->samples[2] - 1; z++)
         for (int y = 1; y < g->samples[1] - 1; y++) {
-            const uint64_t row = sample_row(g, y, z);
-            quads += (size_t)(__builtin_popcountll((row ^ row >> 1) & inner) + __builtin_popcountll((row ^ sample_row(g, y + 1, z)) & inner) +
-                              __builtin_popcountll((row ^ sample_row(g, y, z + 1)) & inner));
+            uint64_t across[3];
+            crossed_edges(g, y, z, across);
+            quads += (size_t)(__builtin_popcountll(across[0]) + __builtin_popcountll(across[1]) + __builtin_popcountll(across[2]));
         }
     out->index_cap = quads ? 6 * quads : 1;
     out->indices = core_alloc(out->index_cap * sizeof *out->indices);
     for (int z = 1; z < g->samples[2] - 1; z++)
         for (int y = 1; y < g->samples[1] - 1; y++) {
             const uint64_t row = sample_row(g, y, z);
-            const uint64_t across[3] = { row ^ row >> 1, row ^ sample_row(g, y + 1, z), row ^ sample_row(g, y, z + 1) };
-            for (uint64_t edges = (across[0] | across[1] | across[2]) & inner; edges; edges &= edges - 1) {
+            uint64_t across[3];
+            crossed_edges(g, y, z, across);
+            for (uint64_t edges = across[0] | across[1] | across[2]; edges; edges &= edges - 1) {
                 const int x = __builtin_ctzll(edges);
                 const bool solid = row >> x & 1;
                 for (int axis = 0; axis < 3; axis++) {
@@ -541,9 +542,7 @@ static void make_quads(const dual_grid *g, rocks__surface *out) {
 }
 
 static void dual_grid_free(dual_grid *g) {
-    core_free(g->solid_rows, fine_bytes(g));
-    core_free(g->sample_rows, cells_bytes(g));
-    core_free(g->qefs, (g->vertex_count ? g->vertex_count : 1) * sizeof *g->qefs);
+    core_arena_release(&g->arena);
     core_free(g->missed, g->missed_cap * sizeof *g->missed);
 }
 
