@@ -441,7 +441,10 @@ static void plain_erosion(const rocks__params *params, const rocks__region_resul
     const uint32_t first = res->voxel_first[r], count = res->voxel_count[r];
     int lo[3] = { INT32_MAX, INT32_MAX, INT32_MAX }, hi[3] = { INT32_MIN, INT32_MIN, INT32_MIN };
     for (uint32_t i = 0; i < count; i++)
-        for (int a = 0; a < 3; a++) lo[a] = fmin(lo[a], res->voxels[first + i][a] - 1), hi[a] = fmax(hi[a], res->voxels[first + i][a] + 1);
+        for (int a = 0; a < 3; a++) {
+            int v = res->voxels[first + i][a];
+            lo[a] = v - 1 < lo[a] ? v - 1 : lo[a], hi[a] = v + 1 > hi[a] ? v + 1 : hi[a];
+        }
     const int sx = hi[0] - lo[0] + 1, sy = hi[1] - lo[1] + 1, sz = hi[2] - lo[2] + 1;
     const size_t total = (size_t)sx * sy * sz;
     float *rho = calloc(total, sizeof *rho), *next = calloc(total, sizeof *next), *omega = calloc(total, sizeof *omega);
