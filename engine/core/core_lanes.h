@@ -1,4 +1,4 @@
-/* core_lanes.h — four 32-bit lanes, or sixteen bytes, in GCC's vector types.
+/* core_lanes.h — four 32-bit lanes, two doubles, or sixteen bytes, in GCC's vector types.
  *
  * For the loops GCC does not vectorise at -O2 (a trip count it does not know, several arrays):
  * SSE2 on any x86-64, NEON on ARM, no runtime dispatch. Each lane does the same operations in the
@@ -18,6 +18,8 @@
 typedef float core_floats4 __attribute__((vector_size(16)));
 typedef int32_t core_ints4 __attribute__((vector_size(16)));
 typedef uint8_t core_bytes16 __attribute__((vector_size(16)));
+typedef double core_doubles2 __attribute__((vector_size(16)));
+typedef float core_floats2 __attribute__((vector_size(8)));
 
 static inline core_floats4 core_floats4_splat(float v) { return (core_floats4){ v, v, v, v }; }
 
@@ -51,5 +53,23 @@ static inline core_bytes16 core_bytes16_load(const uint8_t *p) {
 }
 
 static inline void core_bytes16_store(uint8_t *p, core_bytes16 v) { memcpy(p, &v, sizeof v); }
+
+static inline core_doubles2 core_doubles2_splat(double v) { return (core_doubles2){ v, v }; }
+
+/* Correctly rounded in each lane, as sqrt() is (IEEE 754): the same bits. One instruction on
+ * x86-64 (SSE2 sqrtpd); GCC's vector types have no sqrt of their own. */
+static inline core_doubles2 core_doubles2_sqrt(core_doubles2 v) {
+#if defined(__SSE2__)
+    return __builtin_ia32_sqrtpd(v);
+#else
+    return (core_doubles2){ __builtin_sqrt(v[0]), __builtin_sqrt(v[1]) };
+#endif
+}
+
+/* Two pairs of doubles rounded to four floats, as (float) rounds each. */
+static inline core_floats4 core_floats4_from_doubles(core_doubles2 lo, core_doubles2 hi) {
+    core_floats2 a = __builtin_convertvector(lo, core_floats2), b = __builtin_convertvector(hi, core_floats2);
+    return (core_floats4){ a[0], a[1], b[0], b[1] };
+}
 
 #endif

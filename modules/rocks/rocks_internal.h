@@ -45,6 +45,20 @@ typedef struct rocks__seed {
     int k;              /* index within its cell */
 } rocks__seed;
 
+/* The vector path of the ownership loop (rocks_voronoi.c) and the anchors' farthest-point
+ * rounds (rocks_mesh.c): the widest the CPU has unless set.
+ * Every path gives the same bits; the tests set each the CPU has. rocks__lanes_set returns false,
+ * changing nothing, for a path this CPU lacks. */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define ROCKS__HAS_AVX2 1
+#else
+#define ROCKS__HAS_AVX2 0
+#endif
+typedef enum rocks__lanes { ROCKS__LANES_AUTO, ROCKS__LANES_BASELINE, ROCKS__LANES_AVX2 } rocks__lanes;
+bool rocks__lanes_supported(rocks__lanes path);
+bool rocks__lanes_set(rocks__lanes path);
+bool rocks__lanes_wide(void);   /* the path in use is AVX2 */
+
 /* d_k(δ) for an offset δ from the seed in voxels. The one formula both the builder's loops and
  * the tests use (the same operations in the same order give the same bits; no FMA contraction
  * on the portable x86-64 target). */

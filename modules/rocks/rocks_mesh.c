@@ -65,15 +65,64 @@ bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t v
 #define LOD2_ERROR 8.0f
 #define LOD2_SHARE 12
 
+/* One round of farthest-point sampling over the centres (padded to groups of eight): each
+ * centre's squared distance to the anchors so far, lowered by the last one (bx, by, bz), and the
+ * first centre at the largest. Eight lanes of fixed length,
+ * which the compiler vectorises: each lane keeps its first centre at its maximum, then the least
+ * index among the lanes at the maximum, as one scan in order would. Compiled twice (below); the
+ * lanes do the scalar operations in the same order, with no FMA, so both give the same bits.
+ * Returns the centre, or −1 when none is farther than 0. */
+static inline __attribute__((always_inline)) ptrdiff_t farthest_centre(const float *restrict cx, const float *restrict cy,
+                                                                      const float *restrict cz, float *restrict nearest,
+                                                                      size_t padded, float bx, float by, float bz) {
+    float far[8];
+    int32_t at[8];
+    for (int j = 0; j < 8; j++) far[j] = -1.0f, at[j] = j;
+    for (size_t i = 0; i < padded; i += 8) {
+        float near[8];
+        for (int j = 0; j < 8; j++) {   /* branch-free, so it vectorises */
+            float d2 = 0.0f;
+            d2 += (cx[i + j] - bx) * (cx[i + j] - bx);
+            d2 += (cy[i + j] - by) * (cy[i + j] - by);
+            d2 += (cz[i + j] - bz) * (cz[i + j] - bz);
+            near[j] = d2 < nearest[i + j] ? d2 : nearest[i + j];
+        }
+        for (int j = 0; j < 8; j++) {
+            nearest[i + j] = near[j];
+            int32_t further = -(int32_t)(near[j] > far[j]);
+            far[j] = near[j] > far[j] ? near[j] : far[j];
+            at[j] = (at[j] & ~further) | ((int32_t)(i + (size_t)j) & further);
+        }
+    }
+    int lane = 0;
+    for (int j = 1; j < 8; j++)
+        if (far[j] > far[lane] || (far[j] == far[lane] && at[j] < at[lane])) lane = j;
+    return far[lane] > 0.0f ? (ptrdiff_t)at[lane] : -1;
+}
+
+static ptrdiff_t farthest_baseline(const float *cx, const float *cy, const float *cz, float *nearest, size_t padded,
+                                   float bx, float by, float bz) {
+    return farthest_centre(cx, cy, cz, nearest, padded, bx, by, bz);
+}
+
+#if ROCKS__HAS_AVX2
+__attribute__((target("avx2"))) static ptrdiff_t farthest_avx2(const float *cx, const float *cy, const float *cz,
+                                                               float *nearest, size_t padded, float bx, float by,
+                                                               float bz) {
+    return farthest_centre(cx, cy, cz, nearest, padded, bx, by, bz);
+}
+#else
+#define farthest_avx2 farthest_baseline
+#endif
+
 /* Anchors (001 §6): the seed, then voxel centres with ρ ≥ ½ spread by farthest-point sampling.
  * 001 uses every voxel centre; 15 spread ones bound the cost of testing a rock against the
  * support (placement stays under 0.5 ms a chunk) and still see where it lies. The centres are
- * kept as three arrays padded to groups of four (a pad's distance is −1, never the farthest);
- * each round updates the distances and takes their maximum four lanes at a time, then the first
- * centre at it, as one scan would. Returns the count written. */
+ * kept as three arrays padded to groups of eight (a pad's distance is −1, never the farthest).
+ * Returns the count written. */
 static uint32_t spread_anchors(const float *rho, const int box_lo[3], const int size[3], const float seed_pos[3],
                                float tile_scale, float (*anchors)[3]) {
-    const size_t total = (size_t)size[0] * size[1] * size[2], room = (total + 3) & ~(size_t)3;
+    const size_t total = (size_t)size[0] * size[1] * size[2], room = (total + 7) & ~(size_t)7;
     float *centres = core_alloc(4 * room * sizeof *centres);
     float *restrict cx = centres, *restrict cy = cx + room, *restrict cz = cy + room, *restrict nearest = cz + room;
     size_t c = 0;
@@ -84,46 +133,18 @@ static uint32_t spread_anchors(const float *rho, const int box_lo[3], const int 
                 cx[c] = ((float)(box_lo[0] + x) + 0.5f) * tile_scale;
                 cy[c] = ((float)(box_lo[1] + y) + 0.5f) * tile_scale;
                 cz[c] = ((float)(box_lo[2] + z) + 0.5f) * tile_scale;
-                float d2 = 0.0f;
-                d2 += (cx[c] - seed_pos[0]) * (cx[c] - seed_pos[0]);
-                d2 += (cy[c] - seed_pos[1]) * (cy[c] - seed_pos[1]);
-                d2 += (cz[c] - seed_pos[2]) * (cz[c] - seed_pos[2]);
-                nearest[c++] = d2;
+                nearest[c++] = INFINITY;   /* the first round measures from the seed */
             }
-    const size_t padded = (c + 3) & ~(size_t)3;
+    const size_t padded = (c + 7) & ~(size_t)7;
     for (; c < padded; c++) cx[c] = cy[c] = cz[c] = 0.0f, nearest[c] = -1.0f;
     memcpy(anchors[0], seed_pos, 3 * sizeof *seed_pos);
+    const bool wide = rocks__lanes_wide();
     uint32_t count = 1;
-    float bx = 0.0f, by = 0.0f, bz = 0.0f;
+    float bx = seed_pos[0], by = seed_pos[1], bz = seed_pos[2];
     while (count < ROCKS__ANCHORS) {
-        /* four centres at a time (GCC's vector types: SSE2 on any x86-64), the same operations in
-         * the same order as one at a time, so the same bits; the update, the maximum and the
-         * first centre at it (each lane's first, then the least of the lanes at the maximum) in
-         * one pass */
-        core_floats4 farthest4 = core_floats4_splat(-1.0f);
-        core_ints4 at4 = { 0, 1, 2, 3 }, index4 = { 0, 1, 2, 3 };
-        const core_ints4 step = { 4, 4, 4, 4 };
-        const core_floats4 x0 = core_floats4_splat(bx), y0 = core_floats4_splat(by), z0 = core_floats4_splat(bz);
-        for (size_t i = 0; i < padded; i += 4, index4 += step) {
-            core_floats4 near = core_floats4_load(nearest + i);
-            if (count > 1) {
-                core_floats4 x = core_floats4_load(cx + i), y = core_floats4_load(cy + i), z = core_floats4_load(cz + i);
-                core_floats4 d2 = core_floats4_splat(0.0f);
-                d2 += (x - x0) * (x - x0);
-                d2 += (y - y0) * (y - y0);
-                d2 += (z - z0) * (z - z0);
-                near = core_floats4_select(d2 < near, d2, near);
-                core_floats4_store(nearest + i, near);
-            }
-            core_ints4 further = near > farthest4;
-            farthest4 = core_floats4_select(further, near, farthest4);
-            at4 = (further & index4) | (~further & at4);
-        }
-        int lane = 0;
-        for (int l = 1; l < 4; l++)
-            if (farthest4[l] > farthest4[lane] || (farthest4[l] == farthest4[lane] && at4[l] < at4[lane])) lane = l;
-        if (!(farthest4[lane] > 0.0f)) break;
-        size_t best = (size_t)at4[lane];
+        ptrdiff_t best = wide ? farthest_avx2(cx, cy, cz, nearest, padded, bx, by, bz)
+                              : farthest_baseline(cx, cy, cz, nearest, padded, bx, by, bz);
+        if (best < 0) break;
         bx = cx[best], by = cy[best], bz = cz[best];
         anchors[count][0] = bx, anchors[count][1] = by, anchors[count][2] = bz;
         count++;

@@ -590,6 +590,25 @@ Test(rocks_tiles, one_and_two_workers_give_the_same_bytes) {
     job_system_destroy(two);
 }
 
+/* The ownership loop's vector paths (rocks__lanes): the same bytes on each path this CPU has. */
+Test(rocks_tiles, every_vector_path_gives_the_same_bytes) {
+    rocks_tileset_desc desc = quick_desc();
+    cr_assert(rocks__lanes_set(ROCKS__LANES_BASELINE));
+    rocks_tileset *baseline = rocks_tileset_create(&desc);
+    cr_assert_not_null(baseline);
+    if (rocks__lanes_set(ROCKS__LANES_AVX2)) {
+        rocks_tileset *wide = rocks_tileset_create(&desc);
+        cr_assert_not_null(wide);
+        cr_expect(same_arrays(baseline, wide), "the AVX2 path differs from the baseline");
+        rocks_tileset_destroy(wide);
+    } else {
+        cr_log_info("no AVX2 on this CPU: the baseline path only");
+    }
+    cr_expect_not(rocks__lanes_set((rocks__lanes)99), "an unknown path accepted");
+    rocks__lanes_set(ROCKS__LANES_AUTO);
+    rocks_tileset_destroy(baseline);
+}
+
 /* ---- the cache ----------------------------------------------------------------------------------- */
 
 static rocks_tileset_desc cache_desc(const char *path) {
