@@ -60,9 +60,11 @@ typedef struct index_entry {
     float y_lo, y_hi;                 /* its anchors' lowest and highest height */
     float seed[3];
     uint32_t entry;                   /* in set->entries */
-    uint32_t heights;                 /* its anchors' heights: index.anchor_y[heights …] */
+    uint32_t rock;                    /* the entry's rock */
+    uint32_t heights;                 /* its anchors: set.anchors[heights …] and their heights,
+                                         index.anchor_y[heights …] */
     uint16_t anchor_count;            /* ROCKS__ANCHORS (16) a rock */
-    int8_t offset_y;                  /* the entry's offset[1] */
+    int8_t offset[3];                 /* the entry's offset */
     uint8_t reserved;
 } index_entry;
 
@@ -139,8 +141,9 @@ static void index_tiles(rocks_place_index *index) {
             out[e] = (index_entry){
                 .y_lo = (float)entry->offset[1] + rock->box[0][1], .y_hi = (float)entry->offset[1] + rock->box[1][1],
                 .seed = { entry->offset[0] + rock->seed[0], entry->offset[1] + rock->seed[1], entry->offset[2] + rock->seed[2] },
-                .entry = tile->first + e, .heights = rock->anchor_first, .anchor_count = (uint16_t)rock->anchor_count,
-                .offset_y = entry->offset[1] };
+                .entry = tile->first + e, .rock = entry->rock, .heights = rock->anchor_first,
+                .anchor_count = (uint16_t)rock->anchor_count,
+                .offset = { (int8_t)entry->offset[0], (int8_t)entry->offset[1], (int8_t)entry->offset[2] } };
             index->tallest = max_f(index->tallest, out[e].y_hi - out[e].y_lo);
             index->y_lo = min_f(index->y_lo, out[e].y_lo), index->y_hi = max_f(index->y_hi, out[e].y_hi);
         }
@@ -428,7 +431,7 @@ static uint32_t anchors_inside(const placer *p, const index_rock *rock, const do
     return inside;
 }
 
-static void entry_origin(const placer *p, const rocks_tile_entry *entry, int64_t i, int64_t j, int64_t k, double origin[3]) {
+static void entry_origin(const placer *p, const index_entry *entry, int64_t i, int64_t j, int64_t k, double origin[3]) {
     origin[0] = ((double)i + entry->offset[0]) * p->tile;
     origin[1] = ((double)j + entry->offset[1]) * p->tile;
     origin[2] = ((double)k + entry->offset[2]) * p->tile;
@@ -457,7 +460,7 @@ static bool seed_buried(const placer *p, const tile_column *column, const double
 /* The rock's anchors in the support, anchor by anchor, when its anchor box lies over the 2 × 2
  * columns from table column (x0, z0): an anchor's column is which side of the columns' shared
  * edges it lies (floor(x) ≥ X + 1 exactly when x ≥ X + 1), its intervals a copy in doubles. */
-static uint32_t anchors_inside_2x2(const placer *p, const index_rock *rock, const double origin[3], int64_t x0,
+static uint32_t anchors_inside_2x2(const placer *p, const index_entry *entry, const double origin[3], int64_t x0,
                                    int64_t z0, uint32_t need) {
     const column_table *t = p->table;
     double edge_x = (double)(t->x0 + x0 + 1) * TERRAIN_COLUMN_SIZE, edge_z = (double)(t->z0 + z0 + 1) * TERRAIN_COLUMN_SIZE;
@@ -470,8 +473,8 @@ static uint32_t anchors_inside_2x2(const placer *p, const index_rock *rock, cons
             lo[q][i] = t->intervals[c * INTERVALS_PER_COLUMN + i].lo, hi[q][i] = t->intervals[c * INTERVALS_PER_COLUMN + i].hi;
         slots = t->count[c] > slots ? t->count[c] : slots;
     }
-    const float (*anchors)[3] = (const float (*)[3])p->set->anchors + rock->anchor_first;
-    uint32_t n = rock->anchor_count, inside = 0;
+    const float (*anchors)[3] = (const float (*)[3])p->set->anchors + entry->heights;
+    uint32_t n = entry->anchor_count, inside = 0;
     for (uint32_t a = 0; a < n && inside < need && inside + (n - a) >= need; a++) {
         double x = origin[0] + anchors[a][0] * p->tile, y = origin[1] + anchors[a][1] * p->tile,
                z = origin[2] + anchors[a][2] * p->tile;
@@ -486,18 +489,18 @@ static uint32_t anchors_inside_2x2(const placer *p, const index_rock *rock, cons
 /* Entry e of the tile at (i, j, k): seed in the box, not buried, at least `need` anchors in the
  * support; from the columns under its anchor box when they settle it, anchor by anchor
  * otherwise. */
-static bool entry_kept(const placer *p, const tile_column *column, uint32_t e, int64_t i, int64_t j, int64_t k) {
-    const rocks_tile_entry *entry = &p->set->entries[e];
+static bool entry_kept(const placer *p, const tile_column *column, const index_entry *entry, int64_t i, int64_t j, int64_t k) {
     const index_rock *rock = &p->index->rocks[entry->rock];
-    if (rock->anchor_count == 0) return false;
+    if (entry->anchor_count == 0) return false;
     double origin[3], seed[3];
     entry_origin(p, entry, i, j, k, origin);
     for (int a = 0; a < 3; a++) {
         seed[a] = origin[a] + rock->seed[a] * p->tile;
         if (!(seed[a] >= p->min[a] && seed[a] < p->max[a])) return false;
     }
-    uint32_t need = anchors_needed(p, rock->anchor_count);
+    uint32_t need = anchors_needed(p, entry->anchor_count);
     if (!p->table) return anchors_inside(p, rock, origin, need) >= need;
+    __builtin_prefetch(p->set->anchors + entry->heights);   /* read below when the columns differ */
     double lo[3], hi[3], band[2];
     int64_t foot[4];
     rock_anchor_box(p, rock, origin, lo, hi);
@@ -511,7 +514,7 @@ static bool entry_kept(const placer *p, const tile_column *column, uint32_t e, i
     const column_table *t = p->table;
     int64_t x0 = foot[0], x1 = foot[1], z0 = foot[2], z1 = foot[3];
     if (x0 >= 0 && z0 >= 0 && x1 < t->w && z1 < t->d && x1 - x0 <= 1 && z1 - z0 <= 1)
-        return anchors_inside_2x2(p, rock, origin, x0, z0, need) >= need;
+        return anchors_inside_2x2(p, entry, origin, x0, z0, need) >= need;
     return anchors_inside(p, rock, origin, need) >= need;
 }
 
@@ -694,7 +697,7 @@ static int frame_kept_one(const placer *p, const tile_frame *f, const index_entr
     if (above_lo & below_hi) return safe;                       /* every anchor in: the burial decides */
     /* across hi only, the need-th height from the bottom decides; across lo, the need-th from the top */
     uint32_t need = anchors_needed(p, n);
-    float deciding = (float)e->offset_y + p->index->anchor_y[e->heights + (above_lo ? need - 1 : n - need)];
+    float deciding = (float)e->offset[1] + p->index->anchor_y[e->heights + (above_lo ? need - 1 : n - need)];
     int side = frame_side(deciding, above_lo ? hi : lo, m);
     int anchors_in = above_lo ? side < 0 : side > 0;
     if ((side == 0) | !(above_lo | below_hi)) return -1;
@@ -707,14 +710,13 @@ static bool frame_kept(const placer *p, const tile_frame *f, const tile_column *
     int band;
     frame_says heights = frame_heights(f, e, &band);
     if (heights == FRAME_NO) return false;
-    const rocks_tile_entry *entry = &p->set->entries[e->entry];
-    const index_rock *rock = &p->index->rocks[entry->rock];
-    float seed[3] = { entry->offset[0] + rock->seed[0], entry->offset[1] + rock->seed[1], entry->offset[2] + rock->seed[2] };
+    const index_rock *rock = &p->index->rocks[e->rock];
+    float seed[3] = { e->offset[0] + rock->seed[0], e->offset[1] + rock->seed[1], e->offset[2] + rock->seed[2] };
     frame_says seeded = frame_seed(f, seed);
     if (seeded == FRAME_NO || rock->anchor_count == 0) return false;
-    if (seeded == FRAME_YES && heights == FRAME_EXACT && band >= 0) heights = frame_band(p, f, e, rock, entry->offset[1], band);
+    if (seeded == FRAME_YES && heights == FRAME_EXACT && band >= 0) heights = frame_band(p, f, e, rock, e->offset[1], band);
     if (seeded == FRAME_YES && heights != FRAME_EXACT) return heights == FRAME_YES;
-    return entry_kept(p, column, e->entry, i, j, k);
+    return entry_kept(p, column, e, i, j, k);
 }
 
 /* Room for `more` instances (doubling, as one push at a time would). */
@@ -819,18 +821,21 @@ static void place_tile(placer *p, const tile_column *column, int64_t i, int64_t 
         for (uint32_t s = from; s < to; s++) {
             if (sorted[s].y_hi < window[0]) continue;
             int kept = frame_kept_one(p, &frame, &sorted[s]);
-            if (kept < 0) kept = entry_kept(p, column, sorted[s].entry, i, j, k);
+            if (kept < 0) kept = entry_kept(p, column, &sorted[s], i, j, k);
             uint32_t local = sorted[s].entry - tile->first;
             p->kept[local / 64] |= (uint64_t)kept << (local % 64);   /* no branch on the answer */
             any |= kept;
         }
     } else {
         for (uint32_t s = from; s < to; s++) {
+            /* the rock a few entries on, which entry_kept reads if the cheap tests pass it: the
+             * entries' rocks lie all over the index, and waiting on each cost ~7 % here */
+            if (s + 8 < to) __builtin_prefetch(&p->index->rocks[sorted[s + 8].rock]);
             if (sorted[s].y_hi < window[0]) continue;
-            int kept = !column ? entry_kept(p, column, sorted[s].entry, i, j, k)
+            int kept = !column ? entry_kept(p, column, &sorted[s], i, j, k)
                        : column->same ? frame_kept(p, &frame, column, &sorted[s], i, j, k)
                        : !frame_rejects(p, &frame, column, &sorted[s], p->index->entry_xz[s], j) &&
-                         entry_kept(p, column, sorted[s].entry, i, j, k);
+                         entry_kept(p, column, &sorted[s], i, j, k);
             uint32_t local = sorted[s].entry - tile->first;
             p->kept[local / 64] |= (uint64_t)kept << (local % 64);
             any |= kept;
