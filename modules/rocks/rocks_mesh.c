@@ -19,36 +19,69 @@
 #include <math.h>
 #include <string.h>
 
-/* Directed edges bucketed by their first vertex (a counting sort, O(n)): closed means each
- * directed edge once and its reverse once. */
-bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t vertex_count) {
-    if (index_count == 0 || index_count % 3) return false;
+/* Closed means each directed edge once and its reverse once. The vertices the triangles use are
+ * numbered 0, 1, … in order of first use; up to 256 of them (a rock's levels of detail: ~40),
+ * the directed edges are bits of a 256-column matrix, so each test is one bit. */
+#define DENSE_VERTICES 256
+
+static bool watertight_dense(const uint32_t *indices, uint32_t index_count, const uint16_t *number, uint32_t used) {
+    uint64_t edges[DENSE_VERTICES][DENSE_VERTICES / 64];
+    memset(edges, 0, used * sizeof edges[0]);
+    for (uint32_t t = 0; t < index_count; t += 3)
+        for (int k = 0; k < 3; k++) {
+            uint32_t a = number[indices[t + k]], b = number[indices[t + (k == 2 ? 0 : k + 1)]];
+            uint64_t bit = 1ull << (b % 64);
+            if (edges[a][b / 64] & bit) return false;   /* a directed edge twice */
+            edges[a][b / 64] |= bit;
+        }
+    for (uint32_t t = 0; t < index_count; t += 3)
+        for (int k = 0; k < 3; k++) {
+            uint32_t a = number[indices[t + k]], b = number[indices[t + (k == 2 ? 0 : k + 1)]];
+            if (!(edges[b][a / 64] >> (a % 64) & 1)) return false;   /* no reverse */
+        }
+    return true;
+}
+
+/* More vertices: directed edges bucketed by their first vertex (a counting sort, O(n)). */
+static bool watertight_buckets(const uint32_t *indices, uint32_t index_count, uint32_t vertex_count) {
     const size_t words = 2 * ((size_t)vertex_count + 1) + index_count;   /* first, fill, to: one block */
     uint32_t *first = core_alloc(words * sizeof *first), *fill = first + vertex_count + 1, *to = fill + vertex_count + 1;
     memset(first, 0, ((size_t)vertex_count + 1) * sizeof *first);
+    for (uint32_t t = 0; t < index_count; t += 3)
+        for (int k = 0; k < 3; k++) first[indices[t + k] + 1]++;
+    for (uint32_t v = 0; v < vertex_count; v++) first[v + 1] += first[v];
+    memcpy(fill, first, ((size_t)vertex_count + 1) * sizeof *fill);
+    for (uint32_t t = 0; t < index_count; t += 3)
+        for (int k = 0; k < 3; k++) to[fill[indices[t + k]]++] = indices[t + (k == 2 ? 0 : k + 1)];
     bool ok = true;
-    for (uint32_t t = 0; t < index_count && ok; t += 3)
+    for (uint32_t a = 0; a < vertex_count && ok; a++)
+        for (uint32_t e = first[a]; e < first[a + 1] && ok; e++) {
+            uint32_t b = to[e];
+            for (uint32_t f = e + 1; f < first[a + 1]; f++)
+                if (to[f] == b) ok = false;   /* a directed edge twice */
+            bool back = false;
+            for (uint32_t f = first[b]; f < first[b + 1] && !back; f++) back = to[f] == a;
+            ok &= back;
+        }
+    core_free(first, words * sizeof *first);
+    return ok;
+}
+
+bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t vertex_count) {
+    if (index_count == 0 || index_count % 3) return false;
+    for (uint32_t t = 0; t < index_count; t += 3)
         for (int k = 0; k < 3; k++) {
             uint32_t a = indices[t + k], b = indices[t + (k == 2 ? 0 : k + 1)];
-            if (a == b || a >= vertex_count || b >= vertex_count) ok = false;
-            else first[a + 1]++;
+            if (a == b || a >= vertex_count) return false;   /* a degenerate triangle, or no such vertex */
         }
-    if (ok) {
-        for (uint32_t v = 0; v < vertex_count; v++) first[v + 1] += first[v];
-        memcpy(fill, first, ((size_t)vertex_count + 1) * sizeof *fill);
-        for (uint32_t t = 0; t < index_count; t += 3)
-            for (int k = 0; k < 3; k++) to[fill[indices[t + k]]++] = indices[t + (k == 2 ? 0 : k + 1)];
-        for (uint32_t a = 0; a < vertex_count && ok; a++)
-            for (uint32_t e = first[a]; e < first[a + 1] && ok; e++) {
-                uint32_t b = to[e];
-                for (uint32_t f = e + 1; f < first[a + 1]; f++)
-                    if (to[f] == b) ok = false;   /* a directed edge twice */
-                bool back = false;
-                for (uint32_t f = first[b]; f < first[b + 1] && !back; f++) back = to[f] == a;
-                ok &= back;
-            }
-    }
-    core_free(first, words * sizeof *first);
+    uint16_t small[1024], *number = vertex_count <= 1024 ? small : core_alloc(vertex_count * sizeof *number);
+    memset(number, 0xff, vertex_count * sizeof *number);
+    uint32_t used = 0;
+    for (uint32_t i = 0; i < index_count && used <= DENSE_VERTICES; i++)
+        if (number[indices[i]] == UINT16_MAX) number[indices[i]] = (uint16_t)used++;
+    bool ok = used <= DENSE_VERTICES ? watertight_dense(indices, index_count, number, used)
+                                     : watertight_buckets(indices, index_count, vertex_count);
+    if (number != small) core_free(number, vertex_count * sizeof *number);
     return ok;
 }
 

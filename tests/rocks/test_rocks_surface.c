@@ -62,6 +62,62 @@ static void expect_closed_sphere(const rocks__surface *s) {
  * fitted to the tangent planes of a convex surface sits outside it: for crossings within a
  * coarse cell, at most √3 voxels of arc from the vertex's own direction, by at most
  * R (1 / cos(√3 / R) − 1) ≈ 0.25 voxel at R = 6.3. Normals point out. */
+/* ---- the closed-mesh check (rocks__watertight) on meshes built by hand ---------------------- */
+
+/* A torus of rings × segments vertices, quads split in two, all turned the same way: every
+ * directed edge once and its reverse once (worked out per quad edge: the next quad holds it
+ * reversed). Returns the index count. */
+static uint32_t torus(uint32_t rings, uint32_t segments, uint32_t first_vertex, uint32_t *out) {
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < rings; i++)
+        for (uint32_t j = 0; j < segments; j++) {
+            uint32_t a = first_vertex + i * segments + j, b = first_vertex + (i + 1) % rings * segments + j;
+            uint32_t c = first_vertex + (i + 1) % rings * segments + (j + 1) % segments;
+            uint32_t d = first_vertex + i * segments + (j + 1) % segments;
+            out[n++] = a, out[n++] = b, out[n++] = c;
+            out[n++] = a, out[n++] = c, out[n++] = d;
+        }
+    return n;
+}
+
+Test(rocks_surface, the_closed_mesh_check_knows_a_tetrahedron) {
+    uint32_t tetra[12] = { 0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2 };   /* outward, each edge both ways */
+    cr_expect(rocks__watertight(tetra, 12, 4));
+    cr_expect(rocks__watertight(tetra, 12, 1000), "unused vertices do not open a mesh");
+    cr_expect_not(rocks__watertight(tetra, 9, 4), "one face missing: three open edges");
+    uint32_t flipped[12];
+    memcpy(flipped, tetra, sizeof tetra);
+    flipped[1] = 1, flipped[2] = 2;
+    cr_expect_not(rocks__watertight(flipped, 12, 4), "a face turned over: its edges run twice one way");
+    uint32_t doubled[15];
+    memcpy(doubled, tetra, sizeof tetra);
+    memcpy(doubled + 12, tetra, 3 * sizeof *tetra);
+    cr_expect_not(rocks__watertight(doubled, 15, 4), "a face twice");
+    uint32_t degenerate[15];
+    memcpy(degenerate, tetra, sizeof tetra);
+    degenerate[12] = 0, degenerate[13] = 0, degenerate[14] = 1;
+    cr_expect_not(rocks__watertight(degenerate, 15, 4), "a triangle with a vertex twice");
+    cr_expect_not(rocks__watertight(tetra, 12, 3), "an index past the vertices");
+    cr_expect_not(rocks__watertight(tetra, 11, 4), "a count that is not whole triangles");
+    cr_expect_not(rocks__watertight(tetra, 0, 4), "nothing");
+}
+
+/* Both ways of checking: up to 256 vertices used (a bit matrix) and more (edges in buckets). */
+Test(rocks_surface, the_closed_mesh_check_knows_small_and_large_tori) {
+    const uint32_t sizes[2][2] = { { 6, 9 }, { 20, 17 } };   /* 54 and 340 vertices */
+    for (int t = 0; t < 2; t++) {
+        uint32_t rings = sizes[t][0], segments = sizes[t][1], vertices = rings * segments + 7;
+        uint32_t *indices = malloc(6 * rings * segments * sizeof *indices);
+        uint32_t n = torus(rings, segments, 7, indices);
+        cr_expect(rocks__watertight(indices, n, vertices), "torus %u × %u", rings, segments);
+        cr_expect_not(rocks__watertight(indices, n - 3, vertices), "torus %u × %u less a triangle", rings, segments);
+        uint32_t keep = indices[n / 2 + 1];
+        indices[n / 2 + 1] = indices[n / 2 + 2], indices[n / 2 + 2] = keep;   /* one triangle turned over */
+        cr_expect_not(rocks__watertight(indices, n, vertices), "torus %u × %u with a triangle turned", rings, segments);
+        free(indices);
+    }
+}
+
 Test(rocks_surface, a_ball_comes_out_closed_and_on_its_sphere) {
     const float radius = 6.3f, centre = 9.2f;
     box_field f = box_field_make(20, 20, 20);
