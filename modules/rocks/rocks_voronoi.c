@@ -297,6 +297,20 @@ static bool dual_holds(int m, const int v[3], const int a[3], const int c[3]) {
  * through its centre. The decision reads only owners computable from either region's closure,
  * so the two rocks agree on it. (001 §5 keeps every pair "into contact"; a pair whose bisector
  * point falls elsewhere touches, if at all, away from c_pq.) */
+/* Whether the point t of the way from sa to sb is nearer sa (d_a < d_b): the bisection's test. */
+static inline bool nearer_first(const rocks__seed *sa, const rocks__seed *sb, const float dvec[3], double t) {
+    float x = (float)(t * dvec[0]), y = (float)(t * dvec[1]), z = (float)(t * dvec[2]);
+    return rocks__distance(sa->q, x, y, z) < rocks__distance(sb->q, x - dvec[0], y - dvec[1], z - dvec[2]);
+}
+
+/* Once both ends round to the same float point, every t between them does too (t·d and its
+ * rounding are monotone in t), so every later step compares the same distances: the halvings go
+ * on (the same bits) without evaluating them. */
+static inline bool one_float_point(const float dvec[3], double lo, double hi) {
+    return (float)(lo * dvec[0]) == (float)(hi * dvec[0]) && (float)(lo * dvec[1]) == (float)(hi * dvec[1]) &&
+           (float)(lo * dvec[2]) == (float)(hi * dvec[2]);
+}
+
 static bool contact_point(const region_build *b, const rocks__seed *p, const rocks__seed *q, double c[3]) {
     const rocks__seed *sa = p->id < q->id ? p : q, *sb = p->id < q->id ? q : p;
     const int m = b->m;
@@ -304,23 +318,26 @@ static bool contact_point(const region_build *b, const rocks__seed *p, const roc
     for (int a = 0; a < 3; a++) dvec[a] = (float)((sb->cell[a] - sa->cell[a]) * m) + (sb->u[a] - sa->u[a]);
     double lo = 0.0, hi = 1.0;
     bool nearer_a = false, settled = false;
-    for (int i = 0; i < 40; i++) {
-        double t = 0.5 * (lo + hi);
+    /* 40 halvings, two a round: a round tests its midpoint and both midpoints the next halving
+     * can have, three independent chains the CPU runs side by side, then takes the one it needs
+     * (0.5·(lo + t) or 0.5·(t + hi): the very doubles that halving computes). The state after
+     * every halving is the one-at-a-time bisection's. The settled check from halving 20 on,
+     * when the interval nears a float's precision. */
+    for (int i = 0; i < 40; i += 2) {
+        double t = 0.5 * (lo + hi), t_lo = 0.5 * (lo + t), t_hi = 0.5 * (t + hi);
+        bool at_lo = false, at_hi = false;
         if (!settled) {
-            float x = (float)(t * dvec[0]), y = (float)(t * dvec[1]), z = (float)(t * dvec[2]);
-            float da = rocks__distance(sa->q, x, y, z);
-            float db = rocks__distance(sb->q, x - dvec[0], y - dvec[1], z - dvec[2]);
-            nearer_a = da < db;
+            nearer_a = nearer_first(sa, sb, dvec, t);
+            at_lo = nearer_first(sa, sb, dvec, t_lo), at_hi = nearer_first(sa, sb, dvec, t_hi);
         }
         if (nearer_a) lo = t;
         else hi = t;
-        /* Once both ends round to the same float point, every t between them does too (t·d and
-         * its rounding are monotone in t), so every later step compares the same distances: the
-         * halvings go on (the same bits) without evaluating them. Checked from step 20 on, when
-         * the interval nears a float's precision. */
-        if (!settled && i >= 20)
-            settled = (float)(lo * dvec[0]) == (float)(hi * dvec[0]) && (float)(lo * dvec[1]) == (float)(hi * dvec[1]) &&
-                      (float)(lo * dvec[2]) == (float)(hi * dvec[2]);
+        if (!settled && i >= 20) settled = one_float_point(dvec, lo, hi);
+        if (!settled) nearer_a = nearer_a ? at_hi : at_lo;   /* the midpoint below, tested above */
+        t = 0.5 * (lo + hi);
+        if (nearer_a) lo = t;
+        else hi = t;
+        if (!settled && i + 1 >= 20) settled = one_float_point(dvec, lo, hi);
     }
     double t = 0.5 * (lo + hi);
     int v[3];
