@@ -541,6 +541,7 @@ typedef struct tile_frame {
     float column_x, column_z;         /* the tile's corner in the table's columns (x − x0 metres) */
     float tile;                       /* metres */
     float margin;
+    float grow;                       /* frame_rejects' margin round an anchor box, metres */
 } tile_frame;
 
 static float to_frame(double world, double base, double tile) { return (float)((world - base) / tile); }
@@ -567,6 +568,8 @@ static void tile_frame_make(const placer *p, const tile_column *column, int64_t 
     f->column_x = (float)(base[0] - (double)t->x0 * TERRAIN_COLUMN_SIZE);
     f->column_z = (float)(base[2] - (double)t->z0 * TERRAIN_COLUMN_SIZE);
     f->tile = (float)p->tile;
+    /* the margin covers the floats' rounding (a few ulps of coordinates no larger than the table) */
+    f->grow = f->margin * f->tile + 1e-3f + 1e-6f * (float)(t->w + t->d);
 }
 
 /* 1: v is surely at or above the bound, −1: surely below, 0: too close to tell in floats. */
@@ -651,12 +654,11 @@ static frame_says frame_band(const placer *p, const tile_frame *f, const index_e
  * reach (the columns under its anchor box grown by the margin). */
 static bool frame_rejects(const placer *p, const tile_frame *f, const tile_column *column, const index_entry *e,
                           const float xz[4], int64_t j) {
-    if (frame_in_box(f, e->seed) == FRAME_NO) return true;
+    if (f->any_edge && frame_in_box(f, e->seed) == FRAME_NO) return true;
     const column_table *t = p->table;
-    /* the table's columns under the anchors, a superset: the margin covers the floats' rounding
-     * (a few ulps of coordinates no larger than the table); truncation is floor at or above 0,
-     * and below 0 there is no column to miss */
-    float grow = f->margin * f->tile + 1e-3f + 1e-6f * (float)(t->w + t->d);
+    /* the table's columns under the anchors, a superset (grown by f->grow); truncation is floor
+     * at or above 0, and below 0 there is no column to miss */
+    const float grow = f->grow;
     int64_t x0 = (int64_t)(f->column_x + xz[0] * f->tile - grow), x1 = (int64_t)(f->column_x + xz[1] * f->tile + grow);
     int64_t z0 = (int64_t)(f->column_z + xz[2] * f->tile - grow), z1 = (int64_t)(f->column_z + xz[3] * f->tile + grow);
     x0 = x0 < column->x0 ? column->x0 : x0, x1 = x1 > column->x1 ? column->x1 : x1;
