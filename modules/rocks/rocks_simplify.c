@@ -191,10 +191,14 @@ static bool has_triangle_on(const rocks__simplifier *s, uint32_t v, uint32_t b, 
  * each other); and no turned triangle. u has taken none in this pass. */
 static bool can_collapse(rocks__simplifier *s, uint32_t u, uint32_t v) {
     uint32_t near_v = ++s->stamp_value, counted = ++s->stamp_value, tri[3];
+    /* v's neighbours. A collapsed triangle in v's lists needs no test: it holds v and vertices
+     * still joined to v (the link condition keeps the edge from v to a collapsed triangle's
+     * apex), so stamping it marks nothing new. */
     for (uint32_t x = v; x != NONE; x = next_list(s, v, x))
-        for (uint32_t i = s->first[x]; i < s->first[x + 1]; i++)
-            if (current_triangle(s, s->triangles[i], tri))
-                for (int k = 0; k < 3; k++) s->stamp[tri[k]] = near_v;
+        for (uint32_t i = s->first[x]; i < s->first[x + 1]; i++) {
+            const uint32_t *t = s->indices + 3 * (size_t)s->triangles[i];
+            s->stamp[t[0]] = near_v, s->stamp[t[1]] = near_v, s->stamp[t[2]] = near_v;
+        }
     int common = 0;
     uint32_t apexes[2] = { NONE, NONE };
     const float *pu = s->positions + 3 * (size_t)u, *pv = s->positions + 3 * (size_t)v;
