@@ -457,8 +457,11 @@ static void damping(float *omega, const int lo[3], const int size[3], const doub
                 size_t row = ((size_t)z * size[1] + y) * size[0];
                 float *out = omega + row;
                 const double dy2 = dy * dy, dz2 = dz * dz;
-                int x = from;
-                for (; x + 4 <= to + 1; x += 4) {   /* four at a time (core_lanes.h), no branches */
+                /* four at a time (core_lanes.h), no branches; the last group's lanes past `to` get
+                 * ω_c = 1 and so write back what they read (at most three past the row's last
+                 * interior voxel: its border voxel and the next row's first two, inside the box) */
+                const core_ints4 lane = { 0, 1, 2, 3 };
+                for (int x = from; x <= to; x += 4) {
                     const core_doubles2 half_voxel = core_doubles2_splat(0.5), centre = core_doubles2_splat(p[0]);
                     core_doubles2 dx0 = (core_doubles2){ lo[0] + x, lo[0] + x + 1 } + half_voxel - centre;
                     core_doubles2 dx1 = (core_doubles2){ lo[0] + x + 2, lo[0] + x + 3 } + half_voxel - centre;
@@ -466,15 +469,10 @@ static void damping(float *omega, const int lo[3], const int size[3], const doub
                     core_doubles2 d1 = dx1 * dx1 + core_doubles2_splat(dy2) + core_doubles2_splat(dz2);
                     core_floats4 r = core_floats4_from_doubles(core_doubles2_sqrt(d0), core_doubles2_sqrt(d1));
                     core_floats4 va = core_floats4_splat(a), vb = core_floats4_splat(b), old = core_floats4_load(out + x);
-                    core_floats4 wc = core_floats4_select(r < vb, (r - va) / (vb - va), core_floats4_splat(1.0f));
-                    wc = core_floats4_select(r < va, core_floats4_splat(0.0f), wc);
+                    core_ints4 in_run = lane + (core_ints4){ x, x, x, x } <= (core_ints4){ to, to, to, to };
+                    core_floats4 wc = core_floats4_select((r < vb) & in_run, (r - va) / (vb - va), core_floats4_splat(1.0f));
+                    wc = core_floats4_select((r < va) & in_run, core_floats4_splat(0.0f), wc);
                     core_floats4_store(out + x, core_floats4_select(wc < old, wc, old));
-                }
-                for (; x <= to; x++) {
-                    double dx = lo[0] + x + 0.5 - p[0];
-                    float r = (float)sqrt(dx * dx + dy2 + dz2);
-                    float wc = r < a ? 0.0f : r < b ? (r - a) / (b - a) : 1.0f;
-                    out[x] = wc < out[x] ? wc : out[x];
                 }
             }
         }
