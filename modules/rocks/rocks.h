@@ -236,7 +236,9 @@ typedef struct rocks_placement {
     double origin[3];                 /* world metres */
     rocks_instance *instances;        /* in lattice order (a pure function of the box), owned */
     uint32_t count, capacity;
-    float bounds_min[3], bounds_max[3];   /* of the instances' rocks, relative to origin */
+    float bounds_min[3], bounds_max[3];   /* relative to origin: a box round the instances' rocks
+                                             for culling (per tile and offset, the bounds of every
+                                             rock the tile lists there that it keeps any of) */
 } rocks_placement;
 
 /* Places the rocks whose seed point lies in the world box [min, max) (x, y, z metres), reusing

@@ -72,9 +72,15 @@ typedef struct index_entry {
 typedef struct index_rock {
     float seed[3];
     float box[2][3];                  /* the lowest and highest coordinate of its anchors */
-    float mesh_lo[4], mesh_hi[4];     /* its mesh's bounds (rocks_rock.bounds_min, _max; 4th: 0) */
     uint32_t anchor_first, anchor_count;   /* its anchors' heights in index.anchor_y */
 } index_rock;
+
+/* Per tile, per offset (o + 1)·(1, 3, 9): the bounds of the meshes of every rock the tile lists
+ * with that offset (tile units; lo > hi when none). A placement's bounds are the union of those
+ * of the (tile, offset) pairs it keeps a rock of: no rock is read to write one. */
+typedef struct offset_bounds {
+    float lo[27][3], hi[27][3];
+} offset_bounds;
 
 struct rocks_place_index {
     const rocks_tileset *set;
@@ -83,6 +89,7 @@ struct rocks_place_index {
     index_entry *entries;             /* tile t's are [tiles[t].first, + count), by y_lo */
     float (*entry_xz)[4];             /* beside each: its anchors' x and z ranges, tile frame
                                          (x_lo, x_hi, z_lo, z_hi; rounded) */
+    offset_bounds tile_bounds[256];
     float reach[3];                   /* largest |anchor − seed| of any rock, per axis (tile units) */
     float tallest;                    /* largest y_hi − y_lo */
     float y_lo, y_hi;                 /* over every entry */
@@ -111,9 +118,6 @@ static void index_rocks(rocks_place_index *index) {
         index_rock *out = &index->rocks[r];
         const float *first = rock->anchor_count ? set->anchors[rock->anchor_first] : rock->seed;
         memcpy(out->seed, rock->seed, sizeof out->seed);
-        memcpy(out->mesh_lo, rock->bounds_min, sizeof rock->bounds_min);
-        memcpy(out->mesh_hi, rock->bounds_max, sizeof rock->bounds_max);
-        out->mesh_lo[3] = out->mesh_hi[3] = 0.0f;
         memcpy(out->box[0], first, sizeof out->box[0]);
         memcpy(out->box[1], first, sizeof out->box[1]);
         out->anchor_first = rock->anchor_first, out->anchor_count = rock->anchor_count;
@@ -135,9 +139,17 @@ static void index_tiles(rocks_place_index *index) {
     for (int t = 0; t < 256; t++) {
         const rocks_tile *tile = &set->tiles[t];
         index_entry *out = index->entries + tile->first;
+        offset_bounds *bounds = &index->tile_bounds[t];
+        for (int c = 0; c < 27; c++)
+            for (int a = 0; a < 3; a++) bounds->lo[c][a] = INFINITY, bounds->hi[c][a] = -INFINITY;
         for (uint32_t e = 0; e < tile->count; e++) {
             const rocks_tile_entry *entry = &set->entries[tile->first + e];
             const index_rock *rock = &index->rocks[entry->rock];
+            const rocks_rock *mesh = &set->rocks[entry->rock];
+            int c = (entry->offset[0] + 1) + 3 * (entry->offset[1] + 1) + 9 * (entry->offset[2] + 1);
+            for (int a = 0; a < 3; a++)
+                bounds->lo[c][a] = min_f(bounds->lo[c][a], mesh->bounds_min[a]),
+                bounds->hi[c][a] = max_f(bounds->hi[c][a], mesh->bounds_max[a]);
             out[e] = (index_entry){
                 .y_lo = (float)entry->offset[1] + rock->box[0][1], .y_hi = (float)entry->offset[1] + rock->box[1][1],
                 .seed = { entry->offset[0] + rock->seed[0], entry->offset[1] + rock->seed[1], entry->offset[2] + rock->seed[2] },
@@ -735,38 +747,36 @@ static void placement_reserve(rocks_placement *out, uint32_t more) {
  * come from the smallest and largest mesh bound of the rocks at each of the 27 offsets:
  * x + (float)(b·tile) rounds monotonically in b, so that is the bound the instances one by one
  * would give. */
-static void place_kept(placer *p, const rocks_tile *tile, size_t words, int64_t i, int64_t j, int64_t k) {
+static void place_kept(placer *p, int t, size_t words, int64_t i, int64_t j, int64_t k) {
+    const rocks_tile *tile = &p->set->tiles[t];
     rocks_placement *out = p->out;
     const int64_t lattice[3] = { i, j, k };
     float position[3][3];             /* [axis][offset + 1] */
-    float lo[27][4], hi[27][4];       /* [offset (o + 1)·(1, 3, 9)][axis] */
     for (int a = 0; a < 3; a++)
         for (int o = 0; o < 3; o++) position[a][o] = (float)(((double)lattice[a] + (o - 1)) * p->tile - out->origin[a]);
-    for (int c = 0; c < 27; c++)
-        for (int a = 0; a < 4; a++) lo[c][a] = INFINITY, hi[c][a] = -INFINITY;
     uint32_t kept = 0;
     for (size_t w = 0; w < words; w++) kept += (uint32_t)__builtin_popcountll(p->kept[w]);
     placement_reserve(out, kept);
     uint64_t key = p->seed ^ ((uint64_t)i * 0x9e3779b97f4a7c15ull) ^ ((uint64_t)j * 0xc2b2ae3d27d4eb4full) ^
                    ((uint64_t)k * 0x165667b19e3779f9ull);
     rocks_instance *instance = out->instances + out->count;
+    uint32_t offsets = 0;             /* bit (o + 1)·(1, 3, 9): a rock kept with that offset */
     for (size_t w = 0; w < words; w++)
         for (uint64_t bits = p->kept[w]; bits; bits &= bits - 1) {
             uint32_t e = tile->first + (uint32_t)(w * 64 + (uint32_t)__builtin_ctzll(bits));
             const rocks_tile_entry *entry = &p->set->entries[e];
-            const index_rock *rock = &p->index->rocks[entry->rock];
-            int ox = entry->offset[0] + 1, oy = entry->offset[1] + 1, oz = entry->offset[2] + 1, c = ox + 3 * oy + 9 * oz;
+            int ox = entry->offset[0] + 1, oy = entry->offset[1] + 1, oz = entry->offset[2] + 1;
             *instance++ = (rocks_instance){ .position = { position[0][ox], position[1][oy], position[2][oz] },
                                             .rock = entry->rock, .key = (uint32_t)core_hash_u64(key ^ ((uint64_t)e << 40)) };
-            for (int a = 0; a < 4; a++) lo[c][a] = min_f(lo[c][a], rock->mesh_lo[a]), hi[c][a] = max_f(hi[c][a], rock->mesh_hi[a]);
+            offsets |= 1u << (ox + 3 * oy + 9 * oz);
         }
     out->count += kept;
-    for (int c = 0; c < 27; c++) {
-        if (lo[c][0] > hi[c][0]) continue;
-        const int o[3] = { c % 3, c / 3 % 3, c / 9 };
+    const offset_bounds *bounds = &p->index->tile_bounds[t];
+    for (; offsets; offsets &= offsets - 1) {
+        const int c = __builtin_ctz(offsets), o[3] = { c % 3, c / 3 % 3, c / 9 };
         for (int a = 0; a < 3; a++) {
-            out->bounds_min[a] = min_f(out->bounds_min[a], position[a][o[a]] + (float)(lo[c][a] * p->tile));
-            out->bounds_max[a] = max_f(out->bounds_max[a], position[a][o[a]] + (float)(hi[c][a] * p->tile));
+            out->bounds_min[a] = min_f(out->bounds_min[a], position[a][o[a]] + (float)(bounds->lo[c][a] * p->tile));
+            out->bounds_max[a] = max_f(out->bounds_max[a], position[a][o[a]] + (float)(bounds->hi[c][a] * p->tile));
         }
     }
 }
@@ -808,7 +818,8 @@ static bool tile_window(const placer *p, const tile_column *column, int64_t j, f
 static void place_tile(placer *p, const tile_column *column, int64_t i, int64_t j, int64_t k) {
     float window[2];
     if (!tile_window(p, column, j, window)) return;
-    const rocks_tile *tile = &p->set->tiles[tile_at(p, i, j, k)];
+    const int t = tile_at(p, i, j, k);
+    const rocks_tile *tile = &p->set->tiles[t];
     const index_entry *sorted = p->index->entries;
     uint32_t end = tile->first + tile->count;
     uint32_t from = entries_from(sorted, tile->first, end, window[0] - p->index->tallest);
@@ -843,7 +854,7 @@ static void place_tile(placer *p, const tile_column *column, int64_t i, int64_t 
             any |= kept;
         }
     }
-    if (any) place_kept(p, tile, words, i, j, k);
+    if (any) place_kept(p, t, words, i, j, k);
 }
 
 /* The tiles of lattice [lo, hi), in lattice order (k, j, i); each row of tile columns is worked out

@@ -317,6 +317,35 @@ static void expect_reference(const rocks_tileset *set, terrain_world *world, con
     rocks_placement_free(&p);
 }
 
+/* The placement's box holds every instance's rock, and is no looser than what its tiles list
+ * can make it: per tile and offset, a rock's bounds (a few tile units) round the kept ones. */
+Test(rocks_place, the_placement_box_holds_every_rock_placed) {
+    rocks_tileset *set = small_set();
+    terrain_world *world = pile_world(false, NULL);
+    rocks_placement p = { 0 };
+    place(set, world, PILE_MIN, PILE_MAX, &p);
+    cr_assert_gt(p.count, 20);
+    float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+    for (uint32_t i = 0; i < p.count; i++) {
+        const rocks_rock *rock = &set->rocks[p.instances[i].rock];
+        for (int a = 0; a < 3; a++) {
+            float rock_lo = p.instances[i].position[a] + rock->bounds_min[a] * 3.0f;
+            float rock_hi = p.instances[i].position[a] + rock->bounds_max[a] * 3.0f;
+            cr_assert_geq(rock_lo, p.bounds_min[a] - 1e-4f, "rock %u below the box on axis %d", i, a);
+            cr_assert_leq(rock_hi, p.bounds_max[a] + 1e-4f, "rock %u above the box on axis %d", i, a);
+            lo[a] = fminf(lo[a], rock_lo), hi[a] = fmaxf(hi[a], rock_hi);
+        }
+    }
+    cr_log_info("looser by %.2f %.2f %.2f below, %.2f %.2f %.2f above", lo[0] - p.bounds_min[0], lo[1] - p.bounds_min[1], lo[2] - p.bounds_min[2], p.bounds_max[0] - hi[0], p.bounds_max[1] - hi[1], p.bounds_max[2] - hi[2]);
+    for (int a = 0; a < 3; a++) {   /* a rock lies within its region, two tiles wide at most */
+        cr_expect_leq(lo[a] - p.bounds_min[a], 6.0f, "axis %d: the box reaches %.2f m below the rocks", a, lo[a] - p.bounds_min[a]);
+        cr_expect_leq(p.bounds_max[a] - hi[a], 6.0f, "axis %d: the box reaches %.2f m above the rocks", a, p.bounds_max[a] - hi[a]);
+    }
+    rocks_placement_free(&p);
+    terrain_world_destroy(world);
+    rocks_tileset_destroy(set);
+}
+
 Test(rocks_place, placement_is_the_definition_applied_to_every_rock) {
     rocks_tileset *set = small_set();
     terrain_world *pile = pile_world(false, NULL);
