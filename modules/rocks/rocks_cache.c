@@ -175,8 +175,11 @@ static bool consistent(const rocks__set *full) {
     const rocks_tileset *s = &full->set;
     for (int t = 0; t < 256; t++)
         if ((uint64_t)s->tiles[t].first + s->tiles[t].count > s->entry_count) return false;
-    for (uint32_t e = 0; e < s->entry_count; e++)
+    for (uint32_t e = 0; e < s->entry_count; e++) {
         if (s->entries[e].rock >= s->rock_count) return false;
+        for (int a = 0; a < 3; a++)   /* −1 … 1 (rocks.h): placement indexes by the offset */
+            if (s->entries[e].offset[a] < -1 || s->entries[e].offset[a] > 1) return false;
+    }
     for (uint32_t r = 0; r < s->rock_count; r++) {
         const rocks_rock *rock = &s->rocks[r];
         if ((uint64_t)rock->vertex_first + rock->vertex_count > s->vertex_count) return false;

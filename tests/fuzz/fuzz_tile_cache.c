@@ -5,7 +5,9 @@
  * Seed: tests/fuzz/corpus/fuzz_tile_cache/six_rocks.bin (7.3 KB): the first six rocks of the
  * TILE_DESC set below with everything they reach (tile 0 lists them, the other tiles none,
  * contacts to rocks left out made ROCKS_CONTACT_VARIES), as rocks__cache_write writes it; the
- * whole set's file is 2.4 MB, too much to mutate.
+ * whole set's file is 2.4 MB, too much to mutate. entry_offset_out_of_range.bin: that file with an
+ * entry's offset made −9, which the reader once let through to placement's index (an index out
+ * of bounds there); kept as a seed so the case stays covered.
  *
  * Each input is parsed as it is and with its checksum fixed (fuzz_checksum.h). Traps when a
  * result breaks the contract: a failure says why and keeps nothing; a success gives a set whose every index is
@@ -32,8 +34,11 @@ static void check_accepted(const rocks__set *full) {
     const rocks_tileset *s = &full->set;
     for (int t = 0; t < 256; t++)
         if ((uint64_t)s->tiles[t].first + s->tiles[t].count > s->entry_count) __builtin_trap();
-    for (uint32_t e = 0; e < s->entry_count; e++)
+    for (uint32_t e = 0; e < s->entry_count; e++) {
         if (s->entries[e].rock >= s->rock_count) __builtin_trap();
+        for (int a = 0; a < 3; a++)
+            if (s->entries[e].offset[a] < -1 || s->entries[e].offset[a] > 1) __builtin_trap();
+    }
     for (uint32_t r = 0; r < s->rock_count; r++) {
         const rocks_rock *rock = &s->rocks[r];
         if ((uint64_t)rock->vertex_first + rock->vertex_count > s->vertex_count ||
