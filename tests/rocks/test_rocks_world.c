@@ -104,11 +104,30 @@ static int anchors_in_rocks(terrain_world *world, const rocks_tileset *set, cons
     return inside;
 }
 
+/* The small set placed over the pile's box (or over bare ground); pile_free releases it all. */
+typedef struct pile_placed {
+    rocks_tileset *set;
+    terrain_world *world;
+    rocks_placement p;
+} pile_placed;
+
+static pile_placed pile_place(bool bare) {
+    pile_placed c = { .set = small_set(), .world = pile_world(bare, NULL) };
+    place(c.set, c.world, PILE_MIN, PILE_MAX, &c.p);
+    return c;
+}
+
+static void pile_free(pile_placed *c) {
+    rocks_placement_free(&c->p);
+    terrain_world_destroy(c->world);
+    rocks_tileset_destroy(c->set);
+}
+
 Test(rocks_place, every_rock_placed_has_most_anchors_in_the_rock_layer) {
-    rocks_tileset *set = small_set();
-    terrain_world *world = pile_world(false, NULL);
-    rocks_placement p = { 0 };
-    place(set, world, PILE_MIN, PILE_MAX, &p);
+    pile_placed c = pile_place(false);
+    const rocks_tileset *set = c.set;
+    terrain_world *world = c.world;
+    const rocks_placement p = c.p;
     cr_assert_gt(p.count, 20, "a 3 m pile of 4 m radius holds rocks: %u", p.count);
     for (uint32_t i = 0; i < p.count; i++) {
         const rocks_rock *rock = &set->rocks[p.instances[i].rock];
@@ -121,20 +140,13 @@ Test(rocks_place, every_rock_placed_has_most_anchors_in_the_rock_layer) {
         double seed_r = hypot(origin[0] + rock->seed[0] * 3.0 - PILE_X, origin[2] + rock->seed[2] * 3.0 - PILE_Z);
         cr_assert_lt(seed_r, 4.0 + 3.0 * set->max_radius, "rock %u's seed %.2f m from the pile's axis", i, seed_r);
     }
-    rocks_placement_free(&p);
-    terrain_world_destroy(world);
-    rocks_tileset_destroy(set);
+    pile_free(&c);
 }
 
 Test(rocks_place, bare_ground_has_no_rocks) {
-    rocks_tileset *set = small_set();
-    terrain_world *world = pile_world(true, NULL);
-    rocks_placement p = { 0 };
-    place(set, world, PILE_MIN, PILE_MAX, &p);
-    cr_assert_eq(p.count, 0);
-    rocks_placement_free(&p);
-    terrain_world_destroy(world);
-    rocks_tileset_destroy(set);
+    pile_placed c = pile_place(true);
+    cr_assert_eq(c.p.count, 0);
+    pile_free(&c);
 }
 
 typedef struct placed_rock { int64_t mm[3]; uint32_t rock; } placed_rock;
@@ -320,10 +332,9 @@ static void expect_reference(const rocks_tileset *set, terrain_world *world, con
 /* The placement's box holds every instance's rock, and is no looser than what its tiles list
  * can make it: per tile and offset, a rock's bounds (a few tile units) round the kept ones. */
 Test(rocks_place, the_placement_box_holds_every_rock_placed) {
-    rocks_tileset *set = small_set();
-    terrain_world *world = pile_world(false, NULL);
-    rocks_placement p = { 0 };
-    place(set, world, PILE_MIN, PILE_MAX, &p);
+    pile_placed c = pile_place(false);
+    const rocks_tileset *set = c.set;
+    const rocks_placement p = c.p;
     cr_assert_gt(p.count, 20);
     float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
     for (uint32_t i = 0; i < p.count; i++) {
@@ -336,14 +347,12 @@ Test(rocks_place, the_placement_box_holds_every_rock_placed) {
             lo[a] = fminf(lo[a], rock_lo), hi[a] = fmaxf(hi[a], rock_hi);
         }
     }
-    cr_log_info("looser by %.2f %.2f %.2f below, %.2f %.2f %.2f above", lo[0] - p.bounds_min[0], lo[1] - p.bounds_min[1], lo[2] - p.bounds_min[2], p.bounds_max[0] - hi[0], p.bounds_max[1] - hi[1], p.bounds_max[2] - hi[2]);
     for (int a = 0; a < 3; a++) {   /* a rock lies within its region, two tiles wide at most */
+        cr_log_info("axis %d: the box %.2f m below the rocks, %.2f m above", a, lo[a] - p.bounds_min[a], p.bounds_max[a] - hi[a]);
         cr_expect_leq(lo[a] - p.bounds_min[a], 6.0f, "axis %d: the box reaches %.2f m below the rocks", a, lo[a] - p.bounds_min[a]);
         cr_expect_leq(p.bounds_max[a] - hi[a], 6.0f, "axis %d: the box reaches %.2f m above the rocks", a, p.bounds_max[a] - hi[a]);
     }
-    rocks_placement_free(&p);
-    terrain_world_destroy(world);
-    rocks_tileset_destroy(set);
+    pile_free(&c);
 }
 
 Test(rocks_place, placement_is_the_definition_applied_to_every_rock) {
