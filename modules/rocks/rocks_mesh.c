@@ -14,10 +14,12 @@
 #include "rocks_internal.h"
 
 #include "core/core.h"
-#include "core/core_lanes.h"
 
 #include <math.h>
 #include <string.h>
+
+/* The corner after corner k of triangle t: the end of its k-th directed edge. */
+static inline uint32_t edge_end(const uint32_t *indices, uint32_t t, int k) { return indices[t + (k == 2 ? 0 : k + 1)]; }
 
 /* Closed means each directed edge once and its reverse once. The vertices the triangles use are
  * numbered 0, 1, … in order of first use; up to 256 of them (a rock's levels of detail: ~40),
@@ -29,14 +31,14 @@ static bool watertight_dense(const uint32_t *indices, uint32_t index_count, cons
     memset(edges, 0, used * sizeof edges[0]);
     for (uint32_t t = 0; t < index_count; t += 3)
         for (int k = 0; k < 3; k++) {
-            uint32_t a = number[indices[t + k]], b = number[indices[t + (k == 2 ? 0 : k + 1)]];
+            uint32_t a = number[indices[t + k]], b = number[edge_end(indices, t, k)];
             uint64_t bit = 1ull << (b % 64);
             if (edges[a][b / 64] & bit) return false;   /* a directed edge twice */
             edges[a][b / 64] |= bit;
         }
     for (uint32_t t = 0; t < index_count; t += 3)
         for (int k = 0; k < 3; k++) {
-            uint32_t a = number[indices[t + k]], b = number[indices[t + (k == 2 ? 0 : k + 1)]];
+            uint32_t a = number[indices[t + k]], b = number[edge_end(indices, t, k)];
             if (!(edges[b][a / 64] >> (a % 64) & 1)) return false;   /* no reverse */
         }
     return true;
@@ -52,7 +54,7 @@ static bool watertight_buckets(const uint32_t *indices, uint32_t index_count, ui
     for (uint32_t v = 0; v < vertex_count; v++) first[v + 1] += first[v];
     memcpy(fill, first, ((size_t)vertex_count + 1) * sizeof *fill);
     for (uint32_t t = 0; t < index_count; t += 3)
-        for (int k = 0; k < 3; k++) to[fill[indices[t + k]]++] = indices[t + (k == 2 ? 0 : k + 1)];
+        for (int k = 0; k < 3; k++) to[fill[indices[t + k]]++] = edge_end(indices, t, k);
     bool ok = true;
     for (uint32_t a = 0; a < vertex_count && ok; a++)
         for (uint32_t e = first[a]; e < first[a + 1] && ok; e++) {
@@ -71,7 +73,7 @@ bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t v
     if (index_count == 0 || index_count % 3) return false;
     for (uint32_t t = 0; t < index_count; t += 3)
         for (int k = 0; k < 3; k++) {
-            uint32_t a = indices[t + k], b = indices[t + (k == 2 ? 0 : k + 1)];
+            uint32_t a = indices[t + k], b = edge_end(indices, t, k);
             if (a == b || a >= vertex_count) return false;   /* a degenerate triangle, or no such vertex */
         }
     uint16_t small[1024], *number = vertex_count <= 1024 ? small : core_alloc(vertex_count * sizeof *number);
@@ -100,11 +102,11 @@ bool rocks__watertight(const uint32_t *indices, uint32_t index_count, uint32_t v
 
 /* One round of farthest-point sampling over the centres (padded to groups of eight): each
  * centre's squared distance to the anchors so far, lowered by the last one (bx, by, bz), and the
- * first centre at the largest. Eight lanes of fixed length,
- * which the compiler vectorises: each lane keeps its first centre at its maximum, then the least
- * index among the lanes at the maximum, as one scan in order would. Compiled twice (below); the
- * lanes do the scalar operations in the same order, with no FMA, so both give the same bits.
- * Returns the centre, or −1 when none is farther than 0. */
+ * first centre at the largest. Eight lanes of fixed length, which the compiler vectorises: each
+ * lane keeps its first centre at its maximum, then the least index among the lanes at the
+ * maximum, as one scan in order would. Compiled twice (below); the lanes do the scalar
+ * operations in the same order, with no FMA, so both give the same bits. Returns the centre, or
+ * −1 when none is farther than 0. */
 static inline __attribute__((always_inline)) ptrdiff_t farthest_centre(const float *restrict cx, const float *restrict cy,
                                                                       const float *restrict cz, float *restrict nearest,
                                                                       size_t padded, float bx, float by, float bz) {

@@ -75,9 +75,14 @@ typedef struct index_rock {
     uint32_t anchor_first, anchor_count;   /* its anchors' heights in index.anchor_y */
 } index_rock;
 
-/* Per tile, per offset (o + 1)·(1, 3, 9): the bounds of the meshes of every rock the tile lists
- * with that offset (tile units; lo > hi when none). A placement's bounds are the union of those
- * of the (tile, offset) pairs it keeps a rock of: no rock is read to write one. */
+/* An entry's offset (−1 … 1 a coordinate) as one of 27: (o + 1)·(1, 3, 9). */
+static inline int offset_class(const int8_t offset[3]) {
+    return (offset[0] + 1) + 3 * (offset[1] + 1) + 9 * (offset[2] + 1);
+}
+
+/* Per tile, per offset_class: the bounds of the meshes of every rock the tile lists with that
+ * offset (tile units; lo > hi when none). A placement's bounds are the union of those of the
+ * (tile, offset) pairs it keeps a rock of: no rock is read to write one. */
 typedef struct offset_bounds {
     float lo[27][3], hi[27][3];
 } offset_bounds;
@@ -146,7 +151,7 @@ static void index_tiles(rocks_place_index *index) {
             const rocks_tile_entry *entry = &set->entries[tile->first + e];
             const index_rock *rock = &index->rocks[entry->rock];
             const rocks_rock *mesh = &set->rocks[entry->rock];
-            int c = (entry->offset[0] + 1) + 3 * (entry->offset[1] + 1) + 9 * (entry->offset[2] + 1);
+            int c = offset_class(entry->offset);
             for (int a = 0; a < 3; a++)
                 bounds->lo[c][a] = min_f(bounds->lo[c][a], mesh->bounds_min[a]),
                 bounds->hi[c][a] = max_f(bounds->hi[c][a], mesh->bounds_max[a]);
@@ -744,9 +749,8 @@ static void placement_reserve(rocks_placement *out, uint32_t more) {
 
 /* The kept entries of a tile (bits of p->kept), placed in the tile's order. What depends on the
  * tile alone is worked out once: each offset's position and the key's lattice part. The bounds
- * come from the smallest and largest mesh bound of the rocks at each of the 27 offsets:
- * x + (float)(b·tile) rounds monotonically in b, so that is the bound the instances one by one
- * would give. */
+ * grow by the index's bounds of each offset the tile keeps a rock at (offset_bounds): they hold
+ * every kept rock, and no rock is read for them. */
 static void place_kept(placer *p, int t, size_t words, int64_t i, int64_t j, int64_t k) {
     const rocks_tile *tile = &p->set->tiles[t];
     rocks_placement *out = p->out;
@@ -760,7 +764,7 @@ static void place_kept(placer *p, int t, size_t words, int64_t i, int64_t j, int
     uint64_t key = p->seed ^ ((uint64_t)i * 0x9e3779b97f4a7c15ull) ^ ((uint64_t)j * 0xc2b2ae3d27d4eb4full) ^
                    ((uint64_t)k * 0x165667b19e3779f9ull);
     rocks_instance *instance = out->instances + out->count;
-    uint32_t offsets = 0;             /* bit (o + 1)·(1, 3, 9): a rock kept with that offset */
+    uint32_t offsets = 0;             /* bit offset_class: a rock kept with that offset */
     for (size_t w = 0; w < words; w++)
         for (uint64_t bits = p->kept[w]; bits; bits &= bits - 1) {
             uint32_t e = tile->first + (uint32_t)(w * 64 + (uint32_t)__builtin_ctzll(bits));
@@ -768,7 +772,7 @@ static void place_kept(placer *p, int t, size_t words, int64_t i, int64_t j, int
             int ox = entry->offset[0] + 1, oy = entry->offset[1] + 1, oz = entry->offset[2] + 1;
             *instance++ = (rocks_instance){ .position = { position[0][ox], position[1][oy], position[2][oz] },
                                             .rock = entry->rock, .key = (uint32_t)core_hash_u64(key ^ ((uint64_t)e << 40)) };
-            offsets |= 1u << (ox + 3 * oy + 9 * oz);
+            offsets |= 1u << offset_class(entry->offset);
         }
     out->count += kept;
     const offset_bounds *bounds = &p->index->tile_bounds[t];

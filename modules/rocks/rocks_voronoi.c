@@ -288,15 +288,8 @@ static bool dual_holds(int m, const int v[3], const int a[3], const int c[3]) {
     return true;
 }
 
-/* ---- contacts (001 §5) --------------------------------------------------------------------------
- * c_pq is the point of [p_p, p_q] with d_p = d_q, found by bisection, always from the seed with
- * the smaller id (the same bits from either rock's region). The contact is kept when the voxel
- * v holding c_pq has both seeds' cells in its dual block and belongs to p or q, and its neighbour
- * across the face of v nearest to c_pq, with both cells in its dual block too, belongs to the
- * other: then the two rocks share that face, within half a voxel of c_pq, and both meshes pass
- * through its centre. The decision reads only owners computable from either region's closure,
- * so the two rocks agree on it. (001 §5 keeps every pair "into contact"; a pair whose bisector
- * point falls elsewhere touches, if at all, away from c_pq.) */
+/* ---- contacts (001 §5) ------------------------------------------------------------------------ */
+
 /* Whether the point t of the way from sa to sb is nearer sa (d_a < d_b): the bisection's test. */
 static inline bool nearer_first(const rocks__seed *sa, const rocks__seed *sb, const float dvec[3], double t) {
     float x = (float)(t * dvec[0]), y = (float)(t * dvec[1]), z = (float)(t * dvec[2]);
@@ -311,6 +304,14 @@ static inline bool one_float_point(const float dvec[3], double lo, double hi) {
            (float)(lo * dvec[2]) == (float)(hi * dvec[2]);
 }
 
+/* c_pq is the point of [p_p, p_q] with d_p = d_q, found by bisection, always from the seed with
+ * the smaller id (the same bits from either rock's region). The contact is kept when the voxel
+ * v holding c_pq has both seeds' cells in its dual block and belongs to p or q, and its neighbour
+ * across the face of v nearest to c_pq, with both cells in its dual block too, belongs to the
+ * other: then the two rocks share that face, within half a voxel of c_pq, and both meshes pass
+ * through its centre. The decision reads only owners computable from either region's closure,
+ * so the two rocks agree on it. (001 §5 keeps every pair "into contact"; a pair whose bisector
+ * point falls elsewhere touches, if at all, away from c_pq.) */
 static bool contact_point(const region_build *b, const rocks__seed *p, const rocks__seed *q, double c[3]) {
     const rocks__seed *sa = p->id < q->id ? p : q, *sb = p->id < q->id ? q : p;
     const int m = b->m;
@@ -441,8 +442,12 @@ static void erosion_buffers_free(erosion_buffers *e) {
 static void damping(float *omega, const int lo[3], const int size[3], const double (*contacts)[3],
                     int contact_count, float a, float b) {
     const double b2 = (double)b * (double)b;
+    const core_floats4 va = core_floats4_splat(a), vb = core_floats4_splat(b);
+    const core_doubles2 half_voxel = core_doubles2_splat(0.5);
+    const core_ints4 lane = { 0, 1, 2, 3 };
     for (int c = 0; c < contact_count; c++) {
         const double *p = contacts[c];
+        const core_doubles2 centre = core_doubles2_splat(p[0]);
         for (int z = 1; z < size[2] - 1; z++) {
             double dz = lo[2] + z + 0.5 - p[2];
             if (dz * dz >= b2) continue;
@@ -460,15 +465,13 @@ static void damping(float *omega, const int lo[3], const int size[3], const doub
                 /* four at a time (core_lanes.h), no branches; the last group's lanes past `to` get
                  * ω_c = 1 and so write back what they read (at most three past the row's last
                  * interior voxel: its border voxel and the next row's first two, inside the box) */
-                const core_ints4 lane = { 0, 1, 2, 3 };
                 for (int x = from; x <= to; x += 4) {
-                    const core_doubles2 half_voxel = core_doubles2_splat(0.5), centre = core_doubles2_splat(p[0]);
                     core_doubles2 dx0 = (core_doubles2){ lo[0] + x, lo[0] + x + 1 } + half_voxel - centre;
                     core_doubles2 dx1 = (core_doubles2){ lo[0] + x + 2, lo[0] + x + 3 } + half_voxel - centre;
                     core_doubles2 d0 = dx0 * dx0 + core_doubles2_splat(dy2) + core_doubles2_splat(dz2);
                     core_doubles2 d1 = dx1 * dx1 + core_doubles2_splat(dy2) + core_doubles2_splat(dz2);
                     core_floats4 r = core_floats4_from_doubles(core_doubles2_sqrt(d0), core_doubles2_sqrt(d1));
-                    core_floats4 va = core_floats4_splat(a), vb = core_floats4_splat(b), old = core_floats4_load(out + x);
+                    core_floats4 old = core_floats4_load(out + x);
                     core_ints4 in_run = lane + (core_ints4){ x, x, x, x } <= (core_ints4){ to, to, to, to };
                     core_floats4 wc = core_floats4_select((r < vb) & in_run, (r - va) / (vb - va), core_floats4_splat(1.0f));
                     wc = core_floats4_select((r < va) & in_run, core_floats4_splat(0.0f), wc);
@@ -483,19 +486,21 @@ static void damping(float *omega, const int lo[3], const int size[3], const doub
  * indicator, and of its 6 face neighbours. Each sum runs over the box as one flat array: a voxel
  * on the box's border gets a sum that wraps round a row or plane, but no rock voxel lies on the
  * border, and erosion reads the counts of rock voxels only. */
+/* Sixteen voxels' p[−step] + p[0] + p[step] (core_lanes.h: SSE2 on any x86-64). */
+static inline core_bytes16 sum3(const uint8_t *p, ptrdiff_t step) {
+    return core_bytes16_load(p - step) + core_bytes16_load(p) + core_bytes16_load(p + step);
+}
+
 static void count_empty_neighbours(erosion_buffers *e, const int size[3]) {
     const ptrdiff_t sx = size[0], plane = sx * size[1], total = plane * size[2];
     const uint8_t *empty = e->empty;
     uint8_t *sum_x = e->sum_x, *sum_xy = e->sum_xy, *outside = e->outside, *faces = e->faces;
-    for (ptrdiff_t i = 1; i < total - 1; i += 16)   /* sixteen voxels at a time (core_lanes.h) */
-        core_bytes16_store(sum_x + i, core_bytes16_load(empty + i - 1) + core_bytes16_load(empty + i) + core_bytes16_load(empty + i + 1));
-    for (ptrdiff_t i = sx; i < total - sx; i += 16)
-        core_bytes16_store(sum_xy + i, core_bytes16_load(sum_x + i - sx) + core_bytes16_load(sum_x + i) + core_bytes16_load(sum_x + i + sx));
+    for (ptrdiff_t i = 1; i < total - 1; i += 16) core_bytes16_store(sum_x + i, sum3(empty + i, 1));
+    for (ptrdiff_t i = sx; i < total - sx; i += 16) core_bytes16_store(sum_xy + i, sum3(sum_x + i, sx));
     memset(outside, 0, (size_t)plane);
     memset(faces, 0, (size_t)plane);
     for (ptrdiff_t i = plane; i < total - plane; i += 16) {
-        core_bytes16_store(outside + i, core_bytes16_load(sum_xy + i - plane) + core_bytes16_load(sum_xy + i) +
-                                            core_bytes16_load(sum_xy + i + plane));
+        core_bytes16_store(outside + i, sum3(sum_xy + i, plane));
         core_bytes16_store(faces + i, core_bytes16_load(empty + i - 1) + core_bytes16_load(empty + i + 1) +
                                           core_bytes16_load(empty + i - sx) + core_bytes16_load(empty + i + sx) +
                                           core_bytes16_load(empty + i - plane) + core_bytes16_load(empty + i + plane));
