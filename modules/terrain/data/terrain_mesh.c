@@ -154,23 +154,85 @@ static terrain__column_cursor mesh_probe_cursor(mesh_material_probe *probe, int6
                                   (int)(gz - chunk.z * TERRAIN_CHUNK_COLUMNS));
 }
 
+/* The columns of a window [x0, x0 + width) × [z0, z0 + depth), their layers decoded once: the
+ * weights read each column for several vertices (about four lookups a column in a chunk), and
+ * walking the packed words each time cost more than the weights' arithmetic. */
+typedef struct mesh_columns {
+    int64_t x0, z0;
+    int width, depth;
+    uint32_t *first;               /* width·depth + 1: column c's layers are first[c] … first[c + 1] − 1 */
+    uint32_t *top;                 /* each layer's top, quanta above the floor */
+    uint8_t *material;
+    size_t capacity;               /* of top and material */
+} mesh_columns;
+
+static void mesh_columns_make(mesh_columns *c, terrain_world *world, int64_t x0, int64_t z0, int width, int depth) {
+    *c = (mesh_columns){ .x0 = x0, .z0 = z0, .width = width, .depth = depth, .capacity = 256 };
+    c->first = core_alloc(((size_t)width * (size_t)depth + 1) * sizeof *c->first);
+    c->top = core_alloc(c->capacity * sizeof *c->top);
+    c->material = core_alloc(c->capacity);
+    mesh_material_probe probe = { .world = world };
+    uint32_t count = 0;
+    for (int k = 0; k < depth; k++)
+        for (int i = 0; i < width; i++) {
+            c->first[k * width + i] = count;
+            terrain__column_cursor cursor = mesh_probe_cursor(&probe, x0 + i, z0 + k);
+            terrain__qlayer layer;
+            uint32_t height = 0;
+            while (terrain__cursor_next(&cursor, &layer)) {
+                if (count == c->capacity) {
+                    c->top = core_realloc(c->top, c->capacity * sizeof *c->top, 2 * c->capacity * sizeof *c->top);
+                    c->material = core_realloc(c->material, c->capacity, 2 * c->capacity);
+                    c->capacity *= 2;
+                }
+                height += layer.quanta;
+                c->top[count] = height;
+                c->material[count++] = layer.material;
+            }
+        }
+    c->first[(size_t)width * (size_t)depth] = count;
+}
+
+static void mesh_columns_free(mesh_columns *c) {
+    core_free(c->first, ((size_t)c->width * (size_t)c->depth + 1) * sizeof *c->first);
+    core_free(c->top, c->capacity * sizeof *c->top);
+    core_free(c->material, c->capacity);
+}
+
 /* Adds w × the length (in quanta) of each visible material's layers inside [y0, y1] metres in
- * global column (gx, gz) to sums[bedrock … water], in one walk up the column (below the floor is
- * bedrock, above the last layer air, as terrain_stacks_material_at reads a column). The stacks
- * are run-length layers, so the overlap of the segment with each layer is exact. */
-static void mesh_column_overlaps(mesh_material_probe *probe, int64_t gx, int64_t gz, double y0, double y1, double w,
+ * global column (gx, gz) of the window to sums[bedrock … water] (below the floor is bedrock,
+ * above the last layer air, as terrain_stacks_material_at reads a column). The stacks are
+ * run-length layers, so the overlap of the segment with each layer is exact. Layers wholly
+ * under y0 add nothing and are stepped over. */
+static void mesh_column_overlaps(const mesh_columns *c, int64_t gx, int64_t gz, double y0, double y1, double w,
                                  double sums[4]) {
-    terrain__column_cursor cursor = mesh_probe_cursor(probe, gx, gz);
     const double q0 = (y0 - TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE, q1 = (y1 - TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE;
     if (q0 < 0.0) sums[0] += w * ((q1 < 0.0 ? q1 : 0.0) - q0);
-    terrain__qlayer layer;
-    double bottom = 0.0;
-    while (bottom < q1 && terrain__cursor_next(&cursor, &layer)) {
-        double top = bottom + layer.quanta, lo = q0 > bottom ? q0 : bottom, hi = q1 < top ? q1 : top;
-        if (hi > lo && layer.material >= TERRAIN_BEDROCK && layer.material <= TERRAIN_WATER)
-            sums[layer.material - TERRAIN_BEDROCK] += w * (hi - lo);
+    int64_t i = gx - c->x0, k = gz - c->z0;
+    if (i < 0 || i >= c->width || k < 0 || k >= c->depth) return;   /* never for a unit normal: read as air */
+    size_t column = (size_t)k * (size_t)c->width + (size_t)i;
+    uint32_t layer = c->first[column], end = c->first[column + 1];
+    while (layer < end && (double)c->top[layer] <= q0) layer++;
+    double bottom = layer > c->first[column] ? (double)c->top[layer - 1] : 0.0;
+    for (; layer < end && bottom < q1; layer++) {
+        double top = (double)c->top[layer], lo = q0 > bottom ? q0 : bottom, hi = q1 < top ? q1 : top;
+        unsigned material = c->material[layer];
+        if (hi > lo && material >= TERRAIN_BEDROCK && material <= TERRAIN_WATER)
+            sums[material - TERRAIN_BEDROCK] += w * (hi - lo);
         bottom = top;
     }
+}
+
+/* The segment's centre for a vertex at p with normal n (below), and the first of the four columns
+ * around it with its tent weights. */
+static void mesh_weights_segment(const double p[3], const float n[3], double centre[3], int64_t *gx0, int64_t *gz0,
+                                 double *fx, double *fz) {
+    const double half = 0.5 * TERRAIN_COLUMN_SIZE;
+    for (int a = 0; a < 3; a++) centre[a] = p[a] - half * n[a];
+    /* Column centres sit at (g + ½)·c: the four around the centre and the tent's weights. */
+    double u = centre[0] / TERRAIN_COLUMN_SIZE - 0.5, v = centre[2] / TERRAIN_COLUMN_SIZE - 0.5;
+    *gx0 = mesh_floor(u), *gz0 = mesh_floor(v);
+    *fx = u - (double)*gx0, *fz = v - (double)*gz0;
 }
 
 /* The weights of one vertex at world position p with normal n (000 §6, "according to the ratio
@@ -180,20 +242,17 @@ static void mesh_column_overlaps(mesh_material_probe *probe, int64_t gx, int64_t
  * columns whose centres surround the segment's centre. Each material weighs the exact length of
  * its layers inside the segment, so the weights move continuously with the vertex (8 point
  * samples gave 9 levels, which banded), and only from world position and normal: shared border
- * vertices get the same bytes in every chunk. */
-static void mesh_vertex_weights(mesh_material_probe *probe, const double p[3], const float n[3], uint8_t out[4]) {
+ * vertices get the same bytes in every chunk. The window c holds the four columns. */
+static void mesh_vertex_weights(const mesh_columns *c, const double p[3], const float n[3], uint8_t out[4]) {
     const double half = 0.5 * TERRAIN_COLUMN_SIZE;
-    double centre[3];
-    for (int a = 0; a < 3; a++) centre[a] = p[a] - half * n[a];
-    /* Column centres sit at (g + ½)·c: the four around the centre and the tent's weights. */
-    double u = centre[0] / TERRAIN_COLUMN_SIZE - 0.5, v = centre[2] / TERRAIN_COLUMN_SIZE - 0.5;
-    int64_t gx0 = mesh_floor(u), gz0 = mesh_floor(v);
-    double fx = u - (double)gx0, fz = v - (double)gz0;
+    double centre[3], fx, fz;
+    int64_t gx0, gz0;
+    mesh_weights_segment(p, n, centre, &gx0, &gz0, &fx, &fz);
     double sums[4] = { 0, 0, 0, 0 };
     for (int column = 0; column < 4; column++) {
         double w = ((column & 1) ? fx : 1.0 - fx) * ((column >> 1) ? fz : 1.0 - fz);
         if (w > 0.0)
-            mesh_column_overlaps(probe, gx0 + (column & 1), gz0 + (column >> 1), centre[1] - half, centre[1] + half, w, sums);
+            mesh_column_overlaps(c, gx0 + (column & 1), gz0 + (column >> 1), centre[1] - half, centre[1] + half, w, sums);
     }
     double total = sums[0] + sums[1] + sums[2] + sums[3];
     out[0] = 255, out[1] = out[2] = out[3] = 0;
@@ -208,18 +267,37 @@ static void mesh_vertex_weights(mesh_material_probe *probe, const double p[3], c
 }
 
 void terrain__mesh_vertex_weights(terrain_world *world, const double p[3], const float n[3], uint8_t out[4]) {
-    mesh_material_probe probe = { .world = world };
-    mesh_vertex_weights(&probe, p, n, out);
+    double centre[3], fx, fz;
+    int64_t gx0, gz0;
+    mesh_weights_segment(p, n, centre, &gx0, &gz0, &fx, &fz);
+    mesh_columns columns;
+    mesh_columns_make(&columns, world, gx0, gz0, 2, 2);
+    mesh_vertex_weights(&columns, p, n, out);
+    mesh_columns_free(&columns);
 }
 
+/* Every vertex's weights, from one window of decoded columns over the vertices' bounds: a
+ * segment's centre lies within half a column of its vertex, and its four columns within one
+ * more. */
 static void mesh_weights(const mesh_builder *b, terrain_world *world, const double origin[3]) {
-    mesh_material_probe probe = { .world = world };   /* keeps the last chunk's stacks at hand */
+    if (b->vertex_count == 0) return;
+    double lo[2] = { INFINITY, INFINITY }, hi[2] = { -INFINITY, -INFINITY };
+    for (size_t i = 0; i < b->vertex_count; i++)
+        for (int a = 0; a < 2; a++) {
+            double p = origin[2 * a] + b->vertices[i].position[2 * a];
+            lo[a] = fmin(lo[a], p), hi[a] = fmax(hi[a], p);
+        }
+    int64_t x0 = mesh_floor(lo[0] / TERRAIN_COLUMN_SIZE) - 2, z0 = mesh_floor(lo[1] / TERRAIN_COLUMN_SIZE) - 2;
+    int64_t x1 = mesh_floor(hi[0] / TERRAIN_COLUMN_SIZE) + 2, z1 = mesh_floor(hi[1] / TERRAIN_COLUMN_SIZE) + 2;
+    mesh_columns columns;
+    mesh_columns_make(&columns, world, x0, z0, (int)(x1 - x0 + 1), (int)(z1 - z0 + 1));
     for (size_t i = 0; i < b->vertex_count; i++) {
         terrain_vertex *v = &b->vertices[i];
         double p[3];
         for (int a = 0; a < 3; a++) p[a] = origin[a] + v->position[a];
-        mesh_vertex_weights(&probe, p, v->normal, v->weights);
+        mesh_vertex_weights(&columns, p, v->normal, v->weights);
     }
+    mesh_columns_free(&columns);
 }
 
 /* ---- openness: ambient occlusion from the stacks -------------------------------------------- */
