@@ -7,6 +7,7 @@
 #include "ecs/ecs.h"
 #include "jobs/jobs.h"
 #include "terrain/terrain.h"
+#include "terrain/render/terrain_render_internal.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -215,6 +216,77 @@ Test(render_shadows, the_shadow_stays_put_while_the_camera_moves) {
     render_image_free(&lit);
     terrain_renderer_destroy(unshadowed);
     render_image_free(&image);
+    terrain_renderer_destroy(renderer);
+    wall_close(&s);
+}
+
+/* A map nothing casts into is the same wherever its box is: looking up from above the wall (every
+ * mesh below the view, so nothing can shade what it sees) with the camera sliding 3 m a frame
+ * (past either box's guard band every frame or three), the two cascades are drawn once and not
+ * again. Looking down, the far cascade holds the ground and the wall: it is drawn when the wall
+ * comes in, and again when its box is left behind (8.3 m of band; the near cascade, 0.1–12 m
+ * below the eye and 30 m above the ground, stays empty). */
+Test(render_shadows, an_empty_map_is_not_redrawn_as_the_camera_moves) {
+    wall_scene s = wall_open();
+    terrain_renderer *renderer = terrain_renderer_create(s.gfx, &(terrain_renderer_desc){
+        .sea_level = -50, .fog_density = 1e-6f, .shadows = TERRAIN_SHADOWS_LOW, .no_occlusion = true });
+    cr_assert(renderer);
+    const terrain__shadows *shadows = terrain__renderer_shadows(renderer);
+    cr_assert(shadows);
+    for (int look_up = 1; look_up >= 0; look_up--) {
+        s.view.pitch = look_up ? 1.5707f : -1.5707f;
+        uint64_t before = terrain__shadows_cascades_drawn(shadows);
+        for (int frame = 0; frame < 6; frame++) {
+            s.view.camera[0] = 10.0 + 3.0 * frame;
+            terrain_ecs_set_view(s.te, &s.view);
+            ecs_progress(s.ecs, 1.0f / 60.0f);
+            gfx_frame_begin(s.gfx);
+            terrain_ecs_draw(s.te, renderer, &s.view);
+            gfx_frame_end(s.gfx);
+        }
+        uint64_t drawn = terrain__shadows_cascades_drawn(shadows) - before;
+        if (look_up) cr_expect_eq(drawn, 2, "looking up: %llu cascades drawn in 6 frames, expected the first 2",
+                                  (unsigned long long)drawn);
+        else cr_expect_geq(drawn, 2, "looking down at the wall: %llu cascades drawn in 6 frames",
+                           (unsigned long long)drawn);
+    }
+    terrain_renderer_destroy(renderer);
+    wall_close(&s);
+}
+
+/* A box wider than its slice stays where it was drawn while the slice stays inside it: walking
+ * pace (0.1 m a frame, 6 m/s at 60 frames a second) for ten frames draws the two cascades once,
+ * where a box that follows the camera texel by texel (2.8 cm for the near cascade here) would draw
+ * one every frame; and the shadow is still under the wall at the end. */
+Test(render_shadows, a_walking_camera_keeps_its_maps) {
+    wall_scene s = wall_open();
+    terrain_renderer *renderer = terrain_renderer_create(s.gfx, &(terrain_renderer_desc){
+        .sea_level = -50, .fog_density = 1e-6f, .shadows = TERRAIN_SHADOWS_LOW, .no_occlusion = true });
+    terrain_renderer *unshadowed = terrain_renderer_create(s.gfx, &(terrain_renderer_desc){
+        .sea_level = -50, .fog_density = 1e-6f, .shadows = TERRAIN_SHADOWS_OFF, .no_occlusion = true });
+    cr_assert(renderer && unshadowed);
+    const terrain__shadows *shadows = terrain__renderer_shadows(renderer);
+    render_image image = { W, H, malloc(W * H * 4) }, lit = { W, H, malloc(W * H * 4) };
+    for (int frame = 0; frame < 10; frame++) {
+        s.view.camera[0] = 10.0 + 0.1 * frame;
+        terrain_ecs_set_view(s.te, &s.view);
+        ecs_progress(s.ecs, 1.0f / 60.0f);
+        gfx_frame_begin(s.gfx);
+        terrain_ecs_draw(s.te, renderer, &s.view);
+        gfx_read_pixels(s.gfx, image.rgba);
+        gfx_frame_end(s.gfx);
+    }
+    cr_expect_eq(terrain__shadows_cascades_drawn(shadows), 2, "%llu cascades drawn in 10 frames at walking pace",
+                 (unsigned long long)terrain__shadows_cascades_drawn(shadows));
+    gfx_frame_begin(s.gfx);
+    terrain_ecs_draw(s.te, unshadowed, &s.view);
+    gfx_read_pixels(s.gfx, lit.rgba);
+    gfx_frame_end(s.gfx);
+    double shadow = ground_mean(&s, &image, SHADOW_REGION), shadow_lit = ground_mean(&s, &lit, SHADOW_REGION);
+    cr_expect_lt(shadow, 0.5 * shadow_lit, "%.1f behind the wall, %.1f unshadowed", shadow, shadow_lit);
+    render_image_free(&lit);
+    render_image_free(&image);
+    terrain_renderer_destroy(unshadowed);
     terrain_renderer_destroy(renderer);
     wall_close(&s);
 }

@@ -364,4 +364,5 @@ void terrain__renderer_draw_clipped(terrain_renderer *r, const terrain_view *vie
 void terrain__renderer_set_water_drawn(terrain_renderer *r, bool drawn) { r->water_drawn = drawn; }
 
 float terrain__renderer_fog_density(const terrain_renderer *r) { return r->desc.fog_density; }
+terrain__shadows *terrain__renderer_shadows(const terrain_renderer *r) { return r->shadows; }
 float terrain__renderer_cloud_cover(const terrain_renderer *r) { return r->desc.cloud_cover; }

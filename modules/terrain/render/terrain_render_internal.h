@@ -111,6 +111,11 @@ void terrain__shadows_render(terrain__shadows *shadows, const terrain_view *view
  * shadows NULL sets u_shadow_cascades = 0 (the sampler still gets a unit of its own: GL refuses
  * a draw whose samplers of two types share one). */
 void terrain__shadows_bind(const terrain__shadows *shadows, gfx_context *gfx, uint32_t program, int unit);
+/* Cascades drawn since creation (0 for NULL): a cascade is drawn again only when its box moved
+ * with something casting into it, or what casts into it changed. */
+uint64_t terrain__shadows_cascades_drawn(const terrain__shadows *shadows);
+/* The renderer's shadows (NULL with shadows off). */
+terrain__shadows *terrain__renderer_shadows(const terrain_renderer *renderer);
 
 /* ==== end of the shadows section ========================================================== */
 
