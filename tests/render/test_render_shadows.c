@@ -183,29 +183,37 @@ Test(render_shadows, lit_ground_is_as_bright_with_shadows_as_without) {
     wall_close(&s);
 }
 
+/* A low-shadows renderer (or one without shadows) with next to no fog, occlusion off. */
+static terrain_renderer *wall_renderer(wall_scene *s, terrain_shadow_quality shadows) {
+    terrain_renderer *renderer = terrain_renderer_create(s->gfx, &(terrain_renderer_desc){
+        .sea_level = -50, .fog_density = 1e-6f, .shadows = shadows, .no_occlusion = true });
+    cr_assert(renderer);
+    return renderer;
+}
+
+/* The camera moved to x (the view otherwise as it is), one frame of the ECS, and a frame drawn
+ * with `renderer`; its pixels into `image` when not NULL. */
+static void wall_frame_at(wall_scene *s, double x, terrain_renderer *renderer, render_image *image) {
+    s->view.camera[0] = x;
+    terrain_ecs_set_view(s->te, &s->view);
+    ecs_progress(s->ecs, 1.0f / 60.0f);
+    gfx_frame_begin(s->gfx);
+    terrain_ecs_draw(s->te, renderer, &s->view);
+    if (image) gfx_read_pixels(s->gfx, image->rgba);
+    gfx_frame_end(s->gfx);
+}
+
 /* The maps follow the camera: a cascade is redrawn only when its box moved or its casters
  * changed, at most one a frame, and the receivers read each where it was drawn. With the camera
  * sliding 3 m a frame (every box moves), the shadow stays under the wall in every frame. */
 Test(render_shadows, the_shadow_stays_put_while_the_camera_moves) {
     wall_scene s = wall_open();
-    terrain_renderer *renderer = terrain_renderer_create(s.gfx, &(terrain_renderer_desc){
-        .sea_level = -50, .fog_density = 1e-6f, .shadows = TERRAIN_SHADOWS_LOW, .no_occlusion = true });
-    terrain_renderer *unshadowed = terrain_renderer_create(s.gfx, &(terrain_renderer_desc){
-        .sea_level = -50, .fog_density = 1e-6f, .shadows = TERRAIN_SHADOWS_OFF, .no_occlusion = true });
-    cr_assert(renderer && unshadowed);
+    terrain_renderer *renderer = wall_renderer(&s, TERRAIN_SHADOWS_LOW);
+    terrain_renderer *unshadowed = wall_renderer(&s, TERRAIN_SHADOWS_OFF);
     render_image image = { W, H, malloc(W * H * 4) }, lit = { W, H, malloc(W * H * 4) };
     for (int frame = 0; frame < 5; frame++) {
-        s.view.camera[0] = 10.0 + 3.0 * frame;
-        terrain_ecs_set_view(s.te, &s.view);
-        ecs_progress(s.ecs, 1.0f / 60.0f);
-        gfx_frame_begin(s.gfx);
-        terrain_ecs_draw(s.te, unshadowed, &s.view);
-        gfx_read_pixels(s.gfx, lit.rgba);
-        gfx_frame_end(s.gfx);
-        gfx_frame_begin(s.gfx);
-        terrain_ecs_draw(s.te, renderer, &s.view);
-        gfx_read_pixels(s.gfx, image.rgba);
-        gfx_frame_end(s.gfx);
+        wall_frame_at(&s, 10.0 + 3.0 * frame, unshadowed, &lit);
+        wall_frame_at(&s, 10.0 + 3.0 * frame, renderer, &image);
         double shadow = ground_mean(&s, &image, SHADOW_REGION), shadow_lit = ground_mean(&s, &lit, SHADOW_REGION);
         double past = ground_mean(&s, &image, 0, 4, 10, 26), past_lit = ground_mean(&s, &lit, 0, 4, 10, 26);
         cr_expect_lt(shadow, 0.5 * shadow_lit, "frame %d: %.1f behind the wall, %.1f unshadowed", frame, shadow,
@@ -228,22 +236,13 @@ Test(render_shadows, the_shadow_stays_put_while_the_camera_moves) {
  * below the eye and 30 m above the ground, stays empty). */
 Test(render_shadows, an_empty_map_is_not_redrawn_as_the_camera_moves) {
     wall_scene s = wall_open();
-    terrain_renderer *renderer = terrain_renderer_create(s.gfx, &(terrain_renderer_desc){
-        .sea_level = -50, .fog_density = 1e-6f, .shadows = TERRAIN_SHADOWS_LOW, .no_occlusion = true });
-    cr_assert(renderer);
+    terrain_renderer *renderer = wall_renderer(&s, TERRAIN_SHADOWS_LOW);
     const terrain__shadows *shadows = terrain__renderer_shadows(renderer);
     cr_assert(shadows);
     for (int look_up = 1; look_up >= 0; look_up--) {
         s.view.pitch = look_up ? 1.5707f : -1.5707f;
         uint64_t before = terrain__shadows_cascades_drawn(shadows);
-        for (int frame = 0; frame < 6; frame++) {
-            s.view.camera[0] = 10.0 + 3.0 * frame;
-            terrain_ecs_set_view(s.te, &s.view);
-            ecs_progress(s.ecs, 1.0f / 60.0f);
-            gfx_frame_begin(s.gfx);
-            terrain_ecs_draw(s.te, renderer, &s.view);
-            gfx_frame_end(s.gfx);
-        }
+        for (int frame = 0; frame < 6; frame++) wall_frame_at(&s, 10.0 + 3.0 * frame, renderer, NULL);
         uint64_t drawn = terrain__shadows_cascades_drawn(shadows) - before;
         if (look_up) cr_expect_eq(drawn, 2, "looking up: %llu cascades drawn in 6 frames, expected the first 2",
                                   (unsigned long long)drawn);
@@ -260,28 +259,14 @@ Test(render_shadows, an_empty_map_is_not_redrawn_as_the_camera_moves) {
  * one every frame; and the shadow is still under the wall at the end. */
 Test(render_shadows, a_walking_camera_keeps_its_maps) {
     wall_scene s = wall_open();
-    terrain_renderer *renderer = terrain_renderer_create(s.gfx, &(terrain_renderer_desc){
-        .sea_level = -50, .fog_density = 1e-6f, .shadows = TERRAIN_SHADOWS_LOW, .no_occlusion = true });
-    terrain_renderer *unshadowed = terrain_renderer_create(s.gfx, &(terrain_renderer_desc){
-        .sea_level = -50, .fog_density = 1e-6f, .shadows = TERRAIN_SHADOWS_OFF, .no_occlusion = true });
-    cr_assert(renderer && unshadowed);
+    terrain_renderer *renderer = wall_renderer(&s, TERRAIN_SHADOWS_LOW);
+    terrain_renderer *unshadowed = wall_renderer(&s, TERRAIN_SHADOWS_OFF);
     const terrain__shadows *shadows = terrain__renderer_shadows(renderer);
     render_image image = { W, H, malloc(W * H * 4) }, lit = { W, H, malloc(W * H * 4) };
-    for (int frame = 0; frame < 10; frame++) {
-        s.view.camera[0] = 10.0 + 0.1 * frame;
-        terrain_ecs_set_view(s.te, &s.view);
-        ecs_progress(s.ecs, 1.0f / 60.0f);
-        gfx_frame_begin(s.gfx);
-        terrain_ecs_draw(s.te, renderer, &s.view);
-        gfx_read_pixels(s.gfx, image.rgba);
-        gfx_frame_end(s.gfx);
-    }
+    for (int frame = 0; frame < 10; frame++) wall_frame_at(&s, 10.0 + 0.1 * frame, renderer, &image);
     cr_expect_eq(terrain__shadows_cascades_drawn(shadows), 2, "%llu cascades drawn in 10 frames at walking pace",
                  (unsigned long long)terrain__shadows_cascades_drawn(shadows));
-    gfx_frame_begin(s.gfx);
-    terrain_ecs_draw(s.te, unshadowed, &s.view);
-    gfx_read_pixels(s.gfx, lit.rgba);
-    gfx_frame_end(s.gfx);
+    wall_frame_at(&s, s.view.camera[0], unshadowed, &lit);
     double shadow = ground_mean(&s, &image, SHADOW_REGION), shadow_lit = ground_mean(&s, &lit, SHADOW_REGION);
     cr_expect_lt(shadow, 0.5 * shadow_lit, "%.1f behind the wall, %.1f unshadowed", shadow, shadow_lit);
     render_image_free(&lit);
