@@ -324,7 +324,7 @@ static void shadow_draw_cascade(terrain__shadows *s, shadow_cascade *cascade, co
     s->cascades_drawn++;
 }
 
-/* A cascade is redrawn only when its box moved (a texel's worth: the camera moved or turned) or
+/* A cascade is redrawn only when its box moved (the view's slice left it: shadow_fit) or
  * what casts into it changed, and, once every layer holds something, at most one cascade a
  * frame, in turns: on llvmpipe the casters' triangles are most of the pass, and a layer a frame
  * late (the receivers still read it where it was drawn) is not to be seen. */
@@ -348,19 +348,18 @@ void terrain__shadows_render(terrain__shadows *s, const terrain_view *view, cons
         for (int c = 0; c < set->cascades; c++) redraw[c] = c == chosen;
         if (chosen >= 0) s->next = (chosen + 1) % set->cascades;
     }
-    int first = -1;
+    int first = -1, redrawn = 0;
     for (int c = 0; c < set->cascades; c++) {
         if (redraw[c]) {
             s->cascades[c] = wanted[c];
             if (first < 0) first = c;
+            redrawn++;
         } else {
             /* Kept where it was drawn; this frame's matrices, this frame's slice for culling. */
             memcpy(s->cascades[c].planes, wanted[c].planes, sizeof wanted[c].planes);
             shadow_place(s, &s->cascades[c], view->camera);
         }
     }
-    int redrawn = 0;
-    for (int c = 0; c < set->cascades; c++) redrawn += redraw[c];
     trace_counter("terrain.shadow_cascades_drawn", redrawn);
     if (first >= 0) {
         gfx_pass_begin(s->gfx, &(gfx_pass_desc){ .name = "shadows", .target = s->cascades[first].framebuffer });
