@@ -161,42 +161,59 @@ typedef struct mesh_columns {
     int64_t x0, z0;
     int width, depth;
     uint32_t *first;               /* width·depth + 1: column c's layers are first[c] … first[c + 1] − 1 */
+    uint32_t *base;                /* width·depth: the bottom of column c's first kept layer */
     uint32_t *top;                 /* each layer's top, quanta above the floor */
-    uint8_t *material;
-    size_t capacity;               /* of top and material */
+    uint8_t *slot;                 /* each layer's material: 0 … 3 for bedrock … water, 4 invisible */
+    size_t capacity;               /* of top and slot */
 } mesh_columns;
 
-static void mesh_columns_make(mesh_columns *c, terrain_world *world, int64_t x0, int64_t z0, int width, int depth) {
+/* Keeps only the layers that reach into the heights [lo, hi] metres (what the callers will read):
+ * a column's layers start at the floor, 256 m below sea level, and stepping over the ones under
+ * the surface cost the weights more than their arithmetic. */
+static void mesh_columns_make(mesh_columns *c, terrain_world *world, int64_t x0, int64_t z0, int width, int depth,
+                              double lo, double hi) {
     *c = (mesh_columns){ .x0 = x0, .z0 = z0, .width = width, .depth = depth, .capacity = 256 };
-    c->first = core_alloc(((size_t)width * (size_t)depth + 1) * sizeof *c->first);
+    size_t columns = (size_t)width * (size_t)depth;
+    c->first = core_alloc((columns + 1) * sizeof *c->first);
+    c->base = core_alloc(columns * sizeof *c->base);
     c->top = core_alloc(c->capacity * sizeof *c->top);
-    c->material = core_alloc(c->capacity);
+    c->slot = core_alloc(c->capacity);
+    const double q_lo = (lo - TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE, q_hi = (hi - TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE;
     mesh_material_probe probe = { .world = world };
     uint32_t count = 0;
     for (int k = 0; k < depth; k++)
         for (int i = 0; i < width; i++) {
-            c->first[k * width + i] = count;
+            size_t column = (size_t)k * (size_t)width + (size_t)i;
+            c->first[column] = count;
+            c->base[column] = 0;
             terrain__column_cursor cursor = mesh_probe_cursor(&probe, x0 + i, z0 + k);
             terrain__qlayer layer;
             uint32_t height = 0;
-            while (terrain__cursor_next(&cursor, &layer)) {
+            while ((double)height < q_hi && terrain__cursor_next(&cursor, &layer)) {
+                height += layer.quanta;
+                if ((double)height <= q_lo) {   /* wholly under the heights read */
+                    c->base[column] = height;
+                    continue;
+                }
                 if (count == c->capacity) {
                     c->top = core_realloc(c->top, c->capacity * sizeof *c->top, 2 * c->capacity * sizeof *c->top);
-                    c->material = core_realloc(c->material, c->capacity, 2 * c->capacity);
+                    c->slot = core_realloc(c->slot, c->capacity, 2 * c->capacity);
                     c->capacity *= 2;
                 }
-                height += layer.quanta;
+                unsigned material = layer.material;
                 c->top[count] = height;
-                c->material[count++] = layer.material;
+                c->slot[count++] = (uint8_t)(material >= TERRAIN_BEDROCK && material <= TERRAIN_WATER ? material - TERRAIN_BEDROCK : 4);
             }
         }
-    c->first[(size_t)width * (size_t)depth] = count;
+    c->first[columns] = count;
 }
 
 static void mesh_columns_free(mesh_columns *c) {
-    core_free(c->first, ((size_t)c->width * (size_t)c->depth + 1) * sizeof *c->first);
+    size_t columns = (size_t)c->width * (size_t)c->depth;
+    core_free(c->first, (columns + 1) * sizeof *c->first);
+    core_free(c->base, columns * sizeof *c->base);
     core_free(c->top, c->capacity * sizeof *c->top);
-    core_free(c->material, c->capacity);
+    core_free(c->slot, c->capacity);
 }
 
 /* Adds w × the length (in quanta) of each visible material's layers inside [y0, y1] metres in
@@ -205,7 +222,7 @@ static void mesh_columns_free(mesh_columns *c) {
  * run-length layers, so the overlap of the segment with each layer is exact. Layers wholly
  * under y0 add nothing and are stepped over. */
 static void mesh_column_overlaps(const mesh_columns *c, int64_t gx, int64_t gz, double y0, double y1, double w,
-                                 double sums[4]) {
+                                 double sums[5]) {
     const double q0 = (y0 - TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE, q1 = (y1 - TERRAIN_FLOOR_Y) * TERRAIN__QUANTA_PER_METRE;
     if (q0 < 0.0) sums[0] += w * ((q1 < 0.0 ? q1 : 0.0) - q0);
     int64_t i = gx - c->x0, k = gz - c->z0;
@@ -213,12 +230,13 @@ static void mesh_column_overlaps(const mesh_columns *c, int64_t gx, int64_t gz, 
     size_t column = (size_t)k * (size_t)c->width + (size_t)i;
     uint32_t layer = c->first[column], end = c->first[column + 1];
     while (layer < end && (double)c->top[layer] <= q0) layer++;
-    double bottom = layer > c->first[column] ? (double)c->top[layer - 1] : 0.0;
+    double bottom = layer > c->first[column] ? (double)c->top[layer - 1] : (double)c->base[column];
+    /* Without a branch on the overlap or the material (which are not predictable): a layer
+     * outside the segment adds +0, an invisible material goes to slot 4. */
     for (; layer < end && bottom < q1; layer++) {
         double top = (double)c->top[layer], lo = q0 > bottom ? q0 : bottom, hi = q1 < top ? q1 : top;
-        unsigned material = c->material[layer];
-        if (hi > lo && material >= TERRAIN_BEDROCK && material <= TERRAIN_WATER)
-            sums[material - TERRAIN_BEDROCK] += w * (hi - lo);
+        double length = hi - lo;
+        sums[c->slot[layer]] += w * (length > 0.0 ? length : 0.0);
         bottom = top;
     }
 }
@@ -248,7 +266,7 @@ static void mesh_vertex_weights(const mesh_columns *c, const double p[3], const 
     double centre[3], fx, fz;
     int64_t gx0, gz0;
     mesh_weights_segment(p, n, centre, &gx0, &gz0, &fx, &fz);
-    double sums[4] = { 0, 0, 0, 0 };
+    double sums[5] = { 0, 0, 0, 0, 0 };   /* bedrock … water, and the invisible ones */
     for (int column = 0; column < 4; column++) {
         double w = ((column & 1) ? fx : 1.0 - fx) * ((column >> 1) ? fz : 1.0 - fz);
         if (w > 0.0)
@@ -271,26 +289,35 @@ void terrain__mesh_vertex_weights(terrain_world *world, const double p[3], const
     int64_t gx0, gz0;
     mesh_weights_segment(p, n, centre, &gx0, &gz0, &fx, &fz);
     mesh_columns columns;
-    mesh_columns_make(&columns, world, gx0, gz0, 2, 2);
+    const double half = 0.5 * TERRAIN_COLUMN_SIZE;
+    mesh_columns_make(&columns, world, gx0, gz0, 2, 2, centre[1] - half, centre[1] + half);
     mesh_vertex_weights(&columns, p, n, out);
     mesh_columns_free(&columns);
 }
 
+/* The world-space box around a mesh's vertices. */
+static void mesh_vertex_bounds(const mesh_builder *b, const double origin[3], double lo[3], double hi[3]) {
+    float fl[3] = { INFINITY, INFINITY, INFINITY }, fh[3] = { -INFINITY, -INFINITY, -INFINITY };
+    for (size_t i = 0; i < b->vertex_count; i++)
+        for (int a = 0; a < 3; a++) {
+            float p = b->vertices[i].position[a];
+            fl[a] = p < fl[a] ? p : fl[a], fh[a] = p > fh[a] ? p : fh[a];
+        }
+    for (int a = 0; a < 3; a++) lo[a] = origin[a] + fl[a], hi[a] = origin[a] + fh[a];
+}
+
 /* Every vertex's weights, from one window of decoded columns over the vertices' bounds: a
- * segment's centre lies within half a column of its vertex, and its four columns within one
- * more. */
+ * segment's centre lies within half a column of its vertex, its four columns within one more,
+ * and its ends within a column of the vertex's height. */
 static void mesh_weights(const mesh_builder *b, terrain_world *world, const double origin[3]) {
     if (b->vertex_count == 0) return;
-    double lo[2] = { INFINITY, INFINITY }, hi[2] = { -INFINITY, -INFINITY };
-    for (size_t i = 0; i < b->vertex_count; i++)
-        for (int a = 0; a < 2; a++) {
-            double p = origin[2 * a] + b->vertices[i].position[2 * a];
-            lo[a] = fmin(lo[a], p), hi[a] = fmax(hi[a], p);
-        }
-    int64_t x0 = mesh_floor(lo[0] / TERRAIN_COLUMN_SIZE) - 2, z0 = mesh_floor(lo[1] / TERRAIN_COLUMN_SIZE) - 2;
-    int64_t x1 = mesh_floor(hi[0] / TERRAIN_COLUMN_SIZE) + 2, z1 = mesh_floor(hi[1] / TERRAIN_COLUMN_SIZE) + 2;
+    double lo[3], hi[3];
+    mesh_vertex_bounds(b, origin, lo, hi);
+    int64_t x0 = mesh_floor(lo[0] / TERRAIN_COLUMN_SIZE) - 2, z0 = mesh_floor(lo[2] / TERRAIN_COLUMN_SIZE) - 2;
+    int64_t x1 = mesh_floor(hi[0] / TERRAIN_COLUMN_SIZE) + 2, z1 = mesh_floor(hi[2] / TERRAIN_COLUMN_SIZE) + 2;
     mesh_columns columns;
-    mesh_columns_make(&columns, world, x0, z0, (int)(x1 - x0 + 1), (int)(z1 - z0 + 1));
+    mesh_columns_make(&columns, world, x0, z0, (int)(x1 - x0 + 1), (int)(z1 - z0 + 1), lo[1] - 2.0 * TERRAIN_COLUMN_SIZE,
+                      hi[1] + 2.0 * TERRAIN_COLUMN_SIZE);
     for (size_t i = 0; i < b->vertex_count; i++) {
         terrain_vertex *v = &b->vertices[i];
         double p[3];
@@ -455,12 +482,8 @@ static void mesh_openness(const mesh_builder *b, terrain_world *world, const dou
         directions[k][1] = sin_theta * sin(phi);
         directions[k][2] = sqrt(1.0 - sin_theta * sin_theta);
     }
-    double lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
-    for (size_t i = 0; i < b->vertex_count; i++)
-        for (int a = 0; a < 3; a++) {
-            double p = origin[a] + b->vertices[i].position[a];
-            lo[a] = fmin(lo[a], p), hi[a] = fmax(hi[a], p);
-        }
+    double lo[3], hi[3];
+    mesh_vertex_bounds(b, origin, lo, hi);
     mesh_ao ao = { .stacks = { .world = world } };
     ao.x0 = mesh_floor(lo[0] / TERRAIN_COLUMN_SIZE) - MESH_AO_MARGIN;
     ao.y0 = mesh_floor(lo[1]) - MESH_AO_MARGIN;
