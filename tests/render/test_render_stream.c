@@ -247,6 +247,39 @@ Test(render_stream, memory_budget_evicts_out_of_range_chunks) {
 
 /* Two viewers far apart want two full sets of rings; any two chunks that touch differ by at
  * most one level, also where two viewers' rings meet. */
+/* The regions of the mesh chunks drawn now (not hidden), in world metres. */
+typedef struct chunk_box {
+    double lo[3], hi[3];
+    int level;
+    bool drawn;         /* it has a mesh (made, or found empty), or an older one on the GPU */
+} chunk_box;
+
+static int shown_chunk_boxes(streamed *s, chunk_box **boxes) {
+    ecs_query *q = ecs_query_create(s->ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(s->ecs, "TerrainMeshChunk") } });
+    int count = 0;
+    *boxes = NULL;
+    ecs_iter it = ecs_query_iter(s->ecs, q);
+    while (ecs_query_next(&it)) {
+        TerrainMeshChunk *c = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++) {
+            if (c[i].hidden) continue;
+            double size = 32.0 * (1 << c[i].lod.level);
+            *boxes = realloc(*boxes, (size_t)(count + 1) * sizeof **boxes);
+            (*boxes)[count++] = (chunk_box){ { c[i].x * size, c[i].y * size, c[i].z * size },
+                                             { (c[i].x + 1) * size, (c[i].y + 1) * size, (c[i].z + 1) * size },
+                                             c[i].lod.level, c[i].state != TERRAIN_MESH_WAITING || c[i].gpu.index_count > 0 };
+        }
+    }
+    ecs_query_destroy(s->ecs, q);
+    return count;
+}
+
+static bool chunk_boxes_overlap(const chunk_box *a, const chunk_box *b) {
+    for (int k = 0; k < 3; k++)
+        if (!(a->lo[k] < b->hi[k] && b->lo[k] < a->hi[k])) return false;
+    return true;
+}
+
 Test(render_stream, two_viewers_get_rings_that_fit_together) {
     streamed s = streamed_open(2, &small_rings);
     const double apart[2][3] = { { 1, 5, 1 }, { 5000, 5, 1 } };
@@ -256,38 +289,64 @@ Test(render_stream, two_viewers_get_rings_that_fit_together) {
     const double near[2][3] = { { 1, 5, 1 }, { 100, 5, 30 } };
     cr_assert(streamed_settle(&s, near, 2, 3000) > 0);
     ecs_progress(s.ecs, DT);
-    ecs_query *q = ecs_query_create(s.ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(s.ecs, "TerrainMeshChunk") } });
-    typedef struct box { double lo[3], hi[3]; int level; } box;
-    box *boxes = NULL;
-    int count = 0;
-    ecs_iter it = ecs_query_iter(s.ecs, q);
-    while (ecs_query_next(&it)) {
-        TerrainMeshChunk *c = ecs_field(&it, 0);
-        for (int i = 0; i < it.count; i++) {
-            if (c[i].hidden) continue;
-            double size = 32.0 * (1 << c[i].lod.level);
-            boxes = realloc(boxes, (size_t)(count + 1) * sizeof *boxes);
-            boxes[count++] = (box){ { c[i].x * size, c[i].y * size, c[i].z * size },
-                                    { (c[i].x + 1) * size, (c[i].y + 1) * size, (c[i].z + 1) * size }, c[i].lod.level };
-        }
-    }
+    chunk_box *boxes;
+    int count = shown_chunk_boxes(&s, &boxes);
     int touching = 0, overlapping = 0;
     for (int a = 0; a < count; a++)
         for (int b = a + 1; b < count; b++) {
-            bool touch = true, overlap = true;
-            for (int k = 0; k < 3; k++) {
-                touch = touch && boxes[a].lo[k] <= boxes[b].hi[k] && boxes[b].lo[k] <= boxes[a].hi[k];
-                overlap = overlap && boxes[a].lo[k] < boxes[b].hi[k] && boxes[b].lo[k] < boxes[a].hi[k];
-            }
+            bool touch = true;
+            for (int k = 0; k < 3; k++) touch = touch && boxes[a].lo[k] <= boxes[b].hi[k] && boxes[b].lo[k] <= boxes[a].hi[k];
             if (!touch) continue;
             touching++;
-            overlapping += overlap;
+            overlapping += chunk_boxes_overlap(&boxes[a], &boxes[b]);
             cr_expect_leq(abs(boxes[a].level - boxes[b].level), 1, "levels %d and %d touch", boxes[a].level,
                           boxes[b].level);
         }
     cr_expect_gt(touching, 0);
     cr_expect_eq(overlapping, 0, "%d drawn chunks overlap", overlapping);
     free(boxes);
+    streamed_close(&s);
+}
+
+/* When the rings move, each place changes level in one frame: no two chunks drawn overlap (an
+ * old coarse chunk and the new finer ones ready over it would show the ground twice, and the
+ * renderer would pay for both), and every place the old and the new rings share stays covered
+ * by a chunk whose mesh is up. Small rings (2 levels, w 2: squares of ±128 m around the nearest
+ * 64 m line), the viewer moved one coarsest chunk along x. */
+Test(render_stream, a_moved_layout_shows_each_place_once_and_leaves_no_gap) {
+    streamed s = streamed_open(2, &small_rings);
+    double eye[1][3] = { { 10, 5, 10 } };
+    cr_assert(streamed_settle(&s, (const double (*)[3])eye, 1, 2000) > 0);
+    eye[0][0] += 64;    /* centre 0 → 1: old square x −128 … 128, new −64 … 192 */
+    int frames = 0, overlaps = 0, gaps = 0, mixed = 0;
+    for (; frames < 2000; frames++) {
+        terrain_ecs_set_viewers(s.te, (const double (*)[3])eye, 1);
+        ecs_progress(s.ecs, DT);
+        terrain_world_trim(s.world);
+        chunk_box *boxes;
+        int count = shown_chunk_boxes(&s, &boxes);
+        for (int a = 0; a < count; a++)
+            for (int b = a + 1; b < count; b++)
+                overlaps += boxes[a].drawn && boxes[b].drawn && chunk_boxes_overlap(&boxes[a], &boxes[b]);
+        /* Every 8 m of the shared square, at the ground's height. */
+        for (double z = -124; z < 128; z += 8)
+            for (double x = -60; x < 128; x += 8) {
+                bool covered = false;
+                for (int b = 0; b < count && !covered; b++)
+                    covered = boxes[b].drawn && x >= boxes[b].lo[0] && x < boxes[b].hi[0] && 0.0 >= boxes[b].lo[1] &&
+                              0.0 < boxes[b].hi[1] && z >= boxes[b].lo[2] && z < boxes[b].hi[2];
+                gaps += !covered;
+            }
+        free(boxes);
+        terrain_ecs_stream_stats_info st = terrain_ecs_stream_stats(s.te);
+        if (st.mesh_chunks_ready > 0 && st.mesh_chunks_ready < st.mesh_chunks_wanted) mixed++;
+        if (st.mesh_chunks_ready == st.mesh_chunks_wanted && st.jobs_in_flight == 0) break;
+        nanosleep(&(struct timespec){ 0, 1000000 }, NULL);
+    }
+    cr_assert_lt(frames, 2000, "the new layout never came in");
+    cr_expect_gt(mixed, 1, "the move was in after %d frames: nothing was tested between", frames);
+    cr_expect_eq(overlaps, 0, "%d times two drawn chunks overlapped", overlaps);
+    cr_expect_eq(gaps, 0, "%d points of the shared square had no chunk drawn", gaps);
     streamed_close(&s);
 }
 

@@ -47,6 +47,7 @@ typedef struct stream_record {
     bool wanted;                           /* in some viewer's rings now */
     bool ready;                            /* a mesh for `mask` was delivered (empty counts) */
     bool hidden;                           /* out of range and replaced */
+    bool held_back;                        /* wanted, but a chunk still drawn overlaps it */
     bool retained;                         /* column chunk: retained in the world */
     bool component_hidden;                 /* what the entity's TerrainMeshChunk.hidden says */
     bool edited;                           /* a chunk it reads was edited: remesh this frame */
@@ -358,31 +359,57 @@ static void stream_layout(terrain_ecs *te, ecs_commands *commands) {
 
 /* ---- keeping, hiding and evicting what left the range ------------------------------------ */
 
-/* Whether every wanted chunk overlapping r's region (two levels either way) is ready: then r is
- * replaced and hidden. Regions that nothing wants any more (behind the viewers) hide at once. */
-static bool stream_replaced(const terrain__streamer *s, const stream_record *r) {
-    int level = r->key.level;
-    for (int l = level - 2; l <= level + 2; l++) {
-        if (l < 0 || l >= s->desc.levels || l == level) continue;
-        if (l > level) {
-            int shift = l - level;
-            int64_t n = (int64_t)1 << shift;
-            stream_key parent = { floor_div(r->key.x, n), floor_div(r->key.y, n), floor_div(r->key.z, n), l };
-            const stream_record *p = map_find(&s->meshes, parent);
-            if (p && p->wanted && !p->ready) return false;
+/* Calls visit on every record at another level whose region overlaps key's (its coarser
+ * ancestors and its finer descendants), until visit returns true; returns whether one did. */
+typedef bool (*stream_visit)(stream_record *other);
+
+static bool stream_each_overlapping(const terrain__streamer *s, stream_key key, stream_visit visit) {
+    for (int l = 0; l < s->desc.levels; l++) {
+        if (l == key.level) continue;
+        if (l > key.level) {
+            int64_t n = (int64_t)1 << (l - key.level);
+            stream_record *p = map_find(&s->meshes, (stream_key){ floor_div(key.x, n), floor_div(key.y, n), floor_div(key.z, n), l });
+            if (p && visit(p)) return true;
             continue;
         }
-        int64_t n = (int64_t)1 << (level - l);
+        int64_t n = (int64_t)1 << (key.level - l);
         for (int64_t dz = 0; dz < n; dz++)
             for (int64_t dy = 0; dy < n; dy++)
                 for (int64_t dx = 0; dx < n; dx++) {
-                    stream_key child = { r->key.x * n + dx, r->key.y * n + dy, r->key.z * n + dz, l };
-                    const stream_record *c = map_find(&s->meshes, child);
-                    if (c && c->wanted && !c->ready) return false;
+                    stream_record *c = map_find(&s->meshes, (stream_key){ key.x * n + dx, key.y * n + dy, key.z * n + dz, l });
+                    if (c && visit(c)) return true;
                 }
     }
-    /* Nothing wanted overlaps it (behind the viewers): it stays until the new layout is all in,
-     * when the clipmap's holes move over there (the far ground then covers it). */
+    return false;
+}
+
+static bool stream_wanted_not_ready(stream_record *r) { return r->wanted && !r->ready; }
+
+static bool stream_hold_back(stream_record *r) {
+    if (r->wanted) r->held_back = true;
+    return false;
+}
+
+/* Whether key's columns lie inside some viewer's rings (the coarsest level's square), where
+ * every place is some level's wanted chunk. */
+static bool stream_inside_rings(const terrain__streamer *s, stream_key key) {
+    int coarsest = s->desc.levels - 1, w = s->desc.half_width;
+    int64_t n = (int64_t)1 << (coarsest - key.level), x = floor_div(key.x, n), z = floor_div(key.z, n);
+    for (int v = 0; v < s->centre_count; v++) {
+        int64_t cx = centre_at(s, v, 0, coarsest), cz = centre_at(s, v, 1, coarsest);
+        if (x >= cx - w && x < cx + w && z >= cz - w && z < cz + w) return true;
+    }
+    return false;
+}
+
+/* Whether r, out of range and still drawn, can be hidden: inside the new rings once every
+ * chunk they want over its region is ready (the rings cover the whole of it); elsewhere (behind
+ * the viewers) once a layout is all in, when the clipmap's holes move over there and the far
+ * ground covers it. layout_ready is counted in the mesh phase, after this one: in the frame the
+ * rings move it still says whether the previous layout was all in, and if so what now lies
+ * behind goes at once (a layout's worth of chunks is not kept while the next one loads). */
+static bool stream_replaced(const terrain__streamer *s, const stream_record *r) {
+    if (stream_inside_rings(s, r->key)) return !stream_each_overlapping(s, r->key, stream_wanted_not_ready);
     return s->layout_ready;
 }
 
@@ -417,11 +444,30 @@ static size_t stream_resident(const terrain_ecs *te) {
 static void stream_keep_or_evict(terrain_ecs *te, ecs_commands *commands) {
     terrain__streamer *s = te->stream;
     size_t kept = 0, wanted = 0;
+    /* Out-of-range chunks whose place the new layout has filled stop being drawn. A wanted
+     * chunk is held back while one still drawn overlaps it: drawn together they would show
+     * the same ground twice (and llvmpipe would shade both), so each place changes level in
+     * one frame, once all of its new chunks are ready. */
+    size_t still_drawn = 0;
     for (size_t i = 0; i < s->meshes.capacity; i++) {
         stream_record *r = s->meshes.slots[i];
         if (!r) continue;
-        if (!r->wanted && !r->hidden && r->entity && stream_replaced(s, r)) r->hidden = true;
-        bool hidden = !r->wanted && r->hidden;
+        r->held_back = false;
+        if (!r->wanted && !r->hidden && r->entity) {
+            /* One held back when it left the range (a layout that moved on before it was in)
+             * was never drawn, and is not now. */
+            r->hidden = r->component_hidden || stream_replaced(s, r);
+            still_drawn += !r->hidden;
+        }
+    }
+    for (size_t i = 0; still_drawn && i < s->meshes.capacity; i++) {
+        stream_record *r = s->meshes.slots[i];
+        if (r && !r->wanted && !r->hidden && r->entity) stream_each_overlapping(s, r->key, stream_hold_back);
+    }
+    for (size_t i = 0; i < s->meshes.capacity; i++) {
+        stream_record *r = s->meshes.slots[i];
+        if (!r) continue;
+        bool hidden = r->wanted ? r->held_back : r->hidden;
         if (r->entity && hidden != r->component_hidden) {    /* the flag the cull phase reads */
             TerrainMeshChunk *c = ecs_get(te->ecs, r->entity, te->mesh_chunk);
             if (c) c->hidden = hidden;
