@@ -100,6 +100,36 @@ static int sky_pixels_below(const render_image *image, const render_image *sky, 
     return count;
 }
 
+/* Primitives the GL was given while `draw` ran (GL_PRIMITIVES_GENERATED). */
+static GLuint primitives_of(far_scene *s, const terrain_view *view, bool with_clipmap) {
+    GLuint query, count = 0;
+    glGenQueries(1, &query);
+    glBeginQuery(GL_PRIMITIVES_GENERATED, query);
+    render_image image = with_clipmap ? far_draw(s, view, NULL, 0) : sky_draw(s, view);
+    glEndQuery(GL_PRIMITIVES_GENERATED);
+    glGetQueryObjectuiv(query, GL_QUERY_RESULT, &count);
+    glDeleteQueries(1, &query);
+    free(image.rgba);
+    return count;
+}
+
+/* Visible blocks next to each other in the index buffer are drawn in one call: fewer calls than
+ * blocks, and the GL is given exactly the visible blocks' triangles, no more, no fewer. */
+Test(render_clipmap, neighbouring_blocks_are_one_draw_of_exactly_their_triangles) {
+    far_scene s = far_scene_open(terrain_generation_defaults(42), (terrain_renderer_desc){ .cloud_cover = -1 });
+    terrain_view view = { .camera = { 100, 0, 200 }, .pitch = -0.3f, .aspect = (float)W / H };
+    terrain_clipmap_update(s.clipmap, view.camera);
+    view.camera[1] = terrain_clipmap_height(s.clipmap, 100, 200) + 60.0;
+    GLuint with = primitives_of(&s, &view, true);
+    terrain_clipmap_stats_info stats = terrain_clipmap_stats(s.clipmap);
+    GLuint without = primitives_of(&s, &view, false);
+    cr_assert_gt(stats.blocks_drawn, 0);
+    cr_assert_lt(stats.draws, stats.blocks_drawn, "%d draws for %d blocks", stats.draws, stats.blocks_drawn);
+    cr_assert_eq((uint64_t)(with - without), stats.triangles, "%u primitives for %llu triangles in the visible blocks",
+                 with - without, (unsigned long long)stats.triangles);
+    far_scene_close(&s);
+}
+
 Test(render_clipmap, ground_below_the_horizon_sky_above) {
     far_scene s = far_scene_open(terrain_generation_defaults(42), (terrain_renderer_desc){ .cloud_cover = -1 });
     terrain_view view = { .camera = { 100, 0, 200 }, .pitch = -0.05f, .aspect = (float)W / H };

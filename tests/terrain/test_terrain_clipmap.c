@@ -387,7 +387,11 @@ Test(terrain_clipmap, culling_drops_blocks_behind_and_keeps_the_one_under_the_ca
     int total = 0;
     for (int l = 0; l < levels; l++)
         for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) total += !terrain__clipmap_block(c, l, b).covered;
-    cr_assert_eq(total, levels * TERRAIN__CLIPMAP_BLOCKS - (levels - 1) * 9, "each coarser level leaves 3 × 3 to the finer");
+    /* The finer level covers the middle half of each axis: the split long segments either side
+     * of the one-cell strip at n/4 or n/4 + 1 (2·SPLIT + 1 segments across). */
+    const int middle = 2 * TERRAIN__CLIPMAP_SPLIT + 1;
+    cr_assert_eq(total, levels * TERRAIN__CLIPMAP_BLOCKS - (levels - 1) * middle * middle,
+                 "each coarser level leaves %d × %d blocks to the finer", middle, middle);
 
     /* Looking north (−z), level: nothing wholly behind the camera is kept. */
     terrain_view view = { .camera = { camera[0], camera[1], camera[2] }, .aspect = 16.0f / 9.0f };
@@ -449,7 +453,9 @@ Test(terrain_clipmap, culling_drops_blocks_behind_and_keeps_the_one_under_the_ca
         cr_assert_float_eq(block.box_min[1], before[b].box_min[1] - (reaches ? 156.0 : 0.0), 1e-3, "block %d", b);
         sunk += reaches;
     }
-    cr_assert_eq(sunk, 9, "the blocks of segments 0–2 along both axes");
+    /* Cuts at 0, 8, 16, 17, 24, 32, 40, …: segments 1–4 ([8, 16) … [24, 32)) reach [10, 30). */
+    _Static_assert(TERRAIN__CLIPMAP_SPLIT == 2, "the counts here are worked out for long segments split in two");
+    cr_assert_eq(sunk, 16, "the blocks of segments 1–4 along both axes");
     terrain_clipmap_set_hole(c, hi, lo);   /* min ≥ max: no hole */
     for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) cr_assert_eq(terrain__clipmap_block(c, 0, b).box_min[1], before[b].box_min[1]);
     terrain_clipmap_destroy(c);
@@ -547,10 +553,12 @@ Test(terrain_clipmap, two_disjoint_holes_sink_inside_either_and_nowhere_else) {
         sunk[0] += r0;
         sunk[1] += r1 && !r0;
     }
-    /* Cuts at 0, 16, 17, 32, 48, 49, 64, boxes a cell wider: hole 0 (cells 4 … 14, 6 … 16)
-     * reaches segment 0 along x and segments 0–1 along z, hole 1 segments 3–5 along both. */
-    cr_assert_eq(sunk[0], 2);
-    cr_assert_eq(sunk[1], 9, "the blocks of the second hole are sunk too");
+    /* Cuts at 0, 8, 16, 17, 24, 32, 40, 48, 49, 56, 64 (the four long segments of 0, 16, 17, 32,
+     * 48, 49, 64 split in two), boxes a cell wider: hole 0 (cells 4 … 14, 6 … 16) reaches
+     * segments 0–1 along x and 0–2 along z, hole 1 (40 … 60, 36 … 58) segments 5–9 along both. */
+    _Static_assert(TERRAIN__CLIPMAP_SPLIT == 2, "the counts here are worked out for long segments split in two");
+    cr_assert_eq(sunk[0], 2 * 3);
+    cr_assert_eq(sunk[1], 5 * 5, "the blocks of the second hole are sunk too");
 
     /* The one-hole form replaces them all: the second hole is gone. */
     double lo[2], hi[2];

@@ -36,11 +36,12 @@
  *
  * Blocks. The vertex and index data are one static grid of (n + 1)² vertices shared by every
  * level (the vertex shader places and displaces them). Its cells are cut at 0, n/4, n/4 + 1,
- * n/2, 3n/4, 3n/4 + 1, n along each axis into 6 × 6 blocks, each a contiguous range of the
- * index buffer. The finer level covers exactly segments 1–3 or 2–4 of each axis (h above), so
- * a block is wholly covered or not at all: level L draws the blocks the finer level leaves,
+ * n/2, 3n/4, 3n/4 + 1, n along each axis, and the four long segments again in halves
+ * (TERRAIN__CLIPMAP_SPLIT), into 10 × 10 blocks, each a contiguous range of the index buffer.
+ * The finer level covers exactly the cells [h, h + n/2) of each axis (h above), whole segments,
+ * so a block is wholly covered or not at all: level L draws the blocks the finer level leaves,
  * those the frustum may see (bounds from the heights, the coarser level's under the morph and
- * the pit's depth where any hole reaches).
+ * the pit's depth where any hole reaches), neighbours in the buffer in one call.
  *
  * Seams. Each level's vertices geomorph to the coarser level's triangles near its border
  * (terrain__clipmap_morph, mirrored in shaders/clipmap.vert), reaching them exactly on it: every
@@ -253,7 +254,13 @@ static void push_border_slivers(terrain_clipmap *c, size_t *capacity, int x0, in
 
 static void build_blocks(terrain_clipmap *c) {
     int n = c->cells;
-    const int cuts[SEGMENTS + 1] = { 0, n / 4, n / 4 + 1, n / 2, 3 * n / 4, 3 * n / 4 + 1, n };
+    const int base[7] = { 0, n / 4, n / 4 + 1, n / 2, 3 * n / 4, 3 * n / 4 + 1, n };
+    int cuts[SEGMENTS + 1], count = 0;
+    cuts[count++] = 0;
+    for (int s = 0; s < 6; s++) {
+        int parts = base[s + 1] - base[s] > 1 ? TERRAIN__CLIPMAP_SPLIT : 1;
+        for (int k = 1; k <= parts; k++) cuts[count++] = base[s] + (base[s + 1] - base[s]) * k / parts;
+    }
     memcpy(c->cuts, cuts, sizeof cuts);
     size_t capacity = 0;
     for (int b = 0; b < BLOCKS; b++) {
@@ -815,9 +822,10 @@ float terrain__clipmap_sink(const terrain_clipmap *c, const double camera[3], co
 
 /* ---- blocks and culling ---- */
 
+/* The finer level covers cells [h, h + n/2) of level L along each axis. */
 static bool segment_in_finer(const terrain_clipmap *c, int level, int axis, int segment) {
-    int first = finer_offset(c, level, axis) == c->cells / 4 ? 1 : 2;
-    return segment >= first && segment <= first + 2;
+    int h = finer_offset(c, level, axis);
+    return c->cuts[segment] >= h && c->cuts[segment + 1] <= h + c->cells / 2;
 }
 
 terrain__clipmap_block_info terrain__clipmap_block(const terrain_clipmap *c, int level, int block) {
@@ -1123,6 +1131,7 @@ static void bind_block_holes(const terrain_clipmap *c, GLuint program, const flo
 void terrain__clipmap_draw(terrain_clipmap *c, gfx_context *gfx, uint32_t program_handle, const terrain_view *view) {
     TRACE_ZONE("terrain_clipmap_draw");
     c->stats.blocks_drawn = 0;
+    c->stats.draws = 0;
     c->stats.triangles = 0;
     if (!c->has_camera) return;
     /* Levels placed by an update whose heights are not on the GPU yet would draw stale ones. */
@@ -1145,13 +1154,23 @@ void terrain__clipmap_draw(terrain_clipmap *c, gfx_context *gfx, uint32_t progra
         uniform_ivec2(gl_program, "u_offset", u.offset);
         uniform_ivec2(gl_program, "u_start", u.start);
         uniform_ivec2(gl_program, "u_coarse_start", u.coarse_start);
-        for (int b = 0; b < BLOCKS; b++) {
-            terrain__clipmap_block_info info = terrain__clipmap_block(c, l, b);
+        /* Visible blocks next to each other in the index buffer (along a row, and from a row's
+         * end to the next row's start) with the same holes are one draw. */
+        uint32_t run_first = 0, run_count = 0;
+        for (int b = 0; b <= BLOCKS; b++) {
+            terrain__clipmap_block_info info = b < BLOCKS ? terrain__clipmap_block(c, l, b) : (terrain__clipmap_block_info){ 0 };
+            unsigned near = info.visible ? block_holes(c, &info) : bound;
+            bool joins = info.visible && near == bound && run_count > 0 && c->block_first[b] == run_first + run_count;
+            if (run_count > 0 && !joins) {
+                gfx_draw(&(gfx_draw_desc){ .vertex_array = c->vertex_array, .first = run_first, .count = run_count,
+                                           .index_type = GFX_INDEX_U32 });
+                c->stats.draws++;
+                run_count = 0;
+            }
             if (!info.visible) continue;
-            unsigned near = block_holes(c, &info);
             if (near != bound) bind_block_holes(c, gl_program, holes, bound = near);
-            gfx_draw(&(gfx_draw_desc){ .vertex_array = c->vertex_array, .first = c->block_first[b],
-                                       .count = c->block_count[b], .index_type = GFX_INDEX_U32 });
+            if (run_count == 0) run_first = c->block_first[b];
+            run_count += c->block_count[b];
             c->stats.blocks_drawn++;
             c->stats.triangles += c->block_count[b] / 3;
         }

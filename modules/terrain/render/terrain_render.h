@@ -229,6 +229,7 @@ typedef struct terrain_clipmap_stats_info {
     int blocks_visible;               /* blocks the last terrain_clipmap_cull kept */
     uint64_t triangles_visible;       /* in those blocks */
     int blocks_drawn;                 /* by the last draw */
+    int draws;                        /* draw calls it took (neighbouring blocks are one) */
     uint64_t triangles;               /* drawn by the last draw */
 } terrain_clipmap_stats_info;
 

@@ -20,10 +20,13 @@
 
 /* Level L's vertex (i, k), 0 ≤ i, k ≤ cells, is the world point ((first[0] + i)·s, (first[1] +
  * k)·s) with s = finest_spacing·2^L; first[] is even, so the level's border lies on level L + 1's
- * vertex lines. Each level is cut into 6 × 6 blocks along the cell cuts 0, n/4, n/4 + 1, n/2,
- * 3n/4, 3n/4 + 1, n: the finer level always covers exactly the blocks of segments 1–3 or 2–4 on
- * each axis, so a block is either all covered or not at all. */
-#define TERRAIN__CLIPMAP_SEGMENTS 6
+ * vertex lines. Each level is cut along the cell cuts 0, n/4, n/4 + 1, n/2, 3n/4, 3n/4 + 1, n,
+ * and each of the four long segments again into TERRAIN__CLIPMAP_SPLIT equal parts (culling
+ * then drops more of a level's triangles outside the view): the finer level always covers
+ * exactly the cells [h, h + n/2) on each axis, h = n/4 or n/4 + 1, which are whole segments,
+ * so a block is either all covered or not at all. */
+#define TERRAIN__CLIPMAP_SPLIT 2
+#define TERRAIN__CLIPMAP_SEGMENTS (2 + 4 * TERRAIN__CLIPMAP_SPLIT)
 #define TERRAIN__CLIPMAP_BLOCKS (TERRAIN__CLIPMAP_SEGMENTS * TERRAIN__CLIPMAP_SEGMENTS)
 
 typedef struct terrain__clipmap_level_info {
