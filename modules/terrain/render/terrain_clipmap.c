@@ -1128,6 +1128,19 @@ static void bind_block_holes(const terrain_clipmap *c, GLuint program, const flo
     if (at >= 0 && count > 0) glUniform4fv(at, count, &chosen[0][0]);
 }
 
+/* A range of the index buffer not drawn yet: neighbouring blocks drawn in one call. */
+typedef struct clipmap_run {
+    uint32_t first, count;
+} clipmap_run;
+
+static void clipmap_run_draw(terrain_clipmap *c, clipmap_run *run) {
+    if (run->count == 0) return;
+    gfx_draw(&(gfx_draw_desc){ .vertex_array = c->vertex_array, .first = run->first, .count = run->count,
+                               .index_type = GFX_INDEX_U32 });
+    c->stats.draws++;
+    run->count = 0;
+}
+
 void terrain__clipmap_draw(terrain_clipmap *c, gfx_context *gfx, uint32_t program_handle, const terrain_view *view) {
     TRACE_ZONE("terrain_clipmap_draw");
     c->stats.blocks_drawn = 0;
@@ -1156,24 +1169,22 @@ void terrain__clipmap_draw(terrain_clipmap *c, gfx_context *gfx, uint32_t progra
         uniform_ivec2(gl_program, "u_coarse_start", u.coarse_start);
         /* Visible blocks next to each other in the index buffer (along a row, and from a row's
          * end to the next row's start) with the same holes are one draw. */
-        uint32_t run_first = 0, run_count = 0;
-        for (int b = 0; b <= BLOCKS; b++) {
-            terrain__clipmap_block_info info = b < BLOCKS ? terrain__clipmap_block(c, l, b) : (terrain__clipmap_block_info){ 0 };
-            unsigned near = info.visible ? block_holes(c, &info) : bound;
-            bool joins = info.visible && near == bound && run_count > 0 && c->block_first[b] == run_first + run_count;
-            if (run_count > 0 && !joins) {
-                gfx_draw(&(gfx_draw_desc){ .vertex_array = c->vertex_array, .first = run_first, .count = run_count,
-                                           .index_type = GFX_INDEX_U32 });
-                c->stats.draws++;
-                run_count = 0;
+        clipmap_run run = { 0 };
+        for (int b = 0; b < BLOCKS; b++) {
+            terrain__clipmap_block_info info = terrain__clipmap_block(c, l, b);
+            if (!info.visible) {
+                clipmap_run_draw(c, &run);
+                continue;
             }
-            if (!info.visible) continue;
-            if (near != bound) bind_block_holes(c, gl_program, holes, bound = near);
-            if (run_count == 0) run_first = c->block_first[b];
-            run_count += c->block_count[b];
+            unsigned near = block_holes(c, &info);
+            if (near != bound || c->block_first[b] != run.first + run.count) clipmap_run_draw(c, &run);
+            if (near != bound) bind_block_holes(c, gl_program, holes, bound = near);   /* after the run it ends */
+            if (run.count == 0) run.first = c->block_first[b];
+            run.count += c->block_count[b];
             c->stats.blocks_drawn++;
             c->stats.triangles += c->block_count[b] / 3;
         }
+        clipmap_run_draw(c, &run);
     }
     trace_counter("terrain.clipmap_blocks_drawn", c->stats.blocks_drawn);
     trace_counter("terrain.clipmap_triangles", (double)c->stats.triangles);
