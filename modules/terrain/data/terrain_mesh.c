@@ -420,16 +420,17 @@ static void mesh_ao_fill(mesh_ao *ao) {
 
 /* The solid fraction around a point: the slabs' values sit at the centres of 1 m boxes (column
  * centres in x and z, slab centres in y), read trilinearly — a tent kernel one column wide in
- * each axis, so the value moves continuously with the point. */
-static double mesh_ao_solid(const mesh_ao *ao, double x, double y, double z) {
-    double u = x / TERRAIN_COLUMN_SIZE - 0.5, v = z / TERRAIN_COLUMN_SIZE - 0.5, w = y - 0.5;
-    int64_t gx = mesh_floor(u), gz = mesh_floor(v), J = mesh_floor(w);
-    int64_t i = gx - ao->x0, k = gz - ao->z0, j = J - ao->y0;
+ * each axis, so the value moves continuously with the point. The point comes in the window's
+ * own units: u = x / column − ½ less the window's first column (and so for z, and y in slabs),
+ * an exact shift by a whole number, so floor and fraction are those of the world's own
+ * reading, and a point inside the window is ≥ 0 there, its floor a truncation. */
+static double mesh_ao_solid(const mesh_ao *ao, double u, double v, double w) {
     /* The window's margin keeps every ray inside; a point outside would be a bug, read as air. */
-    if (i < 0 || i + 1 >= ao->width || k < 0 || k + 1 >= ao->depth || j < 0 || j + 1 >= ao->height) return 0.0;
+    if (!(u >= 0.0 && u < ao->width - 1 && v >= 0.0 && v < ao->depth - 1 && w >= 0.0 && w < ao->height - 1)) return 0.0;
+    int i = (int)u, k = (int)v, j = (int)w;
     size_t column = (size_t)k * (size_t)ao->width + (size_t)i;
     if (j >= ao->tops[column]) return 0.0;
-    double fx = u - (double)gx, fz = v - (double)gz, fy = w - (double)J;
+    double fx = u - (double)i, fz = v - (double)k, fy = w - (double)j;
     const size_t row = (size_t)ao->width * (size_t)ao->height, h = (size_t)ao->height;
     const uint8_t *s00 = ao->slabs + column * h + (size_t)j, *s10 = s00 + h, *s01 = s00 + row, *s11 = s01 + h;
     double a00 = s00[0] + fy * (s00[1] - s00[0]), a10 = s10[0] + fy * (s10[1] - s10[0]);
@@ -463,7 +464,9 @@ static double mesh_ao_openness(const mesh_ao *ao, const double directions[MESH_A
         double through = 1.0;
         for (int s = 0; s < MESH_AO_STEPS; s++) {
             double r = mesh_ao_distance[s];
-            double solid = mesh_ao_solid(ao, start[0] + r * ray[0], start[1] + r * ray[1], start[2] + r * ray[2]);
+            double x = start[0] + r * ray[0], y = start[1] + r * ray[1], z = start[2] + r * ray[2];
+            double solid = mesh_ao_solid(ao, (x / TERRAIN_COLUMN_SIZE - 0.5) - (double)ao->x0,
+                                         (z / TERRAIN_COLUMN_SIZE - 0.5) - (double)ao->z0, (y - 0.5) - (double)ao->y0);
             through *= 1.0 - mesh_ao_strength[s] * solid;
         }
         open += through;
