@@ -205,7 +205,8 @@ typedef struct game_app_stats_info {
     double walked, from_start;        /* the walk's path length and straight-line distance, m */
     bool walk_done, walk_stuck;
     /* Time of each frame past loading on the main thread's clock: from its start to the
-     * hand-over to the GL driver (gfx_frame_end), i.e. every phase and the draw calls. The
+     * hand-over to the GL driver (gfx_frame_end), i.e. every phase and the draw calls (a
+     * screenshot's read-back of the frame left out). The
      * driver's waits inside the calls count: on llvmpipe, a read of the frame (water's copy for
      * refraction) waits there for the whole scene to be rasterised. */
     double cpu_ms_p50, cpu_ms_p99, cpu_ms_max;

@@ -65,7 +65,10 @@
  *   Outside systems, a buffer of your own: ecs_commands_create, ecs_commands_apply, _destroy.
  *
  * SYSTEMS AND PHASES. A frame runs the phases in order; the default pipeline is
- *     input, game, stream, generate, stabilize, mesh, lod, cull, draw
+ *     input, game, stream, generate, stabilize, mesh, lod, cull, draw, background
+ *   ("background" hands work to the job system once the frame is drawn, so that it runs while
+ *   the main thread waits on the GPU instead of beside the frame's own work; on a CPU renderer
+ *   such as llvmpipe, while the frame is rasterised.)
  *     static void move(ecs_iter *it) {
  *         while (ecs_query_next(it)) { ... }               // it->dt, it->user, it->commands
  *     }

@@ -72,7 +72,7 @@ static void phase_insert(ecs_world *world, uint32_t at, const char *name) {
 
 void ecs_pipeline_init(ecs_world *world) {
     static const char *const pipeline[] = { "input", "game",  "stream", "generate", "stabilize",
-                                            "mesh",  "lod",   "cull",   "draw" };
+                                            "mesh",  "lod",   "cull",   "draw",     "background" };
     for (uint32_t i = 0; i < CORE_COUNTOF(pipeline); i++) phase_insert(world, i, pipeline[i]);
 }
 

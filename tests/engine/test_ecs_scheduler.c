@@ -337,7 +337,7 @@ static void check_trace_zones(int threads) {
     core_error error = { 0 };
     cr_assert(trace_report_load(path, &report, &error), "%s", error.message);
     const char *phases[] = { "input", "game", "physics", "stream", "generate", "stabilize", "mesh",
-                             "lod", "cull", "draw" };
+                             "lod", "cull", "draw", "background" };
     for (size_t i = 0; i < CORE_COUNTOF(phases); i++)
         cr_expect_eq(zone_count(&report, phases[i]), 2, "threads %d: phase %s", threads, phases[i]);
     cr_expect_eq(zone_count(&report, "step_bodies"), 2, "threads %d", threads);

@@ -543,6 +543,7 @@ Test(render_world, the_frame_goes_through_the_input_game_draw_and_present_phases
         { "input", "input" }, { "player", "game" }, { "camera", "game" }, { "tools", "game" },
         { "terrain_draw", "draw" }, { "sky", "draw" }, { "hud", "draw" }, { "screenshot", "present" },
         { "terrain_stream", "stream" }, { "terrain_clipmap", "lod" }, { "terrain_upload", "draw" },
+        { "terrain_stream_submit", "background" },
     };
     for (size_t i = 0; i < sizeof expected / sizeof expected[0]; i++)
         cr_expect(zone_inside(events, expected[i][0], expected[i][1]), "no '%s' zone inside a '%s' phase zone",
