@@ -358,6 +358,7 @@ typedef struct mesh_ao {
     mesh_material_probe stacks;
     int64_t x0, z0, y0;            /* the window's first column and slab */
     int width, depth, height;      /* columns along x and z, slabs along y */
+    double u_end, v_end, w_end;    /* width − 1, depth − 1, height − 1: where reads end */
     uint8_t *slabs;                /* the solid quanta in slab [J, J + 1) of each column, y fastest */
     int32_t *tops;                 /* per 2 × 2 block of columns from (i, k): no solid from this
                                       slab up in any of them */
@@ -426,7 +427,7 @@ static void mesh_ao_fill(mesh_ao *ao) {
  * reading, and a point inside the window is ≥ 0 there, its floor a truncation. */
 static double mesh_ao_solid(const mesh_ao *ao, double u, double v, double w) {
     /* The window's margin keeps every ray inside; a point outside would be a bug, read as air. */
-    if (!(u >= 0.0 && u < ao->width - 1 && v >= 0.0 && v < ao->depth - 1 && w >= 0.0 && w < ao->height - 1)) return 0.0;
+    if (!(u >= 0.0 && u < ao->u_end && v >= 0.0 && v < ao->v_end && w >= 0.0 && w < ao->w_end)) return 0.0;
     int i = (int)u, k = (int)v, j = (int)w;
     size_t column = (size_t)k * (size_t)ao->width + (size_t)i;
     if (j >= ao->tops[column]) return 0.0;
@@ -456,19 +457,27 @@ static double mesh_ao_openness(const mesh_ao *ao, const double directions[MESH_A
     }
     double start[3];
     for (int a = 0; a < 3; a++) start[a] = p[a] + MESH_AO_LIFT * n[a];
-    double open = 0.0;
+    /* Every read point first (arithmetic the compiler can do two at a time), then the reads,
+     * then the rays: one loop over all three kept more values live than there are registers. */
+    enum { READS = MESH_AO_DIRECTIONS * MESH_AO_STEPS };
+    double u[READS], v[READS], w[READS], solid[READS];
     for (int k = 0; k < MESH_AO_DIRECTIONS; k++) {
         const double *d = directions[k];
         double ray[3];
         for (int a = 0; a < 3; a++) ray[a] = d[0] * t[a] + d[1] * b[a] + d[2] * n[a];
-        double through = 1.0;
         for (int s = 0; s < MESH_AO_STEPS; s++) {
             double r = mesh_ao_distance[s];
             double x = start[0] + r * ray[0], y = start[1] + r * ray[1], z = start[2] + r * ray[2];
-            double solid = mesh_ao_solid(ao, (x / TERRAIN_COLUMN_SIZE - 0.5) - (double)ao->x0,
-                                         (z / TERRAIN_COLUMN_SIZE - 0.5) - (double)ao->z0, (y - 0.5) - (double)ao->y0);
-            through *= 1.0 - mesh_ao_strength[s] * solid;
+            u[k * MESH_AO_STEPS + s] = (x / TERRAIN_COLUMN_SIZE - 0.5) - (double)ao->x0;
+            v[k * MESH_AO_STEPS + s] = (z / TERRAIN_COLUMN_SIZE - 0.5) - (double)ao->z0;
+            w[k * MESH_AO_STEPS + s] = (y - 0.5) - (double)ao->y0;
         }
+    }
+    for (int q = 0; q < READS; q++) solid[q] = mesh_ao_solid(ao, u[q], v[q], w[q]);
+    double open = 0.0;
+    for (int k = 0; k < MESH_AO_DIRECTIONS; k++) {
+        double through = 1.0;
+        for (int s = 0; s < MESH_AO_STEPS; s++) through *= 1.0 - mesh_ao_strength[s] * solid[k * MESH_AO_STEPS + s];
         open += through;
     }
     return open / MESH_AO_DIRECTIONS;
@@ -494,6 +503,7 @@ static void mesh_openness(const mesh_builder *b, terrain_world *world, const dou
     ao.width = (int)(mesh_floor(hi[0] / TERRAIN_COLUMN_SIZE) + MESH_AO_MARGIN - ao.x0 + 1);
     ao.height = (int)(mesh_floor(hi[1]) + MESH_AO_MARGIN - ao.y0 + 1);
     ao.depth = (int)(mesh_floor(hi[2] / TERRAIN_COLUMN_SIZE) + MESH_AO_MARGIN - ao.z0 + 1);
+    ao.u_end = ao.width - 1, ao.v_end = ao.depth - 1, ao.w_end = ao.height - 1;
     size_t column_count = (size_t)ao.width * (size_t)ao.depth, slab_count = column_count * (size_t)ao.height;
     if (slab_count > MESH_AO_MAX_SLABS) return;
     ao.slabs = core_alloc(slab_count * sizeof *ao.slabs);
