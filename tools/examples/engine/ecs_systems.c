@@ -1,5 +1,6 @@
 /* ecs_systems — the engine in one short program: components, systems in phases, parallel
- * and main-thread systems, deferred spawning, and a trace of every frame.
+ * and main-thread systems, deferred spawning, work handed out after the draw that spans frames,
+ * and a trace of every frame.
  *
  *   ecs_systems [--frames N] [--particles N] [--threads N] [--trace FILE]
  *
@@ -19,11 +20,22 @@ typedef struct Position { float x, y, z; } Position;
 typedef struct Velocity { float x, y, z; } Velocity;
 typedef struct Lifetime { float seconds_left; } Lifetime;
 
+/* A count the census job makes from its own copy of the heights, while the frames go on. */
+typedef struct census {
+    float *heights;
+    size_t count, capacity;
+    int above;           /* particles over 1 m when the copy was taken */
+    job_handle job;      /* the count's job (the zero handle, none yet, reads as done) */
+    bool started;
+} census;
+
 typedef struct demo {
     ecs_component position, velocity, lifetime;
     int target_particles;
     uint64_t spawned;
     float highest;       /* written by the draw system, on the main thread */
+    census census;
+    int censuses, last_above;
 } demo;
 
 /* input: keep the fountain full. Spawning is deferred: entities appear at the end of the phase. */
@@ -92,6 +104,35 @@ static void render(ecs_iter *it) {
     }
 }
 
+static void count_above(void *user) {
+    census *c = user;
+    int above = 0;
+    for (size_t i = 0; i < c->count; i++) above += c->heights[i] > 1.0f;
+    c->above = above;
+}
+
+/* census (in the background phase, the last, after the draw): work that may take longer than a
+ * frame goes to the job system as a background job once the frame is drawn, so it runs while
+ * the main thread hands the frame over instead of beside the frame's own systems. A finished
+ * count is read, and the next one started from a fresh copy (a job never reads components). */
+static void census_start(ecs_iter *it) {
+    demo *d = it->user;
+    job_system *jobs = ecs_world_jobs(it->world);
+    census *c = &d->census;
+    /* Alone, the main thread is the only one that can run background jobs: up to 1 ms a frame. */
+    if (job_thread_count(jobs) == 1) job_help(jobs, 1000000);
+    if (!job_is_done(jobs, c->job)) return;   /* the last one is still counting */
+    if (c->started) d->last_above = c->above, d->censuses++;
+    c->started = true;
+    c->count = 0;
+    while (ecs_query_next(it)) {
+        const Position *p = ecs_field(it, 0);
+        c->heights = core_grow(c->heights, &c->capacity, c->count + (size_t)it->count, sizeof *c->heights);
+        for (int i = 0; i < it->count; i++) c->heights[c->count++] = p[i].y;
+    }
+    c->job = job_submit(jobs, &(job_desc){ .fn = count_above, .user = c, .background = true, .name = "census" });
+}
+
 int main(int argc, char **argv) {
     core_common_args common = { 0 };
     int frames = 240, particles = 100000;
@@ -124,6 +165,8 @@ int main(int argc, char **argv) {
         .query = { .with = { d.lifetime } }, .writes = { d.lifetime } });
     ecs_system_add(world, &(ecs_system_desc){ .name = "render", .phase = "draw", .main_thread = true,
         .fn = render, .user = &d, .query = { .with = { d.position } } });
+    ecs_system_add(world, &(ecs_system_desc){ .name = "census", .phase = "background", .main_thread = true,
+        .fn = census_start, .user = &d, .query = { .with = { d.position } } });
 
     uint64_t start = core_time_ns();
     for (int frame = 0; frame < frames; frame++) {
@@ -136,8 +179,11 @@ int main(int argc, char **argv) {
     double ms = core_ns_to_ms(core_time_ns() - start);
 
     printf("ecs_systems: %d frames, %.3f ms per frame on %d threads; %d particles alive, "
-           "%llu born, the highest at %.1f m\n", frames, ms / frames, job_thread_count(jobs),
-           ecs_entity_count(world), (unsigned long long)d.spawned, d.highest);
+           "%llu born, the highest at %.1f m; %d censuses, the last %d over 1 m\n", frames, ms / frames,
+           job_thread_count(jobs), ecs_entity_count(world), (unsigned long long)d.spawned, d.highest, d.censuses,
+           d.last_above);
+    job_wait(jobs, d.census.job);   /* it reads its copy until it is done */
+    core_free(d.census.heights, d.census.capacity * sizeof *d.census.heights);
     ecs_world_destroy(world);
     job_system_destroy(jobs);
     trace_stop();
@@ -146,5 +192,5 @@ int main(int argc, char **argv) {
 
 /* Expected output:
  * Run: --frames 30 --threads 2 --trace $TMP/run.json
- * ^ecs_systems: 30 frames, [0-9.]+ ms per frame on 2 threads; [1-9][0-9]* particles alive, [1-9][0-9]* born, the highest at [0-9.]+ m$
+ * ^ecs_systems: 30 frames, [0-9.]+ ms per frame on 2 threads; [1-9][0-9]* particles alive, [1-9][0-9]* born, the highest at [0-9.]+ m; [1-9][0-9]* censuses, the last [0-9]+ over 1 m$
  */
