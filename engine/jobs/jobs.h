@@ -44,7 +44,9 @@
  * THREADS AND SLEEP
  *   Each worker owns a queue; an idle worker steals from the others, and with nothing to steal
  *   it sleeps (an idle engine uses ~0% CPU). A new job wakes one sleeper that can run it (a
- *   worker first); a finished job wakes only a thread waiting for it.
+ *   worker first); a finished job wakes only a thread waiting for it. On Linux the workers run
+ *   under SCHED_BATCH: the same share of the CPU, but a woken worker waits for a free core or
+ *   the running thread's turn to end instead of preempting the thread that submitted the job.
  *
  * TRACES
  *   Every job runs inside a trace zone named by job_desc.name ("job" when NULL). A thread

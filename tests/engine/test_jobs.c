@@ -3,6 +3,7 @@
 #include "jobs/jobs.h"
 
 #include "test.h"
+#include <sched.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <time.h>
@@ -401,5 +402,22 @@ Test(job_system, children_of_background_jobs_are_background) {
     job_wait(jobs, parent);
     cr_expect_eq(atomic_load(&probe.child_thread), 1, "the child ran on thread %d, not the worker",
                  atomic_load(&probe.child_thread));
+    job_system_destroy(jobs);
+}
+
+/* ---- workers do not preempt on wake-up -------------------------------------------------- */
+
+static void record_policy(void *user) { atomic_store((_Atomic int *)user, sched_getscheduler(0)); }
+
+/* Workers run under SCHED_BATCH (jobs.c, worker_yield_on_wake): a woken worker waits for the
+ * running thread's turn instead of preempting the main thread that handed it the job. The main
+ * thread's own policy is left as it was. */
+Test(job_system, workers_do_not_preempt_the_thread_that_wakes_them) {
+    job_system *jobs = job_system_create(&(job_system_desc){ .threads = 2 });
+    _Atomic int policy = -1;
+    /* Background: the main thread never runs it while it waits, so the worker does. */
+    job_wait(jobs, job_submit(jobs, &(job_desc){ .fn = record_policy, .user = &policy, .background = true }));
+    cr_expect_eq(atomic_load(&policy), SCHED_BATCH, "a worker ran under policy %d", atomic_load(&policy));
+    cr_expect_eq(sched_getscheduler(0), SCHED_OTHER, "the main thread's policy changed");
     job_system_destroy(jobs);
 }
