@@ -461,6 +461,52 @@ Test(terrain_clipmap, culling_drops_blocks_behind_and_keeps_the_one_under_the_ca
     terrain_clipmap_destroy(c);
 }
 
+/* A level wholly inside a hole is all pit (the game's level 0 is the rings' hole itself): it is
+ * not drawn, and the next coarser level draws its middle, sunk, in its place. A hole that leaves
+ * any of the level outside changes nothing. */
+static int blocks_drawn_at(const terrain_clipmap *c, int level) {
+    int drawn = 0;
+    for (int b = 0; b < TERRAIN__CLIPMAP_BLOCKS; b++) drawn += !terrain__clipmap_block(c, level, b).covered;
+    return drawn;
+}
+
+Test(terrain_clipmap, a_level_inside_a_hole_is_left_to_the_coarser_one) {
+    const int levels = 3, all = TERRAIN__CLIPMAP_BLOCKS, middle = 2 * TERRAIN__CLIPMAP_SPLIT + 1;
+    terrain_clipmap *c = small_clipmap(8, levels, 64, 4.0f, NULL);
+    terrain_clipmap_update(c, (const double[3]){ 300.0, 0.0, -700.0 });
+    terrain__clipmap_level_info fine = terrain__clipmap_level(c, 0);
+    const double lo[2] = { (double)fine.first[0] * 4.0, (double)fine.first[1] * 4.0 };
+    const double hi[2] = { lo[0] + 64 * 4.0, lo[1] + 64 * 4.0 };
+    cr_assert_eq(blocks_drawn_at(c, 0), all);
+    cr_assert_eq(blocks_drawn_at(c, 1), all - middle * middle);
+    terrain__clipmap_block_info before[TERRAIN__CLIPMAP_BLOCKS];
+    for (int b = 0; b < all; b++) before[b] = terrain__clipmap_block(c, 1, b);
+
+    /* Exactly level 0's square, and a wider one: level 0 is buried in both. */
+    for (int wider = 0; wider < 2; wider++) {
+        const double m = wider ? 40.0 : 0.0;
+        terrain_clipmap_set_hole(c, (const double[2]){ lo[0] - m, lo[1] - m }, (const double[2]){ hi[0] + m, hi[1] + m });
+        cr_assert_eq(blocks_drawn_at(c, 0), 0, "level 0 lies in the hole: none of it is drawn");
+        cr_assert_eq(blocks_drawn_at(c, 1), all, "level 1 draws its middle too");
+        cr_assert_eq(blocks_drawn_at(c, 2), all - middle * middle, "level 2 is unchanged");
+        /* Level 1's middle blocks lie in the hole: their boxes reach down to the pit's floor
+         * (156 m: 12 + 1.5·64 + 48, the default below the generator's caves). */
+        for (int b = 0; b < all; b++)
+            if (before[b].covered) cr_assert_float_eq(terrain__clipmap_block(c, 1, b).box_min[1], before[b].box_min[1] - 156.0, 1e-3);
+    }
+
+    /* One cell of level 0 outside the hole, on any side: level 0 draws as before. */
+    for (int side = 0; side < 4; side++) {
+        double a[2] = { lo[0], lo[1] }, z[2] = { hi[0], hi[1] };
+        if (side < 2) a[side] += 4.0;
+        else z[side - 2] -= 4.0;
+        terrain_clipmap_set_hole(c, a, z);
+        cr_assert_eq(blocks_drawn_at(c, 0), all, "side %d", side);
+        cr_assert_eq(blocks_drawn_at(c, 1), all - middle * middle, "side %d", side);
+    }
+    terrain_clipmap_destroy(c);
+}
+
 /* ---- holes: one pit per viewer's rings (002 §3.5) ---- */
 
 #define PIT_BAND 8.0f      /* two level-0 cells */

@@ -63,7 +63,9 @@
  * view), and would show sky through an unmeshed chunk; the pit costs only hidden fragments,
  * which the depth test drops early (the shader never discards). Its one condition: the hole's
  * border lies on the finest level's vertex lines inside it (chunk borders do, at 4 m), else a
- * triangle straddling the border starts sinking outside it.
+ * triangle straddling the border starts sinking outside it. A level wholly inside a hole (the
+ * game's level 0, once the rings' layout is in) is all pit: the coarser level draws it instead
+ * (level_buried, below).
  *
  * The seam. With the stacks' heights, a vertex on a hole's border keeps its own texel (α = 0)
  * whatever its level's morph (on_hole_border, clipmap.vert's `seam`): in the game level 0 lies on
@@ -828,6 +830,26 @@ static bool segment_in_finer(const terrain_clipmap *c, int level, int axis, int 
     return c->cuts[segment] >= h && c->cuts[segment + 1] <= h + c->cells / 2;
 }
 
+/* Whether the level lies wholly inside one hole: all of it would be pit under the chunks. The
+ * game's level 0 is the rings' hole itself (same extent, same snap) once their layout is in:
+ * a fifth of the clipmap's triangles, every one hidden. The coarser level draws the pit there
+ * instead, at its own spacing: the pit's floor needs no detail, and its wall is the same (the
+ * sink is linear across hole_band, one coarser cell at the default band), its border vertices
+ * on the hole's border with their own heights as before. */
+static bool level_buried(const terrain_clipmap *c, int level) {
+    const clipmap_level *lv = &c->levels[level];
+    if (!lv->valid) return false;
+    for (int h = 0; h < c->hole_count; h++) {
+        bool inside = true;
+        for (int a = 0; a < 2; a++) {
+            double lo = (double)lv->first[a] * lv->spacing, hi = (double)(lv->first[a] + c->cells) * lv->spacing;
+            inside = inside && lo >= c->hole_min[h][a] && hi <= c->hole_max[h][a];
+        }
+        if (inside) return true;
+    }
+    return false;
+}
+
 terrain__clipmap_block_info terrain__clipmap_block(const terrain_clipmap *c, int level, int block) {
     const clipmap_level *lv = &c->levels[level];
     int sx = block % SEGMENTS, sz = block / SEGMENTS;
@@ -841,7 +863,8 @@ terrain__clipmap_block_info terrain__clipmap_block(const terrain_clipmap *c, int
     info.box_min[1] = lv->block_min[block];
     info.box_max[1] = lv->block_max[block];
     if (!lv->valid) return info;
-    bool in_finer = level > 0 && segment_in_finer(c, level, 0, sx) && segment_in_finer(c, level, 1, sz);
+    bool in_finer = level > 0 && !level_buried(c, level - 1) && segment_in_finer(c, level, 0, sx) &&
+                    segment_in_finer(c, level, 1, sz);
     /* Blocks reaching into any hole are drawn sunk there (the pit). */
     for (int h = 0; h < c->hole_count; h++)
         if (info.box_max[0] > c->hole_min[h][0] && info.box_min[0] < c->hole_max[h][0] && info.box_max[2] > c->hole_min[h][1] &&
@@ -849,7 +872,7 @@ terrain__clipmap_block_info terrain__clipmap_block(const terrain_clipmap *c, int
             info.box_min[1] -= c->desc.hole_depth;
             break;
         }
-    info.covered = in_finer;
+    info.covered = in_finer || level_buried(c, level);
     info.visible = !info.covered && (!lv->culled || lv->in_frustum[block]);
     return info;
 }

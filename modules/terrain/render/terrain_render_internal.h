@@ -82,7 +82,8 @@ float terrain__clipmap_sink(const terrain_clipmap *clipmap, const double camera[
 typedef struct terrain__clipmap_block_info {
     int cells_min[2], cells_max[2];   /* cells [min, max) of the level's grid along x and z */
     double box_min[3], box_max[3];    /* world bounds the cull tests (heights conservative) */
-    bool covered;                     /* by the finer level: never drawn */
+    bool covered;                     /* by the finer level, or its level lies wholly in a hole (a pit
+                                         the coarser level draws): never drawn */
     bool visible;                     /* drawn (not covered and, if culled, in the frustum) */
 } terrain__clipmap_block_info;
 
