@@ -371,3 +371,48 @@ Test(render_terrain, culling_changes_no_pixel) {
     render_image_free(&images[0]);
     render_image_free(&images[1]);
 }
+
+/* Meshes that the frustum's edges cross draw only their parts in view (terrain_data.h): the
+ * same pixels as drawing them whole, and fewer triangles. */
+Test(render_terrain, parts_out_of_view_are_left_out_and_change_no_pixel) {
+    area a = area_open(2, 7, W, H, (terrain_renderer_desc){ .cloud_cover = -1, .shadows = TERRAIN_SHADOWS_OFF });
+    terrain_ecs_spawn_area(a.te, 0, 0, 2, -2, 5);
+    ecs_progress(a.ecs, 1.0f / 60.0f);
+    ecs_query *q = ecs_query_create(a.ecs, &(ecs_query_desc){ .with = { ecs_component_lookup(a.ecs, "TerrainMeshChunk") } });
+    terrain_gpu_mesh meshes[256];
+    int count = 0;
+    uint64_t whole = 0;
+    ecs_iter it = ecs_query_iter(a.ecs, q);
+    while (ecs_query_next(&it)) {
+        TerrainMeshChunk *chunks = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++)
+            if (chunks[i].gpu.index_count > 0 && count < 256) {
+                cr_expect_gt(chunks[i].gpu.part_count, 0, "a streamed chunk's mesh has parts");
+                meshes[count++] = chunks[i].gpu;
+                whole += chunks[i].gpu.index_count / 3;
+            }
+    }
+    cr_assert_gt(count, 4);
+    /* Low over the middle, looking along a diagonal: the edges cross many chunks. */
+    terrain_view view = { .camera = { 16, area_ground(&a) + 20, 16 }, .yaw = 0.7f, .pitch = -0.3f, .aspect = (float)W / H };
+    render_image images[2];
+    uint64_t triangles[2];
+    for (int pass = 0; pass < 2; pass++) {
+        if (pass) for (int i = 0; i < count; i++) meshes[i].part_count = 0;   /* whole */
+        gfx_frame_begin(a.gfx);
+        terrain_renderer_draw(a.renderer, &view, meshes, count);
+        images[pass] = (render_image){ W, H, malloc(W * H * 4) };
+        gfx_read_pixels(a.gfx, images[pass].rgba);
+        gfx_frame_end(a.gfx);
+        triangles[pass] = gfx_context_stats(a.gfx).triangles;
+    }
+    cr_assert(memcmp(images[0].rgba, images[1].rgba, W * H * 4) == 0, "leaving parts out changed the image");
+    cr_expect_eq(triangles[1], whole + 1, "drawn whole: every triangle and the sky's one (no shadows, no far terrain): %llu, %llu",
+                 (unsigned long long)triangles[1], (unsigned long long)whole);
+    cr_expect_lt(triangles[0], triangles[1] * 3 / 4, "parts in view: %llu of %llu triangles",
+                 (unsigned long long)triangles[0], (unsigned long long)triangles[1]);
+    cr_expect_gt(triangles[0], 0);
+    render_image_free(&images[0]);
+    render_image_free(&images[1]);
+    area_close(&a);
+}

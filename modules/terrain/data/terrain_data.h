@@ -315,12 +315,27 @@ typedef struct terrain_vertex {
 } terrain_vertex;
 _Static_assert(sizeof(terrain_vertex) == 32, "terrain_vertex is 8 words on the GPU");
 
+/* A mesh's triangles come in parts: runs of its indices, each with its own box, so that a
+ * renderer leaves out the parts outside the view (a chunk that the frustum's edge crosses draws
+ * only the parts in view). The mesher sorts the triangles by the cell of a
+ * TERRAIN_MESH_PART_GRID² grid over the mesh's box (in x and z) that their centroid falls in. */
+#define TERRAIN_MESH_PART_GRID 4
+#define TERRAIN_MESH_PARTS (TERRAIN_MESH_PART_GRID * TERRAIN_MESH_PART_GRID)
+
+typedef struct terrain_mesh_part {
+    uint32_t first_index, index_count;
+    float bounds_min[3], bounds_max[3];   /* of its triangles' vertices, relative to origin */
+} terrain_mesh_part;
+
 typedef struct terrain_mesh {
     double origin[3];                 /* world position of the vertices' (0, 0, 0) */
     terrain_vertex *vertices;
     uint32_t *indices;                /* triangles, counter-clockwise seen from the air */
     uint32_t vertex_count, index_count;
     float bounds_min[3], bounds_max[3];   /* of the vertices, relative to origin */
+    terrain_mesh_part parts[TERRAIN_MESH_PARTS];   /* in index order, none empty, together all
+                                                      the indices */
+    uint32_t part_count;              /* 0 = one part, the whole mesh (desc.no_optimize) */
 } terrain_mesh;
 
 typedef struct terrain_mesh_desc {
@@ -328,7 +343,8 @@ typedef struct terrain_mesh_desc {
                                          bedrock, occlusion 0 (open) */
     int apron;                        /* samples along each border that are read for gradients
                                          but not meshed (1 makes normals agree across chunks) */
-    bool no_optimize;                 /* skip meshoptimizer's vertex-cache reordering */
+    bool no_optimize;                 /* skip the parts and meshoptimizer's vertex-cache
+                                         order: the mesher's raw output */
     bool no_occlusion;                /* occlusion 0 everywhere (skips its cost) */
     struct job_system *jobs;          /* large fields (64³ cells and up) are meshed on its
                                          threads; NULL = the calling thread only. Same mesh

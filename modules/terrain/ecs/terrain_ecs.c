@@ -277,7 +277,6 @@ static int terrain_compare_nearer(const void *a, const void *b, void *camera) {
 
 void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain_view *view) {
     size_t count = 0, casters = 0;
-    uint64_t triangles = 0;
     ecs_iter it = ecs_query_iter(te->ecs, te->mesh_chunks);
     while (ecs_query_next(&it)) {
         TerrainMeshChunk *chunks = ecs_field(&it, 0);
@@ -290,7 +289,6 @@ void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain
             if (!chunks[i].visible) continue;
             te->draw_list = core_grow(te->draw_list, &te->draw_capacity, count + 1, sizeof *te->draw_list);
             te->draw_list[count++] = chunks[i].gpu;
-            triangles += chunks[i].gpu.index_count / 3;
         }
     }
     /* Nearest first: the depth test then rejects what nearer ground hides before it is shaded
@@ -301,7 +299,6 @@ void terrain_ecs_draw(terrain_ecs *te, terrain_renderer *renderer, const terrain
     terrain_renderer_draw_shadows(renderer, view, te->caster_list, (int)casters);
     terrain_renderer_draw(renderer, view, te->draw_list, (int)count);
     trace_counter("terrain.mesh_chunks_drawn", (double)count);
-    trace_counter("terrain.triangles_drawn", (double)triangles);
     trace_counter("terrain.chunks_cached", (double)terrain_world_chunk_count(te->terrain));
     /* Outside ecs_progress no frame job holds stacks (background jobs bracket their reads with
      * terrain_world_read_begin/end): the moment to drop cached chunks no entity keeps. */

@@ -150,6 +150,8 @@ terrain_gpu_mesh terrain_gpu_mesh_upload(const terrain_mesh *mesh) {
         gpu.bounds_min[a] = mesh->bounds_min[a];
         gpu.bounds_max[a] = mesh->bounds_max[a];
     }
+    gpu.part_count = mesh->part_count;
+    memcpy(gpu.parts, mesh->parts, mesh->part_count * sizeof *mesh->parts);
     if (mesh->index_count == 0) return gpu;
     gpu.vertex_buffer = gfx_buffer_create(&(gfx_buffer_desc){
         .size = mesh->vertex_count * sizeof(terrain_vertex), .data = mesh->vertices });
@@ -275,10 +277,35 @@ static void terrain_scene_uniforms(terrain_renderer *r, gfx_program program, con
 
 static void terrain_draw_sky(terrain_renderer *r, const terrain_view *view, mat4 inverse);
 
+/* A mesh's parts in view, consecutive ones in one draw (its parts tile its indices in order).
+ * Returns the triangles drawn. */
+static uint64_t terrain_draw_parts(const terrain_gpu_mesh *m, const terrain_frustum *frustum) {
+    if (m->part_count == 0) {
+        gfx_draw(&(gfx_draw_desc){ .vertex_array = m->vertex_array, .count = m->index_count,
+                                   .index_type = GFX_INDEX_U32 });
+        return m->index_count / 3;
+    }
+    uint32_t first = 0, count = 0;
+    uint64_t drawn = 0;
+    for (uint32_t p = 0; p <= m->part_count; p++) {
+        const terrain_mesh_part *part = &m->parts[p < m->part_count ? p : 0];
+        bool seen = p < m->part_count && terrain_frustum_sees(frustum, m->origin, part->bounds_min, part->bounds_max);
+        if (seen && count == 0) first = part->first_index;
+        if (seen) count += part->index_count;
+        if (seen || count == 0) continue;
+        gfx_draw(&(gfx_draw_desc){ .vertex_array = m->vertex_array, .first = first, .count = count,
+                                   .index_type = GFX_INDEX_U32 });
+        drawn += count / 3;
+        count = 0;
+    }
+    return drawn;
+}
+
 /* The meshes, the far terrain and (`with_sky`) the sky into the bound framebuffer with `view`,
  * shadows from `shadows` (NULL: none), keeping only what lies on the positive side of the
- * camera-relative `clip_plane` (all zero: everything; the sky is never clipped). */
-static void terrain_draw_scene(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,
+ * camera-relative `clip_plane` (all zero: everything; the sky is never clipped). Returns the
+ * meshes' triangles drawn. */
+static uint64_t terrain_draw_scene(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,
                                int mesh_count, const float clip_plane[4], const terrain__shadows *shadows,
                                bool with_sky) {
     gfx_context *gfx = r->gfx;
@@ -291,6 +318,8 @@ static void terrain_draw_scene(terrain_renderer *r, const terrain_view *view, co
     if (clipped) glEnable(GL_CLIP_DISTANCE0);
     gfx_program programs[3] = { r->terrain, r->sky, r->clipmap };
     for (int p = 0; p < 3; p++) terrain_scene_uniforms(r, programs[p], sun, clip_plane);
+    terrain_frustum frustum = terrain_frustum_from_view(view);
+    uint64_t triangles = 0;
     gfx_program_use(gfx, r->terrain);
     gfx_uniform_mat4(gfx, r->terrain, "u_view_projection", (const float *)view_projection);
     gfx_uniform_float(gfx, r->terrain, "u_sea_level", r->desc.sea_level);
@@ -312,12 +341,12 @@ static void terrain_draw_scene(terrain_renderer *r, const terrain_view *view, co
         gfx_uniform_vec3(gfx, r->terrain, "u_offset", offset);
         gfx_uniform_vec3(gfx, r->terrain, "u_texture_offset", texture_offset);
         gfx_uniform_float(gfx, r->terrain, "u_mesh_y", (float)m->origin[1]);
-        gfx_draw(&(gfx_draw_desc){ .vertex_array = m->vertex_array, .count = m->index_count,
-                                   .index_type = GFX_INDEX_U32 });
+        triangles += terrain_draw_parts(m, &frustum);
     }
     if (r->far_terrain) terrain_draw_clipmap(r, view, view_projection, shadows);
     if (clipped) glDisable(GL_CLIP_DISTANCE0);     /* sky.vert writes no clip distance */
     if (with_sky) terrain_draw_sky(r, view, inverse);
+    return triangles;
 }
 
 /* The sky behind what is drawn: a full-screen triangle at the far plane (the scene's uniforms
@@ -351,8 +380,10 @@ void terrain_renderer_draw(terrain_renderer *r, const terrain_view *view, const 
     if (!r->shadows_drawn) terrain_renderer_draw_shadows(r, view, meshes, mesh_count);
     r->shadows_drawn = false;
     gfx_pass_begin(r->gfx, &(gfx_pass_desc){ .name = "terrain", .clear_depth = true });
-    terrain_draw_scene(r, view, meshes, mesh_count, (const float[4]){ 0, 0, 0, 0 }, r->shadows, !r->desc.sky_apart);
+    uint64_t triangles = terrain_draw_scene(r, view, meshes, mesh_count, (const float[4]){ 0, 0, 0, 0 }, r->shadows,
+                                            !r->desc.sky_apart);
     gfx_pass_end(r->gfx);
+    trace_counter("terrain.triangles_drawn", (double)triangles);
 }
 
 void terrain__renderer_draw_clipped(terrain_renderer *r, const terrain_view *view, const terrain_gpu_mesh *meshes,

@@ -80,6 +80,9 @@ typedef struct terrain_gpu_mesh {
                                          knows when it changed */
     double origin[3];
     float bounds_min[3], bounds_max[3];
+    terrain_mesh_part parts[TERRAIN_MESH_PARTS];   /* the mesh's: the draw leaves out those out
+                                                      of view */
+    uint32_t part_count;              /* 0 = one part, the whole mesh */
 } terrain_gpu_mesh;
 
 terrain_gpu_mesh terrain_gpu_mesh_upload(const terrain_mesh *mesh);
