@@ -277,9 +277,7 @@ static void terrain_scene_uniforms(terrain_renderer *r, gfx_program program, con
 
 static void terrain_draw_sky(terrain_renderer *r, const terrain_view *view, mat4 inverse);
 
-/* A mesh's parts in view, consecutive ones in one draw (its parts tile its indices in order).
- * Returns the triangles drawn. */
-static uint64_t terrain_draw_parts(const terrain_gpu_mesh *m, const terrain_frustum *frustum) {
+uint64_t terrain__draw_parts(const terrain_gpu_mesh *m, terrain__box_test test, const void *user) {
     if (m->part_count == 0) {
         gfx_draw(&(gfx_draw_desc){ .vertex_array = m->vertex_array, .count = m->index_count,
                                    .index_type = GFX_INDEX_U32 });
@@ -289,7 +287,7 @@ static uint64_t terrain_draw_parts(const terrain_gpu_mesh *m, const terrain_frus
     uint64_t drawn = 0;
     for (uint32_t p = 0; p <= m->part_count; p++) {
         const terrain_mesh_part *part = &m->parts[p < m->part_count ? p : 0];
-        bool seen = p < m->part_count && terrain_frustum_sees(frustum, m->origin, part->bounds_min, part->bounds_max);
+        bool seen = p < m->part_count && test(user, m->origin, part->bounds_min, part->bounds_max);
         if (seen && count == 0) first = part->first_index;
         if (seen) count += part->index_count;
         if (seen || count == 0) continue;
@@ -299,6 +297,10 @@ static uint64_t terrain_draw_parts(const terrain_gpu_mesh *m, const terrain_frus
         count = 0;
     }
     return drawn;
+}
+
+static bool terrain_frustum_test(const void *frustum, const double origin[3], const float lo[3], const float hi[3]) {
+    return terrain_frustum_sees(frustum, origin, lo, hi);
 }
 
 /* The meshes, the far terrain and (`with_sky`) the sky into the bound framebuffer with `view`,
@@ -341,7 +343,7 @@ static uint64_t terrain_draw_scene(terrain_renderer *r, const terrain_view *view
         gfx_uniform_vec3(gfx, r->terrain, "u_offset", offset);
         gfx_uniform_vec3(gfx, r->terrain, "u_texture_offset", texture_offset);
         gfx_uniform_float(gfx, r->terrain, "u_mesh_y", (float)m->origin[1]);
-        triangles += terrain_draw_parts(m, &frustum);
+        triangles += terrain__draw_parts(m, terrain_frustum_test, &frustum);
     }
     if (r->far_terrain) terrain_draw_clipmap(r, view, view_projection, shadows);
     if (clipped) glDisable(GL_CLIP_DISTANCE0);     /* sky.vert writes no clip distance */

@@ -101,6 +101,15 @@ int terrain__clipmap_ground_levels(const terrain_clipmap *clipmap);
 
 /* ==== end of the clipmap section ========================================================== */
 
+/* ==== meshes by parts (terrain_render.c) ================================================== */
+
+/* Whether a box (origin + lo … hi, world metres) is to be drawn. */
+typedef bool (*terrain__box_test)(const void *user, const double origin[3], const float lo[3], const float hi[3]);
+/* Draws the parts of `mesh` whose boxes pass `test` (program and uniforms already set), runs of
+ * consecutive parts in one draw call: they tile the indices in order. A mesh without parts is
+ * drawn whole. Returns the triangles drawn. */
+uint64_t terrain__draw_parts(const terrain_gpu_mesh *mesh, terrain__box_test test, const void *user);
+
 /* ==== sun shadows (terrain_shadow.c) ====================================================== */
 
 typedef struct terrain__shadows terrain__shadows;

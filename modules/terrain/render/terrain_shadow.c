@@ -251,12 +251,12 @@ static void shadow_fit(terrain__shadows *s, const terrain_view *view, shadow_cas
  * (the plane's inside does not lie further from the sun). Most of a big cascade's box is beside
  * the view: these tests keep the casters near to what is seen, which is what llvmpipe's triangle
  * setup pays for. */
-static bool shadow_cascade_sees(const terrain__shadows *s, const shadow_cascade *cascade, const double camera[3],
-                                const terrain_gpu_mesh *mesh) {
+static bool shadow_cascade_sees_box(const terrain__shadows *s, const shadow_cascade *cascade, const double camera[3],
+                                    const double origin[3], const float box_lo[3], const float box_hi[3]) {
     double lo[3], hi[3], centre[3], half[3];
     for (int a = 0; a < 3; a++) {
-        lo[a] = mesh->origin[a] - camera[a] + mesh->bounds_min[a];
-        hi[a] = mesh->origin[a] - camera[a] + mesh->bounds_max[a];
+        lo[a] = origin[a] - camera[a] + box_lo[a];
+        hi[a] = origin[a] - camera[a] + box_hi[a];
         centre[a] = 0.5 * (lo[a] + hi[a]) - cascade->centre[a];
         half[a] = 0.5 * (hi[a] - lo[a]);
     }
@@ -274,6 +274,23 @@ static bool shadow_cascade_sees(const terrain__shadows *s, const shadow_cascade 
         if (plane[0] * x + plane[1] * y + plane[2] * z + plane[3] < 0) return false;
     }
     return true;
+}
+
+static bool shadow_cascade_sees(const terrain__shadows *s, const shadow_cascade *cascade, const double camera[3],
+                                const terrain_gpu_mesh *mesh) {
+    return shadow_cascade_sees_box(s, cascade, camera, mesh->origin, mesh->bounds_min, mesh->bounds_max);
+}
+
+/* What terrain__draw_parts asks of a part. */
+typedef struct shadow_part_test {
+    const terrain__shadows *shadows;
+    const shadow_cascade *cascade;
+    const double *camera;
+} shadow_part_test;
+
+static bool shadow_part_sees(const void *user, const double origin[3], const float lo[3], const float hi[3]) {
+    const shadow_part_test *t = user;
+    return shadow_cascade_sees_box(t->shadows, t->cascade, t->camera, origin, lo, hi);
 }
 
 static uint64_t shadow_key_double(uint64_t key, double value) {
@@ -317,8 +334,7 @@ static void shadow_draw_cascade(terrain__shadows *s, shadow_cascade *cascade, co
         float offset[3];
         for (int a = 0; a < 3; a++) offset[a] = (float)(m->origin[a] - camera[a]);
         glProgramUniform3fv(gl, offset_location, 1, offset);
-        gfx_draw(&(gfx_draw_desc){ .vertex_array = m->vertex_array, .count = m->index_count,
-                                   .index_type = GFX_INDEX_U32 });
+        terrain__draw_parts(m, shadow_part_sees, &(shadow_part_test){ s, cascade, camera });
     }
     cascade->drawn = true;
     s->cascades_drawn++;
