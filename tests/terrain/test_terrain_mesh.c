@@ -710,10 +710,15 @@ Test(terrain_mesh, vertex_cache_optimisation_keeps_the_triangles) {
     terrain_field_free(&f);
 }
 
-/* The parts (terrain_data.h): they tile the indices in order, each holds the triangles whose
- * centroid lies in its cell of a 4 × 4 grid over the mesh's box in x and z, the cells in order
- * (z, then x), and each box is exactly its triangles' box. A sphere's silhouette reaches into
- * all 16 cells (even a corner cell's inner corner lies 0.71 r from the axis), so all are there. */
+/* The parts (terrain_data.h): they tile the indices in order, none empty; each holds the
+ * triangles whose centroid lies in one cell of the TERRAIN_MESH_PART_GRID² grid over the mesh's
+ * box in x and z, every cell that holds a centroid is a part, the cells come in order (z, then x),
+ * and each part's box is exactly its triangles' box. */
+static int grid_cell(double at, float lo, float hi) {
+    int cell = (int)floor((at - lo) / (hi - lo) * TERRAIN_MESH_PART_GRID);
+    return cell < 0 ? 0 : cell >= TERRAIN_MESH_PART_GRID ? TERRAIN_MESH_PART_GRID - 1 : cell;
+}
+
 Test(terrain_mesh, parts_hold_the_triangles_of_their_cell_in_order) {
     sphere s = { { 8.5, 8.2, 8.9 }, 6.1 };
     terrain_field f = field_make(18, 18, 18, sphere_fn, &s);
@@ -721,19 +726,32 @@ Test(terrain_mesh, parts_hold_the_triangles_of_their_cell_in_order) {
     cr_assert(terrain_mesh_build(&f, &(terrain_mesh_desc){ .no_optimize = true }, &plain));
     cr_assert(terrain_mesh_build(&f, &(terrain_mesh_desc){ 0 }, &mesh));
     cr_expect_eq(plain.part_count, 0, "the raw output has no parts");
-    cr_assert_eq(mesh.part_count, TERRAIN_MESH_PARTS);
     float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
     for (uint32_t v = 0; v < mesh.vertex_count; v++)
         for (int a = 0; a < 3; a++) lo[a] = fminf(lo[a], mesh.vertices[v].position[a]), hi[a] = fmaxf(hi[a], mesh.vertices[v].position[a]);
+    /* The cells the raw mesh's centroids fall in. */
+    bool occupied[TERRAIN_MESH_PARTS] = { false };
+    int cells = 0;
+    for (uint32_t t = 0; t < plain.index_count; t += 3) {
+        double centroid[3] = { 0, 0, 0 };
+        for (int c = 0; c < 3; c++)
+            for (int a = 0; a < 3; a++) centroid[a] += plain.vertices[plain.indices[t + c]].position[a] / 3.0;
+        int cell = grid_cell(centroid[2], lo[2], hi[2]) * TERRAIN_MESH_PART_GRID + grid_cell(centroid[0], lo[0], hi[0]);
+        cells += !occupied[cell];
+        occupied[cell] = true;
+    }
+    cr_expect_gt(cells, 1);
+    cr_assert_eq(mesh.part_count, (uint32_t)cells, "a part for each cell that holds triangles");
     const double cell_x = (hi[0] - lo[0]) / TERRAIN_MESH_PART_GRID, cell_z = (hi[2] - lo[2]) / TERRAIN_MESH_PART_GRID;
     uint32_t next = 0;
+    int last_cell = -1;
     for (uint32_t p = 0; p < mesh.part_count; p++) {
         const terrain_mesh_part *part = &mesh.parts[p];
         cr_assert_eq(part->first_index, next, "part %u starts where the last ended", p);
         cr_assert_gt(part->index_count, 0, "part %u is empty", p);
         cr_assert_eq(part->index_count % 3, 0);
         next += part->index_count;
-        int i = (int)p % TERRAIN_MESH_PART_GRID, k = (int)p / TERRAIN_MESH_PART_GRID;
+        int i = -1, k = -1;
         float box_lo[3] = { INFINITY, INFINITY, INFINITY }, box_hi[3] = { -INFINITY, -INFINITY, -INFINITY };
         for (uint32_t t = part->first_index; t < part->first_index + part->index_count; t += 3) {
             double centroid[3] = { 0, 0, 0 };
@@ -743,6 +761,11 @@ Test(terrain_mesh, parts_hold_the_triangles_of_their_cell_in_order) {
                     centroid[a] += q[a] / 3.0;
                     box_lo[a] = fminf(box_lo[a], q[a]), box_hi[a] = fmaxf(box_hi[a], q[a]);
                 }
+            }
+            if (i < 0) {   /* the part's cell, from its first triangle */
+                i = grid_cell(centroid[0], lo[0], hi[0]), k = grid_cell(centroid[2], lo[2], hi[2]);
+                cr_expect_gt(k * TERRAIN_MESH_PART_GRID + i, last_cell, "part %u's cell comes after the last's", p);
+                last_cell = k * TERRAIN_MESH_PART_GRID + i;
             }
             cr_expect(centroid[0] >= lo[0] + i * cell_x - 1e-4 && centroid[0] <= lo[0] + (i + 1) * cell_x + 1e-4 &&
                           centroid[2] >= lo[2] + k * cell_z - 1e-4 && centroid[2] <= lo[2] + (k + 1) * cell_z + 1e-4,

@@ -122,7 +122,9 @@ bool terrain_renderer_set_shadows(terrain_renderer *renderer, terrain_shadow_qua
 
 /* Draws the meshes, then the sky behind them, inside one pass named "terrain". With shadows on,
  * a pass named "shadows" comes first: the sun's shadow map, cast by the meshes given to
- * terrain_renderer_draw_shadows since the last draw or else by these. */
+ * terrain_renderer_draw_shadows since the last draw or else by these. Of each mesh only the parts
+ * whose boxes the view's frustum may see are drawn (terrain_mesh_part); the trace counter
+ * terrain.triangles_drawn says how many triangles that was. */
 void terrain_renderer_draw(terrain_renderer *renderer, const terrain_view *view,
                            const terrain_gpu_mesh *meshes, int mesh_count);
 /* The sky alone, in a pass named "sky", behind what the bound framebuffer holds (its depth at
