@@ -5,7 +5,8 @@
  *   2. write it as PREFIX.json + PREFIX.raw (terrain_field_write), read it back
  *      (terrain_field_read) and check that every value came back;
  *   3. mesh what was read (marching cubes, terrain_mesh_build, on the job system's threads) and
- *      print its size and area; with --ply, write the mesh as a binary PLY too.
+ *      print its size, area and parts (what a renderer culls on its own); with --ply, write the
+ *      mesh as a binary PLY too.
  *
  *   terrain_field_files [--seed S] [--size N] [--out PREFIX] [--ply FILE] [--threads N] [--trace FILE]
  *
@@ -83,6 +84,13 @@ int main(int argc, char **argv) {
     if (!terrain_mesh_build(&back, &(terrain_mesh_desc){ .world = world, .jobs = jobs }, &mesh)) return 1;
     printf("terrain_field_files: mesh of %u vertices, %u triangles, %.0f m2\n", mesh.vertex_count,
            mesh.index_count / 3, terrain_mesh_area(&mesh));
+    /* The triangles come in parts, runs of the indices by a grid over the mesh's box in x and z,
+     * each with its box: a renderer draws only the parts its view can see. */
+    uint32_t largest = 0;
+    for (uint32_t p = 0; p < mesh.part_count; p++)
+        if (mesh.parts[p].index_count > largest) largest = mesh.parts[p].index_count;
+    printf("terrain_field_files: in %u parts of up to %d, the largest %u triangles\n", mesh.part_count,
+           TERRAIN_MESH_PARTS, largest / 3);
     if (ply && !terrain_mesh_write_ply(&mesh, ply, &error)) {
         fprintf(stderr, "terrain_field_files: %s\n", error.message);
         rc = 1;
@@ -111,4 +119,5 @@ int main(int argc, char **argv) {
  * ^terrain_field_files: sampled 24 x 64 x 24, [0-9]+% solid$
  * ^terrain_field_files: wrote field\.json and field\.raw, read back the same values$
  * ^terrain_field_files: mesh of [1-9][0-9]* vertices, [1-9][0-9]* triangles, [1-9][0-9]* m2$
+ * ^terrain_field_files: in [1-9][0-9]* parts of up to 16, the largest [1-9][0-9]* triangles$
  */
