@@ -295,24 +295,22 @@ void terrain__mesh_vertex_weights(terrain_world *world, const double p[3], const
     mesh_columns_free(&columns);
 }
 
-/* The world-space box around a mesh's vertices. */
-static void mesh_vertex_bounds(const mesh_builder *b, const double origin[3], double lo[3], double hi[3]) {
-    float fl[3] = { INFINITY, INFINITY, INFINITY }, fh[3] = { -INFINITY, -INFINITY, -INFINITY };
+/* The box around a mesh's vertices, relative to its origin (all 0 for no vertex). */
+static void mesh_vertex_bounds(const mesh_builder *b, float lo[3], float hi[3]) {
+    for (int a = 0; a < 3; a++) lo[a] = b->vertex_count ? INFINITY : 0.0f, hi[a] = b->vertex_count ? -INFINITY : 0.0f;
     for (size_t i = 0; i < b->vertex_count; i++)
         for (int a = 0; a < 3; a++) {
             float p = b->vertices[i].position[a];
-            fl[a] = p < fl[a] ? p : fl[a], fh[a] = p > fh[a] ? p : fh[a];
+            lo[a] = p < lo[a] ? p : lo[a], hi[a] = p > hi[a] ? p : hi[a];
         }
-    for (int a = 0; a < 3; a++) lo[a] = origin[a] + fl[a], hi[a] = origin[a] + fh[a];
 }
 
-/* Every vertex's weights, from one window of decoded columns over the vertices' bounds: a
- * segment's centre lies within half a column of its vertex, its four columns within one more,
- * and its ends within a column of the vertex's height. */
-static void mesh_weights(const mesh_builder *b, terrain_world *world, const double origin[3]) {
+/* Every vertex's weights, from one window of decoded columns over the vertices' world box lo …
+ * hi: a segment's centre lies within half a column of its vertex, its four columns within one
+ * more, and its ends within a column of the vertex's height. */
+static void mesh_weights(const mesh_builder *b, terrain_world *world, const double origin[3], const double lo[3],
+                         const double hi[3]) {
     if (b->vertex_count == 0) return;
-    double lo[3], hi[3];
-    mesh_vertex_bounds(b, origin, lo, hi);
     int64_t x0 = mesh_floor(lo[0] / TERRAIN_COLUMN_SIZE) - 2, z0 = mesh_floor(lo[2] / TERRAIN_COLUMN_SIZE) - 2;
     int64_t x1 = mesh_floor(hi[0] / TERRAIN_COLUMN_SIZE) + 2, z1 = mesh_floor(hi[2] / TERRAIN_COLUMN_SIZE) + 2;
     mesh_columns columns;
@@ -483,7 +481,9 @@ static double mesh_ao_openness(const mesh_ao *ao, const double directions[MESH_A
     return open / MESH_AO_DIRECTIONS;
 }
 
-static void mesh_openness(const mesh_builder *b, terrain_world *world, const double origin[3]) {
+/* lo … hi: the vertices' world box. */
+static void mesh_openness(const mesh_builder *b, terrain_world *world, const double origin[3], const double lo[3],
+                          const double hi[3]) {
     if (b->vertex_count == 0) return;
     /* The directions in the frame (t, b, n): cosine-weighted over the 60° cap, sin θ ∝ √u. */
     double directions[MESH_AO_DIRECTIONS][3];
@@ -494,8 +494,6 @@ static void mesh_openness(const mesh_builder *b, terrain_world *world, const dou
         directions[k][1] = sin_theta * sin(phi);
         directions[k][2] = sqrt(1.0 - sin_theta * sin_theta);
     }
-    double lo[3], hi[3];
-    mesh_vertex_bounds(b, origin, lo, hi);
     mesh_ao ao = { .stacks = { .world = world } };
     ao.x0 = mesh_floor(lo[0] / TERRAIN_COLUMN_SIZE) - MESH_AO_MARGIN;
     ao.y0 = mesh_floor(lo[1]) - MESH_AO_MARGIN;
@@ -881,12 +879,9 @@ static void mesh_parts(mesh_builder *b, terrain_mesh *out) {
     size_t triangles = b->index_count / 3;
     uint32_t *ordered = core_alloc(b->index_count * sizeof *ordered);
     meshopt_optimizeVertexCacheFifo(ordered, b->indices, b->index_count, b->vertex_count, 16);
-    float lo[2] = { INFINITY, INFINITY }, hi[2] = { -INFINITY, -INFINITY }, scale[2];
-    for (size_t i = 0; i < b->vertex_count; i++)
-        for (int c = 0; c < 2; c++) {
-            float p = b->vertices[i].position[c ? 2 : 0];
-            lo[c] = p < lo[c] ? p : lo[c], hi[c] = p > hi[c] ? p : hi[c];
-        }
+    /* The grid over the mesh's box (out->bounds, already made) in x and z. */
+    const float lo[2] = { out->bounds_min[0], out->bounds_min[2] }, hi[2] = { out->bounds_max[0], out->bounds_max[2] };
+    float scale[2];
     for (int c = 0; c < 2; c++) scale[c] = hi[c] > lo[c] ? TERRAIN_MESH_PART_GRID / (hi[c] - lo[c]) : 0.0f;
     uint8_t *part_of = core_alloc(triangles);
     uint32_t first[TERRAIN_MESH_PARTS + 1] = { 0 };
@@ -918,8 +913,12 @@ static void mesh_finish(mesh_builder *b, const terrain_mesh_desc *desc, const do
         b->vertices[i].occlusion = 0;
         memset(b->vertices[i].reserved, 0, sizeof b->vertices[i].reserved);
     }
-    if (desc->world) mesh_weights(b, desc->world, origin);
-    if (desc->world && !desc->no_occlusion) mesh_openness(b, desc->world, origin);
+    /* The box once: the weights' and occlusion's windows and the parts' grid are laid over it. */
+    mesh_vertex_bounds(b, out->bounds_min, out->bounds_max);
+    double lo[3], hi[3];
+    for (int a = 0; a < 3; a++) lo[a] = origin[a] + out->bounds_min[a], hi[a] = origin[a] + out->bounds_max[a];
+    if (desc->world) mesh_weights(b, desc->world, origin, lo, hi);
+    if (desc->world && !desc->no_occlusion) mesh_openness(b, desc->world, origin, lo, hi);
     if (!desc->no_optimize && b->index_count) mesh_parts(b, out);
     /* Exact sizes, so that terrain_mesh_free knows them. */
     out->vertices = b->vertex_count ? core_realloc(b->vertices, b->vertex_capacity * sizeof *b->vertices,
@@ -930,14 +929,6 @@ static void mesh_finish(mesh_builder *b, const terrain_mesh_desc *desc, const do
     if (!b->index_count && b->indices) core_free(b->indices, b->index_capacity * sizeof *b->indices);
     out->vertex_count = (uint32_t)b->vertex_count;
     out->index_count = (uint32_t)b->index_count;
-    for (int a = 0; a < 3; a++) out->bounds_min[a] = out->bounds_max[a] = 0.0f;
-    for (size_t i = 0; i < b->vertex_count; i++) {
-        for (int a = 0; a < 3; a++) {
-            float p = out->vertices[i].position[a];
-            if (i == 0 || p < out->bounds_min[a]) out->bounds_min[a] = p;
-            if (i == 0 || p > out->bounds_max[a]) out->bounds_max[a] = p;
-        }
-    }
 }
 
 bool terrain_mesh_build(const terrain_field *field, const terrain_mesh_desc *desc_in, terrain_mesh *out) {

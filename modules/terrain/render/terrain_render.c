@@ -277,26 +277,29 @@ static void terrain_scene_uniforms(terrain_renderer *r, gfx_program program, con
 
 static void terrain_draw_sky(terrain_renderer *r, const terrain_view *view, mat4 inverse);
 
+/* Indices first … first + count of the mesh, if any; returns their triangles. */
+static uint64_t terrain_draw_run(const terrain_gpu_mesh *m, uint32_t first, uint32_t count) {
+    if (count == 0) return 0;
+    gfx_draw(&(gfx_draw_desc){ .vertex_array = m->vertex_array, .first = first, .count = count,
+                               .index_type = GFX_INDEX_U32 });
+    return count / 3;
+}
+
 uint64_t terrain__draw_parts(const terrain_gpu_mesh *m, terrain__box_test test, const void *user) {
-    if (m->part_count == 0) {
-        gfx_draw(&(gfx_draw_desc){ .vertex_array = m->vertex_array, .count = m->index_count,
-                                   .index_type = GFX_INDEX_U32 });
-        return m->index_count / 3;
-    }
-    uint32_t first = 0, count = 0;
+    if (m->part_count == 0) return terrain_draw_run(m, 0, m->index_count);
+    uint32_t first = 0, count = 0;   /* the run of parts in view so far */
     uint64_t drawn = 0;
-    for (uint32_t p = 0; p <= m->part_count; p++) {
-        const terrain_mesh_part *part = &m->parts[p < m->part_count ? p : 0];
-        bool seen = p < m->part_count && test(user, m->origin, part->bounds_min, part->bounds_max);
-        if (seen && count == 0) first = part->first_index;
-        if (seen) count += part->index_count;
-        if (seen || count == 0) continue;
-        gfx_draw(&(gfx_draw_desc){ .vertex_array = m->vertex_array, .first = first, .count = count,
-                                   .index_type = GFX_INDEX_U32 });
-        drawn += count / 3;
-        count = 0;
+    for (uint32_t p = 0; p < m->part_count; p++) {
+        const terrain_mesh_part *part = &m->parts[p];
+        if (!test(user, m->origin, part->bounds_min, part->bounds_max)) {
+            drawn += terrain_draw_run(m, first, count);
+            count = 0;
+            continue;
+        }
+        if (count == 0) first = part->first_index;
+        count += part->index_count;
     }
-    return drawn;
+    return drawn + terrain_draw_run(m, first, count);
 }
 
 static bool terrain_frustum_test(const void *frustum, const double origin[3], const float lo[3], const float hi[3]) {
