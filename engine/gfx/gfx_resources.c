@@ -94,6 +94,11 @@ void gfx_pass_begin(gfx_context *gfx, const gfx_pass_desc *desc) {
     }
     glBindFramebuffer(GL_FRAMEBUFFER, target);
     glViewport(0, 0, width, height);
+    /* The default framebuffer's depth may have been cleared already, by gfx_frame_end; this
+     * pass may draw into it, so that holds for one pass only. A resize since loses it. */
+    bool cleared_ahead = target == 0 && gfx->depth_cleared_ahead && gfx->cleared_width == width &&
+                         gfx->cleared_height == height;
+    if (target == 0) gfx->depth_cleared_ahead = false;
     GLbitfield clear = 0;
     if (desc->clear_color) {
         glClearColor(desc->color[0], desc->color[1], desc->color[2], desc->color[3]);
@@ -102,7 +107,7 @@ void gfx_pass_begin(gfx_context *gfx, const gfx_pass_desc *desc) {
     if (desc->clear_depth) {
         glDepthMask(GL_TRUE);
         glClearDepth(1.0);
-        clear |= GL_DEPTH_BUFFER_BIT;
+        if (!cleared_ahead) clear |= GL_DEPTH_BUFFER_BIT;
     }
     if (clear) glClear(clear);
 }

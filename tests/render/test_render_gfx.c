@@ -166,6 +166,57 @@ Test(render_gfx, indirect_draw_takes_its_counts_from_the_buffer) {
     gfx_context_destroy(gfx);
 }
 
+/* A full-screen quad at clip depth z (window depth (z + 1) / 2) in `colour`, into the bound
+ * framebuffer with the context's depth test (LEQUAL); returns the centre pixel's RGBA. */
+static uint32_t depth_quad(gfx_context *gfx, gfx_program program, float z, const float colour[3]) {
+    const float corners[] = { -1, -1, 1, -1, 1, 1, -1, -1, 1, 1, -1, 1 };
+    gfx_buffer vertices = gfx_buffer_create(&(gfx_buffer_desc){ .size = sizeof corners, .data = corners });
+    gfx_vertex_array array = gfx_vertex_array_create(&(gfx_vertex_array_desc){
+        .vertices = vertices, .vertex_stride = 8, .attributes = { { .components = 2 } } });
+    gfx_program_use(gfx, program);
+    gfx_uniform_float(gfx, program, "u_z", z);
+    gfx_uniform_vec3(gfx, program, "u_colour", colour);
+    gfx_draw(&(gfx_draw_desc){ .vertex_array = array, .count = 6 });
+    uint8_t pixels[32 * 32 * 4];
+    gfx_read_pixels(gfx, pixels);
+    const uint8_t *centre = pixels + (16 * 32 + 16) * 4;
+    gfx_vertex_array_destroy(&array);
+    gfx_buffer_destroy(&vertices);
+    return (uint32_t)centre[0] | (uint32_t)centre[1] << 8 | (uint32_t)centre[2] << 16;
+}
+
+/* gfx_frame_end clears the default framebuffer's depth for the next frame, and the first pass
+ * into it that asks for a depth clear skips its own: the depth must still be clear there, and
+ * only there (a later pass's clear is done, a pass without one keeps the depth drawn). */
+Test(render_gfx, depth_cleared_ahead_at_frame_end_serves_one_pass) {
+    gfx_context *gfx = render_offscreen(32, 32);
+    gfx_program program = gfx_program_from_source(gfx, "depth",
+        "#version 450 core\nlayout(location = 0) in vec2 a_position;\nuniform float u_z;\n"
+        "void main() { gl_Position = vec4(a_position, u_z, 1.0); }\n",
+        "#version 450 core\nuniform vec3 u_colour;\nout vec4 c;\nvoid main() { c = vec4(u_colour, 1); }\n");
+    cr_assert(program.id);
+    const float red[3] = { 1, 0, 0 }, green[3] = { 0, 1, 0 }, blue[3] = { 0, 0, 1 };
+    const uint32_t RED = 0xff, GREEN = 0xff00, BLUE = 0xff0000;
+    gfx_frame_begin(gfx);
+    gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "near", .clear_color = true, .clear_depth = true });
+    cr_assert_eq(depth_quad(gfx, program, -0.5f, red), RED, "depth 0.25 drawn");
+    gfx_pass_end(gfx);
+    gfx_frame_end(gfx);
+    gfx_frame_begin(gfx);
+    /* Depth 0.75 behind last frame's 0.25: drawn only if the depth was cleared. */
+    gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "far", .clear_color = true, .clear_depth = true });
+    cr_assert_eq(depth_quad(gfx, program, 0.5f, green), GREEN, "the new frame's depth is clear");
+    gfx_pass_end(gfx);
+    gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "kept" });
+    cr_assert_eq(depth_quad(gfx, program, 0.8f, red), GREEN, "no clear asked: 0.9 stays behind 0.75");
+    gfx_pass_end(gfx);
+    gfx_pass_begin(gfx, &(gfx_pass_desc){ .name = "again", .clear_depth = true });
+    cr_assert_eq(depth_quad(gfx, program, 0.8f, blue), BLUE, "a second clear in the frame is done");
+    gfx_pass_end(gfx);
+    gfx_frame_end(gfx);
+    gfx_context_destroy(gfx);
+}
+
 Test(render_gfx, frame_stats_count_the_draws_and_their_triangles) {
     /* A quad is 2 triangles: 1 + 4 instances drawn directly make 10, and the indirect draw's
      * triangles are on the GPU, so it counts as an indirect draw only. */

@@ -100,11 +100,18 @@ static double eye_depth(float stored) {
 
 Test(render_scene, depth_puts_the_sphere_in_front_of_the_ground) {
     gfx_context *gfx = render_offscreen(W, H);
-    render_image image = render_scene(gfx, 1);
+    gfx_scene *scene = gfx_scene_create(gfx);
+    cr_assert(scene);
+    gfx_camera camera = gfx_scene_default_camera();
+    gfx_frame_begin(gfx);
+    gfx_scene_draw(scene, &camera, 0.0);
     float centre = 0, bottom = 0;
-    /* GL rows count from the bottom: row H/2 is the centre; row 0 the bottom edge. */
+    /* Inside the frame: gfx_frame_end clears the depth for the next one. GL rows count from the
+     * bottom: row H/2 is the centre; row 0 the bottom edge. */
     glReadPixels(W / 2, H / 2, 1, 1, GL_DEPTH_COMPONENT, GL_FLOAT, &centre);
     glReadPixels(W / 2, 0, 1, 1, GL_DEPTH_COMPONENT, GL_FLOAT, &bottom);
+    gfx_frame_end(gfx);
+    gfx_scene_destroy(scene);
     /* Centre: the sphere's near surface, D − 1 away along the view axis. */
     double distance = sqrt(0.6 * 0.6 + 5.0 * 5.0);
     cr_assert(fabs(eye_depth(centre) - (distance - 1.0)) < 0.05, "centre depth %.3f, expected %.3f",
@@ -116,7 +123,6 @@ Test(render_scene, depth_puts_the_sphere_in_front_of_the_ground) {
     cr_assert(fabs(eye_depth(bottom) - expected) < 0.02, "bottom depth %.3f, expected %.3f",
               eye_depth(bottom), expected);
     cr_assert_lt(eye_depth(centre), 13.0, "the ground behind the sphere must not show through");
-    render_image_free(&image);
     gfx_context_destroy(gfx);
 }
 
