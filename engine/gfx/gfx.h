@@ -99,8 +99,8 @@ void gfx_window_set_title(gfx_context *gfx, const char *title);
 bool gfx_parse_size(const char *text, int *width, int *height);
 
 /* Frame brackets: begin collects finished GPU timings (and reloads changed shaders in debug
- * builds); end swaps the window's buffers, or finishes the offscreen frame, and clears the
- * default framebuffer's depth for the next frame (README: "cleared ahead"). */
+ * builds); end swaps the window's buffers, or clears the offscreen depth for the next frame
+ * and finishes the frame (README: "The next frame's depth clear"). */
 void gfx_frame_begin(gfx_context *gfx);
 void gfx_frame_end(gfx_context *gfx);
 uint64_t gfx_frame_index(const gfx_context *gfx);
@@ -133,9 +133,10 @@ typedef struct gfx_pass_desc {
     gfx_framebuffer target;        /* { 0 } = the default framebuffer */
     bool clear_color;              /* clear with .color first */
     float color[4];
-    bool clear_depth;              /* clear depth to 1 (gfx_frame_end clears the default
-                                      framebuffer's depth for the next frame: its first pass
-                                      there finds it done; read depth before gfx_frame_end) */
+    bool clear_depth;              /* clear depth to 1 (offscreen, gfx_frame_end clears the
+                                      default framebuffer's depth for the next frame: its first
+                                      pass there finds it done; read depth before
+                                      gfx_frame_end) */
 } gfx_pass_desc;
 
 /* Binds the target, sets the viewport to its size, clears as asked, starts the pass's timer. */

@@ -117,28 +117,24 @@ void gfx_frame_begin(gfx_context *gfx) {
     gfx__timers_collect(gfx);
 }
 
-/* The next frame's depth clear, queued at this frame's end: offscreen, the driver runs it with
- * the rest of this frame, which is waited for anyway, and the first pass of the next frame into
- * the default framebuffer that asks for a depth clear finds it done (gfx_pass_begin). On
- * llvmpipe a clear queued at a frame's start held up that frame's first draws while the driver's
- * threads ran it: about 1.1 ms of the world's 8 ms CPU frame (engine/gfx/README.md). The GPU's
- * work is the same either way. A window's clear follows its swap: EGL leaves the depth buffer
- * undefined after one. */
+/* The next frame's depth clear, queued with the rest of this offscreen frame, which is waited for
+ * anyway; the next frame's first pass into the default framebuffer that asks for a depth clear
+ * finds it done (gfx_pass_begin). On llvmpipe a clear queued at a frame's start held up that
+ * frame's first draws while the driver's threads ran it (engine/gfx/README.md). A window keeps
+ * the clear in its pass: EGL leaves the depth buffer undefined after a swap, and the window
+ * system may resize it between frames. */
 static void gfx_clear_depth_ahead(gfx_context *gfx) {
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glDepthMask(GL_TRUE);
     glClearDepth(1.0);
     glClear(GL_DEPTH_BUFFER_BIT);
     gfx->depth_cleared_ahead = true;
-    gfx->cleared_width = gfx->width;
-    gfx->cleared_height = gfx->height;
 }
 
 void gfx_frame_end(gfx_context *gfx) {
     TRACE_ZONE("gfx_frame_end");
     if (gfx->backend == GFX_BACKEND_WINDOW) {
         gfx__window_swap(gfx);
-        gfx_clear_depth_ahead(gfx);
     } else {
         gfx_clear_depth_ahead(gfx);
         /* Offscreen there is no swap to wait on: finish, so a frame's time is the GPU's too. */

@@ -98,10 +98,9 @@ struct gfx_context {
     uint64_t next_reload_check_ns;
     uint32_t program_in_use;
 
-    /* The default framebuffer's depth, cleared by gfx_frame_end for the next frame at this
-     * size; no pass has drawn into it since while set (gfx_pass_begin then skips its clear) */
+    /* Offscreen, the default framebuffer's depth cleared by gfx_frame_end for the next frame,
+     * and no pass into it since (gfx_pass_begin then skips its clear) */
     bool depth_cleared_ahead;
-    int cleared_width, cleared_height;
 
     /* Objects (gfx_resources.c), behind generation-checked handles */
     gfx_pool buffers, vertex_arrays, textures, framebuffers;

@@ -95,9 +95,8 @@ void gfx_pass_begin(gfx_context *gfx, const gfx_pass_desc *desc) {
     glBindFramebuffer(GL_FRAMEBUFFER, target);
     glViewport(0, 0, width, height);
     /* The default framebuffer's depth may have been cleared already, by gfx_frame_end; this
-     * pass may draw into it, so that holds for one pass only. A resize since loses it. */
-    bool cleared_ahead = target == 0 && gfx->depth_cleared_ahead && gfx->cleared_width == width &&
-                         gfx->cleared_height == height;
+     * pass may draw into it, so that holds for one pass only. */
+    bool cleared_ahead = target == 0 && gfx->depth_cleared_ahead;
     if (target == 0) gfx->depth_cleared_ahead = false;
     GLbitfield clear = 0;
     if (desc->clear_color) {
