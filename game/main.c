@@ -2,7 +2,7 @@
  *
  *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT | --tour] [--record FILE]
  *         [--replay FILE] [--bindings FILE] [--gamepad-mappings FILE] [--screenshot FILE] [--pixel-error P]
- *         [--radius R] [--levels N]
+ *         [--radius R] [--levels N] [--simplify]
  *         [--memory MB] [--grass off|low|high] [--water off|low|medium|high] [--shadows off|low|high]
  *         [--detail on|off] [--rocks on|off] [--threads N]
  *         [--trace FILE [--trace-frames N]] [--world DIR] [--at X,Y,Z] [--look YAW,PITCH]
@@ -47,7 +47,7 @@ typedef struct options {
         *look, *rocks, *cliffs;
     int seed, frames, radius, levels, memory_mb, trace_frames;
     double pixel_error;
-    bool headless, tour, no_head_bob, no_ao;
+    bool headless, tour, no_head_bob, no_ao, simplify;
 } options;
 
 /* `text` as count finite numbers, comma-separated with nothing after them, each within
@@ -110,6 +110,8 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "radius", CORE_OPTION_INT, &o->radius, "R", "full-detail chunks of 32 m each way (default: from "
           "--pixel-error; with --radius or --levels the rings are fixed, radius 2)", 1, 32 },
         { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
+        { "simplify", CORE_OPTION_FLAG, &o->simplify, NULL, "simplify each terrain chunk by its level's own error "
+          "(fewer triangles, more streaming work)" },
         { "grass", CORE_OPTION_STRING, &o->grass, "off|low|high", "grass patches (default low)" },
         { "water", CORE_OPTION_STRING, &o->water, "off|low|medium|high", "the sea and lakes (default low: blended, the frame never read back)" },
         { "rocks", CORE_OPTION_STRING, &o->rocks, "on|off", "rock piles (default on; the tile set is cached "
@@ -269,7 +271,7 @@ int main(int argc, char **argv) {
     desc.screenshot_path = o.screenshot;
     desc.world_dir = o.world;
     desc.stream = (terrain_stream_desc){ .half_width = o.radius, .levels = o.levels,
-                                         .memory_budget = (size_t)o.memory_mb << 20 };
+                                         .memory_budget = (size_t)o.memory_mb << 20, .simplify = o.simplify };
     desc.pixel_error = (float)o.pixel_error;
     game_app *app = game_app_create(&desc);
     if (!app) {

@@ -143,6 +143,24 @@ Test(render_stream, rings_at_the_origin_equal_the_static_rings) {
                  (unsigned long long)streamed_triangles, (unsigned long long)static_triangles);
 }
 
+/* terrain_stream_desc.simplify: the same rings, each chunk simplified by its level's own error,
+ * draw fewer triangles (tests/terrain's simplified_* cases check the meshes and their seams). */
+Test(render_stream, simplified_rings_draw_fewer_triangles) {
+    const double eye[1][3] = { { 1, 5, 1 } };
+    uint64_t triangles[2];
+    for (int simplify = 0; simplify < 2; simplify++) {
+        terrain_stream_desc desc = small_rings;
+        desc.simplify = simplify;
+        streamed s = streamed_open(2, &desc);
+        cr_assert(streamed_settle(&s, eye, 1, 2000) > 0);
+        triangles[simplify] = terrain_ecs_stats(s.te).triangles;
+        streamed_close(&s);
+    }
+    cr_log_info("rings: %llu triangles, %llu simplified", (unsigned long long)triangles[0], (unsigned long long)triangles[1]);
+    cr_expect_gt(triangles[1], 0);
+    cr_expect_lt(triangles[1], triangles[0]);
+}
+
 /* 100.8 km out the rolling ground repeats exactly and so do the rings: 100 800 m is a multiple
  * of both periods (lcm 200 m) and of the coarsest chunk (64 m). The same chunks mesh to the
  * same triangles, and every mesh is stored relative to its own origin, so its vertex

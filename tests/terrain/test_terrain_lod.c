@@ -5,11 +5,14 @@
  * edge once in each direction and the Euler characteristic of its topology; generated terrain's
  * union is open only on the block's outer box. Crack-free seams are exactly what makes these
  * hold: a crossing placed differently on the two sides, or a segment drawn on one side only,
- * leaves an edge without its reverse on the seam. */
+ * leaves an edge without its reverse on the seam. The same checks hold for chunks simplified
+ * by terrain_lod_desc.max_error (their border kept), with a plane worked out by hand and the
+ * simplified surface's distance to the marching-cubes vertices. */
 #include "../engine/test.h"
 #include "core/core.h"
 #include "terrain/terrain.h"
 #include "terrain/terrain_internal.h"
+#include "distance_test.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -18,7 +21,7 @@
 /* ---- analytic fields: f at grid points, whatever the request ------------------------------ */
 
 typedef struct analytic {
-    int kind;                 /* 0 sphere, 1 noise blob */
+    int kind;                 /* 0 sphere, 1 noise blob, 2 plane */
     double centre[3], radius;
     uint64_t seed;
     int scale;                /* noise lattice, grid points */
@@ -49,6 +52,7 @@ static float analytic_at(const analytic *an, const double p[3]) {
     double dx = p[0] - an->centre[0], dy = p[1] - an->centre[1], dz = p[2] - an->centre[2];
     double ball = an->radius - sqrt(dx * dx + dy * dy + dz * dz);
     if (an->kind == 0) return (float)ball;
+    if (an->kind == 2) return (float)(an->centre[1] - p[1] - an->centre[0] * p[0] - an->centre[2] * p[2]);   /* solid below */
     return (float)fmin(noise_value(an, p) + 0.2, ball);   /* noise, cut off by a ball: closed */
 }
 
@@ -81,7 +85,8 @@ typedef struct block {
 
 typedef bool (*chunk_mesher)(void *user, int64_t x, int64_t y, int64_t z, const terrain_lod_desc *lod, terrain_mesh *out);
 
-static void block_build(block *b, chunk_mesher mesh, void *user, const int64_t region[3], int level) {
+/* error_scale > 0: every chunk simplified by that many times its level's error. */
+static void block_build(block *b, chunk_mesher mesh, void *user, const int64_t region[3], int level, float error_scale) {
     b->count = 0;
     b->triangles[0] = b->triangles[1] = 0;
     double size = (double)TERRAIN_MESH_CELLS * (double)(1 << level);
@@ -89,7 +94,8 @@ static void block_build(block *b, chunk_mesher mesh, void *user, const int64_t r
     for (int k = 0; k < 8; k++) {
         terrain_mesh *m = &b->meshes[b->count++];
         cr_assert(mesh(user, 2 * region[0] + (k & 1), 2 * region[1] + ((k >> 1) & 1), 2 * region[2] + (k >> 2),
-                       &(terrain_lod_desc){ .level = level - 1 }, m));
+                       &(terrain_lod_desc){ .level = level - 1,
+                                            .max_error = error_scale * (float)terrain_chunk_level_error(level - 1) }, m));
         b->triangles[0] += m->index_count / 3;
     }
     for (int dz = -1; dz <= 1; dz++)
@@ -98,7 +104,8 @@ static void block_build(block *b, chunk_mesher mesh, void *user, const int64_t r
                 if (!dx && !dy && !dz) continue;
                 terrain_mesh *m = &b->meshes[b->count++];
                 /* From the neighbour, R lies at the opposite offset. */
-                terrain_lod_desc lod = { .level = level, .finer_neighbours = terrain_lod_neighbour_bit(-dx, -dy, -dz) };
+                terrain_lod_desc lod = { .level = level, .finer_neighbours = terrain_lod_neighbour_bit(-dx, -dy, -dz),
+                                         .max_error = error_scale * (float)terrain_chunk_level_error(level) };
                 cr_assert(mesh(user, region[0] + dx, region[1] + dy, region[2] + dz, &lod, m));
                 b->triangles[1] += m->index_count / 3;
             }
@@ -235,7 +242,7 @@ Test(terrain_lod, spheres_across_levels_are_closed) {
     for (size_t s = 0; s < CORE_COUNTOF(spheres); s++) {
         analytic an = spheres[s];
         block b;
-        block_build(&b, analytic_mesher, &an, region, 1);
+        block_build(&b, analytic_mesher, &an, region, 1, 0.0f);
         union_topology t = union_check(&b);
         cr_expect(t.watertight, "sphere %zu: %d open edges", s, t.open);
         cr_expect_eq(t.euler, 2, "sphere %zu: V − E + F = %lld", s, (long long)t.euler);
@@ -260,7 +267,7 @@ Test(terrain_lod, noise_blobs_across_levels_are_closed) {
                                     size * (1.05 - 0.08 * (double)(seed % 4)) },
                         .radius = size * 0.45 };
         block b;
-        block_build(&b, analytic_mesher, &an, (const int64_t[3]){ 0, 0, 0 }, level);
+        block_build(&b, analytic_mesher, &an, (const int64_t[3]){ 0, 0, 0 }, level, 0.0f);
         union_topology t = union_check(&b);
         cr_expect_eq(t.open, 0, "seed %llu (level %d): %d open edges", (unsigned long long)seed, level, t.open);
         cr_expect_eq(t.euler % 2, 0, "seed %llu", (unsigned long long)seed);
@@ -285,7 +292,7 @@ Test(terrain_lod, generated_terrain_seams_have_no_open_edges) {
     for (int level = 1; level <= 2; level++) {
         int64_t region[3] = { 0, ground_region(world, level), 0 };
         block b;
-        block_build(&b, world_mesher, world, region, level);
+        block_build(&b, world_mesher, world, region, level, 0.0f);
         union_topology t = union_check(&b);
         cr_expect_gt(t.open, 0, "level %d: the terrain leaves the block", level);
         cr_expect_eq(t.open_inside, 0, "level %d: %d of %d open edges inside the block (on a seam)", level,
@@ -326,6 +333,161 @@ Test(terrain_lod, coarse_chunks_have_far_fewer_triangles) {
     cr_expect_gt(triangles[2], 0);
     cr_expect_gt(triangles[0], 3 * triangles[1], "a level-1 surface has about a quarter of the triangles");
     cr_expect_gt(triangles[1], 3 * triangles[2]);
+    terrain_world_destroy(world);
+}
+
+/* ---- simplified chunks (terrain_lod_desc.max_error) -------------------------------------------- */
+
+/* The largest distance from a vertex of `full` to the surface of `simple` (the same origin). */
+static double largest_distance(const terrain_mesh *full, const terrain_mesh *simple) {
+    double largest = 0.0;
+    for (uint32_t v = 0; v < full->vertex_count; v++) {
+        double p[3], nearest = INFINITY;
+        for (int k = 0; k < 3; k++) p[k] = full->vertices[v].position[k];
+        for (uint32_t i = 0; i < simple->index_count && nearest > 0.0; i += 3) {
+            double corners[3][3];
+            const double *corner[3] = { corners[0], corners[1], corners[2] };
+            bool near = true;
+            for (int c = 0; c < 3; c++)
+                for (int k = 0; k < 3; k++) corners[c][k] = simple->vertices[simple->indices[i + c]].position[k];
+            for (int k = 0; k < 3 && near; k++)   /* no triangle farther than the nearest so far */
+                near = fmin(corners[0][k], fmin(corners[1][k], corners[2][k])) - nearest <= p[k] &&
+                       fmax(corners[0][k], fmax(corners[1][k], corners[2][k])) + nearest >= p[k];
+            if (near) nearest = fmin(nearest, point_triangle_distance(p, corner));
+        }
+        largest = fmax(largest, nearest);
+    }
+    return largest;
+}
+
+typedef struct border_points { double (*p)[3]; size_t count; } border_points;
+
+static int compare_point(const void *a, const void *b) {
+    const double *x = a, *y = b;
+    for (int k = 0; k < 3; k++)
+        if (x[k] != y[k]) return x[k] < y[k] ? -1 : 1;
+    return 0;
+}
+
+/* The vertices on the sides x or z = lo or hi (mesh coordinates), sorted. */
+static border_points border_of(const terrain_mesh *m, float lo, float hi) {
+    border_points b = { .p = malloc((m->vertex_count + 1) * sizeof *b.p) };
+    for (uint32_t v = 0; v < m->vertex_count; v++) {
+        const float *q = m->vertices[v].position;
+        if (q[0] != lo && q[0] != hi && q[2] != lo && q[2] != hi) continue;
+        for (int k = 0; k < 3; k++) b.p[b.count][k] = q[k];
+        b.count++;
+    }
+    qsort(b.p, b.count, sizeof *b.p, compare_point);
+    return b;
+}
+
+Test(terrain_lod, simplifying_a_plane_keeps_its_border_and_its_area) {
+    /* f = 20.5 − y − 0.31 x − 0.17 z over chunk (0, 0, 0). f is linear, so marching cubes puts
+     * every vertex on the plane and no collapse moves the surface: the simplifier may take every
+     * vertex that is not on the chunk's sides or next to them. What is left tiles the same polygon, whose area is
+     * that of the 32 × 32 m square tilted, 1024·sqrt(1 + 0.31² + 0.17²) = 1086.12 m², with the
+     * same border vertices. */
+    analytic an = { .kind = 2, .centre = { 0.31, 20.5, 0.17 } };
+    terrain_mesh full, simple;
+    cr_assert(analytic_mesher(&an, 0, 0, 0, &(terrain_lod_desc){ 0 }, &full));
+    cr_assert(analytic_mesher(&an, 0, 0, 0, &(terrain_lod_desc){ .max_error = 0.02f }, &simple));
+    const double area = 1024.0 * sqrt(1.0 + 0.31 * 0.31 + 0.17 * 0.17);
+    cr_expect(fabs(terrain_mesh_area(&full) - area) < 1e-3 * area, "full %.3f m²", terrain_mesh_area(&full));
+    cr_expect(fabs(terrain_mesh_area(&simple) - area) < 1e-3 * area, "simplified %.3f m²", terrain_mesh_area(&simple));
+    /* The chunk's cells span mesh coordinates 1 … 33 (the apron's first sample is the origin). */
+    border_points a = border_of(&full, 1.0f, 33.0f), b = border_of(&simple, 1.0f, 33.0f);
+    cr_assert_gt(a.count, 2 * 32);
+    cr_expect_eq(a.count, b.count);
+    for (size_t i = 0; i < a.count && i < b.count; i++) cr_expect_eq(compare_point(a.p[i], b.p[i]), 0, "border vertex %zu", i);
+    /* The vertices next to the border (sharing a triangle with one, not on it) are kept too. */
+    uint8_t *on_border = calloc(full.vertex_count, 1), *next = calloc(full.vertex_count, 1);
+    for (uint32_t v = 0; v < full.vertex_count; v++) {
+        const float *q = full.vertices[v].position;
+        on_border[v] = q[0] == 1.0f || q[0] == 33.0f || q[2] == 1.0f || q[2] == 33.0f;
+    }
+    for (uint32_t i = 0; i < full.index_count; i += 3) {
+        const uint32_t *t = full.indices + i;
+        if (on_border[t[0]] || on_border[t[1]] || on_border[t[2]])
+            for (int k = 0; k < 3; k++) next[t[k]] = !on_border[t[k]];
+    }
+    size_t ring = 0;
+    for (uint32_t v = 0; v < full.vertex_count; v++) ring += next[v];
+    /* A disc of B border and I inner vertices has B + 2I − 2 triangles: with only the ring left
+     * inside, B + 2·ring − 2; a fifth more allows for collapses the simplifier leaves undone (it
+     * left 10 % on this plane). */
+    uint32_t triangles = simple.index_count / 3;
+    size_t least = b.count + 2 * ring - 2;
+    cr_expect_geq(triangles, least);
+    cr_expect_leq(triangles, least + least / 5, "%u triangles for %zu border and %zu ring vertices", triangles, b.count, ring);
+    cr_expect_gt(full.index_count / 3, 3 * triangles, "marching cubes: %u", full.index_count / 3);
+    free(on_border), free(next);
+    for (uint32_t v = 0; v < simple.vertex_count; v++) {
+        double p[3];
+        for (int k = 0; k < 3; k++) p[k] = simple.origin[k] + simple.vertices[v].position[k];
+        cr_expect(fabs(analytic_at(&an, p)) < 1e-3f, "vertex %u off the plane", v);
+    }
+    free(a.p), free(b.p);
+    terrain_mesh_free(&full), terrain_mesh_free(&simple);
+}
+
+Test(terrain_lod, simplified_spheres_across_levels_stay_closed) {
+    /* Four times the level's error, to make the simplifier work hard near the seams: the union
+     * must stay one closed surface (V − E + F = 2) with fewer triangles. */
+    const analytic spheres[] = {
+        { .centre = { 61.3, 66.7, 63.1 }, .radius = 21.7 },
+        { .centre = { 50.2, 30.6, 70.3 }, .radius = 17.1 },
+        { .centre = { 33.1, 30.7, 31.9 }, .radius = 45.2 },
+    };
+    for (size_t s = 0; s < CORE_COUNTOF(spheres); s++) {
+        analytic an = spheres[s];
+        block full, simple;
+        block_build(&full, analytic_mesher, &an, (const int64_t[3]){ 0, 0, 0 }, 1, 0.0f);
+        block_build(&simple, analytic_mesher, &an, (const int64_t[3]){ 0, 0, 0 }, 1, 4.0f);
+        union_topology t = union_check(&simple);
+        cr_expect(t.watertight, "sphere %zu: %d open edges", s, t.open);
+        cr_expect_eq(t.euler, 2, "sphere %zu: V − E + F = %lld", s, (long long)t.euler);
+        cr_expect_eq(t.degenerate, 0, "sphere %zu", s);
+        cr_expect_lt(simple.triangles[0] + simple.triangles[1], full.triangles[0] + full.triangles[1], "sphere %zu", s);
+        block_free(&full), block_free(&simple);
+    }
+}
+
+Test(terrain_lod, simplified_generated_terrain_meets_at_every_seam) {
+    /* The streamer's simplification (each chunk by its level's own error) on generated ground
+     * across levels 0–1 and 1–2: no open edge inside the block, fewer triangles, every vertex
+     * kept with its own normal and weights, and the full surface near the simplified one. */
+    terrain_world *world = terrain_world_create(&(terrain_world_desc){ .generation = terrain_generation_defaults(5) });
+    for (int level = 1; level <= 2; level++) {
+        int64_t region[3] = { 0, ground_region(world, level), 0 };
+        block full, simple;
+        block_build(&full, world_mesher, world, region, level, 0.0f);
+        block_build(&simple, world_mesher, world, region, level, 1.0f);
+        union_topology t = union_check(&simple);
+        cr_expect_eq(t.open_inside, 0, "level %d: %d of %d open edges inside the block", level, t.open_inside, t.open);
+        int64_t before = full.triangles[0] + full.triangles[1], after = simple.triangles[0] + simple.triangles[1];
+        cr_log_info("level %d block: %lld triangles simplified to %lld (%.0f %%)", level, (long long)before,
+                    (long long)after, 100.0 * (double)after / (double)before);
+        cr_expect_lt(after, before);
+        for (int m = 0; m < simple.count; m++) {
+            const terrain_mesh *mesh = &simple.meshes[m];
+            for (uint32_t v = 0; v < mesh->vertex_count; v++) {
+                const float *n = mesh->vertices[v].normal;
+                const uint8_t *w = mesh->vertices[v].weights;
+                cr_expect_float_eq(n[0] * n[0] + n[1] * n[1] + n[2] * n[2], 1.0f, 1e-4f);
+                cr_expect_eq(w[0] + w[1] + w[2] + w[3], 255);
+            }
+        }
+        /* The finer chunks (m < 8, level − 1) and the coarser ones: how far the simplified
+         * surface strays from the marching-cubes vertices. */
+        for (int m = 0; m < simple.count; m += 7) {
+            int at = m < 8 ? level - 1 : level;
+            double error = terrain_chunk_level_error(at), distance = largest_distance(&full.meshes[m], &simple.meshes[m]);
+            cr_log_info("level %d chunk %d: %.3f m at most from the full surface (max_error %.3f m)", at, m, distance, error);
+            cr_expect_leq(distance, 2.0 * error, "level %d chunk %d: %.3f m", at, m, distance);
+        }
+        block_free(&full), block_free(&simple);
+    }
     terrain_world_destroy(world);
 }
 

@@ -6,6 +6,7 @@
 #include "../engine/test.h"
 #include "terrain/terrain.h"
 #include "terrain/terrain_internal.h"
+#include "distance_test.h"
 
 #include "core/core.h"
 
@@ -450,14 +451,6 @@ Test(terrain_sculpt, the_same_edits_on_two_fresh_regions_give_the_same_columns) 
 }
 
 /* ---- sweeping ------------------------------------------------------------------------------ */
-
-static double point_segment_distance(const double p[3], const double a[3], const double b[3]) {
-    double d[3], w[3], dd = 0.0, wd = 0.0;
-    for (int e = 0; e < 3; e++) d[e] = b[e] - a[e], w[e] = p[e] - a[e], dd += d[e] * d[e], wd += w[e] * d[e];
-    double t = dd > 0.0 ? fmin(fmax(wd / dd, 0.0), 1.0) : 0.0, e2 = 0.0;
-    for (int e = 0; e < 3; e++) e2 += (w[e] - t * d[e]) * (w[e] - t * d[e]);
-    return sqrt(e2);
-}
 
 static double polyline_distance(const double p[3], const double (*points)[3], int count) {
     double best = INFINITY;

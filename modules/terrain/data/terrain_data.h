@@ -346,6 +346,11 @@ typedef struct terrain_mesh_desc {
     bool no_optimize;                 /* skip the parts and meshoptimizer's vertex-cache
                                          order: the mesher's raw output */
     bool no_occlusion;                /* occlusion 0 everywhere (skips its cost) */
+    float max_error;                  /* metres: > 0 simplifies the triangles (edge collapses
+                                         that move the surface at most about this far, never a
+                                         vertex of the mesh's open border, so a chunk still meets
+                                         its neighbours exactly); 0 = every marching-cubes
+                                         triangle (README, "Simplified chunks") */
     struct job_system *jobs;          /* large fields (64³ cells and up) are meshed on its
                                          threads; NULL = the calling thread only. Same mesh
                                          either way */
@@ -387,6 +392,9 @@ void terrain_mesh_free(terrain_mesh *mesh);
 typedef struct terrain_lod_desc {
     int level;                        /* 0 … 16; cells 2^level columns wide */
     uint32_t finer_neighbours;        /* 26 bits (above); must be 0 at level 0 */
+    float max_error;                  /* terrain_mesh_desc.max_error: metres the triangles may be
+                                         simplified by, the border kept; 0 = none. Streaming with
+                                         .simplify asks for terrain_chunk_level_error(level) */
 } terrain_lod_desc;
 
 uint32_t terrain_lod_neighbour_bit(int dx, int dy, int dz);   /* 0 for (0, 0, 0) or out of range */

@@ -410,7 +410,8 @@ static void lod_rules(lod_chunk *c, uint32_t mask) {
 }
 
 static bool lod_mesh_transitions(terrain__field_sampler sample, void *user, terrain_world *weights_world,
-                                 const int64_t first[3], int level, uint32_t mask, bool reference, terrain_mesh *out) {
+                                 const int64_t first[3], int level, uint32_t mask, float max_error, bool reference,
+                                 terrain_mesh *out) {
     const int64_t step = (int64_t)1 << level, half = step / 2;
     lod_chunk c = { .fine_spacing = (float)half * TERRAIN_COLUMN_SIZE };
     lod_rules(&c, mask);
@@ -478,7 +479,8 @@ static bool lod_mesh_transitions(terrain__field_sampler sample, void *user, terr
                 }
             }
         for (int a = 0; a < 3; a++) core_free(c.edges[a], samples * sizeof(uint32_t));
-        ok = terrain__mesh_finish(&c.b, &(terrain_mesh_desc){ .world = weights_world }, field.origin, out);
+        ok = terrain__mesh_finish(&c.b, &(terrain_mesh_desc){ .world = weights_world, .max_error = max_error },
+                                  field.origin, out);
         if (ok) memcpy(out->origin, field.origin, sizeof out->origin);
     }
     for (int f = 0; f < 6; f++) {
@@ -514,13 +516,13 @@ static bool lod_mesh_chunk(terrain__field_sampler sample, void *user, terrain_wo
     for (int dz = -1; dz <= 1; dz += 2)
         for (int dy = -1; dy <= 1; dy += 2)
             for (int dx = -1; dx <= 1; dx += 2) mask &= ~terrain_lod_neighbour_bit(dx, dy, dz);
-    if (mask) return lod_mesh_transitions(sample, user, weights_world, first, lod.level, mask, reference, out);
+    if (mask) return lod_mesh_transitions(sample, user, weights_world, first, lod.level, mask, lod.max_error, reference, out);
     /* No seam to close: the plain pair (at level 0 exactly the example of terrain.h). */
     terrain_field field;
     terrain_field_desc desc = { .size = { LOD_SAMPLES, LOD_SAMPLES, LOD_SAMPLES }, .step = (int)step };
     for (int a = 0; a < 3; a++) desc.first[a] = first[a] - step;
     if (!sample(user, &desc, &field)) return false;
-    bool ok = terrain_mesh_build(&field, &(terrain_mesh_desc){ .world = weights_world, .apron = 1 }, out);
+    bool ok = terrain_mesh_build(&field, &(terrain_mesh_desc){ .world = weights_world, .apron = 1, .max_error = lod.max_error }, out);
     terrain_field_free(&field);
     return ok;
 }

@@ -907,8 +907,220 @@ static void mesh_parts(mesh_builder *b, terrain_mesh *out) {
     core_free(part_of, triangles);
 }
 
+/* Distance from p to triangle abc: to its plane where p projects inside the triangle, else to
+ * its nearest edge. */
+static float segment_distance(const float p[3], const float a[3], const float b[3]) {
+    float ab[3], ap[3], along = 0.0f, length = 0.0f, d = 0.0f;
+    for (int k = 0; k < 3; k++) ab[k] = b[k] - a[k], ap[k] = p[k] - a[k], along += ab[k] * ap[k], length += ab[k] * ab[k];
+    float t = length > 0.0f ? fminf(fmaxf(along / length, 0.0f), 1.0f) : 0.0f;
+    for (int k = 0; k < 3; k++) d += (ap[k] - t * ab[k]) * (ap[k] - t * ab[k]);
+    return sqrtf(d);
+}
+
+static float triangle_distance(const float p[3], const float *corner[3]) {
+    float e0[3], e1[3], n[3], ap[3];
+    for (int k = 0; k < 3; k++) e0[k] = corner[1][k] - corner[0][k], e1[k] = corner[2][k] - corner[0][k], ap[k] = p[k] - corner[0][k];
+    n[0] = e0[1] * e1[2] - e0[2] * e1[1], n[1] = e0[2] * e1[0] - e0[0] * e1[2], n[2] = e0[0] * e1[1] - e0[1] * e1[0];
+    float nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    bool inside = nn > 0.0f;
+    for (int k = 0; k < 3 && inside; k++) {
+        const float *a = corner[k], *b = corner[(k + 1) % 3];
+        float e[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] }, t[3] = { p[0] - a[0], p[1] - a[1], p[2] - a[2] };
+        float c[3] = { e[1] * t[2] - e[2] * t[1], e[2] * t[0] - e[0] * t[2], e[0] * t[1] - e[1] * t[0] };
+        inside = c[0] * n[0] + c[1] * n[1] + c[2] * n[2] >= 0.0f;
+    }
+    if (inside) return fabsf(ap[0] * n[0] + ap[1] * n[1] + ap[2] * n[2]) / sqrtf(nn);
+    return fminf(segment_distance(p, corner[0], corner[1]),
+                 fminf(segment_distance(p, corner[1], corner[2]), segment_distance(p, corner[2], corner[0])));
+}
+
+#define SIMPLIFY_GRID 16   /* cells along each axis of the check's grid over the mesh's box */
+
+/* Whether every vertex the simplified triangles (b->indices, index_count of them) left out lies
+ * within `tolerance` of them. Quadrics measure a collapse by the planes of the triangles around
+ * it, so a thin fin or spike can fold onto its own side planes at no cost and vanish (seen: an
+ * 8 m fin of a level-2 chunk under a 0.32 m error); this catches it. The triangles go into a
+ * SIMPLIFY_GRID³ grid, each into the cells its box grown by the tolerance touches, so a vertex
+ * need only look at its own cell. */
+static bool mesh_simplified_near(const mesh_builder *b, size_t index_count, float tolerance) {
+    float lo[3], hi[3], scale[3];
+    mesh_vertex_bounds(b, lo, hi);
+    for (int k = 0; k < 3; k++) scale[k] = hi[k] > lo[k] ? SIMPLIFY_GRID / (hi[k] - lo[k]) : 0.0f;
+    const size_t cells = SIMPLIFY_GRID * SIMPLIFY_GRID * SIMPLIFY_GRID;
+    uint32_t *first = core_calloc(cells + 1, sizeof *first);
+    uint8_t *kept = core_calloc(b->vertex_count, 1);
+    int range[2][3];
+    /* Two passes over the triangles: count each cell's, then place them (CSR). */
+    uint32_t *entries = NULL;
+    for (int pass = 0; pass < 2; pass++) {
+        for (size_t i = 0; i < index_count; i += 3) {
+            for (int k = 0; k < 3; k++) {
+                float a = b->vertices[b->indices[i]].position[k], c = b->vertices[b->indices[i + 1]].position[k],
+                      d = b->vertices[b->indices[i + 2]].position[k];
+                int from = (int)((fminf(a, fminf(c, d)) - tolerance - lo[k]) * scale[k]);
+                int to = (int)((fmaxf(a, fmaxf(c, d)) + tolerance - lo[k]) * scale[k]);
+                range[0][k] = from < 0 ? 0 : from > SIMPLIFY_GRID - 1 ? SIMPLIFY_GRID - 1 : from;
+                range[1][k] = to < 0 ? 0 : to > SIMPLIFY_GRID - 1 ? SIMPLIFY_GRID - 1 : to;
+            }
+            for (int z = range[0][2]; z <= range[1][2]; z++)
+                for (int y = range[0][1]; y <= range[1][1]; y++)
+                    for (int x = range[0][0]; x <= range[1][0]; x++) {
+                        size_t cell = ((size_t)z * SIMPLIFY_GRID + y) * SIMPLIFY_GRID + x;
+                        if (pass == 0) first[cell + 1]++;
+                        else entries[first[cell]++] = (uint32_t)i;
+                    }
+            if (pass == 0) kept[b->indices[i]] = kept[b->indices[i + 1]] = kept[b->indices[i + 2]] = 1;
+        }
+        if (pass == 0) {
+            for (size_t c = 0; c < cells; c++) first[c + 1] += first[c];
+            entries = core_alloc(((size_t)first[cells] + 1) * sizeof *entries);
+        }
+    }
+    /* first[c] now ends cell c's run; the run starts where cell c − 1's ends. */
+    bool near = true;
+    for (size_t v = 0; v < b->vertex_count && near; v++) {
+        if (kept[v]) continue;
+        const float *p = b->vertices[v].position;
+        size_t cell = 0;
+        for (int k = 2; k >= 0; k--) {
+            int i = (int)((p[k] - lo[k]) * scale[k]);
+            cell = cell * SIMPLIFY_GRID + (size_t)(i < 0 ? 0 : i > SIMPLIFY_GRID - 1 ? SIMPLIFY_GRID - 1 : i);
+        }
+        near = false;
+        for (uint32_t e = cell ? first[cell - 1] : 0; e < first[cell] && !near; e++) {
+            const uint32_t *tri = b->indices + entries[e];
+            const float *corner[3] = { b->vertices[tri[0]].position, b->vertices[tri[1]].position, b->vertices[tri[2]].position };
+            near = triangle_distance(p, corner) <= tolerance;
+        }
+    }
+    core_free(entries, ((size_t)first[cells] + 1) * sizeof *entries);
+    core_free(first, (cells + 1) * sizeof *first);
+    core_free(kept, b->vertex_count);
+    return near;
+}
+
+static int mesh_compare_edges(const void *a, const void *b) {
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* The open edges of triangles `indices` (count of them), sorted, into `edges` (room for count):
+ * directed edges whose reverse no triangle has. Only edges between two vertices on the sides of
+ * the meshed box can be open, so only those are looked at. False when a directed edge occurs
+ * twice (two triangles on one side of an edge). */
+static bool mesh_open_edges(const uint8_t *side, const uint32_t *indices, size_t count, uint64_t *edges, size_t *open) {
+    size_t n = 0;
+    for (size_t i = 0; i < count; i++) {
+        uint32_t v = indices[i], w = indices[i % 3 == 2 ? i - 2 : i + 1];
+        if (side[v] && side[w]) edges[n++] = (uint64_t)v << 32 | w;
+    }
+    qsort(edges, n, sizeof *edges, mesh_compare_edges);
+    for (size_t i = 1; i < n; i++)
+        if (edges[i] == edges[i - 1]) return false;
+    *open = 0;
+    for (size_t i = 0; i < n; i++) {
+        uint64_t reverse = edges[i] << 32 | edges[i] >> 32;
+        if (!bsearch(&reverse, edges, n, sizeof *edges, mesh_compare_edges)) edges[(*open)++] = edges[i];
+    }
+    return true;
+}
+
+/* Whether the simplified triangles (b->indices, count of them) have exactly the open edges of
+ * the whole mesh (`whole`), each once: no crack opened along a chunk's side. */
+static bool mesh_sides_kept(const mesh_builder *b, const uint8_t *side, const uint32_t *whole, size_t whole_count,
+                            size_t count) {
+    uint64_t *before = core_alloc((whole_count + 1) * sizeof *before), *after = core_alloc((count + 1) * sizeof *after);
+    size_t open_before = 0, open_after = 0;
+    bool kept = mesh_open_edges(side, whole, whole_count, before, &open_before) &&
+                mesh_open_edges(side, b->indices, count, after, &open_after) && open_before == open_after &&
+                memcmp(before, after, open_after * sizeof *after) == 0;
+    core_free(before, (whole_count + 1) * sizeof *before);
+    core_free(after, (count + 1) * sizeof *after);
+    return kept;
+}
+
+/* Fewer triangles where fewer draw the same surface (desc.max_error; README, "Simplified
+ * chunks"): meshoptimizer's edge collapses ranked by Garland and Heckbert's quadrics, none moving
+ * the surface by more than about max_error by their measure, none flipping a triangle, and none
+ * touching a vertex on the sides of the meshed box (where the neighbours' triangles start) or
+ * next to one. Locking the border (meshopt_SimplifyLockBorder) is not enough in meshoptimizer
+ * 0.18: an inner vertex may still collapse onto a border vertex and leave a sliver of the side's
+ * plane uncovered, a crack against the neighbour (43 of 44 chunks of generated ground). So the
+ * vertices next to the border are made border vertices too, each given a tiny triangle of its
+ * own with two extra vertices (an open edge in, one out), which are dropped afterwards. Then two
+ * checks, and the mesh stays whole if either fails: the open edges are those of the whole mesh
+ * (mesh_sides_kept), and every vertex left out lies within 2·max_error of the triangles kept
+ * (mesh_simplified_near: the quadrics' blind spot is a thin fin folding onto its own side
+ * planes). Last, the vertices no triangle uses go, the rest in first-use order; this runs before
+ * the weights and the occlusion, which are then made for the vertices kept only. */
+static void mesh_simplify(mesh_builder *b, float max_error) {
+    if (!(max_error > 0.0f) || b->index_count == 0) return;
+    const size_t n = b->vertex_count, whole_count = b->index_count;
+    const float spacing = b->field->spacing;
+    uint8_t *side = core_calloc(n, 1), *ring = core_calloc(n, 1);
+    for (size_t v = 0; v < n; v++)
+        for (int a = 0; a < 3; a++) {
+            float p = b->vertices[v].position[a];
+            side[v] |= p == (float)b->lo[a] * spacing || p == (float)b->hi[a] * spacing;
+        }
+    size_t rings = 0;
+    for (size_t i = 0; i < whole_count; i += 3) {
+        const uint32_t *t = b->indices + i;
+        if (!side[t[0]] && !side[t[1]] && !side[t[2]]) continue;
+        for (int k = 0; k < 3; k++)
+            if (!side[t[k]] && !ring[t[k]]) ring[t[k]] = 1, rings++;
+    }
+    /* Positions and triangles with the locking triangles after them: vertex v's are n + 2r and
+     * n + 2r + 1, a thousandth of a cell off it along x and z (distinct positions, so that the
+     * simplifier does not weld them to v). */
+    float *positions = core_alloc((n + 2 * rings) * 3 * sizeof *positions);
+    uint32_t *input = core_alloc((whole_count + 3 * rings) * sizeof *input);
+    uint32_t *output = core_alloc((whole_count + 3 * rings) * sizeof *output);
+    memcpy(input, b->indices, whole_count * sizeof *input);
+    size_t extra = 0;
+    for (size_t v = 0; v < n; v++) {
+        memcpy(positions + 3 * v, b->vertices[v].position, 3 * sizeof *positions);
+        if (!ring[v]) continue;
+        uint32_t d = (uint32_t)(n + 2 * extra);
+        float *pa = positions + 3 * (size_t)d, *pb = pa + 3;
+        memcpy(pa, b->vertices[v].position, 3 * sizeof *pa);
+        memcpy(pb, b->vertices[v].position, 3 * sizeof *pb);
+        pa[0] += 1e-3f * spacing, pb[2] += 1e-3f * spacing;
+        uint32_t *t = input + whole_count + 3 * extra++;
+        t[0] = (uint32_t)v, t[1] = d, t[2] = d + 1;
+    }
+    const size_t all = n + 2 * rings, input_count = whole_count + 3 * rings;
+    float extent = meshopt_simplifyScale(positions, all, 3 * sizeof *positions);
+    size_t count = extent > 0.0f ? meshopt_simplify(output, input, input_count, positions, all, 3 * sizeof *positions, 0,
+                                                    max_error / extent, meshopt_SimplifyLockBorder, NULL)
+                                 : input_count;
+    /* Without the locking triangles, into the builder (the whole mesh kept in `input`). */
+    size_t kept = 0;
+    for (size_t i = 0; i < count; i += 3)
+        if (output[i] < n && output[i + 1] < n && output[i + 2] < n) {
+            memcpy(b->indices + kept, output + i, 3 * sizeof *output);
+            kept += 3;
+        }
+    if (!mesh_sides_kept(b, side, input, whole_count, kept) || !mesh_simplified_near(b, kept, 2.0f * max_error))
+        memcpy(b->indices, input, whole_count * sizeof *input);
+    else
+        b->index_count = kept;
+    core_free(positions, all * 3 * sizeof *positions);
+    core_free(input, input_count * sizeof *input);
+    core_free(output, input_count * sizeof *output);
+    core_free(side, n);
+    core_free(ring, n);
+    if (b->index_count == whole_count) return;
+    unsigned *remap = core_alloc(n * sizeof *remap);
+    b->vertex_count = meshopt_optimizeVertexFetchRemap(remap, b->indices, b->index_count, n);
+    meshopt_remapIndexBuffer(b->indices, b->indices, b->index_count, remap);
+    meshopt_remapVertexBuffer(b->vertices, b->vertices, n, sizeof *b->vertices, remap);
+    core_free(remap, n * sizeof *remap);
+}
+
 static void mesh_finish(mesh_builder *b, const terrain_mesh_desc *desc, const double origin[3], terrain_mesh *out) {
     out->part_count = 0;
+    mesh_simplify(b, desc->max_error);
     for (size_t i = 0; i < b->vertex_count; i++) {
         b->vertices[i].occlusion = 0;
         memset(b->vertices[i].reserved, 0, sizeof b->vertices[i].reserved);

@@ -219,7 +219,9 @@ static job_handle stream_task_start(terrain_ecs *te, stream_record *record, bool
     stream_task *t = core_calloc(1, sizeof *t);
     t->world = te->terrain;
     t->key = record->key;
-    t->lod = (terrain_lod_desc){ .level = record->key.level < 0 ? 0 : record->key.level, .finer_neighbours = record->mask };
+    int level = record->key.level < 0 ? 0 : record->key.level;
+    t->lod = (terrain_lod_desc){ .level = level, .finer_neighbours = record->mask,
+                                 .max_error = s->desc.simplify ? (float)terrain_chunk_level_error(level) : 0.0f };
     t->record = record;
     record->task = t;
     bool column = record->key.level == STREAM_COLUMN_LEVEL;

@@ -12,6 +12,10 @@
  *   terrain.mesh.chunk32.no_ao   the meshing half again on the same fields without ambient
  *                                occlusion (terrain_mesh_desc.no_occlusion), same runs: the
  *                                occlusion's cost is the difference.
+ *   terrain.mesh.chunk32.simplified   the meshing half as streaming makes it: simplified by
+ *                                level 0's error (terrain_lod_desc.max_error =
+ *                                terrain_chunk_level_error(0), 0.02 m), same runs; the
+ *                                triangles it keeps are printed beside the full count.
  *   terrain.mesh.256             ms to mesh a 256³-sample field (a generated region across the
  *                                surface, sampled beforehand, read from memory) on every core
  *                                (--threads): the isosurface alone, positions, normals and
@@ -59,10 +63,10 @@ typedef struct mesh_bench {
     terrain_world *world;
     int64_t chunks[CHUNK_COUNT][3];
     /* Per-run halves of the chunk row, recorded as rows of their own afterwards. */
-    double field_ms[64], mesh_ms[64], mesh_no_ao_ms[64], mesh_iso_ms[64];
+    double field_ms[64], mesh_ms[64], mesh_no_ao_ms[64], mesh_iso_ms[64], mesh_simplified_ms[64];
     int runs_seen;
     double cells_meshed;            /* per chunk, for ns/cell */
-    uint64_t triangles;
+    uint64_t triangles, triangles_simplified;
     terrain_field big;
     job_system *jobs;               /* the 256 rows' threads; NULL = one core */
     bool full;                      /* the game's options (weights, occlusion, reordering) */
@@ -90,8 +94,8 @@ static void pick_chunks(mesh_bench *b) {
 
 static double sample_field_mesh_chunk(void *user) {
     mesh_bench *b = user;
-    double field_total = 0.0, mesh_total = 0.0, no_ao_total = 0.0, iso_total = 0.0;
-    uint64_t triangles = 0;
+    double field_total = 0.0, mesh_total = 0.0, no_ao_total = 0.0, iso_total = 0.0, simplified_total = 0.0;
+    uint64_t triangles = 0, simplified = 0;
     for (int c = 0; c < CHUNK_COUNT; c++) {
         const int64_t *chunk = b->chunks[c];
         terrain_field_desc desc = { .size = { CHUNK_CELLS + 1 + 2 * CHUNK_APRON, CHUNK_CELLS + 1 + 2 * CHUNK_APRON,
@@ -119,6 +123,13 @@ static double sample_field_mesh_chunk(void *user) {
         terrain_mesh_build(&field, &(terrain_mesh_desc){ .apron = CHUNK_APRON, .no_optimize = true }, &mesh);
         iso_total += core_ns_to_ms(core_time_ns() - t4);
         terrain_mesh_free(&mesh);
+        /* And as streaming makes it, simplified by level 0's error. */
+        uint64_t t5 = core_time_ns();
+        terrain_mesh_build(&field, &(terrain_mesh_desc){ .world = b->world, .apron = CHUNK_APRON,
+                                                         .max_error = (float)terrain_chunk_level_error(0) }, &mesh);
+        simplified_total += core_ns_to_ms(core_time_ns() - t5);
+        simplified += mesh.index_count / 3;
+        terrain_mesh_free(&mesh);
         terrain_field_free(&field);
     }
     /* The harness calls once to warm up, then `runs` times: keep the timed runs' halves. */
@@ -127,9 +138,11 @@ static double sample_field_mesh_chunk(void *user) {
         b->mesh_ms[b->runs_seen - 1] = mesh_total / CHUNK_COUNT;
         b->mesh_no_ao_ms[b->runs_seen - 1] = no_ao_total / CHUNK_COUNT;
         b->mesh_iso_ms[b->runs_seen - 1] = iso_total / CHUNK_COUNT;
+        b->mesh_simplified_ms[b->runs_seen - 1] = simplified_total / CHUNK_COUNT;
     }
     b->runs_seen++;
     b->triangles = triangles / CHUNK_COUNT;
+    b->triangles_simplified = simplified / CHUNK_COUNT;
     bench_consume((double)triangles);
     return (field_total + mesh_total) / CHUNK_COUNT;
 }
@@ -320,8 +333,10 @@ void bench_group_terrain_mesh(bench_context *ctx) {
             bench_record(ctx, "terrain.mesh.chunk32.ns_per_cell", "ns", per_cell, recorded);
             bench_record(ctx, "terrain.mesh.chunk32.no_ao", "ms", b->mesh_no_ao_ms, recorded);
             bench_record(ctx, "terrain.mesh.chunk32.isosurface", "ms", b->mesh_iso_ms, recorded);
+            bench_record(ctx, "terrain.mesh.chunk32.simplified", "ms", b->mesh_simplified_ms, recorded);
         }
-        printf("  (chunk32: %llu triangles per chunk on average)\n", (unsigned long long)b->triangles);
+        printf("  (chunk32: %llu triangles per chunk on average, %llu simplified)\n", (unsigned long long)b->triangles,
+               (unsigned long long)b->triangles_simplified);
     }
 
     if (want_big) {
