@@ -907,8 +907,6 @@ static void mesh_parts(mesh_builder *b, terrain_mesh *out) {
     core_free(part_of, triangles);
 }
 
-/* Distance from p to triangle abc: to its plane where p projects inside the triangle, else to
- * its nearest edge. */
 static float segment_distance(const float p[3], const float a[3], const float b[3]) {
     float ab[3], ap[3], along = 0.0f, length = 0.0f, d = 0.0f;
     for (int k = 0; k < 3; k++) ab[k] = b[k] - a[k], ap[k] = p[k] - a[k], along += ab[k] * ap[k], length += ab[k] * ab[k];
@@ -917,6 +915,8 @@ static float segment_distance(const float p[3], const float a[3], const float b[
     return sqrtf(d);
 }
 
+/* Distance from p to triangle abc: to its plane where p projects inside the triangle, else to
+ * its nearest edge. */
 static float triangle_distance(const float p[3], const float *corner[3]) {
     float e0[3], e1[3], n[3], ap[3];
     for (int k = 0; k < 3; k++) e0[k] = corner[1][k] - corner[0][k], e1[k] = corner[2][k] - corner[0][k], ap[k] = p[k] - corner[0][k];
@@ -935,6 +935,12 @@ static float triangle_distance(const float p[3], const float *corner[3]) {
 }
 
 #define SIMPLIFY_GRID 16   /* cells along each axis of the check's grid over the mesh's box */
+
+/* The grid cell along one axis that coordinate `at` falls in, clamped to the grid. */
+static int simplify_grid_cell(float at, float lo, float scale) {
+    int i = (int)((at - lo) * scale);
+    return i < 0 ? 0 : i > SIMPLIFY_GRID - 1 ? SIMPLIFY_GRID - 1 : i;
+}
 
 /* Whether every vertex the simplified triangles (b->indices, index_count of them) left out lies
  * within `tolerance` of them. Quadrics measure a collapse by the planes of the triangles around
@@ -957,10 +963,8 @@ static bool mesh_simplified_near(const mesh_builder *b, size_t index_count, floa
             for (int k = 0; k < 3; k++) {
                 float a = b->vertices[b->indices[i]].position[k], c = b->vertices[b->indices[i + 1]].position[k],
                       d = b->vertices[b->indices[i + 2]].position[k];
-                int from = (int)((fminf(a, fminf(c, d)) - tolerance - lo[k]) * scale[k]);
-                int to = (int)((fmaxf(a, fmaxf(c, d)) + tolerance - lo[k]) * scale[k]);
-                range[0][k] = from < 0 ? 0 : from > SIMPLIFY_GRID - 1 ? SIMPLIFY_GRID - 1 : from;
-                range[1][k] = to < 0 ? 0 : to > SIMPLIFY_GRID - 1 ? SIMPLIFY_GRID - 1 : to;
+                range[0][k] = simplify_grid_cell(fminf(a, fminf(c, d)) - tolerance, lo[k], scale[k]);
+                range[1][k] = simplify_grid_cell(fmaxf(a, fmaxf(c, d)) + tolerance, lo[k], scale[k]);
             }
             for (int z = range[0][2]; z <= range[1][2]; z++)
                 for (int y = range[0][1]; y <= range[1][1]; y++)
@@ -982,10 +986,7 @@ static bool mesh_simplified_near(const mesh_builder *b, size_t index_count, floa
         if (kept[v]) continue;
         const float *p = b->vertices[v].position;
         size_t cell = 0;
-        for (int k = 2; k >= 0; k--) {
-            int i = (int)((p[k] - lo[k]) * scale[k]);
-            cell = cell * SIMPLIFY_GRID + (size_t)(i < 0 ? 0 : i > SIMPLIFY_GRID - 1 ? SIMPLIFY_GRID - 1 : i);
-        }
+        for (int k = 2; k >= 0; k--) cell = cell * SIMPLIFY_GRID + (size_t)simplify_grid_cell(p[k], lo[k], scale[k]);
         near = false;
         for (uint32_t e = cell ? first[cell - 1] : 0; e < first[cell] && !near; e++) {
             const uint32_t *tri = b->indices + entries[e];
