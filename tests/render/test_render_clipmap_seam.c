@@ -208,13 +208,13 @@ static bool mesh_chunk_plain(terrain_world *world, int64_t cx, int64_t cy, int64
     return ok;
 }
 
-/* The game's arrangement at an eighth of its scale (the debug build's time): the hole is the
- * rings' square, ±32 m, whose border level-0 meshes draw (the game: ±256 m, level 2), and the
- * clipmap's finest level has their spacing, 1 m, and a snap of a quarter of it, 16 m (the
- * game's: 128 m), placed for a viewer near the centre: level 0 (64 cells) is then the hole, so
- * without the border's own heights its odd vertices would morph onto the 2 m level's edges. Low
- * eyes inside and outside look along each side and, zoomed (20°), over it. */
-Test(render_clipmap_seam, looking_along_the_seam_from_low_angles_shows_no_sky_and_no_ledge) {
+/* The clipmap around a hole of the game's shape at an eighth of its scale (the debug build's
+ * time): the hole is the rings' square, ±32 m, whose border level-0 meshes draw (the game:
+ * ±256 m, level 2), with a snap of a quarter of it, 16 m (the game's: 128 m), placed for a
+ * viewer near the centre. The clipmap's levels as given (the finest `finest` metres apart,
+ * `cells` a side, sinking over `band` metres). Low eyes inside and outside look along each side
+ * and, zoomed (20°), over it. */
+static void check_seam_around_the_rings(int cells, float finest, float band) {
     terrain_generation_desc generation = terrain_generation_defaults(1);
     gfx_context *gfx = render_offscreen(W, H);
     terrain_renderer *renderer = terrain_renderer_create(gfx, &(terrain_renderer_desc){
@@ -245,10 +245,10 @@ Test(render_clipmap_seam, looking_along_the_seam_from_low_angles_shows_no_sky_an
         }
     cr_assert_gt(count, 3);
     terrain_clipmap *stacks = terrain_clipmap_create(&(terrain_clipmap_desc){
-        .generation = generation, .levels = 5, .cells = 64, .finest_spacing = 1.0f, .world = world, .mesh_step = 1.0f,
-        .centre_snap = 16.0f });
-    terrain_clipmap *ground = terrain_clipmap_create(&(terrain_clipmap_desc){ .generation = generation, .levels = 5, .cells = 64,
-                                                                              .finest_spacing = 1.0f });
+        .generation = generation, .levels = 5, .cells = cells, .finest_spacing = finest, .hole_band = band, .world = world,
+        .mesh_step = 1.0f, .centre_snap = 16.0f });
+    terrain_clipmap *ground = terrain_clipmap_create(&(terrain_clipmap_desc){
+        .generation = generation, .levels = 5, .cells = cells, .finest_spacing = finest, .hole_band = band });
     terrain_clipmap_set_hole(stacks, hole_min, hole_max);
     terrain_clipmap_set_hole(ground, hole_min, hole_max);
     /* Measured: 3 235 pixels in the band, no ledge; 311 with G alone (the bound, 20, is a guard
@@ -274,4 +274,19 @@ Test(render_clipmap_seam, looking_along_the_seam_from_low_angles_shows_no_sky_an
     terrain_world_destroy(world);
     terrain_renderer_destroy(renderer);
     gfx_context_destroy(gfx);
+}
+
+/* The arrangement the game had: the finest level has the meshes' spacing, 1 m, so level 0 (64
+ * cells) is the hole itself, buried, and without the border's own heights its odd vertices
+ * would morph onto the 2 m level's edges. */
+Test(render_clipmap_seam, looking_along_the_seam_from_low_angles_shows_no_sky_and_no_ledge) {
+    check_seam_around_the_rings(64, 1.0f, 0.0f);
+}
+
+/* The game's arrangement (app.c, app_fixed_clipmap_levels): the finest level at twice the
+ * meshes' spacing, 2 m (the game's 8 m), 48 cells (its 96) reaching past the hole, sinking over
+ * the band the 1 m levels did, 2 m. The hole's border then lies inside the finest level, whose
+ * vertices on it keep the meshes' heights (every other one of their samples). */
+Test(render_clipmap_seam, the_games_levels_from_twice_the_meshes_spacing_show_no_sky_and_no_ledge) {
+    check_seam_around_the_rings(48, 2.0f, 2.0f);
 }

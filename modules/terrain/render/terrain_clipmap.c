@@ -63,14 +63,15 @@
  * view), and would show sky through an unmeshed chunk; the pit costs only hidden fragments,
  * which the depth test drops early (the shader never discards). Its one condition: the hole's
  * border lies on the finest level's vertex lines inside it (chunk borders do, at 4 m), else a
- * triangle straddling the border starts sinking outside it. A level wholly inside a hole (the
- * game's level 0, once the rings' layout is in) is all pit: the coarser level draws it instead
- * (level_buried, below).
+ * triangle straddling the border starts sinking outside it. A level wholly inside a hole (level
+ * 0 of the rings' own spacing, snapped as they are, once their layout is in) is all pit: the
+ * coarser level draws it instead (level_buried, below). The game starts at twice their spacing
+ * instead (game/app.c), so none is.
  *
  * The seam. With the stacks' heights, a vertex on a hole's border keeps its own texel (α = 0)
- * whatever its level's morph (on_hole_border, clipmap.vert's `seam`): in the game level 0 lies on
- * the rings' hole (centre_snap), so its border is the hole's, where the morph would otherwise
- * put its odd vertices on the 8 m level's edges. Where a level's border runs along the hole's,
+ * whatever its level's morph (on_hole_border, clipmap.vert's `seam`): a level 0 of the rings'
+ * spacing lies on their hole (centre_snap), so its border is the hole's, where the morph would
+ * otherwise put its odd vertices on the next level's edges. Where a level's border runs along the hole's,
  * that opens a T-junction crack against the coarser level in the border's vertical plane; a ray
  * through it from outside runs under the chunks' edge into the pit (ground), and one from inside
  * has gone under the chunks' surface first. The pit's band starts at the border vertex, at the
@@ -830,8 +831,8 @@ static bool segment_in_finer(const terrain_clipmap *c, int level, int axis, int 
     return c->cuts[segment] >= h && c->cuts[segment + 1] <= h + c->cells / 2;
 }
 
-/* Whether the level lies wholly inside one hole: all of it would be pit under the chunks. The
- * game's level 0 is the rings' hole itself (same extent, same snap) once their layout is in:
+/* Whether the level lies wholly inside one hole: all of it would be pit under the chunks. A
+ * level 0 of the rings' spacing and snap is the rings' hole itself once their layout is in:
  * a fifth of the clipmap's triangles, every one hidden. The coarser level draws the pit there
  * instead, at its own spacing: the pit's floor needs no detail, and its wall is the same (the
  * sink is linear across hole_band, one coarser cell at the default band), its border vertices
