@@ -504,7 +504,7 @@ game_app *game_app_create(const game_app_desc *desc) {
         /* The stacks' surface where chunks are cached, sampled as the outermost ring meshes it,
          * and snapped as the rings are: the far terrain meets the chunks along their hole's
          * border and shows edits from afar (002 §3.5). Without --pixel-error the levels are
-         * fixed (app_clipmap_levels). */
+         * fixed (app_fixed_clipmap_levels). */
         float outermost = (float)(1 << (rings.levels - 1));
         app_clipmap_levels fixed = app_fixed_clipmap_levels(outermost, d->pixel_error);
         app->clipmap = terrain_clipmap_create(&(terrain_clipmap_desc){
