@@ -751,7 +751,7 @@ static void app_memory_counters(game_app *app) {
     trace_counter("memory.meshes_gpu", (double)st.gpu_mesh_bytes);
     if (app->rocks) {
         rocks_system_stats_info r = rocks_system_stats(app->rocks);
-        trace_counter("memory.rocks", (double)(r.tiles_bytes + r.placed_bytes + r.gpu_bytes));
+        trace_counter("memory.rocks", (double)(r.tiles_bytes + r.placed_bytes + r.draw_bytes + r.gpu_bytes));
     }
     if (app->grass) trace_counter("memory.grass", (double)grass_system_stats(app->grass).bytes);
 }

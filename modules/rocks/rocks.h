@@ -338,14 +338,16 @@ typedef struct rocks_system_stats_info {
     int chunks;                       /* RockTiles components now */
     uint64_t instances;               /* rocks placed over them */
     uint64_t instances_drawn;         /* by the last rocks_draw */
-    int commands_drawn;               /* its draw commands (rock mesh × LOD) */
+    uint64_t triangles_drawn;         /* their triangles (all in one draw call) */
     uint64_t placements;              /* chunks placed since creation */
     double place_ms;                  /* CPU ms placing, last frame */
     double draw_ms;                   /* CPU ms of the last rocks_draw */
     size_t tiles_bytes;               /* the tile set (rocks_tileset.bytes; shared, not owned) */
     size_t placed_bytes;              /* the placed rocks' instances, CPU side */
-    size_t gpu_bytes;                 /* the renderer's buffers: the set's meshes, instances,
-                                         draw commands */
+    size_t draw_bytes;                /* the renderer's CPU side: every rock level's vertices and
+                                         indices, kept compact, and the frame's staging */
+    size_t gpu_bytes;                 /* the renderer's buffers: the frame's batch of vertices
+                                         and indices */
 } rocks_system_stats_info;
 rocks_system_stats_info rocks_system_stats(const rocks_system *rocks);
 /* A hash of every placed rock (chunk coordinates, rock, key, position): tests and tools. */

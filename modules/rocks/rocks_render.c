@@ -1,10 +1,17 @@
-/* rocks_render.c — the tile set's rock meshes on the GPU, drawn instanced.
+/* rocks_render.c — the rocks in view as one batch of vertices a frame, drawn with one call.
  *
- * Every rock mesh of every level of detail lives in one vertex and one index buffer, uploaded
- * once. A frame buckets the rocks in view by (rock, LOD) — counting, a prefix sum, a scatter: no
- * sort — writes their instances into one buffer in bucket order, and issues one
- * glMultiDrawElementsIndirect whose commands are the buckets (baseInstance points each at its
- * run of instances). The CPU work is a few operations per rock in view, whatever their meshes.
+ * Every level of detail of every rock keeps its own compact vertices (tile units from the rock's
+ * seed, and normals) and indices on the CPU, made once from the tile set. A frame picks the rocks
+ * in view and their levels and writes each one's vertices, placed (seed less the camera, plus the
+ * vertex times the scale) and tinted, into one vertex buffer with its indices, then draws them
+ * all with one glDrawElements. The CPU work is a few operations per vertex in view: ~7 k
+ * vertices for the ~1 200 rocks a walk's start view holds, most of them at LOD 2 (4.3 vertices).
+ *
+ * Why not instances: an instanced draw (the first version: one glMultiDrawElementsIndirect, a
+ * command per rock mesh and level) costs llvmpipe about a microsecond per instance whatever the
+ * mesh, 1.2 ms a frame for 1 200 rocks whose 4-triangle LOD 2 is almost all of them; drawing
+ * every rock at LOD 2 saved 0.1 of it. Rocks this small are also what a GPU packs poorly into
+ * instances. The per-frame upload is ~32 bytes a vertex (~0.2 MB).
  *
  * Levels of detail: a rock switches at lod_distance × s, s ∈ [0.75, 1.25] from a hash of its
  * key, so switches are spread over a band instead of a ring moving with the player. Past
@@ -19,53 +26,101 @@
 #include "gfx/gfx.h"
 #include "trace/trace.h"
 
-typedef struct rock_gpu_vertex {
-    float position[3];                /* tile units from the rock's seed */
+/* A vertex of a rock's level, as kept: tile units from the rock's seed. */
+typedef struct rock_mesh_vertex {
+    float local[3];
     int8_t normal[4];
+} rock_mesh_vertex;
+
+/* Where one rock level's compact vertices and its indices (into them) start. */
+typedef struct rock_level {
+    uint32_t vertex_first, index_first;
+    uint16_t vertex_count;            /* a rock's vertices fit 16-bit indices in the tile set */
+    uint32_t index_count;
+} rock_level;
+
+/* A rock in view: its level (an index into levels), where and how it is drawn. */
+typedef struct rock_pick {
+    uint32_t level;
+    float seed[3];                    /* metres from the camera */
+    float scale;                      /* metres a tile unit: tile size × the fade past range */
+    uint8_t tint[4];
+} rock_pick;
+
+/* A vertex as drawn (32 bytes). */
+typedef struct rock_gpu_vertex {
+    float relative[3];                /* metres from the camera */
+    float local[3];                   /* tile units from the seed: the grain's frame */
+    int8_t normal[4];
+    uint8_t tint[4];                  /* albedo, unorm */
 } rock_gpu_vertex;
-
-typedef struct rock_gpu_instance {
-    float seed[4];                    /* seed − camera (metres), scale */
-    float tint[4];
-} rock_gpu_instance;
-
-typedef struct draw_command {
-    uint32_t count, instance_count, first_index;
-    int32_t base_vertex;
-    uint32_t base_instance;
-} draw_command;
 
 struct rocks_renderer {
     gfx_context *gfx;
     const rocks_tileset *set;
     gfx_program program;
-    gfx_buffer vertices, indices, instances, commands;
+    rock_level *levels;               /* rock_count × ROCKS_LODS */
+    rock_mesh_vertex *mesh_vertices;
+    uint16_t *mesh_indices;
+    size_t mesh_vertex_count, mesh_index_count;
+    /* The frame's batch: the rocks picked, CPU staging, and the GPU buffers (grown by doubling). */
+    rock_pick *picks;
+    size_t pick_capacity;
+    rock_gpu_vertex *staged_vertices;
+    uint32_t *staged_indices;
+    size_t staged_vertex_capacity, staged_index_capacity;
+    gfx_buffer vertices, indices;
     gfx_vertex_array vertex_array;
-    size_t instance_capacity, command_capacity;   /* in items, GPU side */
-    /* Per-frame CPU scratch. */
-    uint32_t *bucket_count;           /* rock_count × ROCKS_LODS, zero between frames */
-    uint32_t *touched;                /* bucket ids with a count */
-    size_t touched_capacity;
-    rock_gpu_instance *staged;
-    size_t staged_capacity;
-    rock_gpu_instance *ordered;
-    size_t ordered_capacity;
-    draw_command *command_list;
-    size_t command_list_capacity;
+    size_t vertex_capacity, index_capacity;   /* in items, GPU side */
 };
 
-/* Instances in buffer 1, advanced once per instance (baseInstance offsets them per command). */
-static void make_vertex_array(rocks_renderer *r) {
+static void make_buffers(rocks_renderer *r) {
+    r->vertices = gfx_buffer_create(&(gfx_buffer_desc){ .size = r->vertex_capacity * sizeof(rock_gpu_vertex),
+                                                        .usage = GFX_BUFFER_DYNAMIC });
+    r->indices = gfx_buffer_create(&(gfx_buffer_desc){ .size = r->index_capacity * sizeof(uint32_t),
+                                                       .usage = GFX_BUFFER_DYNAMIC });
     r->vertex_array = gfx_vertex_array_create(&(gfx_vertex_array_desc){
-        .vertices = r->vertices, .vertex_stride = sizeof(rock_gpu_vertex),
-        .instances = r->instances, .instance_stride = sizeof(rock_gpu_instance),
-        .indices = r->indices,
+        .vertices = r->vertices, .vertex_stride = sizeof(rock_gpu_vertex), .indices = r->indices,
         .attributes = {
-            { .components = 3, .type = GL_FLOAT, .offset = 0 },
+            { .components = 3, .type = GL_FLOAT, .offset = offsetof(rock_gpu_vertex, relative) },
+            { .components = 3, .type = GL_FLOAT, .offset = offsetof(rock_gpu_vertex, local) },
             { .components = 3, .type = GL_BYTE, .normalized = true, .offset = offsetof(rock_gpu_vertex, normal) },
-            { .components = 4, .type = GL_FLOAT, .offset = 0, .buffer = 1 },
-            { .components = 4, .type = GL_FLOAT, .offset = offsetof(rock_gpu_instance, tint), .buffer = 1 },
+            { .components = 3, .type = GL_UNSIGNED_BYTE, .normalized = true, .offset = offsetof(rock_gpu_vertex, tint) },
         } });
+}
+
+static void destroy_buffers(rocks_renderer *r) {
+    gfx_vertex_array_destroy(&r->vertex_array);
+    gfx_buffer_destroy(&r->vertices);
+    gfx_buffer_destroy(&r->indices);
+}
+
+/* Each rock level's vertices, only those its triangles use, numbered in order of first use
+ * (`stamp`, one entry a vertex of the rock, says where each went: UINT16_MAX for not yet). */
+static void compact_level(rocks_renderer *r, const rocks_rock *rock, int lod, uint16_t *stamp) {
+    const rocks_tileset *set = r->set;
+    rock_level *level = &r->levels[(size_t)(rock - set->rocks) * ROCKS_LODS + (size_t)lod];
+    level->vertex_first = (uint32_t)r->mesh_vertex_count;
+    level->index_first = (uint32_t)r->mesh_index_count;
+    level->index_count = rock->index_count[lod];
+    uint16_t used = 0;
+    for (uint32_t i = 0; i < rock->index_count[lod]; i++) {
+        uint16_t v = set->indices[rock->index_first[lod] + i];
+        if (stamp[v] == UINT16_MAX) {
+            const rocks_vertex *in = &set->vertices[rock->vertex_first + v];
+            rock_mesh_vertex *out = &r->mesh_vertices[r->mesh_vertex_count + used];
+            for (int a = 0; a < 3; a++) {
+                out->local[a] = in->position[a] - rock->seed[a];
+                out->normal[a] = in->normal[a];
+            }
+            out->normal[3] = 0;
+            stamp[v] = used++;
+        }
+        r->mesh_indices[r->mesh_index_count++] = stamp[v];
+    }
+    for (uint32_t i = 0; i < rock->index_count[lod]; i++) stamp[set->indices[rock->index_first[lod] + i]] = UINT16_MAX;
+    level->vertex_count = used;
+    r->mesh_vertex_count += used;
 }
 
 rocks_renderer *rocks__renderer_create(gfx_context *gfx, const rocks_tileset *set) {
@@ -79,55 +134,51 @@ rocks_renderer *rocks__renderer_create(gfx_context *gfx, const rocks_tileset *se
     r->gfx = gfx;
     r->set = set;
     r->program = program;
-    /* Vertices relative to their rock's seed: the instance then places the seed. */
-    rock_gpu_vertex *vertices = core_alloc((set->vertex_count ? set->vertex_count : 1) * sizeof *vertices);
-    for (uint32_t k = 0; k < set->rock_count; k++) {
-        const rocks_rock *rock = &set->rocks[k];
-        for (uint32_t v = rock->vertex_first; v < rock->vertex_first + rock->vertex_count; v++) {
-            const rocks_vertex *in = &set->vertices[v];
-            rock_gpu_vertex *out = &vertices[v];
-            for (int a = 0; a < 3; a++) {
-                out->position[a] = in->position[a] - rock->seed[a];
-                out->normal[a] = in->normal[a];
-            }
-            out->normal[3] = 0;
-        }
-    }
-    r->vertices = gfx_buffer_create(&(gfx_buffer_desc){ .size = (size_t)set->vertex_count * sizeof *vertices,
-                                                        .data = vertices });
-    core_free(vertices, (set->vertex_count ? set->vertex_count : 1) * sizeof *vertices);
-    r->indices = gfx_buffer_create(&(gfx_buffer_desc){ .size = (size_t)set->index_count * sizeof(uint16_t),
-                                                       .data = set->indices });
-    r->instance_capacity = 4096;
-    r->instances = gfx_buffer_create(&(gfx_buffer_desc){ .size = r->instance_capacity * sizeof(rock_gpu_instance),
-                                                         .usage = GFX_BUFFER_DYNAMIC });
-    r->command_capacity = 1024;
-    r->commands = gfx_buffer_create(&(gfx_buffer_desc){ .size = r->command_capacity * sizeof(draw_command),
-                                                        .usage = GFX_BUFFER_DYNAMIC });
-    make_vertex_array(r);
-    r->bucket_count = core_calloc((size_t)set->rock_count * ROCKS_LODS + 1, sizeof *r->bucket_count);
+    /* At most every level uses all of its rock's vertices: the arrays' bound, trimmed after. */
+    size_t vertex_bound = (size_t)set->vertex_count * ROCKS_LODS, index_total = 0;
+    for (uint32_t k = 0; k < set->rock_count; k++)
+        for (int lod = 0; lod < ROCKS_LODS; lod++) index_total += set->rocks[k].index_count[lod];
+    r->levels = core_calloc((size_t)set->rock_count * ROCKS_LODS, sizeof *r->levels);
+    r->mesh_vertices = core_alloc((vertex_bound ? vertex_bound : 1) * sizeof *r->mesh_vertices);
+    r->mesh_indices = core_alloc((index_total ? index_total : 1) * sizeof *r->mesh_indices);
+    uint16_t *stamp = core_alloc(65536 * sizeof *stamp);
+    memset(stamp, 0xff, 65536 * sizeof *stamp);
+    for (uint32_t k = 0; k < set->rock_count; k++)
+        for (int lod = 0; lod < ROCKS_LODS; lod++) compact_level(r, &set->rocks[k], lod, stamp);
+    core_free(stamp, 65536 * sizeof *stamp);
+    r->mesh_indices = core_realloc(r->mesh_indices, (index_total ? index_total : 1) * sizeof *r->mesh_indices,
+                                   (r->mesh_index_count ? r->mesh_index_count : 1) * sizeof *r->mesh_indices);
+    r->mesh_vertices = core_realloc(r->mesh_vertices, (vertex_bound ? vertex_bound : 1) * sizeof *r->mesh_vertices,
+                                    (r->mesh_vertex_count ? r->mesh_vertex_count : 1) * sizeof *r->mesh_vertices);
+    r->vertex_capacity = 16384;
+    r->index_capacity = 32768;
+    make_buffers(r);
     return r;
 }
 
 void rocks__renderer_destroy(rocks_renderer *r) {
     if (!r) return;
-    gfx_vertex_array_destroy(&r->vertex_array);
-    gfx_buffer_destroy(&r->vertices);
-    gfx_buffer_destroy(&r->indices);
-    gfx_buffer_destroy(&r->instances);
-    gfx_buffer_destroy(&r->commands);
-    core_free(r->bucket_count, ((size_t)r->set->rock_count * ROCKS_LODS + 1) * sizeof *r->bucket_count);
-    core_free(r->touched, r->touched_capacity * sizeof *r->touched);
-    core_free(r->staged, r->staged_capacity * sizeof *r->staged);
-    core_free(r->ordered, r->ordered_capacity * sizeof *r->ordered);
-    core_free(r->command_list, r->command_list_capacity * sizeof *r->command_list);
+    destroy_buffers(r);
+    core_free(r->levels, (size_t)r->set->rock_count * ROCKS_LODS * sizeof *r->levels);
+    core_free(r->mesh_vertices, (r->mesh_vertex_count ? r->mesh_vertex_count : 1) * sizeof *r->mesh_vertices);
+    core_free(r->mesh_indices, (r->mesh_index_count ? r->mesh_index_count : 1) * sizeof *r->mesh_indices);
+    core_free(r->picks, r->pick_capacity * sizeof *r->picks);
+    core_free(r->staged_vertices, r->staged_vertex_capacity * sizeof *r->staged_vertices);
+    core_free(r->staged_indices, r->staged_index_capacity * sizeof *r->staged_indices);
     core_free(r, sizeof *r);
 }
 
 size_t rocks__renderer_gpu_bytes(const rocks_renderer *r) {
     if (!r) return 0;
-    return (size_t)r->set->vertex_count * sizeof(rock_gpu_vertex) + (size_t)r->set->index_count * sizeof(uint16_t) +
-           r->instance_capacity * sizeof(rock_gpu_instance) + r->command_capacity * sizeof(draw_command);
+    return r->vertex_capacity * sizeof(rock_gpu_vertex) + r->index_capacity * sizeof(uint32_t);
+}
+
+size_t rocks__renderer_cpu_bytes(const rocks_renderer *r) {
+    if (!r) return 0;
+    return r->mesh_vertex_count * sizeof *r->mesh_vertices + r->mesh_index_count * sizeof *r->mesh_indices +
+           (size_t)r->set->rock_count * ROCKS_LODS * sizeof *r->levels +
+           r->pick_capacity * sizeof *r->picks + r->staged_vertex_capacity * sizeof *r->staged_vertices +
+           r->staged_index_capacity * sizeof *r->staged_indices;
 }
 
 static float key_unit(uint32_t key, int which) {
@@ -151,20 +202,50 @@ static bool sphere_in_frustum(const terrain_frustum *f, const float c[3], float 
     return true;
 }
 
-uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const rocks_draw_desc *params,
-                              const rocks_placement *const *placements, int count, int *commands_out) {
-    TRACE_ZONE("rocks_draw");
+/* Writes a rock's level placed at seed (metres from the camera) with `scale` (metres a tile unit)
+ * and `tint` into the batch at vertex `first_vertex`, index `first_index`. */
+static void stage_rock(rocks_renderer *r, const rock_pick *pick, size_t first_vertex, size_t first_index) {
+    const rock_level *level = &r->levels[pick->level];
+    rock_gpu_vertex *out = r->staged_vertices + first_vertex;
+    const rock_mesh_vertex *in = r->mesh_vertices + level->vertex_first;
+    for (uint32_t v = 0; v < level->vertex_count; v++) {
+        for (int a = 0; a < 3; a++) {
+            out[v].relative[a] = pick->seed[a] + in[v].local[a] * pick->scale;
+            out[v].local[a] = in[v].local[a];
+        }
+        memcpy(out[v].normal, in[v].normal, sizeof out[v].normal);
+        memcpy(out[v].tint, pick->tint, sizeof out[v].tint);
+    }
+    const uint16_t *indices = r->mesh_indices + level->index_first;
+    uint32_t *to = r->staged_indices + first_index, first = (uint32_t)first_vertex;
+    for (uint32_t i = 0; i < level->index_count; i++) to[i] = first + indices[i];
+}
+
+static uint8_t unorm8(float x) { return (uint8_t)lrintf(fminf(fmaxf(x, 0.0f), 1.0f) * 255.0f); }
+
+/* Grows the GPU buffers to hold the batch (doubling; the array is made again over them). */
+static void fit_buffers(rocks_renderer *r, size_t vertex_count, size_t index_count) {
+    if (vertex_count <= r->vertex_capacity && index_count <= r->index_capacity) return;
+    while (r->vertex_capacity < vertex_count) r->vertex_capacity *= 2;
+    while (r->index_capacity < index_count) r->index_capacity *= 2;
+    destroy_buffers(r);
+    make_buffers(r);
+}
+
+/* The rocks in view with their levels, into r->picks; returns how many. */
+static size_t pick_rocks(rocks_renderer *r, const terrain_view *view, const rocks_draw_desc *params,
+                         const rocks_placement *const *placements, int count) {
     const rocks_tileset *set = r->set;
     const float tile = params->tile_size;
     terrain_frustum frustum = terrain_frustum_from_view(view);
-    size_t staged = 0, touched = 0;
-    /* Pass 1: pick the rocks in view and their level; count per bucket. */
+    size_t picked = 0;
     for (int p = 0; p < count; p++) {
         const rocks_placement *pl = placements[p];
         float base[3] = { (float)(pl->origin[0] - view->camera[0]), (float)(pl->origin[1] - view->camera[1]),
                           (float)(pl->origin[2] - view->camera[2]) };
         for (uint32_t i = 0; i < pl->count; i++) {
             const rocks_instance *in = &pl->instances[i];
+            if (i + 8 < pl->count) __builtin_prefetch(&set->rocks[pl->instances[i + 8].rock]);
             const rocks_rock *rock = &set->rocks[in->rock];
             float seed[3];
             for (int a = 0; a < 3; a++) seed[a] = base[a] + in->position[a] + rock->seed[a] * tile;
@@ -174,58 +255,51 @@ uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const
             float spread = 0.75f + 0.5f * key_unit(in->key, 0), scale;
             int lod = choose_lod(params, distance, spread, &scale);
             if (lod < 0 || rock->index_count[lod] == 0) continue;
-            uint32_t bucket = in->rock * ROCKS_LODS + (uint32_t)lod;
-            if (r->bucket_count[bucket]++ == 0) {
-                r->touched = core_grow(r->touched, &r->touched_capacity, touched + 1, sizeof *r->touched);
-                r->touched[touched++] = bucket;
-            }
-            r->staged = core_grow(r->staged, &r->staged_capacity, staged + 1, sizeof *r->staged);
             float shade = 0.85f + 0.3f * key_unit(in->key, 1), warm = key_unit(in->key, 2);
-            r->staged[staged] = (rock_gpu_instance){
-                .seed = { seed[0], seed[1], seed[2], tile * scale },
-                .tint = { shade * (0.50f + 0.07f * warm), shade * (0.48f + 0.03f * warm), shade * (0.45f - 0.03f * warm), 0 },
-            };
-            r->staged[staged].tint[3] = (float)bucket;      /* its bucket (exact below 2^24) */
-            staged++;
+            r->picks = core_grow(r->picks, &r->pick_capacity, picked + 1, sizeof *r->picks);
+            r->picks[picked] = (rock_pick){
+                .level = in->rock * ROCKS_LODS + (uint32_t)lod, .seed = { seed[0], seed[1], seed[2] }, .scale = tile * scale,
+                .tint = { unorm8(shade * (0.50f + 0.07f * warm)), unorm8(shade * (0.48f + 0.03f * warm)),
+                          unorm8(shade * (0.45f - 0.03f * warm)), 255 } };
+            __builtin_prefetch(&r->levels[r->picks[picked++].level]);
         }
     }
-    *commands_out = (int)touched;
-    if (staged == 0) return 0;
-    /* Pass 2: commands in bucket order of first appearance; prefix sums become first instances. */
-    r->command_list = core_grow(r->command_list, &r->command_list_capacity, touched, sizeof *r->command_list);
-    uint32_t first = 0;
-    for (size_t t = 0; t < touched; t++) {
-        uint32_t bucket = r->touched[t];
-        const rocks_rock *rock = &set->rocks[bucket / ROCKS_LODS];
-        uint32_t lod = bucket % ROCKS_LODS, n = r->bucket_count[bucket];
-        r->command_list[t] = (draw_command){ .count = rock->index_count[lod], .instance_count = n,
-                                             .first_index = rock->index_first[lod],
-                                             .base_vertex = (int32_t)rock->vertex_first, .base_instance = first };
-        r->bucket_count[bucket] = first;           /* now the next free slot of the bucket */
-        first += n;
-    }
-    /* Pass 3: scatter. */
-    r->ordered = core_grow(r->ordered, &r->ordered_capacity, staged, sizeof *r->ordered);
-    for (size_t s = 0; s < staged; s++) {
-        uint32_t bucket = (uint32_t)r->staged[s].tint[3];
-        r->ordered[r->bucket_count[bucket]++] = r->staged[s];
-    }
-    for (size_t t = 0; t < touched; t++) r->bucket_count[r->touched[t]] = 0;
+    return picked;
+}
 
-    if (staged > r->instance_capacity || touched > r->command_capacity) {
-        while (r->instance_capacity < staged) r->instance_capacity *= 2;
-        while (r->command_capacity < touched) r->command_capacity *= 2;
-        gfx_buffer_destroy(&r->instances);
-        gfx_buffer_destroy(&r->commands);
-        gfx_vertex_array_destroy(&r->vertex_array);
-        r->instances = gfx_buffer_create(&(gfx_buffer_desc){ .size = r->instance_capacity * sizeof(rock_gpu_instance),
-                                                             .usage = GFX_BUFFER_DYNAMIC });
-        r->commands = gfx_buffer_create(&(gfx_buffer_desc){ .size = r->command_capacity * sizeof(draw_command),
-                                                            .usage = GFX_BUFFER_DYNAMIC });
-        make_vertex_array(r);
+/* The picked rocks' vertices and indices into the staging arrays, and their counts. Two passes:
+ * the levels, then their vertices, each scattered over megabytes and each read only after the
+ * previous pass asked for it (prefetched), so the cache misses of one pass overlap. */
+static void stage_batch(rocks_renderer *r, size_t picked, size_t *vertex_count, size_t *index_count) {
+    size_t vertices = 0, indices = 0;
+    for (size_t k = 0; k < picked; k++) {
+        const rock_level *level = &r->levels[r->picks[k].level];
+        __builtin_prefetch(r->mesh_vertices + level->vertex_first);
+        __builtin_prefetch(r->mesh_indices + level->index_first);
+        vertices += level->vertex_count;
+        indices += level->index_count;
     }
-    gfx_buffer_update(r->instances, 0, r->ordered, staged * sizeof *r->ordered);
-    gfx_buffer_update(r->commands, 0, r->command_list, touched * sizeof *r->command_list);
+    r->staged_vertices = core_grow(r->staged_vertices, &r->staged_vertex_capacity, vertices, sizeof *r->staged_vertices);
+    r->staged_indices = core_grow(r->staged_indices, &r->staged_index_capacity, indices, sizeof *r->staged_indices);
+    size_t first_vertex = 0, first_index = 0;
+    for (size_t k = 0; k < picked; k++) {
+        stage_rock(r, &r->picks[k], first_vertex, first_index);
+        first_vertex += r->levels[r->picks[k].level].vertex_count;
+        first_index += r->levels[r->picks[k].level].index_count;
+    }
+    *vertex_count = vertices, *index_count = indices;
+}
+
+uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const rocks_draw_desc *params,
+                              const rocks_placement *const *placements, int count, uint64_t *triangles_out) {
+    TRACE_ZONE("rocks_draw");
+    size_t picked = pick_rocks(r, view, params, placements, count), vertex_count = 0, index_count = 0;
+    if (picked) stage_batch(r, picked, &vertex_count, &index_count);
+    *triangles_out = index_count / 3;
+    if (picked == 0) return 0;
+    fit_buffers(r, vertex_count, index_count);
+    gfx_buffer_update(r->vertices, 0, r->staged_vertices, vertex_count * sizeof *r->staged_vertices);
+    gfx_buffer_update(r->indices, 0, r->staged_indices, index_count * sizeof *r->staged_indices);
 
     gfx_pass_begin(r->gfx, &(gfx_pass_desc){ .name = "rocks" });
     float matrix[16], sun[3], zero[3] = { 0, 0, 0 };
@@ -238,12 +312,10 @@ uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const
     gfx_uniform_float(r->gfx, r->program, "u_fog_density", params->fog_density);
     /* the context's defaults (gfx_context.c): depth test LEQUAL, back faces culled; closed,
      * outward-wound rocks need nothing else, and nothing here is left changed */
-    glBindVertexArray(gfx_vertex_array_gl(r->vertex_array));
-    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gfx_buffer_gl(r->commands));
-    glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_SHORT, NULL, (GLsizei)touched, 0);
-    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
-    glBindVertexArray(0);
+    gfx_draw(&(gfx_draw_desc){ .vertex_array = r->vertex_array, .count = (uint32_t)index_count,
+                               .index_type = GFX_INDEX_U32 });
     gfx_pass_end(r->gfx);
-    trace_counter("rocks.drawn", (double)staged);
-    return staged;
+    trace_counter("rocks.drawn", (double)picked);
+    trace_counter("rocks.triangles", (double)(index_count / 3));
+    return picked;
 }

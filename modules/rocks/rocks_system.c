@@ -243,6 +243,7 @@ rocks_system_stats_info rocks_system_stats(const rocks_system *r) {
     s.tiles_bytes = r->desc.tiles ? r->desc.tiles->bytes : 0;
     s.placed_bytes = (size_t)s.instances * sizeof(rocks_instance);
     s.gpu_bytes = rocks__renderer_gpu_bytes(r->renderer);
+    s.draw_bytes = rocks__renderer_cpu_bytes(r->renderer);
     return s;
 }
 
@@ -269,7 +270,7 @@ void rocks_draw(rocks_system *r, const terrain_view *view) {
     rocks_draw_desc params = { .tile_size = r->desc.tile_size, .range = r->desc.range,
                                  .fog_density = r->desc.fog_density,
                                  .lod_distance = { r->desc.lod_distance[0], r->desc.lod_distance[1] } };
-    r->stats.instances_drawn = rocks__renderer_draw(r->renderer, view, &params, list, n, &r->stats.commands_drawn);
+    r->stats.instances_drawn = rocks__renderer_draw(r->renderer, view, &params, list, n, &r->stats.triangles_drawn);
     r->stats.draw_ms = (double)(core_time_ns() - start) * 1e-6;
 }
 

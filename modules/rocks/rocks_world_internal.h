@@ -7,18 +7,20 @@
 
 typedef struct rocks_renderer rocks_renderer;
 
-/* The tile set's meshes on the GPU, and the per-frame instance and command buffers. */
+/* The tile set's rock levels kept compact on the CPU (the set's meshes may be released after),
+ * and the frame's batch of placed vertices with its GPU buffers. */
 rocks_renderer *rocks__renderer_create(gfx_context *gfx, const rocks_tileset *set);
 void rocks__renderer_destroy(rocks_renderer *r);
 size_t rocks__renderer_gpu_bytes(const rocks_renderer *r);   /* its buffers' sizes */
+size_t rocks__renderer_cpu_bytes(const rocks_renderer *r);   /* the kept levels and the staging */
 typedef struct rocks_draw_desc {
     float tile_size, range, fog_density;
     float lod_distance[ROCKS_LODS - 1];
 } rocks_draw_desc;
-/* Draws the placements' rocks in view (one pass "rocks"); returns the instances drawn and the
- * commands in *commands. */
+/* Draws the placements' rocks in view (one pass "rocks", one draw call); returns the rocks drawn
+ * and their triangles in *triangles. */
 uint64_t rocks__renderer_draw(rocks_renderer *r, const terrain_view *view, const rocks_draw_desc *params,
-                              const rocks_placement *const *placements, int count, int *commands);
+                              const rocks_placement *const *placements, int count, uint64_t *triangles);
 
 /* Block copy `block` of the tile copy at tile coordinate `cell` raised into the field's samples
  * inside its bounds (rocks_blocks.c; the cliffs' amplifier shares it); false when its bounds

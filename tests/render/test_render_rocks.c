@@ -1,7 +1,7 @@
 /* Rocks in the running world (modules/rocks): RockTiles follow the level-0 chunks, the rocks are
- * drawn (stone-coloured pixels where the pile is), the same rocks whatever the thread count, a
- * rock layer dropped by an edit shows in the frame it is committed, and digging removes them in
- * that frame. Worlds are made by hand: a flat bedrock floor with a rock layer on part of it. */
+ * drawn (stone-coloured pixels where the pile is), far ones whole at LOD 2 in one batch, the same
+ * rocks whatever the thread count, a rock layer dropped by an edit shows in the frame it is
+ * committed, and digging removes them in that frame. Worlds are made by hand: a flat bedrock floor with a rock layer on part of it. */
 #include "render_util.h"
 
 #include "core/core.h"
@@ -119,6 +119,42 @@ Test(render_rocks, a_rock_layer_is_drawn_as_rocks) {
     cr_expect_gt(grey, changed * 8 / 10, "%d of %d changed pixels stone-coloured", grey, changed);
     render_image_free(&bare);
     render_image_free(&rocky);
+    yard_close(&y);
+}
+
+/* The triangles of LOD 2 of every rock placed (read from the RockTiles components themselves). */
+static uint64_t yard_lod2_triangles(yard *y) {
+    ecs_component tiles = ecs_component_lookup(y->ecs, "RockTiles");
+    cr_assert_neq(tiles, 0);
+    ecs_query *query = ecs_query_create(y->ecs, &(ecs_query_desc){ .with = { tiles } });
+    uint64_t triangles = 0;
+    ecs_iter it = ecs_query_iter(y->ecs, query);
+    while (ecs_query_next(&it)) {
+        const RockTiles *t = ecs_field(&it, 0);
+        for (int i = 0; i < it.count; i++)
+            for (uint32_t k = 0; k < t[i].placement.count; k++)
+                triangles += y->tiles->rocks[t[i].placement.instances[k].rock].index_count[2] / 3;
+    }
+    ecs_query_destroy(y->ecs, query);
+    return triangles;
+}
+
+/* The frame's rocks are one batch of the rocks' own levels: from 32–48 m (every seed past LOD 2's
+ * latest start, 25 m × 1.25, and short of the shrinking's earliest end, 70 m × 0.75) with the
+ * whole yard in view, every rock placed is drawn, and the batch holds exactly the sum of their
+ * LOD 2 meshes' triangles, counted from the tile set. */
+Test(render_rocks, far_rocks_are_drawn_whole_at_lod_2_in_one_batch) {
+    yard y;
+    yard_open(&y, 2);
+    y.view = (terrain_view){ .camera = { 16, 28, 52 }, .yaw = 0.0f, .pitch = -0.47f, .aspect = (float)WIDTH / HEIGHT };
+    for (int frame = 0; frame < 4; frame++) yard_frame(&y, true);
+    rocks_system_stats_info st = rocks_system_stats(y.rocks);
+    cr_assert_gt(st.instances, 50);
+    cr_expect_eq(st.instances_drawn, st.instances, "%llu of %llu rocks drawn", (unsigned long long)st.instances_drawn,
+                 (unsigned long long)st.instances);
+    uint64_t expected = yard_lod2_triangles(&y);
+    cr_expect_eq(st.triangles_drawn, expected, "%llu triangles drawn, %llu in the rocks' LOD 2",
+                 (unsigned long long)st.triangles_drawn, (unsigned long long)expected);
     yard_close(&y);
 }
 

@@ -90,9 +90,9 @@ int main(int argc, char **argv) {
         gfx_frame_end(gfx);
     }
     rocks_system_stats_info stats = rocks_system_stats(rocks);
-    printf("rocks_pile: %u rock shapes in %.2f s; %llu rocks placed in %d chunks, %llu drawn with %d commands\n",
+    printf("rocks_pile: %u rock shapes in %.2f s; %llu rocks placed in %d chunks, %llu drawn (%llu triangles)\n",
            tiles->rock_count, tiles->build_seconds, (unsigned long long)stats.instances, stats.chunks,
-           (unsigned long long)stats.instances_drawn, stats.commands_drawn);
+           (unsigned long long)stats.instances_drawn, (unsigned long long)stats.triangles_drawn);
     rocks_system_destroy(rocks);
     rocks_tileset_destroy(tiles);
     terrain_renderer_destroy(renderer);
