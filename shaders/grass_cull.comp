@@ -4,6 +4,8 @@
 // and counted in the one indirect draw. A patch is 32 or 64 m wide, and most of its tufts are out
 // of view or range: only the others reach the vertex stage, and the work of a tuft (its height,
 // turn, colour, the wind and the player's push) is done here once, not at each of its corners.
+// The CPU already left out the parts of the mesh (each a run of tufts) whose boxes are out of
+// view or range: an invocation takes the runs in view one after another.
 //
 // A tuft is two crossed quads around an up halfway between the ground's normal and the vertical
 // (002 §3.3 uses the normal alone, which tilts tufts on slopes more than grass grows). A tuft is
@@ -22,7 +24,11 @@ layout(std430, binding = 0) readonly buffer Tufts { vec4 tufts[]; };        // t
 layout(std430, binding = 5) buffer Command { uint command[5]; };           // DrawElementsIndirectCommand
 layout(std430, binding = 6) writeonly buffer Visible { vec4 visible[]; };  // 5 per tuft
 
-uniform uint u_tuft_count;
+const int MAX_RUNS = 16;           // grass.c's GRASS_MAX_RUNS (the mesh's parts)
+uniform uint u_tuft_count;         // the invocations: the tufts of the runs below
+uniform int u_run_count;           // the runs of tufts looked at: those of the parts in view
+uniform uint u_run_first[MAX_RUNS];        // each run's first tuft in the patch
+uniform uint u_run_start[MAX_RUNS + 1];    // the invocations before each run
 uniform vec3 u_offset;             // patch origin − camera
 uniform float u_range;
 uniform float u_height;
@@ -54,6 +60,9 @@ vec3 tuft_top(vec3 root, vec3 up, float height, uint seed) {
 void main() {
     uint t = gl_GlobalInvocationID.x;
     if (t >= u_tuft_count) return;
+    int run = 0;
+    while (run + 1 < u_run_count && t >= u_run_start[run + 1]) run++;
+    t = u_run_first[run] + (t - u_run_start[run]);
     vec4 a = tufts[2u * t], b = tufts[2u * t + 1u];
     uint seed = floatBitsToUint(a.w);
     vec3 root = a.xyz + u_offset;

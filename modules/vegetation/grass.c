@@ -20,6 +20,7 @@
 #define GRASS_REACH_AHEAD 32.0            /* patches are placed this far beyond the range … */
 #define GRASS_REACH_KEEP 96.0             /* … and released only this far beyond it */
 #define GRASS_WAVE_PERIOD 256.0           /* metres after which the gusts repeat */
+#define GRASS_MAX_RUNS TERRAIN_MESH_PARTS /* runs of tufts a patch's culling looks at; grass_cull.comp's MAX_RUNS */
 
 struct grass_system {
     grass_system_desc desc;
@@ -138,6 +139,17 @@ static void grass_place_uniforms(grass_system *g, const TerrainMeshChunk *chunk,
     gfx_uniform_float(gfx, g->place, "u_snow_height", g->desc.snow_height);
 }
 
+/* Where each of the mesh's parts starts among the tufts: the scan's offset at the part's first
+ * triangle (parts are runs of triangles, tufts are placed in triangle order). Read after the
+ * total, which already waited for the scan. */
+static void grass_part_tufts(grass_system *g, const terrain_gpu_mesh *mesh, GrassPatch *patch) {
+    patch->part_count = patch->tufts ? mesh->part_count : 0;
+    for (uint32_t p = 0; p < patch->part_count; p++)
+        glGetNamedBufferSubData(gfx_buffer_gl(g->counts), (GLintptr)(mesh->parts[p].first_index / 3 * sizeof(uint32_t)),
+                                sizeof(uint32_t), &patch->part_first_tuft[p]);
+    patch->part_first_tuft[patch->part_count] = patch->tufts;
+}
+
 /* Places the chunk's tufts into `patch` (whose buffers are released first). */
 static void grass_place(grass_system *g, const TerrainMeshChunk *chunk, GrassPatch *patch) {
     TRACE_ZONE("grass_place_patch");
@@ -169,6 +181,7 @@ static void grass_place(grass_system *g, const TerrainMeshChunk *chunk, GrassPat
     /* The one value the CPU reads: the tufts, to size their buffer (a wait for this chunk's
      * placement, once per placement, never per frame). */
     glGetNamedBufferSubData(gfx_buffer_gl(g->total), 0, sizeof patch->tufts, &patch->tufts);
+    grass_part_tufts(g, mesh, patch);
     if (patch->tufts) {
         patch->tuft_buffer = gfx_buffer_create(&(gfx_buffer_desc){ .size = (size_t)patch->tufts * GRASS_TUFT_BYTES });
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, gfx_buffer_gl(patch->tuft_buffer));
@@ -375,6 +388,35 @@ static void grass_shape_uniforms(grass_system *g, const terrain_view *view) {
     gfx_uniform_float(gfx, g->cull, "u_time", view->time);
 }
 
+/* The runs of the patch's tufts that can show: those of the mesh's parts whose box, grown by
+ * what a tuft reaches from its root (1.7 heights up, 1.2 around: grass_cull.comp's sphere, for
+ * the tallest tuft, 1.4 × the average height), is in the frustum and whose roots' box is within
+ * the range. Adjacent parts make one run. `first[r]` is run r's first tuft, `start[r]` the
+ * tufts of the runs before it (start[runs]: all). Returns the runs. The shader still tests each
+ * tuft: the parts only spare it the tufts that cannot pass. */
+static int grass_runs(const grass_system *g, const TerrainMeshChunk *chunk, const GrassPatch *p,
+                      const terrain_frustum *frustum, uint32_t first[GRASS_MAX_RUNS], uint32_t start[GRASS_MAX_RUNS + 1]) {
+    start[0] = 0;
+    if (p->part_count == 0 || chunk->gpu.serial != p->source || chunk->gpu.part_count != p->part_count) {
+        first[0] = 0, start[1] = p->tufts;
+        return 1;
+    }
+    const float reach = 2.4f * g->desc.height;
+    int runs = 0;
+    bool open = false;                   /* the last part was in a run */
+    for (uint32_t k = 0; k < p->part_count; k++) {
+        const terrain_mesh_part *part = &chunk->gpu.parts[k];
+        float lo[3], hi[3];
+        for (int a = 0; a < 3; a++) lo[a] = part->bounds_min[a] - reach, hi[a] = part->bounds_max[a] + reach;
+        bool in = p->part_first_tuft[k + 1] > p->part_first_tuft[k] && terrain_frustum_sees(frustum, p->origin, lo, hi) &&
+                  grass_box_distance(g, p->origin, part->bounds_min, part->bounds_max) <= g->desc.range;
+        if (in && !open) first[runs] = p->part_first_tuft[k], start[runs + 1] = start[runs], runs++;
+        if (in) start[runs] += p->part_first_tuft[k + 1] - p->part_first_tuft[k];
+        open = in;
+    }
+    return runs;
+}
+
 /* Appends the tufts of the patches in view to g->visible; returns the tufts looked at. It runs
  * in the draw phase, before anything of the frame is drawn: the barrier that makes its results
  * visible to the draw then waits for nothing (after the terrain's draws it would wait for them:
@@ -402,6 +444,9 @@ static uint64_t grass_cull(grass_system *g, const terrain_view *view) {
     grass_shape_uniforms(g, view);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, gfx_buffer_gl(g->command));
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, gfx_buffer_gl(g->visible));
+    GLint run_count = glGetUniformLocation(program, "u_run_count");
+    GLint run_first = glGetUniformLocation(program, "u_run_first"), run_start = glGetUniformLocation(program, "u_run_start");
+    uint64_t looked = 0;
     it = ecs_query_iter(g->desc.ecs, g->patches);
     while (ecs_query_next(&it)) {
         const TerrainMeshChunk *chunks = ecs_field(&it, 0);
@@ -409,18 +454,25 @@ static uint64_t grass_cull(grass_system *g, const terrain_view *view) {
         for (int i = 0; i < it.count; i++) {
             const GrassPatch *p = &patches[i];
             if (!grass_patch_drawn(g, &chunks[i], p)) continue;
+            uint32_t first[GRASS_MAX_RUNS], start[GRASS_MAX_RUNS + 1];
+            int runs = grass_runs(g, &chunks[i], p, &frustum, first, start);
+            if (runs == 0 || start[runs] == 0) continue;
             float offset[3];
             for (int a = 0; a < 3; a++) offset[a] = (float)(p->origin[a] - view->camera[a]);
             gfx_uniform_vec3(gfx, g->cull, "u_offset", offset);
-            grass_uniform_uint(program, "u_tuft_count", p->tufts);
+            grass_uniform_uint(program, "u_tuft_count", start[runs]);
+            glProgramUniform1i(program, run_count, runs);
+            glProgramUniform1uiv(program, run_first, runs, first);
+            glProgramUniform1uiv(program, run_start, runs + 1, start);
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gfx_buffer_gl(p->tuft_buffer));
-            glDispatchCompute((p->tufts + GRASS_GROUP_SIZE - 1) / GRASS_GROUP_SIZE, 1, 1);
+            glDispatchCompute((start[runs] + GRASS_GROUP_SIZE - 1) / GRASS_GROUP_SIZE, 1, 1);
+            looked += start[runs];
             g->stats.patches_drawn++;
         }
     }
     for (GLuint binding = 0; binding <= 6; binding++) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, 0);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
-    return considered;
+    return looked;
 }
 
 static void grass_draw_uniforms(grass_system *g, const terrain_view *view) {

@@ -106,12 +106,18 @@ typedef struct GrassPatch {
                                          (terrain_gpu_mesh.serial) */
     double origin[3];                 /* of the mesh: tuft positions are relative to it */
     float bounds_min[3], bounds_max[3];
+    /* The tufts lie in the mesh's triangle order, so each of its parts (terrain_mesh_part) holds
+     * a run of them: part p's are [part_first_tuft[p], part_first_tuft[p + 1]). The culling pass
+     * looks only at the runs of the parts in view. 0 parts: one run, the whole patch. */
+    uint32_t part_count;
+    uint32_t part_first_tuft[TERRAIN_MESH_PARTS + 1];
 } GrassPatch;
 
 typedef struct grass_system_stats_info {
     int patches;                      /* GrassPatch components now */
     uint64_t tufts;                   /* placed over all patches now (two billboards each) */
-    uint64_t tufts_drawn;             /* in the patches the last grass_draw looked at (its culling
+    uint64_t tufts_drawn;             /* those the last culling pass looked at: the tufts of the
+                                         mesh parts in view and range of the patches drawn (the
                                          pass keeps those in view and not faded out) */
     int patches_drawn;
     uint64_t placements;              /* patches placed since creation (re-placements too) */
