@@ -95,6 +95,19 @@ static void destroy_buffers(rocks_renderer *r) {
     gfx_buffer_destroy(&r->indices);
 }
 
+/* The vertices of a rock level's triangles, each once (`stamp`: one entry a vertex of the rock,
+ * UINT16_MAX between calls). */
+static uint32_t level_vertex_count(const rocks_tileset *set, const rocks_rock *rock, int lod, uint16_t *stamp) {
+    uint32_t used = 0;
+    for (uint32_t i = 0; i < rock->index_count[lod]; i++) {
+        uint16_t v = set->indices[rock->index_first[lod] + i];
+        used += stamp[v] == UINT16_MAX;
+        stamp[v] = 0;
+    }
+    for (uint32_t i = 0; i < rock->index_count[lod]; i++) stamp[set->indices[rock->index_first[lod] + i]] = UINT16_MAX;
+    return used;
+}
+
 /* Each rock level's vertices, only those its triangles use, numbered in order of first use
  * (`stamp`, one entry a vertex of the rock, says where each went: UINT16_MAX for not yet). */
 static void compact_level(rocks_renderer *r, const rocks_rock *rock, int lod, uint16_t *stamp) {
@@ -134,22 +147,22 @@ rocks_renderer *rocks__renderer_create(gfx_context *gfx, const rocks_tileset *se
     r->gfx = gfx;
     r->set = set;
     r->program = program;
-    /* At most every level uses all of its rock's vertices: the arrays' bound, trimmed after. */
-    size_t vertex_bound = (size_t)set->vertex_count * ROCKS_LODS, index_total = 0;
-    for (uint32_t k = 0; k < set->rock_count; k++)
-        for (int lod = 0; lod < ROCKS_LODS; lod++) index_total += set->rocks[k].index_count[lod];
-    r->levels = core_calloc((size_t)set->rock_count * ROCKS_LODS, sizeof *r->levels);
-    r->mesh_vertices = core_alloc((vertex_bound ? vertex_bound : 1) * sizeof *r->mesh_vertices);
-    r->mesh_indices = core_alloc((index_total ? index_total : 1) * sizeof *r->mesh_indices);
+    /* Counted first and allocated exactly: the set's own meshes are still in memory here, and
+     * the game's peak memory is taken while they are. */
     uint16_t *stamp = core_alloc(65536 * sizeof *stamp);
     memset(stamp, 0xff, 65536 * sizeof *stamp);
+    size_t vertex_total = 0, index_total = 0;
+    for (uint32_t k = 0; k < set->rock_count; k++)
+        for (int lod = 0; lod < ROCKS_LODS; lod++) {
+            vertex_total += level_vertex_count(set, &set->rocks[k], lod, stamp);
+            index_total += set->rocks[k].index_count[lod];
+        }
+    r->levels = core_calloc((size_t)set->rock_count * ROCKS_LODS, sizeof *r->levels);
+    r->mesh_vertices = core_alloc((vertex_total ? vertex_total : 1) * sizeof *r->mesh_vertices);
+    r->mesh_indices = core_alloc((index_total ? index_total : 1) * sizeof *r->mesh_indices);
     for (uint32_t k = 0; k < set->rock_count; k++)
         for (int lod = 0; lod < ROCKS_LODS; lod++) compact_level(r, &set->rocks[k], lod, stamp);
     core_free(stamp, 65536 * sizeof *stamp);
-    r->mesh_indices = core_realloc(r->mesh_indices, (index_total ? index_total : 1) * sizeof *r->mesh_indices,
-                                   (r->mesh_index_count ? r->mesh_index_count : 1) * sizeof *r->mesh_indices);
-    r->mesh_vertices = core_realloc(r->mesh_vertices, (vertex_bound ? vertex_bound : 1) * sizeof *r->mesh_vertices,
-                                    (r->mesh_vertex_count ? r->mesh_vertex_count : 1) * sizeof *r->mesh_vertices);
     r->vertex_capacity = 16384;
     r->index_capacity = 32768;
     make_buffers(r);
