@@ -95,45 +95,30 @@ static void destroy_buffers(rocks_renderer *r) {
     gfx_buffer_destroy(&r->indices);
 }
 
-/* The vertices of a rock level's triangles, each once (`stamp`: one entry a vertex of the rock,
- * UINT16_MAX between calls). */
-static uint32_t level_vertex_count(const rocks_tileset *set, const rocks_rock *rock, int lod, uint16_t *stamp) {
-    uint32_t used = 0;
-    for (uint32_t i = 0; i < rock->index_count[lod]; i++) {
-        uint16_t v = set->indices[rock->index_first[lod] + i];
-        used += stamp[v] == UINT16_MAX;
-        stamp[v] = 0;
-    }
-    for (uint32_t i = 0; i < rock->index_count[lod]; i++) stamp[set->indices[rock->index_first[lod] + i]] = UINT16_MAX;
-    return used;
-}
-
-/* Each rock level's vertices, only those its triangles use, numbered in order of first use
- * (`stamp`, one entry a vertex of the rock, says where each went: UINT16_MAX for not yet). */
-static void compact_level(rocks_renderer *r, const rocks_rock *rock, int lod, uint16_t *stamp) {
-    const rocks_tileset *set = r->set;
-    rock_level *level = &r->levels[(size_t)(rock - set->rocks) * ROCKS_LODS + (size_t)lod];
-    level->vertex_first = (uint32_t)r->mesh_vertex_count;
-    level->index_first = (uint32_t)r->mesh_index_count;
-    level->index_count = rock->index_count[lod];
+/* Rock level `lod`'s vertices, only those its triangles use, numbered in order of first use,
+ * into out (tile units from the seed) with its indices into `indices`; both NULL: only counted.
+ * Returns the vertices. `stamp` (one entry a vertex of the rock, UINT16_MAX between calls) says
+ * where each vertex went. */
+static uint16_t compact_level(const rocks_tileset *set, const rocks_rock *rock, int lod, uint16_t *stamp,
+                              rock_mesh_vertex *out, uint16_t *indices) {
     uint16_t used = 0;
     for (uint32_t i = 0; i < rock->index_count[lod]; i++) {
         uint16_t v = set->indices[rock->index_first[lod] + i];
         if (stamp[v] == UINT16_MAX) {
-            const rocks_vertex *in = &set->vertices[rock->vertex_first + v];
-            rock_mesh_vertex *out = &r->mesh_vertices[r->mesh_vertex_count + used];
-            for (int a = 0; a < 3; a++) {
-                out->local[a] = in->position[a] - rock->seed[a];
-                out->normal[a] = in->normal[a];
+            if (out) {
+                const rocks_vertex *in = &set->vertices[rock->vertex_first + v];
+                for (int a = 0; a < 3; a++) {
+                    out[used].local[a] = in->position[a] - rock->seed[a];
+                    out[used].normal[a] = in->normal[a];
+                }
+                out[used].normal[3] = 0;
             }
-            out->normal[3] = 0;
             stamp[v] = used++;
         }
-        r->mesh_indices[r->mesh_index_count++] = stamp[v];
+        if (indices) indices[i] = stamp[v];
     }
     for (uint32_t i = 0; i < rock->index_count[lod]; i++) stamp[set->indices[rock->index_first[lod] + i]] = UINT16_MAX;
-    level->vertex_count = used;
-    r->mesh_vertex_count += used;
+    return used;
 }
 
 rocks_renderer *rocks__renderer_create(gfx_context *gfx, const rocks_tileset *set) {
@@ -154,14 +139,23 @@ rocks_renderer *rocks__renderer_create(gfx_context *gfx, const rocks_tileset *se
     size_t vertex_total = 0, index_total = 0;
     for (uint32_t k = 0; k < set->rock_count; k++)
         for (int lod = 0; lod < ROCKS_LODS; lod++) {
-            vertex_total += level_vertex_count(set, &set->rocks[k], lod, stamp);
+            vertex_total += compact_level(set, &set->rocks[k], lod, stamp, NULL, NULL);
             index_total += set->rocks[k].index_count[lod];
         }
     r->levels = core_calloc((size_t)set->rock_count * ROCKS_LODS, sizeof *r->levels);
     r->mesh_vertices = core_alloc((vertex_total ? vertex_total : 1) * sizeof *r->mesh_vertices);
     r->mesh_indices = core_alloc((index_total ? index_total : 1) * sizeof *r->mesh_indices);
     for (uint32_t k = 0; k < set->rock_count; k++)
-        for (int lod = 0; lod < ROCKS_LODS; lod++) compact_level(r, &set->rocks[k], lod, stamp);
+        for (int lod = 0; lod < ROCKS_LODS; lod++) {
+            const rocks_rock *rock = &set->rocks[k];
+            rock_level *level = &r->levels[(size_t)k * ROCKS_LODS + (size_t)lod];
+            *level = (rock_level){ .vertex_first = (uint32_t)r->mesh_vertex_count, .index_first = (uint32_t)r->mesh_index_count,
+                                   .index_count = rock->index_count[lod] };
+            level->vertex_count = compact_level(set, rock, lod, stamp, r->mesh_vertices + r->mesh_vertex_count,
+                                                r->mesh_indices + r->mesh_index_count);
+            r->mesh_vertex_count += level->vertex_count;
+            r->mesh_index_count += level->index_count;
+        }
     core_free(stamp, 65536 * sizeof *stamp);
     r->vertex_capacity = 16384;
     r->index_capacity = 32768;

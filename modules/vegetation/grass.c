@@ -456,7 +456,7 @@ static uint64_t grass_cull(grass_system *g, const terrain_view *view) {
             if (!grass_patch_drawn(g, &chunks[i], p)) continue;
             uint32_t first[GRASS_MAX_RUNS], start[GRASS_MAX_RUNS + 1];
             int runs = grass_runs(g, &chunks[i], p, &frustum, first, start);
-            if (runs == 0 || start[runs] == 0) continue;
+            if (start[runs] == 0) continue;   /* no run, or only empty ones */
             float offset[3];
             for (int a = 0; a < 3; a++) offset[a] = (float)(p->origin[a] - view->camera[a]);
             gfx_uniform_vec3(gfx, g->cull, "u_offset", offset);
