@@ -2,7 +2,7 @@
  *
  *   world [--seed S] [--size WxH] [--headless] [--frames N] [--walk SCRIPT | --tour] [--record FILE]
  *         [--replay FILE] [--bindings FILE] [--gamepad-mappings FILE] [--screenshot FILE] [--pixel-error P]
- *         [--radius R] [--levels N] [--simplify]
+ *         [--radius R] [--levels N] [--simplify none|coarse|all]
  *         [--memory MB] [--grass off|low|high] [--water off|low|medium|high] [--shadows off|low|high]
  *         [--detail on|off] [--rocks on|off] [--threads N]
  *         [--trace FILE [--trace-frames N]] [--world DIR] [--at X,Y,Z] [--look YAW,PITCH]
@@ -44,10 +44,10 @@
 typedef struct options {
     core_common_args common;
     const char *size, *screenshot, *walk, *record, *replay, *bindings, *gamepad_mappings, *world, *grass, *water, *shadows, *detail, *at,
-        *look, *rocks, *cliffs;
+        *look, *rocks, *cliffs, *simplify;
     int seed, frames, radius, levels, memory_mb, trace_frames;
     double pixel_error;
-    bool headless, tour, no_head_bob, no_ao, simplify;
+    bool headless, tour, no_head_bob, no_ao;
 } options;
 
 /* `text` as count finite numbers, comma-separated with nothing after them, each within
@@ -110,8 +110,8 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
         { "radius", CORE_OPTION_INT, &o->radius, "R", "full-detail chunks of 32 m each way (default: from "
           "--pixel-error; with --radius or --levels the rings are fixed, radius 2)", 1, 32 },
         { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
-        { "simplify", CORE_OPTION_FLAG, &o->simplify, NULL, "simplify each terrain chunk by its level's own error "
-          "(fewer triangles, more streaming work)" },
+        { "simplify", CORE_OPTION_STRING, &o->simplify, "none|coarse|all", "which terrain chunks are simplified by "
+          "their level's own error (default coarse: levels 1 and up; fewer triangles, more streaming work)" },
         { "grass", CORE_OPTION_STRING, &o->grass, "off|low|high", "grass patches (default low)" },
         { "water", CORE_OPTION_STRING, &o->water, "off|low|medium|high", "the sea and lakes (default low: blended, the frame never read back)" },
         { "rocks", CORE_OPTION_STRING, &o->rocks, "on|off", "rock piles (default on; the tile set is cached "
@@ -169,6 +169,10 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
     if (o->shadows && !terrain_parse_shadow_quality(o->shadows, &desc->shadows)) {
         snprintf(error, sizeof error, "'%s' is not off, low or high", o->shadows);
         return bad_value(&cli, "shadows", error);
+    }
+    if (o->simplify && !terrain_parse_simplify(o->simplify, &desc->stream.simplify)) {
+        snprintf(error, sizeof error, "'%s' is not none, coarse or all", o->simplify);
+        return bad_value(&cli, "simplify", error);
     }
     /* The world's limits: ±1e9 m along the ground (walk.h's), ±1e5 m up and down. */
     static const char *const at_names[] = { "X", "Y", "Z" }, *const look_names[] = { "YAW", "PITCH" };
@@ -271,7 +275,7 @@ int main(int argc, char **argv) {
     desc.screenshot_path = o.screenshot;
     desc.world_dir = o.world;
     desc.stream = (terrain_stream_desc){ .half_width = o.radius, .levels = o.levels,
-                                         .memory_budget = (size_t)o.memory_mb << 20, .simplify = o.simplify };
+                                         .memory_budget = (size_t)o.memory_mb << 20, .simplify = desc.stream.simplify };
     desc.pixel_error = (float)o.pixel_error;
     game_app *app = game_app_create(&desc);
     if (!app) {

@@ -143,22 +143,33 @@ Test(render_stream, rings_at_the_origin_equal_the_static_rings) {
                  (unsigned long long)streamed_triangles, (unsigned long long)static_triangles);
 }
 
-/* terrain_stream_desc.simplify: the same rings, each chunk simplified by its level's own error,
- * draw fewer triangles (tests/terrain's simplified_* cases check the meshes and their seams). */
+/* terrain_stream_desc.simplify: the same rings, the chunks of the levels it names simplified by
+ * their level's own error (tests/terrain's simplified_* cases check the meshes and their seams).
+ * With level 0 alone, the default (coarse) leaves every chunk whole and so draws exactly what none
+ * does; with a coarser level, it draws fewer; all draws fewer still. */
 Test(render_stream, simplified_rings_draw_fewer_triangles) {
     const double eye[1][3] = { { 1, 5, 1 } };
-    uint64_t triangles[2];
-    for (int simplify = 0; simplify < 2; simplify++) {
-        terrain_stream_desc desc = small_rings;
-        desc.simplify = simplify;
-        streamed s = streamed_open(2, &desc);
-        cr_assert(streamed_settle(&s, eye, 1, 2000) > 0);
-        triangles[simplify] = terrain_ecs_stats(s.te).triangles;
-        streamed_close(&s);
+    static const terrain_simplify which[3] = { TERRAIN_SIMPLIFY_NONE, TERRAIN_SIMPLIFY_COARSE, TERRAIN_SIMPLIFY_ALL };
+    for (int levels = 1; levels <= 2; levels++) {
+        uint64_t triangles[3];
+        for (int k = 0; k < 3; k++) {
+            terrain_stream_desc desc = small_rings;
+            desc.levels = levels;
+            desc.simplify = which[k];
+            streamed s = streamed_open(2, &desc);
+            cr_assert(streamed_settle(&s, eye, 1, 2000) > 0);
+            triangles[k] = terrain_ecs_stats(s.te).triangles;
+            streamed_close(&s);
+        }
+        cr_log_info("%d level(s): %llu triangles whole, %llu coarse simplified, %llu all simplified", levels,
+                    (unsigned long long)triangles[0], (unsigned long long)triangles[1], (unsigned long long)triangles[2]);
+        cr_expect_gt(triangles[2], 0);
+        if (levels == 1)
+            cr_expect_eq(triangles[1], triangles[0], "level 0 stays whole by default");
+        else
+            cr_expect_lt(triangles[1], triangles[0], "the coarse level is simplified by default");
+        cr_expect_lt(triangles[2], triangles[1]);
     }
-    cr_log_info("rings: %llu triangles, %llu simplified", (unsigned long long)triangles[0], (unsigned long long)triangles[1]);
-    cr_expect_gt(triangles[1], 0);
-    cr_expect_lt(triangles[1], triangles[0]);
 }
 
 /* 100.8 km out the rolling ground repeats exactly and so do the rings: 100 800 m is a multiple

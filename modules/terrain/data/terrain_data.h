@@ -393,8 +393,8 @@ typedef struct terrain_lod_desc {
     int level;                        /* 0 … 16; cells 2^level columns wide */
     uint32_t finer_neighbours;        /* 26 bits (above); must be 0 at level 0 */
     float max_error;                  /* terrain_mesh_desc.max_error: metres the triangles may be
-                                         simplified by, the border kept; 0 = none. Streaming with
-                                         .simplify asks for terrain_chunk_level_error(level) */
+                                         simplified by, the border kept; 0 = none. Streaming asks
+                                         for terrain_simplify_error (terrain_ecs.h) */
 } terrain_lod_desc;
 
 uint32_t terrain_lod_neighbour_bit(int dx, int dy, int dz);   /* 0 for (0, 0, 0) or out of range */

@@ -90,8 +90,8 @@ void terrain_ecs_spawn_area(terrain_ecs *te, int64_t cx, int64_t cz, int radius,
 /* Nested rings of detail around the origin: level 0 covers mesh chunks x, z ∈ [−w, w) (w =
  * half_width, even when levels > 1), and each coarser level L covers its own chunks in [−w, w)
  * but not the finer area inside, so level L reaches w·32·2^L metres out. Seams between levels
- * are closed (terrain_mesh_chunk). Each chunk is simplified by its level's error
- * (terrain_lod_desc.max_error = terrain_chunk_level_error(level)), as streaming does. All levels
+ * are closed (terrain_mesh_chunk). The chunks of levels 1 and up are simplified by their level's
+ * error, as streaming does by default (TERRAIN_SIMPLIFY_COARSE, below). All levels
  * cover [y_min, y_max] rounded out to the coarsest chunk height. Column-chunk entities are
  * spawned for the level-0 area. */
 void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double y_min, double y_max);
@@ -118,6 +118,22 @@ void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double
  * Generation and meshing run as background jobs (jobs.h), so they span frames and a frame never
  * waits for them. A mesh chunk whose samples cannot reach any interface of its column chunks
  * (terrain_stacks_interface_range) is empty without being sampled. */
+/* Which chunks streaming simplifies, each by its own level's error, terrain_chunk_level_error
+ * (terrain_lod_desc.max_error): the surface moves by about what that level's sampling moves it
+ * anyway (README, "Simplified chunks"). Fewer triangles to draw, more work to mesh. */
+typedef enum terrain_simplify {
+    TERRAIN_SIMPLIFY_COARSE = 0,      /* levels 1 and up, level 0 whole (the default): the
+                                         coarse levels are most of what a view from above draws,
+                                         and a small share of the chunks streaming meshes */
+    TERRAIN_SIMPLIFY_ALL = 1,         /* every level (also what `.simplify = true` asks) */
+    TERRAIN_SIMPLIFY_NONE = 2,        /* none: marching cubes' triangles as they come */
+} terrain_simplify;
+
+/* The max_error streaming gives a chunk of `level` under `simplify` (0 = whole). */
+float terrain_simplify_error(terrain_simplify simplify, int level);
+/* "none", "coarse" or "all" into *out; false (out untouched) for anything else. */
+bool terrain_parse_simplify(const char *text, terrain_simplify *out);
+
 typedef struct terrain_stream_desc {
     int half_width;                   /* level-0 mesh chunks each way from the viewer; 0 = 2, or
                                          with pixel_error terrain_rings_half_width(levels, K) */
@@ -140,10 +156,8 @@ typedef struct terrain_stream_desc {
                                          every worker busy while the world loads, then what
                                          finishes the backlog before the rings move again at
                                          the viewer's speed, at least 8 (README) */
-    bool simplify;                    /* each chunk simplified by its level's own error,
-                                         terrain_chunk_level_error (terrain_lod_desc.max_error):
-                                         ~20 % fewer triangles for about 1.6 ms more CPU a level-0
-                                         chunk; off by default (README, "Simplified chunks") */
+    terrain_simplify simplify;        /* which levels' chunks are simplified by their level's
+                                         own error; 0 = TERRAIN_SIMPLIFY_COARSE (below) */
 } terrain_stream_desc;
 
 #define TERRAIN_MAX_VIEWERS 8

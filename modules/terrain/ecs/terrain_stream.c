@@ -221,7 +221,7 @@ static job_handle stream_task_start(terrain_ecs *te, stream_record *record, bool
     t->key = record->key;
     int level = record->key.level < 0 ? 0 : record->key.level;
     t->lod = (terrain_lod_desc){ .level = level, .finer_neighbours = record->mask,
-                                 .max_error = s->desc.simplify ? (float)terrain_chunk_level_error(level) : 0.0f };
+                                 .max_error = terrain_simplify_error(s->desc.simplify, level) };
     t->record = record;
     record->task = t;
     bool column = record->key.level == STREAM_COLUMN_LEVEL;
@@ -878,6 +878,22 @@ void terrain_ecs_set_clipmap(terrain_ecs *te, terrain_clipmap *clipmap) {
 }
 
 /* ---- the API ------------------------------------------------------------------------------ */
+
+bool terrain_parse_simplify(const char *text, terrain_simplify *out) {
+    static const struct { const char *name; terrain_simplify value; } names[] = {
+        { "none", TERRAIN_SIMPLIFY_NONE }, { "coarse", TERRAIN_SIMPLIFY_COARSE }, { "all", TERRAIN_SIMPLIFY_ALL } };
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
+        if (text && strcmp(text, names[i].name) == 0) {
+            *out = names[i].value;
+            return true;
+        }
+    return false;
+}
+
+float terrain_simplify_error(terrain_simplify simplify, int level) {
+    bool simplified = simplify == TERRAIN_SIMPLIFY_ALL || (simplify == TERRAIN_SIMPLIFY_COARSE && level >= 1);
+    return simplified ? (float)terrain_chunk_level_error(level) : 0.0f;
+}
 
 static terrain_stream_desc stream_defaults(const terrain_ecs *te, const terrain_stream_desc *desc) {
     terrain_stream_desc d = desc ? *desc : (terrain_stream_desc){ 0 };
