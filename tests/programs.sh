@@ -355,6 +355,7 @@ expect "world: bad --water" 2 "bad value for '--water': 'deep' is not off, low, 
 expect "world: bad --detail" 2 "bad value for '--detail': 'high' is not on or off" -- "$bin/world" --detail high
 expect "world: bad --cliffs" 2 "bad value for '--cliffs': 'tall' is not on or off" -- "$bin/world" --cliffs tall
 expect "world: bad --simplify" 2 "bad value for '--simplify': 'some' is not none, coarse or all" -- "$bin/world" --simplify some
+expect "terrain_streaming: bad --simplify" 2 "bad value for '--simplify': 'some' is not none, coarse or all" -- "$bin/terrain_streaming" --simplify some
 expect "world: --help lists --simplify" 0 "--simplify none\|coarse\|all" -- "$bin/world" --help
 expect "world: bad --shadows" 2 "bad value for '--shadows': 'soft' is not off, low or high" -- "$bin/world" --shadows soft
 expect "world: bad --shadows gets the usage" 2 "usage: world" -- "$bin/world" --shadows soft

@@ -7,10 +7,14 @@
  * along −x at each step (seed 1's ground stays near the start's height that way; along +x it
  * climbs a mountain); after each step the frames run until every wanted chunk is ready, and the
  * counts are printed: the chunks the rings want, how many are ready, how many left behind are
- * kept while memory allows.
+ * kept while memory allows; at the end, the triangles the chunks hold.
  *
- *   terrain_streaming [--seed S] [--hills] [--steps N] [--size WxH] [--headless]
- *                     [--screenshot FILE] [--threads N] [--trace FILE]
+ * --levels adds coarser rings, and --simplify says which levels' chunks are simplified by their
+ * level's own error (terrain_stream_desc.simplify): coarse (the default) leaves level 0 whole,
+ * so with one level it is none; try --levels 2 with each to see the triangles it saves.
+ *
+ *   terrain_streaming [--seed S] [--hills] [--steps N] [--levels N] [--simplify none|coarse|all]
+ *                     [--size WxH] [--headless] [--screenshot FILE] [--threads N] [--trace FILE]
  *
  * The rings here are small (2 × 2 chunks of full detail, over 32 m of height); a generated
  * chunk takes a few hundred ms to mesh in a debug build, so the check runs over --hills, a world
@@ -43,13 +47,16 @@ static terrain_stacks *hills(void *user, terrain_chunk_coord coord) {
 
 int main(int argc, char **argv) {
     core_common_args common = { 0 };
-    const char *size = NULL, *screenshot = NULL;
-    int seed = 1, steps = 3;
+    const char *size = NULL, *screenshot = NULL, *simplify_name = NULL;
+    int seed = 1, steps = 3, levels = 1;
     bool headless = false, hand_made = false;
     const core_option options[] = {
         CORE_COMMON_OPTIONS(common),
         { "seed", CORE_OPTION_INT, &seed, "S", "world seed (default 1)", 0, 2147483647 },
         { "steps", CORE_OPTION_INT, &steps, "N", "chunks the viewer moves, one a step (default 3)", 0, 100 },
+        { "levels", CORE_OPTION_INT, &levels, "N", "rings of detail, each coarser one twice the cells (default 1)", 1, 4 },
+        { "simplify", CORE_OPTION_STRING, &simplify_name, "none|coarse|all", "which levels' chunks are simplified "
+          "(default coarse: levels 1 and up)" },
         { "size", CORE_OPTION_STRING, &size, "WxH", "framebuffer size (default 320x180)" },
         { "hills", CORE_OPTION_FLAG, &hand_made, NULL, "gentle hills made by hand instead of the generator's world" },
         { "headless", CORE_OPTION_FLAG, &headless, NULL, "render offscreen with OSMesa" },
@@ -62,6 +69,12 @@ int main(int argc, char **argv) {
     int width = 320, height = 180;
     if (size && !gfx_parse_size(size, &width, &height)) {
         fprintf(stderr, "terrain_streaming: bad value for '--size': '%s' is not WxH\n", size);
+        core_cli_print_usage(&cli, stderr);
+        return 2;
+    }
+    terrain_simplify simplify = TERRAIN_SIMPLIFY_COARSE;
+    if (simplify_name && !terrain_parse_simplify(simplify_name, &simplify)) {
+        fprintf(stderr, "terrain_streaming: bad value for '--simplify': '%s' is not none, coarse or all\n", simplify_name);
         core_cli_print_usage(&cli, stderr);
         return 2;
     }
@@ -86,13 +99,14 @@ int main(int argc, char **argv) {
         if (!renderer) return 1;
     }
 
-    /* Small rings: 2 × 2 chunks of full detail around the viewer, over the 32 m of height
-     * around the start's ground; the far ground beyond
-     * is the clipmap's. */
+    /* Small rings: 2 × 2 chunks of full detail around the viewer (4 × 4 with coarser levels:
+     * their rings align with the coarser chunks), over the 32 m of height around the start's
+     * ground; the far ground beyond is the clipmap's. */
     terrain_ecs *te = terrain_ecs_create(&(terrain_ecs_desc){ .ecs = ecs, .terrain = world });
     double ground = terrain_world_top(world, 16, 16);
-    terrain_ecs_stream(te, &(terrain_stream_desc){ .half_width = 1, .levels = 1, .y_min = ground - 16,
-                                                   .y_max = ground + 16, .collision_radius = 1 });
+    terrain_ecs_stream(te, &(terrain_stream_desc){ .half_width = 1, .levels = levels, .y_min = ground - 16,
+                                                   .y_max = ground + 16, .collision_radius = 1,
+                                                   .simplify = simplify });
     terrain_clipmap *far = terrain_clipmap_create(&(terrain_clipmap_desc){ .levels = 3, .cells = 32,
                                                                           .generation = params, .jobs = jobs });
     terrain_ecs_set_clipmap(te, far);
@@ -130,9 +144,9 @@ int main(int argc, char **argv) {
                stats.mesh_chunks_wanted, stats.mesh_chunks_ready, stats.mesh_chunks_kept);
     }
     terrain_ecs_stream_stats_info stats = terrain_ecs_stream_stats(te);
-    printf("terrain_streaming: %llu chunks meshed, %llu empty skipped unsampled, %.1f MB resident\n",
+    printf("terrain_streaming: %llu chunks meshed, %llu empty skipped unsampled, %.1f MB resident, %llu triangles\n",
            (unsigned long long)stats.chunks_meshed, (unsigned long long)stats.chunks_skipped_empty,
-           (double)stats.resident_bytes / (1 << 20));
+           (double)stats.resident_bytes / (1 << 20), (unsigned long long)terrain_ecs_stats(te).triangles);
 
     terrain_ecs_set_clipmap(te, NULL);
     terrain_ecs_destroy(te);
@@ -151,5 +165,5 @@ int main(int argc, char **argv) {
  * ^terrain_streaming: step 0 at x 16: 8 chunks wanted, 8 ready, 0 kept$
  * ^terrain_streaming: step 1 at x -16: 8 chunks wanted, 8 ready, 4 kept$
  * ^terrain_streaming: step 2 at x -48: 8 chunks wanted, 8 ready, 8 kept$
- * ^terrain_streaming: [1-9][0-9]* chunks meshed, [0-9]+ empty skipped unsampled, [0-9.]+ MB resident$
+ * ^terrain_streaming: [1-9][0-9]* chunks meshed, [0-9]+ empty skipped unsampled, [0-9.]+ MB resident, [1-9][0-9]* triangles$
  */
