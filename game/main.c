@@ -111,7 +111,7 @@ static int parse(int argc, char **argv, options *o, game_app_desc *desc, game_wa
           "--pixel-error; with --radius or --levels the rings are fixed, radius 2)", 1, 32 },
         { "levels", CORE_OPTION_INT, &o->levels, "N", "rings of volumetric detail (default 3)", 1, 8 },
         { "simplify", CORE_OPTION_STRING, &o->simplify, "none|coarse|all", "which terrain chunks are simplified by "
-          "their level's own error (default coarse: levels 1 and up; fewer triangles, more streaming work)" },
+          "their level's own error (default none; coarse: levels 1 and up; fewer triangles, more streaming work)" },
         { "grass", CORE_OPTION_STRING, &o->grass, "off|low|high", "grass patches (default low)" },
         { "water", CORE_OPTION_STRING, &o->water, "off|low|medium|high", "the sea and lakes (default low: blended, the frame never read back)" },
         { "rocks", CORE_OPTION_STRING, &o->rocks, "on|off", "rock piles (default on; the tile set is cached "

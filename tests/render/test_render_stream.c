@@ -145,8 +145,8 @@ Test(render_stream, rings_at_the_origin_equal_the_static_rings) {
 
 /* terrain_stream_desc.simplify: the same rings, the chunks of the levels it names simplified by
  * their level's own error (tests/terrain's simplified_* cases check the meshes and their seams).
- * With level 0 alone, the default (coarse) leaves every chunk whole and so draws exactly what none
- * does; with a coarser level, it draws fewer; all draws fewer still. */
+ * With level 0 alone, coarse leaves every chunk whole and so draws exactly what none (the
+ * default) does; with a coarser level, it draws fewer; all draws fewer still. */
 Test(render_stream, simplified_rings_draw_fewer_triangles) {
     const double eye[1][3] = { { 1, 5, 1 } };
     static const terrain_simplify which[3] = { TERRAIN_SIMPLIFY_NONE, TERRAIN_SIMPLIFY_COARSE, TERRAIN_SIMPLIFY_ALL };
@@ -165,9 +165,9 @@ Test(render_stream, simplified_rings_draw_fewer_triangles) {
                     (unsigned long long)triangles[0], (unsigned long long)triangles[1], (unsigned long long)triangles[2]);
         cr_expect_gt(triangles[2], 0);
         if (levels == 1)
-            cr_expect_eq(triangles[1], triangles[0], "level 0 stays whole by default");
+            cr_expect_eq(triangles[1], triangles[0], "coarse leaves level 0 whole");
         else
-            cr_expect_lt(triangles[1], triangles[0], "the coarse level is simplified by default");
+            cr_expect_lt(triangles[1], triangles[0], "coarse simplifies the coarser level");
         cr_expect_lt(triangles[2], triangles[1]);
     }
 }

@@ -248,8 +248,7 @@ void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double
                     ecs_set(te->ecs, m, te->mesh_chunk, &(TerrainMeshChunk){
                         .x = x, .y = y, .z = z,
                         .lod = { .level = level,
-                                 .finer_neighbours = terrain_ring_mask(half_width, level, x, y, z, y_first, y_last),
-                                 .max_error = terrain_simplify_error(TERRAIN_SIMPLIFY_COARSE, level) } });
+                                 .finer_neighbours = terrain_ring_mask(half_width, level, x, y, z, y_first, y_last) } });
                 }
             }
     }

@@ -90,8 +90,8 @@ void terrain_ecs_spawn_area(terrain_ecs *te, int64_t cx, int64_t cz, int radius,
 /* Nested rings of detail around the origin: level 0 covers mesh chunks x, z ∈ [−w, w) (w =
  * half_width, even when levels > 1), and each coarser level L covers its own chunks in [−w, w)
  * but not the finer area inside, so level L reaches w·32·2^L metres out. Seams between levels
- * are closed (terrain_mesh_chunk). The chunks of levels 1 and up are simplified by their level's
- * error, as streaming does by default (TERRAIN_SIMPLIFY_COARSE, below). All levels
+ * are closed (terrain_mesh_chunk). Every chunk is meshed whole, as streaming does by default
+ * (terrain_simplify, below). All levels
  * cover [y_min, y_max] rounded out to the coarsest chunk height. Column-chunk entities are
  * spawned for the level-0 area. */
 void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double y_min, double y_max);
@@ -122,11 +122,12 @@ void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double
  * (terrain_lod_desc.max_error): the surface moves by about what that level's sampling moves it
  * anyway (README, "Simplified chunks"). Fewer triangles to draw, more work to mesh. */
 typedef enum terrain_simplify {
-    TERRAIN_SIMPLIFY_COARSE = 0,      /* levels 1 and up, level 0 whole (the default): the
-                                         coarse levels are most of what a view from above draws,
-                                         and a small share of the chunks streaming meshes */
+    TERRAIN_SIMPLIFY_NONE = 0,        /* none, marching cubes' triangles as they come (the
+                                         default: the walk's frame times were best so, README) */
     TERRAIN_SIMPLIFY_ALL = 1,         /* every level (also what `.simplify = true` asks) */
-    TERRAIN_SIMPLIFY_NONE = 2,        /* none: marching cubes' triangles as they come */
+    TERRAIN_SIMPLIFY_COARSE = 2,      /* levels 1 and up, level 0 whole: the coarse levels are
+                                         most of what a view from a few tens of metres up draws,
+                                         and a small share of the chunks streaming meshes */
 } terrain_simplify;
 
 /* The max_error streaming gives a chunk of `level` under `simplify` (0 = whole). */
@@ -157,7 +158,7 @@ typedef struct terrain_stream_desc {
                                          finishes the backlog before the rings move again at
                                          the viewer's speed, at least 8 (README) */
     terrain_simplify simplify;        /* which levels' chunks are simplified by their level's
-                                         own error; 0 = TERRAIN_SIMPLIFY_COARSE (below) */
+                                         own error; 0 = TERRAIN_SIMPLIFY_NONE (above) */
 } terrain_stream_desc;
 
 #define TERRAIN_MAX_VIEWERS 8

@@ -10,8 +10,8 @@
  * kept while memory allows; at the end, the triangles the chunks hold.
  *
  * --levels adds coarser rings, and --simplify says which levels' chunks are simplified by their
- * level's own error (terrain_stream_desc.simplify): coarse (the default) leaves level 0 whole,
- * so with one level it is none; try --levels 2 with each to see the triangles it saves.
+ * level's own error (terrain_stream_desc.simplify; none by default): coarse leaves level 0
+ * whole, so with one level it is none; try --levels 2 with each to see the triangles it saves.
  *
  *   terrain_streaming [--seed S] [--hills] [--steps N] [--levels N] [--simplify none|coarse|all]
  *                     [--size WxH] [--headless] [--screenshot FILE] [--threads N] [--trace FILE]
@@ -56,7 +56,7 @@ int main(int argc, char **argv) {
         { "steps", CORE_OPTION_INT, &steps, "N", "chunks the viewer moves, one a step (default 3)", 0, 100 },
         { "levels", CORE_OPTION_INT, &levels, "N", "rings of detail, each coarser one twice the cells (default 1)", 1, 4 },
         { "simplify", CORE_OPTION_STRING, &simplify_name, "none|coarse|all", "which levels' chunks are simplified "
-          "(default coarse: levels 1 and up)" },
+          "(default none; coarse: levels 1 and up)" },
         { "size", CORE_OPTION_STRING, &size, "WxH", "framebuffer size (default 320x180)" },
         { "hills", CORE_OPTION_FLAG, &hand_made, NULL, "gentle hills made by hand instead of the generator's world" },
         { "headless", CORE_OPTION_FLAG, &headless, NULL, "render offscreen with OSMesa" },
@@ -72,7 +72,7 @@ int main(int argc, char **argv) {
         core_cli_print_usage(&cli, stderr);
         return 2;
     }
-    terrain_simplify simplify = TERRAIN_SIMPLIFY_COARSE;
+    terrain_simplify simplify = TERRAIN_SIMPLIFY_NONE;
     if (simplify_name && !terrain_parse_simplify(simplify_name, &simplify)) {
         fprintf(stderr, "terrain_streaming: bad value for '--simplify': '%s' is not none, coarse or all\n", simplify_name);
         core_cli_print_usage(&cli, stderr);
