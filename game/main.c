@@ -274,8 +274,9 @@ int main(int argc, char **argv) {
     desc.gamepad_mappings_path = o.gamepad_mappings;
     desc.screenshot_path = o.screenshot;
     desc.world_dir = o.world;
-    desc.stream = (terrain_stream_desc){ .half_width = o.radius, .levels = o.levels,
-                                         .memory_budget = (size_t)o.memory_mb << 20, .simplify = desc.stream.simplify };
+    desc.stream.half_width = o.radius;             /* .simplify was parsed with the flags */
+    desc.stream.levels = o.levels;
+    desc.stream.memory_budget = (size_t)o.memory_mb << 20;
     desc.pixel_error = (float)o.pixel_error;
     game_app *app = game_app_create(&desc);
     if (!app) {

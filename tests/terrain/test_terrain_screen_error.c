@@ -182,8 +182,7 @@ Test(terrain_screen_error, clipmap_set_screen_derives_again_and_keeps_fixed_ones
 
 /* Which chunks streaming simplifies, each by its level's own error h²/50 (cells h = 2^L m):
  * none, the default (0), gives nothing; coarse leaves level 0 whole and gives levels 1 and 2
- * 0.08 and 0.32 m; all
- * gives level 0 its 1/50 = 0.02 m too. The three names parse, and anything
+ * 0.08 and 0.32 m; all gives level 0 its 1/50 = 0.02 m too. The three names parse, and anything
  * else is refused with the output untouched. */
 Test(terrain_screen_error, streaming_simplifies_the_levels_asked_for) {
     terrain_stream_desc zero = { 0 };

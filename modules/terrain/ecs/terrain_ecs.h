@@ -96,6 +96,23 @@ void terrain_ecs_spawn_area(terrain_ecs *te, int64_t cx, int64_t cz, int radius,
  * spawned for the level-0 area. */
 void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double y_min, double y_max);
 
+/* Which chunks streaming simplifies, each by its own level's error, terrain_chunk_level_error
+ * (terrain_lod_desc.max_error): the surface moves by about what that level's sampling moves it
+ * anyway (README, "Simplified chunks"). Fewer triangles to draw, more work to mesh. */
+typedef enum terrain_simplify {
+    TERRAIN_SIMPLIFY_NONE = 0,        /* none, marching cubes' triangles as they come (the
+                                         default: the walk's frame times were best so, README) */
+    TERRAIN_SIMPLIFY_ALL = 1,         /* every level (also what `.simplify = true` asks) */
+    TERRAIN_SIMPLIFY_COARSE = 2,      /* levels 1 and up, level 0 whole: the coarse levels are
+                                         most of what a view from a few tens of metres up draws,
+                                         and a small share of the chunks streaming meshes */
+} terrain_simplify;
+
+/* The max_error streaming gives a chunk of `level` under `simplify` (0 = whole). */
+float terrain_simplify_error(terrain_simplify simplify, int level);
+/* "none", "coarse" or "all" into *out; false (out untouched) for anything else. */
+bool terrain_parse_simplify(const char *text, terrain_simplify *out);
+
 /* ---- streaming ----------------------------------------------------------------------------
  *
  * Instead of a fixed area, chunks follow viewers (the player, a second camera):
@@ -118,23 +135,6 @@ void terrain_ecs_spawn_rings(terrain_ecs *te, int half_width, int levels, double
  * Generation and meshing run as background jobs (jobs.h), so they span frames and a frame never
  * waits for them. A mesh chunk whose samples cannot reach any interface of its column chunks
  * (terrain_stacks_interface_range) is empty without being sampled. */
-/* Which chunks streaming simplifies, each by its own level's error, terrain_chunk_level_error
- * (terrain_lod_desc.max_error): the surface moves by about what that level's sampling moves it
- * anyway (README, "Simplified chunks"). Fewer triangles to draw, more work to mesh. */
-typedef enum terrain_simplify {
-    TERRAIN_SIMPLIFY_NONE = 0,        /* none, marching cubes' triangles as they come (the
-                                         default: the walk's frame times were best so, README) */
-    TERRAIN_SIMPLIFY_ALL = 1,         /* every level (also what `.simplify = true` asks) */
-    TERRAIN_SIMPLIFY_COARSE = 2,      /* levels 1 and up, level 0 whole: the coarse levels are
-                                         most of what a view from a few tens of metres up draws,
-                                         and a small share of the chunks streaming meshes */
-} terrain_simplify;
-
-/* The max_error streaming gives a chunk of `level` under `simplify` (0 = whole). */
-float terrain_simplify_error(terrain_simplify simplify, int level);
-/* "none", "coarse" or "all" into *out; false (out untouched) for anything else. */
-bool terrain_parse_simplify(const char *text, terrain_simplify *out);
-
 typedef struct terrain_stream_desc {
     int half_width;                   /* level-0 mesh chunks each way from the viewer; 0 = 2, or
                                          with pixel_error terrain_rings_half_width(levels, K) */
