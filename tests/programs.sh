@@ -151,6 +151,17 @@ expect "trace_report: --slowest shows counters at the frame's end" 0 "counters a
   "$bin/trace_report" --slowest 1 "$tmp/drill.json"
 expect "trace_report: --slowest 5 lists both frames" 0 "^frame 0 +at 0\\.000 ms +10\\.000 ms$" -- \
   "$bin/trace_report" --slowest 5 "$tmp/drill.json"
+# --over: frame 1 (30 ms) alone is over 20 ms, and its gen (self 24, none in frame 0) leads the
+# zones; by the mem counter at the frames' ends (100 and 200), 150 leaves frame 1 over too.
+expect "trace_report: --over 20 counts frame 1" 0 "^frames over 20\\.000 ms \\(frame duration\\): 1 of 2 \\(50\\.00%\\) in 1 runs$" -- \
+  "$bin/trace_report" --over 20 "$tmp/drill.json"
+expect "trace_report: --over lists what the over frames spend more on" 0 "^  gen +24\\.000 +0\\.000 +\\+24\\.000$" -- \
+  "$bin/trace_report" --over 20 "$tmp/drill.json"
+expect "trace_report: --over by a counter" 0 "^frames over 150\\.000 ms \\(mem\\): 1 of 2 " -- \
+  "$bin/trace_report" --over 150 --series mem "$tmp/drill.json"
+expect "trace_report: --series without --over" 2 "'--series' needs '--over MS'" -- "$bin/trace_report" --series mem "$tmp/drill.json"
+expect "trace_report: --series absent" 2 "no counter series \"absent\"" -- "$bin/trace_report" --over 5 --series absent "$tmp/drill.json"
+expect "trace_report: --over 0" 2 "bad value for '--over'" -- "$bin/trace_report" --over 0 "$tmp/drill.json"
 
 # End to end: the example runs, writes a trace, and the report reads its frames and phases.
 expect "trace_report: frames of the run" 0 "30 frames" -- "$bin/trace_report" "$tmp/run.json"

@@ -60,6 +60,11 @@
  *     trace_report_slowest(&report, 5, 8, &slowest);
  *     trace_slowest_print(&slowest, stdout);
  *     trace_slowest_free(&slowest);                   // its names point into the report
+ *     trace_over_budget over;                         // the frames over 8 ms of CPU time
+ *     trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = 8, .series = "game.cpu_frame_ms" },
+ *                              &over, &error);        // false: no such series (error says)
+ *     trace_over_budget_print(&over, stdout);
+ *     trace_over_budget_free(&over);
  *     trace_report_free(&report);
  *
  *   Self time is a zone's time minus the time of the zones directly nested in it on the same
@@ -210,6 +215,53 @@ typedef struct trace_slowest {
 void trace_report_slowest(const trace_report *report, size_t n, size_t top_zones, trace_slowest *out);
 void trace_slowest_print(const trace_slowest *slowest, FILE *out);
 void trace_slowest_free(trace_slowest *slowest);
+
+/* ---- frames over a budget ---------------------------------------------------------------- */
+
+/* Which frames pass a budget, where in the run they fall, and what they spend more on than the
+ * frames within it: where a p99 comes from. A frame's value is its duration, or with `series`
+ * the last sample of that counter series at or before the frame's end (the game records
+ * game.cpu_frame_ms: the main thread's part of a frame, without the wait for the GPU). */
+typedef struct trace_budget_desc {
+    double budget_ms;              /* frames whose value is over it are "over"; > 0 */
+    const char *series;            /* NULL: the frame's duration */
+    size_t gap;                    /* over frames this many frames apart or closer share a run
+                                      (1: only neighbours); 0 = 30 */
+    size_t top_zones;              /* zones kept; 0 = 8 */
+} trace_budget_desc;
+
+typedef struct trace_budget_run {
+    size_t first, last;            /* its first and last over frame (indices into frame_ms) */
+    size_t over;                   /* its frames over the budget */
+    double worst_ms;               /* the largest value among them */
+} trace_budget_run;
+
+/* A zone's mean self time a frame in each group: its share of the frame's span (as
+ * trace_frame_zone's), on the frame's own thread only, where a frame's work is (the other
+ * threads' idle and sleep zones would grow with any long frame). */
+typedef struct trace_budget_zone {
+    const char *name;              /* points into the report */
+    double over_ms, within_ms;
+} trace_budget_zone;
+
+typedef struct trace_over_budget {
+    double budget_ms;
+    const char *series;            /* the desc's (NULL: frame durations) */
+    size_t frames;                 /* frames with a value: all, or those after the series' first sample */
+    size_t over;                   /* of them, over the budget */
+    trace_budget_run *runs;        /* in frame order */
+    size_t run_count;
+    trace_budget_zone *zones;      /* by over_ms − within_ms, largest first; ties by name */
+    size_t zone_count;
+} trace_over_budget;
+
+/* Fills *out (free it with trace_over_budget_free; its names point into the report). False with
+ * CORE_ERROR_ARGUMENT in `error` for a budget that is not > 0 or a series the trace does not
+ * have; *out is then empty. */
+bool trace_report_over_budget(const trace_report *report, const trace_budget_desc *desc, trace_over_budget *out,
+                              core_error *error);
+void trace_over_budget_print(const trace_over_budget *over, FILE *out);
+void trace_over_budget_free(trace_over_budget *over);
 
 /* Nearest-rank percentile of sorted values: sorted[ceil(p/100 · n) − 1]; 0 for n = 0. */
 double trace_percentile(const double *sorted, size_t n, double p);

@@ -1,6 +1,6 @@
 /* trace_report.c — reads a Chrome trace back and summarises it: frame-time percentiles, per-zone
- * inclusive and self times, per-counter statistics, the slowest frames and an SVG plot of frame
- * times (trace.h, REPORT).
+ * inclusive and self times, per-counter statistics, the slowest frames, the frames over a
+ * budget and an SVG plot of frame times (trace.h, REPORT).
  *
  * Zones are B/E pairs, matched per (pid, tid) with a stack as Chrome does (an "E" closes the
  * innermost open "B" of its thread, whatever its name), or X events. Frames are zones named
@@ -742,13 +742,15 @@ static int report_compare_frame_zones(const void *a, const void *b) {
     return strcmp(x->name, y->name);
 }
 
-/* Every zone instance that overlaps [begin, end), on any thread, adds its self time in the
- * proportion of its duration that lies inside: exact for zones inside the frame, a fair share
- * for a job that straddles its edge. */
-static void report_frame_zones(const trace_report *report, double begin_us, double end_us, size_t top,
-                               trace_slow_frame *frame) {
+#define REPORT_ALL_THREADS UINT32_MAX
+
+/* Every zone instance that overlaps [begin, end), on `thread` (or any: REPORT_ALL_THREADS), adds
+ * its self time in the proportion of its duration that lies inside to all[its zone]
+ * (report->zone_count entries): exact for zones inside the frame, a fair share for a job that
+ * straddles its edge. Called for several spans on one array, it sums them. */
+static void report_span_zones(const trace_report *report, double begin_us, double end_us, uint32_t thread,
+                              trace_frame_zone *all) {
     const trace_report_detail *d = report->detail;
-    trace_frame_zone *all = core_calloc(report->zone_count, sizeof *all);
     size_t low = 0, high = d->instance_count; /* the first zone whose reach passes begin_us */
     while (low < high) {
         size_t mid = low + (high - low) / 2;
@@ -757,7 +759,7 @@ static void report_frame_zones(const trace_report *report, double begin_us, doub
     for (size_t k = low; k < d->instance_count && d->instances[d->by_begin[k]].begin_us < end_us; k++) {
         const report_instance *z = &d->instances[d->by_begin[k]];
         double overlap = fmin(z->end_us, end_us) - fmax(z->begin_us, begin_us);
-        if (!(overlap > 0)) continue;
+        if (!(overlap > 0) || (thread != REPORT_ALL_THREADS && z->thread != thread)) continue;
         double duration = z->end_us - z->begin_us;
         trace_frame_zone *entry = &all[z->zone];
         entry->count++;
@@ -767,6 +769,12 @@ static void report_frame_zones(const trace_report *report, double begin_us, doub
             entry->args = z->args ? d->text + z->args : NULL;
         }
     }
+}
+
+static void report_frame_zones(const trace_report *report, double begin_us, double end_us, size_t top,
+                               trace_slow_frame *frame) {
+    trace_frame_zone *all = core_calloc(report->zone_count, sizeof *all);
+    report_span_zones(report, begin_us, end_us, REPORT_ALL_THREADS, all);
     size_t used = 0;
     for (size_t z = 0; z < report->zone_count; z++) {
         if (all[z].count == 0) continue;
@@ -782,21 +790,29 @@ static void report_frame_zones(const trace_report *report, double begin_us, doub
     core_free(all, report->zone_count * sizeof *all);
 }
 
-/* Each series' samples are sorted by time: the last at or before `end_us` by bisection. */
-static void report_frame_counters(const trace_report *report, double end_us, trace_slow_frame *frame) {
+/* Series c's last sample at or before end_us (its samples are sorted by time: bisection);
+ * false when it has none yet. */
+static bool report_series_at(const trace_report *report, size_t c, double end_us, double *value) {
     const trace_report_detail *d = report->detail;
+    const report_counter_sample *run = d->samples + d->counter_first[c];
+    size_t low = 0, high = report->counters[c].count; /* samples [0, low) are at or before end_us */
+    while (low < high) {
+        size_t mid = low + (high - low) / 2;
+        if (run[mid].ts_us <= end_us) low = mid + 1; else high = mid;
+    }
+    if (low == 0) return false;
+    *value = run[low - 1].value;
+    return true;
+}
+
+/* Every series' last sample at or before `end_us`. */
+static void report_frame_counters(const trace_report *report, double end_us, trace_slow_frame *frame) {
     if (report->counter_series_count == 0) return;
     frame->counters = core_alloc(report->counter_series_count * sizeof *frame->counters);
     for (size_t c = 0; c < report->counter_series_count; c++) {
-        const report_counter_sample *run = d->samples + d->counter_first[c];
-        size_t low = 0, high = report->counters[c].count; /* samples [0, low) are at or before end_us */
-        while (low < high) {
-            size_t mid = low + (high - low) / 2;
-            if (run[mid].ts_us <= end_us) low = mid + 1; else high = mid;
-        }
-        if (low == 0) continue; /* no sample yet */
-        frame->counters[frame->counter_count++] =
-            (trace_frame_counter){ .name = report->counters[c].name, .value = run[low - 1].value };
+        double value;
+        if (report_series_at(report, c, end_us, &value))
+            frame->counters[frame->counter_count++] = (trace_frame_counter){ .name = report->counters[c].name, .value = value };
     }
     /* Keep exactly counter_count, so the frame can be freed knowing only its own fields. */
     trace_frame_counter *all = frame->counters;
@@ -872,6 +888,136 @@ static void report_print_slow_frame(FILE *out, const trace_slow_frame *frame) {
 void trace_slowest_print(const trace_slowest *slowest, FILE *out) {
     fprintf(out, "slowest %zu frames (zones by self time inside the frame, all threads)\n", slowest->frame_count);
     for (size_t i = 0; i < slowest->frame_count; i++) report_print_slow_frame(out, &slowest->frames[i]);
+}
+
+/* ---- frames over a budget ------------------------------------------------------------------ */
+
+#define REPORT_BUDGET_GAP 30
+#define REPORT_BUDGET_TOP_ZONES 8
+#define REPORT_BUDGET_PRINTED_RUNS 20
+
+static int report_compare_budget_zones(const void *a, const void *b) {
+    const trace_budget_zone *x = a, *y = b;
+    double dx = x->over_ms - x->within_ms, dy = y->over_ms - y->within_ms;
+    if (dx != dy) return dx > dy ? -1 : 1;
+    return strcmp(x->name, y->name);
+}
+
+/* The frames' values: durations, or series c's sample at each frame's end (NaN: none yet). */
+static double *report_budget_values(const trace_report *report, const char *series, core_error *error) {
+    size_t c = 0;
+    if (series) {
+        while (c < report->counter_series_count && strcmp(report->counters[c].name, series) != 0) c++;
+        if (c == report->counter_series_count) {
+            core_error_set(error, CORE_ERROR_ARGUMENT, "no counter series \"%.64s\" in the trace (%zu series)", series,
+                           report->counter_series_count);
+            return NULL;
+        }
+    }
+    double *values = core_alloc((report->frame_count ? report->frame_count : 1) * sizeof *values);
+    for (size_t i = 0; i < report->frame_count; i++) {
+        values[i] = report->frame_ms[i];
+        if (!series) continue;
+        const report_instance *z = report->detail ? &report->detail->instances[report->detail->frames[i]] : NULL;
+        if (!z || !report_series_at(report, c, z->end_us, &values[i])) values[i] = NAN;
+    }
+    return values;
+}
+
+/* Over frames at most `gap` apart share a run. */
+static void report_budget_runs(trace_over_budget *out, const double *values, size_t frames, size_t gap) {
+    size_t capacity = 0;
+    for (size_t i = 0; i < frames; i++) {
+        if (!(values[i] > out->budget_ms)) continue;
+        trace_budget_run *run = out->run_count ? &out->runs[out->run_count - 1] : NULL;
+        if (!run || i - run->last > gap) {
+            out->runs = core_grow(out->runs, &capacity, out->run_count + 1, sizeof *out->runs);
+            run = &out->runs[out->run_count++];
+            *run = (trace_budget_run){ .first = i, .worst_ms = values[i] };
+        }
+        run->last = i;
+        run->over++;
+        run->worst_ms = fmax(run->worst_ms, values[i]);
+    }
+    /* Exactly run_count, so that trace_over_budget_free knows the size. */
+    if (out->run_count) out->runs = core_realloc(out->runs, capacity * sizeof *out->runs, out->run_count * sizeof *out->runs);
+}
+
+/* Each group's zone shares summed over its frames, then their means side by side. */
+static void report_budget_zones(const trace_report *report, trace_over_budget *out, const double *values, size_t top) {
+    size_t zones = report->zone_count;
+    if (zones == 0) return;
+    trace_frame_zone *over = core_calloc(zones, sizeof *over), *within = core_calloc(zones, sizeof *within);
+    for (size_t i = 0; i < report->frame_count; i++) {
+        if (isnan(values[i])) continue;
+        const report_instance *z = &report->detail->instances[report->detail->frames[i]];
+        report_span_zones(report, z->begin_us, z->end_us, z->thread, values[i] > out->budget_ms ? over : within);
+    }
+    size_t within_frames = out->frames - out->over;
+    trace_budget_zone *all = core_alloc(zones * sizeof *all);
+    size_t used = 0;
+    for (size_t k = 0; k < zones; k++) {
+        if (over[k].count == 0 && within[k].count == 0) continue;
+        all[used++] = (trace_budget_zone){
+            .name = report->zones[k].name,
+            .over_ms = out->over ? over[k].self_ms / (double)out->over : 0.0,
+            .within_ms = within_frames ? within[k].self_ms / (double)within_frames : 0.0,
+        };
+    }
+    qsort(all, used, sizeof *all, report_compare_budget_zones);
+    out->zone_count = CORE_MIN(used, top);
+    if (out->zone_count) {
+        out->zones = core_alloc(out->zone_count * sizeof *out->zones);
+        memcpy(out->zones, all, out->zone_count * sizeof *out->zones);
+    }
+    core_free(all, zones * sizeof *all);
+    core_free(over, zones * sizeof *over);
+    core_free(within, zones * sizeof *within);
+}
+
+bool trace_report_over_budget(const trace_report *report, const trace_budget_desc *desc, trace_over_budget *out,
+                              core_error *error) {
+    *out = (trace_over_budget){ 0 };
+    if (!desc || !(desc->budget_ms > 0) || !isfinite(desc->budget_ms))
+        return core_error_set(error, CORE_ERROR_ARGUMENT, "the budget must be a number of milliseconds above 0");
+    double *values = report_budget_values(report, desc->series, error);
+    if (!values) return false;
+    out->budget_ms = desc->budget_ms;
+    out->series = desc->series;
+    for (size_t i = 0; i < report->frame_count; i++) {
+        out->frames += !isnan(values[i]);
+        out->over += values[i] > desc->budget_ms;
+    }
+    report_budget_runs(out, values, report->frame_count, desc->gap ? desc->gap : REPORT_BUDGET_GAP);
+    if (report->detail) report_budget_zones(report, out, values, desc->top_zones ? desc->top_zones : REPORT_BUDGET_TOP_ZONES);
+    core_free(values, (report->frame_count ? report->frame_count : 1) * sizeof *values);
+    return true;
+}
+
+void trace_over_budget_print(const trace_over_budget *over, FILE *out) {
+    fprintf(out, "frames over %.3f ms (%s): %zu of %zu (%.2f%%) in %zu runs\n", over->budget_ms,
+            over->series ? over->series : "frame duration", over->over, over->frames, report_share(over->over, over->frames),
+            over->run_count);
+    size_t shown = CORE_MIN(over->run_count, (size_t)REPORT_BUDGET_PRINTED_RUNS);
+    for (size_t i = 0; i < shown; i++) {
+        const trace_budget_run *run = &over->runs[i];
+        fprintf(out, "  frames %7zu - %-7zu %6zu over   worst %.3f ms\n", run->first, run->last, run->over, run->worst_ms);
+    }
+    if (over->run_count > shown) fprintf(out, "  ... and %zu more runs\n", over->run_count - shown);
+    if (over->zone_count == 0) return;
+    fprintf(out, "\n  %-30s %12s %12s %10s\n", "zone (self ms a frame)", "over", "within", "more");
+    for (size_t i = 0; i < over->zone_count; i++) {
+        const trace_budget_zone *zone = &over->zones[i];
+        fputs("  ", out);
+        report_print_name(out, zone->name, 30);
+        fprintf(out, " %12.3f %12.3f %+10.3f\n", zone->over_ms, zone->within_ms, zone->over_ms - zone->within_ms);
+    }
+}
+
+void trace_over_budget_free(trace_over_budget *over) {
+    core_free(over->runs, over->run_count * sizeof *over->runs);
+    core_free(over->zones, over->zone_count * sizeof *over->zones);
+    *over = (trace_over_budget){ 0 };
 }
 
 /* ---- SVG plot --------------------------------------------------------------------------- */

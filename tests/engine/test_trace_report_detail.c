@@ -5,6 +5,7 @@
 #include "trace/trace.h"
 
 #include "test.h"
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -454,4 +455,179 @@ Test(trace_report_detail, memory_is_returned) {
     cr_expect_not(trace_report_parse(bad, strlen(bad), &report, NULL));
     trace_report_free(&report);
     cr_expect_eq(core_memory_in_use(), before);
+}
+
+/* ---- frames over a budget ----------------------------------------------------------------- */
+
+typedef struct expected_budget_zone {
+    const char *name;
+    double over_ms, within_ms;
+} expected_budget_zone;
+
+static void expect_budget_zones(const trace_over_budget *over, const expected_budget_zone *expected, size_t n) {
+    cr_assert_eq(over->zone_count, n, "%zu zones", over->zone_count);
+    for (size_t i = 0; i < n; i++) {
+        cr_expect_str_eq(over->zones[i].name, expected[i].name, "row %zu", i);
+        cr_expect_float_eq(over->zones[i].over_ms, expected[i].over_ms, 1e-9, "%s over %g", expected[i].name,
+                           over->zones[i].over_ms);
+        cr_expect_float_eq(over->zones[i].within_ms, expected[i].within_ms, 1e-9, "%s within %g", expected[i].name,
+                           over->zones[i].within_ms);
+    }
+}
+
+static void expect_budget_run(const trace_budget_run *run, size_t first, size_t last, size_t count, double worst) {
+    cr_expect(run->first == first && run->last == last && run->over == count, "run %zu-%zu (%zu over)", run->first,
+              run->last, run->over);
+    cr_expect_float_eq(run->worst_ms, worst, 1e-9, "run %zu-%zu worst %g", run->first, run->last, run->worst_ms);
+}
+
+Test(trace_report_detail, frames_over_a_budget_of_duration) {
+    /* Durations 10, 30 and 15 ms; over 12 ms: frames 1 and 2, one run (1 apart), worst 30.
+     * Zones on the frames' own thread (tid 1) only, by self time inside each frame:
+     *   frame 0: frame 4, A 3, B 2, x1 1 (tid 2's gen and mesh, tid 3's zones left out)
+     *   frame 1: gen 15, frame 6, noise 5, wait 4 (tid 2's gen 38 → 46 left out)
+     *   frame 2: frame 13, A 2
+     * Over (frames 1, 2), means a frame: gen 7.5, frame 9.5, noise 2.5, wait 2, A 1; within
+     * (frame 0): frame 4, A 3, B 2, x1 1. By over − within: gen +7.5, frame +5.5, noise +2.5,
+     * wait +2, x1 −1, then A and B both −2 (by name). */
+    trace_report report;
+    load_drill(&report);
+    trace_over_budget over;
+    core_error error = { 0 };
+    cr_assert(trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = 12 }, &over, &error), "%s",
+              error.message);
+    cr_expect_eq(over.frames, 3);
+    cr_expect_eq(over.over, 2);
+    cr_expect_null(over.series);
+    cr_assert_eq(over.run_count, 1);
+    expect_budget_run(&over.runs[0], 1, 2, 2, 30);
+    expect_budget_zones(&over, (const expected_budget_zone[]){ { "gen", 7.5, 0 }, { "frame", 9.5, 4 },
+                                                               { "noise", 2.5, 0 }, { "wait", 2, 0 },
+                                                               { "x1", 0, 1 }, { "A", 1, 3 }, { "B", 0, 2 } }, 7);
+    trace_over_budget_free(&over);
+    trace_report_free(&report);
+}
+
+Test(trace_report_detail, frames_over_a_budget_of_a_counter) {
+    /* mem at the frames' ends (10, 40, 55 ms): 100 (@5), 300 (@20), 200 (@45). Over 250: frame
+     * 1 alone, worst 300. Within: frames 0 and 2, so frame (4 + 13) / 2 = 8.5, A (3 + 2) / 2 =
+     * 2.5, B 1, x1 0.5. By over − within, the top 3: gen +15, noise +5, wait +4. */
+    trace_report report;
+    load_drill(&report);
+    trace_over_budget over;
+    core_error error = { 0 };
+    cr_assert(trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = 250, .series = "mem", .top_zones = 3 },
+                                       &over, &error), "%s", error.message);
+    cr_expect_eq(over.frames, 3);
+    cr_expect_eq(over.over, 1);
+    cr_assert_eq(over.run_count, 1);
+    expect_budget_run(&over.runs[0], 1, 1, 1, 300);
+    expect_budget_zones(&over, (const expected_budget_zone[]){ { "gen", 15, 0 }, { "noise", 5, 0 }, { "wait", 4, 0 } }, 3);
+    trace_over_budget_free(&over);
+
+    /* queue.value's only sample is at 50 ms: frames 0 and 1 end before it and have no value, so
+     * only frame 2 (7) counts; over 5 it is, and nothing is within. */
+    cr_assert(trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = 5, .series = "queue.value" }, &over,
+                                       &error), "%s", error.message);
+    cr_expect_eq(over.frames, 1);
+    cr_expect_eq(over.over, 1);
+    cr_assert_eq(over.run_count, 1);
+    expect_budget_run(&over.runs[0], 2, 2, 1, 7);
+    expect_budget_zones(&over, (const expected_budget_zone[]){ { "frame", 13, 0 }, { "A", 2, 0 } }, 2);
+    trace_over_budget_free(&over);
+    trace_report_free(&report);
+}
+
+Test(trace_report_detail, frames_over_a_budget_refuse_bad_input) {
+    trace_report report;
+    load_drill(&report);
+    trace_over_budget over;
+    core_error error = { 0 };
+    cr_expect_not(trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = 5, .series = "absent" }, &over,
+                                           &error));
+    cr_expect_eq(error.code, CORE_ERROR_ARGUMENT);
+    cr_expect(strstr(error.message, "absent") != NULL, "%s", error.message);
+    cr_expect(over.run_count == 0 && over.runs == NULL && over.zones == NULL);
+    const double bad[] = { 0, -1, NAN, INFINITY };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        error = (core_error){ 0 };
+        cr_expect_not(trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = bad[i] }, &over, &error),
+                      "budget %g", bad[i]);
+        cr_expect_eq(error.code, CORE_ERROR_ARGUMENT);
+    }
+    cr_expect_not(trace_report_over_budget(&report, NULL, &over, NULL));
+    trace_over_budget_free(&over);
+    trace_report_free(&report);
+}
+
+/* Frames of the given durations (ms), one after another on one thread, nothing else. */
+static void load_frames(trace_report *report, const double *durations, size_t n) {
+    char json[4096] = "{\"traceEvents\":[";
+    size_t used = strlen(json);
+    double ts = 0;
+    for (size_t i = 0; i < n; i++) {
+        used += (size_t)snprintf(json + used, sizeof json - used,
+                                 "%s{\"ph\":\"X\",\"name\":\"frame\",\"ts\":%.0f,\"dur\":%.0f,\"pid\":1,\"tid\":1}",
+                                 i ? "," : "", ts, durations[i] * 1000.0);
+        ts += durations[i] * 1000.0;
+    }
+    snprintf(json + used, sizeof json - used, "]}");
+    core_error error = { 0 };
+    cr_assert(trace_report_parse(json, strlen(json), report, &error), "%s", error.message);
+}
+
+Test(trace_report_detail, frames_over_a_budget_make_runs_by_gap) {
+    /* Over 10 ms: frames 1 (21), 4 (22), 5 (23) and 10 (24). Frames 3 or fewer apart share a
+     * run: 1 → 4 is 3, 5 → 10 is 5, so [1, 5] (3 over, worst 23) and [10] (24). Only
+     * neighbours (gap 1): [1], [4, 5], [10]. The default (30): one run of all four. */
+    const double durations[] = { 5, 21, 5, 5, 22, 23, 5, 5, 5, 5, 24 };
+    trace_report report;
+    load_frames(&report, durations, sizeof durations / sizeof durations[0]);
+    trace_over_budget over;
+    cr_assert(trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = 10, .gap = 3 }, &over, NULL));
+    cr_expect_eq(over.over, 4);
+    cr_assert_eq(over.run_count, 2);
+    expect_budget_run(&over.runs[0], 1, 5, 3, 23);
+    expect_budget_run(&over.runs[1], 10, 10, 1, 24);
+    trace_over_budget_free(&over);
+
+    cr_assert(trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = 10, .gap = 1 }, &over, NULL));
+    cr_assert_eq(over.run_count, 3);
+    expect_budget_run(&over.runs[0], 1, 1, 1, 21);
+    expect_budget_run(&over.runs[1], 4, 5, 2, 23);
+    expect_budget_run(&over.runs[2], 10, 10, 1, 24);
+    trace_over_budget_free(&over);
+
+    cr_assert(trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = 10 }, &over, NULL));
+    cr_assert_eq(over.run_count, 1);
+    expect_budget_run(&over.runs[0], 1, 10, 4, 24);
+    trace_over_budget_free(&over);
+
+    /* A budget above every frame: nothing over, no run. */
+    cr_assert(trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = 24 }, &over, NULL));
+    cr_expect(over.over == 0 && over.run_count == 0 && over.runs == NULL);
+    trace_over_budget_free(&over);
+    trace_report_free(&report);
+}
+
+Test(trace_report_detail, frames_over_a_budget_print) {
+    trace_report report;
+    load_drill(&report);
+    trace_over_budget over;
+    cr_assert(trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = 12, .top_zones = 2 }, &over, NULL));
+    char *text = NULL;
+    size_t size = 0;
+    FILE *out = open_memstream(&text, &size);
+    trace_over_budget_print(&over, out);
+    fclose(out);
+    cr_expect(strstr(text, "frames over 12.000 ms (frame duration): 2 of 3 (66.67%) in 1 runs\n") != NULL, "%s", text);
+    cr_expect(strstr(text, "frames       1 - 2            2 over   worst 30.000 ms\n") != NULL, "%s", text);
+    const char *gen = strstr(text, "\n  gen ");
+    cr_assert(gen != NULL, "%s", text);
+    double over_ms = 0, within_ms = 0, more = 0;
+    cr_expect_eq(sscanf(gen + 7, "%lf %lf %lf", &over_ms, &within_ms, &more), 3, "%s", gen);
+    cr_expect(over_ms == 7.5 && within_ms == 0 && more == 7.5, "%s", gen);
+    free(text);
+    trace_over_budget_free(&over);
+    trace_report_free(&report);
 }

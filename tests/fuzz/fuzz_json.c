@@ -3,7 +3,8 @@
  *
  *   tests/fuzz/run.sh 20     (builds every target with the engine's sources, runs each 20 s)
  * Seeds: tests/fuzz/corpus/fuzz_json/ (a small trace, a bare-array trace, every kind of value,
- * a trace with nested zones, zone args and counter series for the slowest frames).
+ * a trace with nested zones, zone args and counter series for the slowest frames and the
+ * frames over a budget).
  *
  * Besides "no crash, no leak, no read out of bounds" it checks two properties and traps when
  * one fails: a failed parse always says where (line and column from 1), and whatever bytes the
@@ -74,11 +75,22 @@ static void fuzz_report(const char *data, size_t size) {
         /* The drill-down reads what the summary kept (zone instances, counter samples, args). */
         trace_slowest slowest;
         trace_report_slowest(&report, 3, 4, &slowest);
+        /* Frames over a budget, by duration and by the first counter series if there is one. */
+        trace_over_budget by_duration, by_series;
+        const char *series = report.counter_series_count ? report.counters[0].name : NULL;
+        if (!trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = 1, .gap = 2 }, &by_duration, NULL))
+            __builtin_trap(); /* a budget above 0 and no series is always accepted */
+        bool series_read = trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = 1, .series = series },
+                                                    &by_series, NULL);
         if (sink) {
             trace_report_print(&report, sink);
             trace_slowest_print(&slowest, sink);
+            trace_over_budget_print(&by_duration, sink);
+            if (series_read) trace_over_budget_print(&by_series, sink);
             fclose(sink);
         }
+        trace_over_budget_free(&by_duration);
+        trace_over_budget_free(&by_series);
         trace_slowest_free(&slowest);
     } else if (error.code == CORE_ERROR_NONE || error.message[0] == '\0') {
         __builtin_trap(); /* a failure always says what kind and why */

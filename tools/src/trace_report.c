@@ -6,6 +6,10 @@
  *     trace_report run.json --svg plot.svg   # plot elsewhere
  *     trace_report run.json --slowest 5      # and the 5 slowest frames: their top zones by
  *                                            # self time (args of the longest) and counters
+ *     trace_report run.json --over 8 --series game.cpu_frame_ms
+ *                                            # the frames over 8 ms of the game's CPU frame
+ *                                            # time: how many, in which runs of the trace, and
+ *                                            # the zones they spend more on than the others
  *
  * Exit status: 0 done, 1 the trace could not be read or the plot written, 2 bad arguments or
  * an unwritable --trace (the report can trace itself, like every program).
@@ -32,10 +36,26 @@ static char *trace_report_svg_path_for(const char *trace_path) {
     return path;
 }
 
+/* --over: false (after saying why) for a series the trace does not have. */
+static bool trace_report_print_over(const trace_report *report, double over_ms, const char *series) {
+    trace_over_budget over;
+    core_error error = { 0 };
+    if (!trace_report_over_budget(report, &(trace_budget_desc){ .budget_ms = over_ms, .series = series }, &over, &error)) {
+        fprintf(stderr, "trace_report: %s\n", error.message);
+        return false;
+    }
+    fputc('\n', stdout);
+    trace_over_budget_print(&over, stdout);
+    trace_over_budget_free(&over);
+    return true;
+}
+
 int main(int argc, char **argv) {
     const char *svg_path = NULL;
     const char *trace_path = NULL;
     int slowest_count = 0;
+    double over_ms = 0.0;
+    const char *series = NULL;
     int positional_count = 0;
     core_common_args common = { 0 };
     core_option options[] = {
@@ -44,6 +64,11 @@ int main(int argc, char **argv) {
           .help = "where to write the frame-time plot (default: FILE with .frames.svg)" },
         { .name = "slowest", .kind = CORE_OPTION_INT, .value = &slowest_count, .metavar = "N", .min = 1,
           .max = INT_MAX, .help = "also list the N slowest frames: top zones by self time, counters" },
+        { .name = "over", .kind = CORE_OPTION_DOUBLE, .value = &over_ms, .metavar = "MS", .min_double = 0.001,
+          .max_double = 1e9, .help = "also list the frames over MS: their runs, and the zones they spend more on" },
+        { .name = "series", .kind = CORE_OPTION_STRING, .value = &series, .metavar = "NAME",
+          .help = "with --over: compare a counter's value at each frame's end instead of the frame's duration "
+                  "(the game's game.cpu_frame_ms, say)" },
     };
     core_cli cli = {
         .program = "trace_report",
@@ -59,6 +84,10 @@ int main(int argc, char **argv) {
     };
     int rc = core_cli_parse(&cli, argc, argv);
     if (rc != CORE_CLI_OK) return rc == CORE_CLI_HELP ? 0 : 2;
+    if (series && !(over_ms > 0)) {
+        fprintf(stderr, "trace_report: '--series' needs '--over MS'\n");
+        return 2;
+    }
 
     trace_thread_name("main");
     if (common.trace_path && !trace_start(common.trace_path)) return 2;
@@ -77,6 +106,11 @@ int main(int argc, char **argv) {
             fputc('\n', stdout);
             trace_slowest_print(&slowest, stdout);
             trace_slowest_free(&slowest);
+        }
+        if (over_ms > 0 && !trace_report_print_over(&report, over_ms, series)) {
+            trace_report_free(&report);
+            trace_stop();
+            return 2;
         }
         char *default_svg = svg_path ? NULL : trace_report_svg_path_for(trace_path);
         const char *plot_path = svg_path ? svg_path : default_svg;
