@@ -316,14 +316,22 @@ Test(trace_report_detail, slowest_frame_zones_on_every_thread) {
     trace_report_free(&report);
 }
 
+/* A memory stream for a print call's output; fclose it, then read and free *text. */
+static FILE *text_stream(char **text, size_t *size) {
+    *text = NULL, *size = 0;
+    FILE *out = open_memstream(text, size);
+    cr_assert_not_null(out);
+    return out;
+}
+
 Test(trace_report_detail, slowest_print) {
     trace_report report;
     load_drill(&report);
     trace_slowest slowest;
     trace_report_slowest(&report, 1, 2, &slowest);
-    char *text = NULL;
-    size_t size = 0;
-    FILE *out = open_memstream(&text, &size);
+    char *text;
+    size_t size;
+    FILE *out = text_stream(&text, &size);
     trace_slowest_print(&slowest, out);
     fclose(out);
     cr_expect(strstr(text, "slowest 1 frames") != NULL, "%s", text);
@@ -615,9 +623,9 @@ Test(trace_report_detail, frames_over_a_budget_print) {
     load_drill(&report);
     trace_over_budget over;
     cr_assert(trace_report_over_budget(&report, &(trace_budget_desc){ .budget_ms = 12, .top_zones = 2 }, &over, NULL));
-    char *text = NULL;
-    size_t size = 0;
-    FILE *out = open_memstream(&text, &size);
+    char *text;
+    size_t size;
+    FILE *out = text_stream(&text, &size);
     trace_over_budget_print(&over, out);
     fclose(out);
     cr_expect(strstr(text, "frames over 12.000 ms (frame duration): 2 of 3 (66.67%) in 1 runs\n") != NULL, "%s", text);
